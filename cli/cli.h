@@ -1,0 +1,52 @@
+/* cli.h — what every eventlfm subcommand file shares.
+ *
+ * A subcommand is `int cmd_NAME(int argc, char **argv)` with argv[0] the
+ * subcommand's name; it parses its options (getopt_long) into a struct,
+ * calls the libraries, prints results to stdout and messages to stderr, and
+ * returns the process exit code: 0 success, 1 failure, 2 usage error.
+ * Every subcommand answers --help (and -h) with its usage on stdout, exit 0.
+ */
+#ifndef ELFM_CLI_H
+#define ELFM_CLI_H
+
+#include <stdint.h>
+
+#include "elfm_recon.h"
+
+#define CLI_OK 0
+#define CLI_FAIL 1
+#define CLI_USAGE 2
+
+int cmd_info(int argc, char **argv);
+int cmd_convert(int argc, char **argv);
+int cmd_calib(int argc, char **argv);
+int cmd_simulate(int argc, char **argv);
+int cmd_recon(int argc, char **argv);
+int cmd_track(int argc, char **argv);
+int cmd_score(int argc, char **argv);
+int cmd_view(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
+int cmd_demo(int argc, char **argv);
+
+/* Print "eventlfm CMD: <formatted error>" to stderr; returns CLI_FAIL. */
+int cli_fail(const char *cmd, const elfm_error *err);
+/* Print "eventlfm CMD: message" to stderr; returns `code`. */
+int cli_message(const char *cmd, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Strict number parsing for options: the whole string must be a number
+ * (and for ints, fit); on failure prints a usage message naming the option
+ * and returns 0; on success stores the value and returns 1. */
+int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out);
+int cli_parse_int64(const char *cmd, const char *opt, const char *s, int64_t *out);
+int cli_parse_int(const char *cmd, const char *opt, const char *s, int *out);
+
+/* Seconds of a monotonic clock (for timing figures). */
+double cli_now_s(void);
+/* Peak resident set size of this process in MB (0 when unknown). */
+double cli_peak_rss_mb(void);
+
+#endif

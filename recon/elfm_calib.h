@@ -1,0 +1,73 @@
+/* elfm_calib.h — Fourier LFM calibration: where a point of object space
+ * lands in each view (SPEC §2) and the calib.json file (SPEC §3).
+ *
+ *   u = cx + x_um / um_per_px + z_um * dx_px_per_um
+ *   v = cy + y_um / um_per_px + z_um * dy_px_per_um
+ *
+ * `views` is authoritative; `optics` is informational (has_optics says
+ * whether it was filled). Plain value type: no allocation, copy freely.
+ */
+#ifndef ELFM_CALIB_H
+#define ELFM_CALIB_H
+
+#include "elfm_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* 9 x 9 lenslets is more than any Fourier LFM we know of uses (5 x 5 here). */
+#define ELFM_MAX_VIEWS 81
+
+typedef struct elfm_view {
+  int i, j;                 /* column / row offset in lenslets; (0,0) centre */
+  double cx_px, cy_px;      /* sensor position of the on-axis focal point */
+  double dx_px_per_um, dy_px_per_um; /* image shift per micrometre of depth */
+} elfm_view;
+
+typedef struct elfm_optics {
+  double na, n_medium, magnification, f_tube_mm, f_fourier_mm, f_mla_mm,
+      mla_pitch_um, relay, wavelength_um;
+  int lenslets_per_side;    /* 5 for the 5 x 5 array */
+} elfm_optics;
+
+typedef struct elfm_calib {
+  int sensor_width_px, sensor_height_px;
+  double pixel_um;
+  int has_optics;
+  elfm_optics optics;
+  double um_per_px;
+  int view_w_px, view_h_px; /* size of each cropped view = volume W x H */
+  int n_views;
+  elfm_view views[ELFM_MAX_VIEWS];
+  double z_min_um, z_max_um, z_step_um;
+} elfm_calib;
+
+/* The paper's system (SPEC §2): EVK4 behind 20x/0.75 NA, f_fourier 80 mm, ... */
+void elfm_optics_default(elfm_optics *o);
+
+/* Build a calibration from optics for a sensor (SPEC §2 formulas, exact
+ * non-paraxial view angles; views outside the pupil are left out). Views
+ * are laid out on the sensor around its centre at the nominal spacing.
+ * view size and z range: view_w/h_px = 144, z = -100..100 step 2 unless the
+ * caller changes them afterwards. */
+elfm_status elfm_calib_from_optics(const elfm_optics *o, int sensor_width_px,
+                                   int sensor_height_px, double pixel_um,
+                                   elfm_calib *out, elfm_error *err);
+
+/* Read / write calib.json. Load checks every field (finite, in range) and
+ * names the file and the offending key on error. */
+elfm_status elfm_calib_load(const char *path, elfm_calib *out, elfm_error *err);
+elfm_status elfm_calib_save(const elfm_calib *c, const char *path, elfm_error *err);
+
+/* Sensor position of object point (x,y,z) in view `v` (0 <= v < n_views). */
+void elfm_calib_project(const elfm_calib *c, int v, double x_um, double y_um,
+                        double z_um, double *u_px, double *v_px);
+
+/* Number of z planes: floor((z_max - z_min) / z_step + 0.5) + 1. */
+int elfm_calib_n_planes(const elfm_calib *c);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,45 @@
+/* elfm_volume.h — a reconstructed volume: W x H x Nz floats with its time
+ * and physical axes (SPEC §3, §5).
+ *
+ * Voxel (X, Y, k) is at x = (X - (W-1)/2) * um_per_px,
+ *                        y = (Y - (H-1)/2) * um_per_px,
+ *                        z = z_min_um + k * z_step_um.
+ * data[((size_t)k * h + Y) * w + X]; the volume owns data.
+ */
+#ifndef ELFM_VOLUME_H
+#define ELFM_VOLUME_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "elfm_error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct elfm_volume {
+  int w, h, nz;
+  float *data;
+  int64_t t_us;       /* the time this volume stands for (SPEC §5) */
+  int64_t frame;      /* index of the frame it was built from */
+  double um_per_px, z_min_um, z_step_um;
+} elfm_volume;
+
+/* Allocate a zeroed volume; NULL (err filled) when out of memory.
+ * Free with elfm_volume_free (NULL is a no-op). */
+elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
+                                double z_min_um, double z_step_um, elfm_error *err);
+void elfm_volume_free(elfm_volume *v);
+
+static inline double elfm_volume_x_um(const elfm_volume *v, double X)
+{ return (X - (v->w - 1) * 0.5) * v->um_per_px; }
+static inline double elfm_volume_y_um(const elfm_volume *v, double Y)
+{ return (Y - (v->h - 1) * 0.5) * v->um_per_px; }
+static inline double elfm_volume_z_um(const elfm_volume *v, double k)
+{ return v->z_min_um + k * v->z_step_um; }
+
+#ifdef __cplusplus
+}
+#endif
+#endif

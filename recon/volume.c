@@ -1,0 +1,35 @@
+/* volume.c — allocation of elfm_volume (see elfm_volume.h). */
+#include "elfm_volume.h"
+
+#include <stdlib.h>
+
+elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
+                                double z_min_um, double z_step_um, elfm_error *err)
+{
+  if (w <= 0 || h <= 0 || nz <= 0 || w > 65535 || h > 65535 || nz > 65535) {
+    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                   "volume size %d x %d x %d is not positive or too large", w, h, nz);
+    return NULL;
+  }
+  elfm_volume *v = calloc(1, sizeof *v);
+  if (v) v->data = calloc((size_t)w * (size_t)h * (size_t)nz, sizeof *v->data);
+  if (!v || !v->data) {
+    free(v);
+    elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "cannot allocate a %d x %d x %d volume", w, h, nz);
+    return NULL;
+  }
+  v->w = w;
+  v->h = h;
+  v->nz = nz;
+  v->um_per_px = um_per_px;
+  v->z_min_um = z_min_um;
+  v->z_step_um = z_step_um;
+  return v;
+}
+
+void elfm_volume_free(elfm_volume *v)
+{
+  if (!v) return;
+  free(v->data);
+  free(v);
+}
