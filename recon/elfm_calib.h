@@ -60,6 +60,11 @@ elfm_status elfm_calib_from_optics(const elfm_optics *o, int sensor_width_px,
 elfm_status elfm_calib_load(const char *path, elfm_calib *out, elfm_error *err);
 elfm_status elfm_calib_save(const elfm_calib *c, const char *path, elfm_error *err);
 
+/* Same checks as elfm_calib_load on JSON text already in memory (len bytes,
+ * need not be NUL-terminated); `path` only names the source in messages. */
+elfm_status elfm_calib_parse(const char *text, size_t len, const char *path,
+                             elfm_calib *out, elfm_error *err);
+
 /* Sensor position of object point (x,y,z) in view `v` (0 <= v < n_views). */
 void elfm_calib_project(const elfm_calib *c, int v, double x_um, double y_um,
                         double z_um, double *u_px, double *v_px);
