@@ -1,0 +1,230 @@
+/* test_peaks.c — 3D peak detector on synthetic volumes with known blobs:
+ * positions (sub-voxel), widths, thresholds, separation, bad input, and the
+ * time-surface lag correction. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+/* Paper resolution: FWHM 3.9 um lateral, 21.0 um axial -> Gaussian sigmas. */
+#define SXY (3.9 / 2.3548)
+#define SZ (21.0 / 2.3548)
+
+static void add_blob(elfm_volume *v, double x, double y, double z, double amp, double sxy, double sz)
+{
+  for (int k = 0; k < v->nz; k++)
+    for (int j = 0; j < v->h; j++)
+      for (int i = 0; i < v->w; i++) {
+        double dx = elfm_volume_x_um(v, i) - x, dy = elfm_volume_y_um(v, j) - y,
+               dz = elfm_volume_z_um(v, k) - z;
+        double e = dx * dx / (2 * sxy * sxy) + dy * dy / (2 * sxy * sxy) + dz * dz / (2 * sz * sz);
+        if (e < 30) v->data[((size_t)k * v->h + j) * v->w + i] += (float)(amp * exp(-e));
+      }
+}
+
+/* deterministic uniform noise in [-a, a] (xorshift) */
+static void add_noise(elfm_volume *v, double a, uint64_t seed)
+{
+  size_t n = (size_t)v->w * v->h * v->nz;
+  for (size_t i = 0; i < n; i++) {
+    seed ^= seed << 13; seed ^= seed >> 7; seed ^= seed << 17;
+    v->data[i] += (float)(a * ((double)(seed >> 11) / 9007199254740992.0 * 2 - 1));
+  }
+}
+
+static const elfm_detection *nearest(const elfm_detection *d, int n, double x, double y, double z)
+{
+  const elfm_detection *best = NULL;
+  double bd = 1e300;
+  for (int i = 0; i < n; i++) {
+    double e = pow(d[i].x_um - x, 2) + pow(d[i].y_um - y, 2) + pow((d[i].z_um - z) / 4, 2);
+    if (e < bd) { bd = e; best = &d[i]; }
+  }
+  return best;
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_volume *v = elfm_volume_create(64, 60, 51, 0.926, -50, 2, &err);
+  CHECK(v != NULL);
+  if (!v) return check_report();
+  v->frame = 7;
+  v->t_us = 1000000000123LL;
+  const double P[4][3] = {{-10.3, 5.21, -12.7}, {12.44, -8.9, 20.3}, {0.37, 14.1, 3.1}, {-15.0, -15.0, 30.0}};
+  for (int b = 0; b < 4; b++) add_blob(v, P[b][0], P[b][1], P[b][2], 100 + 20 * b, SXY, SZ);
+
+  elfm_peaks_options o;
+  elfm_peaks_options_default(&o);
+  elfm_peaks *pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK(pk != NULL);
+  elfm_detection det[16];
+  int n = 0;
+  /* noiseless: the k-sigma rule sees mostly-nonzero tails; use an absolute threshold */
+  o.k_sigma = 0;
+  o.absolute = 10;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 4);
+  for (int b = 0; b < 4; b++) {
+    const elfm_detection *d = nearest(det, n, P[b][0], P[b][1], P[b][2]);
+    CHECK(d != NULL);
+    if (!d) continue;
+    /* Gaussian refinement is exact for a Gaussian: tiny errors only */
+    CHECK_NEAR(d->x_um, P[b][0], 0.02);
+    CHECK_NEAR(d->y_um, P[b][1], 0.02);
+    CHECK_NEAR(d->z_um, P[b][2], 0.1);
+    CHECK_NEAR(d->sigma_x_um, SXY, 0.05);
+    CHECK_NEAR(d->sigma_z_um, SZ, 0.3);
+    CHECK_NEAR(d->intensity, 100 + 20 * b, 1.0);
+    CHECK_EQ_INT(d->frame, 7);
+    CHECK(d->t_us == 1000000000123LL);
+  }
+  /* strongest first */
+  for (int i = 1; i < n; i++) CHECK(det[i - 1].intensity >= det[i].intensity - 1e-9);
+
+  /* Quadratic refinement: biased but within a quarter voxel; no refinement:
+   * on voxel centres (error up to half a voxel). */
+  double err_q = 0, err_none = 0;
+  for (int mode = ELFM_REFINE_QUADRATIC; mode <= ELFM_REFINE_NONE; mode++) {
+    o.refine = (elfm_refine_mode)mode;
+    elfm_peaks *pq = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pq, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 4);
+    for (int b = 0; b < 4; b++) {
+      const elfm_detection *d = nearest(det, n, P[b][0], P[b][1], P[b][2]);
+      double e = fabs(d->x_um - P[b][0]) + fabs(d->y_um - P[b][1]);
+      if (mode == ELFM_REFINE_QUADRATIC) err_q += e; else err_none += e;
+    }
+    elfm_peaks_free(pq);
+  }
+  CHECK_MSG(err_q < 8 * 0.25 * 0.926, "quadratic total error %g", err_q);
+  CHECK_MSG(err_q < err_none, "quadratic %g should beat voxel centres %g", err_q, err_none);
+  o.refine = ELFM_REFINE_GAUSSIAN;
+
+  /* cap: only the strongest are kept */
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 2, &n, &err), &err);
+  CHECK_EQ_INT(n, 2);
+  CHECK_NEAR(det[0].intensity, 160, 1.0);
+  CHECK_NEAR(det[1].intensity, 140, 1.0);
+
+  /* relative threshold: 0.8 of the voxel max (~157) keeps the 140 and 160 blobs */
+  o.absolute = 0;
+  o.relative = 0.8;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 2);
+
+  /* k-sigma threshold on a noisy volume: all 4 blobs, no noise peaks. */
+  add_noise(v, 3.0, 12345);
+  o.relative = 0;
+  o.k_sigma = 6;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 4);
+  double thr = elfm_peaks_last_threshold(pk);
+  /* uniform noise in [-3,3] has sigma sqrt(3) ~1.73; the blob tails add a little */
+  CHECK_MSG(thr > 6 && thr < 40, "threshold %g", thr);
+  for (int b = 0; b < 4; b++) {
+    const elfm_detection *d = nearest(det, n, P[b][0], P[b][1], P[b][2]);
+    CHECK_NEAR(d->x_um, P[b][0], 0.15);
+    CHECK_NEAR(d->z_um, P[b][2], 1.5);
+  }
+  /* without a threshold the noise gives many more peaks: the threshold matters */
+  o.k_sigma = 0;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK(n > 4);
+
+  /* Minimum separation: two blobs 3 um apart laterally -> one peak with
+   * separation 4 um (and a radius small enough that both are local maxima),
+   * two with separation 2 um. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  add_blob(v, -1.5, 0, 0, 100, 0.7, SZ);
+  add_blob(v, 1.5, 0, 0, 90, 0.7, SZ);
+  o.absolute = 5;
+  o.radius_xy_um = 1.0;
+  o.min_separation_um = 4.0;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 1);
+  o.min_separation_um = 2.0;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 2);
+
+  /* A flat plateau gives exactly one peak. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  for (int k = 20; k < 23; k++)
+    for (int j = 30; j < 32; j++)
+      for (int i = 10; i < 12; i++) v->data[((size_t)k * 60 + j) * 64 + i] = 50;
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 1);
+
+  /* Empty volume: no peaks, no error. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 0);
+
+  /* Errors: NaN voxel, wrong geometry, bad options. */
+  v->data[1234] = NAN;
+  CHECK_EQ_INT(elfm_peaks_detect(pk, v, det, 16, &n, &err), ELFM_ERR_NUMERIC);
+  CHECK(strstr(err.message, "NaN") != NULL);
+  elfm_volume *v2 = elfm_volume_create(10, 10, 10, 1, 0, 1, &err);
+  CHECK_EQ_INT(elfm_peaks_detect(pk, v2, det, 16, &n, &err), ELFM_ERR_INVALID);
+  elfm_volume_free(v2);
+  o.radius_z_um = -1;
+  CHECK(elfm_peaks_create(&o, 10, 10, 10, &err) == NULL);
+  CHECK_EQ_INT(err.code, ELFM_ERR_INVALID);
+  elfm_peaks_free(NULL);
+  o.radius_z_um = 15;
+
+  /* Lag correction. A leaky surface of an object moving at 1 um/ms along
+   * +x, tau = 2 ms: sum over the past of exp(-age/tau) * blob. The raw peak
+   * lies behind the current position; the corrected one is much closer. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  const double speed = 1.0, tau_us = 2000, x_now = 5.0;
+  for (int s = 0; s < 400; s++) {           /* 25 us steps over 10 ms (5 tau) */
+    double age_us = s * 25.0;
+    add_blob(v, x_now - speed * age_us * 1e-3, 0, 0, 25.0 / tau_us * exp(-age_us / tau_us) * 100,
+             SXY, SZ);
+  }
+  o.radius_xy_um = 3;
+  o.min_separation_um = 4;
+  o.absolute = 1;
+  elfm_peaks_free(pk);
+  pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 1);
+  double raw_err = det[0].x_um - x_now;
+  /* the blob seen by the detector is wider than SXY along x (the trail) */
+  elfm_detection c = det[0];
+  c.sigma_x_um = SXY;  /* the object's own width along the motion */
+  elfm_detection_correct_lag(&c, speed, 0, 0, tau_us);
+  double cor_err = c.x_um - x_now;
+  fprintf(stderr, "lag: raw error %.3f um, corrected %.3f um (model lag %.3f um)\n", raw_err,
+          cor_err, elfm_peaks_trail_lag_um(speed * tau_us * 1e-3, SXY));
+  CHECK_MSG(raw_err < -0.5, "raw detection should trail: %g", raw_err);
+  CHECK_MSG(fabs(cor_err) < 0.25 * fabs(raw_err), "correction %g vs raw %g", cor_err, raw_err);
+  CHECK_NEAR(c.y_um, det[0].y_um, 1e-12);
+  /* No motion, no shift; tiny trail -> tiny lag; long trail -> lag < trail. */
+  elfm_detection c2 = det[0];
+  elfm_detection_correct_lag(&c2, 0, 0, 0, tau_us);
+  CHECK(c2.x_um == det[0].x_um);
+  CHECK(elfm_peaks_trail_lag_um(1e-6, 1.0) < 1e-5);
+  double lg = elfm_peaks_trail_lag_um(50, 1.0);
+  CHECK(lg >= 0 && lg < 50);
+  CHECK(elfm_peaks_trail_lag_um(NAN, 1.0) == 0);
+
+  elfm_peaks_free(pk);
+  elfm_volume_free(v);
+  return check_report();
+}

@@ -1,0 +1,2 @@
+# Tracker: peaks, linker, smoother, track store and writers, analysis, track command.
+elfm_add_test(test_peaks test_peaks.c TIMEOUT 60)
