@@ -65,6 +65,10 @@ elfm_event_format elfm_format_from_name(const char *name);
 /* ---- reading ---- */
 typedef struct elfm_reader_options {
   int width, height;   /* geometry to use when the file has none (DAT); 0 = unknown */
+  /* 0 (default): a time that goes back is a format error naming the byte
+   * offset/line. 1: keep the file's order and count the backward steps
+   * (elfm_reader_backward_steps), as `eventlfm info` does. */
+  int allow_unsorted;
 } elfm_reader_options;
 
 typedef struct elfm_reader elfm_reader;
@@ -88,6 +92,8 @@ elfm_event_format elfm_reader_format(const elfm_reader *r);
 int elfm_reader_width(const elfm_reader *r);   /* 0 when unknown */
 int elfm_reader_height(const elfm_reader *r);  /* 0 when unknown */
 const char *elfm_reader_path(const elfm_reader *r);
+/* Times seen going back so far (only non-zero with allow_unsorted). */
+int64_t elfm_reader_backward_steps(const elfm_reader *r);
 void elfm_reader_close(elfm_reader *r);
 
 /* ---- writing ---- */
