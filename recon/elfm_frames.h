@@ -1,0 +1,135 @@
+/* elfm_frames.h — events -> frames (time surfaces, event counts) and the
+ * median filter that cleans them.
+ *
+ * A frame is a full-sensor image of floats that is mostly zero: besides the
+ * dense `data`, it lists the pixels that may be non-zero (`idx`), so that
+ * building, filtering, clearing and the event-sparse refocus cost O(listed
+ * pixels), not O(sensor). Invariant: data[i] != 0 only if i is in
+ * idx[0..nnz); each index is listed at most once; nnz <= w*h.
+ *
+ * Windows (SPEC §5): window n covers [start + n*stride, start + n*stride + dt).
+ * Representations, evaluated at the window's end t1 from the events inside
+ * the window (events before the window do not contribute):
+ *   EXP   255 * exp(-(t1 - t_last) / tau)       t_us = t1 (window end)
+ *   LIN   255 * max(0, 1 - (t1 - t_last) / tau) t_us = t1
+ *   COUNT number of events                      t_us = window centre
+ * where t_last is the pixel's latest event in the window. Polarity: ON or
+ * OFF keep only those events; BOTH keeps all; SIGNED gives a time surface
+ * the sign of the latest event (+ ON, - OFF) and counts ON minus OFF.
+ *
+ * The framer is stateful across chunks: it keeps the events of the windows
+ * still open (a FIFO whose size is bounded by the event rate x (dt + one
+ * chunk)), so memory does not grow with the recording; nothing is allocated
+ * per event or per frame once the FIFO has reached its working size.
+ */
+#ifndef ELFM_FRAMES_H
+#define ELFM_FRAMES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "elfm_error.h"
+#include "elfm_events.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum elfm_repr {
+  ELFM_REPR_EXP = 0,  /* exponential time surface (the paper's) */
+  ELFM_REPR_LIN,      /* linear time surface */
+  ELFM_REPR_COUNT     /* plain event count */
+} elfm_repr;
+
+typedef enum elfm_polarity {
+  ELFM_POL_BOTH = 0,
+  ELFM_POL_ON,
+  ELFM_POL_OFF,
+  ELFM_POL_SIGNED
+} elfm_polarity;
+
+typedef enum elfm_frame_start {
+  ELFM_START_FIRST_EVENT = 0, /* first window starts at the first event */
+  ELFM_START_AT_TIME,         /* ... at options.start_us */
+  ELFM_START_FIRST_TRIGGER    /* ... at the first trigger edge (stimulus onset) */
+} elfm_frame_start;
+
+typedef struct elfm_frame {
+  int w, h;            /* sensor size */
+  float *data;         /* w*h, row-major, zero outside idx */
+  uint32_t *idx;       /* pixels that may be non-zero (y*w + x) */
+  size_t nnz, cap;     /* listed pixels; cap == w*h */
+  int64_t t_us;        /* time the representation stands for (SPEC §5) */
+  int64_t t_start_us, t_end_us; /* the window [t_start, t_end) */
+  int64_t index;       /* window number n, 0 for the first window */
+  size_t n_events;     /* events that fell into the window (after polarity) */
+} elfm_frame;
+
+/* A zero frame of w x h; NULL (err filled) when out of memory.
+ * Free with elfm_frame_free (NULL is a no-op). */
+elfm_frame *elfm_frame_create(int w, int h, elfm_error *err);
+void elfm_frame_free(elfm_frame *f);
+/* Zero the listed pixels and empty the list: O(nnz). */
+void elfm_frame_clear(elfm_frame *f);
+/* Set pixel i (< w*h) to value, listing it if needed. Not for hot loops
+ * of the framer (it checks the list), for tests and loaders. */
+void elfm_frame_set(elfm_frame *f, uint32_t i, float value);
+/* Copy src into dst (same size): dst is cleared first. O(nnz). */
+elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err);
+
+typedef struct elfm_framer_options {
+  int64_t dt_us;        /* window length; >= 50 us. Default 1000 (1 kHz volumes, the paper) */
+  int64_t stride_us;    /* window start to next start; 0 = dt; 1..dt */
+  elfm_frame_start start;
+  int64_t start_us;     /* for ELFM_START_AT_TIME */
+  elfm_repr repr;
+  double tau_us;        /* time-surface decay; default 1000 (= dt, so the oldest event of
+                           a window still shows at 255/e) */
+  elfm_polarity polarity;
+} elfm_framer_options;
+
+void elfm_framer_options_default(elfm_framer_options *o);
+/* Check ranges; ELFM_ERR_INVALID with a message naming the option. */
+elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *err);
+
+typedef struct elfm_framer elfm_framer;
+
+/* A framer for a width x height sensor. Free with elfm_framer_free. */
+elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int height,
+                               elfm_framer **out, elfm_error *err);
+void elfm_framer_free(elfm_framer *f);
+
+/* Take a chunk's events (times must not decrease across pushes; pixels must
+ * lie inside the sensor, else ELFM_ERR_RANGE). The chunk is not kept. */
+elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err);
+
+/* End of stream: from now on every window that begins at or before the
+ * last pushed event counts as closed (the last one is partial). */
+void elfm_framer_finish(elfm_framer *f);
+
+/* Build the next closed window into `out` (cleared first; size must match
+ * the sensor). Returns 1 if a frame was produced, 0 if no window is closed
+ * yet. Windows without events give empty frames (a fixed volume rate). */
+int elfm_framer_next(elfm_framer *f, elfm_frame *out);
+
+/* Start of the first window, or INT64_MIN while still unknown. */
+int64_t elfm_framer_origin_us(const elfm_framer *f);
+
+/* ---- median filter ---- */
+typedef struct elfm_median elfm_median;
+
+/* A size x size (3 or 5) median for w x h frames, with zero padding outside
+ * the sensor. Holds a w*h marker array. Free with elfm_median_free. */
+elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_error *err);
+void elfm_median_free(elfm_median *m);
+
+/* out = median(in). in and out must differ and match the median's size.
+ * Only pixels next to a listed pixel of `in` are computed (every other
+ * median is 0), and a window with fewer than half its pixels non-zero
+ * of each sign is 0 without sorting. Not thread-safe on the same `m`. */
+void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

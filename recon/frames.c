@@ -1,0 +1,332 @@
+/* frames.c — the framer: event chunks -> windowed frames (see elfm_frames.h).
+ *
+ * State: a FIFO of the events of the windows still open (time, pixel,
+ * polarity), a per-pixel "listed in this frame" stamp and latest-event time
+ * and polarity. A window is closed once an event at or after its end has
+ * been pushed (times never decrease), or at finish(). Building a frame walks
+ * the FIFO entries of its window once, then evaluates each listed pixel once
+ * (a table of the decay over integer ages replaces exp() per pixel).
+ */
+#include "elfm_frames.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Decay tables longer than this many microseconds (1 s windows) are not
+ * worth 4 MB: such frames are rare, so we fall back to exp(). */
+#define ELFM_DECAY_TABLE_MAX_US 1000000
+
+struct elfm_framer {
+  elfm_framer_options opt;
+  int w, h;
+  /* FIFO ring of pending events: t and (pixel | polarity << 31). */
+  int64_t *q_t;
+  uint32_t *q_pix;
+  size_t q_head, q_n, q_cap; /* q_cap a power of two */
+  /* per pixel */
+  uint32_t *stamp;           /* == cur_stamp: listed in the frame being built */
+  int64_t *last_t;           /* latest event time in the frame being built */
+  uint8_t *last_p;
+  uint32_t cur_stamp;
+  float *decay;              /* decay[age_us] for age 0..dt, or NULL */
+  int64_t origin_us;         /* start of window 0, INT64_MIN until known */
+  int64_t next_index;        /* window to emit next */
+  int64_t t_seen;            /* latest event time pushed (any polarity), INT64_MIN */
+  int64_t t_last_kept;       /* latest event time kept in the FIFO */
+  int have_events, finished;
+};
+
+elfm_frame *elfm_frame_create(int w, int h, elfm_error *err)
+{
+  if (w <= 0 || h <= 0 || (int64_t)w * h > (int64_t)1 << 31) {
+    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "frame size %d x %d is invalid", w, h);
+    return NULL;
+  }
+  elfm_frame *f = calloc(1, sizeof *f);
+  size_t n = (size_t)w * (size_t)h;
+  if (f) {
+    f->data = calloc(n, sizeof *f->data);
+    f->idx = malloc(n * sizeof *f->idx);
+  }
+  if (!f || !f->data || !f->idx) {
+    elfm_frame_free(f);
+    elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "cannot allocate a %d x %d frame", w, h);
+    return NULL;
+  }
+  f->w = w;
+  f->h = h;
+  f->cap = n;
+  return f;
+}
+
+void elfm_frame_free(elfm_frame *f)
+{
+  if (!f) return;
+  free(f->data);
+  free(f->idx);
+  free(f);
+}
+
+void elfm_frame_clear(elfm_frame *f)
+{
+  for (size_t i = 0; i < f->nnz; i++) f->data[f->idx[i]] = 0.0f;
+  f->nnz = 0;
+  f->n_events = 0;
+}
+
+void elfm_frame_set(elfm_frame *f, uint32_t i, float value)
+{
+  if (i >= f->cap) return;
+  if (f->data[i] == 0.0f) {
+    size_t k;
+    for (k = 0; k < f->nnz; k++)
+      if (f->idx[k] == i) break;
+    if (k == f->nnz) f->idx[f->nnz++] = i;
+  }
+  f->data[i] = value;
+}
+
+elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err)
+{
+  if (dst->w != src->w || dst->h != src->h)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "frame copy: %dx%d into %dx%d",
+                          src->w, src->h, dst->w, dst->h);
+  elfm_frame_clear(dst);
+  for (size_t i = 0; i < src->nnz; i++) {
+    uint32_t p = src->idx[i];
+    dst->idx[i] = p;
+    dst->data[p] = src->data[p];
+  }
+  dst->nnz = src->nnz;
+  dst->t_us = src->t_us;
+  dst->t_start_us = src->t_start_us;
+  dst->t_end_us = src->t_end_us;
+  dst->index = src->index;
+  dst->n_events = src->n_events;
+  return ELFM_OK;
+}
+
+void elfm_framer_options_default(elfm_framer_options *o)
+{
+  memset(o, 0, sizeof *o);
+  o->dt_us = 1000;
+  o->stride_us = 0;
+  o->start = ELFM_START_FIRST_EVENT;
+  o->repr = ELFM_REPR_EXP;
+  o->tau_us = 1000.0;
+  o->polarity = ELFM_POL_BOTH;
+}
+
+elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *err)
+{
+  /* 50 us: below this the EVK4's own timestamp jitter and refractory
+   * period dominate (issue 4). 10 s: a frame per 10 s is no longer a video. */
+  if (o->dt_us < 50 || o->dt_us > 10000000)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "dt_us %lld is outside 50..10000000", (long long)o->dt_us);
+  if (o->stride_us < 0 || o->stride_us > o->dt_us)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "stride_us %lld must be 0 (= dt) or 1..dt_us (%lld)",
+                          (long long)o->stride_us, (long long)o->dt_us);
+  if ((o->repr == ELFM_REPR_EXP || o->repr == ELFM_REPR_LIN) &&
+      (!isfinite(o->tau_us) || o->tau_us <= 0.0))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "tau_us must be > 0");
+  if ((unsigned)o->repr > ELFM_REPR_COUNT)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown representation %d", (int)o->repr);
+  if ((unsigned)o->polarity > ELFM_POL_SIGNED)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown polarity %d", (int)o->polarity);
+  if ((unsigned)o->start > ELFM_START_FIRST_TRIGGER)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown start mode %d", (int)o->start);
+  return ELFM_OK;
+}
+
+static float framer_decay(const elfm_framer *f, int64_t age_us)
+{
+  if (f->decay) return f->decay[age_us];
+  double a = (double)age_us / f->opt.tau_us;
+  if (f->opt.repr == ELFM_REPR_EXP) return (float)(255.0 * exp(-a));
+  return a >= 1.0 ? 0.0f : (float)(255.0 * (1.0 - a));
+}
+
+elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int height,
+                               elfm_framer **out, elfm_error *err)
+{
+  *out = NULL;
+  elfm_status st = elfm_framer_options_check(o, err);
+  if (st) return st;
+  if (width <= 0 || height <= 0 || width > 32767 || height > 32767)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "sensor size %d x %d is invalid",
+                          width, height);
+  elfm_framer *f = calloc(1, sizeof *f);
+  if (!f) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (framer)");
+  f->opt = *o;
+  if (f->opt.stride_us == 0) f->opt.stride_us = f->opt.dt_us;
+  f->w = width;
+  f->h = height;
+  size_t n = (size_t)width * (size_t)height;
+  f->q_cap = 1u << 16;
+  f->q_t = malloc(f->q_cap * sizeof *f->q_t);
+  f->q_pix = malloc(f->q_cap * sizeof *f->q_pix);
+  f->stamp = calloc(n, sizeof *f->stamp);
+  f->last_t = malloc(n * sizeof *f->last_t);
+  f->last_p = malloc(n);
+  int table = o->repr != ELFM_REPR_COUNT && o->dt_us <= ELFM_DECAY_TABLE_MAX_US;
+  if (table) f->decay = malloc((size_t)(o->dt_us + 1) * sizeof *f->decay);
+  if (!f->q_t || !f->q_pix || !f->stamp || !f->last_t || !f->last_p || (table && !f->decay)) {
+    elfm_framer_free(f);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (framer %d x %d)",
+                          width, height);
+  }
+  if (table) {
+    float *d = f->decay;
+    f->decay = NULL; /* framer_decay computes directly while the table is built */
+    for (int64_t a = 0; a <= o->dt_us; a++) d[a] = framer_decay(f, a);
+    f->decay = d;
+  }
+  f->cur_stamp = 0;
+  f->origin_us = INT64_MIN;
+  f->t_seen = INT64_MIN;
+  f->t_last_kept = INT64_MIN;
+  if (o->start == ELFM_START_AT_TIME) f->origin_us = o->start_us;
+  *out = f;
+  return ELFM_OK;
+}
+
+void elfm_framer_free(elfm_framer *f)
+{
+  if (!f) return;
+  free(f->q_t);
+  free(f->q_pix);
+  free(f->stamp);
+  free(f->last_t);
+  free(f->last_p);
+  free(f->decay);
+  free(f);
+}
+
+int64_t elfm_framer_origin_us(const elfm_framer *f) { return f->origin_us; }
+
+static int framer_grow(elfm_framer *f)
+{
+  size_t cap = f->q_cap * 2;
+  int64_t *t = malloc(cap * sizeof *t);
+  uint32_t *p = malloc(cap * sizeof *p);
+  if (!t || !p) {
+    free(t);
+    free(p);
+    return 0;
+  }
+  for (size_t i = 0; i < f->q_n; i++) {
+    size_t k = (f->q_head + i) & (f->q_cap - 1);
+    t[i] = f->q_t[k];
+    p[i] = f->q_pix[k];
+  }
+  free(f->q_t);
+  free(f->q_pix);
+  f->q_t = t;
+  f->q_pix = p;
+  f->q_cap = cap;
+  f->q_head = 0;
+  return 1;
+}
+
+elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err)
+{
+  if (f->origin_us == INT64_MIN && f->opt.start == ELFM_START_FIRST_TRIGGER) {
+    for (size_t i = 0; i < c->n_trig; i++)
+      if (c->trig[i].value == 1) {
+        f->origin_us = c->trig[i].t_us;
+        break;
+      }
+  }
+  for (size_t i = 0; i < c->n; i++) {
+    int64_t t = c->t_us[i];
+    if (t < f->t_seen)
+      return elfm_error_set(err, ELFM_ERR_FORMAT, NULL, -1,
+                            "event time %lld us is before the previous event's %lld us",
+                            (long long)t, (long long)f->t_seen);
+    f->t_seen = t;
+    if (c->x[i] >= f->w || c->y[i] >= f->h)
+      return elfm_error_set(err, ELFM_ERR_RANGE, NULL, -1,
+                            "event at (%u, %u) lies outside the %d x %d sensor",
+                            (unsigned)c->x[i], (unsigned)c->y[i], f->w, f->h);
+    int p = c->p[i] ? 1 : 0;
+    if ((f->opt.polarity == ELFM_POL_ON && !p) || (f->opt.polarity == ELFM_POL_OFF && p))
+      continue;
+    if (f->origin_us == INT64_MIN) {
+      if (f->opt.start != ELFM_START_FIRST_EVENT) continue; /* waiting for the trigger */
+      f->origin_us = t;
+    }
+    if (t < f->origin_us) continue;
+    if (f->q_n == f->q_cap && !framer_grow(f))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1,
+                            "out of memory holding %zu events of open windows", f->q_n);
+    size_t k = (f->q_head + f->q_n) & (f->q_cap - 1);
+    f->q_t[k] = t;
+    f->q_pix[k] = ((uint32_t)c->y[i] * (uint32_t)f->w + c->x[i]) | ((uint32_t)p << 31);
+    f->q_n++;
+    f->t_last_kept = t;
+    f->have_events = 1;
+  }
+  return ELFM_OK;
+}
+
+void elfm_framer_finish(elfm_framer *f) { f->finished = 1; }
+
+int elfm_framer_next(elfm_framer *f, elfm_frame *out)
+{
+  if (f->origin_us == INT64_MIN || out->w != f->w || out->h != f->h) return 0;
+  int64_t t0 = f->origin_us + f->next_index * f->opt.stride_us;
+  int64_t t1 = t0 + f->opt.dt_us;
+  int closed = f->t_seen != INT64_MIN && t1 <= f->t_seen;
+  if (!closed && f->finished) closed = f->have_events && t0 <= f->t_last_kept;
+  if (!closed) return 0;
+
+  elfm_frame_clear(out);
+  if (++f->cur_stamp == 0) { /* wrapped after 2^32 frames: forget old stamps */
+    memset(f->stamp, 0, (size_t)f->w * (size_t)f->h * sizeof *f->stamp);
+    f->cur_stamp = 1;
+  }
+  const uint32_t stamp = f->cur_stamp;
+  const int count = f->opt.repr == ELFM_REPR_COUNT;
+  const int sign = f->opt.polarity == ELFM_POL_SIGNED;
+  size_t nev = 0;
+  for (size_t i = 0; i < f->q_n; i++) {
+    size_t k = (f->q_head + i) & (f->q_cap - 1);
+    int64_t t = f->q_t[k];
+    if (t >= t1) break;
+    if (t < t0) continue; /* only when stride < dt left older events queued */
+    uint32_t pix = f->q_pix[k] & 0x7fffffffu;
+    uint8_t p = (uint8_t)(f->q_pix[k] >> 31);
+    nev++;
+    if (f->stamp[pix] != stamp) {
+      f->stamp[pix] = stamp;
+      out->idx[out->nnz++] = pix;
+    }
+    if (count) out->data[pix] += sign && !p ? -1.0f : 1.0f;
+    f->last_t[pix] = t;
+    f->last_p[pix] = p;
+  }
+  if (!count) {
+    for (size_t i = 0; i < out->nnz; i++) {
+      uint32_t pix = out->idx[i];
+      float v = framer_decay(f, t1 - f->last_t[pix]);
+      out->data[pix] = sign && !f->last_p[pix] ? -v : v;
+    }
+  }
+  out->n_events = nev;
+  out->t_start_us = t0;
+  out->t_end_us = t1;
+  out->t_us = count ? t0 + f->opt.dt_us / 2 : t1;
+  out->index = f->next_index;
+  f->next_index++;
+  /* drop what no later window needs */
+  int64_t next_t0 = t0 + f->opt.stride_us;
+  while (f->q_n > 0 && f->q_t[f->q_head] < next_t0) {
+    f->q_head = (f->q_head + 1) & (f->q_cap - 1);
+    f->q_n--;
+  }
+  return 1;
+}

@@ -1,0 +1,278 @@
+/* test_frames.c — the framer: windows, representations, polarity, start
+ * modes, chunk-boundary independence, bad input. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+
+enum { SW = 64, SH = 48 };
+
+static void add_event(elfm_event_chunk *c, int64_t t, int x, int y, int p)
+{
+  c->t_us[c->n] = t;
+  c->x[c->n] = (uint16_t)x;
+  c->y[c->n] = (uint16_t)y;
+  c->p[c->n] = (uint8_t)p;
+  c->n++;
+}
+
+static float px(const elfm_frame *f, int x, int y) { return f->data[y * f->w + x]; }
+
+/* every non-zero pixel listed, each listed once */
+static int frame_consistent(const elfm_frame *f)
+{
+  char *seen = calloc((size_t)f->w * f->h, 1);
+  int ok = 1;
+  for (size_t i = 0; i < f->nnz; i++) {
+    if (seen[f->idx[i]]) ok = 0;
+    seen[f->idx[i]] = 1;
+  }
+  for (int i = 0; i < f->w * f->h; i++)
+    if (f->data[i] != 0.0f && !seen[i]) ok = 0;
+  free(seen);
+  return ok;
+}
+
+static void test_exp_windows(void)
+{
+  elfm_error err;
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_AT_TIME;
+  o.start_us = 5000000; /* recordings start at arbitrary offsets (SPEC §1) */
+  elfm_framer *fr = NULL;
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create(64, &err);
+  elfm_frame *f = elfm_frame_create(SW, SH, &err);
+  add_event(c, 4999999, 1, 1, 1);             /* before start: ignored */
+  add_event(c, 5000100, 3, 4, 1);
+  add_event(c, 5000600, 3, 4, 0);             /* same pixel later: latest wins */
+  add_event(c, 5000900, 10, 20, 1);
+  add_event(c, 5003500, 7, 7, 1);             /* window 3; windows 1, 2 are empty */
+  CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+  CHECK_EQ_INT(f->index, 0);
+  CHECK_EQ_INT(f->t_start_us, 5000000);
+  CHECK_EQ_INT(f->t_end_us, 5001000);
+  CHECK_EQ_INT(f->t_us, 5001000); /* time surface: window end */
+  CHECK_EQ_INT(f->n_events, 3);
+  CHECK_EQ_INT(f->nnz, 2);
+  CHECK_NEAR(px(f, 3, 4), 255.0 * exp(-400.0 / 1000.0), 1e-3);
+  CHECK_NEAR(px(f, 10, 20), 255.0 * exp(-100.0 / 1000.0), 1e-3);
+  CHECK(px(f, 1, 1) == 0.0f);
+  CHECK(frame_consistent(f));
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+  CHECK_EQ_INT(f->index, 1);
+  CHECK_EQ_INT(f->nnz, 0);
+  CHECK(px(f, 3, 4) == 0.0f); /* cleared from the previous frame */
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+  CHECK_EQ_INT(f->index, 2);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 0); /* window 3 not closed yet */
+  elfm_framer_finish(fr);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+  CHECK_EQ_INT(f->index, 3);
+  CHECK_NEAR(px(f, 7, 7), 255.0 * exp(-500.0 / 1000.0), 1e-3);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 0);
+  elfm_framer_free(fr);
+  elfm_chunk_free(c);
+  elfm_frame_free(f);
+}
+
+static void test_lin_count_signed(void)
+{
+  elfm_error err;
+  elfm_event_chunk *c = elfm_chunk_create(64, &err);
+  elfm_frame *f = elfm_frame_create(SW, SH, &err);
+  add_event(c, 100, 2, 2, 1);
+  add_event(c, 300, 2, 2, 0);
+  add_event(c, 400, 2, 2, 0);
+  add_event(c, 500, 5, 5, 1);
+  add_event(c, 1100, 6, 6, 1); /* closes window [100, 1100) */
+  for (int mode = 0; mode < 4; mode++) {
+    elfm_framer_options o;
+    elfm_framer_options_default(&o);
+    o.tau_us = 800;
+    elfm_framer *fr = NULL;
+    if (mode == 0) { o.repr = ELFM_REPR_LIN; }
+    if (mode == 1) { o.repr = ELFM_REPR_COUNT; }
+    if (mode == 2) { o.repr = ELFM_REPR_COUNT; o.polarity = ELFM_POL_SIGNED; }
+    if (mode == 3) { o.repr = ELFM_REPR_EXP; o.polarity = ELFM_POL_OFF; }
+    CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+    CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+    if (mode == 3) {
+      /* OFF only: the first OFF event (300) starts the window [300, 1300),
+       * which the ON event at 1100 cannot close */
+      CHECK_EQ_INT(elfm_framer_next(fr, f), 0);
+      elfm_framer_finish(fr);
+    }
+    CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+    if (mode == 0) {
+      CHECK_EQ_INT(f->t_start_us, 100); /* first window starts at the first event */
+      CHECK_NEAR(px(f, 2, 2), 255.0 * (1.0 - 700.0 / 800.0), 1e-3);
+      CHECK_NEAR(px(f, 5, 5), 255.0 * (1.0 - 600.0 / 800.0), 1e-3);
+    } else if (mode == 1) {
+      CHECK_EQ_INT(f->t_us, 600); /* accumulation: window centre */
+      CHECK_NEAR(px(f, 2, 2), 3.0, 0);
+      CHECK_NEAR(px(f, 5, 5), 1.0, 0);
+    } else if (mode == 2) {
+      CHECK_NEAR(px(f, 2, 2), -1.0, 0);
+      CHECK_NEAR(px(f, 5, 5), 1.0, 0);
+    } else {
+      CHECK_EQ_INT(f->t_start_us, 300);
+      CHECK_EQ_INT(f->nnz, 1);
+      CHECK_NEAR(px(f, 2, 2), 255.0 * exp(-900.0 / 800.0), 1e-3);
+    }
+    CHECK(frame_consistent(f));
+    elfm_framer_free(fr);
+  }
+  elfm_chunk_free(c);
+  elfm_frame_free(f);
+}
+
+/* Overlapping windows (stride < dt), and splitting the stream into chunks
+ * anywhere gives the same frames. */
+static void test_stride_and_chunking(void)
+{
+  elfm_error err;
+  enum { N = 3000 };
+  elfm_event_chunk *all = elfm_chunk_create(N, &err);
+  uint32_t s = 12345;
+  int64_t t = 1000;
+  for (int i = 0; i < N; i++) {
+    s = s * 1103515245u + 12345u;
+    t += (s >> 16) % 7; /* equal times happen */
+    add_event(all, t, (int)((s >> 8) % SW), (int)((s >> 20) % SH), (int)(s >> 31));
+  }
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.dt_us = 500;
+  o.stride_us = 200;
+  o.tau_us = 300;
+  elfm_framer *a = NULL, *b = NULL;
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &a, &err), &err);
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &b, &err), &err);
+  elfm_frame *fa = elfm_frame_create(SW, SH, &err), *fb = elfm_frame_create(SW, SH, &err);
+  CHECK_OK(elfm_framer_push(a, all, &err), &err);
+  elfm_framer_finish(a);
+  /* reference: frames from the whole stream, kept as checksums */
+  double sums[200];
+  int64_t nevs[200];
+  int na = 0;
+  while (na < 200 && elfm_framer_next(a, fa)) {
+    double sum = 0;
+    for (int i = 0; i < SW * SH; i++) sum += fa->data[i] * (1.0 + i % 13);
+    CHECK(frame_consistent(fa));
+    CHECK_EQ_INT(fa->t_start_us, all->t_us[0] + na * 200);
+    /* brute force: events in the window */
+    int64_t n = 0;
+    for (int i = 0; i < N; i++) n += all->t_us[i] >= fa->t_start_us && all->t_us[i] < fa->t_end_us;
+    CHECK_EQ_INT(fa->n_events, n);
+    sums[na] = sum;
+    nevs[na] = (int64_t)fa->n_events;
+    na++;
+  }
+  CHECK(na > 30);
+  /* feed b in chunks of 1..97 events, pulling frames between pushes */
+  elfm_event_chunk *c = elfm_chunk_create(128, &err);
+  int nb = 0, pos = 0;
+  while (pos < N) {
+    s = s * 1103515245u + 12345u;
+    int len = 1 + (int)((s >> 16) % 97);
+    c->n = 0;
+    for (int i = 0; i < len && pos < N; i++, pos++)
+      add_event(c, all->t_us[pos], all->x[pos], all->y[pos], all->p[pos]);
+    CHECK_OK(elfm_framer_push(b, c, &err), &err);
+    while (elfm_framer_next(b, fb)) {
+      double sum = 0;
+      for (int i = 0; i < SW * SH; i++) sum += fb->data[i] * (1.0 + i % 13);
+      if (nb < na) {
+        CHECK_NEAR(sum, sums[nb], 1e-6 * fabs(sums[nb]) + 1e-9);
+        CHECK_EQ_INT(fb->n_events, nevs[nb]);
+      }
+      nb++;
+    }
+  }
+  elfm_framer_finish(b);
+  while (elfm_framer_next(b, fb)) nb++;
+  CHECK_EQ_INT(nb, na);
+  elfm_framer_free(a);
+  elfm_framer_free(b);
+  elfm_frame_free(fa);
+  elfm_frame_free(fb);
+  elfm_chunk_free(all);
+  elfm_chunk_free(c);
+}
+
+static void test_trigger_start(void)
+{
+  elfm_error err;
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_FIRST_TRIGGER;
+  elfm_framer *fr = NULL;
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create(16, &err);
+  elfm_frame *f = elfm_frame_create(SW, SH, &err);
+  add_event(c, 100, 1, 1, 1); /* before any trigger: no window yet */
+  CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+  CHECK_EQ_INT(elfm_framer_origin_us(fr), INT64_MIN);
+  c->n = 0;
+  c->trig[0] = (elfm_trigger){.t_us = 2500, .channel = 0, .value = 1};
+  c->n_trig = 1;
+  add_event(c, 2000, 2, 2, 1); /* before the trigger: dropped */
+  add_event(c, 2700, 3, 3, 1);
+  add_event(c, 3600, 4, 4, 1);
+  CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+  CHECK_EQ_INT(elfm_framer_origin_us(fr), 2500);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+  CHECK_EQ_INT(f->t_start_us, 2500);
+  CHECK_EQ_INT(f->nnz, 1);
+  CHECK(px(f, 3, 3) > 0.0f && px(f, 2, 2) == 0.0f);
+  elfm_framer_free(fr);
+  elfm_chunk_free(c);
+  elfm_frame_free(f);
+}
+
+static void test_bad_input(void)
+{
+  elfm_error err;
+  elfm_framer_options o;
+  elfm_framer *fr = NULL;
+  elfm_framer_options_default(&o);
+  o.dt_us = 49;
+  CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID && fr == NULL);
+  CHECK(strstr(err.message, "dt_us") != NULL);
+  elfm_framer_options_default(&o);
+  o.stride_us = 2000;
+  CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
+  elfm_framer_options_default(&o);
+  o.tau_us = -1;
+  CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
+  elfm_framer_options_default(&o);
+  CHECK(elfm_framer_create(&o, 0, SH, &fr, &err) == ELFM_ERR_INVALID);
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create(16, &err);
+  add_event(c, 100, SW, 0, 1);
+  CHECK(elfm_framer_push(fr, c, &err) == ELFM_ERR_RANGE);
+  CHECK(strstr(err.message, "outside") != NULL);
+  c->n = 0;
+  add_event(c, 200, 1, 1, 1);
+  add_event(c, 150, 1, 1, 1);
+  CHECK(elfm_framer_push(fr, c, &err) == ELFM_ERR_FORMAT);
+  elfm_framer_free(fr);
+  elfm_framer_free(NULL);
+  elfm_frame_free(NULL);
+  elfm_chunk_free(c);
+}
+
+int main(void)
+{
+  test_exp_windows();
+  test_lin_count_signed();
+  test_stride_and_chunking();
+  test_trigger_start();
+  test_bad_input();
+  return check_report();
+}
