@@ -1,3 +1,4 @@
 # recon: frames, median, refocusing, pipeline and outputs (issue 4).
 elfm_add_test(test_frames test_frames.c)
 elfm_add_test(test_median test_median.c)
+elfm_add_test(test_refocus test_refocus.c)

@@ -1,0 +1,115 @@
+/* elfm_refocus.h — shift-and-add refocusing of Fourier LFM frames onto the
+ * z planes of a calibration, with ghost suppression.
+ *
+ * FFTW style: plan once, execute many. elfm_refocus_plan_create() turns a
+ * calibration into a read-only plan (crop boxes, per-view per-plane integer
+ * shifts and bilinear weights, per-voxel view counts); the plan can be shared
+ * by any number of threads. Each concurrent execute needs its own workspace
+ * (scratch; nothing is allocated per frame once it has reached its size).
+ *
+ * Geometry (SPEC §2, §3): voxel (X, Y, k) of a W x H x Nz volume samples view v
+ * at sensor u = X + cx_v - (W-1)/2 + z_k dx_v (likewise v), bilinearly. A view
+ * "samples" a voxel when both bilinear taps lie inside the view's crop box
+ * (view_size_px centred on (cx, cy), widened by crop_margin_px, clipped to the
+ * sensor); each voxel is the mean over the views that sample it, so views
+ * overhanging the sensor do not darken the edges. Voxels no view samples are 0.
+ *
+ * Two paths, same result (to float rounding; tested to 1e-4 of the maximum):
+ *   dense   gathers every voxel plane by plane (cost ~ views x W x H x Nz);
+ *   sparse  scatters each listed frame pixel (cost ~ listed pixels x Nz): pixel
+ *           u of view v lands on X = u - floor(shift) with weight 1 - frac and
+ *           on X - 1 with weight frac, the adjoint of the bilinear gather.
+ * AUTO picks sparse when the listed pixels are few (see options).
+ *
+ * Ghost suppression (applied in execute, after the mean), see docs/recon.md:
+ *   threshold: ABS (voxel < value -> 0), FRAC_MAX (< value x volume maximum),
+ *              MAD (< median + value x 1.4826 MAD of the non-zero voxels);
+ *   agreement: a voxel keeps its value only if at least
+ *              ceil(agree_frac x views sampling it) of those views see signal
+ *              there (their bilinear sample is non-zero). A ghost is where a
+ *              few views' images of different objects happen to overlap; a
+ *              real object is seen by (nearly) all views.
+ */
+#ifndef ELFM_REFOCUS_H
+#define ELFM_REFOCUS_H
+
+#include "elfm_calib.h"
+#include "elfm_error.h"
+#include "elfm_frames.h"
+#include "elfm_volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum elfm_refocus_path {
+  ELFM_PATH_AUTO = 0,
+  ELFM_PATH_DENSE,
+  ELFM_PATH_SPARSE
+} elfm_refocus_path;
+
+typedef enum elfm_ghost_threshold {
+  ELFM_GHOST_THR_NONE = 0,
+  ELFM_GHOST_THR_ABS,
+  ELFM_GHOST_THR_FRAC_MAX,
+  ELFM_GHOST_THR_MAD
+} elfm_ghost_threshold;
+
+typedef struct elfm_refocus_options {
+  elfm_refocus_path path;
+  /* AUTO: sparse when listed pixels < sparse_max_fill x (sum of crop box
+   * areas). Default from bench_refocus (docs/recon.md). */
+  double sparse_max_fill;
+  int crop_margin_px;              /* widen each view's crop box (default 0) */
+  elfm_ghost_threshold threshold;  /* default NONE */
+  double threshold_value;          /* ABS: value; FRAC_MAX: fraction; MAD: k */
+  double agree_frac;               /* 0 = off; else in (0, 1] */
+} elfm_refocus_options;
+
+void elfm_refocus_options_default(elfm_refocus_options *o);
+
+typedef struct elfm_refocus_plan elfm_refocus_plan;
+typedef struct elfm_refocus_workspace elfm_refocus_workspace;
+
+/* Build a plan for frames of the calibration's sensor and volumes of
+ * view_w x view_h x n_planes. On failure *out is NULL and err says why.
+ * Free with elfm_refocus_plan_free (NULL is a no-op). */
+elfm_status elfm_refocus_plan_create(const elfm_calib *calib, const elfm_refocus_options *opt,
+                                     elfm_refocus_plan **out, elfm_error *err);
+void elfm_refocus_plan_free(elfm_refocus_plan *p);
+
+/* Plan facts: volume size, sensor size, views that sample voxel (X, Y, k). */
+void elfm_refocus_plan_size(const elfm_refocus_plan *p, int *w, int *h, int *nz);
+int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k);
+const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
+
+/* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
+ * The workspace remembers which rows of the volume it last wrote on the
+ * sparse path, so it clears only those next time: between two executes
+ * with the same volume and workspace, only zero voxels (a threshold) may be
+ * changed by the caller; after any other change, call
+ * elfm_refocus_workspace_forget(). */
+elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
+                                          elfm_refocus_workspace **out, elfm_error *err);
+void elfm_refocus_workspace_free(elfm_refocus_workspace *ws);
+void elfm_refocus_workspace_forget(elfm_refocus_workspace *ws);
+/* The path the last execute took (DENSE or SPARSE). */
+elfm_refocus_path elfm_refocus_workspace_last_path(const elfm_refocus_workspace *ws);
+
+/* Refocus `frame` (the full sensor) into `vol` (created with the plan's
+ * size; its t_us/frame/axes are set from the frame and the calibration),
+ * applying the plan's ghost suppression. The plan's path choice is used. */
+elfm_status elfm_refocus_execute(const elfm_refocus_plan *p, const elfm_frame *frame,
+                                 elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err);
+/* Same with an explicit path (DENSE or SPARSE; AUTO = the plan's rule). */
+elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_path path,
+                                      const elfm_frame *frame, elfm_volume *vol,
+                                      elfm_refocus_workspace *ws, elfm_error *err);
+
+/* A volume of the plan's size (zeroed). Free with elfm_volume_free. */
+elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

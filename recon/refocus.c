@@ -1,0 +1,302 @@
+/* refocus.c — refocus plan, workspace and the dense (gather) path
+ * (see elfm_refocus.h; the sparse path is refocus_sparse.c, ghosts ghost.c).
+ */
+#include "refocus_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void elfm_refocus_options_default(elfm_refocus_options *o)
+{
+  memset(o, 0, sizeof *o);
+  o->path = ELFM_PATH_AUTO;
+  /* Sparse costs ~ listed pixels x planes x 4 scattered adds, dense ~ views x
+   * W x H x planes x 4 gathered madds over the crop boxes: per pixel, a
+   * scatter costs about as much as a gather, so the crossover is near a
+   * fill of 1/2; bench_refocus measures it (docs/recon.md). */
+  o->sparse_max_fill = 0.25;
+  o->crop_margin_px = 0;
+  o->threshold = ELFM_GHOST_THR_NONE;
+  o->threshold_value = 0.0;
+  o->agree_frac = 0.0;
+}
+
+void elfm_refocus_plan_free(elfm_refocus_plan *p)
+{
+  if (!p) return;
+  free(p->box);
+  free(p->shift);
+  free(p->inv_count);
+  free(p->count);
+  free(p->need);
+  free(p);
+}
+
+static int imax(int a, int b) { return a > b ? a : b; }
+static int imin(int a, int b) { return a < b ? a : b; }
+
+elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_options *opt,
+                                     elfm_refocus_plan **out, elfm_error *err)
+{
+  *out = NULL;
+  elfm_refocus_options o;
+  if (opt) o = *opt;
+  else elfm_refocus_options_default(&o);
+  if ((unsigned)o.path > ELFM_PATH_SPARSE)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown refocus path %d", (int)o.path);
+  if (!(o.sparse_max_fill >= 0.0) || !isfinite(o.sparse_max_fill))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "sparse_max_fill must be >= 0");
+  if (o.crop_margin_px < 0 || o.crop_margin_px > 1000)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "crop margin %d px outside 0..1000",
+                          o.crop_margin_px);
+  if (!(o.agree_frac >= 0.0 && o.agree_frac <= 1.0))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "agree_frac must be in [0, 1]");
+  if ((unsigned)o.threshold > ELFM_GHOST_THR_MAD || !isfinite(o.threshold_value) ||
+      o.threshold_value < 0.0)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "ghost threshold mode %d with value %g is invalid", (int)o.threshold,
+                          o.threshold_value);
+  if (c->n_views <= 0 || c->n_views > ELFM_MAX_VIEWS || c->n_views > 254)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "calibration has %d views", c->n_views);
+  if (c->view_w_px <= 0 || c->view_h_px <= 0 || c->view_w_px > 8192 || c->view_h_px > 8192 ||
+      c->sensor_width_px <= 0 || c->sensor_height_px <= 0)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calibration view %d x %d / sensor %d x %d is invalid", c->view_w_px,
+                          c->view_h_px, c->sensor_width_px, c->sensor_height_px);
+  if (!(c->z_step_um > 0.0) || !isfinite(c->z_min_um) || !(c->z_max_um >= c->z_min_um))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "calibration z range is invalid");
+  int nz = elfm_calib_n_planes(c);
+  if (nz <= 0 || nz > 4096)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "%d z planes (1..4096)", nz);
+
+  elfm_refocus_plan *p = calloc(1, sizeof *p);
+  if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan)");
+  p->calib = *c;
+  p->opt = o;
+  p->w = c->view_w_px;
+  p->h = c->view_h_px;
+  p->nz = nz;
+  p->nv = c->n_views;
+  p->sw = c->sensor_width_px;
+  p->sh = c->sensor_height_px;
+  size_t nvox = (size_t)p->w * p->h * nz;
+  p->box = calloc((size_t)p->nv, sizeof *p->box);
+  p->shift = calloc((size_t)p->nv * nz, sizeof *p->shift);
+  p->inv_count = calloc(nvox, sizeof *p->inv_count);
+  p->count = calloc(nvox, 1);
+  if (o.agree_frac > 0.0) p->need = calloc(nvox, 1);
+  if (!p->box || !p->shift || !p->inv_count || !p->count || (o.agree_frac > 0.0 && !p->need)) {
+    elfm_refocus_plan_free(p);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
+  }
+  const double hw = 0.5 * (p->w - 1), hh = 0.5 * (p->h - 1);
+  for (int v = 0; v < p->nv; v++) {
+    const elfm_view *vw = &c->views[v];
+    if (!isfinite(vw->cx_px) || !isfinite(vw->cy_px) || !isfinite(vw->dx_px_per_um) ||
+        !isfinite(vw->dy_px_per_um) || fabs(vw->cx_px) > 1e6 || fabs(vw->cy_px) > 1e6) {
+      elfm_refocus_plan_free(p);
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "view %d of the calibration is not finite", v);
+    }
+    /* The crop box holds both taps of every voxel at focus: columns
+     * floor(cx - hw) .. floor(cx + hw) + 1. */
+    elfm_refocus_box *b = &p->box[v];
+    double x0 = floor(vw->cx_px - hw) - o.crop_margin_px, y0 = floor(vw->cy_px - hh) - o.crop_margin_px;
+    double x1 = floor(vw->cx_px + hw) + 2 + o.crop_margin_px, y1 = floor(vw->cy_px + hh) + 2 + o.crop_margin_px;
+    b->x0 = (int)fmax(0.0, x0);
+    b->y0 = (int)fmax(0.0, y0);
+    b->x1 = (int)fmin((double)p->sw, x1);
+    b->y1 = (int)fmin((double)p->sh, y1);
+    if (b->x1 < b->x0) b->x1 = b->x0;
+    if (b->y1 < b->y0) b->y1 = b->y0;
+    p->box_area += (double)(b->x1 - b->x0) * (b->y1 - b->y0);
+    for (int k = 0; k < nz; k++) {
+      double z = c->z_min_um + k * c->z_step_um;
+      double ox = vw->cx_px - hw + z * vw->dx_px_per_um;
+      double oy = vw->cy_px - hh + z * vw->dy_px_per_um;
+      elfm_refocus_shift *s = &p->shift[(size_t)k * p->nv + v];
+      double fix = floor(ox), fiy = floor(oy);
+      if (fabs(fix) > 1e7 || fabs(fiy) > 1e7) { /* so far off the sensor it samples nothing */
+        s->xlo = s->xhi = s->ylo = s->yhi = 0;
+        continue;
+      }
+      s->ix = (int)fix;
+      s->iy = (int)fiy;
+      s->fx = (float)(ox - fix);
+      s->fy = (float)(oy - fiy);
+      s->xlo = imax(0, b->x0 - s->ix);
+      s->xhi = imin(p->w, b->x1 - 1 - s->ix);
+      s->ylo = imax(0, b->y0 - s->iy);
+      s->yhi = imin(p->h, b->y1 - 1 - s->iy);
+      if (s->xhi < s->xlo) s->xhi = s->xlo;
+      if (s->yhi < s->ylo) s->yhi = s->ylo;
+      for (int Y = s->ylo; Y < s->yhi; Y++) {
+        uint8_t *row = p->count + ((size_t)k * p->h + Y) * p->w;
+        for (int X = s->xlo; X < s->xhi; X++) row[X]++;
+      }
+    }
+  }
+  for (size_t i = 0; i < nvox; i++) {
+    p->inv_count[i] = p->count[i] ? 1.0f / (float)p->count[i] : 0.0f;
+    if (p->need) {
+      int n = (int)ceil(o.agree_frac * p->count[i] - 1e-9);
+      p->need[i] = (uint8_t)(n < 1 && p->count[i] ? 1 : n);
+    }
+  }
+  *out = p;
+  return ELFM_OK;
+}
+
+void elfm_refocus_plan_size(const elfm_refocus_plan *p, int *w, int *h, int *nz)
+{
+  if (w) *w = p->w;
+  if (h) *h = p->h;
+  if (nz) *nz = p->nz;
+}
+
+int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k)
+{
+  if (X < 0 || Y < 0 || k < 0 || X >= p->w || Y >= p->h || k >= p->nz) return 0;
+  return p->count[((size_t)k * p->h + Y) * p->w + X];
+}
+
+const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p) { return &p->calib; }
+
+elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)
+{
+  return elfm_volume_create(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,
+                            p->calib.z_step_um, err);
+}
+
+elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
+                                          elfm_refocus_workspace **out, elfm_error *err)
+{
+  *out = NULL;
+  elfm_refocus_workspace *ws = calloc(1, sizeof *ws);
+  if (!ws) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
+  size_t nvox = (size_t)p->w * p->h * p->nz;
+  ws->plan = p;
+  ws->plane_cnt = calloc((size_t)p->w * p->h, 1);
+  ws->cap_taps = 1u << 14;
+  ws->taps = malloc(ws->cap_taps * sizeof *ws->taps);
+  ws->row_dirty = calloc((size_t)p->nz * p->h, 1);
+  ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
+  if (p->need) {
+    ws->vox_cnt = calloc(nvox, 1);
+    ws->vox_last = calloc(nvox, 1);
+  }
+  if (!ws->plane_cnt || !ws->taps || !ws->row_dirty || !ws->rows ||
+      (p->need && (!ws->vox_cnt || !ws->vox_last))) {
+    elfm_refocus_workspace_free(ws);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
+  }
+  ws->last_path = ELFM_PATH_AUTO;
+  *out = ws;
+  return ELFM_OK;
+}
+
+void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
+{
+  if (!ws) return;
+  free(ws->plane_cnt);
+  free(ws->taps);
+  free(ws->vox_cnt);
+  free(ws->vox_last);
+  free(ws->row_dirty);
+  free(ws->rows);
+  free(ws);
+}
+
+void elfm_refocus_workspace_forget(elfm_refocus_workspace *ws)
+{
+  for (size_t i = 0; i < ws->n_rows; i++) ws->row_dirty[ws->rows[i]] = 0;
+  ws->n_rows = 0;
+  ws->dirty_data = NULL;
+  ws->dirty_all = 0;
+}
+
+elfm_refocus_path elfm_refocus_workspace_last_path(const elfm_refocus_workspace *ws)
+{
+  return ws->last_path;
+}
+
+/* Plane by plane: gather every view's bilinear sample into the plane, count
+ * the views that see signal, then take the mean over sampling views. */
+static void refocus_dense(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol,
+                          elfm_refocus_workspace *ws)
+{
+  const int W = p->w, H = p->h, SW = p->sw;
+  const float *img = frame->data;
+  for (int k = 0; k < p->nz; k++) {
+    float *plane = vol->data + (size_t)k * W * H;
+    memset(plane, 0, (size_t)W * H * sizeof *plane);
+    if (p->need) memset(ws->plane_cnt, 0, (size_t)W * H);
+    for (int v = 0; v < p->nv; v++) {
+      const elfm_refocus_shift *s = &p->shift[(size_t)k * p->nv + v];
+      const float w00 = (1.0f - s->fx) * (1.0f - s->fy), w01 = s->fx * (1.0f - s->fy);
+      const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
+      const int n = s->xhi - s->xlo;
+      for (int Y = s->ylo; Y < s->yhi; Y++) {
+        /* both taps of X lie in the crop box, inside the sensor (plan) */
+        const float *r0 = img + (size_t)(Y + s->iy) * SW + (size_t)(s->ix + s->xlo);
+        const float *r1 = r0 + SW;
+        float *o = plane + (size_t)Y * W + s->xlo;
+        if (p->need) {
+          uint8_t *cnt = ws->plane_cnt + (size_t)Y * W + s->xlo;
+          for (int i = 0; i < n; i++) {
+            float a = w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
+            o[i] += a;
+            cnt[i] += a != 0.0f;
+          }
+        } else {
+          for (int i = 0; i < n; i++)
+            o[i] += w00 * r0[i] + w01 * r0[i + 1] + w10 * r1[i] + w11 * r1[i + 1];
+        }
+      }
+    }
+    const float *inv = p->inv_count + (size_t)k * W * H;
+    for (size_t i = 0; i < (size_t)W * H; i++) plane[i] *= inv[i];
+    if (p->need)
+      for (int Y = 0; Y < H; Y++)
+        elfm_ghost_agree_row(p, k, Y, plane + (size_t)Y * W, ws->plane_cnt + (size_t)Y * W);
+  }
+  elfm_ghost_threshold_apply(p, vol, NULL, 0);
+}
+
+elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_path path,
+                                      const elfm_frame *frame, elfm_volume *vol,
+                                      elfm_refocus_workspace *ws, elfm_error *err)
+{
+  if (!frame || frame->w != p->sw || frame->h != p->sh)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "frame %d x %d does not match the calibration's %d x %d sensor",
+                          frame ? frame->w : 0, frame ? frame->h : 0, p->sw, p->sh);
+  if (!vol || vol->w != p->w || vol->h != p->h || vol->nz != p->nz)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "volume does not match the plan's %d x %d x %d", p->w, p->h, p->nz);
+  if (!ws || ws->plan != p)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "workspace was made for another plan");
+  if (path == ELFM_PATH_AUTO) path = p->opt.path;
+  if (path == ELFM_PATH_AUTO)
+    path = (double)frame->nnz < p->opt.sparse_max_fill * p->box_area ? ELFM_PATH_SPARSE
+                                                                     : ELFM_PATH_DENSE;
+  vol->t_us = frame->t_us;
+  vol->frame = frame->index;
+  vol->um_per_px = p->calib.um_per_px;
+  vol->z_min_um = p->calib.z_min_um;
+  vol->z_step_um = p->calib.z_step_um;
+  ws->last_path = path;
+  if (path == ELFM_PATH_SPARSE) return elfm_refocus_sparse(p, frame, vol, ws, err);
+  refocus_dense(p, frame, vol, ws);
+  /* every voxel may now be non-zero: a later sparse call clears it all */
+  elfm_refocus_workspace_forget(ws);
+  ws->dirty_data = vol->data;
+  ws->dirty_all = 1;
+  return ELFM_OK;
+}
+
+elfm_status elfm_refocus_execute(const elfm_refocus_plan *p, const elfm_frame *frame,
+                                 elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err)
+{
+  return elfm_refocus_execute_path(p, ELFM_PATH_AUTO, frame, vol, ws, err);
+}

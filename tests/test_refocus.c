@@ -1,0 +1,324 @@
+/* test_refocus.c — refocusing on synthetic Fourier LFM frames rendered with
+ * the SPEC §2 projection at the paper's geometry:
+ *  - a bead anywhere in +-90 um z and the field of view: the volume's peak is
+ *    within one voxel laterally and one plane axially of the truth (both paths);
+ *  - dense and sparse agree to 1e-4 of the maximum (with and without ghost rules);
+ *  - a uniform frame gives exactly 1 wherever views sample, although the outer
+ *    views overhang the 720-row sensor (normalisation by sampling views);
+ *  - ghost rules: agreement drops what few views see; thresholds;
+ *  - bad input. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+
+/* The lenslet field stop: a view's image ends half a view pitch (154 px,
+ * SPEC §2) from its centre; nothing of it reaches the neighbours' crops. */
+#define FIELD_STOP_PX 77.0
+
+static void render_bead(elfm_frame *f, const elfm_calib *c, double x, double y, double z,
+                        double amp)
+{
+  const double sigma = 1.3; /* px: the 3.9 um lateral FWHM / 0.93 um/px / 2.355 */
+  for (int v = 0; v < c->n_views; v++) {
+    double u, w;
+    elfm_calib_project(c, v, x, y, z, &u, &w);
+    if (fabs(u - c->views[v].cx_px) > FIELD_STOP_PX || fabs(w - c->views[v].cy_px) > FIELD_STOP_PX)
+      continue;
+    for (int yy = (int)floor(w) - 3; yy <= (int)floor(w) + 4; yy++)
+      for (int xx = (int)floor(u) - 3; xx <= (int)floor(u) + 4; xx++) {
+        if (xx < 0 || yy < 0 || xx >= f->w || yy >= f->h) continue;
+        double d2 = (xx - u) * (xx - u) + (yy - w) * (yy - w);
+        float a = (float)(amp * exp(-0.5 * d2 / (sigma * sigma)));
+        if (a < 1.0f) continue;
+        uint32_t i = (uint32_t)(yy * f->w + xx);
+        elfm_frame_set(f, i, f->data[i] + a);
+      }
+  }
+}
+
+static size_t argmax(const elfm_volume *v)
+{
+  size_t n = (size_t)v->w * v->h * v->nz, best = 0;
+  for (size_t i = 1; i < n; i++)
+    if (v->data[i] > v->data[best]) best = i;
+  return best;
+}
+
+static float vmax(const elfm_volume *v)
+{
+  float m = 0.0f;
+  for (size_t i = 0; i < (size_t)v->w * v->h * v->nz; i++) m = fmaxf(m, fabsf(v->data[i]));
+  return m;
+}
+
+static float maxdiff(const elfm_volume *a, const elfm_volume *b)
+{
+  float m = 0.0f;
+  for (size_t i = 0; i < (size_t)a->w * a->h * a->nz; i++)
+    m = fmaxf(m, fabsf(a->data[i] - b->data[i]));
+  return m;
+}
+
+static void paper_calib(elfm_calib *c)
+{
+  elfm_optics o;
+  elfm_error err;
+  elfm_optics_default(&o);
+  CHECK_OK(elfm_calib_from_optics(&o, 1280, 720, 4.86, c, &err), &err);
+}
+
+static void test_bead_positions(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, NULL, &p, &err), &err);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *vd = elfm_refocus_volume_create(p, &err), *vs = elfm_refocus_volume_create(p, &err);
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  const double fov_um = 0.5 * (c->view_w_px - 1) * c->um_per_px;
+  uint32_t s = 7;
+  int worst_lat = 0, worst_ax = 0;
+  for (int trial = 0; trial < 24; trial++) {
+    s = s * 1664525u + 1013904223u;
+    double x = ((s >> 8) % 10001 / 10000.0 * 2 - 1) * (fov_um - 8);
+    s = s * 1664525u + 1013904223u;
+    double y = ((s >> 8) % 10001 / 10000.0 * 2 - 1) * (fov_um - 8);
+    s = s * 1664525u + 1013904223u;
+    double z = ((s >> 8) % 10001 / 10000.0 * 2 - 1) * 90.0;
+    if (trial == 0) { x = 0; y = 0; z = 90; }
+    if (trial == 1) { x = -fov_um + 8; y = fov_um - 8; z = -90; }
+    elfm_frame_clear(f);
+    render_bead(f, c, x, y, z, 255.0);
+    f->t_us = 1000 + trial;
+    CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, vd, ws, &err), &err);
+    CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, f, vs, ws, &err), &err);
+    CHECK_EQ_INT(vs->t_us, 1000 + trial);
+    for (int path = 0; path < 2; path++) {
+      const elfm_volume *v = path ? vs : vd;
+      size_t i = argmax(v);
+      int X = (int)(i % (size_t)v->w), Y = (int)(i / (size_t)v->w % (size_t)v->h);
+      int k = (int)(i / ((size_t)v->w * v->h));
+      double Xt = x / c->um_per_px + 0.5 * (v->w - 1), Yt = y / c->um_per_px + 0.5 * (v->h - 1);
+      double kt = (z - c->z_min_um) / c->z_step_um;
+      int lat = fabs(X - Xt) > fabs(Y - Yt) ? (int)ceil(fabs(X - Xt) - 1e-9) : (int)ceil(fabs(Y - Yt) - 1e-9);
+      int ax = (int)ceil(fabs(k - kt) - 1e-9);
+      if (lat > worst_lat) worst_lat = lat;
+      if (ax > worst_ax) worst_ax = ax;
+      CHECK_MSG(fabs(X - Xt) <= 1.0 && fabs(Y - Yt) <= 1.0 && fabs(k - kt) <= 1.0,
+                "bead (%.1f, %.1f, %.1f) um: peak at voxel (%d, %d, %d), truth (%.2f, %.2f, %.2f), %s",
+                x, y, z, X, Y, k, Xt, Yt, kt, path ? "sparse" : "dense");
+    }
+    float m = vmax(vd);
+    CHECK_MSG(maxdiff(vd, vs) <= 1e-4f * m, "dense/sparse differ by %g of max %g", maxdiff(vd, vs), m);
+  }
+  printf("worst peak error: %d voxel(s) laterally, %d plane(s) axially\n", worst_lat, worst_ax);
+  elfm_frame_free(f);
+  elfm_volume_free(vd);
+  elfm_volume_free(vs);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_plan_free(p);
+}
+
+/* Random time-surface-like frames (noise and beads) with each ghost rule:
+ * dense and sparse agree; a sparse call after a dense one (and on a fresh
+ * volume) starts from a clean volume. */
+static void test_dense_sparse_agree(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  for (int mode = 0; mode < 4; mode++) {
+    elfm_refocus_options o;
+    elfm_refocus_options_default(&o);
+    if (mode == 1) o.agree_frac = 0.6;
+    if (mode == 2) { o.threshold = ELFM_GHOST_THR_FRAC_MAX; o.threshold_value = 0.3; }
+    if (mode == 3) { o.threshold = ELFM_GHOST_THR_MAD; o.threshold_value = 3; o.agree_frac = 0.3; }
+    elfm_refocus_plan *p = NULL;
+    CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+    elfm_refocus_workspace *wd = NULL, *wsp = NULL;
+    CHECK_OK(elfm_refocus_workspace_create(p, &wd, &err), &err);
+    CHECK_OK(elfm_refocus_workspace_create(p, &wsp, &err), &err);
+    elfm_volume *vd = elfm_refocus_volume_create(p, &err), *vs = elfm_refocus_volume_create(p, &err);
+    uint32_t s = 1234u + (uint32_t)mode;
+    for (int rep = 0; rep < 3; rep++) {
+      elfm_frame_clear(f);
+      for (int i = 0; i < 3000; i++) {
+        s = s * 1664525u + 1013904223u;
+        uint32_t pix = (s >> 4) % (uint32_t)(f->w * f->h);
+        s = s * 1664525u + 1013904223u;
+        elfm_frame_set(f, pix, (float)(20 + (s >> 24) % 200));
+      }
+      for (int b = 0; b < 5; b++)
+        render_bead(f, c, -50.0 + 25 * b, 40.0 - 20 * b, -80.0 + 40 * b + rep, 200.0);
+      CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, vd, wd, &err), &err);
+      if (rep == 2) /* reuse a volume the dense path filled: must be cleared */
+        CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, vs, wsp, &err), &err);
+      CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, f, vs, wsp, &err), &err);
+      CHECK(elfm_refocus_workspace_last_path(wsp) == ELFM_PATH_SPARSE);
+      float m = vmax(vd), d = maxdiff(vd, vs);
+      CHECK(m > 0.0f);
+      CHECK_MSG(d <= 1e-4f * m, "mode %d rep %d: dense/sparse differ by %g (max %g)", mode, rep, d, m);
+    }
+    /* auto: a 3000-pixel frame is sparse, a full one dense */
+    CHECK_OK(elfm_refocus_execute(p, f, vs, wsp, &err), &err);
+    CHECK(elfm_refocus_workspace_last_path(wsp) == ELFM_PATH_SPARSE);
+    elfm_volume_free(vd);
+    elfm_volume_free(vs);
+    elfm_refocus_workspace_free(wd);
+    elfm_refocus_workspace_free(wsp);
+    elfm_refocus_plan_free(p);
+  }
+  elfm_frame_free(f);
+}
+
+static void test_uniform_overhang(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, NULL, &p, &err), &err);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *v = elfm_refocus_volume_create(p, &err);
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  for (uint32_t i = 0; i < (uint32_t)(f->w * f->h); i++) {
+    f->data[i] = 1.0f;
+    f->idx[i] = i;
+  }
+  f->nnz = (size_t)f->w * f->h;
+  CHECK_OK(elfm_refocus_execute(p, f, v, ws, &err), &err);
+  CHECK(elfm_refocus_workspace_last_path(ws) == ELFM_PATH_DENSE);
+  int min_views = 1000, max_views = 0, bad = 0;
+  for (int k = 0; k < v->nz; k++)
+    for (int Y = 0; Y < v->h; Y++)
+      for (int X = 0; X < v->w; X++) {
+        int n = elfm_refocus_plan_views_at(p, X, Y, k);
+        float a = v->data[((size_t)k * v->h + Y) * v->w + X];
+        if (n < min_views) min_views = n;
+        if (n > max_views) max_views = n;
+        if (n > 0 ? fabsf(a - 1.0f) > 1e-5f : a != 0.0f) bad++;
+      }
+  CHECK_EQ_INT(bad, 0);
+  CHECK_EQ_INT(max_views, c->n_views);
+  CHECK(min_views < c->n_views); /* the outer rows overhang the sensor */
+  printf("views per voxel: %d..%d of %d\n", min_views, max_views, c->n_views);
+  elfm_frame_free(f);
+  elfm_volume_free(v);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_plan_free(p);
+}
+
+static void test_ghost_rules(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  /* a spot in 3 views only: some voxels get signal from 3 views */
+  elfm_calib c3 = *c;
+  elfm_frame_clear(f);
+  for (int v = 0; v < 3; v++) {
+    double u, w;
+    elfm_calib_project(&c3, v + 10, 5.0, 5.0, 0.0, &u, &w);
+    elfm_frame_set(f, (uint32_t)((int)w * f->w + (int)u), 100.0f);
+  }
+  for (int mode = 0; mode < 3; mode++) {
+    elfm_refocus_options o;
+    elfm_refocus_options_default(&o);
+    if (mode == 1) o.agree_frac = 0.5;
+    if (mode == 2) { o.threshold = ELFM_GHOST_THR_ABS; o.threshold_value = 1e6; }
+    elfm_refocus_plan *p = NULL;
+    CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+    elfm_refocus_workspace *ws = NULL;
+    CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+    elfm_volume *v = elfm_refocus_volume_create(p, &err);
+    for (int path = ELFM_PATH_DENSE; path <= ELFM_PATH_SPARSE; path++) {
+      CHECK_OK(elfm_refocus_execute_path(p, (elfm_refocus_path)path, f, v, ws, &err), &err);
+      float m = vmax(v);
+      if (mode == 0) CHECK(m > 1.0f);
+      else CHECK_MSG(m == 0.0f, "mode %d path %d: max %g", mode, path, m);
+    }
+    elfm_volume_free(v);
+    elfm_refocus_workspace_free(ws);
+    elfm_refocus_plan_free(p);
+  }
+  /* FRAC_MAX keeps the bead's peak, removes voxels under 0.5 x max */
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  o.threshold = ELFM_GHOST_THR_FRAC_MAX;
+  o.threshold_value = 0.5;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *v = elfm_refocus_volume_create(p, &err);
+  elfm_frame_clear(f);
+  render_bead(f, c, 10, -10, 30, 255);
+  CHECK_OK(elfm_refocus_execute(p, f, v, ws, &err), &err);
+  float m = vmax(v);
+  size_t nz = 0, low = 0;
+  for (size_t i = 0; i < (size_t)v->w * v->h * v->nz; i++) {
+    nz += v->data[i] != 0.0f;
+    low += v->data[i] != 0.0f && v->data[i] < 0.5f * m;
+  }
+  CHECK(m > 100.0f);
+  CHECK(nz > 0 && low == 0);
+  elfm_volume_free(v);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_plan_free(p);
+  elfm_frame_free(f);
+}
+
+static void test_bad_input(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_refocus_plan *p = NULL;
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  o.agree_frac = 1.5;
+  CHECK(elfm_refocus_plan_create(c, &o, &p, &err) == ELFM_ERR_INVALID && p == NULL);
+  elfm_refocus_options_default(&o);
+  o.threshold = ELFM_GHOST_THR_MAD;
+  o.threshold_value = NAN;
+  CHECK(elfm_refocus_plan_create(c, &o, &p, &err) == ELFM_ERR_INVALID);
+  elfm_calib bad = *c;
+  bad.z_step_um = 0;
+  CHECK(elfm_refocus_plan_create(&bad, NULL, &p, &err) == ELFM_ERR_INVALID);
+  bad = *c;
+  bad.views[3].cx_px = NAN;
+  CHECK(elfm_refocus_plan_create(&bad, NULL, &p, &err) == ELFM_ERR_INVALID);
+  bad = *c;
+  bad.n_views = 0;
+  CHECK(elfm_refocus_plan_create(&bad, NULL, &p, &err) == ELFM_ERR_INVALID);
+  CHECK_OK(elfm_refocus_plan_create(c, NULL, &p, &err), &err);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *v = elfm_refocus_volume_create(p, &err);
+  elfm_frame *small = elfm_frame_create(640, 480, &err);
+  CHECK(elfm_refocus_execute(p, small, v, ws, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "640") != NULL);
+  elfm_volume *wrong = elfm_volume_create(10, 10, 10, 1, 0, 1, &err);
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  CHECK(elfm_refocus_execute(p, f, wrong, ws, &err) == ELFM_ERR_INVALID);
+  elfm_volume_free(wrong);
+  elfm_volume_free(v);
+  elfm_frame_free(small);
+  elfm_frame_free(f);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_workspace_free(NULL);
+  elfm_refocus_plan_free(p);
+  elfm_refocus_plan_free(NULL);
+}
+
+int main(void)
+{
+  elfm_calib c;
+  paper_calib(&c);
+  CHECK_EQ_INT(c.n_views, 25);
+  test_bead_positions(&c);
+  test_dense_sparse_agree(&c);
+  test_uniform_overhang(&c);
+  test_ghost_rules(&c);
+  test_bad_input(&c);
+  return check_report();
+}
