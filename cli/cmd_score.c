@@ -1,9 +1,190 @@
-/* cmd_score.c — eventlfm score (not built yet: reports so and fails). */
+/* cmd_score.c — eventlfm score: detections/tracks against simulator truth
+ * (SPEC §7; every definition is in tracker/elfm_score.h). */
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+
 #include "cli.h"
+#include "elfm_tracker.h"
+
+struct score_opts {
+  const char *truth, *tracks, *detections, *calib;
+  int json;
+  elfm_score_options so;
+};
+
+static void score_usage(FILE *f)
+{
+  fprintf(f,
+          "usage: eventlfm score --truth truth.csv (--tracks tracks.csv | --detections detections.csv)\n"
+          "                      [--tracks tracks.csv] [--detections detections.csv]\n"
+          "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
+          "                      [--eps-um 4] [--kz 4] [--json]\n"
+          "\n"
+          "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
+          "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
+          "t_us and counts only while bright and (with --calib) inside the volume.\n"
+          "  detections: recall, precision, F1, RMSE x/y/z (um) from per-frame Hungarian matching\n"
+          "              (without --detections, the tracks' raw points are the detections)\n"
+          "  tracks:     ISBI 2012 alpha, beta, track and detection Jaccard (Chenouard 2014)\n"
+          "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
+          "--json prints one JSON object on stdout instead of the table.\n");
+}
+
+static int parse_vec3(const char *s, double v[3])
+{
+  char tail;
+  return s && sscanf(s, "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) == 3 && isfinite(v[0]) &&
+         isfinite(v[1]) && isfinite(v[2]);
+}
+
+/* cJSON cannot write NaN as a number: a value that is not defined is null. */
+static void json_num(cJSON *o, const char *key, double v)
+{
+  if (isfinite(v)) cJSON_AddNumberToObject(o, key, v);
+  else cJSON_AddNullToObject(o, key);
+}
+
+static int print_json(const struct score_opts *op, const elfm_score_result *r)
+{
+  cJSON *o = cJSON_CreateObject();
+  if (!o) return cli_message("score", CLI_FAIL, "out of memory");
+  json_num(o, "alpha", r->has_tracks ? r->alpha : NAN);
+  json_num(o, "beta", r->has_tracks ? r->beta : NAN);
+  json_num(o, "jaccard_tracks", r->has_tracks ? r->jaccard_tracks : NAN);
+  json_num(o, "jaccard_detections", r->has_tracks ? r->jaccard_detections : NAN);
+  json_num(o, "recall", r->recall);
+  json_num(o, "precision", r->precision);
+  json_num(o, "f1", r->f1);
+  json_num(o, "rmse_x_um", r->rmse_x_um);
+  json_num(o, "rmse_y_um", r->rmse_y_um);
+  json_num(o, "rmse_z_um", r->rmse_z_um);
+  json_num(o, "rmse_tracks_um", r->has_tracks ? r->rmse_tracks_um : NAN);
+  cJSON_AddNumberToObject(o, "n_frames", r->n_frames);
+  cJSON_AddNumberToObject(o, "n_truth_points", (double)r->n_truth_points);
+  cJSON_AddNumberToObject(o, "n_detections", (double)r->n_detections);
+  cJSON_AddNumberToObject(o, "n_true_positives", (double)r->n_true_positives);
+  cJSON_AddBoolToObject(o, "detections_from_tracks", r->detections_from_tracks);
+  if (r->has_tracks) {
+    cJSON_AddNumberToObject(o, "n_truth_tracks", r->n_truth_tracks);
+    cJSON_AddNumberToObject(o, "n_candidate_tracks", r->n_candidate_tracks);
+    cJSON_AddNumberToObject(o, "n_paired_tracks", r->n_paired_tracks);
+    cJSON_AddNumberToObject(o, "n_missed_tracks", r->n_missed_tracks);
+    cJSON_AddNumberToObject(o, "n_spurious_tracks", r->n_spurious_tracks);
+  }
+  if (r->has_stage) {
+    cJSON *v = cJSON_CreateDoubleArray(r->mean_v_um_per_ms, 3);
+    cJSON_AddItemToObject(o, "mean_velocity_um_per_ms", v);
+    json_num(o, "stage_velocity_rel_error", r->stage_rel_error);
+  }
+  cJSON_AddNumberToObject(o, "eps_um", op->so.eps_um);
+  cJSON_AddNumberToObject(o, "kz", op->so.kz);
+  char *text = cJSON_PrintUnformatted(o);
+  cJSON_Delete(o);
+  if (!text) return cli_message("score", CLI_FAIL, "out of memory");
+  printf("%s\n", text);
+  cJSON_free(text);
+  return CLI_OK;
+}
+
+static void print_table(const struct score_opts *op, const elfm_score_result *r)
+{
+  printf("scoring (eps %.3g um, kz %.3g, %d frames%s)\n", op->so.eps_um, op->so.kz, r->n_frames,
+         op->so.have_bounds ? ", truth inside the volume only" : "");
+  printf("detections%s\n", r->detections_from_tracks ? " (raw points of the tracks)" : "");
+  printf("  truth points %10lld   detections %10lld   matched %10lld\n",
+         (long long)r->n_truth_points, (long long)r->n_detections,
+         (long long)r->n_true_positives);
+  printf("  recall    %8.4f   precision %8.4f   F1 %8.4f\n", r->recall, r->precision, r->f1);
+  printf("  RMSE x %8.4f um   y %8.4f um   z %8.4f um\n", r->rmse_x_um, r->rmse_y_um,
+         r->rmse_z_um);
+  if (r->has_tracks) {
+    printf("tracks (ISBI 2012)\n");
+    printf("  truth %d   candidates %d   paired %d   missed %d   spurious %d\n",
+           r->n_truth_tracks, r->n_candidate_tracks, r->n_paired_tracks, r->n_missed_tracks,
+           r->n_spurious_tracks);
+    printf("  alpha %8.4f   beta %8.4f   Jaccard tracks %8.4f   Jaccard detections %8.4f\n",
+           r->alpha, r->beta, r->jaccard_tracks, r->jaccard_detections);
+    printf("  RMSE (anisotropic d, matched points) %8.4f um\n", r->rmse_tracks_um);
+  }
+  if (r->has_stage)
+    printf("stage: mean velocity (%.4f, %.4f, %.4f) um/ms, relative error %.4f\n",
+           r->mean_v_um_per_ms[0], r->mean_v_um_per_ms[1], r->mean_v_um_per_ms[2],
+           r->stage_rel_error);
+}
 
 int cmd_score(int argc, char **argv)
 {
-  (void)argc;
-  (void)argv;
-  return cli_message("score", CLI_FAIL, "not implemented yet");
+  enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON };
+  static const struct option longopts[] = {
+      {"truth", required_argument, NULL, OPT_TRUTH},
+      {"tracks", required_argument, NULL, OPT_TRACKS},
+      {"detections", required_argument, NULL, OPT_DETS},
+      {"calib", required_argument, NULL, OPT_CALIB},
+      {"stage-velocity-um-per-ms", required_argument, NULL, OPT_STAGE},
+      {"eps-um", required_argument, NULL, OPT_EPS},
+      {"kz", required_argument, NULL, OPT_KZ},
+      {"json", no_argument, NULL, OPT_JSON},
+      {"help", no_argument, NULL, 'h'},
+      {NULL, 0, NULL, 0}};
+  struct score_opts op;
+  memset(&op, 0, sizeof op);
+  elfm_score_options_default(&op.so);
+  optind = 1;
+  opterr = 0;
+  int c;
+  while ((c = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+    switch (c) {
+    case 'h': score_usage(stdout); return CLI_OK;
+    case OPT_TRUTH: op.truth = optarg; break;
+    case OPT_TRACKS: op.tracks = optarg; break;
+    case OPT_DETS: op.detections = optarg; break;
+    case OPT_CALIB: op.calib = optarg; break;
+    case OPT_STAGE:
+      if (!parse_vec3(optarg, op.so.stage_v_um_per_ms))
+        return cli_message("score", CLI_USAGE,
+                           "--stage-velocity-um-per-ms expects vx,vy,vz (three numbers), got '%s'",
+                           optarg);
+      op.so.have_stage = 1;
+      break;
+    case OPT_EPS:
+      if (!cli_parse_double("score", "--eps-um", optarg, &op.so.eps_um)) return CLI_USAGE;
+      if (!(op.so.eps_um > 0))
+        return cli_message("score", CLI_USAGE, "--eps-um must be positive");
+      break;
+    case OPT_KZ:
+      if (!cli_parse_double("score", "--kz", optarg, &op.so.kz)) return CLI_USAGE;
+      if (!(op.so.kz > 0)) return cli_message("score", CLI_USAGE, "--kz must be positive");
+      break;
+    case OPT_JSON: op.json = 1; break;
+    default:
+      cli_message("score", CLI_USAGE, "unknown option or missing value: '%s'",
+                  argv[optind - 1]);
+      score_usage(stderr);
+      return CLI_USAGE;
+    }
+  }
+  if (optind < argc)
+    return cli_message("score", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
+  if (!op.truth || (!op.tracks && !op.detections)) {
+    cli_message("score", CLI_USAGE, "needs --truth and at least one of --tracks, --detections");
+    score_usage(stderr);
+    return CLI_USAGE;
+  }
+  elfm_error err;
+  elfm_error_clear(&err);
+  if (op.calib) {
+    elfm_calib cal;
+    if (elfm_calib_load(op.calib, &cal, &err) != ELFM_OK) return cli_fail("score", &err);
+    elfm_score_options_set_calib(&op.so, &cal);
+  }
+  elfm_score_result r;
+  if (elfm_score_files(op.truth, op.tracks, op.detections, &op.so, &r, &err) != ELFM_OK)
+    return cli_fail("score", &err);
+  if (op.json) return print_json(&op, &r);
+  print_table(&op, &r);
+  return CLI_OK;
 }

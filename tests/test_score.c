@@ -1,0 +1,483 @@
+/* test_score.c — scoring against hand-computed answers (elfm_score.h).
+ *
+ * Scene: two objects, truth sampled every 100 us from t = 0 to 25 ms;
+ * 20 frames, frame f at t_us = 1000 + 1000 f (so N = 20 truth points per
+ * object and d(X, empty) = 4 * 20 = 80 per object, 160 in all).
+ *   A: x = -10 + 0.001 t, y = -20, z = 5
+ *   B: x =  10 - 0.001 t, y = +20, z = -10 + 0.0004 t
+ * They are 40 um apart: no cross-talk through the 4 um gate.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+#define NF 20
+static double frame_t(int f) { return 1000.0 + 1000.0 * f; }
+
+static void pos(int obj, double t, double *x, double *y, double *z)
+{
+  if (obj == 0) { *x = -10 + 0.001 * t; *y = -20; *z = 5; }
+  else { *x = 10 - 0.001 * t; *y = 20; *z = -10 + 0.0004 * t; }
+}
+
+/* A growing text buffer. */
+typedef struct { char *s; size_t n, cap; } buf_t;
+static void bprintf(buf_t *b, const char *fmt, ...)
+{
+  va_list ap;
+  for (;;) {
+    va_start(ap, fmt);
+    int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
+    va_end(ap);
+    if (b->s && (size_t)k < b->cap - b->n) { b->n += (size_t)k; return; }
+    b->cap = (b->cap + (size_t)k + 1) * 2;
+    b->s = realloc(b->s, b->cap);
+    if (!b->s) abort();
+  }
+}
+
+static elfm_table *parse(buf_t *b, const char *name)
+{
+  elfm_table *t = NULL;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_status s = elfm_table_parse(b->s, b->n, name, &t, &err);
+  if (s != ELFM_OK) {
+    char m[1200];
+    fprintf(stderr, "test input did not parse: %s\n", elfm_error_format(&err, m, sizeof m));
+    abort();
+  }
+  free(b->s);
+  memset(b, 0, sizeof *b);
+  return t;
+}
+
+/* Truth with optional dark interval for B (frames dark_from..) */
+static elfm_table *make_truth(double b_dark_from_t)
+{
+  buf_t b = {0};
+  bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
+  for (int t = 0; t <= 25000; t += 100)
+    for (int o = 0; o < 2; o++) {
+      double x, y, z;
+      pos(o, t, &x, &y, &z);
+      double br = (o == 1 && t >= b_dark_from_t) ? 0.0 : 1.0;
+      bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,%g\n", o + 7, t, x, y, z, br);
+    }
+  return parse(&b, "truth.csv");
+}
+
+/* Track rows for object o over frames [f0, f1] with id, offset, and frames
+ * [g0, g1] as gap-closing fills (raw empty, position junk). */
+static void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double dy, double dz,
+                      int g0, int g1)
+{
+  for (int f = f0; f <= f1; f++) {
+    double x, y, z;
+    pos(o, frame_t(f), &x, &y, &z);
+    if (f >= g0 && f <= g1)
+      bprintf(b, "%d,%d,%.0f,%.17g,%.17g,%.17g,,,,0,0,0,1\n", id, f, frame_t(f), x + 50, y, z);
+    else
+      bprintf(b, "%d,%d,%.0f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0.001,0,0,1\n", id, f,
+              frame_t(f), x + dx, y + dy, z + dz, x + dx, y + dy, z + dz);
+  }
+}
+
+static const char *TRACK_HEADER =
+    "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um,vx_um_per_ms,vy_um_per_ms,"
+    "vz_um_per_ms,intensity\n";
+
+static elfm_score_result run(const elfm_table *truth, const elfm_table *tracks,
+                             const elfm_table *dets, const elfm_score_options *o)
+{
+  elfm_score_result r;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_score_options def;
+  elfm_score_options_default(&def);
+  CHECK_OK(elfm_score_tables(truth, tracks, dets, o ? o : &def, &r, &err), &err);
+  return r;
+}
+
+static void expect_fail(const elfm_table *truth, const elfm_table *tracks, const elfm_table *dets,
+                        elfm_status code, const char *file, int64_t line, const char *what)
+{
+  elfm_score_result r;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_score_options def;
+  elfm_score_options_default(&def);
+  elfm_status s = elfm_score_tables(truth, tracks, dets, &def, &r, &err);
+  CHECK_MSG(s == code, "%s: got %s: %s", what, elfm_status_str(s), err.message);
+  CHECK_MSG(strcmp(err.file, file) == 0, "%s: file '%s'", what, err.file);
+  CHECK_MSG(err.line == line, "%s: line %lld, expected %lld (%s)", what, (long long)err.line,
+            (long long)line, err.message);
+}
+
+int main(void)
+{
+  const double TOL = 1e-12;
+  elfm_table *truth = make_truth(1e9);
+
+  /* 1. Perfect tracks and detections. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um,intensity\n");
+    for (int f = 0; f < NF; f++)
+      for (int o = 0; o < 2; o++) {
+        double x, y, z;
+        pos(o, frame_t(f), &x, &y, &z);
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g,1\n", f, frame_t(f), x, y, z);
+      }
+    elfm_table *de = parse(&b, "detections.csv");
+    elfm_score_result r = run(truth, tr, de, NULL);
+    CHECK_EQ_INT(r.n_frames, NF);
+    CHECK_EQ_INT(r.n_truth_points, 2 * NF);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 1.0, TOL);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.recall, 1.0, TOL);
+    CHECK_NEAR(r.precision, 1.0, TOL);
+    CHECK_NEAR(r.jaccard_tracks, 1.0, TOL);
+    CHECK_NEAR(r.jaccard_detections, 1.0, TOL);
+    CHECK_NEAR(r.rmse_x_um, 0.0, 1e-9);
+    CHECK_NEAR(r.rmse_z_um, 0.0, 1e-9);
+    CHECK_EQ_INT(r.detections_from_tracks, 0);
+    CHECK_EQ_INT(r.n_paired_tracks, 2);
+    /* detections only (no tracks): detection measures, no track measures */
+    r = run(truth, NULL, de, NULL);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_EQ_INT(r.has_tracks, 0);
+    /* a detection missing at frame 5 and at frame 6 (no track rows either):
+     * truth there still counts (frame times interpolated), recall 38/40 */
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 0; f < NF; f++)
+      for (int o = 0; o < 2; o++) {
+        if (f == 5 || f == 6) continue;
+        double x, y, z;
+        pos(o, frame_t(f), &x, &y, &z);
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
+      }
+    elfm_table *de2 = parse(&b, "detections.csv");
+    r = run(truth, NULL, de2, NULL);
+    CHECK_EQ_INT(r.n_truth_points, 2 * NF);
+    CHECK_NEAR(r.recall, 36.0 / 40.0, TOL);
+    CHECK_NEAR(r.precision, 1.0, TOL);
+    CHECK_NEAR(r.f1, 2.0 * 36.0 / (40.0 + 36.0), TOL);
+    elfm_table_free(de2);
+    elfm_table_free(tr);
+    elfm_table_free(de);
+  }
+
+  /* 2. Constant 1 um offset in x: d = 1 on every frame -> alpha = 1 - 1/4. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 1.0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 1.0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.75, TOL);
+    CHECK_NEAR(r.beta, 0.75, TOL); /* (160 - 40) / 160 */
+    CHECK_NEAR(r.rmse_tracks_um, 1.0, 1e-9);
+    /* detections from the raw points: all within the gate */
+    CHECK_EQ_INT(r.detections_from_tracks, 1);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.rmse_x_um, 1.0, 1e-9);
+    CHECK_NEAR(r.rmse_y_um, 0.0, 1e-9);
+    elfm_table_free(tr);
+  }
+
+  /* 3. Anisotropic z: dz = 4 um counts as d = 1 (kz = 4) -> alpha 0.75;
+   * dz = 15.9 is inside the gate (d = 3.975), dz = 16 is not (d = eps). */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 4.0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 4.0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.75, TOL);
+    CHECK_NEAR(r.rmse_z_um, 4.0, 1e-9);
+    CHECK_NEAR(r.rmse_x_um, 0.0, 1e-9);
+    elfm_table_free(tr);
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 15.9, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 16.0, -1, -1);
+    tr = parse(&b, "tracks.csv");
+    r = run(truth, tr, NULL, NULL);
+    /* A: 20 * 3.975; B: unmatched -> its track is spurious and B missed */
+    CHECK_NEAR(r.alpha, 1.0 - (20 * 3.975 + 80) / 160.0, 1e-9);
+    CHECK_EQ_INT(r.n_paired_tracks, 1);
+    CHECK_EQ_INT(r.n_spurious_tracks, 1);
+    CHECK_NEAR(r.recall, 0.5, TOL);
+    /* the same 16 um offset in x instead is far outside: x is not divided */
+    elfm_table_free(tr);
+  }
+
+  /* 4. A missing track: only A is tracked. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.5, TOL);
+    CHECK_NEAR(r.beta, 0.5, TOL);
+    CHECK_NEAR(r.jaccard_tracks, 0.5, TOL);
+    CHECK_NEAR(r.jaccard_detections, 0.5, TOL);
+    CHECK_EQ_INT(r.n_missed_tracks, 1);
+    CHECK_NEAR(r.recall, 0.5, TOL);
+    CHECK_NEAR(r.precision, 1.0, TOL);
+    elfm_table_free(tr);
+  }
+
+  /* 5. A spurious track (10 frames, far from both): beta drops, alpha not.
+   * beta = 160 / (160 + 4 * 10) = 0.8. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 3, 0, 5, 14, 0, 30, 0, -1, -1); /* A shifted 30 um in y */
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 0.8, TOL);
+    CHECK_NEAR(r.jaccard_tracks, 2.0 / 3.0, TOL);
+    CHECK_NEAR(r.jaccard_detections, 40.0 / 50.0, TOL);
+    CHECK_EQ_INT(r.n_spurious_tracks, 1);
+    CHECK_NEAR(r.recall, 1.0, TOL);
+    CHECK_NEAR(r.precision, 40.0 / 50.0, TOL);
+    elfm_table_free(tr);
+  }
+
+  /* 6. A split track: A as two halves (frames 0-9, 10-19). One half pairs:
+   * d(A, half) = 4 * (20 + 10 - 10) - 4 * 10 = 40; alpha = 1 - 40/160,
+   * beta = (160 - 40) / (160 + 40) = 0.6. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, 9, 0, 0, 0, -1, -1);
+    add_track(&b, 4, 0, 10, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.75, TOL);
+    CHECK_NEAR(r.beta, 0.6, TOL);
+    CHECK_NEAR(r.jaccard_tracks, 2.0 / 3.0, TOL);
+    CHECK_NEAR(r.f1, 1.0, TOL); /* detection-wise nothing is wrong */
+    elfm_table_free(tr);
+  }
+
+  /* 7. Gap-closing rows (raw empty, position junk) are left out: A's frames
+   * 5-9 are virtual: 5 frames at eps -> alpha = 1 - 20/160 = 0.875, and no
+   * spurious detections from the junk. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, 5, 9);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.875, TOL);
+    CHECK_NEAR(r.beta, 0.875, TOL);
+    CHECK_NEAR(r.precision, 1.0, TOL);
+    CHECK_NEAR(r.recall, 35.0 / 40.0, TOL);
+    CHECK_EQ_INT(r.n_track_fp, 0);
+    elfm_table_free(tr);
+  }
+
+  /* 8. Blinking: B dark from 10.5 ms on (frames 10..19 dark, frame 9 at
+   * 10 ms bright). A track of B over frames 0-9 is then perfect; B's
+   * tracked frames 10-19 would be spurious detections. */
+  {
+    elfm_table *truth_b = make_truth(10500);
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, 9, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth_b, tr, NULL, NULL);
+    CHECK_EQ_INT(r.n_truth_points, 30);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 1.0, TOL);
+    elfm_table_free(tr);
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    tr = parse(&b, "tracks.csv");
+    r = run(truth_b, tr, NULL, NULL);
+    /* d(B, Y) = 4 * (10 + 20 - 10) - 4 * 10 = 40 over d_empty 120 */
+    CHECK_NEAR(r.alpha, 1.0 - 40.0 / 120.0, TOL);
+    CHECK_NEAR(r.precision, 30.0 / 40.0, TOL);
+    elfm_table_free(tr);
+    elfm_table_free(truth_b);
+  }
+
+  /* 9. Volume bounds: with x within +-8 um, A (x = -9..10) and B
+   * (x = 9..-10) count only on frames with |x| <= 8; an untracked part
+   * outside does not count as missed. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_options o;
+    elfm_score_options_default(&o);
+    elfm_calib cal;
+    memset(&cal, 0, sizeof cal);
+    cal.view_w_px = 17; /* (17 - 1) / 2 * 1.0 = 8 um */
+    cal.view_h_px = 101;
+    cal.um_per_px = 1.0;
+    cal.z_min_um = -100;
+    cal.z_max_um = 100;
+    elfm_score_options_set_calib(&o, &cal);
+    CHECK_NEAR(o.x_half_um, 8.0, TOL);
+    elfm_score_result r = run(truth, tr, NULL, &o);
+    /* A: x = -9 + f, |x| <= 8 for f = 1..17 -> 17 points; B: x = 9 - f, likewise */
+    CHECK_EQ_INT(r.n_truth_points, 34);
+    CHECK_NEAR(r.recall, 1.0, TOL);
+    CHECK_NEAR(r.precision, 34.0 / 40.0, TOL);
+    elfm_table_free(tr);
+  }
+
+  /* 10. Stage velocity: tracks report vx = 0.001 um/ms. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_options o;
+    elfm_score_options_default(&o);
+    o.have_stage = 1;
+    o.stage_v_um_per_ms[0] = 0.002;
+    elfm_score_result r = run(truth, tr, NULL, &o);
+    CHECK_EQ_INT(r.has_stage, 1);
+    CHECK_NEAR(r.mean_v_um_per_ms[0], 0.001, 1e-15);
+    CHECK_NEAR(r.stage_rel_error, 0.5, 1e-12);
+    elfm_table_free(tr);
+  }
+
+  /* 11. Bad input -> error naming file and line. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, 3, 0, 0, 0, -1, -1);
+    elfm_table *good_tracks = parse(&b, "tracks.csv");
+
+    bprintf(&b, "id,t_us,x_um,y_um,z_um\n1,0,0,0,0\n");
+    elfm_table *t_nocol = parse(&b, "truth.csv");
+    expect_fail(t_nocol, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 1, "missing brightness");
+
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,1\n1,100,,0,0,1\n");
+    elfm_table *t_nan = parse(&b, "truth.csv");
+    expect_fail(t_nan, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 3, "empty x_um");
+
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,1\n2,0,0,0,0,1\n1,200,0,0,0,1\n"
+                "2,100,0,0,0,1\n1,100,0,0,0,1\n");
+    elfm_table *t_uns = parse(&b, "truth.csv");
+    expect_fail(t_uns, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 6, "unsorted truth");
+
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,-1\n");
+    elfm_table *t_neg = parse(&b, "truth.csv");
+    expect_fail(t_neg, good_tracks, NULL, ELFM_ERR_RANGE, "truth.csv", 2, "negative brightness");
+
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1.5,0,0,0,0,1\n");
+    elfm_table *t_frac = parse(&b, "truth.csv");
+    expect_fail(t_frac, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 2, "fractional id");
+
+    bprintf(&b, "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um\n1,0,1000,0,0,0,0,0\n");
+    elfm_table *k_nocol = parse(&b, "tracks.csv");
+    expect_fail(truth, k_nocol, NULL, ELFM_ERR_FORMAT, "tracks.csv", 1, "missing raw_z_um");
+
+    bprintf(&b, "%s1,0,1000,0,0,0,0,0,0,0,0,0,1\n1,1,2000,0,0,0,0,0,0,0,0,0,1\n"
+                "1,1,2000,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
+    elfm_table *k_dup = parse(&b, "tracks.csv");
+    expect_fail(truth, k_dup, NULL, ELFM_ERR_FORMAT, "tracks.csv", 4, "duplicate frame");
+
+    bprintf(&b, "%s1,0,1000,0,0,0,0,0,0,0,0,0,1\n2,0,1001,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
+    elfm_table *k_time = parse(&b, "tracks.csv");
+    expect_fail(truth, k_time, NULL, ELFM_ERR_FORMAT, "tracks.csv", 3, "inconsistent frame time");
+
+    bprintf(&b, "%s1,0,1000,0,0,0,0,,0,0,0,0,1\n", TRACK_HEADER);
+    elfm_table *k_part = parse(&b, "tracks.csv");
+    expect_fail(truth, k_part, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "partial raw");
+
+    bprintf(&b, "%s1,0,1000,,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
+    elfm_table *k_nan = parse(&b, "tracks.csv");
+    expect_fail(truth, k_nan, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "empty x_um");
+
+    bprintf(&b, "%s1,0.5,1000,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
+    elfm_table *k_frac = parse(&b, "tracks.csv");
+    expect_fail(truth, k_frac, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "fractional frame");
+
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n0,1000,0,0,0\n1,500,0,0,0\n");
+    elfm_table *d_back = parse(&b, "detections.csv");
+    expect_fail(truth, NULL, d_back, ELFM_ERR_FORMAT, "detections.csv", 3, "time goes back");
+
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n0,1000,0,0,0\n50000001,500,0,0,0\n");
+    elfm_table *d_span = parse(&b, "detections.csv");
+    {
+      elfm_score_result r;
+      elfm_error err;
+      elfm_score_options def;
+      elfm_score_options_default(&def);
+      CHECK(elfm_score_tables(truth, NULL, d_span, &def, &r, &err) == ELFM_ERR_RANGE);
+      CHECK(strcmp(err.file, "detections.csv") == 0);
+      /* neither tracks nor detections */
+      CHECK(elfm_score_tables(truth, NULL, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
+      def.eps_um = 0;
+      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
+    }
+    /* missing file */
+    {
+      elfm_score_result r;
+      elfm_error err;
+      elfm_score_options def;
+      elfm_score_options_default(&def);
+      CHECK(elfm_score_files("/nonexistent/truth.csv", "/nonexistent/tracks.csv", NULL, &def, &r,
+                             &err) == ELFM_ERR_IO);
+      CHECK(strstr(err.file, "truth.csv") != NULL);
+    }
+    elfm_table *all[] = {good_tracks, t_nocol, t_nan, t_uns, t_neg, t_frac, k_nocol, k_dup,
+                         k_time, k_part, k_nan, k_frac, d_back, d_span};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) elfm_table_free(all[i]);
+  }
+
+  /* 12. Many objects in a crowded frame: the scorer must not confuse
+   * neighbours 3 um apart (inside the gate of each other). Grid of 10 x 10
+   * objects at 3 um spacing, detections exactly on truth -> F1 = 1. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
+    for (int t = 0; t <= 3000; t += 1000)
+      for (int k = 0; k < 100; k++)
+        bprintf(&b, "%d,%d,%g,%g,0,1\n", k, t, 3.0 * (k % 10), 3.0 * (k / 10));
+    elfm_table *gt = parse(&b, "truth.csv");
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 0; f < 3; f++)
+      for (int k = 99; k >= 0; k--) /* reversed order on purpose */
+        bprintf(&b, "%d,%d,%g,%g,0.4\n", f, 1000 * (f + 1), 3.0 * (k % 10) + 1.4, 3.0 * (k / 10));
+    elfm_table *de = parse(&b, "detections.csv");
+    elfm_score_result r = run(gt, NULL, de, NULL);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.rmse_x_um, 1.4, 1e-9); /* each matched to its own, not the neighbour 1.6 away */
+    CHECK_NEAR(r.rmse_z_um, 0.4, 1e-9);
+    elfm_table_free(gt);
+    elfm_table_free(de);
+  }
+
+  elfm_table_free(truth);
+  return check_report();
+}

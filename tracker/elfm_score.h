@@ -1,0 +1,172 @@
+/* elfm_score.h — scoring detections and tracks against simulator truth
+ * (SPEC §7), and the project's one assignment solver (Hungarian).
+ *
+ * DISTANCE. Every comparison uses the anisotropic distance
+ *     d = sqrt(dx^2 + dy^2 + (dz / kz)^2),  kz = 4,
+ * because the refocused PSF is ~5x longer along z than across (SPEC §2:
+ * 21.0 um axial vs 3.9 um lateral FWHM), and the gate eps = 4 um (about one
+ * lateral FWHM). A pair "matches" when d < eps (strict, as the official ISBI
+ * evaluator's `ed < maxDist`).
+ *
+ * TRUTH. truth.csv rows (id, t_us, x, y, z, brightness) are grouped per id,
+ * must be strictly increasing in t_us within an id, and are linearly
+ * interpolated (all of x, y, z, brightness) at each frame's t_us. An object
+ * counts at a frame only when (a) t_us lies within its first..last sample,
+ * (b) its interpolated brightness is > 0 and (c) it lies inside the
+ * reconstructed volume when bounds are given: |x|, |y| <= (W-1)/2 * um_per_px
+ * and z_min <= z <= z_max (calib.json; without a calibration all count).
+ *
+ * FRAMES. Integer frame indices and their t_us come from detections.csv and
+ * tracks.csv (every row carries both; a frame index seen with two different
+ * t_us is an error). Frames missing from both files (no detection, no track
+ * point) but lying between known frames get a t_us interpolated linearly
+ * between their known neighbours, so that truth there still counts as missed.
+ *
+ * DETECTIONS (per frame). Truth points and detections are matched one to one
+ * with the Hungarian solver below, pairs with d >= eps being forbidden: the
+ * matching has the largest number of pairs within the gate and, among those,
+ * the smallest summed d. Its pairs are the true positives (TP). recall = TP / truth points, precision = TP /
+ * detections, F1 = 2 TP / (truth points + detections); RMSE of x, y and z
+ * (um, plain differences, no kz) over the TP pairs. Without detections.csv the
+ * real (non-gap-filled) rows of tracks.csv at their raw_* positions are used
+ * as the detections.
+ *
+ * TRACKS (ISBI 2012, Chenouard et al., Nat. Methods 11:281 (2014), following
+ * the official evaluation software, Chenouard's TrackToTrackDistance /
+ * OneToOneMatcher / PerformanceAnalyzer, Feb 2012):
+ *  - A candidate track Y is the rows of tracks.csv with one track_id whose
+ *    raw_x_um/raw_y_um/raw_z_um are present (gap-closing fills are left out);
+ *    its positions are the smoothed x_um, y_um, z_um. Like the official
+ *    importer we treat the frames between its first and last real point as
+ *    its span S(Y); frames of the span without a real point are "virtual":
+ *    they never match and are never counted as spurious detections.
+ *  - A truth track X is one truth id at every frame where it counts (above);
+ *    F(X) is that set of frames.
+ *  - d(X, Y) = sum over frames t in F(X) u S(Y) of
+ *        d_t      if X and a real point of Y exist at t and d_t < eps,
+ *        eps      otherwise (one of them missing, virtual, or beyond the gate).
+ *    d(X, empty) = eps * |F(X)|;  d(Ybar, empty) = eps * |S(Ybar)|.
+ *  - Pairing: a pair (X, Y) is feasible if at least one frame matches. Each
+ *    truth track is assigned to one feasible candidate or to its own dummy
+ *    track (cost d(X, empty)), each candidate to at most one truth track,
+ *    minimising sum of d(X, Y) (Hungarian; infeasible pairs forbidden).
+ *  - alpha = 1 - sum_pairs d(X, Y) / sum_X d(X, empty)            (0..1)
+ *    beta  = (sum_X d(X, empty) - sum_pairs d(X, Y))
+ *            / (sum_X d(X, empty) + sum_unpaired Ybar d(Ybar, empty))
+ *    (a truth track paired with its dummy contributes d(X, empty) to the
+ *    pair sum, i.e. zero to the numerator).
+ *  - Track Jaccard = paired / (paired + missed truth tracks + unpaired
+ *    candidates). Detection Jaccard = TP / (TP + FN + FP) with TP = matched
+ *    frames of the pairs, FN = truth points not matched, FP = real points of
+ *    paired candidates not matched plus all real points of unpaired ones.
+ *    (The official code also counts virtual points of a candidate that lie
+ *    outside its truth track's span as spurious; we count real points only.)
+ *  - rmse_tracks_um: RMS of the anisotropic d over the matched frames.
+ *
+ * STAGE. With a stage velocity v_s (um/ms), the mean velocity vector v_m is
+ * the mean of the vx/vy/vz_um_per_ms columns of tracks.csv over its real rows
+ * (or, without those columns, of per-track displacement over time), and
+ * stage_rel_error = |v_m - v_s| / |v_s|.
+ *
+ * All functions follow elfm_error.h: they fill err and return a status; they
+ * never print. Allocation: the result is a plain value; everything else is
+ * freed before returning.
+ */
+#ifndef ELFM_SCORE_H
+#define ELFM_SCORE_H
+
+#include <stdint.h>
+
+#include "elfm_calib.h"
+#include "elfm_error.h"
+#include "elfm_table.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---------------------------------------------------------------------- */
+/* Assignment (Hungarian / Kuhn-Munkres with potentials, O(n^2 m) for an
+ * n x m problem with n <= m; rectangular problems of either shape).
+ *
+ * cost is n_rows x n_cols, row-major. A +INFINITY entry is forbidden (a pair
+ * outside a gate). Any other non-finite entry (NaN, -inf) is an error
+ * (ELFM_ERR_NUMERIC). The result maximises first the number of assigned
+ * (non-forbidden) pairs and then minimises their total cost: forbidden
+ * entries are replaced internally by a penalty larger than any difference of
+ * finite totals, so precision is that of double sums (costs should not span
+ * more than ~1e12 in ratio).
+ * row_to_col[r] receives the column of row r, or -1 when unassigned;
+ * *total_cost (may be NULL) the sum of the assigned costs.
+ * The workspace holds all scratch; it grows (realloc) only when a problem is
+ * larger than every earlier one, so a caller that reuses it in a loop stops
+ * allocating once it has seen its largest problem. */
+typedef struct elfm_assign_workspace elfm_assign_workspace;
+
+/* Create a workspace pre-sized for problems up to max_rows x max_cols (0, 0
+ * is fine: it grows on demand). Free with elfm_assign_workspace_free. */
+elfm_status elfm_assign_workspace_create(int max_rows, int max_cols,
+                                         elfm_assign_workspace **out, elfm_error *err);
+void elfm_assign_workspace_free(elfm_assign_workspace *ws); /* NULL: no-op */
+
+elfm_status elfm_assign_hungarian(const double *cost, int n_rows, int n_cols,
+                                  int *row_to_col, double *total_cost,
+                                  elfm_assign_workspace *ws, elfm_error *err);
+
+/* ---------------------------------------------------------------------- */
+/* Scoring. */
+
+typedef struct elfm_score_options {
+  double eps_um;           /* gate, 4 um (SPEC §7) */
+  double kz;               /* axial weight divisor, 4 (SPEC §7) */
+  int have_bounds;         /* 1: objects outside the volume below do not count */
+  double x_half_um, y_half_um, z_min_um, z_max_um;
+  int have_stage;          /* 1: compute stage_rel_error against stage_v */
+  double stage_v_um_per_ms[3];
+} elfm_score_options;
+
+/* eps 4, kz 4, no bounds, no stage. */
+void elfm_score_options_default(elfm_score_options *o);
+/* Volume bounds from a calibration (SPEC §3 voxel grid). */
+void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c);
+
+typedef struct elfm_score_result {
+  int n_frames;                 /* frames scored (known + interpolated) */
+  /* detections */
+  int detections_from_tracks;   /* 1: no detections table, raw track points used */
+  int64_t n_truth_points, n_detections, n_true_positives;
+  double recall, precision, f1; /* NaN when the denominator is 0 */
+  double rmse_x_um, rmse_y_um, rmse_z_um;
+  /* tracks (valid when has_tracks) */
+  int has_tracks;
+  int n_truth_tracks, n_candidate_tracks, n_paired_tracks, n_missed_tracks,
+      n_spurious_tracks;
+  int64_t n_track_tp, n_track_fn, n_track_fp;
+  double alpha, beta, jaccard_tracks, jaccard_detections, rmse_tracks_um;
+  /* stage (valid when have_stage was set and tracks exist) */
+  int has_stage;
+  double mean_v_um_per_ms[3];
+  double stage_rel_error;
+} elfm_score_result;
+
+/* Score loaded tables. truth is required; tracks and detections may each be
+ * NULL but not both. Column requirements: truth id,t_us,x_um,y_um,z_um,
+ * brightness; detections frame,t_us,x_um,y_um,z_um; tracks track_id,frame,
+ * t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um (vx/vy/vz_um_per_ms
+ * optional). Errors (missing column, empty/NaN required value, unsorted
+ * truth, a duplicate frame in a track, inconsistent frame times, negative
+ * brightness) name the table's file and line. */
+elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
+                              const elfm_table *detections, const elfm_score_options *opt,
+                              elfm_score_result *out, elfm_error *err);
+
+/* Load the CSV files (tracks_csv or detections_csv may be NULL, not both)
+ * and call elfm_score_tables. */
+elfm_status elfm_score_files(const char *truth_csv, const char *tracks_csv,
+                             const char *detections_csv, const elfm_score_options *opt,
+                             elfm_score_result *out, elfm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
