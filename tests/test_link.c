@@ -1,0 +1,263 @@
+/* test_link.c — the streaming linker: identities through crossings, optimal
+ * (not greedy) assignment, gap closing up to max_gap, births/ends, minimum
+ * length, many objects through the k-d tree, bad input. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+static uint64_t rng = 88172645463325252ULL;
+static double urand(void)
+{
+  rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17;
+  return (double)(rng >> 11) / 9007199254740992.0;
+}
+
+static elfm_detection mk(double x, double y, double z)
+{
+  elfm_detection d;
+  memset(&d, 0, sizeof d);
+  d.x_um = x; d.y_um = y; d.z_um = z;
+  d.intensity = 1;
+  d.sigma_x_um = d.sigma_y_um = 1.6;
+  d.sigma_z_um = 9;
+  return d;
+}
+
+/* Collect all finished tracks into a store (after finish). */
+static void drain(elfm_linker *l, elfm_track_store *s)
+{
+  elfm_track *t;
+  elfm_error err;
+  while ((t = elfm_link_pop_finished(l))) elfm_track_store_add(s, t, &err);
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_link_options o;
+  elfm_link_options_default(&o);
+  const int64_t T0 = 1000000000000LL;  /* absolute times near 1e12 us */
+
+  /* 1. Two objects crossing in an X at 0.5 um/ms each, 1 kHz, noise 0.1 um.
+   * At the crossing frame they are closer than the gate; the constant
+   * velocity prediction keeps their identities. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    CHECK(l != NULL);
+    elfm_detection d[2];
+    for (int f = 0; f < 100; f++) {
+      double t = f - 50;  /* ms */
+      d[0] = mk(0.5 * t + 0.1 * (urand() - 0.5), 0.5 * t, 10);
+      d[1] = mk(0.5 * t + 0.1 * (urand() - 0.5), -0.5 * t, 10);
+      /* present them in alternating order so the order gives no hint */
+      if (f % 2) { elfm_detection tmp = d[0]; d[0] = d[1]; d[1] = tmp; }
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, 2, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    elfm_track_store s;
+    elfm_track_store_init(&s);
+    drain(l, &s);
+    CHECK_EQ_INT(s.n, 2);
+    for (size_t i = 0; i < s.n; i++) {
+      const elfm_track *t = s.tracks[i];
+      CHECK_EQ_INT(t->n, 100);
+      /* one identity: y has one sign of slope all along */
+      double sgn = t->pts[99].y_um - t->pts[0].y_um > 0 ? 1 : -1;
+      int bad = 0;
+      for (size_t k = 0; k < t->n; k++)
+        bad += fabs(t->pts[k].y_um - sgn * 0.5 * ((double)k - 50)) > 1e-9;
+      CHECK_EQ_INT(bad, 0);
+      CHECK(t->pts[0].t_us == T0);
+    }
+    elfm_track_store_clear(&s);
+    elfm_link_free(l);
+  }
+
+  /* 2. Optimal, not greedy: static tracks at x = 0 (A) and 1.5 (B); then
+   * detections at 1.0 and 3.0. Greedy nearest-first takes B-1.0 (0.5) and
+   * leaves A-3.0 (3.0): cost 0.25 + 9; the optimum is A-1.0, B-3.0: 1 + 2.25. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    elfm_detection d[2];
+    int64_t ida = -1, idb = -1;
+    for (int f = 0; f < 6; f++) {
+      d[0] = mk(0, 0, 0);
+      d[1] = mk(1.5, 0, 0);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, 2, &err), &err);
+      if (f == 0) { ida = elfm_link_last_track_id(l, 0); idb = elfm_link_last_track_id(l, 1); }
+    }
+    CHECK(ida != idb && ida >= 0 && idb >= 0);
+    d[0] = mk(3.0, 0, 0);
+    d[1] = mk(1.0, 0, 0);
+    CHECK_OK(elfm_link_step(l, 6, T0 + 6000, d, 2, &err), &err);
+    CHECK_EQ_INT(elfm_link_last_track_id(l, 1), ida);
+    CHECK_EQ_INT(elfm_link_last_track_id(l, 0), idb);
+    CHECK_EQ_INT(elfm_link_n_live(l), 2);
+    CHECK_EQ_INT(elfm_link_last_track_id(l, 5), -1);
+    elfm_link_free(l);  /* frees live tracks (ASan checks) */
+  }
+
+  /* 3. Gap closing: a bead moving at 0.05 um/ms goes dark for 50 frames
+   * (joined) and, later, for 51 frames (a new track). Also a 2-point blip
+   * far away is dropped (min_points 5), and finished tracks come out while
+   * the stream runs. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    int popped_early = 0;
+    elfm_track_store s;
+    elfm_track_store_init(&s);
+    for (int f = 0; f < 300; f++) {
+      int dark = (f >= 100 && f < 150) || (f >= 200 && f < 251);
+      elfm_detection d[2];
+      int n = 0;
+      if (!dark) d[n++] = mk(0.05 * f, 3, -20);
+      if (f == 10 || f == 11) d[n++] = mk(-40, -40, 0);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+      elfm_track *t;
+      while ((t = elfm_link_pop_finished(l))) {
+        if (f < 299) popped_early++;
+        elfm_track_store_add(&s, t, &err);
+      }
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    drain(l, &s);
+    CHECK_EQ_INT(s.n, 2);
+    CHECK_EQ_INT(popped_early, 1);  /* the first track ended at frame 251 */
+    if (s.n == 2) {
+      CHECK_EQ_INT(s.tracks[0]->n, 150);  /* frames 0-99 and 150-199 */
+      CHECK_EQ_INT(s.tracks[0]->pts[0].frame, 0);
+      CHECK_EQ_INT(s.tracks[0]->pts[149].frame, 199);
+      CHECK_EQ_INT(s.tracks[1]->n, 49);   /* frames 251-299 */
+    }
+    CHECK(elfm_link_n_started(l) == 3);   /* bead, blip, bead again */
+    elfm_track_store_clear(&s);
+    elfm_link_free(l);
+  }
+
+  /* 4. Blinking while moving fast: 1 um/ms, dark 40 frames: the velocity
+   * prediction carries it 40 um, far outside a plain gate. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    for (int f = 0; f < 120; f++) {
+      if (f >= 40 && f < 80) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+      elfm_detection d = mk(-50 + 1.0 * f + 0.1 * (urand() - 0.5), 0.2 * f, 0);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    elfm_track *t = elfm_link_pop_finished(l);
+    CHECK(t && t->n == 80);
+    CHECK(elfm_link_pop_finished(l) == NULL);
+    elfm_track_free(t);
+    elfm_link_free(l);
+  }
+
+  /* 5. 2,000 objects drifting with individual velocities (up to 0.3 um/ms)
+   * in a 200 x 200 x 200 um box, noise 0.1 um: every track keeps its object. */
+  {
+    enum { N = 2000, F = 40 };
+    double *p0 = malloc(sizeof(double) * 3 * N), *v = malloc(sizeof(double) * 3 * N);
+    elfm_detection *d = malloc(sizeof *d * N);
+    int *perm = malloc(sizeof(int) * N);
+    double *tag = malloc(sizeof(double) * N);
+    /* Start positions at least 3 um apart (anisotropic): at birth a track
+     * has no velocity yet, and two objects closer than their first step
+     * are genuinely ambiguous. Later they cross freely. */
+    for (int i = 0; i < N; i++) {
+      for (int tries = 0;; tries++) {
+        for (int a = 0; a < 3; a++) p0[3 * i + a] = 200 * urand() - 100;
+        int ok = 1;
+        for (int k = 0; k < i && ok; k++) {
+          double dx = p0[3 * i] - p0[3 * k], dy = p0[3 * i + 1] - p0[3 * k + 1],
+                 dz = (p0[3 * i + 2] - p0[3 * k + 2]) / 4;
+          ok = dx * dx + dy * dy + dz * dz >= 9;
+        }
+        if (ok || tries > 100) break;
+      }
+      for (int a = 0; a < 3; a++) v[3 * i + a] = 0.6 * urand() - 0.3;
+      perm[i] = i;
+    }
+    elfm_linker *l = elfm_link_create(&o, &err);
+    for (int f = 0; f < F; f++) {
+      for (int i = N - 1; i > 0; i--) {  /* shuffle the order every frame */
+        int j = (int)(urand() * (i + 1));
+        int t = perm[i]; perm[i] = perm[j]; perm[j] = t;
+      }
+      for (int k = 0; k < N; k++) {
+        int i = perm[k];
+        d[k] = mk(p0[3 * i] + v[3 * i] * f + 0.1 * (urand() - 0.5),
+                  p0[3 * i + 1] + v[3 * i + 1] * f + 0.1 * (urand() - 0.5),
+                  p0[3 * i + 2] + v[3 * i + 2] * f + 0.4 * (urand() - 0.5));
+        d[k].intensity = i;  /* the truth id rides along */
+      }
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, N, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    elfm_track_store s;
+    elfm_track_store_init(&s);
+    drain(l, &s);
+    size_t mixed = 0, full = 0;
+    for (size_t i = 0; i < s.n; i++) {
+      const elfm_track *t = s.tracks[i];
+      for (size_t k = 1; k < t->n; k++) {
+        if (t->pts[k].intensity != t->pts[k - 1].intensity && getenv("LINK_DEBUG"))
+          fprintf(stderr, "switch at frame %lld\n", (long long)t->pts[k].frame);
+        mixed += t->pts[k].intensity != t->pts[0].intensity;
+      }
+      full += t->n == F;
+    }
+    (void)tag;
+    CHECK_EQ_INT(s.n, N);
+    CHECK_EQ_INT(full, N);
+    CHECK_EQ_INT(mixed, 0);
+    elfm_track_store_clear(&s);
+    elfm_link_free(l);
+    free(p0); free(v); free(d); free(perm); free(tag);
+  }
+
+  /* 6. Bad input. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    elfm_detection d = mk(0, 0, 0);
+    CHECK_OK(elfm_link_step(l, 5, T0, &d, 1, &err), &err);
+    CHECK_EQ_INT(elfm_link_step(l, 5, T0 + 1000, &d, 1, &err), ELFM_ERR_INVALID);
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 - 1, &d, 1, &err), ELFM_ERR_INVALID);
+    d.y_um = NAN;
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, &d, 1, &err), ELFM_ERR_NUMERIC);
+    d.y_um = INFINITY;
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, &d, 1, &err), ELFM_ERR_NUMERIC);
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, NULL, 3, &err), ELFM_ERR_INVALID);
+    elfm_link_free(l);
+    elfm_link_options bad = o;
+    bad.gate_um = 0;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.history = 1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    elfm_link_free(NULL);
+    CHECK(elfm_link_pop_finished(NULL) == NULL);
+  }
+
+  /* 7. Lag correction through the linker: detections trail a bead moving at
+   * 1 um/ms by the model lag; with lag_tau_us set the attached points sit on
+   * the truth again. */
+  {
+    elfm_link_options ol = o;
+    ol.lag_tau_us = 2000;
+    ol.min_points = 1;
+    elfm_linker *l = elfm_link_create(&ol, &err);
+    double lag = elfm_peaks_trail_lag_um(2.0, 1.6);
+    double worst = 0;
+    for (int f = 0; f < 30; f++) {
+      elfm_detection d = mk(1.0 * f - lag, 0, 0);
+      d.sigma_x_um = 1.6;
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+      if (f >= 1 && fabs(d.x_um - f) > worst) worst = fabs(d.x_um - f);
+    }
+    CHECK_MSG(lag > 0.5 && worst < 0.05, "lag %g, worst corrected error %g", lag, worst);
+    elfm_link_free(l);
+  }
+  return check_report();
+}

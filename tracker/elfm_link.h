@@ -1,0 +1,85 @@
+/* elfm_link.h — streaming frame-to-frame linking of detections into tracks.
+ *
+ * Per frame (elfm_link_step):
+ *  1. every live track predicts its position at the frame's time with a
+ *     constant velocity fitted (least squares) to its last `history` real
+ *     points (a track with one point predicts standing still);
+ *  2. the frame's detections go into a FLANN exact k-d tree
+ *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
+ *     1/kz), and each track asks for the detections within its gate:
+ *     gate_um + gate_growth_um_per_frame * (frames missed so far);
+ *  3. tracks and detections joined by a candidate pair form connected
+ *     groups; each group is solved optimally (the Hungarian solver of
+ *     elfm_score.h: most pairs, then least total cost; cost = squared
+ *     anisotropic distance over the squared gate, plus gap_cost per missed
+ *     frame so a continuing track beats one coming back from a gap);
+ *  4. unmatched detections start tracks; a track that has missed more
+ *     than max_gap_frames consecutive frames ends. Ended tracks with at
+ *     least min_points real points become "finished" and can be taken with
+ *     elfm_link_pop_finished as soon as they end (shorter ones are dropped).
+ * Memory: live tracks plus finished tracks not yet popped; per-frame
+ * scratch is reused (it grows only when a frame has more objects than any
+ * earlier one).
+ */
+#ifndef ELFM_LINK_H
+#define ELFM_LINK_H
+
+#include <stdint.h>
+
+#include "elfm_error.h"
+#include "elfm_peaks.h"
+#include "elfm_tracks.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct elfm_link_options {
+  double gate_um;                  /* default 4 um: the scoring gate (SPEC §7) */
+  double gate_growth_um_per_frame; /* default 0.05: +2.5 um after a 50-frame gap */
+  double kz;                       /* anisotropy, default 4 (SPEC §7) */
+  int max_gap_frames;              /* default 50: blinking beads stay dark <= 50 ms at 1 kHz */
+  int min_points;                  /* default 5 real points */
+  int history;                     /* default 20 points for the velocity fit */
+  double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
+  int max_candidates;              /* per track, default 8 */
+  /* Time-surface lag correction (elfm_peaks.h): when tau_us > 0, each
+   * detection attached to a track with a velocity is moved forward by the
+   * surface's lag, in the caller's array too. 0 = off. */
+  double lag_tau_us;
+} elfm_link_options;
+
+void elfm_link_options_default(elfm_link_options *o);
+
+typedef struct elfm_linker elfm_linker;
+
+/* NULL (err filled) on bad options / no memory. Free with elfm_link_free,
+ * which also frees live and unpopped finished tracks. */
+elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err);
+void elfm_link_free(elfm_linker *l);
+
+/* Link the detections of one frame. Frames must come in increasing order
+ * (gaps in the numbering count as missed frames); t_us must not decrease.
+ * det may be modified (lag correction, see options) and its frame/t_us
+ * fields are set to `frame`/`t_us`. NaN positions are an ELFM_ERR_NUMERIC. */
+elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det,
+                           int n, elfm_error *err);
+
+/* End every live track (end of the recording): they become finished. */
+elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err);
+
+/* Take the oldest finished track (caller owns it: elfm_track_free), or NULL. */
+elfm_track *elfm_link_pop_finished(elfm_linker *l);
+
+/* Live tracks right now, and how many tracks were started in total. */
+size_t elfm_link_n_live(const elfm_linker *l);
+int64_t elfm_link_n_started(const elfm_linker *l);
+
+/* Id of the track detection i of the LAST step joined (a new track when it
+ * matched none), or -1 when i is out of range. */
+int64_t elfm_link_last_track_id(const elfm_linker *l, int i);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,110 @@
+/* elfm_tracks.h — the track type, the track store, and the track writers
+ * (tracks.csv, detections.csv, ISBI 2012 XML, TrackMate XML; SPEC §5).
+ *
+ * A track holds its REAL points (detections the linker attached), in
+ * increasing frame order; frames between them are gaps (filled only in the
+ * smoothed output). After smoothing (elfm_track_smooth, elfm_smooth.h) it
+ * also holds one smoothed state per frame of its span first..last, with
+ * raw_index[k] the real point at that frame or -1 for a gap-filled frame.
+ *
+ * The store (elfm_track_store) owns finished tracks; it is the only thing
+ * that grows with the recording's length (STYLE: "nothing grows except the
+ * tracks themselves").
+ */
+#ifndef ELFM_TRACKS_H
+#define ELFM_TRACKS_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "elfm_error.h"
+#include "elfm_peaks.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Motion models the smoother chooses from (elfm_smooth.h). */
+typedef enum elfm_motion_model {
+  ELFM_MODEL_AUTO = 0,       /* choose per track by BIC */
+  ELFM_MODEL_CONST_VELOCITY,
+  ELFM_MODEL_CONST_ACCEL,
+  ELFM_MODEL_SPLINE,         /* smoothing spline, weight chosen by GCV */
+  ELFM_MODEL_STATIC          /* one point, or all points at one time: position only */
+} elfm_motion_model;
+
+const char *elfm_motion_model_name(elfm_motion_model m);
+
+typedef struct elfm_track {
+  int64_t id;
+  size_t n, cap;
+  elfm_detection *pts;        /* real points, strictly increasing frame */
+  /* Smoothed, one entry per frame of the span (n_span = last - first + 1);
+   * all NULL / 0 until smoothed. pos, vel and the sd arrays are n_span x 3 (x, y, z). */
+  size_t n_span;
+  int64_t *span_t_us;
+  double *pos_um, *vel_um_per_ms, *pos_sd_um, *vel_sd_um_per_ms;
+  int32_t *raw_index;
+  elfm_motion_model model;    /* the model the smoother chose */
+  double spline_weight_ms3;   /* chosen spline weight (SPLINE only) */
+  double edf;                 /* effective parameters per axis */
+  int n_outliers;             /* points the robust loss down-weighted below 1/2 */
+} elfm_track;
+
+/* A new empty track; free with elfm_track_free (NULL is a no-op). */
+elfm_track *elfm_track_create(int64_t id, elfm_error *err);
+void elfm_track_free(elfm_track *t);
+/* Append a real point; its frame must exceed the last one's. */
+elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error *err);
+/* Mean smoothed velocity over the span (um/ms); zeros when not smoothed. */
+void elfm_track_mean_velocity(const elfm_track *t, double v_um_per_ms[3]);
+
+/* The store: takes ownership of finished tracks. */
+typedef struct elfm_track_store {
+  size_t n, cap;
+  elfm_track **tracks;
+} elfm_track_store;
+
+void elfm_track_store_init(elfm_track_store *s);
+/* Take ownership of t (also on failure: t is freed then). */
+elfm_status elfm_track_store_add(elfm_track_store *s, elfm_track *t, elfm_error *err);
+/* Free every track and the array; the store is empty afterwards. */
+void elfm_track_store_clear(elfm_track_store *s);
+
+/* ---- writers. Each takes an open FILE (the caller opens/closes it) and a
+ * `path` used in error messages; write errors are ELFM_ERR_IO. ---- */
+
+/* detections.csv: header then rows
+ * frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um */
+elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err);
+elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d, int n,
+                                  elfm_error *err);
+
+/* tracks.csv: header then, per smoothed track, one row per frame of its
+ * span: track_id,frame,t_us,x_um,y_um,z_um (smoothed), raw_x_um,raw_y_um,
+ * raw_z_um (empty on gap frames), vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,
+ * intensity (empty on gap frames), sd_x_um,sd_y_um,sd_z_um,
+ * sd_vx_um_per_ms,sd_vy_um_per_ms,sd_vz_um_per_ms (empty where undetermined:
+ * e.g. the velocity of a one-point track). All fields numeric or empty, so
+ * elfm_table reads it back; the chosen model goes to summary.json.
+ * A track that is not smoothed is an ELFM_ERR_INVALID. */
+elfm_status elfm_tracks_write_csv_header(FILE *f, const char *path, elfm_error *err);
+elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t, elfm_error *err);
+
+/* ISBI 2012 particle-tracking challenge XML: one <particle> per track, one
+ * <detection t= x= y= z=/> per REAL point (the evaluator fills gaps), at the
+ * smoothed positions; t is the frame index, x/y/z in um (snr, density and
+ * scenario are the header attributes the challenge files carry). */
+elfm_status elfm_tracks_write_isbi(FILE *f, const char *path, const elfm_track_store *s,
+                                   elfm_error *err);
+
+/* TrackMate XML (the TmXmlReader layout: Model/AllSpots/SpotsInFrame/Spot,
+ * AllTracks/Track/Edge, FilteredTracks), positions in um, frame interval
+ * in ms, one spot per real point at its smoothed position. */
+elfm_status elfm_tracks_write_trackmate(FILE *f, const char *path, const elfm_track_store *s,
+                                        double frame_interval_ms, elfm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

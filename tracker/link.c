@@ -1,0 +1,489 @@
+/* link.c — streaming linker: constant-velocity prediction, FLANN k-d tree
+ * candidates, optimal assignment per connected group, gap closing
+ * (see elfm_link.h). */
+#include "elfm_link.h"
+
+#include <flann/flann.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "elfm_score.h"
+
+typedef struct live_track {
+  elfm_track *t;
+  int64_t last_frame, last_t_us;
+  double last[3];           /* last real position */
+  double vel_um_per_ms[3];  /* fitted over the recent history; 0 with one point */
+  double pred[3];           /* prediction for the current frame */
+  double gate_um;           /* gate for the current frame */
+  int missed;               /* frames missed before the current frame */
+} live_track;
+
+typedef struct link_cand {
+  int det;
+  double cost;
+} link_cand;
+
+struct elfm_linker {
+  elfm_link_options o;
+  live_track *live;
+  size_t n_live, cap_live;
+  elfm_track **fin;          /* FIFO of finished tracks: fin[fin_head .. fin_head+fin_n) */
+  size_t fin_head, fin_n, fin_cap;
+  int64_t next_id, last_frame, last_t_us;
+  int started;
+  /* per-frame scratch, grown on demand */
+  size_t cap_det, cap_trk;
+  float *pts;                /* n_det x 3, z scaled by 1/kz */
+  int *nn_idx;               /* max_candidates */
+  float *nn_dist;
+  link_cand *cand;           /* n_trk x max_candidates */
+  int *n_cand;               /* per track */
+  int *uf;                   /* union-find over tracks then detections */
+  int *comp_of, *comp_start, *comp_fill, *members; /* grouping */
+  int *track_det, *det_track, *det_local;
+  int64_t *det_id;
+  size_t cap_cost;
+  double *cost;
+  int *row_to_col;
+  int *rows, *cols;
+  elfm_assign_workspace *aws;
+};
+
+void elfm_link_options_default(elfm_link_options *o)
+{
+  memset(o, 0, sizeof *o);
+  o->gate_um = 4.0;
+  o->gate_growth_um_per_frame = 0.05;
+  o->kz = 4.0;
+  o->max_gap_frames = 50;
+  o->min_points = 5;
+  o->history = 20;
+  o->gap_cost = 0.02;
+  o->max_candidates = 8;
+  o->lag_tau_us = 0;
+}
+
+elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
+{
+  if (!o || !(o->gate_um > 0) || !isfinite(o->gate_um) || !(o->gate_growth_um_per_frame >= 0) ||
+      !isfinite(o->gate_growth_um_per_frame) || !(o->kz > 0) || o->max_gap_frames < 0 ||
+      o->min_points < 1 || o->history < 2 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
+      o->max_candidates > 1024 || !(o->lag_tau_us >= 0)) {
+    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                   "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
+                   "history >= 2, 1 <= max_candidates <= 1024)");
+    return NULL;
+  }
+  elfm_linker *l = calloc(1, sizeof *l);
+  if (!l) {
+    elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    return NULL;
+  }
+  l->o = *o;
+  l->nn_idx = malloc((size_t)o->max_candidates * sizeof *l->nn_idx);
+  l->nn_dist = malloc((size_t)o->max_candidates * sizeof *l->nn_dist);
+  if (!l->nn_idx || !l->nn_dist ||
+      elfm_assign_workspace_create(16, 16, &l->aws, err) != ELFM_OK) {
+    elfm_link_free(l);
+    elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    return NULL;
+  }
+  return l;
+}
+
+void elfm_link_free(elfm_linker *l)
+{
+  if (!l) return;
+  for (size_t i = 0; i < l->n_live; i++) elfm_track_free(l->live[i].t);
+  for (size_t i = 0; i < l->fin_n; i++) elfm_track_free(l->fin[l->fin_head + i]);
+  free(l->live);
+  free(l->fin);
+  free(l->pts);
+  free(l->nn_idx);
+  free(l->nn_dist);
+  free(l->cand);
+  free(l->n_cand);
+  free(l->uf);
+  free(l->comp_of);
+  free(l->comp_start);
+  free(l->comp_fill);
+  free(l->members);
+  free(l->track_det);
+  free(l->det_track);
+  free(l->det_local);
+  free(l->det_id);
+  free(l->cost);
+  free(l->row_to_col);
+  free(l->rows);
+  free(l->cols);
+  elfm_assign_workspace_free(l->aws);
+  free(l);
+}
+
+size_t elfm_link_n_live(const elfm_linker *l) { return l ? l->n_live : 0; }
+int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
+
+int64_t elfm_link_last_track_id(const elfm_linker *l, int i)
+{
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_id) return -1;
+  return l->det_id[i];
+}
+
+static int grow(void **p, size_t n, size_t size)
+{
+  void *q = realloc(*p, (n ? n : 1) * size);
+  if (!q) return 0;
+  *p = q;
+  return 1;
+}
+
+/* Make the scratch hold n_trk tracks and n_det detections. */
+static elfm_status reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_error *err)
+{
+  size_t mc = (size_t)l->o.max_candidates;
+  if (n_det > l->cap_det) {
+    size_t c = n_det + n_det / 2 + 16;
+    if (!grow((void **)&l->pts, 3 * c, sizeof(float)) ||
+        !grow((void **)&l->det_track, c, sizeof(int)) ||
+        !grow((void **)&l->det_local, c, sizeof(int)) ||
+        !grow((void **)&l->det_id, c, sizeof(int64_t)))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    l->cap_det = c;
+  }
+  if (n_trk > l->cap_trk) {
+    size_t c = n_trk + n_trk / 2 + 16;
+    if (!grow((void **)&l->cand, c * mc, sizeof(link_cand)) ||
+        !grow((void **)&l->n_cand, c, sizeof(int)) ||
+        !grow((void **)&l->track_det, c, sizeof(int)) ||
+        !grow((void **)&l->rows, c, sizeof(int)) ||
+        !grow((void **)&l->row_to_col, c, sizeof(int)))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    l->cap_trk = c;
+  }
+  size_t nodes = l->cap_trk + l->cap_det;
+  /* union-find and grouping cover tracks + detections */
+  if (!grow((void **)&l->uf, nodes, sizeof(int)) || !grow((void **)&l->comp_of, nodes, sizeof(int)) ||
+      !grow((void **)&l->comp_start, nodes + 1, sizeof(int)) ||
+      !grow((void **)&l->comp_fill, nodes + 1, sizeof(int)) ||
+      !grow((void **)&l->members, nodes, sizeof(int)) || !grow((void **)&l->cols, nodes, sizeof(int)))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+  return ELFM_OK;
+}
+
+static int uf_find(int *uf, int a)
+{
+  while (uf[a] != a) {
+    uf[a] = uf[uf[a]];  /* path halving */
+    a = uf[a];
+  }
+  return a;
+}
+
+/* Least-squares velocity over the last `history` real points. */
+static void fit_velocity(live_track *lt, int history)
+{
+  const elfm_track *t = lt->t;
+  size_t n = t->n, k0 = n > (size_t)history ? n - (size_t)history : 0;
+  lt->vel_um_per_ms[0] = lt->vel_um_per_ms[1] = lt->vel_um_per_ms[2] = 0;
+  if (n - k0 < 2) return;
+  /* times relative to the last point, in ms: never float absolute times */
+  const int64_t tr = t->pts[n - 1].t_us;
+  double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
+  double m = (double)(n - k0);
+  for (size_t k = k0; k < n; k++) {
+    double tm = (double)(t->pts[k].t_us - tr) * 1e-3;
+    const double p[3] = {t->pts[k].x_um, t->pts[k].y_um, t->pts[k].z_um};
+    st += tm;
+    stt += tm * tm;
+    for (int a = 0; a < 3; a++) {
+      sx[a] += p[a];
+      stx[a] += tm * p[a];
+    }
+  }
+  double den = m * stt - st * st;
+  if (!(den > 1e-12)) return;  /* all points at one time */
+  for (int a = 0; a < 3; a++) lt->vel_um_per_ms[a] = (m * stx[a] - st * sx[a]) / den;
+}
+
+static elfm_status end_track(elfm_linker *l, elfm_track *t, elfm_error *err)
+{
+  if (t->n < (size_t)l->o.min_points) {
+    elfm_track_free(t);
+    return ELFM_OK;
+  }
+  if (l->fin_head + l->fin_n == l->fin_cap) {
+    if (l->fin_head > 0) {  /* slide the queue down before growing */
+      memmove(l->fin, l->fin + l->fin_head, l->fin_n * sizeof *l->fin);
+      l->fin_head = 0;
+    }
+    if (l->fin_n == l->fin_cap) {
+      size_t c = l->fin_cap ? 2 * l->fin_cap : 64;
+      if (!grow((void **)&l->fin, c, sizeof *l->fin)) {
+        elfm_track_free(t);
+        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+      }
+      l->fin_cap = c;
+    }
+  }
+  l->fin[l->fin_head + l->fin_n++] = t;
+  return ELFM_OK;
+}
+
+elfm_track *elfm_link_pop_finished(elfm_linker *l)
+{
+  if (!l || !l->fin_n) return NULL;
+  elfm_track *t = l->fin[l->fin_head++];
+  if (--l->fin_n == 0) l->fin_head = 0;
+  return t;
+}
+
+static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elfm_error *err)
+{
+  if (l->o.lag_tau_us > 0 && lt->t->n >= 2)
+    elfm_detection_correct_lag(d, lt->vel_um_per_ms[0], lt->vel_um_per_ms[1],
+                               lt->vel_um_per_ms[2], l->o.lag_tau_us);
+  elfm_status st = elfm_track_append(lt->t, d, err);
+  if (st != ELFM_OK) return st;
+  lt->last_frame = d->frame;
+  lt->last_t_us = d->t_us;
+  lt->last[0] = d->x_um;
+  lt->last[1] = d->y_um;
+  lt->last[2] = d->z_um;
+  fit_velocity(lt, l->o.history);
+  if (l->o.lag_tau_us > 0 && lt->t->n == 2) {
+    /* the first velocity: correct the two points it came from alike, so
+     * later fits do not mix corrected and uncorrected points */
+    for (int k = 0; k < 2; k++)
+      elfm_detection_correct_lag(&lt->t->pts[k], lt->vel_um_per_ms[0], lt->vel_um_per_ms[1],
+                                 lt->vel_um_per_ms[2], l->o.lag_tau_us);
+    d->x_um = lt->t->pts[1].x_um;
+    d->y_um = lt->t->pts[1].y_um;
+    d->z_um = lt->t->pts[1].z_um;
+    lt->last[0] = d->x_um;
+    lt->last[1] = d->y_um;
+    lt->last[2] = d->z_um;
+  }
+  return ELFM_OK;
+}
+
+static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_out, elfm_error *err)
+{
+  if (l->n_live == l->cap_live) {
+    size_t c = l->cap_live ? 2 * l->cap_live : 64;
+    if (!grow((void **)&l->live, c, sizeof *l->live))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    l->cap_live = c;
+  }
+  elfm_track *t = elfm_track_create(l->next_id, err);
+  if (!t) return ELFM_ERR_NOMEM;
+  live_track *lt = &l->live[l->n_live];
+  memset(lt, 0, sizeof *lt);
+  lt->t = t;
+  elfm_status st = attach(l, lt, d, err);
+  if (st != ELFM_OK) {
+    elfm_track_free(t);
+    return st;
+  }
+  l->n_live++;
+  *id_out = l->next_id++;
+  return ELFM_OK;
+}
+
+elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det, int n,
+                           elfm_error *err)
+{
+  if (!l || n < 0 || (n > 0 && !det))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: bad arguments");
+  if (l->started && (frame <= l->last_frame || t_us < l->last_t_us))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "link: frame %lld at t = %lld us after frame %lld at t = %lld us "
+                          "(frames must increase, times must not decrease)",
+                          (long long)frame, (long long)t_us, (long long)l->last_frame,
+                          (long long)l->last_t_us);
+  for (int j = 0; j < n; j++)
+    if (!isfinite(det[j].x_um) || !isfinite(det[j].y_um) || !isfinite(det[j].z_um))
+      return elfm_error_set(err, ELFM_ERR_NUMERIC, NULL, -1,
+                            "link: detection %d of frame %lld has a non-finite position", j,
+                            (long long)frame);
+  l->started = 1;
+  l->last_frame = frame;
+  l->last_t_us = t_us;
+  const elfm_link_options *o = &l->o;
+  const double kz = o->kz;
+
+  /* 1. End tracks dark for too long (stable compaction keeps the order
+   * deterministic); predict the others. */
+  size_t w = 0;
+  for (size_t i = 0; i < l->n_live; i++) {
+    live_track lt = l->live[i];
+    lt.missed = (int)(frame - lt.last_frame - 1);
+    if (lt.missed > o->max_gap_frames) {
+      elfm_status st = end_track(l, lt.t, err);
+      if (st != ELFM_OK) return st;
+      continue;
+    }
+    double dt_ms = (double)(t_us - lt.last_t_us) * 1e-3;
+    for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
+    lt.gate_um = o->gate_um + o->gate_growth_um_per_frame * lt.missed;
+    l->live[w++] = lt;
+  }
+  l->n_live = w;
+  const size_t nt = l->n_live, nd = (size_t)n;
+  elfm_status st = reserve(l, nt, nd, err);
+  if (st != ELFM_OK) return st;
+  for (size_t j = 0; j < nd; j++) {
+    det[j].frame = frame;
+    det[j].t_us = t_us;
+    l->det_track[j] = -1;
+  }
+  for (size_t i = 0; i < nt; i++) {
+    l->n_cand[i] = 0;
+    l->track_det[i] = -1;
+  }
+
+  /* 2. Candidates from the k-d tree over this frame's detections. */
+  if (nt > 0 && nd > 0) {
+    for (size_t j = 0; j < nd; j++) {
+      l->pts[3 * j] = (float)det[j].x_um;
+      l->pts[3 * j + 1] = (float)det[j].y_um;
+      l->pts[3 * j + 2] = (float)(det[j].z_um / kz);
+    }
+    struct FLANNParameters fp = DEFAULT_FLANN_PARAMETERS;
+    fp.algorithm = FLANN_INDEX_KDTREE_SINGLE;  /* exact search */
+    fp.leaf_max_size = 10;
+    fp.checks = FLANN_CHECKS_UNLIMITED;
+    fp.sorted = 1;                              /* nearest first when capped */
+    fp.max_neighbors = o->max_candidates;
+    fp.cores = 1;
+    fp.log_level = FLANN_LOG_NONE;
+    float speedup = 0;
+    flann_index_t idx = flann_build_index_float(l->pts, (int)nd, 3, &speedup, &fp);
+    if (!idx) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: FLANN index build failed");
+    for (size_t i = 0; i < nt; i++) {
+      live_track *lt = &l->live[i];
+      float q[3] = {(float)lt->pred[0], (float)lt->pred[1], (float)(lt->pred[2] / kz)};
+      double g2 = lt->gate_um * lt->gate_um;
+      /* FLANN's L2 works in squared distances */
+      int k = flann_radius_search_float(idx, q, l->nn_idx, l->nn_dist, o->max_candidates,
+                                        (float)g2, &fp);
+      if (k < 0) {
+        flann_free_index_float(idx, &fp);
+        return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: FLANN radius search failed");
+      }
+      if (k > o->max_candidates) k = o->max_candidates;
+      int c = 0;
+      for (int m = 0; m < k; m++) {
+        int j = l->nn_idx[m];
+        if (j < 0 || (size_t)j >= nd) continue;
+        /* exact double distance for the cost (FLANN's is float) */
+        double dx = det[j].x_um - lt->pred[0], dy = det[j].y_um - lt->pred[1],
+               dz = (det[j].z_um - lt->pred[2]) / kz;
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 >= g2) continue;
+        l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
+            (link_cand){j, d2 / g2 + o->gap_cost * lt->missed};
+      }
+      l->n_cand[i] = c;
+    }
+    flann_free_index_float(idx, &fp);
+  }
+
+  /* 3. Connected groups (union-find over tracks 0..nt-1, detections
+   * nt..nt+nd-1), each solved optimally. */
+  const size_t nodes = nt + nd;
+  for (size_t a = 0; a < nodes; a++) l->uf[a] = (int)a;
+  for (size_t i = 0; i < nt; i++)
+    for (int c = 0; c < l->n_cand[i]; c++) {
+      int ra = uf_find(l->uf, (int)i),
+          rb = uf_find(l->uf, (int)(nt + (size_t)l->cand[i * (size_t)o->max_candidates + c].det));
+      if (ra != rb) l->uf[ra] = rb;
+    }
+  /* counting sort of nodes by group */
+  int ngroups = 0;
+  for (size_t a = 0; a < nodes; a++) l->comp_of[a] = -1;
+  for (size_t a = 0; a < nodes; a++) {
+    int r = uf_find(l->uf, (int)a);
+    if (l->comp_of[r] < 0) l->comp_of[r] = ngroups++;
+  }
+  for (int g = 0; g <= ngroups; g++) l->comp_start[g] = 0;
+  for (size_t a = 0; a < nodes; a++) l->comp_start[l->comp_of[uf_find(l->uf, (int)a)] + 1]++;
+  for (int g = 0; g < ngroups; g++) l->comp_start[g + 1] += l->comp_start[g];
+  for (int g = 0; g < ngroups; g++) l->comp_fill[g] = l->comp_start[g];
+  for (size_t a = 0; a < nodes; a++)
+    l->members[l->comp_fill[l->comp_of[uf_find(l->uf, (int)a)]]++] = (int)a;
+
+  for (int g = 0; g < ngroups; g++) {
+    int nr = 0, nc = 0;
+    for (int m = l->comp_start[g]; m < l->comp_start[g + 1]; m++) {
+      int a = l->members[m];
+      if ((size_t)a < nt) l->rows[nr++] = a;
+      else {
+        l->det_local[a - (int)nt] = nc;
+        l->cols[nc++] = a - (int)nt;
+      }
+    }
+    if (nr == 0 || nc == 0) continue;
+    if (nr == 1 && nc == 1) {  /* the common case: one track, one detection */
+      l->track_det[l->rows[0]] = l->cols[0];
+      l->det_track[l->cols[0]] = l->rows[0];
+      continue;
+    }
+    size_t need = (size_t)nr * (size_t)nc;
+    if (need > l->cap_cost) {
+      size_t c = need + need / 2;
+      if (!grow((void **)&l->cost, c, sizeof(double)))
+        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+      l->cap_cost = c;
+    }
+    for (size_t k = 0; k < need; k++) l->cost[k] = INFINITY;
+    for (int r = 0; r < nr; r++) {
+      int i = l->rows[r];
+      for (int c = 0; c < l->n_cand[i]; c++) {
+        const link_cand *lc = &l->cand[(size_t)i * (size_t)o->max_candidates + c];
+        l->cost[(size_t)r * nc + l->det_local[lc->det]] = lc->cost;
+      }
+    }
+    st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+    if (st != ELFM_OK) return st;
+    for (int r = 0; r < nr; r++) {
+      int c = l->row_to_col[r];
+      if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
+      l->track_det[l->rows[r]] = l->cols[c];
+      l->det_track[l->cols[c]] = l->rows[r];
+    }
+  }
+
+  /* 4. Attach, then births (after: start_track may move the live array). */
+  for (size_t i = 0; i < nt; i++) {
+    int j = l->track_det[i];
+    if (j < 0) continue;
+    st = attach(l, &l->live[i], &det[j], err);
+    if (st != ELFM_OK) return st;
+    l->det_id[j] = l->live[i].t->id;
+  }
+  for (size_t j = 0; j < nd; j++) {
+    if (l->det_track[j] >= 0) continue;
+    st = start_track(l, &det[j], &l->det_id[j], err);
+    if (st != ELFM_OK) return st;
+  }
+  for (size_t j = nd; j < l->cap_det; j++) l->det_id[j] = -1;
+  return ELFM_OK;
+}
+
+elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err)
+{
+  if (!l) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: NULL linker");
+  for (size_t i = 0; i < l->n_live; i++) {
+    elfm_status st = end_track(l, l->live[i].t, err);
+    if (st != ELFM_OK) {
+      /* end_track freed this one; free the rest so nothing leaks */
+      for (size_t k = i + 1; k < l->n_live; k++) elfm_track_free(l->live[k].t);
+      l->n_live = 0;
+      return st;
+    }
+  }
+  l->n_live = 0;
+  return ELFM_OK;
+}

@@ -1,0 +1,91 @@
+/* tracks.c — the track type and the store of finished tracks (see
+ * elfm_tracks.h). */
+#include "elfm_tracks.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+const char *elfm_motion_model_name(elfm_motion_model m)
+{
+  switch (m) {
+  case ELFM_MODEL_AUTO: return "auto";
+  case ELFM_MODEL_CONST_VELOCITY: return "constant_velocity";
+  case ELFM_MODEL_CONST_ACCEL: return "constant_acceleration";
+  case ELFM_MODEL_SPLINE: return "spline";
+  case ELFM_MODEL_STATIC: return "static";
+  }
+  return "unknown";
+}
+
+elfm_track *elfm_track_create(int64_t id, elfm_error *err)
+{
+  elfm_track *t = calloc(1, sizeof *t);
+  if (!t) elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "track: out of memory");
+  else t->id = id;
+  return t;
+}
+
+void elfm_track_free(elfm_track *t)
+{
+  if (!t) return;
+  free(t->pts);
+  free(t->span_t_us);
+  free(t->pos_um);
+  free(t->vel_um_per_ms);
+  free(t->pos_sd_um);
+  free(t->vel_sd_um_per_ms);
+  free(t->raw_index);
+  free(t);
+}
+
+elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error *err)
+{
+  if (t->n && d->frame <= t->pts[t->n - 1].frame)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "track %lld: frame %lld after frame %lld", (long long)t->id,
+                          (long long)d->frame, (long long)t->pts[t->n - 1].frame);
+  if (t->n == t->cap) {
+    /* doubling: amortised O(1), the track is the one thing allowed to grow */
+    size_t cap = t->cap ? 2 * t->cap : 16;
+    elfm_detection *p = realloc(t->pts, cap * sizeof *p);
+    if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "track: out of memory");
+    t->pts = p;
+    t->cap = cap;
+  }
+  t->pts[t->n++] = *d;
+  return ELFM_OK;
+}
+
+void elfm_track_mean_velocity(const elfm_track *t, double v[3])
+{
+  v[0] = v[1] = v[2] = 0;
+  if (!t || !t->n_span || !t->vel_um_per_ms) return;
+  for (size_t k = 0; k < t->n_span; k++)
+    for (int a = 0; a < 3; a++) v[a] += t->vel_um_per_ms[3 * k + a];
+  for (int a = 0; a < 3; a++) v[a] /= (double)t->n_span;
+}
+
+void elfm_track_store_init(elfm_track_store *s) { memset(s, 0, sizeof *s); }
+
+elfm_status elfm_track_store_add(elfm_track_store *s, elfm_track *t, elfm_error *err)
+{
+  if (s->n == s->cap) {
+    size_t cap = s->cap ? 2 * s->cap : 64;
+    elfm_track **p = realloc(s->tracks, cap * sizeof *p);
+    if (!p) {
+      elfm_track_free(t);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "track store: out of memory");
+    }
+    s->tracks = p;
+    s->cap = cap;
+  }
+  s->tracks[s->n++] = t;
+  return ELFM_OK;
+}
+
+void elfm_track_store_clear(elfm_track_store *s)
+{
+  for (size_t i = 0; i < s->n; i++) elfm_track_free(s->tracks[i]);
+  free(s->tracks);
+  elfm_track_store_init(s);
+}
