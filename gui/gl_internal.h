@@ -1,0 +1,100 @@
+/* gl_internal.h — private to gui/: the viewer's state and the OpenGL
+ * entry points. Not installed, not included outside gui/.
+ *
+ * OpenGL 3.3 core functions are called directly (GL_GLEXT_PROTOTYPES): the
+ * Linux libGL exports every core entry point, so there is no loader and no
+ * table of function pointers to keep in global state.
+ */
+#ifndef ELFM_GUI_GL_INTERNAL_H
+#define ELFM_GUI_GL_INTERNAL_H
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+#include "elfm_gui.h"
+
+/* Vertex of tracks, truth, detections and the box: 5 floats. t is in ms
+ * since the data's t_min_us (a float holds 1 us steps up to 16.7 s and 2 us
+ * steps to 33 s: finer than any frame), key in [0,1] picks a track's colour. */
+#define GUI_VERTEX_FLOATS 5
+/* Overlay vertex: x, y in pixels from the top-left, then r, g, b, a. */
+#define GUI_OVERLAY_FLOATS 6
+/* Overlay capacity in vertices, allocated once: ~150 label characters of
+ * up to 35 dots x 6 vertices, plus bars: 64 k vertices is 1.5 MB. */
+#define GUI_OVERLAY_CAP 65536
+typedef struct gui_lines_prog {
+  GLuint prog;
+  GLint u_mvp, u_mode, u_t0, u_t1, u_z0, u_z1, u_color, u_cursor, u_trail, u_point_size;
+} gui_lines_prog;
+
+typedef struct gui_series_gl {
+  GLuint vao, vbo;
+  GLint *firsts;    /* per polyline, for glMultiDrawArrays */
+  GLsizei *counts;
+  GLsizei n_lines;
+} gui_series_gl;
+
+struct elfm_viewer {
+  GLFWwindow *win;
+  const elfm_view_data *data;
+  elfm_viewer_options opt;
+  elfm_camera cam;
+  elfm_color_mode mode;
+  int64_t cursor_us;        /* tracks shown up to here */
+  int playing;
+  double play_us_per_s;     /* playback speed: recording us per wall second */
+  double line_width_px;
+
+  gui_lines_prog lines;
+  GLuint prog_overlay;
+  GLint u_ov_viewport;
+  GLuint prog_tex;
+  GLint u_tex_mvp, u_tex_sampler, u_tex_alpha;
+
+  gui_series_gl tracks, truth;
+  GLuint det_vao, det_vbo;
+  GLsizei n_det;
+  GLuint box_vao, box_vbo;
+  GLsizei n_box;
+
+  GLuint ov_vao, ov_vbo;
+  float *ov;                /* GUI_OVERLAY_CAP * GUI_OVERLAY_FLOATS */
+  size_t ov_n;
+
+  GLuint mip_vao, mip_vbo, mip_tex;
+  long mip_loaded;          /* index into data->mips, -1 none */
+  int mip_ok;               /* the loaded picture is on the texture */
+  uint8_t *mip_rgba;        /* reused decode buffer */
+  size_t mip_cap;
+
+  GLuint fbo, fbo_color, fbo_depth;
+  int fbo_w, fbo_h;
+
+  /* interactive state */
+  double mouse_x, mouse_y;
+  int drag_rotate, drag_pan;
+  char status_line[128];    /* shown bottom-left in the window, e.g. errors */
+};
+
+/* shaders.c */
+elfm_status gui_shaders_create(elfm_viewer *v, elfm_error *err);
+void gui_shaders_free(elfm_viewer *v);
+
+/* overlay.c: rebuild the 2D overlay (labels, colour bar, scale bar, HUD)
+ * for a width x height picture into v->ov; no allocation. */
+void gui_overlay_build(elfm_viewer *v, int width, int height);
+
+/* mip_plane.c: make the texture show the MIP of the cursor's frame (reads a
+ * PNG only when the frame changes); 1 if a MIP is ready to draw. */
+int gui_mip_update(elfm_viewer *v);
+
+/* png_io.c: decode into a reusable buffer (grown only when too small). */
+elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int *width,
+                              int *height, elfm_error *err);
+
+/* viewer.c: draw one frame into the bound framebuffer. */
+void gui_draw(elfm_viewer *v, int width, int height);
+
+#endif
