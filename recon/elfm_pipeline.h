@@ -1,0 +1,130 @@
+/* elfm_pipeline.h — the streaming driver (events -> frames -> median ->
+ * refocused volumes) shared by `eventlfm recon`, `track` and the benchmark,
+ * the same for conventional light-field TIFF stacks, and the volume writers
+ * (OpenEXR volumes, depth-coded MIP PNGs).
+ *
+ *   elfm_recon_options o;
+ *   elfm_recon_options_default(&o);            then change what you need
+ *   elfm_recon_run(events_path, &calib, &o, on_volume, user, &stats, &err);
+ *
+ * The driver reads fixed-size chunks, builds frames sequentially, refocuses
+ * batches of frames in parallel (OpenMP; each batch slot owns a frame, a
+ * volume and a refocus workspace) and calls `on_volume` IN FRAME ORDER on the
+ * calling thread. Memory is fixed by the options (chunk size, batch slots,
+ * volume size), independent of the recording's length.
+ */
+#ifndef ELFM_PIPELINE_H
+#define ELFM_PIPELINE_H
+
+#include <stdint.h>
+
+#include "elfm_calib.h"
+#include "elfm_error.h"
+#include "elfm_events.h"
+#include "elfm_frames.h"
+#include "elfm_refocus.h"
+#include "elfm_volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct elfm_recon_stats {
+  int64_t events;          /* events taken in (inside from/to, before the polarity filter) */
+  int64_t frames;          /* volumes delivered to the callback */
+  int64_t frames_sparse, frames_dense; /* refocus path taken */
+  int64_t t_first_us, t_last_us; /* first/last event time taken (INT64_MIN/MAX if none) */
+  double span_s;           /* recording span processed: windows' end - first window start */
+  double wall_s;           /* the whole run */
+  double read_s, frame_s;  /* reading/decoding, building frames (calling thread) */
+  double refocus_s;        /* wall time of the parallel median + refocus sections */
+  double callback_s;       /* time spent in the callback */
+  double events_per_s, volumes_per_s;
+  double realtime_factor;  /* span_s / wall_s: > 1 is faster than real time */
+} elfm_recon_stats;
+
+/* Called now and then (about every 0.25 s of wall time) on the calling
+ * thread with the stats so far; may be NULL. */
+typedef void (*elfm_recon_progress_fn)(const elfm_recon_stats *s, void *user);
+
+typedef struct elfm_recon_options {
+  elfm_framer_options framer;   /* dt, stride, representation, tau, polarity, start */
+  int median;                   /* 0 (off), 3 (the paper's) or 5 */
+  elfm_refocus_options refocus; /* path (auto/dense/sparse), ghost suppression */
+  int threads;                  /* 0: OpenMP's default */
+  int batch;                    /* frames refocused per parallel batch; 0: 2 x threads */
+  int64_t from_us, to_us;       /* event time range [from, to); INT64_MIN / INT64_MAX: all.
+                                   With from_us set and start FIRST_EVENT, windows start at from_us. */
+  size_t chunk_events;          /* events per read; default 65536 */
+  elfm_reader_options reader;   /* geometry for DAT files without one */
+  int64_t tiff_frame_us;        /* TIFF stacks: time between pages; 0 = dt_us */
+  elfm_recon_progress_fn progress;
+  void *progress_user;
+} elfm_recon_options;
+
+/* Defaults: dt 1000 us exponential time surface tau 1000 us, both
+ * polarities, 3x3 median, auto path, no ghost suppression
+ * (see docs/recon.md for the measured ghost comparison), all threads. */
+void elfm_recon_options_default(elfm_recon_options *o);
+
+/* Receives each volume in frame order (vol->frame counts windows from 0,
+ * vol->t_us per SPEC §5). The volume is only valid during the call. A non-OK
+ * return stops the run; elfm_recon_run then returns that status with the
+ * callback's err. */
+typedef elfm_status (*elfm_volume_fn)(const elfm_volume *vol, void *user, elfm_error *err);
+
+/* Refocus the events of `events_path` with `calib`. `stats` may be NULL.
+ * Errors: the reader's (file + byte offset / line), geometry mismatch
+ * between file and calibration (ELFM_ERR_INVALID), options (ELFM_ERR_INVALID). */
+elfm_status elfm_recon_run(const char *events_path, const elfm_calib *calib,
+                           const elfm_recon_options *opt, elfm_volume_fn on_volume, void *user,
+                           elfm_recon_stats *stats, elfm_error *err);
+
+/* The same for a conventional light-field recording: a multi-page 8/16-bit
+ * (or float) grey TIFF stack of sensor frames, one volume per page (no median
+ * unless asked for, dense path; page n has t_us = n x tiff_frame_us). */
+elfm_status elfm_recon_run_tiff(const char *tiff_path, const elfm_calib *calib,
+                                const elfm_recon_options *opt, elfm_volume_fn on_volume,
+                                void *user, elfm_recon_stats *stats, elfm_error *err);
+
+/* ---- TIFF stacks (lf_tiff.c, libtiff) ---- */
+typedef struct elfm_tiff_stack elfm_tiff_stack;
+/* Open a stack; every page must be single-channel 8/16-bit unsigned or
+ * 32-bit float of the first page's size. Free with elfm_tiff_close. */
+elfm_status elfm_tiff_open(const char *path, elfm_tiff_stack **out, elfm_error *err);
+int elfm_tiff_width(const elfm_tiff_stack *s);
+int elfm_tiff_height(const elfm_tiff_stack *s);
+/* Read the next page into `out` (same size; cleared first, non-zero pixels
+ * listed); *got = 0 after the last page. Errors name the file and page. */
+elfm_status elfm_tiff_read(elfm_tiff_stack *s, elfm_frame *out, int *got, elfm_error *err);
+void elfm_tiff_close(elfm_tiff_stack *s);
+/* Write frames as a 16-bit stack (values rounded, clamped to 0..65535):
+ * for tests and for exporting event frames to other tools. */
+typedef struct elfm_tiff_writer elfm_tiff_writer;
+elfm_status elfm_tiff_writer_open(const char *path, elfm_tiff_writer **out, elfm_error *err);
+elfm_status elfm_tiff_writer_add(elfm_tiff_writer *w, const elfm_frame *f, elfm_error *err);
+elfm_status elfm_tiff_writer_close(elfm_tiff_writer *w, elfm_error *err);
+
+/* ---- volume outputs ---- */
+/* OpenEXR (volume_exr.c): one scanline file per volume, W x H, one FLOAT
+ * channel per z plane named "z000", "z001", ... (zero-padded so that EXR's
+ * alphabetical channel order is the plane order), ZIP compressed; header
+ * attributes t_us (double, exact below 2^53 us), frame (int), um_per_px,
+ * z_min_um, z_step_um (double), nz (int). */
+elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_error *err);
+/* Read such a file back; *out is allocated (elfm_volume_free). */
+elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error *err);
+
+/* Depth-colour-coded maximum intensity projection (mip_png.c), 8-bit RGB:
+ * the x-y MIP at top left, the x-z MIP below it (z downwards) and the y-z
+ * MIP to its right (z rightwards), each z plane `z_px` pixels thick
+ * (0 = 1; at most 64).
+ * Hue = depth of the maximum (blue at z_min through red at z_max),
+ * brightness = maximum / `scale` (scale <= 0: the volume's maximum). */
+elfm_status elfm_volume_write_mip_png(const elfm_volume *v, const char *path, double scale,
+                                      int z_px, elfm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,349 @@
+/* pipeline.c — the streaming driver (see elfm_pipeline.h).
+ *
+ * One loop for both sources (event files through the framer, TIFF stacks
+ * page by page): fill a batch of slots with frames on the calling thread,
+ * median-filter and refocus the batch in parallel, hand the volumes to the
+ * callback in order. The framer and the callback stay sequential (the
+ * architecture's rule: parallel across frames, sequential state stays on
+ * one thread).
+ */
+#include "elfm_pipeline.h"
+
+#include <limits.h>
+#include <math.h>
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static double now_s(void)
+{
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void elfm_recon_options_default(elfm_recon_options *o)
+{
+  memset(o, 0, sizeof *o);
+  elfm_framer_options_default(&o->framer);
+  elfm_refocus_options_default(&o->refocus);
+  o->median = 3;
+  o->threads = 0;
+  o->batch = 0;
+  o->from_us = INT64_MIN;
+  o->to_us = INT64_MAX;
+  o->chunk_events = 65536; /* 0.9 MB of events: a few ms of a busy EVK4 */
+}
+
+typedef struct slot {
+  elfm_frame *frame, *filtered;
+  elfm_volume *vol;
+  elfm_refocus_workspace *ws;
+  elfm_status status;
+  elfm_error err;
+} slot;
+
+/* Where frames come from. */
+typedef struct source {
+  elfm_reader *reader;
+  elfm_event_chunk *chunk;
+  elfm_framer *framer;
+  elfm_tiff_stack *tiff;
+  int64_t tiff_page, tiff_frame_us;
+  int64_t from_us, to_us;
+  int eof;
+} source;
+
+typedef struct run {
+  const elfm_recon_options *opt;
+  elfm_refocus_plan *plan;
+  int threads, nslots;
+  slot *slots;
+  elfm_median **medians; /* one per thread */
+  source src;
+  elfm_recon_stats st;
+  int64_t first_window_us;
+} run;
+
+static void run_free(run *r)
+{
+  if (r->slots)
+    for (int i = 0; i < r->nslots; i++) {
+      elfm_frame_free(r->slots[i].frame);
+      elfm_frame_free(r->slots[i].filtered);
+      elfm_volume_free(r->slots[i].vol);
+      elfm_refocus_workspace_free(r->slots[i].ws);
+    }
+  free(r->slots);
+  if (r->medians)
+    for (int i = 0; i < r->threads; i++) elfm_median_free(r->medians[i]);
+  free(r->medians);
+  elfm_refocus_plan_free(r->plan);
+  elfm_reader_close(r->src.reader);
+  elfm_chunk_free(r->src.chunk);
+  elfm_framer_free(r->src.framer);
+  elfm_tiff_close(r->src.tiff);
+}
+
+static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_options *opt,
+                             int use_median, elfm_error *err)
+{
+  r->opt = opt;
+  if (opt->median != 0 && opt->median != 3 && opt->median != 5)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "median %d: use 0, 3 or 5", opt->median);
+  if (opt->threads < 0 || opt->threads > 1024 || opt->batch < 0 || opt->batch > 4096)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "threads %d / batch %d out of range",
+                          opt->threads, opt->batch);
+  if (opt->from_us >= opt->to_us)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "from_us %lld is not before to_us %lld",
+                          (long long)opt->from_us, (long long)opt->to_us);
+  elfm_status st = elfm_framer_options_check(&opt->framer, err);
+  if (st) return st;
+  st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan, err);
+  if (st) return st;
+  r->threads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
+  /* Two frames per thread: dynamic scheduling evens out frames of different
+   * event counts while keeping the slots' memory (a volume each) small. */
+  r->nslots = opt->batch > 0 ? opt->batch : 2 * r->threads;
+  r->slots = calloc((size_t)r->nslots, sizeof *r->slots);
+  r->medians = calloc((size_t)r->threads, sizeof *r->medians);
+  if (!r->slots || !r->medians)
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (pipeline)");
+  const int sw = calib->sensor_width_px, sh = calib->sensor_height_px;
+  for (int i = 0; i < r->nslots; i++) {
+    slot *s = &r->slots[i];
+    if (!(s->frame = elfm_frame_create(sw, sh, err))) return err ? err->code : ELFM_ERR_NOMEM;
+    if (use_median && !(s->filtered = elfm_frame_create(sw, sh, err)))
+      return err ? err->code : ELFM_ERR_NOMEM;
+    if (!(s->vol = elfm_refocus_volume_create(r->plan, err))) return err ? err->code : ELFM_ERR_NOMEM;
+    st = elfm_refocus_workspace_create(r->plan, &s->ws, err);
+    if (st) return st;
+  }
+  if (use_median)
+    for (int t = 0; t < r->threads; t++) {
+      st = elfm_median_create(opt->median, sw, sh, &r->medians[t], err);
+      if (st) return st;
+    }
+  r->st.t_first_us = INT64_MAX;
+  r->st.t_last_us = INT64_MIN;
+  r->first_window_us = INT64_MIN;
+  return ELFM_OK;
+}
+
+/* Next frame from the event file: pull closed windows from the framer,
+ * reading chunks until one closes or the file (or to_us) ends. */
+static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_error *err)
+{
+  source *s = &r->src;
+  *got = 0;
+  for (;;) {
+    double t0 = now_s();
+    int ok = elfm_framer_next(s->framer, out);
+    r->st.frame_s += now_s() - t0;
+    if (ok) {
+      if (out->t_start_us >= s->to_us) return ELFM_OK; /* past the range: done */
+      *got = 1;
+      return ELFM_OK;
+    }
+    if (s->eof) return ELFM_OK;
+    t0 = now_s();
+    elfm_status st = elfm_reader_read(s->reader, s->chunk, err);
+    r->st.read_s += now_s() - t0;
+    if (st) return st;
+    elfm_event_chunk *c = s->chunk;
+    if (c->n == 0 && c->n_trig == 0) {
+      s->eof = 1;
+      elfm_framer_finish(s->framer);
+      continue;
+    }
+    /* clip to [from, to): the reader was positioned at from_us; the end
+     * is found here, and then no more is read */
+    size_t lo = 0, hi = c->n;
+    while (lo < hi && c->t_us[lo] < s->from_us) lo++;
+    while (hi > lo && c->t_us[hi - 1] >= s->to_us) hi--;
+    if (hi < c->n) s->eof = 1;
+    if (c->n_trig > 0 && c->trig[c->n_trig - 1].t_us >= s->to_us) s->eof = 1;
+    if (lo > 0) { /* only in the first chunk after a seek: shift down */
+      memmove(c->t_us, c->t_us + lo, (hi - lo) * sizeof *c->t_us);
+      memmove(c->x, c->x + lo, (hi - lo) * sizeof *c->x);
+      memmove(c->y, c->y + lo, (hi - lo) * sizeof *c->y);
+      memmove(c->p, c->p + lo, (hi - lo) * sizeof *c->p);
+    }
+    c->n = hi - lo;
+    if (c->n > 0) {
+      if (c->t_us[0] < r->st.t_first_us) r->st.t_first_us = c->t_us[0];
+      r->st.t_last_us = c->t_us[c->n - 1];
+      r->st.events += (int64_t)c->n;
+    }
+    t0 = now_s();
+    st = elfm_framer_push(s->framer, c, err);
+    r->st.frame_s += now_s() - t0;
+    if (st) {
+      /* name the file: the framer does not know it */
+      if (err && !err->file[0])
+        snprintf(err->file, sizeof err->file, "%s", elfm_reader_path(s->reader));
+      return st;
+    }
+    if (s->eof) elfm_framer_finish(s->framer);
+  }
+}
+
+static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_error *err)
+{
+  source *s = &r->src;
+  double t0 = now_s();
+  elfm_status st = elfm_tiff_read(s->tiff, out, got, err);
+  r->st.read_s += now_s() - t0;
+  if (st || !*got) return st;
+  out->index = s->tiff_page;
+  out->t_start_us = s->tiff_page * s->tiff_frame_us;
+  out->t_end_us = out->t_start_us + s->tiff_frame_us;
+  out->t_us = out->t_start_us + s->tiff_frame_us / 2; /* an exposure: its centre */
+  out->n_events = 0;
+  s->tiff_page++;
+  return ELFM_OK;
+}
+
+static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
+                            elfm_volume_fn on_volume, void *user, elfm_error *err)
+{
+  const double t_start = now_s();
+  double t_progress = t_start;
+  for (;;) {
+    int nb = 0, got = 1;
+    while (nb < r->nslots) {
+      elfm_status st = r->src.tiff ? source_tiff_next(r, r->slots[nb].frame, &got, err)
+                                   : source_events_next(r, r->slots[nb].frame, &got, err);
+      if (st) return st;
+      if (!got) break;
+      if (r->first_window_us == INT64_MIN) r->first_window_us = r->slots[nb].frame->t_start_us;
+      double span = (double)(r->slots[nb].frame->t_end_us - r->first_window_us) * 1e-6;
+      if (span > r->st.span_s) r->st.span_s = span;
+      nb++;
+    }
+    if (nb == 0) break;
+    double t0 = now_s();
+    const elfm_refocus_plan *plan = r->plan;
+#pragma omp parallel for num_threads(r->threads) schedule(dynamic, 1)
+    for (int i = 0; i < nb; i++) {
+      slot *s = &r->slots[i];
+      const elfm_frame *in = s->frame;
+      if (use_median) {
+        elfm_median_apply(r->medians[omp_get_thread_num()], s->frame, s->filtered);
+        in = s->filtered;
+      }
+      s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
+    }
+    r->st.refocus_s += now_s() - t0;
+    for (int i = 0; i < nb; i++) {
+      slot *s = &r->slots[i];
+      if (s->status) {
+        if (err) *err = s->err;
+        return s->status;
+      }
+      if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
+      else r->st.frames_dense++;
+      t0 = now_s();
+      elfm_status st = on_volume ? on_volume(s->vol, user, err) : ELFM_OK;
+      r->st.callback_s += now_s() - t0;
+      if (st) return st;
+      r->st.frames++;
+    }
+    double now = now_s();
+    if (r->opt->progress && now - t_progress >= 0.25) {
+      t_progress = now;
+      r->st.wall_s = now - t_start;
+      r->opt->progress(&r->st, r->opt->progress_user);
+    }
+    if (!got) break;
+  }
+  return ELFM_OK;
+}
+
+static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)
+{
+  r->st.wall_s = wall_s;
+  if (wall_s > 0) {
+    r->st.events_per_s = (double)r->st.events / wall_s;
+    r->st.volumes_per_s = (double)r->st.frames / wall_s;
+    r->st.realtime_factor = r->st.span_s / wall_s;
+  }
+  if (out) *out = r->st;
+}
+
+elfm_status elfm_recon_run(const char *events_path, const elfm_calib *calib,
+                           const elfm_recon_options *opt, elfm_volume_fn on_volume, void *user,
+                           elfm_recon_stats *stats, elfm_error *err)
+{
+  const double t_start = now_s();
+  elfm_recon_options def;
+  if (!opt) {
+    elfm_recon_options_default(&def);
+    opt = &def;
+  }
+  run r;
+  memset(&r, 0, sizeof r);
+  const int use_median = opt->median != 0;
+  elfm_status st = run_setup(&r, calib, opt, use_median, err);
+  if (!st) st = elfm_reader_open(events_path, &opt->reader, &r.src.reader, err);
+  if (!st) {
+    int w = elfm_reader_width(r.src.reader), h = elfm_reader_height(r.src.reader);
+    if ((w && w != calib->sensor_width_px) || (h && h != calib->sensor_height_px))
+      st = elfm_error_set(err, ELFM_ERR_INVALID, events_path, -1,
+                          "events are %d x %d but the calibration's sensor is %d x %d", w, h,
+                          calib->sensor_width_px, calib->sensor_height_px);
+  }
+  if (!st) {
+    size_t cap = opt->chunk_events ? opt->chunk_events : 65536;
+    r.src.chunk = elfm_chunk_create(cap, err);
+    if (!r.src.chunk) st = err ? err->code : ELFM_ERR_NOMEM;
+  }
+  if (!st) {
+    elfm_framer_options fo = opt->framer;
+    if (opt->from_us != INT64_MIN && fo.start == ELFM_START_FIRST_EVENT) {
+      fo.start = ELFM_START_AT_TIME;
+      fo.start_us = opt->from_us;
+    }
+    st = elfm_framer_create(&fo, calib->sensor_width_px, calib->sensor_height_px, &r.src.framer, err);
+  }
+  r.src.from_us = opt->from_us;
+  r.src.to_us = opt->to_us;
+  if (!st && opt->from_us != INT64_MIN) st = elfm_reader_seek_us(r.src.reader, opt->from_us, err);
+  if (!st) st = run_loop(&r, use_median, ELFM_PATH_AUTO, on_volume, user, err);
+  run_finish_stats(&r, now_s() - t_start, stats);
+  run_free(&r);
+  return st;
+}
+
+elfm_status elfm_recon_run_tiff(const char *tiff_path, const elfm_calib *calib,
+                                const elfm_recon_options *opt, elfm_volume_fn on_volume,
+                                void *user, elfm_recon_stats *stats, elfm_error *err)
+{
+  const double t_start = now_s();
+  elfm_recon_options def;
+  if (!opt) {
+    elfm_recon_options_default(&def);
+    def.median = 0;
+    opt = &def;
+  }
+  run r;
+  memset(&r, 0, sizeof r);
+  const int use_median = opt->median != 0;
+  elfm_status st = run_setup(&r, calib, opt, use_median, err);
+  if (!st) st = elfm_tiff_open(tiff_path, &r.src.tiff, err);
+  if (!st && (elfm_tiff_width(r.src.tiff) != calib->sensor_width_px ||
+              elfm_tiff_height(r.src.tiff) != calib->sensor_height_px))
+    st = elfm_error_set(err, ELFM_ERR_INVALID, tiff_path, -1,
+                        "pages are %d x %d but the calibration's sensor is %d x %d",
+                        elfm_tiff_width(r.src.tiff), elfm_tiff_height(r.src.tiff),
+                        calib->sensor_width_px, calib->sensor_height_px);
+  r.src.tiff_frame_us = opt->tiff_frame_us > 0 ? opt->tiff_frame_us : opt->framer.dt_us;
+  elfm_refocus_path path = opt->refocus.path == ELFM_PATH_AUTO ? ELFM_PATH_DENSE : opt->refocus.path;
+  if (!st) st = run_loop(&r, use_median, path, on_volume, user, err);
+  r.st.span_s = (double)r.src.tiff_page * (double)r.src.tiff_frame_us * 1e-6;
+  run_finish_stats(&r, now_s() - t_start, stats);
+  run_free(&r);
+  return st;
+}
