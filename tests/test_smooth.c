@@ -1,0 +1,343 @@
+/* test_smooth.c — the Ceres smoother: model choice (constant velocity,
+ * constant acceleration, spline), robust loss against outliers, uncertainty,
+ * and the numerical-stability cases of issue 5 (1-3 points, gaps, repeated
+ * times, times near 1e12 us, offsets, static/collinear, extreme weights,
+ * NaN/inf). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+static uint64_t rng = 0x9E3779B97F4A7C15ULL;
+static double urand(void)
+{
+  rng ^= rng << 13; rng ^= rng >> 7; rng ^= rng << 17;
+  return (double)(rng >> 11) / 9007199254740992.0;
+}
+static double gauss(void)
+{
+  double u = urand() + 1e-300, v = urand();
+  return sqrt(-2 * log(u)) * cos(6.283185307179586 * v);
+}
+
+enum { NMAX = 1200 };
+static int64_t T[NMAX], Q[NMAX];
+static double X[3 * NMAX], TRUTH[3 * NMAX], P[3 * NMAX], V[3 * NMAX], PS[3 * NMAX], VS[3 * NMAX];
+
+/* motion kinds */
+static void truth_at(int kind, double t_ms, double p[3], double v[3])
+{
+  switch (kind) {
+  case 0: /* constant velocity */
+    p[0] = 5 + 0.3 * t_ms; p[1] = -2 - 0.1 * t_ms; p[2] = 10 + 0.05 * t_ms;
+    v[0] = 0.3; v[1] = -0.1; v[2] = 0.05;
+    break;
+  case 1: /* constant acceleration 0.002 um/ms^2 along x, 0.001 along z */
+    p[0] = 0.1 * t_ms + 0.5 * 0.002 * t_ms * t_ms; p[1] = 3; p[2] = 0.5 * 0.001 * t_ms * t_ms;
+    v[0] = 0.1 + 0.002 * t_ms; v[1] = 0; v[2] = 0.001 * t_ms;
+    break;
+  default: /* wiggle: 4 um, period 60 ms (a swimming worm's neuron) */
+    p[0] = 4 * sin(6.283185307179586 * t_ms / 60); p[1] = 0.05 * t_ms;
+    p[2] = 8 * cos(6.283185307179586 * t_ms / 60);
+    v[0] = 4 * 6.283185307179586 / 60 * cos(6.283185307179586 * t_ms / 60); v[1] = 0.05;
+    v[2] = -8 * 6.283185307179586 / 60 * sin(6.283185307179586 * t_ms / 60);
+  }
+}
+
+/* n points at 1 kHz from t0, noise 0.1 um lateral, 0.4 um axial */
+static void make(int kind, int n, int64_t t0, double sxy, double sz)
+{
+  for (int i = 0; i < n; i++) {
+    T[i] = t0 + (int64_t)i * 1000;
+    double p[3], v[3];
+    truth_at(kind, i, p, v);
+    memcpy(TRUTH + 3 * i, p, sizeof p);
+    X[3 * i] = p[0] + sxy * gauss();
+    X[3 * i + 1] = p[1] + sxy * gauss();
+    X[3 * i + 2] = p[2] + sz * gauss();
+  }
+}
+
+static double rmse_xy(const double *a, const double *b, int n)
+{
+  double s = 0;
+  for (int i = 0; i < n; i++)
+    s += pow(a[3 * i] - b[3 * i], 2) + pow(a[3 * i + 1] - b[3 * i + 1], 2);
+  return sqrt(s / (2.0 * n));
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_smooth_options o;
+  elfm_smooth_options_default(&o);
+  elfm_smooth_info info;
+  const int64_t T0 = 1000000000000LL;
+
+  /* 1. Constant velocity with 4 gross outliers: CV chosen, outliers flagged,
+   * velocity accurate, smoothed error well below the raw noise. */
+  make(0, 300, T0, 0.1, 0.4);
+  for (int k = 0; k < 4; k++) X[3 * (40 + 60 * k)] += 6.0;
+  CHECK_OK(elfm_smooth_fit(&o, 300, T, X, NULL, 300, T, P, V, PS, VS, &info, &err), &err);
+  CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_VELOCITY);
+  CHECK(info.n_outliers >= 4 && info.n_outliers <= 10);
+  CHECK_NEAR(V[0], 0.3, 0.005);
+  CHECK_NEAR(V[1], -0.1, 0.005);
+  CHECK_NEAR(V[2], 0.05, 0.02);
+  CHECK_NEAR(info.sigma_um[0], 0.1, 0.03);   /* estimated noise */
+  CHECK_NEAR(info.sigma_um[2], 0.4, 0.1);
+  CHECK(rmse_xy(P, TRUTH, 300) < 0.04);
+  CHECK(PS[0] > 0 && PS[0] < 0.05 && VS[0] > 0 && VS[0] < 0.01);
+  /* without the robust loss the outliers pull the fit: a worse x error */
+  {
+    elfm_smooth_options on = o;
+    on.loss = ELFM_LOSS_NONE;
+    on.model = ELFM_MODEL_CONST_VELOCITY;
+    double P2[3 * 300];
+    CHECK_OK(elfm_smooth_fit(&on, 300, T, X, NULL, 300, T, P2, NULL, NULL, NULL, NULL, &err), &err);
+    CHECK_MSG(rmse_xy(P2, TRUTH, 300) > 1.5 * rmse_xy(P, TRUTH, 300), "plain %g robust %g",
+              rmse_xy(P2, TRUTH, 300), rmse_xy(P, TRUTH, 300));
+    on.loss = ELFM_LOSS_CAUCHY;
+    CHECK_OK(elfm_smooth_fit(&on, 300, T, X, NULL, 300, T, P2, NULL, NULL, NULL, NULL, &err), &err);
+    CHECK(rmse_xy(P2, TRUTH, 300) < 0.04);
+  }
+
+  /* 2. Constant acceleration: CA chosen, acceleration within 5 %. */
+  make(1, 400, T0, 0.1, 0.4);
+  CHECK_OK(elfm_smooth_fit(&o, 400, T, X, NULL, 400, T, P, V, PS, VS, &info, &err), &err);
+  CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_ACCEL);
+  CHECK_NEAR(info.accel_um_per_ms2[0], 0.002, 0.0001);
+  CHECK_NEAR(info.accel_um_per_ms2[2], 0.001, 0.0002);
+  CHECK(isfinite(info.bic[ELFM_MODEL_CONST_VELOCITY]) &&
+        info.bic[ELFM_MODEL_CONST_VELOCITY] > info.bic[ELFM_MODEL_CONST_ACCEL]);
+
+  /* 3. Wiggle: the spline is chosen, with a data-chosen weight, and beats
+   * the raw positions. */
+  make(2, 300, T0, 0.1, 0.4);
+  CHECK_OK(elfm_smooth_fit(&o, 300, T, X, NULL, 300, T, P, V, PS, VS, &info, &err), &err);
+  CHECK_EQ_INT(info.model, ELFM_MODEL_SPLINE);
+  CHECK(info.spline_weight_ms3 > 0 && info.edf > 3);
+  double raw_rmse = rmse_xy(X, TRUTH, 300), sm_rmse = rmse_xy(P, TRUTH, 300);
+  CHECK_MSG(sm_rmse < 0.6 * raw_rmse, "smoothed %g raw %g", sm_rmse, raw_rmse);
+  {
+    double ve = 0;
+    for (int i = 5; i < 295; i++) {
+      double p[3], v[3];
+      truth_at(2, i, p, v);
+      ve += pow(V[3 * i] - v[0], 2);
+    }
+    CHECK_MSG(sqrt(ve / 290) < 0.05, "velocity rmse %g (peak speed 0.42 um/ms)", sqrt(ve / 290));
+  }
+  /* sparse and dense solvers agree */
+  {
+    elfm_smooth_options od = o;
+    od.model = ELFM_MODEL_SPLINE;
+    od.spline_weight_ms3 = info.spline_weight_ms3;
+    od.solver = ELFM_SOLVER_DENSE;
+    double P2[3 * 300], P3[3 * 300];
+    CHECK_OK(elfm_smooth_fit(&od, 300, T, X, NULL, 300, T, P2, NULL, NULL, NULL, NULL, &err), &err);
+    od.solver = ELFM_SOLVER_SPARSE;
+    CHECK_OK(elfm_smooth_fit(&od, 300, T, X, NULL, 300, T, P3, NULL, NULL, NULL, NULL, &err), &err);
+    double md = 0;
+    for (int i = 0; i < 900; i++) md = fmax(md, fabs(P2[i] - P3[i]));
+    CHECK_MSG(md < 1e-4, "dense vs sparse %g", md);
+  }
+
+  /* 4. Offsets: the same track at t ~ 0 vs ~1e12 us, and shifted by
+   * (1e4, -3e3, 500) um, gives the same answer. */
+  {
+    make(2, 200, 0, 0.1, 0.4);
+    double P0[3 * 200], V0[3 * 200], X2[3 * 200];
+    elfm_smooth_info i0, i1;
+    CHECK_OK(elfm_smooth_fit(&o, 200, T, X, NULL, 200, T, P0, V0, NULL, NULL, &i0, &err), &err);
+    int64_t T2[200];
+    for (int i = 0; i < 200; i++) {
+      T2[i] = T[i] + 999999999999LL;
+      X2[3 * i] = X[3 * i] + 1e4;
+      X2[3 * i + 1] = X[3 * i + 1] - 3e3;
+      X2[3 * i + 2] = X[3 * i + 2] + 500;
+    }
+    CHECK_OK(elfm_smooth_fit(&o, 200, T2, X2, NULL, 200, T2, P, V, NULL, NULL, &i1, &err), &err);
+    CHECK_EQ_INT(i0.model, i1.model);
+    double dp = 0, dv = 0;
+    for (int i = 0; i < 200; i++) {
+      dp = fmax(dp, fabs(P[3 * i] - 1e4 - P0[3 * i]));
+      dp = fmax(dp, fabs(P[3 * i + 1] + 3e3 - P0[3 * i + 1]));
+      dp = fmax(dp, fabs(P[3 * i + 2] - 500 - P0[3 * i + 2]));
+      for (int a = 0; a < 3; a++) dv = fmax(dv, fabs(V[3 * i + a] - V0[3 * i + a]));
+    }
+    CHECK_MSG(dp < 1e-6 && dv < 1e-6, "offset changed the result: %g um, %g um/ms", dp, dv);
+  }
+
+  /* 5. Tracks of 1, 2 and 3 points. */
+  {
+    int64_t t1[3] = {T0, T0 + 1000, T0 + 2000};
+    double x1[9] = {1, 2, 3, 2, 2, 7, 3, 2, 11};
+    CHECK_OK(elfm_smooth_fit(&o, 1, t1, x1, NULL, 1, t1, P, V, PS, VS, &info, &err), &err);
+    CHECK_EQ_INT(info.model, ELFM_MODEL_STATIC);
+    CHECK(P[0] == 1 && P[1] == 2 && P[2] == 3 && V[0] == 0 && isnan(VS[0]) && PS[0] > 0);
+    CHECK_OK(elfm_smooth_fit(&o, 2, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
+    CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_VELOCITY);
+    CHECK_NEAR(V[0], 1.0, 1e-6);
+    CHECK_NEAR(V[2], 4.0, 1e-6);
+    CHECK_NEAR(P[6], 3.0, 1e-6);  /* extrapolated to the third time */
+    CHECK_OK(elfm_smooth_fit(&o, 3, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
+    CHECK(info.model == ELFM_MODEL_CONST_VELOCITY || info.model == ELFM_MODEL_CONST_ACCEL);
+    for (int i = 0; i < 9; i++) CHECK(isfinite(P[i]) && isfinite(V[i]));
+    o.model = ELFM_MODEL_SPLINE;  /* asked for, but 3 points cannot carry it */
+    CHECK_OK(elfm_smooth_fit(&o, 3, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
+    CHECK(info.model != ELFM_MODEL_SPLINE);
+    o.model = ELFM_MODEL_AUTO;
+  }
+
+  /* 6. Gaps: a constant-velocity bead dark for 40 of 120 frames; the
+   * spline (forced) and the chosen model fill the gap on the line. */
+  {
+    make(0, 120, T0, 0.1, 0.4);
+    int64_t td[120];
+    double xd[360];
+    int n = 0;
+    for (int i = 0; i < 120; i++) {
+      if (i >= 40 && i < 80) continue;
+      td[n] = T[i];
+      memcpy(xd + 3 * n, X + 3 * i, sizeof(double) * 3);
+      n++;
+    }
+    for (int pass = 0; pass < 2; pass++) {
+      elfm_smooth_options og = o;
+      if (pass) og.model = ELFM_MODEL_SPLINE;
+      CHECK_OK(elfm_smooth_fit(&og, (size_t)n, td, xd, NULL, 120, T, P, V, PS, VS, &info, &err), &err);
+      CHECK_MSG(fabs(P[3 * 60] - TRUTH[3 * 60]) < 0.2, "gap fill %g vs %g", P[3 * 60], TRUTH[3 * 60]);
+      /* less certain inside the gap than with the frames present */
+      double PSg = PS[3 * 60], PSfull[360];
+      og.model = info.model;
+      og.spline_weight_ms3 = info.spline_weight_ms3;
+      CHECK_OK(elfm_smooth_fit(&og, 120, T, X, NULL, 120, T, P, V, PSfull, VS, &info, &err), &err);
+      CHECK_MSG(PSg > PSfull[3 * 60], "gap sd %g vs full %g", PSg, PSfull[3 * 60]);
+    }
+  }
+
+  /* 7. Repeated timestamps (two detections in one frame). */
+  {
+    make(0, 60, T0, 0.1, 0.4);
+    int64_t tr[61];
+    double xr[183];
+    memcpy(tr, T, sizeof(int64_t) * 30);
+    memcpy(xr, X, sizeof(double) * 90);
+    tr[30] = T[29];
+    xr[90] = X[87] + 0.05; xr[91] = X[88]; xr[92] = X[89];
+    memcpy(tr + 31, T + 30, sizeof(int64_t) * 30);
+    memcpy(xr + 93, X + 90, sizeof(double) * 90);
+    for (int m = ELFM_MODEL_AUTO; m <= ELFM_MODEL_SPLINE; m++) {
+      elfm_smooth_options orp = o;
+      orp.model = (elfm_motion_model)m;
+      CHECK_OK(elfm_smooth_fit(&orp, 61, tr, xr, NULL, 60, T, P, V, PS, VS, &info, &err), &err);
+      int finite = 1;
+      for (int i = 0; i < 180; i++) finite &= isfinite(P[i]) && isfinite(V[i]);
+      CHECK(finite);
+      CHECK_NEAR(V[3 * 30], 0.3, 0.03);
+    }
+    /* all points at one time: static */
+    int64_t ts[3] = {T0, T0, T0};
+    double xs[9] = {1, 1, 1, 2, 2, 2, 3, 3, 3};
+    CHECK_OK(elfm_smooth_fit(&o, 3, ts, xs, NULL, 1, ts, P, V, PS, VS, &info, &err), &err);
+    CHECK_EQ_INT(info.model, ELFM_MODEL_STATIC);
+    CHECK_NEAR(P[0], 2, 1e-12);
+  }
+
+  /* 8. Static and collinear tracks. */
+  {
+    for (int i = 0; i < 100; i++) {
+      T[i] = T0 + i * 1000;
+      X[3 * i] = 7 + 0.1 * gauss();
+      X[3 * i + 1] = -3 + 0.1 * gauss();
+      X[3 * i + 2] = 20 + 0.4 * gauss();
+    }
+    CHECK_OK(elfm_smooth_fit(&o, 100, T, X, NULL, 100, T, P, V, PS, VS, &info, &err), &err);
+    CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_VELOCITY);
+    CHECK_NEAR(V[0], 0, 0.002);
+    CHECK_NEAR(P[3 * 50], 7, 0.03);
+    /* exactly collinear, noiseless (noise floor applies) */
+    for (int i = 0; i < 100; i++) {
+      X[3 * i] = 0.2 * i;
+      X[3 * i + 1] = 0.2 * i;
+      X[3 * i + 2] = 0.2 * i;
+    }
+    CHECK_OK(elfm_smooth_fit(&o, 100, T, X, NULL, 100, T, P, V, PS, VS, &info, &err), &err);
+    CHECK_NEAR(V[3 * 50 + 2], 0.2, 1e-6);
+    CHECK_NEAR(P[3 * 99], 19.8, 1e-6);
+  }
+
+  /* 9. Extreme spline weights: 1e-12 interpolates, 1e12 is the straight line. */
+  {
+    make(2, 100, T0, 0.1, 0.4);
+    elfm_smooth_options oe = o;
+    oe.model = ELFM_MODEL_SPLINE;
+    oe.loss = ELFM_LOSS_NONE;
+    oe.spline_weight_ms3 = 1e-12;
+    CHECK_OK(elfm_smooth_fit(&oe, 100, T, X, NULL, 100, T, P, V, PS, VS, &info, &err), &err);
+    double md = 0;
+    for (int i = 0; i < 300; i++) md = fmax(md, fabs(P[i] - X[i]));
+    CHECK_MSG(md < 0.01, "interpolation error %g", md);
+    oe.spline_weight_ms3 = 1e12;
+    CHECK_OK(elfm_smooth_fit(&oe, 100, T, X, NULL, 100, T, P, V, PS, VS, &info, &err), &err);
+    double Pl[300];
+    elfm_smooth_options ol = oe;
+    ol.model = ELFM_MODEL_CONST_VELOCITY;
+    CHECK_OK(elfm_smooth_fit(&ol, 100, T, X, NULL, 100, T, Pl, NULL, NULL, NULL, NULL, &err), &err);
+    md = 0;
+    for (int i = 0; i < 300; i++) md = fmax(md, fabs(P[i] - Pl[i]));
+    CHECK_MSG(md < 0.05, "heavy spline vs line %g", md);
+    for (int i = 0; i < 300; i++) CHECK(isfinite(PS[i]) && isfinite(VS[i]));
+  }
+
+  /* 10. Bad input. */
+  {
+    make(0, 10, T0, 0.1, 0.4);
+    X[5] = NAN;
+    CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, NULL, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_NUMERIC);
+    X[5] = INFINITY;
+    CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, NULL, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_NUMERIC);
+    X[5] = 1;
+    double sg[30];
+    for (int i = 0; i < 30; i++) sg[i] = 0.1;
+    sg[7] = 0;
+    CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, sg, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_NUMERIC);
+    sg[7] = 0.1;
+    CHECK_OK(elfm_smooth_fit(&o, 10, T, X, sg, 10, T, P, V, PS, VS, &info, &err), &err);
+    CHECK_NEAR(info.sigma_um[0], 0.1, 1e-12);
+    int64_t tt = T[3]; T[3] = T[5]; T[5] = tt;
+    CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, NULL, 10, Q, P, V, PS, VS, &info, &err), ELFM_ERR_INVALID);
+    CHECK_EQ_INT(elfm_smooth_fit(&o, 0, T, X, NULL, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_INVALID);
+  }
+
+  /* 11. A whole track with a gap: frames first..last, raw_index -1 on gaps. */
+  {
+    elfm_track *t = elfm_track_create(3, &err);
+    for (int f = 0; f < 60; f++) {
+      if (f >= 20 && f < 30) continue;
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = 100 + f;
+      d.t_us = T0 + 1000 * f;
+      d.x_um = 0.5 * f + 0.05 * gauss();
+      d.y_um = 1;
+      d.z_um = 2;
+      elfm_track_append(t, &d, &err);
+    }
+    CHECK_OK(elfm_track_smooth(t, &o, &err), &err);
+    CHECK_EQ_INT(t->n_span, 60);
+    CHECK_EQ_INT(t->raw_index[25], -1);
+    CHECK_EQ_INT(t->raw_index[30], 20);
+    CHECK(t->span_t_us[25] == T0 + 25000);
+    CHECK_NEAR(t->pos_um[3 * 25], 12.5, 0.1);
+    double mv[3];
+    elfm_track_mean_velocity(t, mv);
+    CHECK_NEAR(mv[0], 0.5, 0.01);
+    CHECK(t->model != ELFM_MODEL_AUTO);
+    elfm_track_free(t);
+  }
+  return check_report();
+}

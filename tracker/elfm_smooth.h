@@ -1,0 +1,105 @@
+/* elfm_smooth.h — Ceres-smoothed trajectories with a motion model chosen
+ * per track (the C interface of the C++ bridge tracker/smooth.cc).
+ *
+ * DATA TERM. Each point i contributes r_i = (p(t_i) - x_i) / sigma_i per
+ * axis (anisotropic localisation uncertainty), under a robust loss on
+ * |r_i|^2 (Huber or Cauchy, scale `loss_scale` in units of sigma) so that
+ * outliers (a wrong link, a ghost) pull little.
+ * MODELS.
+ *   constant velocity      p(t) = p0 + v t                         (6 parameters)
+ *   constant acceleration  p(t) = p0 + v t + a t^2 / 2             (9 parameters)
+ *   smoothing spline       one position per time; prior on the acceleration
+ *       sum_k lambda * hbar_k * |a_k / sigma_ref|^2, a_k the second divided
+ *       difference at state k and hbar_k the mean of its two intervals (so
+ *       the prior approximates lambda * integral |a|^2 dt and scales with the
+ *       frame interval); lambda in ms^3. Without a given weight, lambda is
+ *       chosen by generalised cross-validation (GCV) over a grid
+ *       10^-4 .. 10^8 ms^3; its effective degrees of freedom (edf, the trace
+ *       of the hat matrix) come from a banded selected inverse.
+ *   AUTO chooses the model with the lowest BIC = sum_i rho(|r_i|^2) +
+ *   k ln(3 n) (k = 6, 9, or 3 edf); ties go to the simpler model.
+ * NOISE. Without per-point sigmas, sigma per axis is estimated from the
+ * data: 1.4826 MAD of the normalised second differences of consecutive
+ * points (a straight or slowly curving track has none), floored at
+ * min_sigma_*_um.
+ * NUMERICS. Times are taken relative to a reference inside the track (int64
+ * difference, then double ms) and positions relative to their mean, so a
+ * constant offset in time (absolute times ~1e12 us) or space changes
+ * nothing. Tracks of one point, or all points at one time, are STATIC
+ * (velocity 0, its uncertainty NaN = undetermined); two distinct times allow
+ * only constant velocity, three also constant acceleration, four or more
+ * also the spline. Non-finite input is ELFM_ERR_NUMERIC.
+ * Solver: Ceres (C++ API), DENSE_QR for the parametric models, sparse
+ * normal Cholesky (banded problem) for the spline unless `solver` says
+ * dense; Ceres prints nothing.
+ */
+#ifndef ELFM_SMOOTH_H
+#define ELFM_SMOOTH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "elfm_error.h"
+#include "elfm_tracks.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum elfm_robust_loss {
+  ELFM_LOSS_NONE = 0,
+  ELFM_LOSS_HUBER,
+  ELFM_LOSS_CAUCHY
+} elfm_robust_loss;
+
+typedef enum elfm_smooth_solver {
+  ELFM_SOLVER_AUTO = 0,  /* dense for small problems, sparse for the spline */
+  ELFM_SOLVER_DENSE,
+  ELFM_SOLVER_SPARSE
+} elfm_smooth_solver;
+
+typedef struct elfm_smooth_options {
+  elfm_motion_model model;      /* AUTO by default */
+  elfm_robust_loss loss;        /* HUBER */
+  double loss_scale;            /* 3 (sigma units of the 3D residual norm) */
+  double spline_weight_ms3;     /* lambda; <= 0: chosen by GCV */
+  elfm_smooth_solver solver;
+  int max_iterations;           /* Ceres iterations, 50 */
+  double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
+  double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
+} elfm_smooth_options;
+
+void elfm_smooth_options_default(elfm_smooth_options *o);
+
+typedef struct elfm_smooth_info {
+  elfm_motion_model model;      /* model used */
+  double spline_weight_ms3;     /* lambda used (SPLINE) */
+  double edf;                   /* effective parameters per axis (mean over axes) */
+  double bic[5];                /* by elfm_motion_model index; NaN where not fitted */
+  double sigma_um[3];           /* noise per axis used (estimated or median given) */
+  double accel_um_per_ms2[3];   /* CONST_ACCEL: the fitted acceleration; else 0 */
+  int n_outliers;               /* points with robust weight < 1/2 */
+} elfm_smooth_info;
+
+/* Fit n points (t_us non-decreasing; xyz_um n x 3; sigma_um n x 3 or NULL
+ * to estimate) and evaluate at nq query times q_t_us (non-decreasing, any
+ * times for the parametric models; the spline puts a state at every query
+ * time and every data time). Outputs are nq x 3, caller-allocated; any
+ * output pointer may be NULL. info may be NULL. Allocates scratch per call
+ * (a track is smoothed once, when it ends). */
+elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
+                            const double *xyz_um, const double *sigma_um, size_t nq,
+                            const int64_t *q_t_us, double *pos_um, double *vel_um_per_ms,
+                            double *pos_sd_um, double *vel_sd_um_per_ms, elfm_smooth_info *info,
+                            elfm_error *err);
+
+/* Smooth a finished track over its span (one state per frame first..last;
+ * t_us of gap frames interpolated linearly between the neighbouring real
+ * points) and store the result in the track (elfm_tracks.h), replacing
+ * any earlier one. The track keeps ownership of the arrays. */
+elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,721 @@
+// smooth.cc — the Ceres bridge: robust trajectory fits (constant velocity,
+// constant acceleration, smoothing spline) and the model choice (see
+// elfm_smooth.h). The project's only C++; its interface is the extern "C"
+// functions of elfm_smooth.h. No exceptions or output cross the boundary.
+#include "elfm_smooth.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <new>
+#include <vector>
+
+namespace {
+
+const double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// ---- robust loss, mirrored in plain C++ for weights and the BIC --------
+
+struct Loss {
+  elfm_robust_loss kind;
+  double a;  // scale (sigma units of the residual norm)
+  double rho(double s) const {
+    if (kind == ELFM_LOSS_HUBER) return s <= a * a ? s : 2 * a * std::sqrt(s) - a * a;
+    if (kind == ELFM_LOSS_CAUCHY) return a * a * std::log1p(s / (a * a));
+    return s;
+  }
+  // IRLS weight rho'(s)
+  double weight(double s) const {
+    if (kind == ELFM_LOSS_HUBER) return s <= a * a ? 1.0 : a / std::sqrt(s);
+    if (kind == ELFM_LOSS_CAUCHY) return 1.0 / (1.0 + s / (a * a));
+    return 1.0;
+  }
+  ceres::LossFunction *make() const {
+    if (kind == ELFM_LOSS_HUBER) return new ceres::HuberLoss(a);
+    if (kind == ELFM_LOSS_CAUCHY) return new ceres::CauchyLoss(a);
+    return nullptr;
+  }
+};
+
+// ---- data prepared once per fit ----------------------------------------
+
+struct Data {
+  size_t n = 0;
+  std::vector<double> tau;  // ms relative to t_mid (exact int64 difference first)
+  std::vector<double> x;    // n x 3, minus off
+  std::vector<double> sig;  // n x 3
+  double off[3] = {0, 0, 0};
+  int64_t t_ref = 0;        // first data time
+  double t_mid_ms = 0;      // centre of the data times, ms after t_ref
+  double tau_of(int64_t t) const { return (double)(t - t_ref) * 1e-3 - t_mid_ms; }
+};
+
+// ---- Ceres residuals ---------------------------------------------------
+
+struct CvResidual {
+  double tau, x[3], inv_s[3];
+  template <typename T> bool operator()(const T *p0, const T *v, T *r) const {
+    for (int a = 0; a < 3; a++) r[a] = (p0[a] + v[a] * tau - x[a]) * inv_s[a];
+    return true;
+  }
+};
+
+struct CaResidual {
+  double tau, x[3], inv_s[3];
+  template <typename T> bool operator()(const T *p0, const T *v, const T *acc, T *r) const {
+    for (int a = 0; a < 3; a++)
+      r[a] = (p0[a] + v[a] * tau + 0.5 * acc[a] * tau * tau - x[a]) * inv_s[a];
+    return true;
+  }
+};
+
+struct PointResidual {
+  double x[3], inv_s[3];
+  template <typename T> bool operator()(const T *p, T *r) const {
+    for (int a = 0; a < 3; a++) r[a] = (p[a] - x[a]) * inv_s[a];
+    return true;
+  }
+};
+
+// sqrt(lambda hbar) * (second divided difference) / sigma_ref, per axis
+struct AccelResidual {
+  double c0, c1, c2, scale[3];
+  template <typename T> bool operator()(const T *pm, const T *p, const T *pp, T *r) const {
+    for (int a = 0; a < 3; a++) r[a] = (c0 * pm[a] + c1 * p[a] + c2 * pp[a]) * scale[a];
+    return true;
+  }
+};
+
+void solver_options(ceres::Solver::Options *so, bool sparse, int max_iter)
+{
+  so->logging_type = ceres::SILENT;
+  so->minimizer_progress_to_stdout = false;
+  so->max_num_iterations = max_iter;
+  so->num_threads = 1;
+  so->function_tolerance = 1e-12;
+  so->gradient_tolerance = 1e-14;
+  so->parameter_tolerance = 1e-12;
+  if (sparse && ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::SUITE_SPARSE)) {
+    so->linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so->sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+  } else if (sparse && ceres::IsSparseLinearAlgebraLibraryTypeAvailable(ceres::EIGEN_SPARSE)) {
+    so->linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    so->sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
+  } else {
+    so->linear_solver_type = ceres::DENSE_QR;
+  }
+}
+
+// Invert a small SPD matrix (m <= 3) in place by Gauss-Jordan; false if singular.
+bool invert_small(double *M, int m)
+{
+  double A[3][6];
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < 2 * m; j++) A[i][j] = j < m ? M[i * m + j] : (j - m == i);
+  for (int c = 0; c < m; c++) {
+    int p = c;
+    for (int r = c + 1; r < m; r++)
+      if (std::fabs(A[r][c]) > std::fabs(A[p][c])) p = r;
+    if (!(std::fabs(A[p][c]) > 1e-300)) return false;
+    if (p != c)
+      for (int j = 0; j < 2 * m; j++) std::swap(A[p][j], A[c][j]);
+    double d = A[c][c];
+    for (int j = 0; j < 2 * m; j++) A[c][j] /= d;
+    for (int r = 0; r < m; r++)
+      if (r != c) {
+        double f = A[r][c];
+        for (int j = 0; j < 2 * m; j++) A[r][j] -= f * A[c][j];
+      }
+  }
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) M[i * m + j] = A[i][j + m];
+  return true;
+}
+
+// ---- parametric fits -----------------------------------------------------
+
+struct PolyFit {
+  int order = 1;              // 1: constant velocity, 2: constant acceleration
+  double p[3][3] = {{0}};     // p[0] position, p[1] velocity, p[2] acceleration
+  double cov[3][9] = {{0}};   // per axis, order+1 square
+  double chi2 = 0;
+  int outliers = 0;
+  bool ok = false;
+};
+
+void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit *f)
+{
+  f->order = order;
+  ceres::Problem::Options po;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem prob(po);
+  std::unique_ptr<ceres::LossFunction> lf(loss.make());
+  for (size_t i = 0; i < d.n; i++) {
+    if (order == 1) {
+      auto *r = new CvResidual{d.tau[i], {d.x[3 * i], d.x[3 * i + 1], d.x[3 * i + 2]},
+                               {1 / d.sig[3 * i], 1 / d.sig[3 * i + 1], 1 / d.sig[3 * i + 2]}};
+      prob.AddResidualBlock(new ceres::AutoDiffCostFunction<CvResidual, 3, 3, 3>(r), lf.get(),
+                            f->p[0], f->p[1]);
+    } else {
+      auto *r = new CaResidual{d.tau[i], {d.x[3 * i], d.x[3 * i + 1], d.x[3 * i + 2]},
+                               {1 / d.sig[3 * i], 1 / d.sig[3 * i + 1], 1 / d.sig[3 * i + 2]}};
+      prob.AddResidualBlock(new ceres::AutoDiffCostFunction<CaResidual, 3, 3, 3, 3>(r), lf.get(),
+                            f->p[0], f->p[1], f->p[2]);
+    }
+  }
+  ceres::Solver::Options so;
+  solver_options(&so, false, max_iter);
+  ceres::Solver::Summary sum;
+  ceres::Solve(so, &prob, &sum);
+  f->ok = sum.IsSolutionUsable();
+  // chi2 (robustified), IRLS weights and the covariance per axis
+  const int m = order + 1;
+  double M[3][9] = {{0}};
+  f->chi2 = 0;
+  f->outliers = 0;
+  for (size_t i = 0; i < d.n; i++) {
+    double t = d.tau[i], g[3] = {1, t, 0.5 * t * t}, s = 0;
+    for (int a = 0; a < 3; a++) {
+      double pr = f->p[0][a] + f->p[1][a] * t + (order == 2 ? 0.5 * f->p[2][a] * t * t : 0);
+      double r = (pr - d.x[3 * i + a]) / d.sig[3 * i + a];
+      s += r * r;
+    }
+    f->chi2 += loss.rho(s);
+    double w = loss.weight(s);
+    f->outliers += w < 0.5;
+    for (int a = 0; a < 3; a++) {
+      double wi = w / (d.sig[3 * i + a] * d.sig[3 * i + a]);
+      for (int r = 0; r < m; r++)
+        for (int c = 0; c < m; c++) M[a][r * m + c] += wi * g[r] * g[c];
+    }
+  }
+  for (int a = 0; a < 3; a++) {
+    std::memcpy(f->cov[a], M[a], sizeof(double) * m * m);
+    if (!invert_small(f->cov[a], m))
+      for (int k = 0; k < m * m; k++) f->cov[a][k] = kNaN;
+  }
+}
+
+void poly_eval(const PolyFit &f, const Data &d, size_t nq, const int64_t *q, double *pos,
+               double *vel, double *psd, double *vsd)
+{
+  const int m = f.order + 1;
+  for (size_t k = 0; k < nq; k++) {
+    double t = d.tau_of(q[k]);
+    double g[3] = {1, t, 0.5 * t * t}, h[3] = {0, 1, t};
+    for (int a = 0; a < 3; a++) {
+      double acc = f.order == 2 ? f.p[2][a] : 0;
+      if (pos) pos[3 * k + a] = f.p[0][a] + f.p[1][a] * t + 0.5 * acc * t * t + d.off[a];
+      if (vel) vel[3 * k + a] = f.p[1][a] + acc * t;
+      double vp = 0, vv = 0;
+      for (int r = 0; r < m; r++)
+        for (int c = 0; c < m; c++) {
+          vp += g[r] * f.cov[a][r * m + c] * g[c];
+          vv += h[r] * f.cov[a][r * m + c] * h[c];
+        }
+      if (psd) psd[3 * k + a] = vp >= 0 ? std::sqrt(vp) : kNaN;
+      if (vsd) vsd[3 * k + a] = vv >= 0 ? std::sqrt(vv) : kNaN;
+    }
+  }
+}
+
+// ---- spline: banded (pentadiagonal) algebra -------------------------------
+
+// Second divided difference coefficients at interior state k (1..K-2),
+// scaled by sqrt(hbar): prior row r = sqrt(lambda) * coef . p / sigma_ref.
+void accel_coef(const std::vector<double> &ts, size_t k, double c[3])
+{
+  double h0 = ts[k] - ts[k - 1], h1 = ts[k + 1] - ts[k], hb = 0.5 * (h0 + h1);
+  double s = std::sqrt(hb) / hb;
+  c[0] = s / h0;
+  c[1] = -s * (1 / h0 + 1 / h1);
+  c[2] = s / h1;
+}
+
+struct Banded {
+  size_t K = 0;
+  std::vector<double> a0, a1, a2, D, l1, l2, z0, z1, z2;
+  void resize(size_t k) {
+    K = k;
+    for (auto *v : {&a0, &a1, &a2, &D, &l1, &l2, &z0, &z1, &z2}) v->assign(k + 2, 0.0);
+  }
+  // A = diag(W) + mu * sum_k c_k c_k^T (rows over states k-1, k, k+1)
+  void build(const std::vector<double> &W, const std::vector<double> &ts, double mu) {
+    for (size_t k = 0; k < K; k++) {
+      a0[k] = W[k];
+      a1[k] = a2[k] = 0;
+    }
+    for (size_t k = 1; k + 1 < K; k++) {
+      double c[3];
+      accel_coef(ts, k, c);
+      for (int i = 0; i < 3; i++) {
+        a0[k - 1 + i] += mu * c[i] * c[i];
+        if (i < 2) a1[k - 1 + i] += mu * c[i] * c[i + 1];
+      }
+      a2[k - 1] += mu * c[0] * c[2];
+    }
+  }
+  bool factor() {
+    for (size_t k = 0; k < K; k++) {
+      double d = a0[k];
+      if (k >= 1) d -= l1[k - 1] * l1[k - 1] * D[k - 1];
+      if (k >= 2) d -= l2[k - 2] * l2[k - 2] * D[k - 2];
+      if (!(d > 0) || !std::isfinite(d)) return false;
+      D[k] = d;
+      double b1 = a1[k];
+      if (k >= 1) b1 -= l2[k - 1] * l1[k - 1] * D[k - 1];
+      l1[k] = k + 1 < K ? b1 / d : 0;
+      l2[k] = k + 2 < K ? a2[k] / d : 0;
+    }
+    return true;
+  }
+  void solve(const std::vector<double> &b, std::vector<double> &x) const {
+    x.assign(K, 0.0);
+    for (size_t k = 0; k < K; k++) {
+      double y = b[k];
+      if (k >= 1) y -= l1[k - 1] * x[k - 1];
+      if (k >= 2) y -= l2[k - 2] * x[k - 2];
+      x[k] = y;
+    }
+    for (size_t k = 0; k < K; k++) x[k] /= D[k];
+    for (size_t k = K; k-- > 0;) {
+      if (k + 1 < K) x[k] -= l1[k] * x[k + 1];
+      if (k + 2 < K) x[k] -= l2[k] * x[k + 2];
+    }
+  }
+  // Selected inverse (Takahashi): z0 = diag, z1 = (k,k+1), z2 = (k,k+2) of A^-1.
+  void inverse_band() {
+    for (size_t k = K; k-- > 0;) {
+      double zk1k1 = k + 1 < K ? z0[k + 1] : 0, zk2k2 = k + 2 < K ? z0[k + 2] : 0;
+      double zk1k2 = k + 2 < K ? z1[k + 1] : 0;
+      z1[k] = k + 1 < K ? -(l1[k] * zk1k1 + l2[k] * zk1k2) : 0;
+      z2[k] = k + 2 < K ? -(l1[k] * zk1k2 + l2[k] * zk2k2) : 0;
+      z0[k] = 1 / D[k] - l1[k] * z1[k] - l2[k] * z2[k];
+    }
+  }
+};
+
+struct SplineSetup {
+  std::vector<double> ts;           // state times (ms, relative)
+  std::vector<int64_t> ts_abs;      // state times (us, absolute)
+  std::vector<size_t> state_of;     // data i -> state
+  double sig_ref[3] = {1, 1, 1};
+};
+
+// Per-axis weighted fit at lambda; returns RSS (whitened, weighted) and
+// trace of the hat matrix summed over axes. Fills p (K x 3) when given.
+bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<double> &w,
+                   double lambda, Banded &bd, double *rss, double *edf, std::vector<double> *p)
+{
+  const size_t K = ss.ts.size();
+  std::vector<double> W(K), b(K), x;
+  *rss = 0;
+  *edf = 0;
+  bd.resize(K);
+  if (p) p->assign(3 * K, 0.0);
+  for (int a = 0; a < 3; a++) {
+    std::fill(W.begin(), W.end(), 0.0);
+    std::fill(b.begin(), b.end(), 0.0);
+    for (size_t i = 0; i < d.n; i++) {
+      double wi = w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
+      W[ss.state_of[i]] += wi;
+      b[ss.state_of[i]] += wi * d.x[3 * i + a];
+    }
+    bd.build(W, ss.ts, lambda / (ss.sig_ref[a] * ss.sig_ref[a]));
+    if (!bd.factor()) return false;
+    bd.solve(b, x);
+    bd.inverse_band();
+    for (size_t i = 0; i < d.n; i++) {
+      double r = (x[ss.state_of[i]] - d.x[3 * i + a]) / d.sig[3 * i + a];
+      *rss += w[i] * r * r;
+    }
+    for (size_t k = 0; k < K; k++) *edf += bd.z0[k] * W[k];
+    if (p)
+      for (size_t k = 0; k < K; k++) (*p)[3 * k + a] = x[k];
+  }
+  return true;
+}
+
+// GCV over the grid 10^-4 .. 10^8 ms^3 (half decades): the span from "follows
+// every frame" to "straight line" for 1 kHz frames and sub-um noise.
+double gcv_lambda(const Data &d, const SplineSetup &ss, const std::vector<double> &w)
+{
+  Banded bd;
+  double best = 1.0, best_g = std::numeric_limits<double>::infinity();
+  const double nobs = 3.0 * (double)d.n;
+  for (int e = -8; e <= 16; e++) {
+    double lam = std::pow(10.0, 0.5 * e), rss, edf;
+    if (!spline_linear(d, ss, w, lam, bd, &rss, &edf, nullptr)) continue;
+    if (edf >= nobs - 0.5) continue;
+    double g = nobs * rss / ((nobs - edf) * (nobs - edf));
+    if (g < best_g * (1 - 1e-9)) {
+      best_g = g;
+      best = lam;
+    }
+  }
+  return best;
+}
+
+struct SplineFit {
+  double lambda = 1;
+  std::vector<double> p;        // K x 3 (centred)
+  std::vector<double> z0[3], z1[3], z2[3];
+  double chi2 = 0, edf = 0;
+  int outliers = 0;
+  bool ok = false;
+};
+
+// Robust spline at lambda through Ceres, started from the linear solution.
+bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double lambda,
+                  bool sparse, int max_iter, std::vector<double> &p)
+{
+  const size_t K = ss.ts.size();
+  ceres::Problem::Options po;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem prob(po);
+  std::unique_ptr<ceres::LossFunction> lf(loss.make());
+  for (size_t k = 0; k < K; k++) prob.AddParameterBlock(&p[3 * k], 3);
+  for (size_t i = 0; i < d.n; i++) {
+    auto *r = new PointResidual{{d.x[3 * i], d.x[3 * i + 1], d.x[3 * i + 2]},
+                                {1 / d.sig[3 * i], 1 / d.sig[3 * i + 1], 1 / d.sig[3 * i + 2]}};
+    prob.AddResidualBlock(new ceres::AutoDiffCostFunction<PointResidual, 3, 3>(r), lf.get(),
+                          &p[3 * ss.state_of[i]]);
+  }
+  const double sl = std::sqrt(lambda);
+  for (size_t k = 1; k + 1 < K; k++) {
+    double c[3];
+    accel_coef(ss.ts, k, c);
+    auto *r = new AccelResidual{c[0], c[1], c[2],
+                                {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]}};
+    prob.AddResidualBlock(new ceres::AutoDiffCostFunction<AccelResidual, 3, 3, 3, 3>(r), nullptr,
+                          &p[3 * (k - 1)], &p[3 * k], &p[3 * (k + 1)]);
+  }
+  ceres::Solver::Options so;
+  solver_options(&so, sparse, max_iter);
+  ceres::Solver::Summary sum;
+  ceres::Solve(so, &prob, &sum);
+  return sum.IsSolutionUsable();
+}
+
+void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
+                    const std::vector<double> &p, std::vector<double> &w, double *chi2,
+                    int *outliers)
+{
+  *chi2 = 0;
+  *outliers = 0;
+  for (size_t i = 0; i < d.n; i++) {
+    double s = 0;
+    for (int a = 0; a < 3; a++) {
+      double r = (p[3 * ss.state_of[i] + a] - d.x[3 * i + a]) / d.sig[3 * i + a];
+      s += r * r;
+    }
+    *chi2 += loss.rho(s);
+    w[i] = loss.weight(s);
+    *outliers += w[i] < 0.5;
+  }
+}
+
+bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double lambda_given,
+                bool sparse, int max_iter, SplineFit *f)
+{
+  const size_t K = ss.ts.size();
+  std::vector<double> w(d.n, 1.0);
+  double lam = lambda_given > 0 ? lambda_given : gcv_lambda(d, ss, w);
+  // Beyond these the banded factorisation loses its digits (condition
+  // ~ lambda / (sigma^2 h^3)); the ends are already "interpolate" and "line".
+  lam = std::min(std::max(lam, 1e-9), 1e9);
+  Banded bd;
+  double rss, edf;
+  if (!spline_linear(d, ss, w, lam, bd, &rss, &edf, &f->p)) return false;
+  if (loss.kind != ELFM_LOSS_NONE) {
+    if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
+    robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
+    if (lambda_given <= 0) {  // outliers can bias the GCV choice: choose again without them
+      double lam2 = std::min(std::max(gcv_lambda(d, ss, w), 1e-9), 1e9);
+      if (lam2 != lam) {
+        lam = lam2;
+        std::vector<double> w1(d.n, 1.0);
+        if (!spline_linear(d, ss, w1, lam, bd, &rss, &edf, &f->p)) return false;
+        if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
+        robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
+      }
+    }
+  } else {
+    robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
+  }
+  f->lambda = lam;
+  // Posterior band of A^-1 per axis at the final robust weights.
+  f->edf = 0;
+  std::vector<double> W(K), dummy;
+  for (int a = 0; a < 3; a++) {
+    std::fill(W.begin(), W.end(), 0.0);
+    for (size_t i = 0; i < d.n; i++)
+      W[ss.state_of[i]] += w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
+    bd.resize(K);
+    bd.build(W, ss.ts, lam / (ss.sig_ref[a] * ss.sig_ref[a]));
+    if (!bd.factor()) return false;
+    bd.inverse_band();
+    f->z0[a] = bd.z0;
+    f->z1[a] = bd.z1;
+    f->z2[a] = bd.z2;
+    for (size_t k = 0; k < K; k++) f->edf += bd.z0[k] * W[k];
+  }
+  f->ok = true;
+  return true;
+}
+
+void spline_eval(const SplineFit &f, const SplineSetup &ss, const Data &d, size_t nq,
+                 const int64_t *q, double *pos, double *vel, double *psd, double *vsd)
+{
+  const size_t K = ss.ts.size();
+  for (size_t j = 0; j < nq; j++) {
+    size_t k = (size_t)(std::lower_bound(ss.ts_abs.begin(), ss.ts_abs.end(), q[j]) -
+                        ss.ts_abs.begin());
+    if (k >= K) k = K - 1;
+    // velocity: central difference inside, one-sided at the ends
+    size_t km = k > 0 ? k - 1 : k, kp = k + 1 < K ? k + 1 : k;
+    double dt = ss.ts[kp] - ss.ts[km];
+    for (int a = 0; a < 3; a++) {
+      if (pos) pos[3 * j + a] = f.p[3 * k + a] + d.off[a];
+      if (vel) vel[3 * j + a] = (f.p[3 * kp + a] - f.p[3 * km + a]) / dt;
+      if (psd) psd[3 * j + a] = std::sqrt(std::max(f.z0[a][k], 0.0));
+      if (vsd) {
+        // cov(p_kp, p_km): offset 1 or 2 in the band
+        size_t off = kp - km;
+        double c = off == 2 ? f.z2[a][km] : f.z1[a][km];
+        double v = (f.z0[a][kp] + f.z0[a][km] - 2 * c) / (dt * dt);
+        vsd[3 * j + a] = std::sqrt(std::max(v, 0.0));
+      }
+    }
+  }
+}
+
+// Robust noise per axis from normalised second differences.
+void estimate_sigma(const elfm_smooth_options *o, size_t n, const int64_t *t, const double *x,
+                    double out[3])
+{
+  const double floor_[3] = {o->min_sigma_xy_um, o->min_sigma_xy_um, o->min_sigma_z_um};
+  for (int a = 0; a < 3; a++) {
+    std::vector<double> r;
+    for (size_t i = 1; i + 1 < n; i++) {
+      int64_t h0 = t[i] - t[i - 1], h1 = t[i + 1] - t[i];
+      if (h0 <= 0 || h1 <= 0) continue;
+      double rho = (double)h1 / (double)h0;
+      double e = x[3 * (i + 1) + a] - x[3 * i + a] - rho * (x[3 * i + a] - x[3 * (i - 1) + a]);
+      // var(e) = sigma^2 (1 + (1 + rho)^2 + rho^2) for independent noise
+      r.push_back(std::fabs(e) / std::sqrt(1 + (1 + rho) * (1 + rho) + rho * rho));
+    }
+    double s = 0;
+    if (r.size() >= 3) {
+      std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+      s = 1.4826 * r[r.size() / 2];
+    }
+    out[a] = std::max(s, floor_[a]);
+  }
+}
+
+elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
+                     const double *xyz, const double *sigma, size_t nq, const int64_t *q,
+                     double *pos, double *vel, double *psd, double *vsd, elfm_smooth_info *info,
+                     elfm_error *err)
+{
+  elfm_smooth_info inf;
+  std::memset(&inf, 0, sizeof inf);
+  for (double &b : inf.bic) b = kNaN;
+  // ---- validation
+  if (!o || n == 0 || !t_us || !xyz || (nq > 0 && !q))
+    return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: no data or NULL argument");
+  if (!(o->loss_scale > 0) || !std::isfinite(o->loss_scale) || o->max_iterations < 1 ||
+      !(o->min_sigma_xy_um > 0) || !(o->min_sigma_z_um > 0) || !std::isfinite(o->spline_weight_ms3) ||
+      o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC)
+    return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: options out of range");
+  for (size_t i = 0; i < n; i++) {
+    for (int a = 0; a < 3; a++) {
+      if (!std::isfinite(xyz[3 * i + a]))
+        return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1,
+                              "smooth: point %zu has a non-finite coordinate", i);
+      if (sigma && !(sigma[3 * i + a] > 0 && std::isfinite(sigma[3 * i + a])))
+        return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1,
+                              "smooth: point %zu has a sigma that is not finite and > 0", i);
+    }
+    if (i && t_us[i] < t_us[i - 1])
+      return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1,
+                            "smooth: times decrease at point %zu", i);
+  }
+  for (size_t k = 1; k < nq; k++)
+    if (q[k] < q[k - 1])
+      return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: query times decrease");
+  // a span beyond 2^53 us would lose integer precision in double ms
+  if ((double)(t_us[n - 1] - t_us[0]) > 9e15 || (nq && (double)(q[nq - 1] - q[0]) > 9e15))
+    return elfm_error_set(err, ELFM_ERR_RANGE, nullptr, -1, "smooth: time span too large");
+
+  // ---- prepare: reference time, centred positions, sigmas
+  Data d;
+  d.n = n;
+  d.t_ref = t_us[0];
+  d.t_mid_ms = 0.5 * (double)(t_us[n - 1] - t_us[0]) * 1e-3;
+  d.tau.resize(n);
+  d.x.resize(3 * n);
+  d.sig.resize(3 * n);
+  for (size_t i = 0; i < n; i++) d.tau[i] = d.tau_of(t_us[i]);
+  for (int a = 0; a < 3; a++) {
+    double s = 0;
+    for (size_t i = 0; i < n; i++) s += xyz[3 * i + a];
+    d.off[a] = s / (double)n;
+  }
+  for (size_t i = 0; i < n; i++)
+    for (int a = 0; a < 3; a++) d.x[3 * i + a] = xyz[3 * i + a] - d.off[a];
+  if (sigma) {
+    for (size_t i = 0; i < 3 * n; i++) d.sig[i] = sigma[i];
+    for (int a = 0; a < 3; a++) {
+      std::vector<double> s(n);
+      for (size_t i = 0; i < n; i++) s[i] = sigma[3 * i + a];
+      std::nth_element(s.begin(), s.begin() + n / 2, s.end());
+      inf.sigma_um[a] = s[n / 2];
+    }
+  } else {
+    estimate_sigma(o, n, t_us, xyz, inf.sigma_um);
+    for (size_t i = 0; i < n; i++)
+      for (int a = 0; a < 3; a++) d.sig[3 * i + a] = inf.sigma_um[a];
+  }
+  size_t distinct = 1;
+  for (size_t i = 1; i < n; i++) distinct += t_us[i] != t_us[i - 1];
+  Loss loss{o->loss, o->loss_scale};
+  const double lnobs = std::log(3.0 * (double)n);
+
+  // ---- static: one time only (or asked for)
+  if (distinct == 1 || o->model == ELFM_MODEL_STATIC) {
+    double m[3], sw[3];
+    for (int a = 0; a < 3; a++) {
+      double s = 0, sx = 0;
+      for (size_t i = 0; i < n; i++) {
+        double w = 1 / (d.sig[3 * i + a] * d.sig[3 * i + a]);
+        s += w;
+        sx += w * d.x[3 * i + a];
+      }
+      m[a] = sx / s;
+      sw[a] = s;
+    }
+    for (size_t k = 0; k < nq; k++)
+      for (int a = 0; a < 3; a++) {
+        if (pos) pos[3 * k + a] = m[a] + d.off[a];
+        if (vel) vel[3 * k + a] = distinct == 1 ? 0.0 : 0.0;
+        if (psd) psd[3 * k + a] = std::sqrt(1 / sw[a]);
+        if (vsd) vsd[3 * k + a] = kNaN;  // undetermined
+      }
+    inf.model = ELFM_MODEL_STATIC;
+    inf.edf = 1;
+    if (info) *info = inf;
+    return ELFM_OK;
+  }
+
+  // ---- candidate models
+  elfm_motion_model want = o->model;
+  bool try_cv = want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_VELOCITY;
+  bool try_ca = (want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_ACCEL) && distinct >= 3;
+  bool try_sp = (want == ELFM_MODEL_AUTO || want == ELFM_MODEL_SPLINE) && distinct >= 4;
+  if (!try_ca && !try_sp) try_cv = true;  // what the data allow
+  PolyFit cv, ca;
+  SplineFit sp;
+  SplineSetup ss;
+  if (try_cv) {
+    poly_fit(d, loss, 1, o->max_iterations, &cv);
+    if (cv.ok) inf.bic[ELFM_MODEL_CONST_VELOCITY] = cv.chi2 + 6 * lnobs;
+  }
+  if (try_ca) {
+    poly_fit(d, loss, 2, o->max_iterations, &ca);
+    if (ca.ok) inf.bic[ELFM_MODEL_CONST_ACCEL] = ca.chi2 + 9 * lnobs;
+  }
+  if (try_sp) {
+    // states: union of data and query times
+    std::vector<int64_t> all(t_us, t_us + n);
+    all.insert(all.end(), q, q + nq);
+    std::sort(all.begin(), all.end());
+    all.erase(std::unique(all.begin(), all.end()), all.end());
+    ss.ts_abs = all;
+    ss.ts.resize(all.size());
+    for (size_t k = 0; k < all.size(); k++) ss.ts[k] = d.tau_of(all[k]);
+    ss.state_of.resize(n);
+    for (size_t i = 0; i < n; i++)
+      ss.state_of[i] =
+          (size_t)(std::lower_bound(all.begin(), all.end(), t_us[i]) - all.begin());
+    for (int a = 0; a < 3; a++) {
+      std::vector<double> s(n);
+      for (size_t i = 0; i < n; i++) s[i] = d.sig[3 * i + a];
+      std::nth_element(s.begin(), s.begin() + n / 2, s.end());
+      ss.sig_ref[a] = s[n / 2];
+    }
+    bool sparse = o->solver == ELFM_SOLVER_SPARSE ||
+                  (o->solver == ELFM_SOLVER_AUTO && ss.ts.size() > 30);
+    if (spline_fit(d, ss, loss, o->spline_weight_ms3, sparse, o->max_iterations, &sp) && sp.ok)
+      inf.bic[ELFM_MODEL_SPLINE] = sp.chi2 + sp.edf * lnobs;
+  }
+  // ---- choose: lowest BIC, ties (within 1e-9 relative) to the simpler
+  elfm_motion_model best = ELFM_MODEL_AUTO;
+  double bb = std::numeric_limits<double>::infinity();
+  for (elfm_motion_model m : {ELFM_MODEL_CONST_VELOCITY, ELFM_MODEL_CONST_ACCEL, ELFM_MODEL_SPLINE}) {
+    double b = inf.bic[m];
+    if (std::isfinite(b) && (!std::isfinite(bb) || b < bb - 1e-9 * std::fabs(bb))) {
+      bb = b;
+      best = m;
+    }
+  }
+  if (best == ELFM_MODEL_AUTO)
+    return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1,
+                          "smooth: no model could be fitted (%zu points)", n);
+  inf.model = best;
+  if (best == ELFM_MODEL_SPLINE) {
+    spline_eval(sp, ss, d, nq, q, pos, vel, psd, vsd);
+    inf.spline_weight_ms3 = sp.lambda;
+    inf.edf = sp.edf / 3;
+    inf.n_outliers = sp.outliers;
+  } else {
+    const PolyFit &f = best == ELFM_MODEL_CONST_ACCEL ? ca : cv;
+    poly_eval(f, d, nq, q, pos, vel, psd, vsd);
+    inf.edf = f.order + 1;
+    inf.n_outliers = f.outliers;
+    if (best == ELFM_MODEL_CONST_ACCEL)
+      for (int a = 0; a < 3; a++) inf.accel_um_per_ms2[a] = f.p[2][a];
+  }
+  if (info) *info = inf;
+  return ELFM_OK;
+}
+
+}  // namespace
+
+extern "C" {
+
+void elfm_smooth_options_default(elfm_smooth_options *o)
+{
+  std::memset(o, 0, sizeof *o);
+  o->model = ELFM_MODEL_AUTO;
+  o->loss = ELFM_LOSS_HUBER;
+  o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
+  o->spline_weight_ms3 = 0;
+  o->solver = ELFM_SOLVER_AUTO;
+  o->max_iterations = 50;
+  o->min_sigma_xy_um = 0.02;
+  o->min_sigma_z_um = 0.08;
+}
+
+elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
+                            const double *xyz_um, const double *sigma_um, size_t nq,
+                            const int64_t *q_t_us, double *pos_um, double *vel_um_per_ms,
+                            double *pos_sd_um, double *vel_sd_um_per_ms, elfm_smooth_info *info,
+                            elfm_error *err)
+{
+  try {
+    return fit_impl(o, n, t_us, xyz_um, sigma_um, nq, q_t_us, pos_um, vel_um_per_ms, pos_sd_um,
+                    vel_sd_um_per_ms, info, err);
+  } catch (const std::bad_alloc &) {
+    return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
+  } catch (...) {
+    return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1, "smooth: solver failed");
+  }
+}
+
+}  // extern "C"
