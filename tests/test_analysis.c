@@ -1,0 +1,116 @@
+/* test_analysis.c — FWHM of isolated beads in a synthetic volume (paper
+ * widths 3.9 / 21.0 um), and the stage velocity from smoothed tracks. */
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+static void add_blob(elfm_volume *v, double x, double y, double z, double amp, double sxy, double sz)
+{
+  for (int k = 0; k < v->nz; k++)
+    for (int j = 0; j < v->h; j++)
+      for (int i = 0; i < v->w; i++) {
+        double dx = elfm_volume_x_um(v, i) - x, dy = elfm_volume_y_um(v, j) - y,
+               dz = elfm_volume_z_um(v, k) - z;
+        double e = (dx * dx + dy * dy) / (2 * sxy * sxy) + dz * dz / (2 * sz * sz);
+        if (e < 30) v->data[((size_t)k * v->h + j) * v->w + i] += (float)(amp * exp(-e));
+      }
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_volume *v = elfm_volume_create(80, 80, 61, 0.926, -60, 2, &err);
+  const double fx = 3.9, fz = 21.0;
+  /* three isolated beads and a close pair (excluded) */
+  const double P[5][3] = {{-20, -20, 0}, {20, -15, 10.5}, {-10, 22, -20}, {15, 20, 0}, {21, 20, 0}};
+  for (int b = 0; b < 5; b++) add_blob(v, P[b][0], P[b][1], P[b][2], 100, fx / 2.3548, fz / 2.3548);
+  elfm_peaks_options po;
+  elfm_peaks_options_default(&po);
+  po.k_sigma = 0;
+  po.absolute = 10;
+  po.min_separation_um = 2;
+  po.radius_xy_um = 1.5;
+  elfm_peaks *pk = elfm_peaks_create(&po, v->w, v->h, v->nz, &err);
+  elfm_detection det[16];
+  int n = 0;
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 5);
+  elfm_fwhm fw[16];
+  int m = 0;
+  CHECK_OK(elfm_analysis_fwhm(v, det, n, 8.0, fw, 16, &m, &err), &err);
+  CHECK_EQ_INT(m, 3);
+  double xy[16], z[16];
+  for (int i = 0; i < m; i++) {
+    CHECK_NEAR(fw[i].fwhm_xy_um, fx, 0.25);
+    CHECK_NEAR(fw[i].fwhm_z_um, fz, 1.0);
+    xy[i] = fw[i].fwhm_xy_um;
+    z[i] = fw[i].fwhm_z_um;
+  }
+  double med, spr;
+  elfm_analysis_median(xy, (size_t)m, &med, &spr);
+  CHECK_NEAR(med, fx, 0.25);
+  CHECK(spr >= 0 && spr < 0.3);
+  elfm_analysis_median(z, (size_t)m, &med, &spr);
+  CHECK_NEAR(med, fz, 1.0);
+  /* a wider bead reads wider */
+  memset(v->data, 0, sizeof(float) * 80 * 80 * 61);
+  add_blob(v, 0, 0, 0, 100, 2 * fx / 2.3548, fz / 2.3548);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_OK(elfm_analysis_fwhm(v, det, n, 8.0, fw, 16, &m, &err), &err);
+  CHECK_EQ_INT(m, 1);
+  if (m == 1) CHECK_NEAR(fw[0].fwhm_xy_um, 2 * fx, 0.4);
+  /* a bead at the edge whose profile leaves the volume is skipped */
+  memset(v->data, 0, sizeof(float) * 80 * 80 * 61);
+  add_blob(v, 0, 0, -59, 100, fx / 2.3548, fz / 2.3548);
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_OK(elfm_analysis_fwhm(v, det, n, 8.0, fw, 16, &m, &err), &err);
+  CHECK_EQ_INT(m, 0);
+  double e[1];
+  elfm_analysis_median(e, 0, &med, &spr);
+  CHECK(isnan(med));
+  elfm_peaks_free(pk);
+  elfm_volume_free(v);
+
+  /* Stage: 5 tracks moving at (0.2, -0.1, 0.05) um/ms with small noise. */
+  elfm_track_store s;
+  elfm_track_store_init(&s);
+  elfm_stage_result r;
+  CHECK_EQ_INT(elfm_analysis_stage(&s, NULL, &r, &err), ELFM_ERR_INVALID);
+  elfm_smooth_options so;
+  elfm_smooth_options_default(&so);
+  uint64_t seed = 7;
+  for (int k = 0; k < 5; k++) {
+    elfm_track *t = elfm_track_create(k, &err);
+    for (int f = 0; f < 200; f++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = 5000000000LL + 1000LL * f;
+      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      double noise = ((double)(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2;
+      d.x_um = 10 * k + 0.2 * f + noise;
+      d.y_um = -0.1 * f;
+      d.z_um = 0.05 * f - noise;
+      elfm_track_append(t, &d, &err);
+    }
+    CHECK_OK(elfm_track_smooth(t, &so, &err), &err);
+    elfm_track_store_add(&s, t, &err);
+  }
+  const double sv[3] = {0.2, -0.1, 0.05};
+  CHECK_OK(elfm_analysis_stage(&s, sv, &r, &err), &err);
+  CHECK_EQ_INT(r.n_tracks, 5);
+  CHECK(r.rel_error < 0.01);
+  CHECK(fabs(r.speed_rel_error) < 0.01);
+  CHECK_NEAR(r.speed_um_per_ms, sqrt(0.04 + 0.01 + 0.0025), 0.003);
+  CHECK(r.v_sd_um_per_ms[0] < 0.01);
+  /* a wrong stage velocity shows */
+  const double sv2[3] = {0.22, -0.1, 0.05};
+  CHECK_OK(elfm_analysis_stage(&s, sv2, &r, &err), &err);
+  CHECK(r.rel_error > 0.05);
+  const double sv0[3] = {0, 0, 0};
+  CHECK_EQ_INT(elfm_analysis_stage(&s, sv0, &r, &err), ELFM_ERR_INVALID);
+  elfm_track_store_clear(&s);
+  return check_report();
+}

@@ -1,0 +1,132 @@
+/* analysis.c — stage velocity from tracks, FWHM of isolated beads
+ * (see elfm_analysis.h). */
+#include "elfm_analysis.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *sv,
+                                elfm_stage_result *r, elfm_error *err)
+{
+  double sw = 0, m[3] = {0, 0, 0}, um[3] = {0, 0, 0}, uss[3] = {0, 0, 0}, sp = 0, sp2 = 0;
+  size_t n = 0;
+  for (size_t i = 0; i < s->n; i++) {
+    const elfm_track *t = s->tracks[i];
+    if (!t->n_span || !t->vel_um_per_ms) continue;
+    double v[3];
+    elfm_track_mean_velocity(t, v);
+    double w = (double)t->n, speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (int a = 0; a < 3; a++) {
+      m[a] += w * v[a];
+      um[a] += v[a];
+      uss[a] += v[a] * v[a];
+    }
+    sp += speed;
+    sp2 += speed * speed;
+    sw += w;
+    n++;
+  }
+  if (!n) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stage analysis: no smoothed track");
+  r->n_tracks = n;
+  for (int a = 0; a < 3; a++) {
+    r->v_um_per_ms[a] = m[a] / sw;
+    double mu = um[a] / (double)n;
+    r->v_sd_um_per_ms[a] = n > 1 ? sqrt(fmax(0, (uss[a] - n * mu * mu) / (double)(n - 1))) : NAN;
+  }
+  r->speed_um_per_ms = sqrt(r->v_um_per_ms[0] * r->v_um_per_ms[0] +
+                            r->v_um_per_ms[1] * r->v_um_per_ms[1] +
+                            r->v_um_per_ms[2] * r->v_um_per_ms[2]);
+  double msp = sp / (double)n;
+  r->speed_sd_um_per_ms = n > 1 ? sqrt(fmax(0, (sp2 - n * msp * msp) / (double)(n - 1))) : NAN;
+  r->rel_error = r->speed_rel_error = NAN;
+  if (sv) {
+    double ns = sqrt(sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]);
+    if (!(ns > 0) || !isfinite(ns))
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stage analysis: stage velocity is zero or not finite");
+    double d2 = 0;
+    for (int a = 0; a < 3; a++) d2 += pow(r->v_um_per_ms[a] - sv[a], 2);
+    r->rel_error = sqrt(d2) / ns;
+    r->speed_rel_error = (r->speed_um_per_ms - ns) / ns;
+  }
+  return ELFM_OK;
+}
+
+/* Distance (voxels, fractional) from the peak voxel to the half-maximum
+ * crossing going in direction `dir` along an axis; -1 if the profile leaves
+ * the volume first. */
+static double half_crossing(const float *d, size_t ic, ptrdiff_t stride, int pos, int len, int dir,
+                            double half)
+{
+  double prev = d[ic];
+  for (int k = 1;; k++) {
+    int p = pos + dir * k;
+    if (p < 0 || p >= len) return -1;
+    double cur = d[(size_t)((ptrdiff_t)ic + dir * k * stride)];
+    if (cur <= half) return (k - 1) + (prev - half) / (prev - cur);
+    prev = cur;
+  }
+}
+
+elfm_status elfm_analysis_fwhm(const elfm_volume *v, const elfm_detection *det, int n,
+                               double isolation_um, elfm_fwhm *out, int cap, int *n_out,
+                               elfm_error *err)
+{
+  *n_out = 0;
+  if (!v || !v->data || (n > 0 && !det) || cap < 0 || (cap > 0 && !out) || !(v->um_per_px > 0) ||
+      !(v->z_step_um > 0))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "fwhm: bad arguments");
+  int m = 0;
+  for (int i = 0; i < n && m < cap; i++) {
+    int iso = 1;
+    for (int j = 0; j < n && iso; j++) {
+      if (j == i) continue;
+      double dx = det[i].x_um - det[j].x_um, dy = det[i].y_um - det[j].y_um;
+      iso = dx * dx + dy * dy >= isolation_um * isolation_um;
+    }
+    if (!iso) continue;
+    int X = (int)lround(det[i].x_um / v->um_per_px + (v->w - 1) * 0.5);
+    int Y = (int)lround(det[i].y_um / v->um_per_px + (v->h - 1) * 0.5);
+    int K = (int)lround((det[i].z_um - v->z_min_um) / v->z_step_um);
+    if (X < 0 || X >= v->w || Y < 0 || Y >= v->h || K < 0 || K >= v->nz) continue;
+    size_t ic = ((size_t)K * v->h + Y) * v->w + X;
+    double peak = v->data[ic];
+    if (!(peak > 0)) continue;
+    double half = 0.5 * peak;
+    double xl = half_crossing(v->data, ic, 1, X, v->w, -1, half),
+           xr = half_crossing(v->data, ic, 1, X, v->w, 1, half),
+           yl = half_crossing(v->data, ic, v->w, Y, v->h, -1, half),
+           yr = half_crossing(v->data, ic, v->w, Y, v->h, 1, half),
+           zl = half_crossing(v->data, ic, (ptrdiff_t)v->w * v->h, K, v->nz, -1, half),
+           zr = half_crossing(v->data, ic, (ptrdiff_t)v->w * v->h, K, v->nz, 1, half);
+    if (xl < 0 || xr < 0 || yl < 0 || yr < 0 || zl < 0 || zr < 0) continue;
+    out[m].x_um = det[i].x_um;
+    out[m].y_um = det[i].y_um;
+    out[m].z_um = det[i].z_um;
+    out[m].fwhm_xy_um = 0.5 * ((xl + xr) + (yl + yr)) * v->um_per_px;
+    out[m].fwhm_z_um = (zl + zr) * v->z_step_um;
+    m++;
+  }
+  *n_out = m;
+  return ELFM_OK;
+}
+
+static int dcmp(const void *a, const void *b)
+{
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+void elfm_analysis_median(double *x, size_t n, double *median, double *spread)
+{
+  if (!n) {
+    *median = *spread = NAN;
+    return;
+  }
+  qsort(x, n, sizeof *x, dcmp);
+  double med = n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+  for (size_t i = 0; i < n; i++) x[i] = fabs(x[i] - med);
+  qsort(x, n, sizeof *x, dcmp);
+  double mad = n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
+  *median = med;
+  *spread = 1.4826 * mad;
+}

@@ -1,0 +1,56 @@
+/* elfm_analysis.h — what the tracks and volumes say about the experiment:
+ * the stage velocity (all beads move together) and the resolution (FWHM of
+ * isolated reconstructed beads; the paper: 3.9 um lateral, 21.0 um axial).
+ */
+#ifndef ELFM_ANALYSIS_H
+#define ELFM_ANALYSIS_H
+
+#include <stddef.h>
+
+#include "elfm_error.h"
+#include "elfm_peaks.h"
+#include "elfm_tracks.h"
+#include "elfm_volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Stage: each smoothed track's mean velocity, weighted by its number of real
+ * points, averaged over tracks. spread = standard deviation across tracks
+ * (unweighted). With a given stage velocity, rel_error = |v_mean - v_stage| /
+ * |v_stage| and speed_rel_error = (|v_mean| - |v_stage|) / |v_stage|. */
+typedef struct elfm_stage_result {
+  size_t n_tracks;
+  double v_um_per_ms[3], v_sd_um_per_ms[3];
+  double speed_um_per_ms, speed_sd_um_per_ms;
+  double rel_error, speed_rel_error;   /* NaN without a stage velocity */
+} elfm_stage_result;
+
+/* Tracks that are not smoothed are skipped; no smoothed track is
+ * ELFM_ERR_INVALID. stage_v may be NULL. */
+elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *stage_v_um_per_ms,
+                                elfm_stage_result *out, elfm_error *err);
+
+/* Resolution. For each detection of volume v that is isolated (no other
+ * detection within isolation_um laterally), the full width at half maximum
+ * along x, y and z through its peak voxel: the half-maximum crossings on
+ * both sides, linearly interpolated between voxels (no shape assumed); a
+ * profile that leaves the volume before halving is skipped. Writes up to
+ * cap results; *n_out = number written. fwhm_xy = mean of x and y. */
+typedef struct elfm_fwhm {
+  double x_um, y_um, z_um;  /* where */
+  double fwhm_xy_um, fwhm_z_um;
+} elfm_fwhm;
+
+elfm_status elfm_analysis_fwhm(const elfm_volume *v, const elfm_detection *d, int n,
+                               double isolation_um, elfm_fwhm *out, int cap, int *n_out,
+                               elfm_error *err);
+
+/* Median and spread (1.4826 MAD) of x[0..n-1] (reorders x). NaN when n = 0. */
+void elfm_analysis_median(double *x, size_t n, double *median, double *spread);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
