@@ -184,6 +184,8 @@ void elfm_viewer_free(elfm_viewer *v);
 /* The camera in use (read/write): tests project points with it. */
 elfm_camera *elfm_viewer_camera(elfm_viewer *v);
 void elfm_viewer_set_color_mode(elfm_viewer *v, elfm_color_mode mode);
+/* Which layers are drawn (each 0 or 1); the `t`, `d`, `m` keys toggle them. */
+void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip);
 /* Tracks are drawn up to the time cursor t_us (INT64_MAX: everything). */
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us);
 

@@ -231,12 +231,13 @@ static void hud(elfm_viewer *v, int height, int u, int s)
     snprintf(txt, sizeof txt, "T = %.3f MS%s", v->cursor_us / 1000.0,
              v->playing ? "  PLAYING" : "  PAUSED");
   ov_text(v, x, y, s, col_text, txt);
-  snprintf(txt, sizeof txt, "%zu TRACKS  %zu POINTS%s%s", d->tracks.n_lines, d->tracks.n_points,
-           d->truth.n_lines && v->opt.show_truth ? "  TRUTH: GREY" : "",
-           d->n_detections && v->opt.show_detections ? "  DETECTIONS: WHITE" : "");
+  snprintf(txt, sizeof txt, "%zu TRACKS  %zu POINTS", d->tracks.n_lines, d->tracks.n_points);
   ov_text(v, x, y + 11 * s, s, col_dim, txt);
+  snprintf(txt, sizeof txt, "%s%s", d->truth.n_lines && v->opt.show_truth ? "TRUTH: GREY  " : "",
+           d->n_detections && v->opt.show_detections ? "DETECTIONS: WHITE" : "");
+  ov_text(v, x, y + 22 * s, s, col_dim, txt);
   if (v->opt.visible) {
-    ov_text(v, x, y + 22 * s, s, col_dim,
+    ov_text(v, x, y + 33 * s, s, col_dim,
             "DRAG: ROTATE  RIGHT-DRAG: PAN  SCROLL: ZOOM  R: RESET  C: COLOUR  "
             "SPACE: PLAY  ARROWS: STEP  T D M: TRUTH DETECTIONS MIP");
   }

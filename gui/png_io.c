@@ -12,6 +12,22 @@
 
 #include "gl_internal.h"
 
+/* libpng's default handlers print to stderr; library code must not. These
+ * keep libpng's message for our error object and jump back (error_ptr is a
+ * char[200] owned by the calling function). */
+static void png_quiet_error(png_structp png, png_const_charp msg)
+{
+  char *keep = png_get_error_ptr(png);
+  if (keep) snprintf(keep, 200, "%s", msg);
+  png_longjmp(png, 1);
+}
+
+static void png_quiet_warning(png_structp png, png_const_charp msg)
+{
+  (void)png;
+  (void)msg;
+}
+
 elfm_status elfm_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb,
                                elfm_error *err)
 {
@@ -19,7 +35,9 @@ elfm_status elfm_png_write_rgb(const char *path, int width, int height, const ui
     return elfm_error_set(err, ELFM_ERR_INVALID, path, -1, "empty picture");
   FILE *f = fopen(path, "wb");
   if (!f) return elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+  char why[200] = "";
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, why, png_quiet_error,
+                                            png_quiet_warning);
   png_infop info = png ? png_create_info_struct(png) : NULL;
   if (!png || !info) {
     png_destroy_write_struct(&png, &info);
@@ -29,7 +47,8 @@ elfm_status elfm_png_write_rgb(const char *path, int width, int height, const ui
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     fclose(f);
-    return elfm_error_set(err, ELFM_ERR_IO, path, -1, "libpng could not write the picture");
+    return elfm_error_set(err, ELFM_ERR_IO, path, -1, "libpng could not write the picture: %s",
+                          why);
   }
   png_init_io(png, f);
   png_set_IHDR(png, info, (png_uint_32)width, (png_uint_32)height, 8, PNG_COLOR_TYPE_RGB,
@@ -54,7 +73,9 @@ elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int 
     fclose(f);
     return elfm_error_set(err, ELFM_ERR_FORMAT, path, 0, "not a PNG file");
   }
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, NULL, NULL, NULL);
+  char why[200] = "";
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, why, png_quiet_error,
+                                           png_quiet_warning);
   png_infop info = png ? png_create_info_struct(png) : NULL;
   if (!png || !info) {
     png_destroy_read_struct(&png, &info, NULL);
@@ -64,7 +85,7 @@ elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int 
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_read_struct(&png, &info, NULL);
     fclose(f);
-    return elfm_error_set(err, ELFM_ERR_FORMAT, path, -1, "corrupt or truncated PNG");
+    return elfm_error_set(err, ELFM_ERR_FORMAT, path, -1, "corrupt or truncated PNG (%s)", why);
   }
   png_init_io(png, f);
   png_set_sig_bytes(png, 8);

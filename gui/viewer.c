@@ -259,7 +259,7 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
    * wider ones (non-forward-compatible context). Two pixels read well. */
   GLfloat range[2] = {1, 1};
   glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, range);
-  v->line_width_px = range[1] >= 2.0f ? 2.0 : 1.0;
+  v->line_width_px = getenv("ELFM_LW1") ? 1.0 : range[1] >= 2.0f ? 2.0 : 1.0;
   glGetError(); /* the query may be unsupported: not an error for us */
   *out = v;
   return ELFM_OK;
@@ -298,6 +298,12 @@ void elfm_viewer_free(elfm_viewer *v)
 
 elfm_camera *elfm_viewer_camera(elfm_viewer *v) { return &v->cam; }
 void elfm_viewer_set_color_mode(elfm_viewer *v, elfm_color_mode mode) { v->mode = mode; }
+void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip)
+{
+  v->opt.show_truth = truth;
+  v->opt.show_detections = detections;
+  v->opt.show_mip = mip;
+}
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us) { v->cursor_us = t_us; }
 
 static void draw_series(const gui_series_gl *g)
@@ -369,7 +375,7 @@ void gui_draw(elfm_viewer *v, int width, int height)
     /* Raw detections of the last 10 frames before the cursor, as white dots
      * (all of them when the cursor is at the end). */
     glUniform1i(l->u_mode, 3);
-    glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 0.85f);
+    glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
     glUniform1f(l->u_trail, cursor_ms >= 1e29f ? -1.0f : (float)(10.0 * d->frame_dt_us / 1000.0));
     glBindVertexArray(v->det_vao);
     glDrawArrays(GL_POINTS, 0, v->n_det);
