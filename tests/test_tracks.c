@@ -1,0 +1,173 @@
+/* test_tracks.c — track store and writers: tracks.csv (smoothed + raw,
+ * empty raw on gap frames) read back with elfm_table, detections.csv, ISBI
+ * 2012 XML (real detections only), TrackMate XML structure, write errors. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+
+static char *slurp(const char *path)
+{
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *s = malloc((size_t)n + 1);
+  size_t got = fread(s, 1, (size_t)n, f);
+  s[got] = 0;
+  fclose(f);
+  return s;
+}
+
+static int count(const char *s, const char *needle)
+{
+  int n = 0;
+  for (const char *p = s; (p = strstr(p, needle)); p += strlen(needle)) n++;
+  return n;
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  char dir[] = "/tmp/elfm_test_tracks_XXXXXX";
+  if (!mkdtemp(dir)) SKIP("no temp dir");
+  char p_tr[600], p_det[600], p_isbi[600], p_tm[600];
+  snprintf(p_tr, sizeof p_tr, "%s/tracks.csv", dir);
+  snprintf(p_det, sizeof p_det, "%s/detections.csv", dir);
+  snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", dir);
+  snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", dir);
+
+  /* Two tracks: A frames 10..29 with a gap at 15..17; B frames 12..21. */
+  elfm_track_store s;
+  elfm_track_store_init(&s);
+  elfm_smooth_options so;
+  elfm_smooth_options_default(&so);
+  const int64_t T0 = 1234567890123LL;
+  int real_points = 0;
+  for (int k = 0; k < 2; k++) {
+    elfm_track *t = elfm_track_create(k == 0 ? 7 : 11, &err);
+    int f0 = k == 0 ? 10 : 12, f1 = k == 0 ? 29 : 21;
+    for (int f = f0; f <= f1; f++) {
+      if (k == 0 && f >= 15 && f <= 17) continue;
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = T0 + 1000LL * f;
+      d.x_um = k * 30 + 0.5 * f;
+      d.y_um = -2;
+      d.z_um = 4 * k;
+      d.intensity = 100 + f;
+      d.sigma_x_um = d.sigma_y_um = 1.6;
+      d.sigma_z_um = 9;
+      CHECK_OK(elfm_track_append(t, &d, &err), &err);
+      real_points++;
+    }
+    /* appending an older frame fails */
+    elfm_detection old;
+    memset(&old, 0, sizeof old);
+    old.frame = f0;
+    CHECK_EQ_INT(elfm_track_append(t, &old, &err), ELFM_ERR_INVALID);
+    CHECK_OK(elfm_track_smooth(t, &so, &err), &err);
+    CHECK_OK(elfm_track_store_add(&s, t, &err), &err);
+  }
+  CHECK_EQ_INT(s.n, 2);
+
+  FILE *f = fopen(p_tr, "w");
+  CHECK_OK(elfm_tracks_write_csv_header(f, p_tr, &err), &err);
+  for (size_t i = 0; i < s.n; i++) CHECK_OK(elfm_tracks_write_csv(f, p_tr, s.tracks[i], &err), &err);
+  fclose(f);
+  elfm_table *tb = NULL;
+  CHECK_OK(elfm_table_load_csv(p_tr, &tb, &err), &err);
+  if (tb) {
+    CHECK_EQ_INT(tb->n_rows, 20 + 10);  /* every frame of both spans */
+    int c_id = elfm_table_col(tb, "track_id"), c_fr = elfm_table_col(tb, "frame"),
+        c_t = elfm_table_col(tb, "t_us"), c_x = elfm_table_col(tb, "x_um"),
+        c_rx = elfm_table_col(tb, "raw_x_um"), c_vx = elfm_table_col(tb, "vx_um_per_ms"),
+        c_in = elfm_table_col(tb, "intensity");
+    CHECK(c_id == 0 && c_fr == 1 && c_t == 2 && c_x == 3 && c_rx == 6);
+    CHECK(c_vx >= 0 && c_in >= 0);
+    int gaps = 0;
+    for (size_t r = 0; r < tb->n_rows; r++) {
+      double fr = elfm_table_get(tb, r, c_fr);
+      int is_gap = elfm_table_get(tb, r, c_id) == 7 && fr >= 15 && fr <= 17;
+      gaps += isnan(elfm_table_get(tb, r, c_rx));
+      CHECK(is_gap == !!isnan(elfm_table_get(tb, r, c_rx)));
+      CHECK(is_gap == !!isnan(elfm_table_get(tb, r, c_in)));
+      CHECK(elfm_table_get(tb, r, c_t) == (double)(T0 + 1000LL * (int64_t)fr));
+      CHECK_NEAR(elfm_table_get(tb, r, c_vx), 0.5, 1e-3);
+      CHECK_NEAR(elfm_table_get(tb, r, c_x),
+                 (elfm_table_get(tb, r, c_id) == 7 ? 0 : 30) + 0.5 * fr, 1e-3);
+    }
+    CHECK_EQ_INT(gaps, 3);
+  }
+  elfm_table_free(tb);
+
+  /* detections.csv */
+  f = fopen(p_det, "w");
+  CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
+  CHECK_OK(elfm_detections_write(f, p_det, s.tracks[1]->pts, (int)s.tracks[1]->n, &err), &err);
+  fclose(f);
+  tb = NULL;
+  CHECK_OK(elfm_table_load_csv(p_det, &tb, &err), &err);
+  if (tb) {
+    CHECK_EQ_INT(tb->n_rows, 10);
+    CHECK_EQ_INT(elfm_table_col(tb, "intensity"), 5);
+    CHECK_NEAR(elfm_table_get(tb, 0, elfm_table_col(tb, "x_um")), 36, 1e-9);
+  }
+  elfm_table_free(tb);
+
+  /* ISBI: one particle per track, one detection per REAL point */
+  f = fopen(p_isbi, "w");
+  CHECK_OK(elfm_tracks_write_isbi(f, p_isbi, &s, &err), &err);
+  fclose(f);
+  char *x = slurp(p_isbi);
+  CHECK(x != NULL);
+  if (x) {
+    CHECK(strstr(x, "<root>") && strstr(x, "<TrackContestISBI2012"));
+    CHECK_EQ_INT(count(x, "<particle>"), 2);
+    CHECK_EQ_INT(count(x, "<detection "), real_points);
+    CHECK_EQ_INT(count(x, "<detection t=\"15\""), 1);  /* B's only: A's gap is not written */
+    CHECK(strstr(x, "<detection t=\"14\" x=\"7.0000\"") != NULL);
+    free(x);
+  }
+
+  /* TrackMate: spots grouped by frame, edges = points - 1 per track */
+  f = fopen(p_tm, "w");
+  CHECK_OK(elfm_tracks_write_trackmate(f, p_tm, &s, 1.0, &err), &err);
+  fclose(f);
+  x = slurp(p_tm);
+  if (x) {
+    CHECK_EQ_INT(count(x, "<Spot "), real_points);
+    CHECK_EQ_INT(count(x, "<Edge "), real_points - 2);
+    CHECK_EQ_INT(count(x, "<Track "), 2);
+    CHECK_EQ_INT(count(x, "<TrackID "), 2);
+    char want[64];
+    snprintf(want, sizeof want, "<AllSpots nspots=\"%d\">", real_points);
+    CHECK(strstr(x, want) != NULL);
+    /* frames 10..29 (A's gap 15..17 covered by B) once each as SpotsInFrame */
+    CHECK_EQ_INT(count(x, "<SpotsInFrame "), 20);
+    CHECK(strstr(x, "</TrackMate>") != NULL);
+    free(x);
+  }
+  CHECK_EQ_INT(elfm_tracks_write_trackmate(stdout, "x", &s, 0, &err), ELFM_ERR_INVALID);
+
+  /* an unsmoothed track cannot go to tracks.csv; write errors are IO */
+  elfm_track *raw = elfm_track_create(99, &err);
+  CHECK_EQ_INT(elfm_tracks_write_csv(stdout, "stdout", raw, &err), ELFM_ERR_INVALID);
+  elfm_track_free(raw);
+  FILE *full = fopen("/dev/full", "w");
+  if (full) {
+    setvbuf(full, NULL, _IONBF, 0);
+    CHECK_EQ_INT(elfm_tracks_write_csv_header(full, "/dev/full", &err), ELFM_ERR_IO);
+    CHECK(strstr(err.file, "/dev/full") != NULL);
+    fclose(full);
+  }
+  elfm_track_free(NULL);
+  elfm_track_store_clear(&s);
+  CHECK_EQ_INT(s.n, 0);
+  remove(p_tr); remove(p_det); remove(p_isbi); remove(p_tm); rmdir(dir);
+  return check_report();
+}
