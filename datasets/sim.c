@@ -1,0 +1,932 @@
+/* sim.c — the event-camera simulation: light from the scene's objects through
+ * the Fourier LFM onto an IMX636-like pixel array, in time slices.
+ *
+ * Per slice (default 1 ms):
+ *  1. Each object's images: one box per object and view covering where the
+ *     image is during [slice start - one slice, slice end] (the look-back
+ *     keeps pixels stepping until their photoreceptor has settled after an
+ *     image left). Boxes of objects that move or blink are "dynamic"; the
+ *     union of their pixels is the active set, the only pixels stepped.
+ *  2. Time steps over the slice: short enough that an image moves <= 0.4
+ *     sigma per step, split at every light edge (LED, spikes).
+ *  3. Per step and active pixel (v2e / ESIM model): photocurrent = background
+ *     + every image's pixel-integrated Gaussian; log; first-order low-pass
+ *     whose bandwidth rises with the photocurrent; ON/OFF events at each
+ *     threshold crossing with linearly interpolated times, reference reset
+ *     by whole thresholds, refractory period, latency + jitter.
+ *  4. Background activity drawn analytically over the whole sensor: shot
+ *     noise and leak events as Poisson processes, plus hot pixels; the 0.9 M
+ *     quiet pixels are never stepped.
+ *  5. Events (this slice's and those delayed from the last) sorted by time
+ *     (counting sort, stable), the ones before the slice end handed on;
+ *     later ones (latency) wait for the next slice.
+ * Memory: full-sensor pixel state (~30 MB for 1280x720) plus per-slice
+ * buffers that grow to the busiest slice, never with the duration.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "sim_internal.h"
+
+#define TWO_PI 6.283185307179586
+#define STREAM_NOISE 0x4e4f495345ull  /* "NOISE" */
+#define STREAM_SIGNAL 0x5349474eull   /* "SIGN" */
+#define STREAM_THRESH 0x544852ull     /* "THR" */
+#define STREAM_FRESH 0x465245ull      /* "FRE" */
+
+/* Gaussian approximation of the Airy core: sigma = 0.21 lambda / NA
+ * (Zhang, Zerubia & Olivo-Marin, Appl. Opt. 2007). */
+#define AIRY_SIGMA_FACTOR 0.21
+/* An image is cut where it adds less than 2 % to the background: ln(1.02)
+ * = 0.02 is a tenth of the 0.2 contrast threshold, so the cut makes no events. */
+#define BOX_EPS 0.02
+/* Samples of each object's path per slice window (bounding boxes, speed). */
+#define PATH_SAMPLES 9
+/* Step length: an image moves at most this many PSF sigmas per step, which
+ * keeps linear interpolation of the log intensity within a few % of C. */
+#define STEP_SIGMA_FRACTION 0.4
+#define MIN_STEP_US 2
+/* Standard normal CDF table on [-8, 8], 64 points per sigma: linear
+ * interpolation error < 1e-5. */
+#define PHI_LIM 8.0
+#define PHI_PER_SIGMA 64
+#define PHI_N (2 * 8 * PHI_PER_SIGMA + 2) /* 2 * PHI_LIM * PHI_PER_SIGMA + 2 */
+
+typedef struct sim_event {
+  int64_t t_us;
+  uint16_t x, y;
+  uint8_t p;
+} sim_event;
+
+typedef struct sim_box {
+  int obj, view, comp;   /* comp 0: core image, 1: scattering haze */
+  int dynamic;
+  int x0, y0, x1, y1;    /* [x0, x1) x [y0, y1) on the sensor */
+  double r_px;           /* how far from the centre the image matters */
+} sim_box;
+
+/* Per object, per slice. */
+typedef struct sim_objslice {
+  int visible, dynamic;
+  double amp_max_hz, sigma_max_px, sigma_min_px, speed_px_per_us;
+  /* at the current step */
+  double amp_hz, sigma_px, u_off_px, v_off_px, z_um;
+  double pos[3];
+} sim_objslice;
+
+typedef struct sim_stim {
+  int64_t t_us;
+  int channel, value;
+} sim_stim;
+
+typedef struct sim_ws {
+  const elfm_scene *s;
+  int W, H;
+  size_t npix;
+  double umpp, na_sub, dmax, bg;
+  double phi[PHI_N];
+  /* full-sensor pixel state */
+  float *llp, *lref, *con, *coff, *ifull;
+  double *tlast;   /* last event (crossing) time, us from t0 */
+  int32_t *stamp;  /* slice that last listed the pixel as active */
+  /* active set of this slice (slot-indexed copies of the state) */
+  size_t n_act, cap_act;
+  int32_t *a_pix;
+  float *a_llp, *a_lref, *a_con, *a_coff, *a_base;
+  double *a_tlast;
+  uint8_t *a_fresh;
+  sim_box *box;
+  size_t n_box, cap_box;
+  sim_objslice *os;
+  int *dyn_obj;
+  size_t n_dyn;
+  sim_event *ev, *sorted;
+  size_t n_ev, cap_ev, cap_sorted;
+  uint32_t *counts;
+  size_t cap_counts;
+  int64_t *edges, *steps;
+  size_t cap_edges, cap_steps;
+  double *gx, *gy;
+  size_t cap_gx, cap_gy;
+  /* output chunk (our arrays) */
+  int64_t *c_t;
+  uint16_t *c_x, *c_y;
+  uint8_t *c_p;
+  size_t cap_ct, cap_cx, cap_cy, cap_cp;
+  elfm_trigger *c_trig;
+  size_t cap_trig;
+  sim_stim *stim;
+  size_t n_stim, cap_stim;
+  elfm_sim_stats st;
+} sim_ws;
+
+/* Grow *p to hold `need` elements (doubling). 0 on out of memory. Only
+ * called when a slice needs more than any before it. */
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+  if (need <= *cap) return 1;
+  size_t nc = *cap ? *cap : 1024;
+  while (nc < need) nc *= 2;
+  void *np = realloc(*p, nc * elem);
+  if (!np) return 0;
+  *p = np;
+  *cap = nc;
+  return 1;
+}
+
+static double phi_exact(double x) { return 0.5 * erfc(-x / sqrt(2.0)); }
+
+static inline double phi_tab(const double *tab, double x)
+{
+  double f = (x + PHI_LIM) * PHI_PER_SIGMA;
+  if (f <= 0) return 0.0;
+  if (f >= PHI_N - 2) return 1.0;
+  int i = (int)f;
+  double w = f - i;
+  return tab[i] + w * (tab[i + 1] - tab[i]);
+}
+
+static void ws_free(sim_ws *w)
+{
+  free(w->llp); free(w->lref); free(w->con); free(w->coff); free(w->ifull);
+  free(w->tlast); free(w->stamp);
+  free(w->a_pix); free(w->a_llp); free(w->a_lref); free(w->a_con); free(w->a_coff);
+  free(w->a_base); free(w->a_tlast); free(w->a_fresh);
+  free(w->box); free(w->os); free(w->dyn_obj);
+  free(w->ev); free(w->sorted); free(w->counts);
+  free(w->edges); free(w->steps); free(w->gx); free(w->gy);
+  free(w->c_t); free(w->c_x); free(w->c_y); free(w->c_p); free(w->c_trig);
+  free(w->stim);
+}
+
+static elfm_status ws_init(sim_ws *w, const elfm_scene *s, elfm_error *err)
+{
+  memset(w, 0, sizeof *w);
+  w->s = s;
+  w->W = s->sensor.width;
+  w->H = s->sensor.height;
+  w->npix = (size_t)w->W * (size_t)w->H;
+  w->umpp = s->calib.um_per_px;
+  const elfm_optics *o = &s->calib.optics;
+  /* SPEC §2: N = 2 NA f_fourier / (M d) lenslets across the pupil; each
+   * view sees a sub-aperture of NA / N. */
+  double n_lens = 2.0 * o->na * o->f_fourier_mm * 1000.0 / (o->magnification * o->mla_pitch_um);
+  w->na_sub = o->na / n_lens;
+  w->bg = s->background_hz;
+  for (int v = 0; v < s->calib.n_views; v++) {
+    w->dmax = fmax(w->dmax, fabs(s->calib.views[v].dx_px_per_um));
+    w->dmax = fmax(w->dmax, fabs(s->calib.views[v].dy_px_per_um));
+  }
+  for (int i = 0; i < PHI_N; i++) w->phi[i] = phi_exact(-PHI_LIM + (double)i / PHI_PER_SIGMA);
+  w->llp = malloc(w->npix * sizeof *w->llp);
+  w->lref = malloc(w->npix * sizeof *w->lref);
+  w->con = calloc(w->npix, sizeof *w->con); /* 0 = pixel never initialised */
+  w->coff = malloc(w->npix * sizeof *w->coff);
+  w->ifull = malloc(w->npix * sizeof *w->ifull);
+  w->tlast = malloc(w->npix * sizeof *w->tlast);
+  w->stamp = malloc(w->npix * sizeof *w->stamp);
+  w->os = calloc((size_t)(s->n_objects ? s->n_objects : 1), sizeof *w->os);
+  w->dyn_obj = calloc((size_t)(s->n_objects ? s->n_objects : 1), sizeof *w->dyn_obj);
+  if (!w->llp || !w->lref || !w->con || !w->coff || !w->ifull || !w->tlast || !w->stamp ||
+      !w->os || !w->dyn_obj) {
+    ws_free(w);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1,
+                          "out of memory for the %dx%d pixel state", w->W, w->H);
+  }
+  memset(w->stamp, 0xff, w->npix * sizeof *w->stamp); /* -1: listed in no slice */
+  return ELFM_OK;
+}
+
+static double core_sigma_um(const sim_ws *w, double z_um, double diameter_um)
+{
+  const elfm_scene *s = w->s;
+  double s0 = AIRY_SIGMA_FACTOR * s->calib.optics.wavelength_um / w->na_sub;
+  /* Geometric defocus: a disc of radius |z| tan(theta), sin(theta) =
+   * NA_sub / n; a uniform disc has sigma = radius / 2. */
+  double sn = w->na_sub / s->calib.optics.n_medium;
+  double geo = 0.5 * fabs(z_um) * sn / sqrt(1.0 - sn * sn);
+  /* A uniformly filled sphere projects with per-axis variance r^2 / 5. */
+  double r = 0.5 * diameter_um;
+  return sqrt(s0 * s0 + geo * geo + r * r / 5.0);
+}
+
+static double comp_sigma_px(const sim_ws *w, double core_px, int comp)
+{
+  if (!comp) return core_px;
+  double h = w->s->haze_sigma_um / w->umpp;
+  return sqrt(core_px * core_px + h * h);
+}
+
+static double comp_amp(const sim_ws *w, double amp, int comp)
+{
+  return comp ? amp * w->s->haze_fraction : amp * (1.0 - w->s->haze_fraction);
+}
+
+/* Radius (px) beyond which an image of amplitude A (photocurrent summed
+ * over the image) and width sigma adds < BOX_EPS of the background; 0 when
+ * it never does (invisible). */
+static double image_radius_px(const sim_ws *w, double A, double sigma_px)
+{
+  double peak = A / (TWO_PI * sigma_px * sigma_px);
+  double ratio = peak / (BOX_EPS * w->bg);
+  if (ratio <= 1.0) return 0.0;
+  return sigma_px * sqrt(2.0 * log(ratio)) + 1.0;
+}
+
+/* Light factor at t (illumination x spikes x field stop) times flux. */
+static double object_amp(const elfm_scene *s, int k, int64_t t, const double pos[3])
+{
+  return s->obj[k].flux_hz * sim_object_light(s, k, t) * sim_field_stop(s, pos[0], pos[1]);
+}
+
+/* ---- step 1: objects and boxes of a slice ---- */
+static elfm_status plan_slice(sim_ws *w, int64_t a, int64_t b, elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  const elfm_calib *c = &s->calib;
+  const int64_t wa = a - s->slice_us; /* look-back window start */
+  w->n_box = 0;
+  w->n_dyn = 0;
+  for (int k = 0; k < s->n_objects; k++) {
+    sim_objslice *o = &w->os[k];
+    double P[PATH_SAMPLES][3];
+    double amp_max = 0, smax = 0, smin = INFINITY, speed = 0;
+    int moving = 0;
+    for (int i = 0; i < PATH_SAMPLES; i++) {
+      double t = (double)wa + (double)(b - wa) * i / (PATH_SAMPLES - 1);
+      sim_object_position(s, k, t, P[i], NULL);
+      double sg = core_sigma_um(w, P[i][2], s->obj[k].diameter_um) / w->umpp;
+      smax = fmax(smax, sg);
+      smin = fmin(smin, sg);
+      double fs = sim_field_stop(s, P[i][0], P[i][1]);
+      amp_max = fmax(amp_max, s->obj[k].flux_hz * fs);
+      if (i > 0) {
+        double dx = fabs(P[i][0] - P[i - 1][0]), dy = fabs(P[i][1] - P[i - 1][1]),
+               dz = fabs(P[i][2] - P[i - 1][2]);
+        if (dx + dy + dz > 1e-9) moving = 1;
+        double dt = (double)(b - wa) / (PATH_SAMPLES - 1);
+        speed = fmax(speed, ((dx + dy) / w->umpp + dz * w->dmax) / dt);
+      }
+    }
+    int changes = sim_object_light_changes(s, k, wa, b);
+    /* Without a light edge in the window the light is what it is at a. */
+    double lmax = changes ? 1.0 : sim_object_light(s, k, a);
+    amp_max *= lmax;
+    o->visible = amp_max > 0;
+    o->dynamic = o->visible && (moving || changes);
+    o->amp_max_hz = amp_max;
+    o->sigma_max_px = smax;
+    o->sigma_min_px = smin;
+    o->speed_px_per_us = moving ? speed : 0.0;
+    if (!o->visible) continue;
+    if (o->dynamic) w->dyn_obj[w->n_dyn++] = k;
+    for (int comp = 0; comp < 2; comp++) {
+      if (comp == 1 && s->haze_fraction <= 0) break;
+      double A = comp_amp(w, amp_max, comp), sg = comp_sigma_px(w, smax, comp);
+      double r = image_radius_px(w, A, sg);
+      if (r <= 0) continue;
+      for (int v = 0; v < c->n_views; v++) {
+        double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+        for (int i = 0; i < PATH_SAMPLES; i++) {
+          double u, vv;
+          elfm_calib_project(c, v, P[i][0], P[i][1], P[i][2], &u, &vv);
+          umin = fmin(umin, u);
+          umax = fmax(umax, u);
+          vmin = fmin(vmin, vv);
+          vmax = fmax(vmax, vv);
+        }
+        double fx0 = floor(umin - r), fx1 = ceil(umax + r) + 1, fy0 = floor(vmin - r),
+               fy1 = ceil(vmax + r) + 1;
+        if (fx1 <= 0 || fy1 <= 0 || fx0 >= w->W || fy0 >= w->H) continue;
+        if (!grow((void **)&w->box, &w->cap_box, w->n_box + 1, sizeof *w->box))
+          return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory (boxes)");
+        sim_box *bx = &w->box[w->n_box++];
+        bx->obj = k;
+        bx->view = v;
+        bx->comp = comp;
+        bx->dynamic = o->dynamic;
+        bx->x0 = fx0 < 0 ? 0 : (int)fx0;
+        bx->y0 = fy0 < 0 ? 0 : (int)fy0;
+        bx->x1 = fx1 > w->W ? w->W : (int)fx1;
+        bx->y1 = fy1 > w->H ? w->H : (int)fy1;
+        bx->r_px = r;
+      }
+    }
+  }
+  return ELFM_OK;
+}
+
+/* Pixel-integrated Gaussian profile: g[i] for pixels x0 .. x0+n-1 of an
+ * image centred at c (pixel centres at integers). */
+static void profile(const sim_ws *w, double c, double sigma, int x0, int n, double *g)
+{
+  double inv = 1.0 / sigma;
+  double prev = phi_tab(w->phi, (x0 - 0.5 - c) * inv);
+  for (int i = 0; i < n; i++) {
+    double nx = phi_tab(w->phi, (x0 + i + 0.5 - c) * inv);
+    g[i] = nx - prev;
+    prev = nx;
+  }
+}
+
+/* Add an image (amplitude A, sigma, centre u,v) into ifull over the part of
+ * box bx within r of the centre; only_active: skip pixels not stamped q. */
+static void add_image(sim_ws *w, const sim_box *bx, double A, double sigma, double u, double v,
+                      int only_active, int32_t q)
+{
+  int x0 = (int)floor(u - bx->r_px), x1 = (int)ceil(u + bx->r_px) + 1;
+  int y0 = (int)floor(v - bx->r_px), y1 = (int)ceil(v + bx->r_px) + 1;
+  if (x0 < bx->x0) x0 = bx->x0;
+  if (y0 < bx->y0) y0 = bx->y0;
+  if (x1 > bx->x1) x1 = bx->x1;
+  if (y1 > bx->y1) y1 = bx->y1;
+  if (x1 <= x0 || y1 <= y0 || A <= 0) return;
+  int nx = x1 - x0, ny = y1 - y0;
+  profile(w, u, sigma, x0, nx, w->gx);
+  profile(w, v, sigma, y0, ny, w->gy);
+  for (int j = 0; j < ny; j++) {
+    float ay = (float)(A * w->gy[j]);
+    float *row = w->ifull + (size_t)(y0 + j) * w->W + x0;
+    if (only_active) {
+      const int32_t *st = w->stamp + (size_t)(y0 + j) * w->W + x0;
+      for (int i = 0; i < nx; i++)
+        if (st[i] == q) row[i] += ay * (float)w->gx[i];
+    } else {
+      for (int i = 0; i < nx; i++) row[i] += ay * (float)w->gx[i];
+    }
+  }
+}
+
+static elfm_status push_event(sim_ws *w, int64_t t, int x, int y, int p, elfm_error *err)
+{
+  if (w->n_ev == w->cap_ev &&
+      !grow((void **)&w->ev, &w->cap_ev, w->n_ev + 1, sizeof *w->ev))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, w->s->source, -1, "out of memory (events)");
+  sim_event *e = &w->ev[w->n_ev++];
+  e->t_us = t;
+  e->x = (uint16_t)x;
+  e->y = (uint16_t)y;
+  e->p = (uint8_t)p;
+  return ELFM_OK;
+}
+
+/* Threshold of a pixel: mean + sigma * N(0,1), at least a quarter of the
+ * mean (v2e clips the same way to keep thresholds positive). */
+static float pixel_threshold(const sim_ws *w, size_t pix, int off)
+{
+  const sim_sensor *ss = &w->s->sensor;
+  double mean = off ? ss->threshold_off : ss->threshold_on;
+  double n = sim_normal_fast(sim_hash(w->s->seed, STREAM_THRESH, 2 * (uint64_t)pix + (uint64_t)off));
+  double c = mean + ss->threshold_sigma * n;
+  if (c < 0.25 * mean) c = 0.25 * mean;
+  return (float)c;
+}
+
+/* ---- step 2/3: activate pixels, step them ---- */
+static elfm_status activate(sim_ws *w, int32_t q)
+{
+  w->n_act = 0;
+  const float bg = (float)w->bg;
+  for (size_t i = 0; i < w->n_box; i++) {
+    const sim_box *bx = &w->box[i];
+    if (!bx->dynamic) continue;
+    for (int y = bx->y0; y < bx->y1; y++) {
+      for (int x = bx->x0; x < bx->x1; x++) {
+        size_t pix = (size_t)y * w->W + x;
+        if (w->stamp[pix] == q) continue;
+        w->stamp[pix] = q;
+        if (w->n_act == w->cap_act) {
+          size_t need = w->n_act + 1, c0 = w->cap_act, c;
+          c = c0;
+          if (!grow((void **)&w->a_pix, &c, need, sizeof *w->a_pix)) return ELFM_ERR_NOMEM;
+#define GROW_SAME(arr)                                       \
+  c = c0;                                                    \
+  if (!grow((void **)&w->arr, &c, need, sizeof *w->arr)) return ELFM_ERR_NOMEM;
+          GROW_SAME(a_llp);
+          GROW_SAME(a_lref);
+          GROW_SAME(a_con);
+          GROW_SAME(a_coff);
+          GROW_SAME(a_base);
+          GROW_SAME(a_tlast);
+          GROW_SAME(a_fresh);
+#undef GROW_SAME
+          w->cap_act = c;
+        }
+        size_t sl = w->n_act++;
+        w->a_pix[sl] = (int32_t)pix;
+        if (w->con[pix] == 0.0f) {
+          w->con[pix] = pixel_threshold(w, pix, 0);
+          w->coff[pix] = pixel_threshold(w, pix, 1);
+          w->tlast[pix] = -1e18;
+          w->a_fresh[sl] = 1;
+        } else {
+          w->a_fresh[sl] = 0;
+        }
+        w->a_llp[sl] = w->llp[pix];
+        w->a_lref[sl] = w->lref[pix];
+        w->a_con[sl] = w->con[pix];
+        w->a_coff[sl] = w->coff[pix];
+        w->a_tlast[sl] = w->tlast[pix];
+        w->ifull[pix] = bg;
+      }
+    }
+  }
+  return ELFM_OK;
+}
+
+static void deactivate(sim_ws *w)
+{
+  for (size_t sl = 0; sl < w->n_act; sl++) {
+    size_t pix = (size_t)w->a_pix[sl];
+    w->llp[pix] = w->a_llp[sl];
+    w->lref[pix] = w->a_lref[sl];
+    w->tlast[pix] = w->a_tlast[sl];
+  }
+}
+
+static int cmp_i64(const void *a, const void *b)
+{
+  int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+  return (x > y) - (x < y);
+}
+
+/* Events of one pixel in one step (the rare path of the step loop). */
+static elfm_status pixel_events(sim_ws *w, size_t sl, double L0, double L1, double ta, double dt,
+                                sim_rng *rng, elfm_error *err)
+{
+  const sim_sensor *ss = &w->s->sensor;
+  const int64_t t0 = w->s->t0_us;
+  double ref = w->a_lref[sl];
+  double d = L1 - ref;
+  int on = d > 0;
+  double C = on ? w->a_con[sl] : w->a_coff[sl];
+  int n = (int)floor(fabs(d) / C);
+  if (n > 1000) n = 1000; /* a pixel can't fire faster than its refractory period anyway */
+  size_t pix = (size_t)w->a_pix[sl];
+  int x = (int)(pix % (size_t)w->W), y = (int)(pix / (size_t)w->W);
+  double slope = L1 - L0;
+  for (int m = 1; m <= n; m++) {
+    double level = ref + (on ? m * C : -m * C);
+    double frac = slope != 0 ? (level - L0) / slope : 1.0;
+    if (frac < 0) frac = 0;
+    if (frac > 1) frac = 1;
+    double tc = ta + frac * dt;
+    if (tc < w->a_tlast[sl] + ss->refractory_us) {
+      w->st.n_dropped_refractory++;
+      continue;
+    }
+    w->a_tlast[sl] = tc;
+    double delay = ss->latency_us + ss->jitter_us * sim_normal_fast(sim_rng_next(rng));
+    if (delay < 0) delay = 0;
+    elfm_status s = push_event(w, t0 + (int64_t)floor(tc + delay), x, y, on, err);
+    if (s) return s;
+    w->st.n_signal++;
+  }
+  w->a_lref[sl] = (float)(ref + (on ? n * C : -n * C));
+  return ELFM_OK;
+}
+
+static elfm_status step_slice(sim_ws *w, int64_t q, int64_t a, int64_t b, elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  const elfm_calib *c = &s->calib;
+  const sim_sensor *ss = &s->sensor;
+  elfm_status st;
+  if (w->n_dyn == 0) return ELFM_OK;
+  const int32_t qs = (int32_t)(q & 0x7fffffff);
+  if (activate(w, qs)) return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
+  size_t gneed = 0;
+  for (size_t i = 0; i < w->n_box; i++) {
+    size_t m = (size_t)(w->box[i].x1 - w->box[i].x0);
+    if ((size_t)(w->box[i].y1 - w->box[i].y0) > m) m = (size_t)(w->box[i].y1 - w->box[i].y0);
+    if (m > gneed) gneed = m;
+  }
+  if (!grow((void **)&w->gx, &w->cap_gx, gneed + 2, sizeof *w->gx) ||
+      !grow((void **)&w->gy, &w->cap_gy, gneed + 2, sizeof *w->gy))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
+
+  /* Base photocurrent of active pixels: background + images that do not
+   * change in this slice (at their fixed place and brightness). */
+  for (size_t i = 0; i < w->n_box; i++) {
+    const sim_box *bx = &w->box[i];
+    if (bx->dynamic) continue;
+    double pos[3], u, v;
+    sim_object_position(s, bx->obj, (double)a, pos, NULL);
+    double amp = object_amp(s, bx->obj, a, pos);
+    double sg = core_sigma_um(w, pos[2], s->obj[bx->obj].diameter_um) / w->umpp;
+    elfm_calib_project(c, bx->view, pos[0], pos[1], pos[2], &u, &v);
+    add_image(w, bx, comp_amp(w, amp, bx->comp), comp_sigma_px(w, sg, bx->comp), u, v, 1, qs);
+  }
+  for (size_t sl = 0; sl < w->n_act; sl++) w->a_base[sl] = w->ifull[w->a_pix[sl]];
+
+  /* Time steps: motion-limited length, split at light edges. */
+  double dt = (double)s->max_step_us;
+  for (size_t i = 0; i < w->n_dyn; i++) {
+    const sim_objslice *o = &w->os[w->dyn_obj[i]];
+    if (o->speed_px_per_us > 0) dt = fmin(dt, STEP_SIGMA_FRACTION * o->sigma_min_px / o->speed_px_per_us);
+  }
+  int64_t dti = (int64_t)floor(dt);
+  if (dti < MIN_STEP_US) dti = MIN_STEP_US;
+  int64_t n_uniform = (b - a + dti - 1) / dti;
+  int64_t n_edges = sim_light_edges(s, a, b - 1, NULL, 0);
+  size_t need = (size_t)(n_uniform + n_edges + 2);
+  if (!grow((void **)&w->steps, &w->cap_steps, need, sizeof *w->steps))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
+  size_t ns = 0;
+  for (int64_t t = a; t < b; t += dti) w->steps[ns++] = t;
+  ns += (size_t)sim_light_edges(s, a, b - 1, w->steps + ns, n_edges);
+  w->steps[ns++] = b;
+  qsort(w->steps, ns, sizeof *w->steps, cmp_i64);
+  size_t nu = 0; /* unique */
+  for (size_t i = 0; i < ns; i++)
+    if (nu == 0 || w->steps[i] != w->steps[nu - 1]) w->steps[nu++] = w->steps[i];
+
+  sim_rng rng = sim_rng_make(s->seed, STREAM_SIGNAL, (uint64_t)q);
+  const double bg = w->bg;
+  for (size_t i = 0; i + 1 < nu; i++) {
+    int64_t ta = w->steps[i], tb = w->steps[i + 1];
+    double sdt = (double)(tb - ta), tm = (double)ta + 0.5 * sdt;
+    for (size_t k = 0; k < w->n_dyn; k++) {
+      int ob = w->dyn_obj[k];
+      sim_objslice *o = &w->os[ob];
+      sim_object_position(s, ob, tm, o->pos, NULL);
+      o->amp_hz = object_amp(s, ob, ta, o->pos);
+      o->sigma_px = core_sigma_um(w, o->pos[2], s->obj[ob].diameter_um) / w->umpp;
+    }
+    for (size_t j = 0; j < w->n_box; j++) {
+      const sim_box *bx = &w->box[j];
+      if (!bx->dynamic) continue;
+      const sim_objslice *o = &w->os[bx->obj];
+      if (o->amp_hz <= 0) continue;
+      double u, v;
+      elfm_calib_project(c, bx->view, o->pos[0], o->pos[1], o->pos[2], &u, &v);
+      add_image(w, bx, comp_amp(w, o->amp_hz, bx->comp), comp_sigma_px(w, o->sigma_px, bx->comp),
+                u, v, 0, qs);
+    }
+    /* Photoreceptor: first-order low-pass of ln I with cutoff
+     * f = cutoff_at_background * I / background (v2e: bandwidth rises with
+     * photocurrent), capped at cutoff_max; implicit Euler, stable for any step. */
+    const float k1 = (float)(TWO_PI * ss->cutoff_hz_at_background / bg * sdt * 1e-6);
+    const float k2 = (float)(TWO_PI * ss->cutoff_hz_max * sdt * 1e-6);
+    for (size_t sl = 0; sl < w->n_act; sl++) {
+      size_t pix = (size_t)w->a_pix[sl];
+      float I = w->ifull[pix];
+      w->ifull[pix] = w->a_base[sl];
+      float L = logf(I);
+      if (w->a_fresh[sl]) {
+        /* First sight of this pixel: settled at the current light, its
+         * reference anywhere within the dead band (unknown history). */
+        uint64_t h = sim_hash(s->seed, STREAM_FRESH, (uint64_t)pix);
+        w->a_llp[sl] = L;
+        w->a_lref[sl] = L - (float)(sim_u01(h) * (w->a_con[sl] + w->a_coff[sl]) - w->a_coff[sl]);
+        w->a_fresh[sl] = 0;
+        continue;
+      }
+      float ka = k1 * I;
+      if (ka > k2) ka = k2;
+      float L0 = w->a_llp[sl];
+      float L1 = (L0 + ka * L) / (1.0f + ka);
+      w->a_llp[sl] = L1;
+      float d = L1 - w->a_lref[sl];
+      if (d >= w->a_con[sl] || d <= -w->a_coff[sl]) {
+        if ((st = pixel_events(w, sl, L0, L1, (double)ta, sdt, &rng, err))) return st;
+      }
+    }
+  }
+  deactivate(w);
+  return ELFM_OK;
+}
+
+/* ---- step 4: background activity ---- */
+static int64_t poisson(sim_rng *r, double lambda)
+{
+  if (lambda <= 0) return 0;
+  if (lambda < 30) { /* Knuth's product of uniforms */
+    double L = exp(-lambda), p = 1.0;
+    int64_t k = 0;
+    do {
+      k++;
+      p *= sim_uniform(r);
+    } while (p > L);
+    return k - 1;
+  }
+  /* Normal approximation (error of the rate < 1 % for lambda >= 30). */
+  double x = floor(lambda + sqrt(lambda) * sim_normal(r) + 0.5);
+  return x < 0 ? 0 : (int64_t)x;
+}
+
+static elfm_status noise_slice(sim_ws *w, int64_t q, int64_t a, int64_t b, elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  const sim_sensor *ss = &s->sensor;
+  sim_rng r = sim_rng_make(s->seed, STREAM_NOISE, (uint64_t)q);
+  double span_s = (double)(b - a) * 1e-6;
+  double rate = ss->shot_noise_hz + ss->leak_hz;
+  /* Shot noise is ON or OFF alike; leak events are ON (v2e). */
+  double p_on = rate > 0 ? (0.5 * ss->shot_noise_hz + ss->leak_hz) / rate : 0.5;
+  int64_t n = poisson(&r, rate * (double)w->npix * span_s);
+  for (int64_t i = 0; i < n; i++) {
+    uint64_t h = sim_rng_next(&r);
+    size_t pix = (size_t)((h >> 11) % w->npix);
+    int64_t t = a + (int64_t)(sim_uniform(&r) * (double)(b - a));
+    int on = sim_uniform(&r) < p_on;
+    if (push_event(w, s->t0_us + t, (int)(pix % (size_t)w->W), (int)(pix / (size_t)w->W), on, err))
+      return ELFM_ERR_NOMEM;
+  }
+  w->st.n_noise += n;
+  for (int h = 0; h < ss->hot_pixels; h++) {
+    int64_t m = poisson(&r, ss->hot_pixel_hz * span_s);
+    for (int64_t i = 0; i < m; i++) {
+      int64_t t = a + (int64_t)(sim_uniform(&r) * (double)(b - a));
+      int on = sim_uniform(&r) < 0.5;
+      if (push_event(w, s->t0_us + t, s->hot_x[h], s->hot_y[h], on, err)) return ELFM_ERR_NOMEM;
+    }
+    w->st.n_noise += m;
+  }
+  return ELFM_OK;
+}
+
+/* ---- step 5: sort, hand on, keep the late ones ---- */
+typedef struct sim_out {
+  elfm_sim_sink_fn sink;
+  void *user;
+  FILE *truth, *stim;
+  const char *truth_path, *stim_path;
+} sim_out;
+
+static elfm_status emit_sorted(sim_ws *w, int64_t t_lo, int64_t t_end, int final,
+                               const sim_out *out, elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  size_t n = w->n_ev;
+  size_t n_trig = 0;
+  /* LED edges of this slice as trigger events (channel 0), like the
+   * camera's trigger input wired to the LED driver. */
+  for (size_t i = 0; i < w->n_stim; i++)
+    if (w->stim[i].channel == 0) n_trig++;
+  if (n == 0 && n_trig == 0) return ELFM_OK;
+  int64_t t_hi = t_lo;
+  for (size_t i = 0; i < n; i++)
+    if (w->ev[i].t_us > t_hi) t_hi = w->ev[i].t_us;
+  size_t range = (size_t)(t_hi - t_lo) + 1;
+  if (!grow((void **)&w->counts, &w->cap_counts, range + 1, sizeof *w->counts) ||
+      !grow((void **)&w->sorted, &w->cap_sorted, n + 1, sizeof *w->sorted))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory (sort)");
+  memset(w->counts, 0, (range + 1) * sizeof *w->counts);
+  for (size_t i = 0; i < n; i++) w->counts[w->ev[i].t_us - t_lo + 1]++;
+  for (size_t i = 1; i <= range; i++) w->counts[i] += w->counts[i - 1];
+  for (size_t i = 0; i < n; i++) w->sorted[w->counts[w->ev[i].t_us - t_lo]++] = w->ev[i];
+  size_t n_out = n;
+  if (!final) {
+    n_out = 0;
+    while (n_out < n && w->sorted[n_out].t_us < t_end) n_out++;
+  }
+  if (!grow((void **)&w->c_t, &w->cap_ct, n_out + 1, sizeof *w->c_t) ||
+      !grow((void **)&w->c_x, &w->cap_cx, n_out + 1, sizeof *w->c_x) ||
+      !grow((void **)&w->c_y, &w->cap_cy, n_out + 1, sizeof *w->c_y) ||
+      !grow((void **)&w->c_p, &w->cap_cp, n_out + 1, sizeof *w->c_p))
+    goto nomem;
+  for (size_t i = 0; i < n_out; i++) {
+    w->c_t[i] = w->sorted[i].t_us;
+    w->c_x[i] = w->sorted[i].x;
+    w->c_y[i] = w->sorted[i].y;
+    w->c_p[i] = w->sorted[i].p;
+    if (w->sorted[i].p) w->st.n_on++;
+    else w->st.n_off++;
+  }
+  if (!grow((void **)&w->c_trig, &w->cap_trig, n_trig + 1, sizeof *w->c_trig)) goto nomem;
+  n_trig = 0;
+  for (size_t i = 0; i < w->n_stim; i++) {
+    if (w->stim[i].channel != 0) continue;
+    w->c_trig[n_trig].t_us = w->stim[i].t_us;
+    w->c_trig[n_trig].channel = 0;
+    w->c_trig[n_trig].value = (uint8_t)w->stim[i].value;
+    n_trig++;
+  }
+  w->st.n_events += (int64_t)n_out;
+  if (out->sink && (n_out || n_trig)) {
+    elfm_event_chunk ch;
+    memset(&ch, 0, sizeof ch);
+    ch.t_us = w->c_t;
+    ch.x = w->c_x;
+    ch.y = w->c_y;
+    ch.p = w->c_p;
+    ch.n = ch.cap = n_out;
+    ch.trig = w->c_trig;
+    ch.n_trig = ch.cap_trig = n_trig;
+    elfm_status st = out->sink(out->user, &ch, err);
+    if (st) return st;
+  }
+  /* Keep the rest for the next slice. */
+  memcpy(w->ev, w->sorted + n_out, (n - n_out) * sizeof *w->ev);
+  w->n_ev = n - n_out;
+  return ELFM_OK;
+nomem:
+  return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory (output chunk)");
+}
+
+/* ---- truth.csv and stimulus.csv ---- */
+static elfm_status write_truth(sim_ws *w, int64_t a, int64_t b, int last, const sim_out *out,
+                               elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  if (!out->truth) return ELFM_OK;
+  int64_t dt = s->truth_dt_us;
+  int64_t t = ((a + dt - 1) / dt) * dt;
+  for (;; t += dt) {
+    if (t >= b) {
+      if (!last) break;
+      t = b; /* the end of the recording, once */
+      last = 0;
+    }
+    for (int k = 0; k < s->n_objects; k++) {
+      elfm_truth tr;
+      elfm_scene_truth(s, k, s->t0_us + t, &tr);
+      if (fprintf(out->truth, "%lld,%lld,%.4f,%.4f,%.4f,%.4g\n", (long long)tr.id,
+                  (long long)(s->t0_us + t), tr.x_um, tr.y_um, tr.z_um, tr.brightness) < 0)
+        return elfm_error_set(err, ELFM_ERR_IO, out->truth_path, -1, "write failed: %s",
+                              strerror(errno));
+      w->st.n_truth_rows++;
+    }
+  }
+  return ELFM_OK;
+}
+
+static int cmp_stim(const void *pa, const void *pb)
+{
+  const sim_stim *a = pa, *b = pb;
+  if (a->t_us != b->t_us) return (a->t_us > b->t_us) - (a->t_us < b->t_us);
+  return a->channel - b->channel;
+}
+
+/* Light edges in [a, b): channel 0 the LED, channel k+1 object k's spikes. */
+static elfm_status collect_stimulus(sim_ws *w, int64_t a, int64_t b, elfm_error *err)
+{
+  const elfm_scene *s = w->s;
+  w->n_stim = 0;
+  if (s->illum == SIM_ILLUM_RANDOM_PULSES || s->illum == SIM_ILLUM_PERIODIC) {
+    /* The illumination alone: edges where it switches. */
+    int64_t n = 0;
+    if (s->illum == SIM_ILLUM_RANDOM_PULSES) {
+      for (int64_t i = 0; i < s->n_illum_edges; i++) {
+        int64_t e = s->illum_edges[i];
+        if (e < a || e >= b) continue;
+        if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
+        w->stim[w->n_stim++] = (sim_stim){s->t0_us + e, 0, (int)((i & 1) == 0)};
+        n++;
+      }
+    } else {
+      int64_t P = (int64_t)s->illum_period_us, len = (int64_t)s->illum_pulse_us;
+      for (int64_t m = a / P - 1; m * P < b; m++) {
+        int64_t e[2] = {m * P, m * P + len};
+        for (int k = 0; k < 2; k++) {
+          if (e[k] < a || e[k] >= b) continue;
+          if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
+          w->stim[w->n_stim++] = (sim_stim){s->t0_us + e[k], 0, k == 0};
+        }
+      }
+    }
+    (void)n;
+  }
+  if (s->has_spikes) {
+    for (int k = 0; k < s->n_objects; k++) {
+      const sim_object *o = &s->obj[k];
+      const int64_t *ed = s->spike_edges + o->spike_first;
+      for (int64_t i = 0; i < o->spike_count; i++) {
+        if (ed[i] < a || ed[i] >= b) continue;
+        if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
+        w->stim[w->n_stim++] = (sim_stim){s->t0_us + ed[i], k + 1, (int)((i & 1) == 0)};
+      }
+    }
+  }
+  qsort(w->stim, w->n_stim, sizeof *w->stim, cmp_stim);
+  return ELFM_OK;
+nomem:
+  return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory (stimulus)");
+}
+
+static elfm_status write_stimulus(sim_ws *w, const sim_out *out, elfm_error *err)
+{
+  if (!out->stim) return ELFM_OK;
+  for (size_t i = 0; i < w->n_stim; i++) {
+    if (fprintf(out->stim, "%lld,%d,%d\n", (long long)w->stim[i].t_us, w->stim[i].channel,
+                w->stim[i].value) < 0)
+      return elfm_error_set(err, ELFM_ERR_IO, out->stim_path, -1, "write failed: %s",
+                            strerror(errno));
+  }
+  return ELFM_OK;
+}
+
+static double now_s(void)
+{
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static elfm_status sim_core(const elfm_scene *s, const sim_out *out, const elfm_sim_options *opt,
+                            elfm_sim_stats *stats, elfm_error *err)
+{
+  sim_ws w;
+  double t_start = now_s();
+  elfm_status st = ws_init(&w, s, err);
+  if (st) return st;
+  const int64_t D = s->duration_us, S = s->slice_us;
+  const int64_t n_slices = (D + S - 1) / S;
+  for (int64_t q = 0; q < n_slices && st == ELFM_OK; q++) {
+    int64_t a = q * S, b = a + S < D ? a + S : D;
+    int last = q == n_slices - 1;
+    if ((st = plan_slice(&w, a, b, err))) break;
+    if ((st = step_slice(&w, q, a, b, err))) break;
+    if ((st = noise_slice(&w, q, a, b, err))) break;
+    if ((st = collect_stimulus(&w, a, b, err))) break;
+    if ((st = emit_sorted(&w, s->t0_us + a, s->t0_us + b, last, out, err))) break;
+    if ((st = write_truth(&w, a, b, last, out, err))) break;
+    if ((st = write_stimulus(&w, out, err))) break;
+    if (opt && opt->progress && opt->progress(opt->progress_user, b, D)) {
+      st = elfm_error_set(err, ELFM_ERR_INVALID, s->source, -1, "simulation cancelled");
+      break;
+    }
+  }
+  w.st.duration_us = D;
+  w.st.events_per_s = (double)w.st.n_events / ((double)D * 1e-6);
+  w.st.wall_s = now_s() - t_start;
+  if (stats) *stats = w.st;
+  ws_free(&w);
+  return st;
+}
+
+elfm_status elfm_sim_run_sink(const elfm_scene *s, elfm_sim_sink_fn sink, void *sink_user,
+                              const elfm_sim_options *opt, elfm_sim_stats *stats, elfm_error *err)
+{
+  if (!s) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "sim_run: NULL scene");
+  sim_out out = {sink, sink_user, NULL, NULL, NULL, NULL};
+  return sim_core(s, &out, opt, stats, err);
+}
+
+static elfm_status writer_sink(void *user, const elfm_event_chunk *chunk, elfm_error *err)
+{
+  return elfm_writer_write((elfm_writer *)user, chunk, err);
+}
+
+static elfm_status open_text(const char *path, const char *header, FILE **f, elfm_error *err)
+{
+  *f = fopen(path, "wb");
+  if (!*f) return elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
+  if (fputs(header, *f) == EOF) {
+    fclose(*f);
+    *f = NULL;
+    return elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  }
+  return ELFM_OK;
+}
+
+static elfm_status close_text(FILE *f, const char *path, elfm_status st, elfm_error *err)
+{
+  if (!f) return st;
+  int bad = ferror(f);
+  /* fclose reports errors of the final write-back (full disk). */
+  if (fclose(f) != 0) bad = 1;
+  if (bad && st == ELFM_OK)
+    return elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  return st;
+}
+
+elfm_status elfm_sim_run(const elfm_scene *s, const char *out_dir, const elfm_sim_options *opt,
+                         elfm_sim_stats *stats, elfm_error *err)
+{
+  if (!s || !out_dir) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "sim_run: NULL argument");
+  if (mkdir(out_dir, 0777) != 0 && errno != EEXIST)
+    return elfm_error_set(err, ELFM_ERR_IO, out_dir, -1, "cannot create directory: %s",
+                          strerror(errno));
+  char p_ev[1100], p_truth[1100], p_calib[1100], p_stim[1100];
+  if (strlen(out_dir) > 1000)
+    return elfm_error_set(err, ELFM_ERR_INVALID, out_dir, -1, "output directory name too long");
+  snprintf(p_ev, sizeof p_ev, "%s/events.raw", out_dir);
+  snprintf(p_truth, sizeof p_truth, "%s/truth.csv", out_dir);
+  snprintf(p_calib, sizeof p_calib, "%s/calib.json", out_dir);
+  snprintf(p_stim, sizeof p_stim, "%s/stimulus.csv", out_dir);
+
+  elfm_status st = elfm_calib_save(&s->calib, p_calib, err);
+  if (st) return st;
+  elfm_writer *wr = NULL;
+  if ((st = elfm_writer_open(p_ev, ELFM_FMT_EVT3, s->sensor.width, s->sensor.height, &wr, err)))
+    return st;
+  FILE *ft = NULL, *fs = NULL;
+  int want_truth = opt ? opt->write_truth : 1;
+  if (want_truth) st = open_text(p_truth, "id,t_us,x_um,y_um,z_um,brightness\n", &ft, err);
+  if (!st && elfm_scene_has_stimulus(s)) st = open_text(p_stim, "t_us,channel,value\n", &fs, err);
+  if (!st) {
+    sim_out out = {writer_sink, wr, ft, fs, p_truth, p_stim};
+    st = sim_core(s, &out, opt, stats, err);
+  }
+  st = close_text(ft, p_truth, st, err);
+  st = close_text(fs, p_stim, st, err);
+  elfm_status cs = elfm_writer_close(wr, st ? NULL : err);
+  return st ? st : cs;
+}
