@@ -478,6 +478,30 @@ int main(void)
     elfm_table_free(de);
   }
 
+  /* 13. Sparse ids (range far beyond the row count: the qsort grouping
+   * path), interleaved rows, and track ids likewise. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
+    for (int t = 0; t <= 5000; t += 500) {
+      bprintf(&b, "1000000000000,%d,1,1,0,1\n", t);
+      bprintf(&b, "-3,%d,20,20,0,1\n", t);
+    }
+    elfm_table *gt = parse(&b, "truth.csv");
+    bprintf(&b, "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um\n");
+    for (int f = 0; f < 4; f++) {
+      bprintf(&b, "99999999999,%d,%d,1.5,1,0,1.5,1,0\n", f, 1000 * (f + 1));
+      bprintf(&b, "-7,%d,%d,20,20,0,20,20,0\n", f, 1000 * (f + 1));
+    }
+    elfm_table *tk = parse(&b, "tracks.csv");
+    elfm_score_result r = run(gt, tk, NULL, NULL);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.alpha, 1.0 - 4 * 0.5 / 32.0, TOL);
+    CHECK_EQ_INT(r.n_paired_tracks, 2);
+    elfm_table_free(gt);
+    elfm_table_free(tk);
+  }
+
   elfm_table_free(truth);
   return check_report();
 }

@@ -59,11 +59,44 @@ typedef struct {
   size_t idx;   /* row / point index; ties keep file order */
 } keyed_t;
 
+static elfm_status nomem(elfm_error *err);
+
 static int keyed_cmp(const void *a, const void *b)
 {
   const keyed_t *x = a, *y = b;
   if (x->key != y->key) return x->key < y->key ? -1 : 1;
   return x->idx < y->idx ? -1 : x->idx > y->idx;
+}
+
+/* Order rows by an integer id column, file order within an id (stable).
+ * Ids are usually small (0..objects): a counting sort is then linear, which
+ * matters for truth.csv (10 samples per object per frame); otherwise qsort. */
+static elfm_status group_by_id(const elfm_table *t, int col, keyed_t *ord, elfm_error *err)
+{
+  size_t n = t->n_rows;
+  if (n == 0) return ELFM_OK;
+  double lo = elfm_table_get(t, 0, col), hi = lo;
+  for (size_t r = 1; r < n; r++) {
+    double v = elfm_table_get(t, r, col);
+    if (v < lo) lo = v;
+    if (v > hi) hi = v;
+  }
+  if (hi - lo > 4.0 * (double)n + 1024.0) {
+    for (size_t r = 0; r < n; r++) ord[r] = (keyed_t){elfm_table_get(t, r, col), r};
+    qsort(ord, n, sizeof *ord, keyed_cmp);
+    return ELFM_OK;
+  }
+  size_t range = (size_t)(hi - lo) + 1;
+  size_t *start = calloc(range + 1, sizeof *start);
+  if (!start) return nomem(err);
+  for (size_t r = 0; r < n; r++) start[(size_t)(elfm_table_get(t, r, col) - lo) + 1]++;
+  for (size_t k = 0; k < range; k++) start[k + 1] += start[k];
+  for (size_t r = 0; r < n; r++) {
+    double v = elfm_table_get(t, r, col);
+    ord[start[(size_t)(v - lo)]++] = (keyed_t){v, r};
+  }
+  free(start);
+  return ELFM_OK;
 }
 
 /* Union-find over nodes 0..n-1 (path halving). */
@@ -271,8 +304,7 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
   /* Group rows per id (stable: file order within an id). */
   keyed_t *ord = malloc((n ? n : 1) * sizeof *ord);
   if (!ord) return nomem(err);
-  for (size_t r = 0; r < n; r++) ord[r] = (keyed_t){elfm_table_get(tt, r, c[0]), r};
-  qsort(ord, n, sizeof *ord, keyed_cmp);
+  if ((s = group_by_id(tt, c[0], ord, err)) != ELFM_OK) { free(ord); return s; }
   int n_obj = 0;
   for (size_t i = 0; i < n; i++) {
     if (i == 0 || ord[i].key != ord[i - 1].key) { n_obj++; continue; }
@@ -443,13 +475,14 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   /* Scratch sized once for the largest frame (nothing allocated per frame). */
   size_t nn = (size_t)max_t + (size_t)max_d + 1;
   int *parent = malloc(nn * sizeof *parent);
-  int *comp_id = malloc(nn * sizeof *comp_id);   /* node -> index within its component */
+  int *head = malloc(nn * sizeof *head);   /* first node of each root's chain, or -1 */
+  int *next = malloc(nn * sizeof *next);   /* next node in the same component, or -1 */
   int *rows = malloc(nn * sizeof *rows), *cols = malloc(nn * sizeof *cols);
   int *r2c = malloc(nn * sizeof *r2c);
   double *cost = NULL;
   size_t cost_cap = 0;
   elfm_assign_workspace *ws = NULL;
-  if (!parent || !comp_id || !rows || !cols || !r2c) { s = nomem(err); goto done; }
+  if (!parent || !head || !next || !rows || !cols || !r2c) { s = nomem(err); goto done; }
   if ((s = elfm_assign_workspace_create(0, 0, &ws, err)) != ELFM_OK) goto done;
 
   int64_t tp = 0;
@@ -477,12 +510,21 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
       }
     }
     if (!any) continue;
-    /* Solve each connected component with >= 2 nodes. */
+    /* Solve each connected component with >= 2 nodes. Nodes are chained
+     * per root (linear time; scanning all nodes per root was quadratic). */
+    for (int q = 0; q < nt + nd; q++) head[q] = -1;
+    for (int q = nt + nd - 1; q >= 0; q--) {
+      int root = uf_find(parent, q);
+      next[q] = head[root];
+      head[root] = q;
+    }
     for (int root = 0; root < nt + nd; root++) {
-      if (uf_find(parent, root) != root) continue;
+      if (head[root] < 0 || next[head[root]] < 0) continue;
       int nr = 0, nc = 0;
-      for (int i = 0; i < nt; i++) if (uf_find(parent, i) == root) { comp_id[i] = nr; rows[nr++] = i; }
-      for (int j = 0; j < nd; j++) if (uf_find(parent, nt + j) == root) { comp_id[nt + j] = nc; cols[nc++] = j; }
+      for (int q = head[root]; q >= 0; q = next[q]) {
+        if (q < nt) rows[nr++] = q;
+        else cols[nc++] = q - nt;
+      }
       if (nr == 0 || nc == 0) continue;
       size_t need = (size_t)nr * (size_t)nc;
       if (need > cost_cap) {
@@ -525,7 +567,8 @@ done:
   elfm_assign_workspace_free(ws);
   free(cost);
   free(parent);
-  free(comp_id);
+  free(head);
+  free(next);
   free(rows);
   free(cols);
   free(r2c);
@@ -577,8 +620,7 @@ static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, 
   }
   keyed_t *ord = malloc((n ? n : 1) * sizeof *ord);
   if (!ord) return nomem(err);
-  for (size_t r = 0; r < n; r++) ord[r] = (keyed_t){elfm_table_get(t, r, c[0]), r};
-  qsort(ord, n, sizeof *ord, keyed_cmp);
+  if ((s = group_by_id(t, c[0], ord, err)) != ELFM_OK) { free(ord); return s; }
   int n_tracks = 0;
   for (size_t i = 0; i < n; i++) {
     if (i > 0 && ord[i].key == ord[i - 1].key) {
