@@ -1,9 +1,626 @@
-/* cmd_track.c — eventlfm track (not built yet: reports so and fails). */
+/* cmd_track.c — eventlfm track: events -> volumes -> detections -> linked,
+ * smoothed 3D tracks, streaming (the recon driver calls back per volume in
+ * frame order; finished tracks are smoothed and written as they end). */
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <getopt.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
 #include "cli.h"
+#include "elfm_tracker.h"
+
+enum { MOTION_AUTO = 0, MOTION_STAGE, MOTION_FREE };
+
+typedef struct track_opts {
+  const char *calib, *events, *out;
+  elfm_recon_options recon;
+  elfm_peaks_options peaks;
+  elfm_link_options link;
+  elfm_smooth_options smooth;
+  int motion;
+  int has_stage_v;
+  double stage_v[3];
+  int max_det;
+  int lag_correct;
+  int resolution;
+  int quiet;
+} track_opts;
+
+/* Speed bins for the resolution figures (um/ms): static, slow, moderate, fast. */
+#define N_SPEED_BINS 5
+static const double speed_edges[N_SPEED_BINS] = {0, 0.05, 0.2, 0.5, 1e300};
+
+typedef struct fwhm_list {
+  size_t n, cap;
+  double *xy, *z, *speed;
+} fwhm_list;
+
+typedef struct track_ctx {
+  const track_opts *o;
+  elfm_peaks *pk;
+  elfm_linker *lk;
+  elfm_detection *det;
+  FILE *fdet, *ftr;
+  char p_det[1100], p_tr[1100];
+  elfm_track_store store;
+  int64_t n_frames, n_det, n_points_kept, first_frame, last_frame;
+  int64_t first_t_us, last_t_us;
+  double t_peaks, t_link, t_smooth;
+  elfm_fwhm *fw;
+  fwhm_list fl;
+  int vol_w, vol_h, vol_nz;
+  double um_per_px, z_min_um, z_step_um;
+} track_ctx;
+
+static void usage(FILE *f)
+{
+  fprintf(f,
+    "usage: eventlfm track --calib calib.json --events FILE --out DIR [options]\n"
+    "\n"
+    "Events -> refocused volumes -> 3D peaks -> linked tracks -> Ceres-smoothed tracks.\n"
+    "Writes DIR/detections.csv, tracks.csv (smoothed + raw), tracks_isbi.xml (ISBI 2012),\n"
+    "tracks_trackmate.xml (TrackMate) and summary.json. Progress on stderr.\n"
+    "\n"
+    "recon:\n"
+    "  --dt-us N            frame window (default 1000 = 1 kHz volumes)\n"
+    "  --stride-us N        window start to start (default = dt)\n"
+    "  --tau-us T           time-surface decay (default 1000)\n"
+    "  --repr exp|lin|count frame representation (default exp)\n"
+    "  --polarity both|on|off|signed (default both)\n"
+    "  --median 0|3|5       median filter (default 3)\n"
+    "  --path auto|dense|sparse   refocus path\n"
+    "  --ghost none|abs|frac|mad  ghost threshold, --ghost-value V, --agree F\n"
+    "  --threads N, --from-us T, --to-us T\n"
+    "detection:\n"
+    "  --threshold-k K      k x robust noise sigma (default 6), --threshold-abs V,\n"
+    "  --threshold-rel F    fraction of the volume maximum (0 = off)\n"
+    "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 15)\n"
+    "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
+    "linking:\n"
+    "  --gate-um G (4), --max-gap N frames (50), --min-points N (5)\n"
+    "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
+    "smoothing:\n"
+    "  --motion auto|stage|free   auto: model chosen per track (BIC) among constant\n"
+    "                       velocity, constant acceleration and spline; stage: rigid\n"
+    "                       motion (no spline, new tracks predict with the stage\n"
+    "                       velocity when given); free: smoothing spline for all\n"
+    "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
+    "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
+    "analysis:\n"
+    "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
+    "  -q, --quiet          no progress\n"
+    "  -h, --help           this text\n");
+}
+
+static int parse_vec3(const char *s, double v[3])
+{
+  char *end;
+  for (int a = 0; a < 3; a++) {
+    errno = 0;
+    v[a] = strtod(s, &end);
+    if (end == s || errno || !isfinite(v[a])) return 0;
+    if (a < 2) {
+      if (*end != ',') return 0;
+      s = end + 1;
+    }
+  }
+  return *end == 0;
+}
+
+static void progress(const elfm_recon_stats *s, void *user)
+{
+  const track_ctx *c = user;
+  fprintf(stderr, "\reventlfm track: %.3f s of recording, %" PRId64 " volumes, %.0f volumes/s, "
+                  "%zu live tracks   ",
+          s->span_s, s->frames, s->volumes_per_s, elfm_link_n_live(c->lk));
+}
+
+static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_error *err)
+{
+  double t0 = cli_now_s();
+  elfm_status st = elfm_track_smooth(t, &c->o->smooth, err);
+  c->t_smooth += cli_now_s() - t0;
+  if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
+  if (st != ELFM_OK) {
+    elfm_track_free(t);
+    return st;
+  }
+  c->n_points_kept += (int64_t)t->n;
+  return elfm_track_store_add(&c->store, t, err);
+}
+
+static elfm_status drain(track_ctx *c, elfm_error *err)
+{
+  elfm_track *t;
+  while ((t = elfm_link_pop_finished(c->lk))) {
+    elfm_status st = finish_track(c, t, err);
+    if (st != ELFM_OK) return st;
+  }
+  return ELFM_OK;
+}
+
+static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, elfm_error *err)
+{
+  if (l->n == l->cap) {
+    size_t cap = l->cap ? 2 * l->cap : 1024;
+    double *a = realloc(l->xy, cap * sizeof *a);
+    if (a) l->xy = a;
+    double *b = realloc(l->z, cap * sizeof *b);
+    if (b) l->z = b;
+    double *s = realloc(l->speed, cap * sizeof *s);
+    if (s) l->speed = s;
+    if (!a || !b || !s) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory");
+    l->cap = cap;
+  }
+  l->xy[l->n] = xy;
+  l->z[l->n] = z;
+  l->speed[l->n] = speed;
+  l->n++;
+  return ELFM_OK;
+}
+
+static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
+{
+  track_ctx *c = user;
+  const track_opts *o = c->o;
+  if (!c->pk) {
+    c->pk = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
+    if (!c->pk) return err ? err->code : ELFM_ERR_INVALID;
+    c->vol_w = v->w;
+    c->vol_h = v->h;
+    c->vol_nz = v->nz;
+    c->um_per_px = v->um_per_px;
+    c->z_min_um = v->z_min_um;
+    c->z_step_um = v->z_step_um;
+    c->first_frame = v->frame;
+    c->first_t_us = v->t_us;
+  }
+  double t0 = cli_now_s();
+  int n = 0;
+  elfm_status st = elfm_peaks_detect(c->pk, v, c->det, o->max_det, &n, err);
+  if (st != ELFM_OK) return st;
+  double t1 = cli_now_s();
+  c->t_peaks += t1 - t0;
+  st = elfm_link_step(c->lk, v->frame, v->t_us, c->det, n, err);
+  if (st != ELFM_OK) return st;
+  c->t_link += cli_now_s() - t1;
+  /* after linking: the lag correction (when on) has moved the detections */
+  st = elfm_detections_write(c->fdet, c->p_det, c->det, n, err);
+  if (st != ELFM_OK) return st;
+  if (o->resolution && v->frame % 10 == 0 && n > 0) {
+    int m = 0;
+    /* isolation 3 x the paper's lateral FWHM of 3.9 um */
+    st = elfm_analysis_fwhm(v, c->det, n, 12.0, c->fw, o->max_det, &m, err);
+    if (st != ELFM_OK) return st;
+    for (int k = 0; k < m; k++) {
+      /* the speed of the track the bead belongs to: find its detection */
+      double speed = NAN;
+      for (int j = 0; j < n; j++)
+        if (c->det[j].x_um == c->fw[k].x_um && c->det[j].y_um == c->fw[k].y_um &&
+            c->det[j].z_um == c->fw[k].z_um) {
+          speed = elfm_link_last_speed(c->lk, j);
+          break;
+        }
+      if (c->fl.n < 1000000) {  /* a million samples is plenty for a median */
+        st = fwhm_push(&c->fl, c->fw[k].fwhm_xy_um, c->fw[k].fwhm_z_um, speed, err);
+        if (st != ELFM_OK) return st;
+      }
+    }
+  }
+  c->n_frames++;
+  c->n_det += n;
+  c->last_frame = v->frame;
+  c->last_t_us = v->t_us;
+  return drain(c, err);
+}
+
+static cJSON *vec3(const double v[3])
+{
+  cJSON *a = cJSON_CreateArray();
+  for (int k = 0; k < 3; k++) cJSON_AddItemToArray(a, cJSON_CreateNumber(isfinite(v[k]) ? v[k] : 0));
+  return a;
+}
+
+static void add_num(cJSON *o, const char *k, double v)
+{
+  if (isfinite(v)) cJSON_AddNumberToObject(o, k, v);
+  else cJSON_AddNullToObject(o, k);
+}
+
+static cJSON *fwhm_summary(fwhm_list *l)
+{
+  cJSON *r = cJSON_CreateObject();
+  double *tmp = malloc((l->n ? l->n : 1) * sizeof *tmp);
+  if (!tmp) return r;
+  double med, spr;
+  cJSON_AddNumberToObject(r, "n_beads", (double)l->n);
+  memcpy(tmp, l->xy, l->n * sizeof *tmp);
+  elfm_analysis_median(tmp, l->n, &med, &spr);
+  add_num(r, "fwhm_xy_um_median", med);
+  add_num(r, "fwhm_xy_um_spread", spr);
+  memcpy(tmp, l->z, l->n * sizeof *tmp);
+  elfm_analysis_median(tmp, l->n, &med, &spr);
+  add_num(r, "fwhm_z_um_median", med);
+  add_num(r, "fwhm_z_um_spread", spr);
+  cJSON *bins = cJSON_AddArrayToObject(r, "by_speed");
+  for (int b = 0; b + 1 < N_SPEED_BINS; b++) {
+    size_t m = 0;
+    for (size_t i = 0; i < l->n; i++)
+      if (l->speed[i] >= speed_edges[b] && l->speed[i] < speed_edges[b + 1]) tmp[m++] = l->xy[i];
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "speed_min_um_per_ms", speed_edges[b]);
+    add_num(o, "speed_max_um_per_ms", b + 2 < N_SPEED_BINS ? speed_edges[b + 1] : NAN);
+    cJSON_AddNumberToObject(o, "n_beads", (double)m);
+    elfm_analysis_median(tmp, m, &med, &spr);
+    add_num(o, "fwhm_xy_um_median", med);
+    m = 0;
+    for (size_t i = 0; i < l->n; i++)
+      if (l->speed[i] >= speed_edges[b] && l->speed[i] < speed_edges[b + 1]) tmp[m++] = l->z[i];
+    elfm_analysis_median(tmp, m, &med, &spr);
+    add_num(o, "fwhm_z_um_median", med);
+    cJSON_AddItemToArray(bins, o);
+  }
+  free(tmp);
+  return r;
+}
+
+static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s, const char *path,
+                         elfm_error *err)
+{
+  const track_opts *o = c->o;
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "events", o->events);
+  cJSON_AddStringToObject(j, "calib", o->calib);
+  cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
+  cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
+  cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
+  cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
+  cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
+  cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
+  cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
+  int nm[5] = {0, 0, 0, 0, 0};
+  for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;
+  cJSON *models = cJSON_AddObjectToObject(cnt, "models");
+  for (int m = 1; m < 5; m++)
+    cJSON_AddNumberToObject(models, elfm_motion_model_name((elfm_motion_model)m), nm[m]);
+
+  cJSON *par = cJSON_AddObjectToObject(j, "parameters");
+  const elfm_framer_options *fo = &o->recon.framer;
+  cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
+  cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
+  cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
+  cJSON_AddNumberToObject(par, "repr", fo->repr);
+  cJSON_AddNumberToObject(par, "polarity", fo->polarity);
+  cJSON_AddNumberToObject(par, "median", o->recon.median);
+  cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
+  cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
+  cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);
+  cJSON_AddNumberToObject(par, "radius_xy_um", o->peaks.radius_xy_um);
+  cJSON_AddNumberToObject(par, "radius_z_um", o->peaks.radius_z_um);
+  cJSON_AddNumberToObject(par, "min_separation_um", o->peaks.min_separation_um);
+  cJSON_AddNumberToObject(par, "gate_um", o->link.gate_um);
+  cJSON_AddNumberToObject(par, "max_gap_frames", o->link.max_gap_frames);
+  cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
+  cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
+  cJSON_AddStringToObject(par, "motion", o->motion == MOTION_STAGE ? "stage"
+                                         : o->motion == MOTION_FREE ? "free" : "auto");
+  cJSON_AddStringToObject(par, "model", elfm_motion_model_name(o->smooth.model));
+  cJSON_AddStringToObject(par, "loss", o->smooth.loss == ELFM_LOSS_HUBER ? "huber"
+                                       : o->smooth.loss == ELFM_LOSS_CAUCHY ? "cauchy" : "none");
+  if (o->has_stage_v) cJSON_AddItemToObject(par, "stage_velocity_um_per_ms", vec3(o->stage_v));
+
+  cJSON *tim = cJSON_AddObjectToObject(j, "timing");
+  add_num(tim, "wall_s", wall_s);
+  add_num(tim, "span_s", rs->span_s);
+  add_num(tim, "events_per_s", rs->wall_s > 0 ? (double)rs->events / wall_s : NAN);
+  add_num(tim, "volumes_per_s", wall_s > 0 ? (double)c->n_frames / wall_s : NAN);
+  add_num(tim, "realtime_factor", wall_s > 0 ? rs->span_s / wall_s : NAN);
+  add_num(tim, "peak_rss_mb", cli_peak_rss_mb());
+  add_num(tim, "recon_s", rs->wall_s - rs->callback_s);
+  add_num(tim, "peaks_s", c->t_peaks);
+  add_num(tim, "link_s", c->t_link);
+  add_num(tim, "smooth_s", c->t_smooth);
+
+  if (c->store.n) {
+    elfm_stage_result sr;
+    if (elfm_analysis_stage(&c->store, o->has_stage_v ? o->stage_v : NULL, &sr, err) == ELFM_OK) {
+      cJSON *st = cJSON_AddObjectToObject(j, "stage");
+      cJSON_AddItemToObject(st, "velocity_um_per_ms", vec3(sr.v_um_per_ms));
+      cJSON_AddItemToObject(st, "velocity_sd_um_per_ms", vec3(sr.v_sd_um_per_ms));
+      add_num(st, "speed_um_per_ms", sr.speed_um_per_ms);
+      add_num(st, "speed_sd_um_per_ms", sr.speed_sd_um_per_ms);
+      add_num(st, "rel_error", sr.rel_error);
+      add_num(st, "speed_rel_error", sr.speed_rel_error);
+    }
+  }
+  if (o->resolution) cJSON_AddItemToObject(j, "resolution", fwhm_summary(&c->fl));
+
+  cJSON *tr = cJSON_AddArrayToObject(j, "tracks");
+  for (size_t i = 0; i < c->store.n; i++) {
+    const elfm_track *t = c->store.tracks[i];
+    cJSON *e = cJSON_CreateObject();
+    double v[3];
+    elfm_track_mean_velocity(t, v);
+    cJSON_AddNumberToObject(e, "id", (double)t->id);
+    cJSON_AddNumberToObject(e, "first_frame", (double)t->pts[0].frame);
+    cJSON_AddNumberToObject(e, "last_frame", (double)t->pts[t->n - 1].frame);
+    cJSON_AddNumberToObject(e, "points", (double)t->n);
+    cJSON_AddStringToObject(e, "model", elfm_motion_model_name(t->model));
+    if (t->model == ELFM_MODEL_SPLINE) cJSON_AddNumberToObject(e, "spline_weight_ms3", t->spline_weight_ms3);
+    add_num(e, "edf", t->edf);
+    cJSON_AddNumberToObject(e, "outliers", t->n_outliers);
+    cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(v));
+    cJSON_AddItemToArray(tr, e);
+  }
+  char *text = cJSON_Print(j);
+  cJSON_Delete(j);
+  if (!text) return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "cannot build summary.json");
+  FILE *f = fopen(path, "w");
+  elfm_status st = ELFM_OK;
+  if (!f) st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
+  else {
+    fputs(text, f);
+    fputc('\n', f);
+    if (ferror(f) | (fclose(f) != 0))
+      st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  }
+  free(text);
+  return st;
+}
+
+static int close_file(FILE **f, const char *path, elfm_error *err)
+{
+  if (!*f) return ELFM_OK;
+  int bad = ferror(*f) | (fclose(*f) != 0);
+  *f = NULL;
+  if (bad) return elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  return ELFM_OK;
+}
+
+enum {
+  O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
+  O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
+  O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES
+};
 
 int cmd_track(int argc, char **argv)
 {
-  (void)argc;
-  (void)argv;
-  return cli_message("track", CLI_FAIL, "not implemented yet");
+  static const char *const C = "track";
+  track_opts o;
+  memset(&o, 0, sizeof o);
+  elfm_recon_options_default(&o.recon);
+  elfm_peaks_options_default(&o.peaks);
+  elfm_link_options_default(&o.link);
+  elfm_smooth_options_default(&o.smooth);
+  o.max_det = 10000;
+  static const struct option lo[] = {
+      {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
+      {"out", required_argument, 0, O_OUT}, {"dt-us", required_argument, 0, O_DT},
+      {"stride-us", required_argument, 0, O_STRIDE}, {"tau-us", required_argument, 0, O_TAU},
+      {"repr", required_argument, 0, O_REPR}, {"polarity", required_argument, 0, O_POL},
+      {"median", required_argument, 0, O_MEDIAN}, {"path", required_argument, 0, O_PATH},
+      {"ghost", required_argument, 0, O_GHOST}, {"ghost-value", required_argument, 0, O_GHOSTV},
+      {"agree", required_argument, 0, O_AGREE}, {"threads", required_argument, 0, O_THREADS},
+      {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
+      {"threshold-k", required_argument, 0, O_THK}, {"threshold-abs", required_argument, 0, O_THA},
+      {"threshold-rel", required_argument, 0, O_THR}, {"radius-xy-um", required_argument, 0, O_RXY},
+      {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
+      {"refine", required_argument, 0, O_REFINE}, {"max-detections", required_argument, 0, O_MAXDET},
+      {"gate-um", required_argument, 0, O_GATE}, {"max-gap", required_argument, 0, O_MAXGAP},
+      {"min-points", required_argument, 0, O_MINPTS}, {"lag-correct", required_argument, 0, O_LAG},
+      {"motion", required_argument, 0, O_MOTION},
+      {"stage-velocity-um-per-ms", required_argument, 0, O_STAGEV},
+      {"model", required_argument, 0, O_MODEL}, {"loss", required_argument, 0, O_LOSS},
+      {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
+      {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  optind = 1;
+  opterr = 0;
+  int ch;
+  while ((ch = getopt_long(argc, argv, "hq", lo, NULL)) != -1) {
+    const char *a = optarg;
+    switch (ch) {
+    case 'h': usage(stdout); return CLI_OK;
+    case 'q': o.quiet = 1; break;
+    case O_CALIB: o.calib = a; break;
+    case O_EVENTS: o.events = a; break;
+    case O_OUT: o.out = a; break;
+    case O_DT: if (!cli_parse_int64(C, "--dt-us", a, &o.recon.framer.dt_us)) return CLI_USAGE; break;
+    case O_STRIDE: if (!cli_parse_int64(C, "--stride-us", a, &o.recon.framer.stride_us)) return CLI_USAGE; break;
+    case O_TAU: if (!cli_parse_double(C, "--tau-us", a, &o.recon.framer.tau_us)) return CLI_USAGE; break;
+    case O_REPR:
+      if (!strcmp(a, "exp")) o.recon.framer.repr = ELFM_REPR_EXP;
+      else if (!strcmp(a, "lin")) o.recon.framer.repr = ELFM_REPR_LIN;
+      else if (!strcmp(a, "count")) o.recon.framer.repr = ELFM_REPR_COUNT;
+      else return cli_message(C, CLI_USAGE, "--repr must be exp, lin or count, not '%s'", a);
+      break;
+    case O_POL:
+      if (!strcmp(a, "both")) o.recon.framer.polarity = ELFM_POL_BOTH;
+      else if (!strcmp(a, "on")) o.recon.framer.polarity = ELFM_POL_ON;
+      else if (!strcmp(a, "off")) o.recon.framer.polarity = ELFM_POL_OFF;
+      else if (!strcmp(a, "signed")) o.recon.framer.polarity = ELFM_POL_SIGNED;
+      else return cli_message(C, CLI_USAGE, "--polarity must be both, on, off or signed, not '%s'", a);
+      break;
+    case O_MEDIAN:
+      if (!cli_parse_int(C, "--median", a, &o.recon.median)) return CLI_USAGE;
+      if (o.recon.median != 0 && o.recon.median != 3 && o.recon.median != 5)
+        return cli_message(C, CLI_USAGE, "--median must be 0, 3 or 5");
+      break;
+    case O_PATH:
+      if (!strcmp(a, "auto")) o.recon.refocus.path = ELFM_PATH_AUTO;
+      else if (!strcmp(a, "dense")) o.recon.refocus.path = ELFM_PATH_DENSE;
+      else if (!strcmp(a, "sparse")) o.recon.refocus.path = ELFM_PATH_SPARSE;
+      else return cli_message(C, CLI_USAGE, "--path must be auto, dense or sparse, not '%s'", a);
+      break;
+    case O_GHOST:
+      if (!strcmp(a, "none")) o.recon.refocus.threshold = ELFM_GHOST_THR_NONE;
+      else if (!strcmp(a, "abs")) o.recon.refocus.threshold = ELFM_GHOST_THR_ABS;
+      else if (!strcmp(a, "frac")) o.recon.refocus.threshold = ELFM_GHOST_THR_FRAC_MAX;
+      else if (!strcmp(a, "mad")) o.recon.refocus.threshold = ELFM_GHOST_THR_MAD;
+      else return cli_message(C, CLI_USAGE, "--ghost must be none, abs, frac or mad, not '%s'", a);
+      break;
+    case O_GHOSTV: if (!cli_parse_double(C, "--ghost-value", a, &o.recon.refocus.threshold_value)) return CLI_USAGE; break;
+    case O_AGREE: if (!cli_parse_double(C, "--agree", a, &o.recon.refocus.agree_frac)) return CLI_USAGE; break;
+    case O_THREADS: if (!cli_parse_int(C, "--threads", a, &o.recon.threads)) return CLI_USAGE; break;
+    case O_FROM: if (!cli_parse_int64(C, "--from-us", a, &o.recon.from_us)) return CLI_USAGE; break;
+    case O_TO: if (!cli_parse_int64(C, "--to-us", a, &o.recon.to_us)) return CLI_USAGE; break;
+    case O_THK: if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
+    case O_THA: if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
+    case O_THR: if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
+    case O_RXY: if (!cli_parse_double(C, "--radius-xy-um", a, &o.peaks.radius_xy_um)) return CLI_USAGE; break;
+    case O_RZ: if (!cli_parse_double(C, "--radius-z-um", a, &o.peaks.radius_z_um)) return CLI_USAGE; break;
+    case O_SEP: if (!cli_parse_double(C, "--min-separation-um", a, &o.peaks.min_separation_um)) return CLI_USAGE; break;
+    case O_REFINE:
+      if (!strcmp(a, "gauss")) o.peaks.refine = ELFM_REFINE_GAUSSIAN;
+      else if (!strcmp(a, "quad")) o.peaks.refine = ELFM_REFINE_QUADRATIC;
+      else if (!strcmp(a, "none")) o.peaks.refine = ELFM_REFINE_NONE;
+      else return cli_message(C, CLI_USAGE, "--refine must be gauss, quad or none, not '%s'", a);
+      break;
+    case O_MAXDET:
+      if (!cli_parse_int(C, "--max-detections", a, &o.max_det)) return CLI_USAGE;
+      if (o.max_det < 1 || o.max_det > 10000000) return cli_message(C, CLI_USAGE, "--max-detections must be 1..1e7");
+      break;
+    case O_GATE: if (!cli_parse_double(C, "--gate-um", a, &o.link.gate_um)) return CLI_USAGE; break;
+    case O_MAXGAP: if (!cli_parse_int(C, "--max-gap", a, &o.link.max_gap_frames)) return CLI_USAGE; break;
+    case O_MINPTS: if (!cli_parse_int(C, "--min-points", a, &o.link.min_points)) return CLI_USAGE; break;
+    case O_LAG:
+      if (!strcmp(a, "on")) o.lag_correct = 1;
+      else if (!strcmp(a, "off")) o.lag_correct = 0;
+      else return cli_message(C, CLI_USAGE, "--lag-correct must be on or off, not '%s'", a);
+      break;
+    case O_MOTION:
+      if (!strcmp(a, "auto")) o.motion = MOTION_AUTO;
+      else if (!strcmp(a, "stage")) o.motion = MOTION_STAGE;
+      else if (!strcmp(a, "free")) o.motion = MOTION_FREE;
+      else return cli_message(C, CLI_USAGE, "--motion must be auto, stage or free, not '%s'", a);
+      break;
+    case O_STAGEV:
+      if (!parse_vec3(a, o.stage_v))
+        return cli_message(C, CLI_USAGE, "--stage-velocity-um-per-ms wants vx,vy,vz, not '%s'", a);
+      o.has_stage_v = 1;
+      break;
+    case O_MODEL:
+      if (!strcmp(a, "auto")) o.smooth.model = ELFM_MODEL_AUTO;
+      else if (!strcmp(a, "cv")) o.smooth.model = ELFM_MODEL_CONST_VELOCITY;
+      else if (!strcmp(a, "ca")) o.smooth.model = ELFM_MODEL_CONST_ACCEL;
+      else if (!strcmp(a, "spline")) o.smooth.model = ELFM_MODEL_SPLINE;
+      else return cli_message(C, CLI_USAGE, "--model must be auto, cv, ca or spline, not '%s'", a);
+      break;
+    case O_LOSS:
+      if (!strcmp(a, "huber")) o.smooth.loss = ELFM_LOSS_HUBER;
+      else if (!strcmp(a, "cauchy")) o.smooth.loss = ELFM_LOSS_CAUCHY;
+      else if (!strcmp(a, "none")) o.smooth.loss = ELFM_LOSS_NONE;
+      else return cli_message(C, CLI_USAGE, "--loss must be huber, cauchy or none, not '%s'", a);
+      break;
+    case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
+    case O_RES: o.resolution = 1; break;
+    default:
+      return cli_message(C, CLI_USAGE, "unknown option '%s' (see eventlfm track --help)",
+                         argv[optind - 1]);
+    }
+  }
+  if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
+  if (!o.calib || !o.events || !o.out)
+    return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (o.motion == MOTION_STAGE) {
+    o.smooth.allow_spline = 0;
+    if (o.has_stage_v) memcpy(o.link.prior_velocity_um_per_ms, o.stage_v, sizeof o.stage_v);
+  } else if (o.motion == MOTION_FREE && o.smooth.model == ELFM_MODEL_AUTO) {
+    o.smooth.model = ELFM_MODEL_SPLINE;
+  }
+  if (o.lag_correct) o.link.lag_tau_us = o.recon.framer.tau_us;
+
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_calib calib;
+  if (elfm_calib_load(o.calib, &calib, &err) != ELFM_OK) return cli_fail(C, &err);
+  if (mkdir(o.out, 0777) != 0 && errno != EEXIST)
+    return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));
+
+  track_ctx c;
+  memset(&c, 0, sizeof c);
+  c.o = &o;
+  elfm_track_store_init(&c.store);
+  snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
+  snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
+  char p_isbi[1100], p_tm[1100], p_sum[1100];
+  snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", o.out);
+  snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", o.out);
+  snprintf(p_sum, sizeof p_sum, "%s/summary.json", o.out);
+  int rc = CLI_FAIL;
+  FILE *fx = NULL;
+  c.det = malloc((size_t)o.max_det * sizeof *c.det);
+  c.fw = o.resolution ? malloc((size_t)o.max_det * sizeof *c.fw) : NULL;
+  if (!c.det || (o.resolution && !c.fw)) {
+    cli_message(C, CLI_FAIL, "out of memory");
+    goto done;
+  }
+  c.lk = elfm_link_create(&o.link, &err);
+  if (!c.lk) { cli_fail(C, &err); goto done; }
+  c.fdet = fopen(c.p_det, "w");
+  c.ftr = fopen(c.p_tr, "w");
+  if (!c.fdet || !c.ftr) {
+    cli_message(C, CLI_FAIL, "%s: cannot create: %s", c.fdet ? c.p_tr : c.p_det, strerror(errno));
+    goto done;
+  }
+  if (elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
+      elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK) {
+    cli_fail(C, &err);
+    goto done;
+  }
+  if (!o.quiet) {
+    o.recon.progress = progress;
+    o.recon.progress_user = &c;
+  }
+  double t0 = cli_now_s();
+  elfm_recon_stats rs;
+  memset(&rs, 0, sizeof rs);
+  elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, on_volume, &c, &rs, &err);
+  if (!o.quiet) fputc('\n', stderr);
+  if (st == ELFM_OK) st = elfm_link_finish(c.lk, &err);
+  if (st == ELFM_OK) st = drain(&c, &err);
+  if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
+  if (st == ELFM_OK) st = close_file(&c.ftr, c.p_tr, &err);
+  if (st == ELFM_OK) {
+    fx = fopen(p_isbi, "w");
+    if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_isbi, -1, "cannot create: %s", strerror(errno));
+    else st = elfm_tracks_write_isbi(fx, p_isbi, &c.store, &err);
+    if (st == ELFM_OK) st = close_file(&fx, p_isbi, &err);
+  }
+  if (st == ELFM_OK) {
+    fx = fopen(p_tm, "w");
+    double stride_us = (double)(o.recon.framer.stride_us ? o.recon.framer.stride_us : o.recon.framer.dt_us);
+    if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_tm, -1, "cannot create: %s", strerror(errno));
+    else st = elfm_tracks_write_trackmate(fx, p_tm, &c.store, stride_us * 1e-3, &err);
+    if (st == ELFM_OK) st = close_file(&fx, p_tm, &err);
+  }
+  double wall = cli_now_s() - t0;
+  if (st == ELFM_OK) st = write_summary(&c, &rs, wall, p_sum, &err);
+  if (st != ELFM_OK) {
+    cli_fail(C, &err);
+    goto done;
+  }
+  if (!o.quiet)
+    fprintf(stderr, "eventlfm track: %" PRId64 " volumes, %" PRId64 " detections, %zu tracks "
+                    "(%" PRId64 " started) in %.2f s (%.0f volumes/s, realtime factor %.2f) -> %s\n",
+            c.n_frames, c.n_det, c.store.n, elfm_link_n_started(c.lk), wall,
+            wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
+  rc = CLI_OK;
+done:
+  if (fx) fclose(fx);
+  if (c.fdet) fclose(c.fdet);
+  if (c.ftr) fclose(c.ftr);
+  elfm_link_free(c.lk);
+  elfm_peaks_free(c.pk);
+  elfm_track_store_clear(&c.store);
+  free(c.det);
+  free(c.fw);
+  free(c.fl.xy);
+  free(c.fl.z);
+  free(c.fl.speed);
+  return rc;
 }

@@ -47,6 +47,9 @@ typedef struct elfm_link_options {
    * detection attached to a track with a velocity is moved forward by the
    * surface's lag, in the caller's array too. 0 = off. */
   double lag_tau_us;
+  /* Velocity a new track predicts with until it has two points (um/ms):
+   * zero, or the stage velocity when the whole sample moves together. */
+  double prior_velocity_um_per_ms[3];
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);
@@ -70,6 +73,10 @@ elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err);
 
 /* Take the oldest finished track (caller owns it: elfm_track_free), or NULL. */
 elfm_track *elfm_link_pop_finished(elfm_linker *l);
+
+/* Speed (um/ms) of the track detection i of the LAST step joined, from its
+ * recent history; NaN for a new track or i out of range. */
+double elfm_link_last_speed(const elfm_linker *l, int i);
 
 /* Live tracks right now, and how many tracks were started in total. */
 size_t elfm_link_n_live(const elfm_linker *l);

@@ -67,6 +67,7 @@ typedef struct elfm_smooth_options {
   int max_iterations;           /* Ceres iterations, 50 */
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
   double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
+  int allow_spline;             /* AUTO may pick the spline (1); 0 for rigid stage motion */
 } elfm_smooth_options;
 
 void elfm_smooth_options_default(elfm_smooth_options *o);

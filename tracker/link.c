@@ -44,6 +44,7 @@ struct elfm_linker {
   int *comp_of, *comp_start, *comp_fill, *members; /* grouping */
   int *track_det, *det_track, *det_local;
   int64_t *det_id;
+  double *det_speed;
   size_t cap_cost;
   double *cost;
   int *row_to_col;
@@ -70,7 +71,9 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
   if (!o || !(o->gate_um > 0) || !isfinite(o->gate_um) || !(o->gate_growth_um_per_frame >= 0) ||
       !isfinite(o->gate_growth_um_per_frame) || !(o->kz > 0) || o->max_gap_frames < 0 ||
       o->min_points < 1 || o->history < 2 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
-      o->max_candidates > 1024 || !(o->lag_tau_us >= 0)) {
+      o->max_candidates > 1024 || !(o->lag_tau_us >= 0) ||
+      !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
+      !isfinite(o->prior_velocity_um_per_ms[2])) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024)");
@@ -114,6 +117,7 @@ void elfm_link_free(elfm_linker *l)
   free(l->det_track);
   free(l->det_local);
   free(l->det_id);
+  free(l->det_speed);
   free(l->cost);
   free(l->row_to_col);
   free(l->rows);
@@ -124,6 +128,12 @@ void elfm_link_free(elfm_linker *l)
 
 size_t elfm_link_n_live(const elfm_linker *l) { return l ? l->n_live : 0; }
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
+
+double elfm_link_last_speed(const elfm_linker *l, int i)
+{
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_speed || l->det_id[i] < 0) return NAN;
+  return l->det_speed[i];
+}
 
 int64_t elfm_link_last_track_id(const elfm_linker *l, int i)
 {
@@ -148,7 +158,8 @@ static elfm_status reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_erro
     if (!grow((void **)&l->pts, 3 * c, sizeof(float)) ||
         !grow((void **)&l->det_track, c, sizeof(int)) ||
         !grow((void **)&l->det_local, c, sizeof(int)) ||
-        !grow((void **)&l->det_id, c, sizeof(int64_t)))
+        !grow((void **)&l->det_id, c, sizeof(int64_t)) ||
+        !grow((void **)&l->det_speed, c, sizeof(double)))
       return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
     l->cap_det = c;
   }
@@ -182,12 +193,15 @@ static int uf_find(int *uf, int a)
 }
 
 /* Least-squares velocity over the last `history` real points. */
-static void fit_velocity(live_track *lt, int history)
+static void fit_velocity(live_track *lt, int history, const double prior[3])
 {
   const elfm_track *t = lt->t;
   size_t n = t->n, k0 = n > (size_t)history ? n - (size_t)history : 0;
   lt->vel_um_per_ms[0] = lt->vel_um_per_ms[1] = lt->vel_um_per_ms[2] = 0;
-  if (n - k0 < 2) return;
+  if (n - k0 < 2) {
+    memcpy(lt->vel_um_per_ms, prior, sizeof lt->vel_um_per_ms);
+    return;
+  }
   /* times relative to the last point, in ms: never float absolute times */
   const int64_t tr = t->pts[n - 1].t_us;
   double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
@@ -251,7 +265,7 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
   lt->last[0] = d->x_um;
   lt->last[1] = d->y_um;
   lt->last[2] = d->z_um;
-  fit_velocity(lt, l->o.history);
+  fit_velocity(lt, l->o.history, l->o.prior_velocity_um_per_ms);
   if (l->o.lag_tau_us > 0 && lt->t->n == 2) {
     /* the first velocity: correct the two points it came from alike, so
      * later fits do not mix corrected and uncorrected points */
@@ -462,13 +476,19 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     st = attach(l, &l->live[i], &det[j], err);
     if (st != ELFM_OK) return st;
     l->det_id[j] = l->live[i].t->id;
+    const double *v = l->live[i].vel_um_per_ms;
+    l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
   }
   for (size_t j = 0; j < nd; j++) {
     if (l->det_track[j] >= 0) continue;
     st = start_track(l, &det[j], &l->det_id[j], err);
     if (st != ELFM_OK) return st;
+    l->det_speed[j] = NAN;
   }
-  for (size_t j = nd; j < l->cap_det; j++) l->det_id[j] = -1;
+  for (size_t j = nd; j < l->cap_det; j++) {
+    l->det_id[j] = -1;
+    l->det_speed[j] = NAN;
+  }
   return ELFM_OK;
 }
 

@@ -617,7 +617,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   elfm_motion_model want = o->model;
   bool try_cv = want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_VELOCITY;
   bool try_ca = (want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_ACCEL) && distinct >= 3;
-  bool try_sp = (want == ELFM_MODEL_AUTO || want == ELFM_MODEL_SPLINE) && distinct >= 4;
+  bool try_sp = ((want == ELFM_MODEL_AUTO && o->allow_spline) || want == ELFM_MODEL_SPLINE) &&
+                distinct >= 4;
   if (!try_ca && !try_sp) try_cv = true;  // what the data allow
   PolyFit cv, ca;
   SplineFit sp;
@@ -700,6 +701,7 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   o->max_iterations = 50;
   o->min_sigma_xy_um = 0.02;
   o->min_sigma_z_um = 0.08;
+  o->allow_spline = 1;
 }
 
 elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
