@@ -1,0 +1,204 @@
+/* test_sim_scene.c — scene files: every built-in loads; a file equals its
+ * built-in; bad files (missing key, wrong type, non-finite, out of range,
+ * truncated, empty, impossible layouts) fail with the file and the key
+ * named; --param overrides check keys and leave the scene intact on error. */
+#include <string.h>
+
+#include "check.h"
+#include "elfm_datasets.h"
+
+static char *slurp(const char *path)
+{
+  FILE *f = fopen(path, "rb");
+  if (!f) return NULL;
+  fseek(f, 0, SEEK_END);
+  long n = ftell(f);
+  fseek(f, 0, SEEK_SET);
+  char *b = malloc((size_t)n + 1);
+  if (fread(b, 1, (size_t)n, f) != (size_t)n) n = 0;
+  b[n] = 0;
+  fclose(f);
+  return b;
+}
+
+static char *replace(const char *text, const char *from, const char *to)
+{
+  const char *p = strstr(text, from);
+  if (!p) {
+    fprintf(stderr, "replace: '%s' not in scene text\n", from);
+    exit(1);
+  }
+  size_t a = (size_t)(p - text), lf = strlen(from), lt = strlen(to), n = strlen(text);
+  char *r = malloc(n - lf + lt + 1);
+  memcpy(r, text, a);
+  memcpy(r + a, to, lt);
+  memcpy(r + a + lt, p + lf, n - a - lf + 1);
+  return r;
+}
+
+/* Write text to a file, load it: must fail with code, naming file and key. */
+static void expect_bad(const char *text, elfm_status code, const char *key)
+{
+  const char *path = "bad_scene.json";
+  FILE *f = fopen(path, "wb");
+  fputs(text, f);
+  fclose(f);
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_scene *s = (elfm_scene *)&err; /* must come back NULL */
+  elfm_status st = elfm_scene_load(path, &s, &err);
+  char buf[1200];
+  elfm_error_format(&err, buf, sizeof buf);
+  CHECK_MSG(st == code, "key %s: want %s, got %s (%s)", key ? key : "-", elfm_status_str(code),
+            elfm_status_str(st), buf);
+  CHECK(s == NULL);
+  CHECK_MSG(strstr(buf, path) != NULL, "no file in: %s", buf);
+  if (key) CHECK_MSG(strstr(buf, key) != NULL, "no key '%s' in: %s", key, buf);
+  elfm_scene_free(s);
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  int n_builtin = 0;
+  for (int k = 0; elfm_scene_builtin_name(k); k++) {
+    elfm_scene *s = NULL;
+    CHECK_OK(elfm_scene_load(elfm_scene_builtin_name(k), &s, &err), &err);
+    CHECK(s && !strcmp(elfm_scene_name(s), elfm_scene_builtin_name(k)));
+    elfm_scene_free(s);
+    n_builtin++;
+  }
+  CHECK_EQ_INT(n_builtin, 8);
+  const char *names[] = {"stage", "stage_accel", "zsweep", "flow", "blink", "blink_moving", "worm", "slice"};
+  for (int i = 0; i < 8; i++) {
+    elfm_scene *s = NULL;
+    CHECK_OK(elfm_scene_load(names[i], &s, &err), &err);
+    elfm_scene_free(s);
+  }
+  elfm_scene *none = NULL;
+  CHECK(elfm_scene_load("no_such_scene", &none, &err) != ELFM_OK && none == NULL);
+  CHECK(strstr(err.message, "stage") != NULL); /* lists the built-ins */
+  CHECK(elfm_scene_load("no/such/file.json", &none, &err) == ELFM_ERR_IO);
+  CHECK(strstr(err.file, "no/such/file.json") != NULL);
+
+  /* The file in datasets/scenes equals the built-in. */
+  char *text = slurp(ELFM_SOURCE_DIR "/datasets/scenes/worm.json");
+  CHECK(text != NULL);
+  if (!text) return check_report();
+  elfm_scene *a = NULL, *b = NULL;
+  CHECK_OK(elfm_scene_load(ELFM_SOURCE_DIR "/datasets/scenes/worm.json", &a, &err), &err);
+  CHECK_OK(elfm_scene_load("worm", &b, &err), &err);
+  if (a && b) {
+    CHECK_EQ_INT(elfm_scene_n_objects(a), 12);
+    elfm_truth ta, tb;
+    elfm_scene_truth(a, 5, elfm_scene_t0_us(a) + 123456, &ta);
+    elfm_scene_truth(b, 5, elfm_scene_t0_us(b) + 123456, &tb);
+    CHECK(ta.x_um == tb.x_um && ta.y_um == tb.y_um && ta.z_um == tb.z_um);
+    /* Four neurons per worm share the worm's z. */
+    elfm_scene_truth(a, 4, elfm_scene_t0_us(a) + 123456, &tb);
+    elfm_scene_truth(a, 7, elfm_scene_t0_us(a) + 123456, &ta);
+    CHECK(ta.z_um == tb.z_um);
+  }
+  elfm_scene_free(a);
+  elfm_scene_free(b);
+
+  char *t;
+  t = replace(text, "\"slice_us\": 1000,", "");
+  expect_bad(t, ELFM_ERR_FORMAT, "slice_us");
+  free(t);
+  t = replace(text, "\"refractory_us\": 50", "\"refractory_us\": \"50\"");
+  expect_bad(t, ELFM_ERR_FORMAT, "sensor.refractory_us");
+  free(t);
+  t = replace(text, "\"background_hz\": 1000", "\"background_hz\": 1e999");
+  expect_bad(t, ELFM_ERR_RANGE, "background_hz");
+  free(t);
+  t = replace(text, "\"background_hz\": 1000", "\"background_hz\": NaN");
+  expect_bad(t, ELFM_ERR_FORMAT, NULL); /* not JSON: the byte offset is named */
+  free(t);
+  t = replace(text, "\"threshold_on\": 0.2", "\"threshold_on\": -0.2");
+  expect_bad(t, ELFM_ERR_RANGE, "sensor.threshold_on");
+  free(t);
+  t = replace(text, "\"type\": \"worm\"", "\"type\": \"snake\"");
+  expect_bad(t, ELFM_ERR_FORMAT, "motion.type");
+  free(t);
+  t = replace(text, "\"count\": 12", "\"count\": 13");
+  expect_bad(t, ELFM_ERR_RANGE, "objects.count");
+  free(t);
+  t = replace(text, "\"diameter_um\": [\n      4,\n      6\n    ]", "\"diameter_um\": [6, 4]");
+  expect_bad(t, ELFM_ERR_RANGE, "objects.diameter_um");
+  free(t);
+  t = replace(text, "\"neuron_s_um\": [", "\"neuron_s_um\": [1, ");
+  expect_bad(t, ELFM_ERR_FORMAT, "motion.neuron_s_um");
+  free(t);
+  t = replace(text, "\"crawl_mm_per_s\": 0.1", "\"crawl_mm_per_s\": 2");
+  expect_bad(t, ELFM_ERR_RANGE, "motion.crawl_mm_per_s"); /* would leave the field */
+  free(t);
+  t = replace(text, "\"width\": 1280", "\"width\": 4096");
+  expect_bad(t, ELFM_ERR_RANGE, "sensor.width");
+  free(t);
+  t = replace(text, "\"na\": 0.75", "\"na\": 1.2");
+  expect_bad(t, ELFM_ERR_RANGE, "optics.na");
+  free(t);
+  t = replace(text, "\"spikes\": null", "\"spikes\": 3");
+  expect_bad(t, ELFM_ERR_FORMAT, "spikes");
+  free(t);
+  /* Truncated: invalid JSON, with the offset where parsing stopped. */
+  size_t n = strlen(text);
+  char *trunc = strdup(text);
+  trunc[n / 3] = 0;
+  expect_bad(trunc, ELFM_ERR_FORMAT, NULL);
+  elfm_scene *s = NULL;
+  elfm_scene_load("bad_scene.json", &s, &err);
+  CHECK(err.offset >= 0 && err.offset <= (int64_t)(n / 3));
+  free(trunc);
+  expect_bad("", ELFM_ERR_FORMAT, NULL);
+  expect_bad("[]", ELFM_ERR_FORMAT, NULL);
+  free(text);
+
+  /* Too many objects for the placement volume. */
+  text = slurp(ELFM_SOURCE_DIR "/datasets/scenes/blink.json");
+  if (text) {
+    t = replace(text, "\"count\": 15", "\"count\": 5000");
+    expect_bad(t, ELFM_ERR_RANGE, "objects.count");
+    free(t);
+    free(text);
+  }
+
+  /* --param overrides. */
+  s = NULL;
+  CHECK_OK(elfm_scene_load("flow", &s, &err), &err);
+  if (s) {
+    CHECK_OK(elfm_scene_set_param(s, "objects.count=7", &err), &err);
+    CHECK_EQ_INT(elfm_scene_n_objects(s), 7);
+    CHECK_OK(elfm_scene_set_param(s, "duration_ms=25", &err), &err);
+    CHECK_EQ_INT(elfm_scene_duration_us(s), 25000);
+    CHECK_OK(elfm_scene_set_seed(s, 5, &err), &err);
+    elfm_truth before, after;
+    elfm_scene_truth(s, 3, 1000, &before);
+    /* A failed override leaves scene, layout and seed as they were. */
+    CHECK(elfm_scene_set_param(s, "sensor.width=5", &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "sensor.width") != NULL);
+    CHECK(elfm_scene_set_param(s, "sensor.widht=640", &err) == ELFM_ERR_INVALID);
+    CHECK(strstr(err.message, "sensor.widht") != NULL);
+    CHECK(elfm_scene_set_param(s, "sensor.width", &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_scene_set_param(s, "motion.speed_mm_per_s=fast", &err) == ELFM_ERR_FORMAT);
+    CHECK_EQ_INT(elfm_scene_n_objects(s), 7);
+    CHECK_EQ_INT(elfm_scene_calib(s)->sensor_width_px, 1280);
+    CHECK_EQ_INT(elfm_scene_seed(s), 5);
+    elfm_scene_truth(s, 3, 1000, &after);
+    CHECK(before.x_um == after.x_um && before.z_um == after.z_um);
+    /* A later override keeps the seed set before it. */
+    CHECK_OK(elfm_scene_set_param(s, "sensor.leak_hz=0.5", &err), &err);
+    CHECK_EQ_INT(elfm_scene_seed(s), 5);
+    elfm_scene_truth(s, 3, 1000, &after);
+    CHECK(before.x_um == after.x_um);
+    /* Another seed moves the beads. */
+    CHECK_OK(elfm_scene_set_seed(s, 6, &err), &err);
+    elfm_scene_truth(s, 3, 1000, &after);
+    CHECK(before.x_um != after.x_um);
+  }
+  elfm_scene_free(s);
+  elfm_scene_free(NULL);
+  return check_report();
+}
