@@ -189,9 +189,15 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   st = elfm_link_step(c->lk, v->frame, v->t_us, c->det, n, err);
   if (st != ELFM_OK) return st;
   c->t_link += cli_now_s() - t1;
-  /* after linking: the lag correction (when on) has moved the detections */
-  st = elfm_detections_write(c->fdet, c->p_det, c->det, n, err);
-  if (st != ELFM_OK) return st;
+  /* after linking: the lag correction (when on) has moved the detections,
+   * and trail peaks (id -2) are left out */
+  int kept = 0;
+  for (int j = 0; j < n; j++) {
+    if (elfm_link_last_track_id(c->lk, j) == -2) continue;
+    st = elfm_detections_write(c->fdet, c->p_det, &c->det[j], 1, err);
+    if (st != ELFM_OK) return st;
+    kept++;
+  }
   if (o->resolution && v->frame % 10 == 0 && n > 0) {
     int m = 0;
     /* isolation 3 x the paper's lateral FWHM of 3.9 um */
@@ -213,7 +219,7 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
     }
   }
   c->n_frames++;
-  c->n_det += n;
+  c->n_det += kept;
   c->last_frame = v->frame;
   c->last_t_us = v->t_us;
   return drain(c, err);

@@ -1,9 +1,13 @@
 /* elfm_link.h — streaming frame-to-frame linking of detections into tracks.
  *
  * Per frame (elfm_link_step):
- *  1. every live track predicts its position at the frame's time with a
- *     constant velocity fitted (least squares) to its last `history` real
- *     points (a track with one point predicts standing still);
+ *  1. every live track predicts its position at the frame's time: after
+ *     at most `short_gap` missed frames from a constant-acceleration fit
+ *     to its last `short_history` real points (objects on curved paths:
+ *     the flow scene's beads turn ~17 degrees per millisecond), after
+ *     longer gaps from a constant velocity fitted to its last `history`
+ *     points (extrapolating an acceleration over 50 frames diverges); a
+ *     track with one point predicts with prior_velocity_um_per_ms;
  *  2. the frame's detections go into a FLANN exact k-d tree
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:
@@ -40,7 +44,9 @@ typedef struct elfm_link_options {
   double kz;                       /* anisotropy, default 4 (SPEC §7) */
   int max_gap_frames;              /* default 50: blinking beads stay dark <= 50 ms at 1 kHz */
   int min_points;                  /* default 5 real points */
-  int history;                     /* default 20 points for the velocity fit */
+  int history;                     /* default 20 points for the long velocity fit */
+  int short_history;               /* default 8 points for the short acceleration fit */
+  int short_gap;                   /* default 2 missed frames */
   double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
   int max_candidates;              /* per track, default 8 */
   /* Time-surface lag correction (elfm_peaks.h): when tau_us > 0, each
@@ -50,6 +56,17 @@ typedef struct elfm_link_options {
   /* Velocity a new track predicts with until it has two points (um/ms):
    * zero, or the stage velocity when the whole sample moves together. */
   double prior_velocity_um_per_ms[3];
+  /* A track with one point has no velocity yet: its gate widens by
+   * birth_speed_um_per_ms x the time since that point (default 5 um/ms, a
+   * little above the fastest flow scene's 4 mm/s). */
+  double birth_speed_um_per_ms;
+  /* Trail suppression: a moving object's time surface leaves a second,
+   * weaker peak behind it. An unmatched detection lying behind a matched one
+   * (along its track's velocity, within speed x trail_us + gate_um, and
+   * within gate_um of that line) is dropped instead of starting a track;
+   * elfm_link_last_track_id returns -2 for it. 0 = off (default 2000 us:
+   * twice the default tau of 1000 us). */
+  double trail_us;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);
@@ -83,7 +100,8 @@ size_t elfm_link_n_live(const elfm_linker *l);
 int64_t elfm_link_n_started(const elfm_linker *l);
 
 /* Id of the track detection i of the LAST step joined (a new track when it
- * matched none), or -1 when i is out of range. */
+ * matched none), -2 when it was suppressed as a trail, -1 when i is out of
+ * range. */
 int64_t elfm_link_last_track_id(const elfm_linker *l, int i);
 
 #ifdef __cplusplus

@@ -14,7 +14,9 @@ typedef struct live_track {
   elfm_track *t;
   int64_t last_frame, last_t_us;
   double last[3];           /* last real position */
-  double vel_um_per_ms[3];  /* fitted over the recent history; 0 with one point */
+  double vel_um_per_ms[3];  /* long constant-velocity fit; the prior with one point */
+  double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
+  int has_short;            /* the short fit exists (>= 4 points) */
   double pred[3];           /* prediction for the current frame */
   double gate_um;           /* gate for the current frame */
   int missed;               /* frames missed before the current frame */
@@ -61,19 +63,24 @@ void elfm_link_options_default(elfm_link_options *o)
   o->max_gap_frames = 50;
   o->min_points = 5;
   o->history = 20;
+  o->short_history = 8;
+  o->short_gap = 2;
   o->gap_cost = 0.02;
   o->max_candidates = 8;
   o->lag_tau_us = 0;
+  o->birth_speed_um_per_ms = 5.0;
+  o->trail_us = 2000;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
 {
   if (!o || !(o->gate_um > 0) || !isfinite(o->gate_um) || !(o->gate_growth_um_per_frame >= 0) ||
       !isfinite(o->gate_growth_um_per_frame) || !(o->kz > 0) || o->max_gap_frames < 0 ||
-      o->min_points < 1 || o->history < 2 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
+      o->min_points < 1 || o->history < 2 || o->short_history < 4 || o->short_gap < 0 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
       o->max_candidates > 1024 || !(o->lag_tau_us >= 0) ||
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
-      !isfinite(o->prior_velocity_um_per_ms[2])) {
+      !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) ||
+      !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024)");
@@ -192,33 +199,74 @@ static int uf_find(int *uf, int a)
   return a;
 }
 
-/* Least-squares velocity over the last `history` real points. */
-static void fit_velocity(live_track *lt, int history, const double prior[3])
+/* Least-squares fits over the recent real points, times relative to the
+ * last point in ms (never float absolute times): a constant velocity over
+ * `history` points and a constant acceleration over `short_history`. */
+static void fit_velocity(live_track *lt, int history, int short_history, const double prior[3])
 {
   const elfm_track *t = lt->t;
-  size_t n = t->n, k0 = n > (size_t)history ? n - (size_t)history : 0;
-  lt->vel_um_per_ms[0] = lt->vel_um_per_ms[1] = lt->vel_um_per_ms[2] = 0;
-  if (n - k0 < 2) {
-    memcpy(lt->vel_um_per_ms, prior, sizeof lt->vel_um_per_ms);
-    return;
-  }
-  /* times relative to the last point, in ms: never float absolute times */
+  size_t n = t->n;
   const int64_t tr = t->pts[n - 1].t_us;
-  double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
-  double m = (double)(n - k0);
+  memcpy(lt->vel_um_per_ms, prior, sizeof lt->vel_um_per_ms);
+  lt->has_short = 0;
+  size_t k0 = n > (size_t)history ? n - (size_t)history : 0;
+  if (n - k0 >= 2) {
+    double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
+    double m = (double)(n - k0);
+    for (size_t k = k0; k < n; k++) {
+      double tm = (double)(t->pts[k].t_us - tr) * 1e-3;
+      const double p[3] = {t->pts[k].x_um, t->pts[k].y_um, t->pts[k].z_um};
+      st += tm;
+      stt += tm * tm;
+      for (int a = 0; a < 3; a++) {
+        sx[a] += p[a];
+        stx[a] += tm * p[a];
+      }
+    }
+    double den = m * stt - st * st;
+    if (den > 1e-12)  /* else all points at one time: keep the prior */
+      for (int a = 0; a < 3; a++) lt->vel_um_per_ms[a] = (m * stx[a] - st * sx[a]) / den;
+  }
+  k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
+  if (n - k0 < 4) return;
+  /* normal equations of p = c0 + c1 t + c2 t^2 over the short window */
+  double S[5] = {0, 0, 0, 0, 0}, R[3][3] = {{0}};
   for (size_t k = k0; k < n; k++) {
-    double tm = (double)(t->pts[k].t_us - tr) * 1e-3;
+    double tm = (double)(t->pts[k].t_us - tr) * 1e-3, tp = 1;
     const double p[3] = {t->pts[k].x_um, t->pts[k].y_um, t->pts[k].z_um};
-    st += tm;
-    stt += tm * tm;
+    for (int e = 0; e < 5; e++, tp *= tm) S[e] += tp;
     for (int a = 0; a < 3; a++) {
-      sx[a] += p[a];
-      stx[a] += tm * p[a];
+      R[a][0] += p[a];
+      R[a][1] += tm * p[a];
+      R[a][2] += tm * tm * p[a];
     }
   }
-  double den = m * stt - st * st;
-  if (!(den > 1e-12)) return;  /* all points at one time */
-  for (int a = 0; a < 3; a++) lt->vel_um_per_ms[a] = (m * stx[a] - st * sx[a]) / den;
+  double M[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
+  double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
+               M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+               M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+  if (!(fabs(det) > 1e-9)) return;  /* fewer than 3 distinct times */
+  for (int a = 0; a < 3; a++) {
+    double c[3];
+    for (int j = 0; j < 3; j++) {  /* Cramer: replace column j by R[a] */
+      double A[3][3];
+      memcpy(A, M, sizeof A);
+      for (int r = 0; r < 3; r++) A[r][j] = R[a][r];
+      c[j] = (A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+              A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+              A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0])) / det;
+    }
+    lt->fit_pos[a] = c[0];
+    lt->fit_vel[a] = c[1];
+    lt->fit_acc[a] = 2 * c[2];
+  }
+  lt->has_short = 1;
+}
+
+/* The track's velocity now: the short fit's at its last point, else the long one. */
+static const double *current_velocity(const live_track *lt)
+{
+  return lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
 }
 
 static elfm_status end_track(elfm_linker *l, elfm_track *t, elfm_error *err)
@@ -256,8 +304,8 @@ elfm_track *elfm_link_pop_finished(elfm_linker *l)
 static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elfm_error *err)
 {
   if (l->o.lag_tau_us > 0 && lt->t->n >= 2)
-    elfm_detection_correct_lag(d, lt->vel_um_per_ms[0], lt->vel_um_per_ms[1],
-                               lt->vel_um_per_ms[2], l->o.lag_tau_us);
+    elfm_detection_correct_lag(d, current_velocity(lt)[0], current_velocity(lt)[1],
+                               current_velocity(lt)[2], l->o.lag_tau_us);
   elfm_status st = elfm_track_append(lt->t, d, err);
   if (st != ELFM_OK) return st;
   lt->last_frame = d->frame;
@@ -265,7 +313,7 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
   lt->last[0] = d->x_um;
   lt->last[1] = d->y_um;
   lt->last[2] = d->z_um;
-  fit_velocity(lt, l->o.history, l->o.prior_velocity_um_per_ms);
+  fit_velocity(lt, l->o.history, l->o.short_history, l->o.prior_velocity_um_per_ms);
   if (l->o.lag_tau_us > 0 && lt->t->n == 2) {
     /* the first velocity: correct the two points it came from alike, so
      * later fits do not mix corrected and uncorrected points */
@@ -305,6 +353,28 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
+/* Is d in the trail of a detection just matched to a moving track? */
+static int in_trail(const elfm_linker *l, size_t nt, const elfm_detection *det,
+                    const elfm_detection *d)
+{
+  const double g = l->o.gate_um, kz = l->o.kz;
+  for (size_t i = 0; i < nt; i++) {
+    int k = l->track_det[i];
+    const live_track *lt = &l->live[i];
+    if (k < 0 || lt->t->n < 3) continue;  /* needs a velocity from >= 2 earlier points */
+    const double *v = current_velocity(lt);
+    double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(speed > 0)) continue;
+    double e[3] = {d->x_um - det[k].x_um, d->y_um - det[k].y_um, d->z_um - det[k].z_um};
+    double behind = -(e[0] * v[0] + e[1] * v[1] + e[2] * v[2]) / speed;
+    if (behind <= 0 || behind > speed * l->o.trail_us * 1e-3 + g) continue;
+    double px = e[0] + behind * v[0] / speed, py = e[1] + behind * v[1] / speed,
+           pz = (e[2] + behind * v[2] / speed) / kz;
+    if (px * px + py * py + pz * pz < g * g) return 1;
+  }
+  return 0;
+}
+
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det, int n,
                            elfm_error *err)
 {
@@ -339,8 +409,13 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       continue;
     }
     double dt_ms = (double)(t_us - lt.last_t_us) * 1e-3;
-    for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
+    if (lt.has_short && lt.missed <= o->short_gap)
+      for (int a = 0; a < 3; a++)
+        lt.pred[a] = lt.fit_pos[a] + lt.fit_vel[a] * dt_ms + 0.5 * lt.fit_acc[a] * dt_ms * dt_ms;
+    else
+      for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
     lt.gate_um = o->gate_um + o->gate_growth_um_per_frame * lt.missed;
+    if (lt.t->n == 1) lt.gate_um += o->birth_speed_um_per_ms * dt_ms;
     l->live[w++] = lt;
   }
   l->n_live = w;
@@ -476,11 +551,17 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     st = attach(l, &l->live[i], &det[j], err);
     if (st != ELFM_OK) return st;
     l->det_id[j] = l->live[i].t->id;
-    const double *v = l->live[i].vel_um_per_ms;
+    const double *v = current_velocity(&l->live[i]);
     l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
   }
+  const size_t nt_before_births = nt;
   for (size_t j = 0; j < nd; j++) {
     if (l->det_track[j] >= 0) continue;
+    if (o->trail_us > 0 && in_trail(l, nt_before_births, det, &det[j])) {
+      l->det_id[j] = -2;
+      l->det_speed[j] = NAN;
+      continue;
+    }
     st = start_track(l, &det[j], &l->det_id[j], err);
     if (st != ELFM_OK) return st;
     l->det_speed[j] = NAN;
