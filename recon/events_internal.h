@@ -32,19 +32,19 @@
  * binary file misread as text fails fast instead of growing memory. */
 #define ELFM_CSV_MAX_LINE 1024
 
-/* EVT3 decoder state (all times absolute microseconds). */
+/* EVT3 decoder state (all times absolute microseconds). The last word of
+ * each type is kept whole in regs[type] (ADDR_Y: y, VECT_BASE_X: base x
+ * and polarity, TIME_LOW: low time bits), which lets the decoder update
+ * its state with one store instead of a branch per word type. */
 typedef struct elfm_evt3_state {
-  int64_t t_base;     /* loops << 24 | time_high << 12 */
-  int64_t t;          /* t_base | time_low: time of the next CD events */
-  int64_t t_emit;     /* time of the last event stored (order check) */
+  uint32_t regs[16];  /* last word of each type; 0 = none yet */
+  int64_t t_high;     /* loops << 24 | TIME_HIGH << 12 */
   int64_t loops;      /* 2^24 us loops counted so far */
+  int64_t t_emit;     /* time of the last event stored (order check) */
   uint32_t prev_th;   /* last TIME_HIGH value (12 bits) */
+  uint32_t voff;      /* x advance of vectors since VECT_BASE_X (+12/+8) */
   int seen_th;        /* words before the first TIME_HIGH are dropped */
   int seen_y;         /* events before the first ADDR_Y are dropped */
-  int seen_base;      /* vectors before a VECT_BASE_X are dropped */
-  uint32_t y;
-  uint32_t vx;        /* next x of a vector (VECT_BASE_X, +12/+8 per vector) */
-  uint32_t vp;        /* polarity of the vector */
 } elfm_evt3_state;
 
 /* EVT 2.0 / 2.1 decoder state. */

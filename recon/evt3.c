@@ -15,11 +15,12 @@
  * Words before the first TIME_HIGH are dropped (the camera starts mid-
  * stream), as are events before the first ADDR_Y / VECT_BASE_X.
  *
- * Speed: the state lives in locals (registers) for the whole buffer, the
- * switch compiles to a jump table, and vectors are written branch-free:
- * all 12 (or 8) slots are stored and the count advances by each mask bit,
- * which the reader's "room for 12 events" guarantee makes safe.
+ * Speed: see the fast path below: per word one store into a little
+ * register file indexed by the word type, four stores of a would-be event,
+ * and no branch that depends on the word type except vectors'.
  */
+#include <string.h>
+
 #include "events_internal.h"
 
 static elfm_status backward(elfm_reader *r, int64_t off, int64_t t_from, int64_t t_to,
@@ -36,120 +37,181 @@ static elfm_status backward(elfm_reader *r, int64_t off, int64_t t_from, int64_t
 
 elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *err)
 {
-  elfm_evt3_state s = r->st.evt3;
   const uint8_t *b = r->buf;
   size_t pos = r->pos;
   const size_t end = pos + ((r->len - pos) & ~(size_t)1);
   size_t n = c->n;
+  const size_t n0 = n;
   /* The caller guarantees room for 12 events at entry. */
   const size_t lim = c->cap - 12;
-  int64_t *T = c->t_us;
-  uint16_t *X = c->x, *Y = c->y;
-  uint8_t *P = c->p;
+  int64_t *const T = c->t_us;
+  uint16_t *const X = c->x, *const Y = c->y;
+  uint8_t *const P = c->p;
   const uint32_t xlim = r->x_lim, ylim = r->y_lim;
   elfm_status st = ELFM_OK;
+  elfm_evt3_state s = r->st.evt3;
+  uint32_t regs[16];
+  memcpy(regs, s.regs, sizeof regs);
+  int64_t t_high = s.t_high;
+  uint32_t voff = s.voff;
+  /* Largest valid 11-bit payload per word type: ADDR_Y is checked
+   * against the height, ADDR_X against the width, others not. */
+  uint32_t lims[16];
+  for (int i = 0; i < 16; i++) lims[i] = 0x800;
+  lims[0x0] = ylim;
+  lims[0x2] = xlim;
+#define T_EMIT() (n > n0 ? T[n - 1] : s.t_emit)
+#define T_NOW() (t_high | (int64_t)(regs[0x6] & 0xFFF))
+  /* Word types the fast path takes (ADDR_Y, ADDR_X, VECT_BASE_X, VECT_12,
+   * VECT_8, TIME_LOW): all of them once TIME_HIGH and ADDR_Y were seen and
+   * no event is due before the last one's time; none otherwise. */
+#define FAST_MASK() ((s.seen_th && s.seen_y && T_NOW() >= T_EMIT()) ? 0x7Du : 0u)
+  uint32_t fast = FAST_MASK();
 
-  while (pos < end && n <= lim) {
+  for (;;) {
+    /* Fast path. The word types of a real stream follow no pattern a
+     * branch predictor learns, and one mispredicted branch costs more
+     * than a whole word, so a word updates the state by one store into
+     * regs[type] and always writes a would-be ADDR_X event that is kept
+     * (n advances) only when it is one. Time cannot go back here: a
+     * TIME_LOW below the current one leaves for the slow path, so events
+     * need no order check. Any range problem also leaves for the slow
+     * path, which re-decodes the word with full checks. */
+    while (pos < end && n <= lim) {
+      const uint32_t w = elfm_le16(b + pos);
+      const uint32_t type = w >> 12;
+      if (!((fast >> type) & 1)) break;
+      const uint32_t pl = w & 0x7FF;
+      const uint32_t old = regs[type];
+      if ((pl >= lims[type]) | ((type == 0x6) & ((w & 0xFFF) < (old & 0xFFF)))) break;
+      regs[type] = w;
+      voff &= 0u - (uint32_t)(type != 0x3); /* VECT_BASE_X restarts vectors */
+      const int64_t t = T_NOW();
+      T[n] = t;
+      X[n] = (uint16_t)pl;
+      Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
+      P[n] = (uint8_t)((w >> 11) & 1);
+      n += type == 0x2;
+      if (type - 0x4 <= 1) { /* VECT_12, VECT_8 */
+        const uint32_t nbits = type == 0x4 ? 12 : 8;
+        const uint32_t mask = w & ((1u << nbits) - 1);
+        const uint32_t base = regs[0x3];
+        const uint32_t x0 = (base & 0x7FF) + voff;
+        const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask | 1);
+        if ((base >> 12) != 0x3 || (mask && xhi >= xlim)) break;
+        /* t, y and p are the same for the whole vector: broadcast them
+         * into 12 slots (vectorised stores), then place the x of each
+         * set bit; slots past the last set bit are scratch. */
+        const uint16_t y = (uint16_t)(regs[0x0] & 0x7FF);
+        const uint8_t p = (uint8_t)((base >> 11) & 1);
+        for (uint32_t i = 0; i < 12; i++) {
+          T[n + i] = t;
+          Y[n + i] = y;
+          P[n + i] = p;
+        }
+        size_t k = n;
+        for (uint32_t i = 0; i < 12; i++) {
+          X[k] = (uint16_t)(x0 + i);
+          k += (mask >> i) & 1;
+        }
+        n = k;
+        voff += nbits;
+      }
+      pos += 2;
+    }
+    if (pos >= end || n > lim) break;
+
+    /* Slow path: one word with every check; errors name its offset. */
     const uint32_t w = elfm_le16(b + pos);
-    switch (w >> 12) {
-    case 0x0: { /* ADDR_Y */
+    const uint32_t type = w >> 12;
+    const int64_t off = r->buf_off + (int64_t)pos;
+    switch (type) {
+    case 0x0: /* ADDR_Y */
       if (!s.seen_th) break;
-      uint32_t y = w & 0x7FF;
-      if (y >= ylim) {
-        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, r->buf_off + (int64_t)pos,
-                            "EVT3 ADDR_Y y=%u outside the sensor height %u", y, ylim);
+      if ((w & 0x7FF) >= ylim) {
+        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, off,
+                            "EVT3 ADDR_Y y=%u outside the sensor height %u", w & 0x7FF, ylim);
         goto out;
       }
-      s.y = y;
+      regs[0x0] = w;
       s.seen_y = 1;
       break;
-    }
     case 0x2: { /* ADDR_X: one event */
-      if (!s.seen_y) break;
-      uint32_t x = w & 0x7FF;
+      if (!s.seen_th || !s.seen_y) break;
+      const uint32_t x = w & 0x7FF;
       if (x >= xlim) {
-        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, r->buf_off + (int64_t)pos,
+        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, off,
                             "EVT3 ADDR_X x=%u outside the sensor width %u", x, xlim);
         goto out;
       }
-      if (s.t < s.t_emit) {
-        st = backward(r, r->buf_off + (int64_t)pos, s.t_emit, s.t, err);
+      if (T_NOW() < T_EMIT()) {
+        st = backward(r, off, T_EMIT(), T_NOW(), err);
         if (st != ELFM_OK) goto out;
       }
-      s.t_emit = s.t;
-      T[n] = s.t;
+      T[n] = T_NOW();
       X[n] = (uint16_t)x;
-      Y[n] = (uint16_t)s.y;
+      Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
       P[n] = (uint8_t)((w >> 11) & 1);
       n++;
       break;
     }
     case 0x3: /* VECT_BASE_X */
-      s.vx = w & 0x7FF;
-      s.vp = (w >> 11) & 1;
-      s.seen_base = 1;
+      if (!s.seen_th) break;
+      regs[0x3] = w;
+      voff = 0;
       break;
     case 0x4:   /* VECT_12 */
     case 0x5: { /* VECT_8 */
-      const uint32_t nbits = (w >> 12) == 0x4 ? 12 : 8;
+      if (!s.seen_th) break;
+      const uint32_t nbits = type == 0x4 ? 12 : 8;
       const uint32_t mask = w & ((1u << nbits) - 1);
-      const uint32_t x0 = s.vx;
-      s.vx += nbits;
-      if (!s.seen_y || !s.seen_base || !mask) break;
+      const uint32_t base = regs[0x3];
+      const uint32_t x0 = (base & 0x7FF) + voff;
+      voff += nbits;
+      if (!s.seen_y || (base >> 12) != 0x3 || !mask) break;
       /* Highest set bit must land inside the sensor. */
       const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask);
       if (xhi >= xlim) {
-        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, r->buf_off + (int64_t)pos,
+        st = elfm_error_set(err, ELFM_ERR_RANGE, r->path, off,
                             "EVT3 vector runs past the sensor width: x=%u >= %u", xhi, xlim);
         goto out;
       }
-      if (s.t < s.t_emit) {
-        st = backward(r, r->buf_off + (int64_t)pos, s.t_emit, s.t, err);
+      if (T_NOW() < T_EMIT()) {
+        st = backward(r, off, T_EMIT(), T_NOW(), err);
         if (st != ELFM_OK) goto out;
       }
-      s.t_emit = s.t;
-      const int64_t t = s.t;
-      const uint16_t y = (uint16_t)s.y;
-      const uint8_t p = (uint8_t)s.vp;
-      if (nbits == 12) {
-        for (uint32_t i = 0; i < 12; i++) {
+      const int64_t t = T_NOW();
+      for (uint32_t i = 0; i < nbits; i++) {
+        if ((mask >> i) & 1) {
           T[n] = t;
           X[n] = (uint16_t)(x0 + i);
-          Y[n] = y;
-          P[n] = p;
-          n += (mask >> i) & 1;
-        }
-      } else {
-        for (uint32_t i = 0; i < 8; i++) {
-          T[n] = t;
-          X[n] = (uint16_t)(x0 + i);
-          Y[n] = y;
-          P[n] = p;
-          n += (mask >> i) & 1;
+          Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
+          P[n] = (uint8_t)((base >> 11) & 1);
+          n++;
         }
       }
       break;
     }
     case 0x6: /* TIME_LOW */
       if (!s.seen_th) break;
-      s.t = s.t_base | (int64_t)(w & 0xFFF);
+      regs[0x6] = w;
       break;
-    case 0x8: { /* TIME_HIGH */
+    case 0x8: { /* TIME_HIGH: resets TIME_LOW */
       const uint32_t th = w & 0xFFF;
       if (s.seen_th && th + 2048 <= s.prev_th) s.loops++;
       s.prev_th = th;
-      s.t_base = (s.loops << 24) | ((int64_t)th << 12);
-      s.t = s.t_base;
+      t_high = (s.loops << 24) | ((int64_t)th << 12);
+      regs[0x6] = 0x6000;
       if (!s.seen_th) {
         s.seen_th = 1;
-        s.t_emit = s.t;
+        s.t_emit = t_high;
       }
       break;
     }
     case 0xA: /* EXT_TRIGGER */
       if (!s.seen_th || !c->cap_trig) break;
       if (c->n_trig >= c->cap_trig) goto out; /* resume at this word */
-      c->trig[c->n_trig].t_us = s.t;
+      c->trig[c->n_trig].t_us = T_NOW();
       c->trig[c->n_trig].channel = (uint8_t)((w >> 8) & 0xF);
       c->trig[c->n_trig].value = (uint8_t)(w & 1);
       c->n_trig++;
@@ -158,11 +220,19 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
       break;
     }
     pos += 2;
+    fast = FAST_MASK();
   }
 out:
   r->need_more = (r->len - pos) < 2;
   r->pos = pos;
+  s.t_emit = T_EMIT();
   c->n = n;
+  memcpy(s.regs, regs, sizeof regs);
+  s.t_high = t_high;
+  s.voff = voff;
   r->st.evt3 = s;
   return st;
+#undef T_EMIT
+#undef T_NOW
+#undef FAST_MASK
 }
