@@ -35,6 +35,85 @@ static elfm_status backward(elfm_reader *r, int64_t off, int64_t t_from, int64_t
                         (long long)t_to);
 }
 
+/* What the fast loop reads and updates, kept together so it can live in
+ * memory next to the stack while the loop keeps its own values in
+ * registers. */
+typedef struct evt3_fast_state {
+  uint32_t regs[16];  /* as elfm_evt3_state.regs */
+  uint32_t lims[16];  /* largest valid 11-bit payload + 1, per word type */
+  int64_t t_high;
+  uint32_t voff;
+  uint32_t xlim;
+} evt3_fast_state;
+
+/* The fast path, for words q..stop (the caller makes sure the chunk has
+ * room for 12 events per word). The word types of a real stream follow
+ * no pattern a branch predictor learns, and one mispredicted branch costs
+ * more than a whole word, so a word updates the state by one store into
+ * regs[type] and always writes a would-be ADDR_X event that is kept (n
+ * advances) only when it is one. Time cannot go back here: a TIME_LOW
+ * below the current one stops the loop, so events need no order check.
+ * It stops at the first word it does not handle (TIME_HIGH, triggers,
+ * anything out of range) without having changed anything for it; the
+ * slow path then decodes that word with every check. Kept out of line so
+ * that its dozen live values get registers of their own. */
+static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_event_chunk *c,
+                                size_t *n_io, evt3_fast_state *fs)
+{
+  /* restrict: the four arrays never overlap, which lets the compiler
+   * keep the pointers in registers and vectorise the broadcasts. */
+  int64_t *restrict const T = c->t_us;
+  uint16_t *restrict const X = c->x;
+  uint16_t *restrict const Y = c->y;
+  uint8_t *restrict const P = c->p;
+  size_t n = *n_io;
+  const int64_t t_high = fs->t_high;
+  uint32_t voff = fs->voff;
+  for (; q < stop; q += 2) {
+    const uint32_t w = elfm_le16(q);
+    const uint32_t type = w >> 12;
+    /* ADDR_Y, ADDR_X, VECT_BASE_X, VECT_12, VECT_8, TIME_LOW */
+    if (!((0x7Du >> type) & 1)) break;
+    const uint32_t pl = w & 0x7FF;
+    if ((pl >= fs->lims[type]) | ((type == 0x6) & ((w & 0xFFF) < (fs->regs[0x6] & 0xFFF)))) break;
+    if (type - 0x4 <= 1) { /* VECT_12, VECT_8 */
+      const uint32_t nbits = type == 0x4 ? 12 : 8;
+      const uint32_t mask = w & ((1u << nbits) - 1);
+      const uint32_t base = fs->regs[0x3];
+      const uint32_t x0 = (base & 0x7FF) + voff;
+      const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask | 1);
+      if ((base >> 12) != 0x3 || (mask && xhi >= fs->xlim)) break;
+      /* t, y and p are the same for the whole vector: broadcast them
+       * into 12 slots (vectorised stores), then place the x of each set
+       * bit; slots past the last set bit are scratch. */
+      const int64_t t = t_high | (int64_t)(fs->regs[0x6] & 0xFFF);
+      const uint16_t y = (uint16_t)(fs->regs[0x0] & 0x7FF);
+      const uint8_t p = (uint8_t)((base >> 11) & 1);
+      for (uint32_t i = 0; i < 12; i++) T[n + i] = t;
+      for (uint32_t i = 0; i < 12; i++) Y[n + i] = y;
+      for (uint32_t i = 0; i < 12; i++) P[n + i] = p;
+      size_t k = n;
+      for (uint32_t i = 0; i < 12; i++) {
+        X[k] = (uint16_t)(x0 + i);
+        k += (mask >> i) & 1;
+      }
+      n = k;
+      voff += nbits;
+      continue;
+    }
+    fs->regs[type] = w;
+    voff &= 0u - (uint32_t)(type != 0x3); /* VECT_BASE_X restarts vectors */
+    T[n] = t_high | (int64_t)(fs->regs[0x6] & 0xFFF);
+    X[n] = (uint16_t)pl;
+    Y[n] = (uint16_t)(fs->regs[0x0] & 0x7FF);
+    P[n] = (uint8_t)((w >> 11) & 1);
+    n += type == 0x2;
+  }
+  *n_io = n;
+  fs->voff = voff;
+  return q;
+}
+
 elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *err)
 {
   const uint8_t *b = r->buf;
@@ -50,74 +129,30 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
   const uint32_t xlim = r->x_lim, ylim = r->y_lim;
   elfm_status st = ELFM_OK;
   elfm_evt3_state s = r->st.evt3;
-  uint32_t regs[16];
-  memcpy(regs, s.regs, sizeof regs);
-  int64_t t_high = s.t_high;
-  uint32_t voff = s.voff;
-  /* Largest valid 11-bit payload per word type: ADDR_Y is checked
-   * against the height, ADDR_X against the width, others not. */
-  uint32_t lims[16];
-  for (int i = 0; i < 16; i++) lims[i] = 0x800;
-  lims[0x0] = ylim;
-  lims[0x2] = xlim;
+  evt3_fast_state fs;
+  memcpy(fs.regs, s.regs, sizeof fs.regs);
+  for (int i = 0; i < 16; i++) fs.lims[i] = 0x800;
+  fs.lims[0x0] = ylim;
+  fs.lims[0x2] = xlim;
+  fs.t_high = s.t_high;
+  fs.voff = s.voff;
+  fs.xlim = xlim;
 #define T_EMIT() (n > n0 ? T[n - 1] : s.t_emit)
-#define T_NOW() (t_high | (int64_t)(regs[0x6] & 0xFFF))
-  /* Word types the fast path takes (ADDR_Y, ADDR_X, VECT_BASE_X, VECT_12,
-   * VECT_8, TIME_LOW): all of them once TIME_HIGH and ADDR_Y were seen and
-   * no event is due before the last one's time; none otherwise. */
-#define FAST_MASK() ((s.seen_th && s.seen_y && T_NOW() >= T_EMIT()) ? 0x7Du : 0u)
-  uint32_t fast = FAST_MASK();
+#define T_NOW() (fs.t_high | (int64_t)(fs.regs[0x6] & 0xFFF))
+  /* The fast path runs once TIME_HIGH and ADDR_Y were seen and no event
+   * is due before the last one's time. */
+#define FAST_OK() (s.seen_th && s.seen_y && T_NOW() >= T_EMIT())
+  int fast = FAST_OK();
 
-  for (;;) {
-    /* Fast path. The word types of a real stream follow no pattern a
-     * branch predictor learns, and one mispredicted branch costs more
-     * than a whole word, so a word updates the state by one store into
-     * regs[type] and always writes a would-be ADDR_X event that is kept
-     * (n advances) only when it is one. Time cannot go back here: a
-     * TIME_LOW below the current one leaves for the slow path, so events
-     * need no order check. Any range problem also leaves for the slow
-     * path, which re-decodes the word with full checks. */
-    while (pos < end && n <= lim) {
-      const uint32_t w = elfm_le16(b + pos);
-      const uint32_t type = w >> 12;
-      if (!((fast >> type) & 1)) break;
-      const uint32_t pl = w & 0x7FF;
-      const uint32_t old = regs[type];
-      if ((pl >= lims[type]) | ((type == 0x6) & ((w & 0xFFF) < (old & 0xFFF)))) break;
-      regs[type] = w;
-      voff &= 0u - (uint32_t)(type != 0x3); /* VECT_BASE_X restarts vectors */
-      const int64_t t = T_NOW();
-      T[n] = t;
-      X[n] = (uint16_t)pl;
-      Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
-      P[n] = (uint8_t)((w >> 11) & 1);
-      n += type == 0x2;
-      if (type - 0x4 <= 1) { /* VECT_12, VECT_8 */
-        const uint32_t nbits = type == 0x4 ? 12 : 8;
-        const uint32_t mask = w & ((1u << nbits) - 1);
-        const uint32_t base = regs[0x3];
-        const uint32_t x0 = (base & 0x7FF) + voff;
-        const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask | 1);
-        if ((base >> 12) != 0x3 || (mask && xhi >= xlim)) break;
-        /* t, y and p are the same for the whole vector: broadcast them
-         * into 12 slots (vectorised stores), then place the x of each
-         * set bit; slots past the last set bit are scratch. */
-        const uint16_t y = (uint16_t)(regs[0x0] & 0x7FF);
-        const uint8_t p = (uint8_t)((base >> 11) & 1);
-        for (uint32_t i = 0; i < 12; i++) {
-          T[n + i] = t;
-          Y[n + i] = y;
-          P[n + i] = p;
-        }
-        size_t k = n;
-        for (uint32_t i = 0; i < 12; i++) {
-          X[k] = (uint16_t)(x0 + i);
-          k += (mask >> i) & 1;
-        }
-        n = k;
-        voff += nbits;
-      }
-      pos += 2;
+  while (pos < end && n <= lim) {
+    if (fast) {
+      /* As many words as surely fit: each gives at most 12 events. */
+      size_t words = (end - pos) / 2, fit = (lim - n) / 12 + 1;
+      if (words > fit) words = fit;
+      const uint8_t *stop = b + pos + 2 * words;
+      const uint8_t *q = evt3_fast(b + pos, stop, c, &n, &fs);
+      pos = (size_t)(q - b);
+      if (q == stop) continue;
     }
     if (pos >= end || n > lim) break;
 
@@ -133,7 +168,7 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
                             "EVT3 ADDR_Y y=%u outside the sensor height %u", w & 0x7FF, ylim);
         goto out;
       }
-      regs[0x0] = w;
+      fs.regs[0x0] = w;
       s.seen_y = 1;
       break;
     case 0x2: { /* ADDR_X: one event */
@@ -150,24 +185,24 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
       }
       T[n] = T_NOW();
       X[n] = (uint16_t)x;
-      Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
+      Y[n] = (uint16_t)(fs.regs[0x0] & 0x7FF);
       P[n] = (uint8_t)((w >> 11) & 1);
       n++;
       break;
     }
     case 0x3: /* VECT_BASE_X */
       if (!s.seen_th) break;
-      regs[0x3] = w;
-      voff = 0;
+      fs.regs[0x3] = w;
+      fs.voff = 0;
       break;
     case 0x4:   /* VECT_12 */
     case 0x5: { /* VECT_8 */
       if (!s.seen_th) break;
       const uint32_t nbits = type == 0x4 ? 12 : 8;
       const uint32_t mask = w & ((1u << nbits) - 1);
-      const uint32_t base = regs[0x3];
-      const uint32_t x0 = (base & 0x7FF) + voff;
-      voff += nbits;
+      const uint32_t base = fs.regs[0x3];
+      const uint32_t x0 = (base & 0x7FF) + fs.voff;
+      fs.voff += nbits;
       if (!s.seen_y || (base >> 12) != 0x3 || !mask) break;
       /* Highest set bit must land inside the sensor. */
       const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask);
@@ -185,7 +220,7 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
         if ((mask >> i) & 1) {
           T[n] = t;
           X[n] = (uint16_t)(x0 + i);
-          Y[n] = (uint16_t)(regs[0x0] & 0x7FF);
+          Y[n] = (uint16_t)(fs.regs[0x0] & 0x7FF);
           P[n] = (uint8_t)((base >> 11) & 1);
           n++;
         }
@@ -194,17 +229,17 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
     }
     case 0x6: /* TIME_LOW */
       if (!s.seen_th) break;
-      regs[0x6] = w;
+      fs.regs[0x6] = w;
       break;
     case 0x8: { /* TIME_HIGH: resets TIME_LOW */
       const uint32_t th = w & 0xFFF;
       if (s.seen_th && th + 2048 <= s.prev_th) s.loops++;
       s.prev_th = th;
-      t_high = (s.loops << 24) | ((int64_t)th << 12);
-      regs[0x6] = 0x6000;
+      fs.t_high = (s.loops << 24) | ((int64_t)th << 12);
+      fs.regs[0x6] = 0x6000;
       if (!s.seen_th) {
         s.seen_th = 1;
-        s.t_emit = t_high;
+        s.t_emit = fs.t_high;
       }
       break;
     }
@@ -220,19 +255,19 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
       break;
     }
     pos += 2;
-    fast = FAST_MASK();
+    fast = FAST_OK();
   }
 out:
   r->need_more = (r->len - pos) < 2;
   r->pos = pos;
   s.t_emit = T_EMIT();
   c->n = n;
-  memcpy(s.regs, regs, sizeof regs);
-  s.t_high = t_high;
-  s.voff = voff;
+  memcpy(s.regs, fs.regs, sizeof s.regs);
+  s.t_high = fs.t_high;
+  s.voff = fs.voff;
   r->st.evt3 = s;
   return st;
 #undef T_EMIT
 #undef T_NOW
-#undef FAST_MASK
+#undef FAST_OK
 }
