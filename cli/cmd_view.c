@@ -27,9 +27,12 @@ static const char view_usage[] =
   "  --screenshot OUT.png  render one picture off-screen and exit\n"
   "  --at-us T             time cursor for the picture (default: the end)\n"
   "  --size WxH            picture / window size in pixels (default 1280x800)\n"
-  "  --bench-frames N      render N frames off-screen, print ms/frame on stderr\n"
+  "  --bench-frames N      render N frames off-screen, print ms/frame on stderr;\n"
+  "                        the cursor plays through the recording, or stays at\n"
+  "                        --at-us T when given (a T past the end draws everything)\n"
   "  --synthetic NxM       N synthetic helical tracks of M points (no input file)\n"
   "  --no-truth, --no-detections, --no-mip   hide these layers\n"
+  "  --full-detail         draw every point (no level of detail; for comparison)\n"
   "  -h, --help            this text\n"
   "\n"
   "controls: left-drag rotate, right-drag pan, scroll zoom, r reset view,\n"
@@ -47,7 +50,7 @@ typedef struct view_opts {
   int width, height;
   int bench_frames;
   int syn_tracks, syn_points;
-  int no_truth, no_detections, no_mip;
+  int no_truth, no_detections, no_mip, full_detail;
 } view_opts;
 
 /* "WxH" with both parts positive ints. */
@@ -67,7 +70,7 @@ static int parse_pair(const char *s, int *a, int *b)
 static int view_parse(int argc, char **argv, view_opts *o)
 {
   enum { O_TRUTH = 256, O_COLOR, O_SHOT, O_AT, O_SIZE, O_BENCH, O_SYN, O_NOTRUTH, O_NODET,
-         O_NOMIP };
+         O_NOMIP, O_FULL };
   static const struct option longopts[] = {
     {"truth", required_argument, NULL, O_TRUTH},
     {"color", required_argument, NULL, O_COLOR},
@@ -80,6 +83,7 @@ static int view_parse(int argc, char **argv, view_opts *o)
     {"no-truth", no_argument, NULL, O_NOTRUTH},
     {"no-detections", no_argument, NULL, O_NODET},
     {"no-mip", no_argument, NULL, O_NOMIP},
+    {"full-detail", no_argument, NULL, O_FULL},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0},
   };
@@ -122,6 +126,7 @@ static int view_parse(int argc, char **argv, view_opts *o)
     case O_NOTRUTH: o->no_truth = 1; break;
     case O_NODET: o->no_detections = 1; break;
     case O_NOMIP: o->no_mip = 1; break;
+    case O_FULL: o->full_detail = 1; break;
     case ':':
       return cli_message("view", CLI_USAGE, "option %s needs a value", argv[optind - 1]);
     default:
@@ -172,6 +177,7 @@ static int view_main(const view_opts *o)
   vo.show_truth = !o->no_truth;
   vo.show_detections = !o->no_detections;
   vo.show_mip = !o->no_mip;
+  vo.full_detail = o->full_detail;
   if (o->color)
     vo.color_mode = !strcmp(o->color, "depth")   ? ELFM_COLOR_DEPTH
                     : !strcmp(o->color, "track") ? ELFM_COLOR_TRACK
@@ -199,15 +205,17 @@ static int view_main(const view_opts *o)
     }
   } else if (o->bench_frames) {
     double mean = 0, worst = 0;
-    st = elfm_viewer_bench(v, o->bench_frames, o->width, o->height, &mean, &worst, &err);
+    st = elfm_viewer_bench(v, o->bench_frames, o->width, o->height, !o->have_at, &mean, &worst,
+                           &err);
     if (st != ELFM_OK) {
       rc = cli_fail("view", &err);
     } else {
       fprintf(stderr,
-              "eventlfm view: bench %d frames %dx%d, %zu tracks, %zu points: "
+              "eventlfm view: bench %d frames %dx%d, %zu tracks, %zu points, %s, %s: "
               "%.3f ms/frame mean (%.1f fps), %.3f ms worst\n",
               o->bench_frames, o->width, o->height, data->tracks.n_lines,
-              data->tracks.n_points, mean, mean > 0 ? 1000.0 / mean : 0.0, worst);
+              data->tracks.n_points, o->have_at ? "cursor fixed" : "cursor sweeping",
+              o->full_detail ? "full detail" : "level of detail", mean, mean > 0 ? 1000.0 / mean : 0.0, worst);
     }
   } else {
     st = elfm_viewer_run(v, &err);

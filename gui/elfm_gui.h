@@ -164,6 +164,7 @@ typedef struct elfm_viewer_options {
   int visible;               /* 0: hidden window (screenshots, benchmarks) */
   elfm_color_mode color_mode;
   int show_truth, show_detections, show_mip;
+  int full_detail;           /* 1: draw every point (no level of detail) */
   const char *title;         /* window title; NULL -> "eventlfm view" */
 } elfm_viewer_options;
 
@@ -198,10 +199,12 @@ elfm_status elfm_viewer_render_rgb(elfm_viewer *v, int width, int height, uint8_
 /* Interactive loop until the window closes (Esc, q). */
 elfm_status elfm_viewer_run(elfm_viewer *v, elfm_error *err);
 
-/* Render n_frames at width x height off-screen, the cursor sweeping the
- * recording, waiting for each frame to finish (glFinish); *ms_mean and
- * *ms_max receive the frame times. */
-elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height,
+/* Render n_frames at width x height off-screen while the camera turns,
+ * waiting for each frame to finish (glFinish); *ms_mean and *ms_max receive
+ * the frame times. sweep = 1: the cursor plays through the recording (what
+ * playback costs); 0: the cursor stays where it is (INT64_MAX: everything
+ * drawn, the worst case). */
+elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height, int sweep,
                               double *ms_mean, double *ms_max, elfm_error *err);
 
 /* Write top-down RGB rows as an 8-bit PNG (libpng). */

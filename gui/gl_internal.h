@@ -29,11 +29,27 @@ typedef struct gui_lines_prog {
   GLint u_mvp, u_mode, u_t0, u_t1, u_z0, u_z1, u_color, u_cursor, u_trail, u_point_size;
 } gui_lines_prog;
 
+/* Levels of detail: level l keeps every 2^l-th point of a polyline (and
+ * its last). 8 levels reach 1 point in 128, enough for 1 kHz tracks seen
+ * whole; together they hold < 2x the points. */
+#define GUI_LOD_LEVELS 8
+/* A level is used while its segments stay under this length on screen:
+ * a polyline of 1.5-pixel chords strays < 1 pixel from the full one. */
+#define GUI_LOD_MAX_SEG_PX 1.5
+
+/* A series on the GPU: every level of every polyline in one buffer,
+ * uploaded once. Per frame only the draw lists (first/count per polyline)
+ * are refilled on the CPU: level by zoom, count cut at the time cursor. */
 typedef struct gui_series_gl {
   GLuint vao, vbo;
-  GLint *firsts;    /* per polyline, for glMultiDrawArrays */
-  GLsizei *counts;
   GLsizei n_lines;
+  size_t n_vertices;                    /* over all levels */
+  GLint *lvl_first[GUI_LOD_LEVELS];     /* [level][line] first vertex */
+  GLsizei *lvl_count[GUI_LOD_LEVELS];   /* [level][line] vertex count */
+  float *t_ms;                          /* n_vertices: each vertex's time (cursor cut) */
+  float *seg_um;                        /* per line: mean 3D segment length at level 0 */
+  GLint *draw_first;                    /* per line, refilled each frame */
+  GLsizei *draw_count;
 } gui_series_gl;
 
 struct elfm_viewer {
@@ -93,6 +109,14 @@ int gui_mip_update(elfm_viewer *v);
 /* png_io.c: decode into a reusable buffer (grown only when too small). */
 elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int *width,
                               int *height, elfm_error *err);
+
+/* series_lod.c: build all levels of a series into a 5-float vertex array
+ * (malloc'ed, the caller uploads then frees it) and g's index arrays;
+ * free g's arrays; refill g's draw lists for a zoom and a cursor. */
+elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
+                             float **vertices, elfm_error *err);
+void gui_series_arrays_free(gui_series_gl *g);
+void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail);
 
 /* viewer.c: draw one frame into the bound framebuffer. */
 void gui_draw(elfm_viewer *v, int width, int height);

@@ -34,7 +34,7 @@ static float t_ms_of(const elfm_viewer *v, int64_t t_us)
   return (float)((double)(t_us - v->data->t_min_us) / 1000.0);
 }
 
-/* Upload a series as 5-float vertices plus per-line first/count arrays. */
+/* Upload a series (all levels of detail, series_lod.c) into its buffer. */
 static elfm_status series_upload(elfm_viewer *v, const elfm_view_series *s, gui_series_gl *g,
                                  elfm_error *err)
 {
@@ -42,34 +42,10 @@ static elfm_status series_upload(elfm_viewer *v, const elfm_view_series *s, gui_
   glGenBuffers(1, &g->vbo);
   glBindVertexArray(g->vao);
   glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-  if (s->n_points == 0) return ELFM_OK;
-  if (s->n_points > (size_t)INT32_MAX || s->n_lines > (size_t)INT32_MAX)
-    return elfm_error_set(err, ELFM_ERR_RANGE, NULL, -1, "too many points to draw (%zu)",
-                          s->n_points);
-  float *buf = malloc(s->n_points * GUI_VERTEX_FLOATS * sizeof *buf);
-  g->firsts = malloc(s->n_lines * sizeof *g->firsts);
-  g->counts = malloc(s->n_lines * sizeof *g->counts);
-  if (!buf || !g->firsts || !g->counts) {
-    free(buf);
-    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory for vertices");
-  }
-  for (size_t k = 0; k < s->n_lines; k++) {
-    /* Golden-ratio steps around the colour map: neighbouring ids get far
-     * apart colours in "by track" mode. */
-    double key = fmod((double)k * 0.6180339887498949, 1.0);
-    g->firsts[k] = (GLint)s->first[k];
-    g->counts[k] = (GLsizei)(s->first[k + 1] - s->first[k]);
-    for (size_t i = s->first[k]; i < s->first[k + 1]; i++) {
-      float *q = buf + i * GUI_VERTEX_FLOATS;
-      q[0] = s->xyz_um[3 * i];
-      q[1] = s->xyz_um[3 * i + 1];
-      q[2] = s->xyz_um[3 * i + 2];
-      q[3] = t_ms_of(v, s->t_us[i]);
-      q[4] = (float)key;
-    }
-  }
-  g->n_lines = (GLsizei)s->n_lines;
-  glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(s->n_points * GUI_VERTEX_FLOATS * sizeof *buf),
+  float *buf = NULL;
+  elfm_status st = gui_series_build(s, v->data->t_min_us, g, &buf, err);
+  if (st != ELFM_OK) return st;
+  glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(g->n_vertices * GUI_VERTEX_FLOATS * sizeof *buf),
                buf, GL_STATIC_DRAW);
   free(buf);
   return ELFM_OK;
@@ -259,7 +235,7 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
    * wider ones (non-forward-compatible context). Two pixels read well. */
   GLfloat range[2] = {1, 1};
   glGetFloatv(GL_ALIASED_LINE_WIDTH_RANGE, range);
-  v->line_width_px = getenv("ELFM_LW1") ? 1.0 : range[1] >= 2.0f ? 2.0 : 1.0;
+  v->line_width_px = range[1] >= 2.0f ? 2.0 : 1.0;
   glGetError(); /* the query may be unsupported: not an error for us */
   *out = v;
   return ELFM_OK;
@@ -269,8 +245,7 @@ static void series_gl_free(gui_series_gl *g)
 {
   if (g->vbo) glDeleteBuffers(1, &g->vbo);
   if (g->vao) glDeleteVertexArrays(1, &g->vao);
-  free(g->firsts);
-  free(g->counts);
+  gui_series_arrays_free(g);
   memset(g, 0, sizeof *g);
 }
 
@@ -306,11 +281,12 @@ void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip)
 }
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us) { v->cursor_us = t_us; }
 
-static void draw_series(const gui_series_gl *g)
+static void draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
 {
   if (!g->n_lines) return;
+  gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
   glBindVertexArray(g->vao);
-  glMultiDrawArrays(GL_LINE_STRIP, g->firsts, g->counts, g->n_lines);
+  glMultiDrawArrays(GL_LINE_STRIP, g->draw_first, g->draw_count, g->n_lines);
 }
 
 void gui_draw(elfm_viewer *v, int width, int height)
@@ -327,6 +303,7 @@ void gui_draw(elfm_viewer *v, int width, int height)
   /* Cursor in the shaders' ms since t_min; "everything" is past the end. */
   float cursor_ms = v->cursor_us >= d->t_max_us ? 1e30f
                     : v->cursor_us <= d->t_min_us ? 0.0f : t_ms_of(v, v->cursor_us);
+  double px_per_um = height / (2.0 * v->cam.half_height_um);
   /* Pixels grow with the picture so a 4K screenshot reads like a window. */
   double scale = height > 1100 ? 2.0 : 1.0;
 
@@ -365,11 +342,11 @@ void gui_draw(elfm_viewer *v, int width, int height)
   glUniform1f(l->u_cursor, cursor_ms);
   if (v->opt.show_truth && v->truth.n_lines) {
     glUniform4f(l->u_color, 0.62f, 0.62f, 0.62f, 0.8f);
-    draw_series(&v->truth);
+    draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
   }
   glUniform1i(l->u_mode, (int)v->mode);
   glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
-  draw_series(&v->tracks);
+  draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
 
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots
@@ -461,7 +438,7 @@ static double now_s(void)
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height,
+elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height, int sweep,
                               double *ms_mean, double *ms_max, elfm_error *err)
 {
   if (n_frames < 1)
@@ -477,8 +454,9 @@ elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int heigh
   for (int i = 0; i < n_frames; i++) {
     /* The cursor sweeps the recording and the camera turns: what a user
      * playing back while orbiting sees. */
-    v->cursor_us = d->t_min_us + (int64_t)((double)(d->t_max_us - d->t_min_us) *
-                                           (i + 1) / n_frames);
+    if (sweep)
+      v->cursor_us = d->t_min_us + (int64_t)((double)(d->t_max_us - d->t_min_us) *
+                                             (i + 1) / n_frames);
     elfm_camera_rotate(&v->cam, 2.0, 0.0);
     double t0 = now_s();
     gui_draw(v, width, height);

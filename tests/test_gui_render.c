@@ -411,20 +411,45 @@ int main(int argc, char **argv)
   /* 6. Another size through the same viewer (framebuffer rebuilt). */
   uint8_t *big = malloc(1000 * 700 * 3);
   CHECK_OK(elfm_viewer_render_rgb(v, 1000, 700, big, &err), &err);
-  int lit = 0;
-  for (size_t i = 0; i < 1000 * 700; i++) lit += saturation(big + 3 * i) > 80;
-  CHECK(lit > 500);
+  int lit_big = 0;
+  for (size_t i = 0; i < 1000 * 700; i++) lit_big += saturation(big + 3 * i) > 80;
+  CHECK(lit_big > 500);
   free(big);
   uint8_t tiny[3];
   CHECK_EQ_INT(elfm_viewer_render_rgb(v, 0, 5, tiny, &err), ELFM_ERR_INVALID);
 
   double mean = 0, worst = 0;
-  CHECK_OK(elfm_viewer_bench(v, 3, 320, 240, &mean, &worst, &err), &err);
+  CHECK_OK(elfm_viewer_bench(v, 3, 320, 240, 1, &mean, &worst, &err), &err);
   CHECK(mean > 0 && worst >= mean);
   elfm_viewer_free(v);
   elfm_view_data_free(d);
 
-  /* 7. The CLI: --screenshot writes a PNG of the asked size with tracks. */
+  /* 7. Level of detail: 200 helices of 1000 points drawn with sub-pixel
+   * chords merged look like the full-detail picture (< 3 % of the lit
+   * pixels differ visibly). */
+  elfm_view_data *syn = NULL;
+  CHECK_OK(elfm_view_data_synthetic(200, 1000, &syn, &err), &err);
+  static uint8_t full[W * H * 3];
+  for (int pass = 0; syn && pass < 2; pass++) {
+    o.full_detail = pass;
+    v = NULL;
+    CHECK_OK(elfm_viewer_create(&o, syn, &v, &err), &err);
+    if (!v) break;
+    CHECK_OK(elfm_viewer_render_rgb(v, W, H, pass ? full : img, &err), &err);
+    elfm_viewer_free(v);
+  }
+  long lit = 0, differ = 0;
+  for (size_t i = 0; i < (size_t)W * H; i++) {
+    lit += saturation(full + 3 * i) > 80;
+    int m = 0;
+    for (int k = 0; k < 3; k++) m = abs(full[3 * i + k] - img[3 * i + k]) > m ? abs(full[3 * i + k] - img[3 * i + k]) : m;
+    differ += m > 60;
+  }
+  CHECK_MSG(lit > 5000, "full-detail picture has only %ld lit pixels", lit);
+  CHECK_MSG(differ * 100 < 3 * lit, "level of detail changed %ld of %ld lit pixels", differ, lit);
+  elfm_view_data_free(syn);
+
+  /* 8. The CLI: --screenshot writes a PNG of the asked size with tracks. */
   const char *bin = ELFM_BINARY_DIR "/eventlfm";
   if (access(bin, X_OK) == 0) {
     char cmd[2048];
