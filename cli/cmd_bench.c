@@ -66,6 +66,7 @@ struct bench_opts {
   int64_t seed;
   int components, figures;
   double timeout_s;
+  int max_points; /* 0: all; else only the first N points per scene (smoke tests) */
 };
 
 /* One sweep point: extra arguments to `eventlfm track`, or a calibration
@@ -83,38 +84,40 @@ struct sweep_point {
 static const struct sweep_point SWEEP[] = {
     {"baseline", "defaults", {NULL}, 0, 1},
     {"accumulation", "dt 500 us", {"--dt-us", "500", NULL}, 0, 1},
-    {"accumulation", "dt 1 ms", {"--dt-us", "1000", NULL}, 0, 1},
+    {"accumulation", "dt 1 ms", {"--dt-us", "1000", NULL}, 0, 0},
     {"accumulation", "dt 2 ms", {"--dt-us", "2000", NULL}, 0, 1},
     {"accumulation", "dt 5 ms", {"--dt-us", "5000", NULL}, 0, 1},
-    {"representation", "exp time surface", {"--repr", "exp", NULL}, 0, 1},
+    {"representation", "exp time surface", {"--repr", "exp", NULL}, 0, 0},
     {"representation", "lin time surface", {"--repr", "lin", NULL}, 0, 1},
     {"representation", "counts", {"--repr", "count", NULL}, 0, 1},
     {"tau", "tau 250 us", {"--tau-us", "250", NULL}, 0, 1},
     {"tau", "tau 500 us", {"--tau-us", "500", NULL}, 0, 0},
-    {"tau", "tau 1 ms", {"--tau-us", "1000", NULL}, 0, 1},
-    {"tau", "tau 2 ms", {"--tau-us", "2000", NULL}, 0, 0},
+    {"tau", "tau 1 ms", {"--tau-us", "1000", NULL}, 0, 0},
+    {"tau", "tau 2 ms", {"--tau-us", "2000", NULL}, 0, 1},
     {"median", "median off", {"--median", "0", NULL}, 0, 1},
-    {"median", "median 3x3", {"--median", "3", NULL}, 0, 1},
+    {"median", "median 3x3", {"--median", "3", NULL}, 0, 0},
+    {"median", "median 5x5", {"--median", "5", NULL}, 0, 0},
     {"planes", "dz 1 um", {NULL}, 1.0, 1},
-    {"planes", "dz 2 um", {NULL}, 2.0, 1},
+    {"planes", "dz 2 um", {NULL}, 2.0, 0},
     {"planes", "dz 4 um", {NULL}, 4.0, 1},
     {"ghost", "ghost none", {"--ghost", "none", NULL}, 0, 1},
-    {"ghost", "ghost threshold", {"--ghost", "threshold", NULL}, 0, 1},
-    {"ghost", "ghost agreement", {"--ghost", "agreement", NULL}, 0, 1},
+    {"ghost", "MAD k 3", {"--ghost", "mad", "--ghost-value", "3", NULL}, 0, 1},
+    {"ghost", "frac 0.2 of max", {"--ghost", "frac", "--ghost-value", "0.2", NULL}, 0, 0},
+    {"ghost", "agreement 0.8", {"--agree", "0.8", NULL}, 0, 1},
     {"refocus", "dense", {"--path", "dense", NULL}, 0, 1},
     {"refocus", "sparse", {"--path", "sparse", NULL}, 0, 1},
     {"threads", "1 thread", {"--threads", "1", NULL}, 0, 1},
     {"threads", "2 threads", {"--threads", "2", NULL}, 0, 1},
-    {"link radius", "radius 3 um", {"--link-radius-um", "3", NULL}, 0, 1},
-    {"link radius", "radius 6 um", {"--link-radius-um", "6", NULL}, 0, 0},
-    {"link radius", "radius 12 um", {"--link-radius-um", "12", NULL}, 0, 1},
+    {"link radius", "gate 2 um", {"--gate-um", "2", NULL}, 0, 1},
+    {"link radius", "gate 4 um", {"--gate-um", "4", NULL}, 0, 0},
+    {"link radius", "gate 8 um", {"--gate-um", "8", NULL}, 0, 1},
     {"gap", "gap 0", {"--max-gap", "0", NULL}, 0, 1},
     {"gap", "gap 5", {"--max-gap", "5", NULL}, 0, 0},
-    {"gap", "gap 50", {"--max-gap", "50", NULL}, 0, 1},
-    {"smoothing", "auto", {"--smooth", "auto", NULL}, 0, 1},
-    {"smoothing", "constant velocity", {"--smooth", "cv", NULL}, 0, 0},
-    {"smoothing", "spline", {"--smooth", "spline", NULL}, 0, 1},
-    {"smoothing", "off", {"--smooth", "none", NULL}, 0, 1},
+    {"gap", "gap 50", {"--max-gap", "50", NULL}, 0, 0},
+    {"smoothing", "model auto (BIC)", {"--model", "auto", NULL}, 0, 0},
+    {"smoothing", "const. velocity", {"--model", "cv", NULL}, 0, 1},
+    {"smoothing", "const. accel.", {"--model", "ca", NULL}, 0, 0},
+    {"smoothing", "spline", {"--model", "spline", NULL}, 0, 1},
 };
 #define N_SWEEP ((int)(sizeof SWEEP / sizeof SWEEP[0]))
 
@@ -419,7 +422,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
       path_fmt(p, sizeof p, "%s/plot/%s%s.dat", dir, sc[s].name, suffix);
       FILE *f = fopen(p, "w");
       if (!f) return -1;
-      fprintf(f, "# rtf err_f1 err_alpha (err = 1 - F1, 1 - alpha)\n");
+      fprintf(f, "# rtf err_f1 err_alpha setting (err = 1 - F1, 1 - alpha)\n");
       /* fronts in increasing rtf (selection sort on a few dozen points) */
       int used[BENCH_MAX_POINTS * 4] = {0};
       for (;;) {
@@ -433,7 +436,8 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
         }
         if (best < 0) break;
         used[best] = 1;
-        fprintf(f, "%.6g %.6g %.6g\n", pts[best].rtf, err_f1(&pts[best]), err_alpha(&pts[best]));
+        fprintf(f, "%.6g %.6g %.6g \"%s\"\n", pts[best].rtf, err_f1(&pts[best]),
+                err_alpha(&pts[best]), pts[best].sp->setting);
       }
       fclose(f);
     }
@@ -452,9 +456,10 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
     fprintf(g, "set ylabel '%s'\nplot ", panel == 0 ? "1 - F1 (detections)" : "1 - alpha (ISBI tracks)");
     for (int s = 0; s < n_sc; s++)
       fprintf(g, "%s'plot/%s.dat' using 1:%d with points pt 7 lc %d title '%s', "
-                 "'plot/%s_%s.dat' using 1:%d with linespoints lw 2 lc %d notitle",
+                 "'plot/%s_%s.dat' using 1:%d with linespoints lw 2 lc %d title '%s Pareto front', "
+                 "'' using 1:%d:4 with labels font ',8' offset 0.8,0.6 left tc lt %d notitle",
               s ? ", " : "", sc[s].name, panel + 2, s + 1, sc[s].name, sc[s].name,
-              panel == 0 ? "pf1" : "palpha", panel + 2, s + 1);
+              panel == 0 ? "pf1" : "palpha", panel + 2, s + 1, sc[s].name, panel + 2, s + 1);
     fprintf(g, "\n");
   }
   fprintf(g, "unset multiplot\n");
@@ -562,11 +567,13 @@ static void bench_usage(FILE *f)
           "runs `eventlfm track` as a child process and is scored (SPEC 7).\n"
           "Writes DIR/bench.csv, bench.md, bench_error_vs_speed.png (gnuplot), fig_s4.png and\n"
           "the output of the component benchmarks (build/bench/bench_*) in DIR/components/.\n"
-          "  --quick         flow only, 100 ms, fewer points (a few minutes on 2 cores)\n"
+          "  --quick         flow only, 50 ms, 23 points (a few minutes on 2 cores)\n"
           "  --out DIR       output directory (default bench_out)\n"
           "  --scenes LIST   built-in scenes (default: flow with --quick, else flow,stage)\n"
-          "  --duration-ms D simulated duration per scene (default 100 quick, 500 full)\n"
-          "  --timeout-s S   limit per child process (default 300 quick, 1800 full)\n");
+          "  --duration-ms D simulated duration per scene (default 50 quick, 300 full)\n"
+          "  --timeout-s S   limit per child process (default 300 quick, 1800 full)\n"
+          "  --max-points N  only the first N sweep points per scene (smoke tests)\n"
+          "  --no-components skip the component benchmarks; --no-figures: no PNGs\n");
 }
 
 static int run_components(const char *self, const char *dir, int quick, double timeout_s,
@@ -618,7 +625,8 @@ static int run_components(const char *self, const char *dir, int quick, double t
 
 int cmd_bench(int argc, char **argv)
 {
-  enum { OPT_QUICK = 256, OPT_OUT, OPT_SCENES, OPT_DUR, OPT_SEED, OPT_TIMEOUT, OPT_NOCOMP, OPT_NOFIG };
+  enum { OPT_QUICK = 256, OPT_OUT, OPT_SCENES, OPT_DUR, OPT_SEED, OPT_TIMEOUT, OPT_NOCOMP,
+         OPT_NOFIG, OPT_MAXPTS };
   static const struct option longopts[] = {
       {"quick", no_argument, NULL, OPT_QUICK},
       {"out", required_argument, NULL, OPT_OUT},
@@ -628,6 +636,7 @@ int cmd_bench(int argc, char **argv)
       {"timeout-s", required_argument, NULL, OPT_TIMEOUT},
       {"no-components", no_argument, NULL, OPT_NOCOMP},
       {"no-figures", no_argument, NULL, OPT_NOFIG},
+      {"max-points", required_argument, NULL, OPT_MAXPTS},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
   struct bench_opts op;
@@ -665,6 +674,10 @@ int cmd_bench(int argc, char **argv)
       break;
     case OPT_NOCOMP: op.components = 0; break;
     case OPT_NOFIG: op.figures = 0; break;
+    case OPT_MAXPTS:
+      if (!cli_parse_int("bench", "--max-points", optarg, &op.max_points)) return CLI_USAGE;
+      if (op.max_points < 1) return cli_message("bench", CLI_USAGE, "--max-points must be >= 1");
+      break;
     default:
       cli_message("bench", CLI_USAGE, "unknown option or missing value: '%s'", argv[optind - 1]);
       bench_usage(stderr);
@@ -674,7 +687,7 @@ int cmd_bench(int argc, char **argv)
   if (optind < argc)
     return cli_message("bench", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!op.scenes[0]) path_fmt(op.scenes, sizeof op.scenes, "%s", op.quick ? "flow" : "flow,stage");
-  if (op.duration_ms < 0) op.duration_ms = op.quick ? 100 : 500;
+  if (op.duration_ms < 0) op.duration_ms = op.quick ? 50 : 300;
   if (op.timeout_s < 0) op.timeout_s = op.quick ? 300 : 1800;
 
   char self[PATH_MAX];
@@ -737,7 +750,8 @@ int cmd_bench(int argc, char **argv)
   static struct point_result pts[BENCH_MAX_POINTS * 4];
   int n_pts = 0, n_total = 0;
   for (int s = 0; s < n_sc; s++)
-    for (int k = 0; k < N_SWEEP; k++) n_total += !op.quick || SWEEP[k].quick;
+    for (int k = 0, m = 0; k < N_SWEEP; k++)
+      if ((!op.quick || SWEEP[k].quick) && (!op.max_points || m < op.max_points)) { n_total++; m++; }
   char host[128] = "unknown";
   gethostname(host, sizeof host - 1);
   {
@@ -747,9 +761,12 @@ int cmd_bench(int argc, char **argv)
   }
   for (int s = 0; s < n_sc; s++) {
     struct scene_info *si = &sc[s];
+    int n_here = 0;
     for (int k = 0; k < N_SWEEP; k++) {
       const struct sweep_point *sp = &SWEEP[k];
       if (op.quick && !sp->quick) continue;
+      if (op.max_points && n_here >= op.max_points) break;
+      n_here++;
       struct point_result *p = &pts[n_pts++];
       memset(p, 0, sizeof *p);
       p->scene = si->name;
@@ -781,6 +798,7 @@ int cmd_bench(int argc, char **argv)
       for (int a = 0; sp->args[a]; a++) targv[na++] = (char *)sp->args[a];
       targv[na] = NULL;
       int rc = run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb);
+      if (rc != 0) p->peak_rss_mb = NAN; /* a rejected run's memory means nothing */
       if (rc == 2) p->status = "unsupported";
       else if (rc == -2) p->status = "timeout";
       else if (rc != 0) p->status = "failed";

@@ -2,3 +2,4 @@
 elfm_add_test(test_score_hungarian test_score_hungarian.c TIMEOUT 60)
 elfm_add_test(test_score test_score.c TIMEOUT 60)
 elfm_add_test(test_score_cli test_score_cli.c TIMEOUT 60)
+elfm_add_test(test_score_bench_cli test_score_bench_cli.c TIMEOUT 240)

@@ -1,0 +1,110 @@
+/* test_score_bench_cli.c — `eventlfm demo` and `eventlfm bench` end to end
+ * on a very short flow scene: they run the real simulator, tracker and
+ * scorer, and must write what they promise (table on stdout, bench.csv rows
+ * with measured figures, a PNG from gnuplot). Option errors exit 2.
+ * Run from a scratch directory far from the source tree: demo and bench
+ * must not need any file of the checkout. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+
+static char dir[256];
+static const char *exe = ELFM_BINARY_DIR "/eventlfm";
+
+static int run(const char *args, char *out, size_t out_size)
+{
+  char cmd[2048];
+  snprintf(cmd, sizeof cmd, "cd '%s' && '%s' %s >out.txt 2>err.txt", dir, exe, args);
+  int st = system(cmd);
+  int rc = WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+  char p[512];
+  snprintf(p, sizeof p, "%s/out.txt", dir);
+  FILE *f = fopen(p, "r");
+  size_t n = f ? fread(out, 1, out_size - 1, f) : 0;
+  out[n] = '\0';
+  if (f) fclose(f);
+  return rc;
+}
+
+static char *slurp(const char *rel)
+{
+  char p[512];
+  snprintf(p, sizeof p, "%s/%s", dir, rel);
+  FILE *f = fopen(p, "rb");
+  if (!f) return NULL;
+  static char buf[1 << 20];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  buf[n] = '\0';
+  fclose(f);
+  return buf;
+}
+
+static void show_err(void)
+{
+  char *e = slurp("err.txt");
+  if (e) fprintf(stderr, "--- stderr of the last run ---\n%.4000s\n", e);
+}
+
+int main(void)
+{
+  if (access(exe, X_OK) != 0) SKIP("%s not built", exe);
+  snprintf(dir, sizeof dir, "/tmp/elfm_test_bench_cli_XXXXXX");
+  if (!mkdtemp(dir)) { perror("mkdtemp"); return 1; }
+  static char out[1 << 16];
+
+  /* help and usage errors */
+  CHECK_EQ_INT(run("bench --help", out, sizeof out), 0);
+  CHECK(strstr(out, "usage:") != NULL);
+  CHECK_EQ_INT(run("demo --help", out, sizeof out), 0);
+  CHECK(strstr(out, "usage:") != NULL);
+  CHECK_EQ_INT(run("bench --duration-ms 5", out, sizeof out), 2);
+  CHECK_EQ_INT(run("bench --max-points 0", out, sizeof out), 2);
+  CHECK_EQ_INT(run("bench --bogus", out, sizeof out), 2);
+  CHECK_EQ_INT(run("demo --duration-ms abc", out, sizeof out), 2);
+  CHECK_EQ_INT(run("demo extra", out, sizeof out), 2);
+
+  /* demo: 30 ms of flow, no pictures (the recon MIPs are tested by recon) */
+  int rc = run("demo --duration-ms 30 --no-plots --out demo", out, sizeof out);
+  CHECK_EQ_INT(rc, 0);
+  if (rc != 0) show_err();
+  CHECK_MSG(strstr(out, "detection F1") != NULL, "stdout: %s", out);
+  CHECK_MSG(strstr(out, "real-time factor") != NULL, "stdout: %s", out);
+  {
+    const char *l = strstr(out, "detection F1");
+    double f1 = -1;
+    if (l) sscanf(l + strlen("detection F1"), "%lf", &f1);
+    CHECK_MSG(f1 >= 0.0 && f1 <= 1.0, "F1 %g", f1);
+  }
+  CHECK(slurp("demo/track/tracks.csv") != NULL);
+  CHECK(slurp("demo/sim/truth.csv") != NULL);
+
+  /* bench: two sweep points, no component benchmarks */
+  rc = run("bench --quick --duration-ms 20 --max-points 2 --no-components --out b", out,
+           sizeof out);
+  CHECK_EQ_INT(rc, 0);
+  if (rc != 0) show_err();
+  char *csv = slurp("b/bench.csv");
+  CHECK(csv != NULL);
+  if (csv) {
+    int rows = 0, ok = 0;
+    for (char *line = strchr(csv, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
+      rows++;
+      if (strstr(line, ",ok,")) ok++;
+    }
+    CHECK_EQ_INT(rows, 2);
+    CHECK_EQ_INT(ok, 2);
+  }
+  char *md = slurp("b/bench.md");
+  CHECK(md != NULL && strstr(md, "| flow | baseline |") != NULL);
+  char *png = slurp("b/bench_error_vs_speed.png");
+  CHECK(png != NULL && memcmp(png, "\x89PNG", 4) == 0);
+
+  char cmd[600];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+  return check_report();
+}
