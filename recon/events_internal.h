@@ -24,8 +24,9 @@
  * a desktop CPU with the chunk arrays beside it. Also the header limit:
  * a header must end within the first buffer. */
 #define ELFM_READ_BUF_BYTES ((size_t)4 << 20)
-/* The most events one input word can give: an EVT 2.1 word has a 32-bit
- * valid mask; an EVT3 VECT_12 gives 12. */
+/* The most chunk slots one input word may need: an EVT 2.1 word has a
+ * 32-bit valid mask; an EVT3 VECT_12 gives 12 events but the decoder
+ * writes 16 slots (see evt3.c). */
 #define ELFM_PEND_CAP 32
 /* CSV: longest accepted line. "t_us,x,y,p" with a 19-digit time is < 40
  * bytes; 1024 leaves room for trailing spaces and extra columns while a

@@ -35,6 +35,35 @@ static elfm_status backward(elfm_reader *r, int64_t off, int64_t t_from, int64_t
                         (long long)t_to);
 }
 
+/* Set-bit positions (then zeros) and bit counts of every 6-bit value:
+ * a VECT_12 mask is two 6-bit halves, and these tables turn each half
+ * into the x offsets of its events without a loop over the bits.
+ * (Generated: row m lists the i in 0..5 with bit i of m set.) */
+static const uint8_t evt3_pos6[64][8] = {
+    {0, 0, 0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0, 0, 0}, {1, 0, 0, 0, 0, 0, 0, 0}, {0, 1, 0, 0, 0, 0, 0, 0},
+    {2, 0, 0, 0, 0, 0, 0, 0}, {0, 2, 0, 0, 0, 0, 0, 0}, {1, 2, 0, 0, 0, 0, 0, 0}, {0, 1, 2, 0, 0, 0, 0, 0},
+    {3, 0, 0, 0, 0, 0, 0, 0}, {0, 3, 0, 0, 0, 0, 0, 0}, {1, 3, 0, 0, 0, 0, 0, 0}, {0, 1, 3, 0, 0, 0, 0, 0},
+    {2, 3, 0, 0, 0, 0, 0, 0}, {0, 2, 3, 0, 0, 0, 0, 0}, {1, 2, 3, 0, 0, 0, 0, 0}, {0, 1, 2, 3, 0, 0, 0, 0},
+    {4, 0, 0, 0, 0, 0, 0, 0}, {0, 4, 0, 0, 0, 0, 0, 0}, {1, 4, 0, 0, 0, 0, 0, 0}, {0, 1, 4, 0, 0, 0, 0, 0},
+    {2, 4, 0, 0, 0, 0, 0, 0}, {0, 2, 4, 0, 0, 0, 0, 0}, {1, 2, 4, 0, 0, 0, 0, 0}, {0, 1, 2, 4, 0, 0, 0, 0},
+    {3, 4, 0, 0, 0, 0, 0, 0}, {0, 3, 4, 0, 0, 0, 0, 0}, {1, 3, 4, 0, 0, 0, 0, 0}, {0, 1, 3, 4, 0, 0, 0, 0},
+    {2, 3, 4, 0, 0, 0, 0, 0}, {0, 2, 3, 4, 0, 0, 0, 0}, {1, 2, 3, 4, 0, 0, 0, 0}, {0, 1, 2, 3, 4, 0, 0, 0},
+    {5, 0, 0, 0, 0, 0, 0, 0}, {0, 5, 0, 0, 0, 0, 0, 0}, {1, 5, 0, 0, 0, 0, 0, 0}, {0, 1, 5, 0, 0, 0, 0, 0},
+    {2, 5, 0, 0, 0, 0, 0, 0}, {0, 2, 5, 0, 0, 0, 0, 0}, {1, 2, 5, 0, 0, 0, 0, 0}, {0, 1, 2, 5, 0, 0, 0, 0},
+    {3, 5, 0, 0, 0, 0, 0, 0}, {0, 3, 5, 0, 0, 0, 0, 0}, {1, 3, 5, 0, 0, 0, 0, 0}, {0, 1, 3, 5, 0, 0, 0, 0},
+    {2, 3, 5, 0, 0, 0, 0, 0}, {0, 2, 3, 5, 0, 0, 0, 0}, {1, 2, 3, 5, 0, 0, 0, 0}, {0, 1, 2, 3, 5, 0, 0, 0},
+    {4, 5, 0, 0, 0, 0, 0, 0}, {0, 4, 5, 0, 0, 0, 0, 0}, {1, 4, 5, 0, 0, 0, 0, 0}, {0, 1, 4, 5, 0, 0, 0, 0},
+    {2, 4, 5, 0, 0, 0, 0, 0}, {0, 2, 4, 5, 0, 0, 0, 0}, {1, 2, 4, 5, 0, 0, 0, 0}, {0, 1, 2, 4, 5, 0, 0, 0},
+    {3, 4, 5, 0, 0, 0, 0, 0}, {0, 3, 4, 5, 0, 0, 0, 0}, {1, 3, 4, 5, 0, 0, 0, 0}, {0, 1, 3, 4, 5, 0, 0, 0},
+    {2, 3, 4, 5, 0, 0, 0, 0}, {0, 2, 3, 4, 5, 0, 0, 0}, {1, 2, 3, 4, 5, 0, 0, 0}, {0, 1, 2, 3, 4, 5, 0, 0},
+};
+static const uint8_t evt3_cnt6[64] = {
+    0, 1, 1, 2, 1, 2, 2, 3, 1, 2, 2, 3, 2, 3, 3, 4,
+    1, 2, 2, 3, 2, 3, 3, 4, 2, 3, 3, 4, 3, 4, 4, 5,
+    1, 2, 2, 3, 2, 3, 3, 4, 2, 3, 3, 4, 3, 4, 4, 5,
+    2, 3, 3, 4, 3, 4, 4, 5, 3, 4, 4, 5, 4, 5, 5, 6,
+};
+
 /* What the fast loop reads and updates, kept together so it can live in
  * memory next to the stack while the loop keeps its own values in
  * registers. */
@@ -47,9 +76,10 @@ typedef struct evt3_fast_state {
 } evt3_fast_state;
 
 /* The fast path, for words q..stop (the caller makes sure the chunk has
- * room for 12 events per word). The word types of a real stream follow
- * no pattern a branch predictor learns, and one mispredicted branch costs
- * more than a whole word, so a word updates the state by one store into
+ * room for 12 events per word plus 4 scratch slots). The word types of a
+ * real stream follow no pattern a branch predictor learns, and one
+ * mispredicted branch costs more than a whole word (only vectors keep a
+ * branch of their own), so a word updates the state by one store into
  * regs[type] and always writes a would-be ADDR_X event that is kept (n
  * advances) only when it is one. Time cannot go back here: a TIME_LOW
  * below the current one stops the loop, so events need no order check.
@@ -57,6 +87,9 @@ typedef struct evt3_fast_state {
  * anything out of range) without having changed anything for it; the
  * slow path then decodes that word with every check. Kept out of line so
  * that its dozen live values get registers of their own. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
 static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_event_chunk *c,
                                 size_t *n_io, evt3_fast_state *fs)
 {
@@ -92,12 +125,12 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
       for (uint32_t i = 0; i < 12; i++) T[n + i] = t;
       for (uint32_t i = 0; i < 12; i++) Y[n + i] = y;
       for (uint32_t i = 0; i < 12; i++) P[n + i] = p;
-      size_t k = n;
-      for (uint32_t i = 0; i < 12; i++) {
-        X[k] = (uint16_t)(x0 + i);
-        k += (mask >> i) & 1;
-      }
-      n = k;
+      /* x of the set bits: 8 slots per 6-bit half (room for 16). */
+      const uint8_t *lo = evt3_pos6[mask & 63], *hi = evt3_pos6[mask >> 6];
+      for (uint32_t i = 0; i < 8; i++) X[n + i] = (uint16_t)(x0 + lo[i]);
+      n += evt3_cnt6[mask & 63];
+      for (uint32_t i = 0; i < 8; i++) X[n + i] = (uint16_t)(x0 + 6 + hi[i]);
+      n += evt3_cnt6[mask >> 6];
       voff += nbits;
       continue;
     }
@@ -121,8 +154,9 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
   const size_t end = pos + ((r->len - pos) & ~(size_t)1);
   size_t n = c->n;
   const size_t n0 = n;
-  /* The caller guarantees room for 12 events at entry. */
-  const size_t lim = c->cap - 12;
+  /* The caller guarantees room for 16 events at entry (a vector gives 12
+   * but the fast path writes 16 slots). */
+  const size_t lim = c->cap - 16;
   int64_t *const T = c->t_us;
   uint16_t *const X = c->x, *const Y = c->y;
   uint8_t *const P = c->p;
@@ -146,7 +180,8 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
 
   while (pos < end && n <= lim) {
     if (fast) {
-      /* As many words as surely fit: each gives at most 12 events. */
+      /* As many words as surely fit: each gives at most 12 events and
+       * writes at most 16 slots. */
       size_t words = (end - pos) / 2, fit = (lim - n) / 12 + 1;
       if (words > fit) words = fit;
       const uint8_t *stop = b + pos + 2 * words;

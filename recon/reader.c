@@ -277,7 +277,7 @@ static elfm_status parse_header(elfm_reader *r, const elfm_reader_options *opt, 
   r->header_lines = lines;
   r->pos = pos;
   switch (h.fmt) {
-  case ELFM_FMT_EVT3: r->decode = elfm_evt3_decode; r->word_bytes = 2; r->max_per_word = 12; break;
+  case ELFM_FMT_EVT3: r->decode = elfm_evt3_decode; r->word_bytes = 2; r->max_per_word = 16; break;
   case ELFM_FMT_EVT2: r->decode = elfm_evt2_decode; r->word_bytes = 4; r->max_per_word = 1; break;
   case ELFM_FMT_EVT21: r->decode = elfm_evt21_decode; r->word_bytes = 8; r->max_per_word = 32; break;
   case ELFM_FMT_DAT: r->decode = elfm_dat_decode; r->word_bytes = 8; r->max_per_word = 1; break;
