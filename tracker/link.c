@@ -57,7 +57,7 @@ struct elfm_linker {
 void elfm_link_options_default(elfm_link_options *o)
 {
   memset(o, 0, sizeof *o);
-  o->gate_um = 4.0;
+  o->gate_um = 6.0;
   o->gate_growth_um_per_frame = 0.05;
   o->kz = 4.0;
   o->max_gap_frames = 50;
