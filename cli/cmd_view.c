@@ -163,11 +163,15 @@ static int view_main(const view_opts *o)
                        : elfm_view_data_load(o->input, o->truth, &data, &err);
   if (st != ELFM_OK) return cli_fail("view", &err);
   cli_message("view", 0,
-              "%zu tracks (%zu points), %zu truth lines, %zu detections, %zu MIPs; "
+              "%zu tracks (%zu points), %zu truth lines, %zu detections, %zu %s; "
               "t %.3f..%.3f ms; box %s",
               data->tracks.n_lines, data->tracks.n_points, data->truth.n_lines,
-              data->n_detections, data->n_mips, data->t_min_us / 1000.0,
-              data->t_max_us / 1000.0, data->calib_path[0] ? data->calib_path : "from the data");
+              data->n_detections, data->n_mips,
+              data->n_mips && data->mips[0].is_volume ? "volumes" : "MIPs",
+              data->t_min_us / 1000.0, data->t_max_us / 1000.0,
+              data->calib_path[0] ? data->calib_path
+              : o->syn_tracks     ? "synthetic"
+                                  : "from the data");
 
   elfm_viewer_options vo;
   elfm_viewer_options_default(&vo);

@@ -49,10 +49,12 @@ typedef struct elfm_view_series {
   int64_t *t_us;     /* n_points */
 } elfm_view_series;
 
-/* One saved MIP picture and the time it stands for. */
+/* One saved MIP picture (PNG) or volume (OpenEXR, projected by the viewer)
+ * and the time it stands for. */
 typedef struct elfm_view_mip {
   char path[1024];
   int64_t t_us;
+  int is_volume;     /* 1: an .exr volume, 0: a .png MIP */
 } elfm_view_mip;
 
 typedef struct elfm_view_data {
@@ -62,7 +64,7 @@ typedef struct elfm_view_data {
   float *det_xyz_um;           /* 3 * n_detections */
   int64_t *det_t_us;           /* n_detections */
   size_t n_mips;
-  elfm_view_mip *mips;         /* sorted by t_us */
+  elfm_view_mip *mips;         /* sorted by t_us; MIP PNGs if any, else EXR volumes */
   int64_t t_min_us, t_max_us;  /* time span of everything loaded */
   int64_t frame_dt_us;         /* typical step between frames (arrow keys) */
   /* Box of the reconstructed volume in um: from calib.json (SPEC §3) when one
@@ -75,8 +77,12 @@ typedef struct elfm_view_data {
 
 /* Load what `path` names:
  *   - a directory: its tracks.csv (or, without one, truth.csv as the main
- *     lines), detections.csv, mips/ *.png or mip/ *.png, and calib.json from the
- *     directory or its parent;
+ *     lines), detections.csv, MIP pictures (mips/ or mip/ *.png) or else
+ *     volumes (volumes/ or exr/ *.exr), and calib.json from the directory or
+ *     its parent. A picture's or volume's time comes from its name:
+ *     "t<digits>" or "t_us<digits>" is a time in us, otherwise its last
+ *     number is a frame index (mapped to time through the frame and t_us
+ *     columns of tracks.csv/detections.csv);
  *   - a .csv file: its kind is told by its header (track_id -> tracks,
  *     id + brightness -> truth, frame + intensity -> detections).
  * `truth_path` (may be NULL) adds a truth.csv as the grey overlay.

@@ -1,14 +1,20 @@
 /* mip_plane.c — the MIP of the cursor's frame as a textured plane.
  *
- * The recon stage saves one depth-colour-coded MIP PNG per frame; the plane
- * shows the latest one at or before the cursor, under the tracks at the
- * volume's z_min. A PNG is decoded only when the frame changes, into one
- * reused buffer. Where a MIP picture is wider or taller than the volume's
- * x-y size (side panels with x-z and y-z projections), the x-y panel is
- * taken to be its top-left W x H corner (W x H = view_size_px of calib.json).
+ * The recon stage saves one depth-colour-coded MIP PNG per frame (and/or
+ * the volume as OpenEXR); the plane shows the latest one at or before the
+ * cursor, under the tracks at the volume's z_min. A file is decoded only
+ * when the frame changes, into one reused buffer. Where a MIP picture is
+ * wider or taller than the volume's x-y size, it carries side panels
+ * (recon/elfm_pipeline.h: x-y at the top left, x-z below, y-z right), and
+ * the plane shows the top-left W x H (W x H = view_size_px of calib.json).
+ * A volume is projected here: brightness = maximum along z over the
+ * volume's maximum, colour = depth of that maximum through the viewer's own
+ * colour map (so it matches the depth colour bar).
  */
 #include <stdio.h>
+#include <stdlib.h>
 
+#include "elfm_pipeline.h"
 #include "gl_internal.h"
 
 /* Index of the last MIP with t_us <= t, or -1. */
@@ -27,6 +33,48 @@ static long mip_index_at(const elfm_view_data *d, int64_t t)
   return best;
 }
 
+/* Depth-coded MIP of an EXR volume into v->mip_rgba (grown if needed). */
+static elfm_status mip_from_volume(elfm_viewer *v, const char *path, int *w, int *h,
+                                   elfm_error *err)
+{
+  elfm_volume *vol = NULL;
+  elfm_status st = elfm_volume_read_exr(path, &vol, err);
+  if (st != ELFM_OK) return st;
+  size_t plane = (size_t)vol->w * vol->h, need = plane * 4;
+  if (need > v->mip_cap) {
+    uint8_t *nb = realloc(v->mip_rgba, need);
+    if (!nb) {
+      elfm_volume_free(vol);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "out of memory");
+    }
+    v->mip_rgba = nb;
+    v->mip_cap = need;
+  }
+  float vmax = 0;
+  for (size_t i = 0; i < plane * (size_t)vol->nz; i++)
+    if (vol->data[i] > vmax) vmax = vol->data[i];
+  for (size_t i = 0; i < plane; i++) {
+    float best = vol->data[i];
+    int kbest = 0;
+    for (int k = 1; k < vol->nz; k++) {
+      float x = vol->data[(size_t)k * plane + i];
+      if (x > best) {
+        best = x;
+        kbest = k;
+      }
+    }
+    float rgb[3];
+    elfm_colormap_rgb(vol->nz > 1 ? (double)kbest / (vol->nz - 1) : 0.5, rgb);
+    float b = vmax > 0 && best > 0 ? best / vmax : 0;
+    for (int c = 0; c < 3; c++) v->mip_rgba[4 * i + c] = (uint8_t)(255.0f * rgb[c] * b + 0.5f);
+    v->mip_rgba[4 * i + 3] = 255;
+  }
+  *w = vol->w;
+  *h = vol->h;
+  elfm_volume_free(vol);
+  return ELFM_OK;
+}
+
 int gui_mip_update(elfm_viewer *v)
 {
   const elfm_view_data *d = v->data;
@@ -39,7 +87,10 @@ int gui_mip_update(elfm_viewer *v)
   int w = 0, h = 0;
   elfm_error e;
   elfm_error_clear(&e);
-  if (gui_png_read_into(d->mips[k].path, &v->mip_rgba, &v->mip_cap, &w, &h, &e) != ELFM_OK) {
+  elfm_status st = d->mips[k].is_volume
+                       ? mip_from_volume(v, d->mips[k].path, &w, &h, &e)
+                       : gui_png_read_into(d->mips[k].path, &v->mip_rgba, &v->mip_cap, &w, &h, &e);
+  if (st != ELFM_OK) {
     /* A broken MIP must not stop the viewer: say so on the status line. */
     elfm_error_format(&e, v->status_line, sizeof v->status_line);
     return 0;

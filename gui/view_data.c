@@ -221,11 +221,14 @@ static int mip_cmp(const void *a, const void *b)
   return (x->t_us > y->t_us) - (x->t_us < y->t_us);
 }
 
+/* MIP PNGs first (they are what recon made for viewing); else volumes. */
 static elfm_status mips_scan(const char *dir, const frame_clock *fc, elfm_view_data *d,
                              elfm_error *err)
 {
-  static const char *const subdirs[] = {"mips", "mip", "MIP"};
+  static const char *const subdirs[] = {"mips", "mip", "MIP", "volumes", "exr"};
   for (size_t s = 0; s < sizeof subdirs / sizeof subdirs[0]; s++) {
+    int vol = s >= 3;
+    const char *ext = vol ? ".exr" : ".png";
     char sub[1024];
     elfm_status st = join_path(sub, sizeof sub, dir, subdirs[s], err);
     if (st != ELFM_OK) return st;
@@ -236,7 +239,7 @@ static elfm_status mips_scan(const char *dir, const frame_clock *fc, elfm_view_d
     size_t cap = 0;
     while ((e = readdir(dp))) {
       size_t len = strlen(e->d_name);
-      if (len < 5 || strcmp(e->d_name + len - 4, ".png")) continue;
+      if (len < 5 || strcmp(e->d_name + len - 4, ext)) continue;
       int64_t t;
       if (!mip_time_from_name(e->d_name, fc, &t)) continue;
       if (d->n_mips == cap) {
@@ -256,6 +259,7 @@ static elfm_status mips_scan(const char *dir, const frame_clock *fc, elfm_view_d
         return st;
       }
       m->t_us = t;
+      m->is_volume = vol;
       d->n_mips++;
     }
     closedir(dp);
@@ -286,7 +290,8 @@ static void time_add(int64_t *lo, int64_t *hi, const int64_t *t, size_t n)
 }
 
 /* Box, time span and frame step once everything is loaded. */
-static elfm_status finish_bounds(elfm_view_data *d, const frame_clock *fc, elfm_error *err)
+static elfm_status finish_bounds(elfm_view_data *d, const frame_clock *fc, int keep_box,
+                                 elfm_error *err)
 {
   d->t_min_us = INT64_MAX;
   d->t_max_us = INT64_MIN;
@@ -300,7 +305,7 @@ static elfm_status finish_bounds(elfm_view_data *d, const frame_clock *fc, elfm_
   if (fc->valid && fc->us_per_frame >= 1) d->frame_dt_us = (int64_t)llround(fc->us_per_frame);
   else d->frame_dt_us = span / 1000 > 0 ? span / 1000 : 1; /* 1000 steps across */
 
-  if (d->box_from_calib) return ELFM_OK;
+  if (d->box_from_calib || keep_box) return ELFM_OK;
   double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
   extent_add(lo, hi, d->tracks.xyz_um, d->tracks.n_points);
   extent_add(lo, hi, d->truth.xyz_um, d->truth.n_points);
@@ -429,7 +434,7 @@ elfm_status elfm_view_data_load(const char *path, const char *truth_path,
   if (st == ELFM_OK && truth_path) st = load_csv(truth_path, 1, d, &fc, err);
   if (st == ELFM_OK) st = load_calib_box(dir, d, err);
   if (st == ELFM_OK) st = mips_scan(dir, &fc, d, err);
-  if (st == ELFM_OK) st = finish_bounds(d, &fc, err);
+  if (st == ELFM_OK) st = finish_bounds(d, &fc, 0, err);
   if (st != ELFM_OK) {
     elfm_view_data_free(d);
     return st;
@@ -484,9 +489,8 @@ elfm_status elfm_view_data_synthetic(size_t n_tracks, size_t n_points, elfm_view
   d->box_max_um[0] = d->box_max_um[1] = 65;
   d->box_min_um[2] = -100;
   d->box_max_um[2] = 100;
-  d->box_from_calib = 1;
   frame_clock fc = {1, 0, 0, 1000};
-  elfm_status st = finish_bounds(d, &fc, err);
+  elfm_status st = finish_bounds(d, &fc, 1, err);
   if (st != ELFM_OK) {
     elfm_view_data_free(d);
     return st;

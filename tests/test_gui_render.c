@@ -23,6 +23,7 @@
 
 #include "check.h"
 #include "elfm_gui.h"
+#include "elfm_pipeline.h"
 
 /* Under AddressSanitizer: Mesa and Xlib keep allocations for the process's
  * life (driver caches); our own leaks are still reported. The two 56-byte
@@ -407,6 +408,47 @@ int main(int argc, char **argv)
   CHECK_MSG(count[0] > W * H / 20, "MIP plane: %d magenta pixels", count[0]);
   CHECK_EQ_INT(count[1], 0);
   CHECK_EQ_INT(count[2], 0);
+
+  elfm_viewer_free(v);
+  v = NULL;
+  elfm_view_data_free(d);
+  d = NULL;
+
+  /* 5b. Without MIP pictures, saved volumes (EXR) are projected: a volume
+   * lit only in its last plane (z_max) gives the colour map's deep end. */
+  mkdir(tpath("run2"), 0755);
+  mkdir(tpath("run2/volumes"), 0755);
+  char cmd0[1200];
+  snprintf(cmd0, sizeof cmd0, "cp '%s' '%s'", tpath("tracks.csv"), tpath("run2/tracks.csv"));
+  CHECK(system(cmd0) == 0);
+  elfm_volume *vol = elfm_volume_create(16, 16, 5, 1.0, -40, 20, &err);
+  CHECK(vol != NULL);
+  if (vol) {
+    for (int i = 0; i < 16 * 16; i++) vol->data[4 * 16 * 16 + i] = 2.0f;
+    vol->t_us = 20000;
+    CHECK_OK(elfm_volume_write_exr(vol, tpath("run2/volumes/vol_t000020000.exr"), &err), &err);
+    elfm_volume_free(vol);
+  }
+  CHECK_OK(elfm_view_data_load(tpath("run2"), NULL, &d, &err), &err);
+  if (d) {
+    CHECK_EQ_INT(d->n_mips, 1);
+    CHECK_OK(elfm_viewer_create(&o, d, &v, &err), &err);
+  }
+  if (v) {
+    elfm_viewer_set_cursor(v, 30000);
+    render(v);
+    float e[3];
+    elfm_colormap_rgb(1.0, e);
+    int deep = 0;
+    for (size_t i = 0; i < (size_t)W * H; i++)
+      deep += fabs(img[3 * i] - 255.0 * e[0]) + fabs(img[3 * i + 1] - 255.0 * e[1]) +
+                  fabs(img[3 * i + 2] - 255.0 * e[2]) < 40;
+    CHECK_MSG(deep > W * H / 20, "volume MIP plane: %d pixels of the deep colour", deep);
+  }
+  if (!v) {
+    elfm_view_data_free(d);
+    return check_report();
+  }
 
   /* 6. Another size through the same viewer (framebuffer rebuilt). */
   uint8_t *big = malloc(1000 * 700 * 3);
