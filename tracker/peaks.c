@@ -239,29 +239,50 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
   const size_t nvox = (size_t)w * h * nz;
   const float *d = v->data;
 
-  /* Threshold: max of the three enabled rules. */
-  float vmax = -INFINITY;
-  size_t nonzero = 0;
-  for (size_t i = 0; i < nvox; i++) {
-    float f = d[i];
-    if (isnan(f))
-      return elfm_error_set(err, ELFM_ERR_NUMERIC, NULL, -1,
-                            "peaks: NaN voxel at index %zu of frame %lld", i, (long long)v->frame);
-    if (f > vmax) vmax = f;
-    nonzero += f != 0;
+  /* Threshold: max of the three enabled rules. One branch-free pass (it
+   * vectorises) for the maximum, the non-zero count and NaN. */
+  /* Four independent accumulators so the loop is not one long dependency
+   * chain (the volume is ~8 MB: this pass is memory-bound then). */
+  float mx[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
+  size_t nzc[4] = {0, 0, 0, 0};
+  int nan_seen = 0;
+  size_t i4 = 0;
+  for (; i4 + 4 <= nvox; i4 += 4)
+    for (int k = 0; k < 4; k++) {
+      float f = d[i4 + (size_t)k];
+      nan_seen |= f != f;
+      mx[k] = f > mx[k] ? f : mx[k];
+      nzc[k] += f != 0;
+    }
+  for (; i4 < nvox; i4++) {
+    float f = d[i4];
+    nan_seen |= f != f;
+    mx[0] = f > mx[0] ? f : mx[0];
+    nzc[0] += f != 0;
+  }
+  float vmax = mx[0];
+  for (int k = 1; k < 4; k++) vmax = mx[k] > vmax ? mx[k] : vmax;
+  size_t nonzero = nzc[0] + nzc[1] + nzc[2] + nzc[3];
+  if (nan_seen) {
+    size_t i = 0;
+    while (!isnan(d[i])) i++;
+    return elfm_error_set(err, ELFM_ERR_NUMERIC, NULL, -1,
+                          "peaks: NaN voxel at index %zu of frame %lld", i, (long long)v->frame);
   }
   double thr = -INFINITY;
   if (o->absolute > 0) thr = o->absolute;
   if (o->relative > 0 && o->relative * vmax > thr) thr = o->relative * vmax;
-  if (o->k_sigma > 0) {
-    /* Mostly-zero volumes (thresholded surfaces) have MAD 0: use the
-     * non-zero voxels, which is where the noise lives. */
+  if (o->k_sigma > 0 && nonzero > 0) {
+    /* A strided sample of the volume; in mostly-zero volumes (thresholded
+     * surfaces, MAD 0) only its non-zero voxels, where the noise lives,
+     * sampling more densely until there are enough of them. */
     int nonzero_only = nonzero * 2 < nvox;
-    size_t pool = nonzero_only ? nonzero : nvox;
-    size_t stride = pool / PEAKS_NOISE_SAMPLES + 1, n = 0, seen = 0;
-    for (size_t i = 0; i < nvox && n < PEAKS_NOISE_SAMPLES; i++) {
-      if (nonzero_only && d[i] == 0) continue;
-      if (seen++ % stride == 0) p->sample[n++] = d[i];
+    size_t n = 0;
+    for (size_t stride = nvox / PEAKS_NOISE_SAMPLES + 1;; stride = stride / 4 + 1) {
+      n = 0;
+      for (size_t i = stride / 2; i < nvox && n < PEAKS_NOISE_SAMPLES; i += stride)
+        if (!nonzero_only || d[i] != 0) p->sample[n++] = d[i];
+      if (n >= PEAKS_NOISE_SAMPLES / 16 || stride == 1) break;
     }
     double med, sig;
     robust_stats(p->sample, n, &med, &sig);
@@ -278,12 +299,14 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
   if (rx < 1) rx = 1;
   if (rz < 1) rz = 1;
   size_t nc = 0;
+  /* compare in float: a voxel passes when its float value exceeds thr */
+  const float thr_f = thr > 0 ? (float)thr : 0.0f;
   for (int z = 0; z < nz; z++)
     for (int y = 0; y < h; y++) {
       const float *row = d + ((size_t)z * h + y) * w;
       for (int x = 0; x < w; x++) {
         float c = row[x];
-        if (!(c > thr) || c <= 0) continue;
+        if (!(c > thr_f) || (double)c <= thr) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
         if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z};
