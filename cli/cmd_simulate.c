@@ -140,6 +140,9 @@ int cmd_simulate(int argc, char **argv)
               "%" PRId64 " from light changes, %" PRId64 " noise), %d objects, wall %.2f s\n",
               elfm_scene_name(s), elfm_scene_seed(s), st.n_events, (double)st.duration_us * 1e-6,
               st.events_per_s * 1e-6, st.n_signal, st.n_noise, elfm_scene_n_objects(s), st.wall_s);
+      if (!o.quiet)
+        fprintf(stderr, "simulate: %" PRId64 " time steps, %.3g pixel updates\n", st.n_steps,
+                (double)st.n_pixel_steps);
       printf("%s/events.raw\n", o.out);
     }
   }

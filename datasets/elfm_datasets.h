@@ -90,6 +90,8 @@ typedef struct elfm_sim_stats {
   int64_t n_noise;      /* shot noise, leak and hot pixels */
   int64_t n_dropped_refractory;
   int64_t n_truth_rows;
+  int64_t n_pixel_steps;  /* pixel model updates (the cost of the simulation) */
+  int64_t n_steps;        /* time steps */
   int64_t duration_us;
   double events_per_s;  /* n_events / simulated seconds */
   double wall_s;        /* elapsed time of the run */
