@@ -71,8 +71,8 @@ elfm_frame *elfm_frame_create(int w, int h, elfm_error *err);
 void elfm_frame_free(elfm_frame *f);
 /* Zero the listed pixels and empty the list: O(nnz). */
 void elfm_frame_clear(elfm_frame *f);
-/* Set pixel i (< w*h) to value, listing it if needed. Not for hot loops
- * of the framer (it checks the list), for tests and loaders. */
+/* Set pixel i (< w*h) to value, listing it if needed. O(nnz) per call when
+ * the pixel was zero (it searches the list): for tests and small edits only. */
 void elfm_frame_set(elfm_frame *f, uint32_t i, float value);
 /* Copy src into dst (same size): dst is cleared first. O(nnz). */
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err);

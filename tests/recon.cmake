@@ -2,3 +2,4 @@
 elfm_add_test(test_frames test_frames.c)
 elfm_add_test(test_median test_median.c)
 elfm_add_test(test_refocus test_refocus.c)
+elfm_add_test(test_recon_pipeline test_recon_pipeline.c)

@@ -1,0 +1,378 @@
+/* test_recon_pipeline.c — the streaming driver end to end on a synthetic
+ * EVT3 recording (a bead moving through the paper's Fourier LFM, events
+ * rendered with the SPEC §2 projection, plus isolated noise events):
+ * in-order volumes, thread-count independence, time ranges, peak accuracy,
+ * errors; EXR round trip, MIP PNG, TIFF stacks (good and corrupt). */
+#include <math.h>
+#include <png.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+
+#define T0_US 5800000 /* real EVT3 files start at 5.8 s (SPEC §1) */
+#define DUR_US 30000
+
+static void bead_at(int64_t t, double *x, double *y, double *z)
+{
+  double s = (double)(t - T0_US) / DUR_US;
+  *x = -10.0 + 20.0 * s;
+  *y = 8.0 - 10.0 * s;
+  *z = -30.0 + 60.0 * s;
+}
+
+static int write_events(const char *path, const elfm_calib *c, int64_t *n_written)
+{
+  elfm_error err;
+  elfm_writer *w = NULL;
+  if (elfm_writer_open(path, ELFM_FMT_EVT3, c->sensor_width_px, c->sensor_height_px, &w, &err)) return 0;
+  elfm_event_chunk *ch = elfm_chunk_create(8192, &err);
+  uint32_t s = 42;
+  *n_written = 0;
+  for (int64_t t = T0_US; t < T0_US + DUR_US; t += 50) {
+    ch->n = 0;
+    double x, y, z;
+    bead_at(t, &x, &y, &z);
+    for (int v = 0; v < c->n_views; v++) {
+      double u, vv;
+      elfm_calib_project(c, v, x, y, z, &u, &vv);
+      for (int py = (int)floor(vv) - 2; py <= (int)floor(vv) + 2; py++)
+        for (int px = (int)floor(u) - 2; px <= (int)floor(u) + 2; px++) {
+          if (px < 0 || py < 0 || px >= c->sensor_width_px || py >= c->sensor_height_px) continue;
+          if ((px - u) * (px - u) + (py - vv) * (py - vv) > 2.25) continue;
+          ch->t_us[ch->n] = t;
+          ch->x[ch->n] = (uint16_t)px;
+          ch->y[ch->n] = (uint16_t)py;
+          ch->p[ch->n] = 1;
+          ch->n++;
+        }
+    }
+    for (int k = 0; k < 20; k++) { /* isolated noise: the median removes it */
+      s = s * 1664525u + 1013904223u;
+      ch->t_us[ch->n] = t;
+      ch->x[ch->n] = (uint16_t)((s >> 8) % (uint32_t)c->sensor_width_px);
+      ch->y[ch->n] = (uint16_t)((s >> 20) % (uint32_t)c->sensor_height_px);
+      ch->p[ch->n] = (uint8_t)(s >> 31);
+      ch->n++;
+    }
+    *n_written += (int64_t)ch->n;
+    if (elfm_writer_write(w, ch, &err)) return 0;
+  }
+  elfm_chunk_free(ch);
+  return elfm_writer_close(w, &err) == ELFM_OK;
+}
+
+typedef struct collect {
+  int n;
+  int64_t frames[256], t_us[256];
+  double sum[256];
+  int bad_peaks;
+  int fail_at; /* return an error at this volume (-1: never) */
+  elfm_volume *keep;  /* a copy of volume 15 */
+} collect;
+
+static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
+{
+  collect *c = user;
+  if (c->n == c->fail_at) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stop here");
+  if (c->n < 256) {
+    double sum = 0;
+    size_t n = (size_t)v->w * v->h * v->nz, best = 0;
+    for (size_t i = 0; i < n; i++) {
+      sum += v->data[i] * (1.0 + (double)(i % 7));
+      if (v->data[i] > v->data[best]) best = i;
+    }
+    c->frames[c->n] = v->frame;
+    c->t_us[c->n] = v->t_us;
+    c->sum[c->n] = sum;
+    double x, y, z;
+    bead_at(v->t_us, &x, &y, &z);
+    int X = (int)(best % (size_t)v->w), Y = (int)(best / (size_t)v->w % (size_t)v->h);
+    int k = (int)(best / ((size_t)v->w * v->h));
+    double ex = elfm_volume_x_um(v, X) - x, ey = elfm_volume_y_um(v, Y) - y;
+    double ez = elfm_volume_z_um(v, k) - z;
+    /* one voxel laterally, one plane axially (+ rounding of the voxel grid) */
+    if (fabs(ex) > 1.5 * v->um_per_px || fabs(ey) > 1.5 * v->um_per_px || fabs(ez) > 1.5 * v->z_step_um) {
+      c->bad_peaks++;
+      fprintf(stderr, "frame %lld t %lld: peak error (%.2f, %.2f, %.2f) um\n", (long long)v->frame,
+              (long long)v->t_us, ex, ey, ez);
+    }
+    if (c->n == 15 && c->keep) {
+      memcpy(c->keep->data, v->data, n * sizeof *v->data);
+      c->keep->t_us = v->t_us;
+      c->keep->frame = v->frame;
+    }
+  }
+  c->n++;
+  return ELFM_OK;
+}
+
+static void test_runs(const char *dir, const elfm_calib *cal)
+{
+  elfm_error err;
+  char path[600];
+  snprintf(path, sizeof path, "%s/events.raw", dir);
+  int64_t n_written = 0;
+  CHECK(write_events(path, cal, &n_written));
+  elfm_recon_options o;
+  elfm_recon_options_default(&o);
+  static collect c1, c2;
+  memset(&c1, 0, sizeof c1);
+  memset(&c2, 0, sizeof c2);
+  c1.fail_at = c2.fail_at = -1;
+  c1.keep = elfm_volume_create(cal->view_w_px, cal->view_h_px, elfm_calib_n_planes(cal), 1, 0, 1, &err);
+  elfm_recon_stats st;
+  o.threads = 1;
+  o.chunk_events = 5000; /* many chunks: windows span chunk boundaries */
+  CHECK_OK(elfm_recon_run(path, cal, &o, on_volume, &c1, &st, &err), &err);
+  CHECK_EQ_INT(st.events, n_written);
+  CHECK_EQ_INT(st.frames, DUR_US / 1000);
+  CHECK_EQ_INT(c1.n, DUR_US / 1000);
+  CHECK(st.frames_sparse == st.frames); /* a few hundred pixels per frame */
+  CHECK(st.realtime_factor > 0 && st.volumes_per_s > 0);
+  CHECK_NEAR(st.span_s, DUR_US * 1e-6, 1e-9);
+  for (int i = 0; i < c1.n && i < 256; i++) {
+    CHECK_EQ_INT(c1.frames[i], i);
+    CHECK_EQ_INT(c1.t_us[i], T0_US + 1000 * (i + 1));
+  }
+  CHECK_MSG(c1.bad_peaks == 0, "%d of %d peaks off", c1.bad_peaks, c1.n);
+  printf("1 thread: %.0f volumes/s, %.2f x real time\n", st.volumes_per_s, st.realtime_factor);
+
+  /* 2 threads, batches of 3, dense path: the same volumes in the same order */
+  o.threads = 2;
+  o.batch = 3;
+  o.refocus.path = ELFM_PATH_DENSE;
+  CHECK_OK(elfm_recon_run(path, cal, &o, on_volume, &c2, &st, &err), &err);
+  CHECK_EQ_INT(c2.n, c1.n);
+  CHECK(st.frames_dense == st.frames);
+  for (int i = 0; i < c1.n && i < 256; i++) {
+    CHECK_EQ_INT(c2.frames[i], c1.frames[i]);
+    CHECK_NEAR(c2.sum[i], c1.sum[i], 1e-4 * fabs(c1.sum[i]));
+  }
+
+  /* a time range: windows start at from_us */
+  memset(&c2, 0, sizeof c2);
+  c2.fail_at = -1;
+  o.from_us = T0_US + 10000;
+  o.to_us = T0_US + 20000;
+  o.refocus.path = ELFM_PATH_AUTO;
+  CHECK_OK(elfm_recon_run(path, cal, &o, on_volume, &c2, &st, &err), &err);
+  CHECK_EQ_INT(c2.n, 10);
+  CHECK_EQ_INT(c2.t_us[0], T0_US + 11000);
+  CHECK(st.events < n_written / 2 && st.events > n_written / 4);
+  for (int i = 0; i < 10; i++) CHECK_NEAR(c2.sum[i], c1.sum[i + 10], 1e-4 * fabs(c1.sum[i + 10]));
+
+  /* the callback's error stops the run and comes back */
+  memset(&c2, 0, sizeof c2);
+  c2.fail_at = 4;
+  elfm_recon_options_default(&o);
+  CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, &st, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "stop here") != NULL);
+  CHECK_EQ_INT(c2.n, 4); /* volumes 0..3 delivered, the 5th refused */
+
+  /* bad inputs */
+  char missing[700];
+  snprintf(missing, sizeof missing, "%s/nothing.raw", dir);
+  CHECK(elfm_recon_run(missing, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_IO);
+  CHECK(strstr(err.file, "nothing.raw") != NULL);
+  elfm_calib small = *cal;
+  small.sensor_width_px = 640;
+  small.sensor_height_px = 480;
+  CHECK(elfm_recon_run(path, &small, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "640") != NULL);
+  o.median = 4;
+  CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
+  elfm_recon_options_default(&o);
+  o.from_us = 10;
+  o.to_us = 5;
+  CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
+  /* a truncated recording: the volumes before the damage, then the error */
+  char cut[700];
+  snprintf(cut, sizeof cut, "%s/cut.raw", dir);
+  FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
+  char buf[4096];
+  size_t n, total = 0;
+  while ((n = fread(buf, 1, sizeof buf, in)) > 0 && total < 200000) {
+    fwrite(buf, 1, n, out);
+    total += n;
+  }
+  fputc(0x7f, out); /* half an EVT3 word */
+  fclose(in);
+  fclose(out);
+  memset(&c2, 0, sizeof c2);
+  c2.fail_at = -1;
+  elfm_recon_options_default(&o);
+  elfm_status s = elfm_recon_run(cut, cal, &o, on_volume, &c2, NULL, &err);
+  if (s != ELFM_OK) {
+    CHECK(strstr(err.file, "cut.raw") != NULL);
+    CHECK(err.offset >= 0 || err.line > 0);
+  }
+  CHECK(c2.n > 0 && c2.n < c1.n);
+
+  /* EXR round trip and MIP of the kept volume */
+  char exr[700], png[700];
+  snprintf(exr, sizeof exr, "%s/v.exr", dir);
+  snprintf(png, sizeof png, "%s/v.png", dir);
+  c1.keep->um_per_px = cal->um_per_px;
+  c1.keep->z_min_um = cal->z_min_um;
+  c1.keep->z_step_um = cal->z_step_um;
+  CHECK_OK(elfm_volume_write_exr(c1.keep, exr, &err), &err);
+  elfm_volume *back = NULL;
+  CHECK_OK(elfm_volume_read_exr(exr, &back, &err), &err);
+  if (back) {
+    CHECK_EQ_INT(back->w, c1.keep->w);
+    CHECK_EQ_INT(back->nz, c1.keep->nz);
+    CHECK_EQ_INT(back->t_us, c1.keep->t_us);
+    CHECK_EQ_INT(back->frame, 15);
+    CHECK_NEAR(back->um_per_px, cal->um_per_px, 0);
+    CHECK_NEAR(back->z_min_um, cal->z_min_um, 0);
+    CHECK_NEAR(back->z_step_um, cal->z_step_um, 0);
+    size_t nv = (size_t)back->w * back->h * back->nz, diff = 0, nonzero = 0;
+    for (size_t i = 0; i < nv; i++) {
+      diff += back->data[i] != c1.keep->data[i];
+      nonzero += back->data[i] != 0.0f;
+    }
+    CHECK_EQ_INT(diff, 0);
+    CHECK(nonzero > 0);
+    elfm_volume_free(back);
+  }
+  CHECK(elfm_volume_read_exr(path, &back, &err) != ELFM_OK && back == NULL); /* not an EXR */
+  CHECK(strstr(err.file, "events.raw") != NULL);
+  CHECK_OK(elfm_volume_write_mip_png(c1.keep, png, 0, 1, &err), &err);
+  png_image im;
+  memset(&im, 0, sizeof im);
+  im.version = PNG_IMAGE_VERSION;
+  CHECK(png_image_begin_read_from_file(&im, png));
+  CHECK_EQ_INT(im.width, (unsigned)(c1.keep->w + c1.keep->nz));
+  CHECK_EQ_INT(im.height, (unsigned)(c1.keep->h + c1.keep->nz));
+  im.format = PNG_FORMAT_RGB;
+  uint8_t *rgb = malloc(PNG_IMAGE_SIZE(im));
+  CHECK(png_image_finish_read(&im, NULL, rgb, 0, NULL));
+  /* the brightest x-y pixel: full value, coloured by the bead's depth */
+  double x, y, z;
+  bead_at(c1.keep->t_us, &x, &y, &z);
+  int best = 0;
+  for (int i = 0; i < (int)(im.width * im.height); i++) {
+    int a = rgb[3 * i] + rgb[3 * i + 1] + rgb[3 * i + 2];
+    int b = rgb[3 * best] + rgb[3 * best + 1] + rgb[3 * best + 2];
+    if (a > b && i % (int)im.width < c1.keep->w && i / (int)im.width < c1.keep->h) best = i;
+  }
+  int bx = best % (int)im.width, by = best / (int)im.width;
+  CHECK(fabs(elfm_volume_x_um(c1.keep, bx) - x) < 3 && fabs(elfm_volume_y_um(c1.keep, by) - y) < 3);
+  CHECK(z < 0 ? rgb[3 * best + 2] >= rgb[3 * best] : rgb[3 * best] >= rgb[3 * best + 2]); /* blue low, red high */
+  free(rgb);
+  char bad_png[700];
+  snprintf(bad_png, sizeof bad_png, "%s/no/such/dir/v.png", dir);
+  CHECK(elfm_volume_write_mip_png(c1.keep, bad_png, 0, 1, &err) == ELFM_ERR_IO);
+  CHECK(elfm_volume_write_exr(c1.keep, bad_png, &err) != ELFM_OK);
+  elfm_volume_free(c1.keep);
+}
+
+static elfm_status count_tiff(const elfm_volume *v, void *user, elfm_error *err)
+{
+  (void)err;
+  collect *c = user;
+  size_t n = (size_t)v->w * v->h * v->nz, best = 0;
+  for (size_t i = 0; i < n; i++)
+    if (v->data[i] > v->data[best]) best = i;
+  if (c->n < 256) {
+    c->frames[c->n] = (int64_t)best;
+    c->t_us[c->n] = v->t_us;
+  }
+  c->n++;
+  return ELFM_OK;
+}
+
+static void test_tiff(const char *dir, const elfm_calib *cal)
+{
+  elfm_error err;
+  char path[600];
+  snprintf(path, sizeof path, "%s/lf.tif", dir);
+  elfm_frame *f = elfm_frame_create(cal->sensor_width_px, cal->sensor_height_px, &err);
+  elfm_tiff_writer *w = NULL;
+  CHECK_OK(elfm_tiff_writer_open(path, &w, &err), &err);
+  const double zs[3] = {-60, 0, 45};
+  for (int p = 0; p < 3; p++) {
+    elfm_frame_clear(f);
+    for (int i = 0; i < f->w * f->h; i++) { /* camera offset */
+      f->data[i] = 100.0f;
+      f->idx[i] = (uint32_t)i;
+    }
+    f->nnz = (size_t)f->w * f->h;
+    for (int v = 0; v < cal->n_views; v++) {
+      double u, vv;
+      elfm_calib_project(cal, v, 12.0, -7.0, zs[p], &u, &vv);
+      for (int py = (int)vv - 3; py <= (int)vv + 3; py++)
+        for (int px = (int)u - 3; px <= (int)u + 3; px++) {
+          if (px < 0 || py < 0 || px >= f->w || py >= f->h) continue;
+          double d2 = (px - u) * (px - u) + (py - vv) * (py - vv);
+          f->data[py * f->w + px] += (float)(3000.0 * exp(-d2 / 3.0));
+        }
+    }
+    CHECK_OK(elfm_tiff_writer_add(w, f, &err), &err);
+  }
+  CHECK_OK(elfm_tiff_writer_close(w, &err), &err);
+  elfm_recon_options o;
+  elfm_recon_options_default(&o);
+  o.median = 0;
+  o.tiff_frame_us = 10000; /* a 100 Hz sCMOS */
+  collect c;
+  memset(&c, 0, sizeof c);
+  elfm_recon_stats st;
+  CHECK_OK(elfm_recon_run_tiff(path, cal, &o, count_tiff, &c, &st, &err), &err);
+  CHECK_EQ_INT(c.n, 3);
+  CHECK_EQ_INT(st.frames_dense, 3);
+  for (int p = 0; p < 3 && p < c.n; p++) {
+    int W = cal->view_w_px, H = cal->view_h_px;
+    int X = (int)(c.frames[p] % W), Y = (int)(c.frames[p] / W % H), k = (int)(c.frames[p] / ((int64_t)W * H));
+    double x = (X - 0.5 * (W - 1)) * cal->um_per_px, y = (Y - 0.5 * (H - 1)) * cal->um_per_px;
+    double z = cal->z_min_um + k * cal->z_step_um;
+    CHECK_MSG(fabs(x - 12) <= 1.5 * cal->um_per_px && fabs(y + 7) <= 1.5 * cal->um_per_px &&
+                  fabs(z - zs[p]) <= 1.5 * cal->z_step_um,
+              "TIFF page %d: peak (%.1f, %.1f, %.1f)", p, x, y, z);
+    CHECK_EQ_INT(c.t_us[p], 5000 + 10000 * p);
+  }
+  /* a cut TIFF: error naming the file, no crash */
+  char cut[700];
+  snprintf(cut, sizeof cut, "%s/cut.tif", dir);
+  FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
+  char buf[4096];
+  size_t n, total = 0;
+  while ((n = fread(buf, 1, sizeof buf, in)) > 0 && total < 1000000) {
+    fwrite(buf, 1, n, out);
+    total += n;
+  }
+  fclose(in);
+  fclose(out);
+  memset(&c, 0, sizeof c);
+  elfm_status s = elfm_recon_run_tiff(cut, cal, &o, count_tiff, &c, NULL, &err);
+  CHECK(s != ELFM_OK);
+  CHECK(strstr(err.file, "cut.tif") != NULL);
+  char junk[700];
+  snprintf(junk, sizeof junk, "%s/junk.tif", dir);
+  out = fopen(junk, "wb");
+  fputs("II*\0 this is not really a tiff", out);
+  fclose(out);
+  CHECK(elfm_recon_run_tiff(junk, cal, &o, count_tiff, &c, NULL, &err) == ELFM_ERR_FORMAT);
+  CHECK(strstr(err.file, "junk.tif") != NULL);
+  elfm_frame_free(f);
+}
+
+int main(void)
+{
+  elfm_calib cal;
+  elfm_optics op;
+  elfm_error err;
+  elfm_optics_default(&op);
+  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &cal, &err), &err);
+  char dir[] = "/tmp/elfm_recon_XXXXXX";
+  if (!mkdtemp(dir)) SKIP("cannot make a temporary directory");
+  test_runs(dir, &cal);
+  test_tiff(dir, &cal);
+  char cmd[600];
+  snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+  if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
+  return check_report();
+}
