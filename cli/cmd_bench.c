@@ -576,11 +576,26 @@ static void bench_usage(FILE *f)
           "  --no-components skip the component benchmarks; --no-figures: no PNGs\n");
 }
 
+/* The component benchmarks of the other modules, with arguments that keep
+ * --quick short (their own defaults are sized for a careful measurement).
+ * A program that is not built is reported and skipped. */
+struct component {
+  const char *name;
+  const char *quick_args[4];
+};
+static const struct component COMPONENTS[] = {
+    {"bench_decode", {"--events", "10000000", NULL}},  /* EVT3 decode vs memory read */
+    {"bench_refocus", {"--quick", NULL}},              /* sparse vs dense refocus */
+    {"bench_link", {"--quick", NULL}},                 /* FLANN vs brute force */
+    {"bench_smooth", {"--quick", NULL}},               /* Ceres per 1000-point track */
+    {"bench_simulate", {"--quick", NULL}},
+    {"bench_pipeline_score", {"--quick", NULL}},       /* Hungarian, scoring */
+};
+#define N_COMPONENTS ((int)(sizeof COMPONENTS / sizeof COMPONENTS[0]))
+
 static int run_components(const char *self, const char *dir, int quick, double timeout_s,
                           const char **names, int *n_out)
 {
-  static const char *comps[] = {"bench_decode", "bench_refocus", "bench_link", "bench_smooth",
-                                "bench_simulate", "bench_pipeline"};
   char bdir[PATH_MAX];
   path_fmt(bdir, sizeof bdir, "%s", self);
   char *slash = strrchr(bdir, '/');
@@ -589,35 +604,45 @@ static int run_components(const char *self, const char *dir, int quick, double t
   path_fmt(cdir, sizeof cdir, "%s/components", dir);
   if (mkdir_p(cdir) != 0) return -1;
   int n = 0;
-  for (size_t i = 0; i < sizeof comps / sizeof comps[0]; i++) {
+  for (int i = 0; i < N_COMPONENTS; i++) {
+    const struct component *cp = &COMPONENTS[i];
     char exe[PATH_MAX], logp[PATH_MAX];
-    path_fmt(exe, sizeof exe, "%s/bench/%s", bdir, comps[i]);
+    path_fmt(exe, sizeof exe, "%s/bench/%s", bdir, cp->name);
     if (access(exe, X_OK) != 0) {
-      fprintf(stderr, "eventlfm bench: %s not built (%s), skipped\n", comps[i], exe);
+      fprintf(stderr, "eventlfm bench: %s not built (%s), skipped\n", cp->name, exe);
       continue;
     }
-    path_fmt(logp, sizeof logp, "%s/%s.txt", cdir, comps[i]);
-    /* --quick when the program's --help offers it */
-    int has_quick = 0;
-    {
+    path_fmt(logp, sizeof logp, "%s/%s.txt", cdir, cp->name);
+    /* Pass the quick arguments only when the program's --help names them. */
+    int use_quick = 0;
+    if (quick && cp->quick_args[0]) {
       char *hargv[] = {exe, "--help", NULL};
       if (run_child(hargv, 0, logp, 10, NULL, NULL) >= 0) {
         char *t = read_text(logp);
-        has_quick = t && strstr(t, "--quick") != NULL;
+        use_quick = t && strstr(t, cp->quick_args[0]) != NULL;
         free(t);
       }
     }
-    fprintf(stderr, "eventlfm bench: component %s%s ...\n", comps[i], quick && has_quick ? " --quick" : "");
-    char *argv[] = {exe, quick && has_quick ? "--quick" : NULL, NULL};
+    char *argv[8];
+    int na = 0;
+    char shown[128] = "";
+    argv[na++] = exe;
+    for (int a = 0; use_quick && cp->quick_args[a] && na < 7; a++) {
+      argv[na++] = (char *)cp->quick_args[a];
+      size_t l = strlen(shown);
+      path_fmt(shown + l, sizeof shown - l, " %s", cp->quick_args[a]);
+    }
+    argv[na] = NULL;
+    fprintf(stderr, "eventlfm bench: component %s%s ...\n", cp->name, shown);
     double wall = 0;
     int rc = run_child(argv, 0, logp, timeout_s, &wall, NULL);
     FILE *f = fopen(logp, "a");
     if (f) {
-      fprintf(f, "[eventlfm bench: %s%s exited %d after %.1f s]\n", comps[i],
-              quick && has_quick ? " --quick" : "", rc, wall);
+      fprintf(f, "[eventlfm bench: `%s%s` exited %d after %.1f s%s]\n", cp->name, shown, rc,
+              wall, rc == -2 ? " (killed: time limit)" : "");
       fclose(f);
     }
-    names[n++] = comps[i];
+    names[n++] = cp->name;
   }
   *n_out = n;
   return 0;

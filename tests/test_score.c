@@ -502,6 +502,22 @@ int main(void)
     elfm_table_free(tk);
   }
 
+  /* 14. A run that found nothing (header-only tracks.csv): a total miss,
+   * not an undefined score. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    elfm_table *tk = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tk, NULL, NULL);
+    CHECK_NEAR(r.f1, 0.0, TOL);
+    CHECK_NEAR(r.recall, 0.0, TOL);
+    CHECK_NEAR(r.alpha, 0.0, TOL);
+    CHECK_NEAR(r.beta, 0.0, TOL);
+    CHECK_EQ_INT(r.n_missed_tracks, 2);
+    CHECK(isnan(r.precision));
+    elfm_table_free(tk);
+  }
+
   elfm_table_free(truth);
   return check_report();
 }

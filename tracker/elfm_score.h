@@ -21,6 +21,9 @@
  * t_us is an error). Frames missing from both files (no detection, no track
  * point) but lying between known frames get a t_us interpolated linearly
  * between their known neighbours, so that truth there still counts as missed.
+ * A run with no row at all has no frame list: if the truth shows any object
+ * (bright, inside the volume) it scores recall = F1 = alpha = beta = Jaccard
+ * = 0, with n_truth_points = 0 (unknown) and precision undefined (NaN).
  *
  * DETECTIONS (per frame). Truth points and detections are matched one to one
  * with the Hungarian solver below, pairs with d >= eps being forbidden: the

@@ -384,6 +384,35 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
   return ELFM_OK;
 }
 
+/* Number of truth ids with at least one sample that counts (bright, inside
+ * the volume): used when the run produced no frame at all. */
+static elfm_status truth_ids_seen(const elfm_table *tt, const elfm_score_options *o, int *n_ids,
+                                  elfm_error *err)
+{
+  static const char *const names[] = {"id", "t_us", "x_um", "y_um", "z_um", "brightness"};
+  int c[6];
+  elfm_status s = elfm_table_require(tt, names, 6, c, err);
+  if (s != ELFM_OK) return s;
+  double *ids = malloc((tt->n_rows + 1) * sizeof *ids);
+  if (!ids) return nomem(err);
+  size_t n = 0;
+  for (size_t r = 0; r < tt->n_rows; r++)
+    if (elfm_table_get(tt, r, c[5]) > 0 &&
+        inside(o, elfm_table_get(tt, r, c[2]), elfm_table_get(tt, r, c[3]),
+               elfm_table_get(tt, r, c[4])))
+      ids[n++] = elfm_table_get(tt, r, c[0]);
+  keyed_t *k = malloc((n + 1) * sizeof *k);
+  if (!k) { free(ids); return nomem(err); }
+  for (size_t i = 0; i < n; i++) k[i] = (keyed_t){ids[i], i};
+  qsort(k, n, sizeof *k, keyed_cmp);
+  int u = 0;
+  for (size_t i = 0; i < n; i++) u += (i == 0 || k[i].key != k[i - 1].key);
+  free(k);
+  free(ids);
+  *n_ids = u;
+  return ELFM_OK;
+}
+
 /* Object of truth point p (binary search in obj_off). */
 static int truth_obj_of(const truth_t *tr, int64_t p)
 {
@@ -1003,6 +1032,21 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if (tracks) {
     if ((s = score_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
     if (opt->have_stage) score_stage(tracks, ct, opt, out);
+  }
+  if (fr.n == 0) {
+    /* No detection and no track point at all: there is no frame list to
+     * sample the truth at, but if the truth shows any object the run missed
+     * everything: recall, F1, alpha, beta and the Jaccards are 0 (precision
+     * stays undefined). */
+    int seen = 0;
+    if ((s = truth_ids_seen(truth, opt, &seen, err)) != ELFM_OK) goto done;
+    if (seen > 0) {
+      out->recall = out->f1 = 0.0;
+      if (tracks) {
+        out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = 0.0;
+        out->n_truth_tracks = out->n_missed_tracks = seen;
+      }
+    }
   }
 done:
   free(fr.t_us);
