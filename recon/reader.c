@@ -433,7 +433,11 @@ elfm_status elfm_reader_read(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
     c->n_trig = 0;
     elfm_status st = fill(r, c, err);
     if (r->skipping) apply_skip(r, c);
-    if (c->n) r->t_last_out = c->t_us[c->n - 1];
+    /* What was handed out (events and triggers): seeking before it must
+     * start over. */
+    if (c->n && c->t_us[c->n - 1] > r->t_last_out) r->t_last_out = c->t_us[c->n - 1];
+    if (c->n_trig && c->trig[c->n_trig - 1].t_us > r->t_last_out)
+      r->t_last_out = c->trig[c->n_trig - 1].t_us;
     if (st != ELFM_OK) return st;
     int at_end = r->eof && r->pos >= r->len && !pending_left(r);
     if (c->n > 0 || c->n_trig > 0 || at_end) return ELFM_OK;
