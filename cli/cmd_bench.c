@@ -130,7 +130,9 @@ struct point_result {
   double span_s, events_per_s, volumes, volumes_per_s, rtf;
   elfm_score_result score;
   int pareto_f1, pareto_alpha;
+  double stage_s[4]; /* the tracker's own timing: recon, peaks, link, smooth (summary.json) */
 };
+static const char *const STAGE_KEYS[4] = {"recon_s", "peaks_s", "link_s", "smooth_s"};
 
 struct scene_info {
   char name[64];
@@ -236,23 +238,28 @@ static const cJSON *json_find(const cJSON *o, const char *key)
   return NULL;
 }
 
-/* Number of volumes the tracker reports in its summary.json, or -1. */
-static double summary_volumes(const char *run_dir)
+/* Numbers from the tracker's summary.json: the volume count (first of a few
+ * plausible key names) and the per-stage seconds; -1 / NaN when absent. */
+static void summary_read(const char *run_dir, double *volumes, double stage_s[4])
 {
+  *volumes = -1;
+  for (int k = 0; k < 4; k++) stage_s[k] = NAN;
   char p[PATH_MAX];
   path_fmt(p, sizeof p, "%s/summary.json", run_dir);
   char *text = read_text(p);
-  if (!text) return -1;
+  if (!text) return;
   cJSON *o = cJSON_Parse(text);
   free(text);
-  double v = -1;
   static const char *keys[] = {"volumes", "n_volumes", "frames", "n_frames"};
-  for (size_t i = 0; i < sizeof keys / sizeof keys[0] && v < 0; i++) {
+  for (size_t i = 0; i < sizeof keys / sizeof keys[0] && *volumes < 0; i++) {
     const cJSON *n = json_find(o, keys[i]);
-    if (n) v = n->valuedouble;
+    if (n) *volumes = n->valuedouble;
+  }
+  for (int k = 0; k < 4; k++) {
+    const cJSON *n = json_find(o, STAGE_KEYS[k]);
+    if (n) stage_s[k] = n->valuedouble;
   }
   cJSON_Delete(o);
-  return v;
 }
 
 /* Count the events of a recording (streaming; memory independent of size). */
@@ -328,7 +335,8 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
   if (!f) return -1;
   fprintf(f, "scene,axis,setting,args,status,wall_s,events,span_s,events_per_s,volumes,"
              "volumes_per_s,realtime_factor,peak_rss_mb,f1,recall,precision,rmse_x_um,rmse_y_um,"
-             "rmse_z_um,alpha,beta,jaccard_tracks,jaccard_detections,pareto_f1,pareto_alpha\n");
+             "rmse_z_um,alpha,beta,jaccard_tracks,jaccard_detections,pareto_f1,pareto_alpha,"
+             "recon_s,peaks_s,link_s,smooth_s\n");
   for (int i = 0; i < n; i++) {
     const struct point_result *p = &pts[i];
     char args[256];
@@ -344,7 +352,13 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
       fmt_num(b, sizeof b, "%.6g", v[k]);
       fprintf(f, ",%s", b);
     }
-    fprintf(f, ",%d,%d\n", p->pareto_f1, p->pareto_alpha);
+    fprintf(f, ",%d,%d", p->pareto_f1, p->pareto_alpha);
+    for (int k = 0; k < 4; k++) {
+      char b[64];
+      fmt_num(b, sizeof b, "%.4g", p->stage_s[k]);
+      fprintf(f, ",%s", b);
+    }
+    fprintf(f, "\n");
   }
   return fclose(f) == 0 ? 0 : -1;
 }
@@ -380,8 +394,8 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
                 ? (double)sc[s].events / ((double)(sc[s].t_last_us - sc[s].t_first_us)) : 0.0,
             (long long)op->seed);
   fprintf(f, "\n| scene | axis | setting | status | Mev/s | volumes/s | RTF | peak MB | F1 | "
-             "RMSE x | RMSE y | RMSE z | alpha | beta | Pareto |\n");
-  fprintf(f, "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+             "RMSE x | RMSE y | RMSE z | alpha | beta | Pareto | recon / peaks / link / smooth s |\n");
+  fprintf(f, "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
   for (int i = 0; i < n; i++) {
     const struct point_result *p = &pts[i];
     char c[10][32];
@@ -395,9 +409,13 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
     fmt_num(c[7], 32, "%.2f", p->score.rmse_z_um);
     fmt_num(c[8], 32, "%.3f", p->score.alpha);
     fmt_num(c[9], 32, "%.3f", p->score.beta);
-    fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s%s |\n",
+    char st[96] = "";
+    if (isfinite(p->stage_s[0]))
+      path_fmt(st, sizeof st, "%.2f / %.2f / %.2f / %.2f", p->stage_s[0], p->stage_s[1],
+               p->stage_s[2], p->stage_s[3]);
+    fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s%s | %s |\n",
             p->scene, p->sp->axis, p->sp->setting, p->status, c[0], c[1], c[2], c[3], c[4], c[5],
-            c[6], c[7], c[8], c[9], p->pareto_f1 ? "F1 " : "", p->pareto_alpha ? "alpha" : "");
+            c[6], c[7], c[8], c[9], p->pareto_f1 ? "F1 " : "", p->pareto_alpha ? "alpha" : "", st);
   }
   fprintf(f, "\nPlots: `bench_error_vs_speed.png` (error against real-time factor, Pareto "
              "fronts as lines), `fig_s4.png` (time surface vs accumulation, MIPs at 1, 5, 10 ms).\n");
@@ -503,7 +521,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
   static const int dts_ms[3] = {1, 5, 10};
   static const char *reprs[2] = {"exp", "count"};
   char pngs[2][3][PATH_MAX];
-  /* the same window end for every panel: 10 ms before the recording ends */
+  /* the same window end for every panel: 1 ms before the recording ends */
   int64_t t_end = si->t_last_us - 1000;
   for (int r = 0; r < 2; r++)
     for (int k = 0; k < 3; k++) {
@@ -513,13 +531,15 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
       path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       path_fmt(dt, sizeof dt, "%d", dts_ms[k] * 1000);
-      /* one full window before t_end (plus a little lead-in for the surface) */
-      path_fmt(from, sizeof from, "%lld", (long long)(t_end - dts_ms[k] * 1000 - 2000));
+      /* exactly one window [t_end - dt, t_end): one MIP per run. The time
+       * surface decays with tau = dt, so that a longer window also shows a
+       * longer history (with a fixed 1 ms tau all three would look alike). */
+      path_fmt(from, sizeof from, "%lld", (long long)(t_end - dts_ms[k] * 1000));
       path_fmt(to, sizeof to, "%lld", (long long)t_end);
       path_fmt(logp, sizeof logp, "%s/recon.log", out);
       char *argv[] = {(char *)self, "recon", "--calib", calib, "--events", ev, "--out", out,
-                      "--repr", (char *)reprs[r], "--dt-us", dt, "--from-us", from,
-                      "--to-us", to, "--save-mips", NULL};
+                      "--repr", (char *)reprs[r], "--dt-us", dt, "--tau-us", dt, "--from-us",
+                      from, "--to-us", to, "--save-mips", "--quiet", NULL};
       int rc = run_child(argv, 0, logp, timeout_s, NULL, NULL);
       if (rc != 0 || newest_png(out, pngs[r][k], PATH_MAX) != 0) {
         /* MIPs may sit in a sub-directory */
@@ -803,6 +823,7 @@ int cmd_bench(int argc, char **argv)
       p->score.recall = p->score.precision = NAN;
       p->score.jaccard_tracks = p->score.jaccard_detections = NAN;
       p->events_per_s = p->volumes = p->volumes_per_s = p->rtf = NAN;
+      for (int q = 0; q < 4; q++) p->stage_s[q] = NAN;
       char run[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], logp[PATH_MAX];
       path_fmt(run, sizeof run, "%s/runs/%s_%02d", dir, si->name, k);
       if (mkdir_p(run) != 0) return cli_message("bench", CLI_FAIL, "cannot create %s", run);
@@ -831,7 +852,7 @@ int cmd_bench(int argc, char **argv)
         p->status = "ok";
         p->events_per_s = (double)p->events / p->wall_s;
         p->rtf = p->span_s / p->wall_s;
-        p->volumes = summary_volumes(run);
+        summary_read(run, &p->volumes, p->stage_s);
         char truth[PATH_MAX], tracks[PATH_MAX], dets[PATH_MAX];
         path_fmt(truth, sizeof truth, "%s/truth.csv", si->dir);
         path_fmt(tracks, sizeof tracks, "%s/tracks.csv", run);

@@ -89,12 +89,12 @@ static int track_plot(const char *dir)
           "set terminal pngcairo size 1200,560 font 'sans,10'\n"
           "set output '%s/tracks.png'\n"
           "set multiplot layout 1,2 title 'eventlfm demo: tracks (colour = time) over truth (grey)'\n"
-          "set key off\nset grid\nset size ratio -1\nset cbrange [*:*]\n"
+          "set key off\nset grid\nset size ratio -1\nset cblabel 'time (ms)'\n"
           "set xlabel 'x (um)'\nset ylabel 'y (um)'\n"
-          "plot '%s/sim/truth.csv' using 3:4 every 10 with dots lc rgb '#b0b0b0', \\\n"
+          "plot '%s/sim/truth.csv' using 3:4 every 5 with points pt 7 ps 0.15 lc rgb '#c8c8c8', \\\n"
           "     '%s/track/tracks.csv' using 4:5:($3/1000.0) with points pt 7 ps 0.3 lc palette\n"
           "set size noratio\nset xlabel 'x (um)'\nset ylabel 'z (um)'\n"
-          "plot '%s/sim/truth.csv' using 3:5 every 10 with dots lc rgb '#b0b0b0', \\\n"
+          "plot '%s/sim/truth.csv' using 3:5 every 5 with points pt 7 ps 0.15 lc rgb '#c8c8c8', \\\n"
           "     '%s/track/tracks.csv' using 4:6:($3/1000.0) with points pt 7 ps 0.3 lc palette\n"
           "unset multiplot\n",
           dir, dir, dir, dir, dir);
