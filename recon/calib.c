@@ -394,9 +394,22 @@ elfm_status elfm_calib_load(const char *path, elfm_calib *out, elfm_error *err)
 
 /* ---- saving ---- */
 
+/* Shortest "%.Ng" text that reads back as exactly v. cJSON's own number
+ * printer accepts a 15-digit text within one epsilon of the value, which
+ * does not round-trip (found by fuzz_calib), so numbers go in as raw JSON. */
+static void exact_number(double v, char *buf, size_t n)
+{
+  for (int digits = 15; digits <= 17; digits++) {
+    snprintf(buf, n, "%.*g", digits, v);
+    if (strtod(buf, NULL) == v) return;
+  }
+}
+
 static int add_num(cJSON *o, const char *k, double v)
 {
-  return cJSON_AddNumberToObject(o, k, v) != NULL;
+  char buf[40];
+  exact_number(v, buf, sizeof buf);
+  return cJSON_AddRawToObject(o, k, buf) != NULL;
 }
 
 static cJSON *calib_to_json(const elfm_calib *c)

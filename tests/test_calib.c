@@ -146,6 +146,15 @@ int main(void)
   CHECK(same);
   CHECK(r.z_min_um == -100 && r.z_max_um == 100 && r.z_step_um == 2);
 
+  /* Bit-exact even where 15 digits land within an epsilon (fuzz_calib found
+   * cJSON's printer rounding 0.9257142857141429). */
+  elfm_calib e = c;
+  e.um_per_px = 0.9257142857141429;
+  e.views[0].cx_px = 330.85802469135799;
+  CHECK_OK(elfm_calib_save(&e, "calib_exact.json", &err), &err);
+  CHECK_OK(elfm_calib_load("calib_exact.json", &r, &err), &err);
+  CHECK(r.um_per_px == e.um_per_px && r.views[0].cx_px == e.views[0].cx_px);
+
   /* Bad files: each names the file and the key. */
   char *good = read_file("calib_rt.json");
   CHECK(good != NULL);
