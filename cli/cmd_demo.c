@@ -55,7 +55,7 @@ static void demo_usage(FILE *f)
           "3D), runs the tracking pipeline on it (eventlfm track), scores the result against\n"
           "the simulator's truth (SPEC 7), writes depth-coded MIP PNGs (eventlfm recon\n"
           "--save-mips) and a track plot (gnuplot), and prints speed and error.\n"
-          "Output directory: DIR (default eventlfm_demo) with sim/, track/, mips/, tracks.png.\n");
+          "Output directory: DIR (default eventlfm_demo) with sim/, track/, recon/mips/, tracks.png.\n");
 }
 
 static int make_dir(const char *p)
@@ -180,7 +180,7 @@ int cmd_demo(int argc, char **argv)
   char sim[PATH_MAX], trk[PATH_MAX], mips[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX];
   path_fmt(sim, sizeof sim, "%s/sim", dir);
   path_fmt(trk, sizeof trk, "%s/track", dir);
-  path_fmt(mips, sizeof mips, "%s/mips", dir);
+  path_fmt(mips, sizeof mips, "%s/recon", dir); /* recon writes recon/mips/ */
   path_fmt(calib, sizeof calib, "%s/calib.json", sim);
   path_fmt(ev, sizeof ev, "%s/events.raw", sim);
   if (make_dir(sim) || make_dir(trk) || make_dir(mips))
@@ -264,6 +264,6 @@ int cmd_demo(int argc, char **argv)
   printf("  %-34s %12.3f / %.3f\n", "ISBI alpha / beta", r.alpha, r.beta);
   printf("  %-34s %d paired, %d missed, %d spurious\n", "tracks (of truth / candidates)",
          r.n_paired_tracks, r.n_missed_tracks, r.n_spurious_tracks);
-  printf("  outputs: %s/{sim,track,mips}%s\n", dir, op.plots && pics_ok ? ", tracks.png" : "");
+  printf("  outputs: %s/{sim,track%s}\n", dir, op.plots && pics_ok ? ",recon/mips,tracks.png" : "");
   return CLI_OK;
 }
