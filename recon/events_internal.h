@@ -83,7 +83,8 @@ struct elfm_reader {
   int64_t data_offset;      /* first byte after the header (and DAT's type/size) */
   int64_t header_lines;     /* CSV: lines before the first event line */
 
-  uint8_t *buf;             /* ELFM_READ_BUF_BYTES */
+  uint8_t *buf;             /* buf_cap bytes */
+  size_t buf_cap;           /* ELFM_READ_BUF_BYTES, less for small files */
   size_t len, pos;          /* valid bytes, next byte to decode */
   int64_t buf_off;          /* file offset of buf[0] */
   int eof;                  /* no more bytes after buf[len) */

@@ -5,6 +5,7 @@
 #include <inttypes.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "events_internal.h"
 
@@ -158,7 +159,7 @@ static elfm_status refill(elfm_reader *r, elfm_error *err)
   r->len = left;
   r->pos = 0;
   r->need_more = 0;
-  size_t want = ELFM_READ_BUF_BYTES - left;
+  size_t want = r->buf_cap - left;
   size_t got = fread(r->buf + left, 1, want, r->f);
   r->len += got;
   if (got < want) {
@@ -199,8 +200,8 @@ static elfm_status parse_header(elfm_reader *r, const elfm_reader_options *opt, 
       if (!nl) {
         if (!r->eof)
           return elfm_error_set(err, ELFM_ERR_FORMAT, path, (int64_t)pos,
-                                "header does not end within the first %zu MiB",
-                                ELFM_READ_BUF_BYTES >> 20);
+                                "header does not end within the first %zu bytes",
+                                r->buf_cap);
         return elfm_error_set(err, ELFM_ERR_FORMAT, path, (int64_t)pos,
                               "file ends inside a header line (truncated)");
       }
@@ -299,7 +300,22 @@ elfm_status elfm_reader_open(const char *path, const elfm_reader_options *opt,
   elfm_reader *r = calloc(1, sizeof *r);
   if (!r) return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "out of memory");
   r->path = strdup(path);
-  r->buf = malloc(ELFM_READ_BUF_BYTES);
+  r->f = fopen(path, "rb");
+  if (!r->f) {
+    elfm_status st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot open: %s", strerror(errno));
+    elfm_reader_close(r);
+    return st;
+  }
+  /* A small file gets a buffer its size (opening many small files stays
+   * cheap); anything else, or what cannot be sized (a pipe), the full
+   * buffer. 64 KiB at least so that any plausible header fits. */
+  struct stat sb;
+  r->buf_cap = ELFM_READ_BUF_BYTES;
+  if (fstat(fileno(r->f), &sb) == 0 && S_ISREG(sb.st_mode) &&
+      (uint64_t)sb.st_size < ELFM_READ_BUF_BYTES)
+    r->buf_cap = (size_t)sb.st_size + 1 < ((size_t)64 << 10) ? ((size_t)64 << 10)
+                                                             : (size_t)sb.st_size + 1;
+  r->buf = malloc(r->buf_cap);
   r->pend.t_us = malloc(ELFM_PEND_CAP * sizeof *r->pend.t_us);
   r->pend.x = malloc(ELFM_PEND_CAP * sizeof *r->pend.x);
   r->pend.y = malloc(ELFM_PEND_CAP * sizeof *r->pend.y);
@@ -313,12 +329,6 @@ elfm_status elfm_reader_open(const char *path, const elfm_reader_options *opt,
     return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "out of memory");
   }
   r->allow_unsorted = opt ? opt->allow_unsorted : 0;
-  r->f = fopen(path, "rb");
-  if (!r->f) {
-    elfm_status st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot open: %s", strerror(errno));
-    elfm_reader_close(r);
-    return st;
-  }
   elfm_status st = refill(r, err);
   if (st == ELFM_OK) st = parse_header(r, opt, err);
   if (st != ELFM_OK) {
