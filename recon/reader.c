@@ -111,7 +111,7 @@ static elfm_status parse_header_line(const char *path, int64_t off, const char *
     size_t b = a && v[a] == 'x' ? parse_dim(v + a + 1, &hh) : 0;
     if (!a || !b || v[a + 1 + b] != '\0')
       return elfm_error_set(err, ELFM_ERR_FORMAT, path, off,
-                            "bad geometry line '%.60s' (expected WIDTHxHEIGHT)", v);
+                            "bad geometry line '%.60s' (expected WIDTHxHEIGHT, numbers below 10^9)", v);
     h->width = w;
     h->height = hh;
     return ELFM_OK;

@@ -32,6 +32,10 @@ expect 1 "xout.raw: byte 40: EVT3 ADDR_X x=1300" "$bin" info "$tmp/xout.raw"
 # truncated: TIME_HIGH then one byte
 { printf '%% evt 3.0\n%% geometry 1280x720\n%% end\n'; printf '\001\200\012'; } > "$tmp/trunc.raw"
 expect 1 "trunc.raw: byte 38: file ends inside a 2-byte word" "$bin" info "$tmp/trunc.raw"
+printf '%% evt 3.0\n%% geometry 2147483648x2147483648\n%% end\n' > "$tmp/absurd.raw"
+expect 1 "absurd.raw: byte 10: bad geometry" "$bin" info "$tmp/absurd.raw"
+printf '%% evt 3.0\n%% format EVT3;height=720;width=99999\n%% end\n' > "$tmp/absurd2.raw"
+expect 1 "absurd2.raw: byte 0: geometry 99999x720" "$bin" info "$tmp/absurd2.raw"
 printf 't_us,x,y,p\n5,1,1,1\n3,1,1,0\n' > "$tmp/unsorted.csv"
 # info counts backward steps instead of failing; convert refuses them
 expect 0 "" "$bin" info "$tmp/unsorted.csv" --json
