@@ -214,6 +214,29 @@ int main(void)
     CHECK_EQ_INT(mixed, 0);
     elfm_track_store_clear(&s);
     elfm_link_free(l);
+    /* brute-force candidates give the same tracks as the k-d tree */
+    {
+      elfm_link_options ob = o;
+      ob.brute_force = 1;
+      elfm_linker *lb = elfm_link_create(&ob, &err);
+      for (int f = 0; f < 10; f++) {
+        for (int i = 0; i < N; i++) {
+          d[i] = mk(p0[3 * i] + v[3 * i] * f, p0[3 * i + 1] + v[3 * i + 1] * f, p0[3 * i + 2] + v[3 * i + 2] * f);
+          d[i].intensity = i;
+        }
+        CHECK_OK(elfm_link_step(lb, f, T0 + f * 1000, d, N, &err), &err);
+      }
+      CHECK_OK(elfm_link_finish(lb, &err), &err);
+      elfm_track_store_init(&s);
+      drain(lb, &s);
+      size_t bad = 0;
+      for (size_t i = 0; i < s.n; i++)
+        for (size_t k = 1; k < s.tracks[i]->n; k++) bad += s.tracks[i]->pts[k].intensity != s.tracks[i]->pts[0].intensity;
+      CHECK_EQ_INT(s.n, N);
+      CHECK_EQ_INT(bad, 0);
+      elfm_track_store_clear(&s);
+      elfm_link_free(lb);
+    }
     free(p0); free(v); free(d); free(perm); free(tag);
   }
 

@@ -68,6 +68,9 @@ typedef struct elfm_link_options {
    * elfm_link_last_track_id returns -2 for it. 0 = off (default 2000 us:
    * twice the default tau of 1000 us). */
   double trail_us;
+  /* Candidate search: the FLANN k-d tree (default) or brute force over all
+   * pairs (for the benchmark and as a cross-check; same candidates). */
+  int brute_force;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);

@@ -432,8 +432,24 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     l->track_det[i] = -1;
   }
 
-  /* 2. Candidates from the k-d tree over this frame's detections. */
-  if (nt > 0 && nd > 0) {
+  /* 2. Candidates from the k-d tree over this frame's detections (or all
+   * pairs when brute_force is set). */
+  if (nt > 0 && nd > 0 && o->brute_force) {
+    for (size_t i = 0; i < nt; i++) {
+      live_track *lt = &l->live[i];
+      double g2 = lt->gate_um * lt->gate_um;
+      int c = 0;
+      for (size_t j = 0; j < nd && c < o->max_candidates; j++) {
+        double dx = det[j].x_um - lt->pred[0], dy = det[j].y_um - lt->pred[1],
+               dz = (det[j].z_um - lt->pred[2]) / kz;
+        double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < g2)
+          l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
+              (link_cand){(int)j, d2 / g2 + o->gap_cost * lt->missed};
+      }
+      l->n_cand[i] = c;
+    }
+  } else if (nt > 0 && nd > 0) {
     for (size_t j = 0; j < nd; j++) {
       l->pts[3 * j] = (float)det[j].x_um;
       l->pts[3 * j + 1] = (float)det[j].y_um;
