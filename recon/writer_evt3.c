@@ -8,7 +8,7 @@
  *
  * Absolute times: EVT3 carries only 24 bits, and a reader counts a loop
  * when TIME_HIGH drops by >= 2048. So TIME_HIGH never advances by more than
- * 2047 steps (8.4 ms... x 4096 = 8.4 s) at once: a longer gap, or a file
+ * 2047 steps of 4096 us (8.4 s) at once: a longer gap, or a file
  * starting at t = 913 s, is bridged by intermediate TIME_HIGH words (one
  * per 8.4 s, ~110 words for 913 s), which any EVT3 reader follows to the
  * right loop count.
