@@ -42,9 +42,11 @@
 /* Gaussian approximation of the Airy core: sigma = 0.21 lambda / NA
  * (Zhang, Zerubia & Olivo-Marin, Appl. Opt. 2007). */
 #define AIRY_SIGMA_FACTOR 0.21
-/* An image is cut where it adds less than 2 % to the background: ln(1.02)
- * = 0.02 is a tenth of the 0.2 contrast threshold, so the cut makes no events. */
-#define BOX_EPS 0.02
+/* An image is cut where it adds less than 4 % to the background. ln(1.04)
+ * = 0.04 is a fifth of the 0.2 contrast threshold; as an image approaches,
+ * a pixel's light rises monotonically anyway, so the cut only moves that
+ * pixel's first crossing a little earlier, it adds no events. */
+#define BOX_EPS 0.04
 /* Samples of each object's path per slice window (bounding boxes, speed). */
 #define PATH_SAMPLES 9
 /* Step length: an image moves at most this many PSF sigmas per step. ln I
@@ -104,8 +106,13 @@ typedef struct sim_pixel {
   float lref;     /* reference level of the last event */
   float con, coff;/* ON / OFF thresholds; con == 0: never initialised */
   uint32_t mark;  /* step that last processed the pixel */
-  float pad;
+  uint32_t tlast_q; /* last event (crossing) time in quarter us, modulo 2^32 */
 } sim_pixel;
+
+/* Event times in the refractory check: quarter microseconds in 32 bits
+ * wrap after 1074 s; differences are taken modulo 2^32, so only a pixel
+ * silent for more than 537 s could be wrongly held back, once. */
+#define TQ_PER_US 4.0
 
 typedef struct sim_ws {
   const elfm_scene *s;
@@ -117,7 +124,6 @@ typedef struct sim_ws {
    * photocurrent of background + static images; a step adds the moving /
    * blinking images into ifull and puts base back as it reads each pixel. */
   sim_pixel *px;
-  double *tlast;   /* last event (crossing) time, us from t0 */
   uint32_t step_id;
   int first_step;  /* the very first step: pixels start settled at the light they see */
   /* pixels still settling (low-pass not yet at its input): stepped until settled */
@@ -184,7 +190,7 @@ static inline double phi_tab(const double *tab, double x)
 
 static void ws_free(sim_ws *w)
 {
-  free(w->px); free(w->tlast); free(w->carry); free(w->carry_next);
+  free(w->px); free(w->carry); free(w->carry_next);
   free(w->box); free(w->rect); free(w->os); free(w->dyn_obj);
   free(w->ev); free(w->sorted); free(w->counts);
   free(w->steps); free(w->gx); free(w->gy);
@@ -213,10 +219,9 @@ static elfm_status ws_init(sim_ws *w, const elfm_scene *s, elfm_error *err)
   }
   for (int i = 0; i < PHI_N; i++) w->phi[i] = phi_exact(-PHI_LIM + (double)i / PHI_PER_SIGMA);
   w->px = calloc(w->npix, sizeof *w->px); /* con 0: never initialised; mark 0: no step */
-  w->tlast = malloc(w->npix * sizeof *w->tlast);
   w->os = calloc((size_t)(s->n_objects ? s->n_objects : 1), sizeof *w->os);
   w->dyn_obj = calloc((size_t)(s->n_objects ? s->n_objects : 1), sizeof *w->dyn_obj);
-  if (!w->px || !w->tlast || !w->os || !w->dyn_obj) {
+  if (!w->px || !w->os || !w->dyn_obj) {
     ws_free(w);
     return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1,
                           "out of memory for the %dx%d pixel state", w->W, w->H);
@@ -494,11 +499,12 @@ static elfm_status pixel_events(sim_ws *w, size_t pix, float L0, float L1, doubl
     if (frac < 0) frac = 0;
     if (frac > 1) frac = 1;
     double tc = ta + frac * dt;
-    if (tc < w->tlast[pix] + ss->refractory_us) {
+    uint32_t tq = (uint32_t)(uint64_t)(tc * TQ_PER_US);
+    if ((double)(uint32_t)(tq - w->px[pix].tlast_q) < ss->refractory_us * TQ_PER_US) {
       w->st.n_dropped_refractory++;
       continue;
     }
-    w->tlast[pix] = tc;
+    w->px[pix].tlast_q = tq;
     double delay = ss->latency_us + ss->jitter_us * sim_normal_fast(sim_rng_next(&w->rng));
     if (delay < 0) delay = 0;
     elfm_status s = push_event(w, t0 + (int64_t)floor(tc + delay), x, y, on, err);
@@ -543,7 +549,8 @@ static inline elfm_status pixel_step(sim_ws *w, size_t pix, float k1, float k2, 
      * anywhere in the dead band: the history is unknown. */
     w->px[pix].con = pixel_threshold(w, pix, 0);
     w->px[pix].coff = pixel_threshold(w, pix, 1);
-    w->tlast[pix] = -1e18;
+    /* As if its last event were 2^31 quarter us (537 s) ago. */
+    w->px[pix].tlast_q = (uint32_t)(uint64_t)(ta * TQ_PER_US) - 0x80000000u;
     float L_start = w->first_step ? L : fast_lnf(w->px[pix].base);
     uint64_t h = sim_hash(w->s->seed, STREAM_FRESH, (uint64_t)pix);
     w->px[pix].llp = L_start;
