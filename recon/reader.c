@@ -133,8 +133,8 @@ static elfm_status parse_header_line(const char *path, int64_t off, const char *
   }
   /* DAT: "% Data file containing Event2D events." (or the old mangled
    * C++ name "N9Chronocam7Event2dE"), then "% Width N" / "% Height N". */
-  if (strstr(s, "Event2D") || strstr(s, "Event2dE")) {
-    h->fmt = ELFM_FMT_DAT;
+  if ((strstr(s, "Event2D") || strstr(s, "Event2dE")) && h->fmt == ELFM_FMT_UNKNOWN) {
+    h->fmt = ELFM_FMT_DAT; /* an explicit "% evt"/"% format" line wins */
     return ELFM_OK;
   }
   if (starts_with(s, "Width ") || starts_with(s, "Height ")) {
