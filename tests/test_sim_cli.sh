@@ -1,0 +1,47 @@
+#!/bin/sh
+# test_sim_cli.sh — eventlfm simulate / calib from the command line: outputs,
+# exit codes (0 ok, 1 failure, 2 usage) and messages naming what is wrong.
+bin=$1
+dir=${2:-.}/sim_cli_out
+rm -rf "$dir"
+fail=0
+check() { # check NAME EXPECTED_RC COMMAND...
+  name=$1; want=$2; shift 2
+  "$@" >"$dir.out" 2>"$dir.err"; rc=$?
+  if [ "$rc" -ne "$want" ]; then
+    echo "FAIL: $name: exit $rc, want $want"; cat "$dir.err"; fail=$((fail+1))
+  fi
+}
+mkdir -p "$dir"
+check list 0 "$bin" simulate --list
+[ "$(wc -l <"$dir.out")" -eq 8 ] || { echo "FAIL: --list gave $(wc -l <"$dir.out") scenes"; fail=$((fail+1)); }
+check run 0 "$bin" simulate blink --out "$dir/blink" --duration-ms 20 --seed 3 --quiet
+for f in events.raw truth.csv calib.json stimulus.csv; do
+  [ -s "$dir/blink/$f" ] || { echo "FAIL: blink: no $f"; fail=$((fail+1)); }
+done
+grep -q "Mev/s" "$dir.err" || { echo "FAIL: no event rate on stderr"; fail=$((fail+1)); }
+check info 0 "$bin" info "$dir/blink/events.raw"
+check calib-of-scene 0 "$bin" calib show "$dir/blink/calib.json"
+check param 0 "$bin" simulate stage --out "$dir/stage" --duration-ms 3 --param objects.count=2 --quiet
+[ ! -e "$dir/stage/stimulus.csv" ] || { echo "FAIL: stage wrote stimulus.csv"; fail=$((fail+1)); }
+check no-out 2 "$bin" simulate stage
+check bad-seed 2 "$bin" simulate stage --out "$dir/x" --seed abc
+check bad-duration 2 "$bin" simulate stage --out "$dir/x" --duration-ms -5
+check no-scene 1 "$bin" simulate no_such_scene --out "$dir/x"
+grep -q "no_such_scene" "$dir.err" || { echo "FAIL: unknown scene not named"; fail=$((fail+1)); }
+check bad-param 1 "$bin" simulate stage --out "$dir/x" --param sensor.nosuch=1
+grep -q "sensor.nosuch" "$dir.err" || { echo "FAIL: bad --param key not named"; fail=$((fail+1)); }
+printf '{"name": "x"}' >"$dir/bad.json"
+check bad-scene 1 "$bin" simulate "$dir/bad.json" --out "$dir/x"
+grep -q "bad.json" "$dir.err" && grep -q "description" "$dir.err" || { echo "FAIL: bad scene file/key not named"; cat "$dir.err"; fail=$((fail+1)); }
+check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
+check show 0 "$bin" calib show "$dir/c.json"
+grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
+check from-optics-no-out 2 "$bin" calib from-optics
+check from-optics-bad-na 2 "$bin" calib from-optics --na x --out "$dir/c2.json"
+check from-optics-na-range 1 "$bin" calib from-optics --na 1.5 --out "$dir/c2.json"
+check calib-bad-action 2 "$bin" calib frobnicate
+check show-missing 1 "$bin" calib show "$dir/none.json"
+[ $fail -eq 0 ] && echo "test_sim_cli: all passed"
+rm -rf "$dir" "$dir.out" "$dir.err"
+exit $fail
