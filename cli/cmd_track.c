@@ -77,7 +77,7 @@ static void usage(FILE *f)
     "  --ghost none|abs|frac|mad  ghost threshold, --ghost-value V, --agree F\n"
     "  --threads N, --from-us T, --to-us T\n"
     "detection:\n"
-    "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (70 on time\n"
+    "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (50 on time\n"
     "                       surfaces), --threshold-rel F (0.35 of the maximum for counts)\n"
     "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 15)\n"
     "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
@@ -405,11 +405,11 @@ int cmd_track(int argc, char **argv)
   elfm_smooth_options_default(&o.smooth);
   o.max_det = 10000;
   /* Tracking defaults differ from `recon`'s, measured on the simulated flow
-   * scene (50 ms, docs/tracker.md): ON events only (a moving bead's OFF
-   * events form a second peak ~5 um behind it: F1 0.79 -> 0.95), no median
-   * (recall 0.86 -> 0.92 at equal precision), and an absolute threshold of
-   * 70 on the 0..255 time surface (about a quarter of the views firing
-   * together; the k-sigma rule alone let ghosts through: precision 0.29). */
+   * scene (docs/tracker.md): ON events only (a moving bead's OFF events form
+   * a second peak ~5 um behind it: F1 0.79 -> 0.95), no median (recall
+   * 0.86 -> 0.92 at equal precision), and an absolute threshold of 50 on the
+   * 0..255 time surface (F1 0.88 at 45, 0.86 at 55, 0.65 at 30; the k-sigma
+   * rule alone let ghosts through: precision 0.29). */
   o.recon.framer.polarity = ELFM_POL_ON;
   o.recon.median = 0;
   int thr_given = 0;
@@ -543,7 +543,7 @@ int cmd_track(int argc, char **argv)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
   if (!thr_given) {
     if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
-    else o.peaks.absolute = 70;
+    else o.peaks.absolute = 50;
   }
   if (o.motion == MOTION_STAGE) {
     o.smooth.allow_spline = 0;

@@ -11,7 +11,8 @@
  *  2. the frame's detections go into a FLANN exact k-d tree
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:
- *     gate_um + gate_growth_um_per_frame * (frames missed so far);
+ *     gate_um + missed x (gate_growth_um_per_frame + speed_gate_frac x
+ *     speed x frame interval);
  *  3. tracks and detections joined by a candidate pair form connected
  *     groups; each group is solved optimally (the Hungarian solver of
  *     elfm_score.h: most pairs, then least total cost; cost = squared
@@ -42,12 +43,13 @@ typedef struct elfm_link_options {
   double gate_um;                  /* default 6 um: measured on the flow scene (4 um, the scoring
                                       gate, broke tracks of beads turning ~17 deg/ms) */
   double gate_growth_um_per_frame; /* default 0.05: +2.5 um after a 50-frame gap */
+  double speed_gate_frac;          /* + this x speed x frame interval per missed frame (0.3) */
   double kz;                       /* anisotropy, default 4 (SPEC §7) */
   int max_gap_frames;              /* default 50: blinking beads stay dark <= 50 ms at 1 kHz */
   int min_points;                  /* default 5 real points */
   int history;                     /* default 20 points for the long velocity fit */
   int short_history;               /* default 8 points for the short acceleration fit */
-  int short_gap;                   /* default 2 missed frames */
+  int short_gap;                   /* default 6 missed frames */
   double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
   int max_candidates;              /* per track, default 8 */
   /* Time-surface lag correction (elfm_peaks.h): when tau_us > 0, each

@@ -64,11 +64,12 @@ void elfm_link_options_default(elfm_link_options *o)
   o->min_points = 5;
   o->history = 20;
   o->short_history = 8;
-  o->short_gap = 2;
+  o->short_gap = 6;
   o->gap_cost = 0.02;
   o->max_candidates = 8;
   o->lag_tau_us = 0;
   o->birth_speed_um_per_ms = 5.0;
+  o->speed_gate_frac = 0.3;
   o->trail_us = 2000;
 }
 
@@ -79,7 +80,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       o->min_points < 1 || o->history < 2 || o->short_history < 4 || o->short_gap < 0 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
       o->max_candidates > 1024 || !(o->lag_tau_us >= 0) ||
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
-      !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) ||
+      !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
@@ -414,7 +415,14 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         lt.pred[a] = lt.fit_pos[a] + lt.fit_vel[a] * dt_ms + 0.5 * lt.fit_acc[a] * dt_ms * dt_ms;
     else
       for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
-    lt.gate_um = o->gate_um + o->gate_growth_um_per_frame * lt.missed;
+    /* The gate widens with each missed frame, more for fast objects: an
+     * unseen turn moves the object off the extrapolated line by ~ speed x
+     * turn angle (speed_gate_frac = 0.3: ~17 degrees per frame, flow scene). */
+    const double *cv = lt.has_short ? lt.fit_vel : lt.vel_um_per_ms;
+    double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
+    double frame_ms = dt_ms / (lt.missed + 1);
+    lt.gate_um = o->gate_um + lt.missed * (o->gate_growth_um_per_frame +
+                                           o->speed_gate_frac * speed * frame_ms);
     if (lt.t->n == 1) lt.gate_um += o->birth_speed_um_per_ms * dt_ms;
     l->live[w++] = lt;
   }
@@ -438,14 +446,22 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     for (size_t i = 0; i < nt; i++) {
       live_track *lt = &l->live[i];
       double g2 = lt->gate_um * lt->gate_um;
+      /* keep the max_candidates nearest, as the k-d tree's sorted search */
+      link_cand *lc = &l->cand[i * (size_t)o->max_candidates];
       int c = 0;
-      for (size_t j = 0; j < nd && c < o->max_candidates; j++) {
+      for (size_t j = 0; j < nd; j++) {
         double dx = det[j].x_um - lt->pred[0], dy = det[j].y_um - lt->pred[1],
                dz = (det[j].z_um - lt->pred[2]) / kz;
         double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 < g2)
-          l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
-              (link_cand){(int)j, d2 / g2 + o->gap_cost * lt->missed};
+        if (d2 >= g2) continue;
+        double cost = d2 / g2 + o->gap_cost * lt->missed;
+        if (c == o->max_candidates && cost >= lc[c - 1].cost) continue;
+        int k = c < o->max_candidates ? c++ : c - 1;
+        while (k > 0 && lc[k - 1].cost > cost) {
+          lc[k] = lc[k - 1];
+          k--;
+        }
+        lc[k] = (link_cand){(int)j, cost};
       }
       l->n_cand[i] = c;
     }
