@@ -843,6 +843,19 @@ static elfm_status write_truth(sim_ws *w, int64_t a, int64_t b, int last, const 
   return ELFM_OK;
 }
 
+/* Index of the first of edges[0..n) that is >= t (binary search: a long
+ * recording has millions of LED edges; a slice must not scan them all). */
+static int64_t first_edge_at(const int64_t *edges, int64_t n, int64_t t)
+{
+  int64_t lo = 0, hi = n;
+  while (lo < hi) {
+    int64_t mid = lo + (hi - lo) / 2;
+    if (edges[mid] < t) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
+}
+
 static int cmp_stim(const void *pa, const void *pb)
 {
   const sim_stim *a = pa, *b = pb;
@@ -857,14 +870,12 @@ static elfm_status collect_stimulus(sim_ws *w, int64_t a, int64_t b, elfm_error 
   w->n_stim = 0;
   if (s->illum == SIM_ILLUM_RANDOM_PULSES || s->illum == SIM_ILLUM_PERIODIC) {
     /* The illumination alone: edges where it switches. */
-    int64_t n = 0;
     if (s->illum == SIM_ILLUM_RANDOM_PULSES) {
-      for (int64_t i = 0; i < s->n_illum_edges; i++) {
+      for (int64_t i = first_edge_at(s->illum_edges, s->n_illum_edges, a);
+           i < s->n_illum_edges && s->illum_edges[i] < b; i++) {
         int64_t e = s->illum_edges[i];
-        if (e < a || e >= b) continue;
         if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
         w->stim[w->n_stim++] = (sim_stim){s->t0_us + e, 0, (int)((i & 1) == 0)};
-        n++;
       }
     } else {
       int64_t P = (int64_t)s->illum_period_us, len = (int64_t)s->illum_pulse_us;
@@ -877,14 +888,12 @@ static elfm_status collect_stimulus(sim_ws *w, int64_t a, int64_t b, elfm_error 
         }
       }
     }
-    (void)n;
   }
   if (s->has_spikes) {
     for (int k = 0; k < s->n_objects; k++) {
       const sim_object *o = &s->obj[k];
       const int64_t *ed = s->spike_edges + o->spike_first;
-      for (int64_t i = 0; i < o->spike_count; i++) {
-        if (ed[i] < a || ed[i] >= b) continue;
+      for (int64_t i = first_edge_at(ed, o->spike_count, a); i < o->spike_count && ed[i] < b; i++) {
         if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
         w->stim[w->n_stim++] = (sim_stim){s->t0_us + ed[i], k + 1, (int)((i & 1) == 0)};
       }
