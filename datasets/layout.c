@@ -371,7 +371,7 @@ double sim_object_light(const elfm_scene *s, int k, int64_t t)
   double l = illumination(s, t);
   if (s->has_spikes && l > 0) {
     const sim_object *o = &s->obj[k];
-    if (!in_pulses(s->spike_edges + o->spike_first, o->spike_count, t)) l *= s->spike_baseline;
+    if (!in_pulses(sim_spike_edges(s, o), o->spike_count, t)) l *= s->spike_baseline;
   }
   return l;
 }
@@ -422,7 +422,7 @@ int64_t sim_light_edges(const elfm_scene *s, int64_t a, int64_t b, int64_t *out,
   if (s->has_spikes) {
     for (int k = 0; k < s->n_objects; k++) {
       const sim_object *o = &s->obj[k];
-      found = edges_in(s->spike_edges + o->spike_first, o->spike_count, a, b, out, cap, found);
+      found = edges_in(sim_spike_edges(s, o), o->spike_count, a, b, out, cap, found);
     }
   }
   return found;
@@ -458,7 +458,7 @@ int sim_object_light_changes(const elfm_scene *s, int k, int64_t a, int64_t b)
   }
   if (s->has_spikes) {
     const sim_object *o = &s->obj[k];
-    if (edges_in(s->spike_edges + o->spike_first, o->spike_count, a, b, &tmp, 0, 0) > 0) return 1;
+    if (edges_in(sim_spike_edges(s, o), o->spike_count, a, b, &tmp, 0, 0) > 0) return 1;
   }
   return 0;
 }

@@ -809,7 +809,7 @@ static elfm_status emit_sorted(sim_ws *w, int64_t t_lo, int64_t t_end, int final
     if (st) return st;
   }
   /* Keep the rest for the next slice. */
-  memcpy(w->ev, w->sorted + n_out, (n - n_out) * sizeof *w->ev);
+  if (n > n_out) memcpy(w->ev, w->sorted + n_out, (n - n_out) * sizeof *w->ev);
   w->n_ev = n - n_out;
   return ELFM_OK;
 nomem:
@@ -892,14 +892,14 @@ static elfm_status collect_stimulus(sim_ws *w, int64_t a, int64_t b, elfm_error 
   if (s->has_spikes) {
     for (int k = 0; k < s->n_objects; k++) {
       const sim_object *o = &s->obj[k];
-      const int64_t *ed = s->spike_edges + o->spike_first;
+      const int64_t *ed = sim_spike_edges(s, o);
       for (int64_t i = first_edge_at(ed, o->spike_count, a); i < o->spike_count && ed[i] < b; i++) {
         if (!grow((void **)&w->stim, &w->cap_stim, w->n_stim + 1, sizeof *w->stim)) goto nomem;
         w->stim[w->n_stim++] = (sim_stim){s->t0_us + ed[i], k + 1, (int)((i & 1) == 0)};
       }
     }
   }
-  qsort(w->stim, w->n_stim, sizeof *w->stim, cmp_stim);
+  if (w->n_stim > 1) qsort(w->stim, w->n_stim, sizeof *w->stim, cmp_stim);
   return ELFM_OK;
 nomem:
   return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory (stimulus)");

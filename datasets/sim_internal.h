@@ -158,6 +158,12 @@ struct elfm_scene {
   int hot_x[64], hot_y[64]; /* hot pixel positions */
 };
 
+/* Object k's spike edges (NULL when it has none: no arithmetic on NULL). */
+static inline const int64_t *sim_spike_edges(const elfm_scene *s, const sim_object *o)
+{
+  return o->spike_count ? s->spike_edges + o->spike_first : NULL;
+}
+
 /* layout.c: build obj/worms/edges from the scene fields and seed. */
 elfm_status sim_layout_build(elfm_scene *s, elfm_error *err);
 void sim_layout_free(elfm_scene *s);
