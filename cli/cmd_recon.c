@@ -1,9 +1,340 @@
-/* cmd_recon.c — eventlfm recon (not built yet: reports so and fails). */
+/* cmd_recon.c — eventlfm recon: events (or a light-field TIFF stack) ->
+ * refocused volumes (EXR), depth-coded MIPs (PNG) and summary.json.
+ * Options go into a struct, the work into elfm_recon_run (recon/pipeline.c). */
+#include <errno.h>
+#include <getopt.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include <cjson/cJSON.h>
+
 #include "cli.h"
+
+typedef struct recon_args {
+  const char *calib, *events, *tiff, *out;
+  elfm_recon_options ro;
+  int save_volumes, save_mips, quiet;
+  const char *repr_s, *pol_s, *path_s, *ghost_s, *start_s;
+} recon_args;
+
+typedef struct recon_out {
+  const recon_args *a;
+  char dir[4096];
+  int64_t saved_volumes, saved_mips;
+  elfm_status status;
+} recon_out;
+
+static void usage(FILE *f)
+{
+  fprintf(f,
+          "usage: eventlfm recon --calib calib.json (--events FILE | --tiff STACK.tif) --out DIR\n"
+          "                      [options]\n\n"
+          "Refocuses events (or a conventional light-field TIFF stack) into volumes on the\n"
+          "z planes of the calibration and writes DIR/summary.json; with --save-volumes\n"
+          "DIR/volumes/vol_NNNNNN.exr (one float channel per z plane), with --save-mips\n"
+          "DIR/mips/mip_NNNNNN.png (depth-colour-coded x-y, x-z, y-z projections).\n\n"
+          "frames:\n"
+          "  --dt-us N          window length, >= 50 (default 1000: 1 kHz volumes)\n"
+          "  --stride-us N      window start to start, <= dt (default dt)\n"
+          "  --repr R           exp | lin | count (default exp: time surface)\n"
+          "  --tau-us T         time-surface decay (default 1000)\n"
+          "  --polarity P       both | on | off | signed (default both)\n"
+          "  --start S          first (first event, default) | trigger (first trigger edge)\n"
+          "  --from-us T        first event time to use (windows start here)\n"
+          "  --to-us T          stop before this event time\n"
+          "  --median N         0 | 3 | 5 (default 3, the paper's)\n"
+          "refocusing:\n"
+          "  --path P           auto | dense | sparse (default auto)\n"
+          "  --ghost G          comma list of: none, abs:V, frac:F (of the maximum),\n"
+          "                     mad:K (median + K robust sigma), agree:F (a voxel needs\n"
+          "                     signal in F of its views); default none\n"
+          "  --crop-margin-px N widen each view's crop box (default 0)\n"
+          "  --threads N        worker threads (default: all)\n"
+          "  --batch N          frames per parallel batch (default 2 x threads)\n"
+          "  --tiff-frame-us N  TIFF: time between pages (default dt)\n"
+          "output:\n"
+          "  --save-volumes     write every volume as EXR\n"
+          "  --save-mips        write every volume's MIP as PNG\n"
+          "  --quiet            no progress line\n"
+          "  -h, --help         this text\n");
+}
+
+static int parse_ghost(const char *s, elfm_refocus_options *r)
+{
+  char buf[256];
+  snprintf(buf, sizeof buf, "%s", s);
+  for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
+    char *colon = strchr(tok, ':');
+    double v = 0;
+    if (colon) {
+      *colon = '\0';
+      if (!cli_parse_double("recon", "--ghost", colon + 1, &v)) return 0;
+    }
+    if (!strcmp(tok, "none") && !colon) {
+      r->threshold = ELFM_GHOST_THR_NONE;
+      r->agree_frac = 0;
+    } else if (!strcmp(tok, "abs") && colon) {
+      r->threshold = ELFM_GHOST_THR_ABS;
+      r->threshold_value = v;
+    } else if (!strcmp(tok, "frac") && colon) {
+      r->threshold = ELFM_GHOST_THR_FRAC_MAX;
+      r->threshold_value = v;
+    } else if (!strcmp(tok, "mad") && colon) {
+      r->threshold = ELFM_GHOST_THR_MAD;
+      r->threshold_value = v;
+    } else if (!strcmp(tok, "agree") && colon) {
+      r->agree_frac = v;
+    } else {
+      cli_message("recon", CLI_USAGE, "--ghost: '%s' is not none, abs:V, frac:F, mad:K or agree:F", s);
+      return 0;
+    }
+  }
+  return 1;
+}
+
+static int make_dir(const char *path)
+{
+  if (mkdir(path, 0777) == 0 || errno == EEXIST) return 1;
+  cli_message("recon", CLI_FAIL, "%s: cannot create directory: %s", path, strerror(errno));
+  return 0;
+}
+
+static void progress(const elfm_recon_stats *s, void *user)
+{
+  (void)user;
+  fprintf(stderr, "\rrecon: %lld volumes, %.3f s of recording, %.2f Mev/s, %.2fx real time   ",
+          (long long)s->frames, s->span_s, s->events_per_s * 1e-6,
+          s->wall_s > 0 ? s->span_s / s->wall_s : 0.0);
+}
+
+static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
+{
+  recon_out *o = user;
+  char path[4200];
+  if (o->a->save_volumes) {
+    snprintf(path, sizeof path, "%s/volumes/vol_%06lld.exr", o->dir, (long long)v->frame);
+    elfm_status st = elfm_volume_write_exr(v, path, err);
+    if (st) return st;
+    o->saved_volumes++;
+  }
+  if (o->a->save_mips) {
+    snprintf(path, sizeof path, "%s/mips/mip_%06lld.png", o->dir, (long long)v->frame);
+    elfm_status st = elfm_volume_write_mip_png(v, path, 0, 1, err);
+    if (st) return st;
+    o->saved_mips++;
+  }
+  return ELFM_OK;
+}
+
+static const char *repr_name(elfm_repr r)
+{
+  return r == ELFM_REPR_EXP ? "exp" : r == ELFM_REPR_LIN ? "lin" : "count";
+}
+static const char *pol_name(elfm_polarity p)
+{
+  return p == ELFM_POL_ON ? "on" : p == ELFM_POL_OFF ? "off" : p == ELFM_POL_SIGNED ? "signed" : "both";
+}
+static const char *path_name(elfm_refocus_path p)
+{
+  return p == ELFM_PATH_DENSE ? "dense" : p == ELFM_PATH_SPARSE ? "sparse" : "auto";
+}
+static const char *thr_name(elfm_ghost_threshold t)
+{
+  return t == ELFM_GHOST_THR_ABS ? "abs" : t == ELFM_GHOST_THR_FRAC_MAX ? "frac" :
+         t == ELFM_GHOST_THR_MAD ? "mad" : "none";
+}
+
+static int write_summary(const recon_args *a, const recon_out *o, const elfm_calib *cal,
+                         const elfm_recon_stats *s)
+{
+  cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
+  cJSON_AddStringToObject(in, "calib", a->calib);
+  cJSON_AddStringToObject(in, a->tiff ? "tiff" : "events", a->tiff ? a->tiff : a->events);
+  cJSON *p = cJSON_AddObjectToObject(root, "parameters");
+  const elfm_recon_options *r = &a->ro;
+  cJSON_AddNumberToObject(p, "dt_us", (double)r->framer.dt_us);
+  cJSON_AddNumberToObject(p, "stride_us", (double)(r->framer.stride_us ? r->framer.stride_us : r->framer.dt_us));
+  cJSON_AddStringToObject(p, "repr", repr_name(r->framer.repr));
+  cJSON_AddNumberToObject(p, "tau_us", r->framer.tau_us);
+  cJSON_AddStringToObject(p, "polarity", pol_name(r->framer.polarity));
+  cJSON_AddStringToObject(p, "start", r->framer.start == ELFM_START_FIRST_TRIGGER ? "trigger" : "first");
+  cJSON_AddNumberToObject(p, "median", r->median);
+  cJSON_AddStringToObject(p, "path", path_name(r->refocus.path));
+  cJSON_AddStringToObject(p, "ghost_threshold", thr_name(r->refocus.threshold));
+  cJSON_AddNumberToObject(p, "ghost_threshold_value", r->refocus.threshold_value);
+  cJSON_AddNumberToObject(p, "ghost_agree_frac", r->refocus.agree_frac);
+  cJSON_AddNumberToObject(p, "crop_margin_px", r->refocus.crop_margin_px);
+  cJSON_AddNumberToObject(p, "threads", r->threads);
+  if (r->from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)r->from_us);
+  if (r->to_us != INT64_MAX) cJSON_AddNumberToObject(p, "to_us", (double)r->to_us);
+  cJSON *g = cJSON_AddObjectToObject(root, "volume");
+  cJSON_AddNumberToObject(g, "w", cal->view_w_px);
+  cJSON_AddNumberToObject(g, "h", cal->view_h_px);
+  cJSON_AddNumberToObject(g, "nz", elfm_calib_n_planes(cal));
+  cJSON_AddNumberToObject(g, "um_per_px", cal->um_per_px);
+  cJSON_AddNumberToObject(g, "z_min_um", cal->z_min_um);
+  cJSON_AddNumberToObject(g, "z_step_um", cal->z_step_um);
+  cJSON *c = cJSON_AddObjectToObject(root, "counts");
+  cJSON_AddNumberToObject(c, "events", (double)s->events);
+  cJSON_AddNumberToObject(c, "volumes", (double)s->frames);
+  cJSON_AddNumberToObject(c, "volumes_sparse", (double)s->frames_sparse);
+  cJSON_AddNumberToObject(c, "volumes_dense", (double)s->frames_dense);
+  cJSON_AddNumberToObject(c, "saved_volumes", (double)o->saved_volumes);
+  cJSON_AddNumberToObject(c, "saved_mips", (double)o->saved_mips);
+  cJSON *t = cJSON_AddObjectToObject(root, "timing");
+  cJSON_AddNumberToObject(t, "span_s", s->span_s);
+  cJSON_AddNumberToObject(t, "wall_s", s->wall_s);
+  cJSON_AddNumberToObject(t, "read_s", s->read_s);
+  cJSON_AddNumberToObject(t, "frame_s", s->frame_s);
+  cJSON_AddNumberToObject(t, "refocus_s", s->refocus_s);
+  cJSON_AddNumberToObject(t, "output_s", s->callback_s);
+  cJSON_AddNumberToObject(t, "events_per_s", s->events_per_s);
+  cJSON_AddNumberToObject(t, "volumes_per_s", s->volumes_per_s);
+  cJSON_AddNumberToObject(t, "realtime_factor", s->realtime_factor);
+  cJSON_AddNumberToObject(t, "peak_rss_mb", cli_peak_rss_mb());
+  char *text = cJSON_Print(root);
+  cJSON_Delete(root);
+  char path[4200];
+  snprintf(path, sizeof path, "%s/summary.json", o->dir);
+  FILE *f = fopen(path, "w");
+  int ok = f && text && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
+  if (f && fclose(f) != 0) ok = 0;
+  free(text);
+  if (!ok) cli_message("recon", CLI_FAIL, "%s: cannot write: %s", path, strerror(errno));
+  return ok;
+}
 
 int cmd_recon(int argc, char **argv)
 {
-  (void)argc;
-  (void)argv;
-  return cli_message("recon", CLI_FAIL, "not implemented yet");
+  recon_args a;
+  memset(&a, 0, sizeof a);
+  elfm_recon_options_default(&a.ro);
+  enum { O_CALIB = 256, O_EVENTS, O_TIFF, O_OUT, O_DT, O_STRIDE, O_REPR, O_TAU, O_POL, O_START,
+         O_FROM, O_TO, O_MEDIAN, O_PATH, O_GHOST, O_MARGIN, O_THREADS, O_BATCH, O_TIFF_US,
+         O_SAVE_V, O_SAVE_M, O_QUIET };
+  static const struct option opts[] = {
+    {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
+    {"tiff", required_argument, 0, O_TIFF}, {"out", required_argument, 0, O_OUT},
+    {"dt-us", required_argument, 0, O_DT}, {"stride-us", required_argument, 0, O_STRIDE},
+    {"repr", required_argument, 0, O_REPR}, {"tau-us", required_argument, 0, O_TAU},
+    {"polarity", required_argument, 0, O_POL}, {"start", required_argument, 0, O_START},
+    {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
+    {"median", required_argument, 0, O_MEDIAN}, {"path", required_argument, 0, O_PATH},
+    {"ghost", required_argument, 0, O_GHOST}, {"crop-margin-px", required_argument, 0, O_MARGIN},
+    {"threads", required_argument, 0, O_THREADS}, {"batch", required_argument, 0, O_BATCH},
+    {"tiff-frame-us", required_argument, 0, O_TIFF_US}, {"save-volumes", no_argument, 0, O_SAVE_V},
+    {"save-mips", no_argument, 0, O_SAVE_M}, {"quiet", no_argument, 0, O_QUIET},
+    {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  elfm_recon_options *r = &a.ro;
+  optind = 1;
+  opterr = 0;
+  int c;
+  while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+    int ok = 1;
+    switch (c) {
+    case 'h': usage(stdout); return CLI_OK;
+    case O_CALIB: a.calib = optarg; break;
+    case O_EVENTS: a.events = optarg; break;
+    case O_TIFF: a.tiff = optarg; break;
+    case O_OUT: a.out = optarg; break;
+    case O_DT: ok = cli_parse_int64("recon", "--dt-us", optarg, &r->framer.dt_us); break;
+    case O_STRIDE: ok = cli_parse_int64("recon", "--stride-us", optarg, &r->framer.stride_us); break;
+    case O_TAU: ok = cli_parse_double("recon", "--tau-us", optarg, &r->framer.tau_us); break;
+    case O_FROM: ok = cli_parse_int64("recon", "--from-us", optarg, &r->from_us); break;
+    case O_TO: ok = cli_parse_int64("recon", "--to-us", optarg, &r->to_us); break;
+    case O_MEDIAN: ok = cli_parse_int("recon", "--median", optarg, &r->median); break;
+    case O_MARGIN: ok = cli_parse_int("recon", "--crop-margin-px", optarg, &r->refocus.crop_margin_px); break;
+    case O_THREADS: ok = cli_parse_int("recon", "--threads", optarg, &r->threads); break;
+    case O_BATCH: ok = cli_parse_int("recon", "--batch", optarg, &r->batch); break;
+    case O_TIFF_US: ok = cli_parse_int64("recon", "--tiff-frame-us", optarg, &r->tiff_frame_us); break;
+    case O_REPR: a.repr_s = optarg; break;
+    case O_POL: a.pol_s = optarg; break;
+    case O_PATH: a.path_s = optarg; break;
+    case O_GHOST: ok = parse_ghost(optarg, &r->refocus); break;
+    case O_START: a.start_s = optarg; break;
+    case O_SAVE_V: a.save_volumes = 1; break;
+    case O_SAVE_M: a.save_mips = 1; break;
+    case O_QUIET: a.quiet = 1; break;
+    default:
+      cli_message("recon", CLI_USAGE, "unknown or incomplete option '%s'", argv[optind - 1]);
+      usage(stderr);
+      return CLI_USAGE;
+    }
+    if (!ok) return CLI_USAGE;
+  }
+  if (optind < argc) return cli_message("recon", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
+  if (!a.calib || !a.out || (!a.events == !a.tiff)) {
+    usage(stderr);
+    return cli_message("recon", CLI_USAGE, "--calib, --out and one of --events / --tiff are required");
+  }
+  if (a.repr_s) {
+    if (!strcmp(a.repr_s, "exp")) r->framer.repr = ELFM_REPR_EXP;
+    else if (!strcmp(a.repr_s, "lin")) r->framer.repr = ELFM_REPR_LIN;
+    else if (!strcmp(a.repr_s, "count")) r->framer.repr = ELFM_REPR_COUNT;
+    else return cli_message("recon", CLI_USAGE, "--repr: '%s' is not exp, lin or count", a.repr_s);
+  }
+  if (a.pol_s) {
+    if (!strcmp(a.pol_s, "both")) r->framer.polarity = ELFM_POL_BOTH;
+    else if (!strcmp(a.pol_s, "on")) r->framer.polarity = ELFM_POL_ON;
+    else if (!strcmp(a.pol_s, "off")) r->framer.polarity = ELFM_POL_OFF;
+    else if (!strcmp(a.pol_s, "signed")) r->framer.polarity = ELFM_POL_SIGNED;
+    else return cli_message("recon", CLI_USAGE, "--polarity: '%s' is not both, on, off or signed", a.pol_s);
+  }
+  if (a.path_s) {
+    if (!strcmp(a.path_s, "auto")) r->refocus.path = ELFM_PATH_AUTO;
+    else if (!strcmp(a.path_s, "dense")) r->refocus.path = ELFM_PATH_DENSE;
+    else if (!strcmp(a.path_s, "sparse")) r->refocus.path = ELFM_PATH_SPARSE;
+    else return cli_message("recon", CLI_USAGE, "--path: '%s' is not auto, dense or sparse", a.path_s);
+  }
+  if (a.start_s) {
+    if (!strcmp(a.start_s, "first")) r->framer.start = ELFM_START_FIRST_EVENT;
+    else if (!strcmp(a.start_s, "trigger")) r->framer.start = ELFM_START_FIRST_TRIGGER;
+    else return cli_message("recon", CLI_USAGE, "--start: '%s' is not first or trigger", a.start_s);
+  }
+  if (r->median != 0 && r->median != 3 && r->median != 5)
+    return cli_message("recon", CLI_USAGE, "--median: %d is not 0, 3 or 5", r->median);
+  if (r->threads < 0 || r->batch < 0)
+    return cli_message("recon", CLI_USAGE, "--threads and --batch must be >= 0");
+  elfm_error err;
+  elfm_error_clear(&err);
+  if (elfm_framer_options_check(&r->framer, &err)) {
+    cli_fail("recon", &err);
+    return CLI_USAGE;
+  }
+  if (a.tiff && r->median == 3 && !a.quiet)
+    cli_message("recon", 0, "note: --median 3 also filters the TIFF frames (use --median 0 for raw)");
+  elfm_calib cal;
+  if (elfm_calib_load(a.calib, &cal, &err)) return cli_fail("recon", &err);
+
+  recon_out o;
+  memset(&o, 0, sizeof o);
+  o.a = &a;
+  snprintf(o.dir, sizeof o.dir, "%s", a.out);
+  if (!make_dir(o.dir)) return CLI_FAIL;
+  char sub[4200];
+  if (a.save_volumes) {
+    snprintf(sub, sizeof sub, "%s/volumes", o.dir);
+    if (!make_dir(sub)) return CLI_FAIL;
+  }
+  if (a.save_mips) {
+    snprintf(sub, sizeof sub, "%s/mips", o.dir);
+    if (!make_dir(sub)) return CLI_FAIL;
+  }
+  if (!a.quiet) r->progress = progress;
+  elfm_recon_stats s;
+  memset(&s, 0, sizeof s);
+  elfm_status st = a.tiff ? elfm_recon_run_tiff(a.tiff, &cal, r, on_volume, &o, &s, &err)
+                          : elfm_recon_run(a.events, &cal, r, on_volume, &o, &s, &err);
+  if (!a.quiet) fputc('\n', stderr);
+  if (!write_summary(&a, &o, &cal, &s)) return CLI_FAIL;
+  if (st) return cli_fail("recon", &err);
+  if (!a.quiet)
+    fprintf(stderr, "recon: %lld events -> %lld volumes (%lld sparse) in %.2f s: %.0f volumes/s, "
+            "%.2f Mev/s, %.2fx real time; %s/summary.json\n",
+            (long long)s.events, (long long)s.frames, (long long)s.frames_sparse, s.wall_s,
+            s.volumes_per_s, s.events_per_s * 1e-6, s.realtime_factor, o.dir);
+  return CLI_OK;
 }

@@ -84,9 +84,24 @@ static float median_n(float *p, int n)
   return p[n / 2];
 }
 
+/* 3x3 median at an interior pixel (no padding checks): the common case. */
+static float median3_inner(const float *c, int w)
+{
+  float win[9] = {c[-w - 1], c[-w], c[-w + 1], c[-1], c[0], c[1], c[w - 1], c[w], c[w + 1]};
+  int pos = 0, neg = 0;
+  for (int i = 0; i < 9; i++) {
+    pos += win[i] > 0.0f;
+    neg += win[i] < 0.0f;
+  }
+  if (pos < 5 && neg < 5) return 0.0f;
+  return median9(win);
+}
+
 /* Median at (x, y) with zero padding. */
 static float median_at(const elfm_median *m, const float *img, int x, int y)
 {
+  if (m->size == 3 && x > 0 && y > 0 && x < m->w - 1 && y < m->h - 1)
+    return median3_inner(img + (size_t)y * m->w + x, m->w);
   float win[25];
   const int r = m->size / 2, n = m->size * m->size;
   int pos = 0, neg = 0, k = 0;

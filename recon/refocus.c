@@ -177,15 +177,23 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   size_t nvox = (size_t)p->w * p->h * p->nz;
   ws->plan = p;
   ws->plane_cnt = calloc((size_t)p->w * p->h, 1);
-  ws->cap_taps = 1u << 14;
-  ws->taps = malloc(ws->cap_taps * sizeof *ws->taps);
+  ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);
+  ws->cap_sorted = 1u << 14;
+  ws->sorted = malloc(ws->cap_sorted * sizeof *ws->sorted);
+  ws->cap_runs = 1u << 12;
+  ws->runs = malloc(ws->cap_runs * sizeof *ws->runs);
+  ws->cap_vals = 1u << 15;
+  ws->vals = malloc(ws->cap_vals * sizeof *ws->vals);
   ws->row_dirty = calloc((size_t)p->nz * p->h, 1);
+  ws->row_lo = malloc((size_t)p->nz * p->h * sizeof *ws->row_lo);
+  ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
   if (p->need) {
     ws->vox_cnt = calloc(nvox, 1);
     ws->vox_last = calloc(nvox, 1);
   }
-  if (!ws->plane_cnt || !ws->taps || !ws->row_dirty || !ws->rows ||
+  if (!ws->plane_cnt || !ws->row_start || !ws->sorted || !ws->runs || !ws->vals ||
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows ||
       (p->need && (!ws->vox_cnt || !ws->vox_last))) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
@@ -199,7 +207,12 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
 {
   if (!ws) return;
   free(ws->plane_cnt);
-  free(ws->taps);
+  free(ws->row_start);
+  free(ws->sorted);
+  free(ws->runs);
+  free(ws->vals);
+  free(ws->row_lo);
+  free(ws->row_hi);
   free(ws->vox_cnt);
   free(ws->vox_last);
   free(ws->row_dirty);

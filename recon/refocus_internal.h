@@ -30,24 +30,32 @@ struct elfm_refocus_plan {
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
 };
 
-/* One (view, pixel) pair of the sparse path. */
-typedef struct elfm_refocus_tap {
-  int u, v;  /* sensor column, row */
-  float a;   /* pixel value */
-  int view;
-} elfm_refocus_tap;
+/* A run of consecutive non-zero pixels of one sensor row inside one view's
+ * crop box (sparse path). Its values sit at vals[off + 1 .. off + n], with a
+ * zero on each side (vals[off] and vals[off + n + 1]) so that the scatter of
+ * the run is a short gather over n + 1 voxels without edge cases. */
+typedef struct elfm_refocus_run {
+  int view, row, c0, n;
+  size_t off;
+} elfm_refocus_run;
 
 struct elfm_refocus_workspace {
   const elfm_refocus_plan *plan;
   elfm_refocus_path last_path;
   /* dense */
   uint8_t *plane_cnt;         /* [W*H] agreeing views on one plane */
-  /* sparse */
-  elfm_refocus_tap *taps;
-  size_t n_taps, cap_taps;
+  /* sparse: the frame's listed pixels sorted by row, then cut into runs */
+  uint32_t *row_start;        /* [sh + 1] counting sort by sensor row */
+  uint32_t *sorted;           /* [cap_sorted] columns, grouped by row */
+  size_t cap_sorted;
+  elfm_refocus_run *runs;
+  size_t n_runs, cap_runs;
+  float *vals;
+  size_t n_vals, cap_vals;
   uint8_t *vox_cnt;           /* [nz*H*W] agreeing views (agreement on) */
   uint8_t *vox_last;          /* [nz*H*W] last view + 1 that counted */
   uint8_t *row_dirty;         /* [nz*H] */
+  int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
   uint32_t *rows;             /* dirty rows k*H + Y */
   size_t n_rows;
   const float *dirty_data;    /* volume data the dirty rows refer to */
