@@ -194,7 +194,7 @@ int cmd_convert(int argc, char **argv)
   }
   int rc = CLI_OK;
   if (o.have_from && elfm_reader_seek_us(r, o.from_us, &err) != ELFM_OK) rc = cli_fail("convert", &err);
-  int64_t written = 0;
+  int64_t written = 0, dropped_trig = 0;
   int tty = isatty(STDERR_FILENO);
   double t_report = cli_now_s() + 2.0;
   while (rc == CLI_OK) {
@@ -208,6 +208,7 @@ int cmd_convert(int argc, char **argv)
         break;
       }
       written += (int64_t)c->n;
+      dropped_trig += o.fmt == ELFM_FMT_CSV ? (int64_t)c->n_trig : 0;
     }
     if (st != ELFM_OK) {
       rc = cli_fail("convert", &err);
@@ -225,5 +226,8 @@ int cmd_convert(int argc, char **argv)
   if (rc == CLI_OK)
     fprintf(stderr, "%seventlfm convert: %" PRId64 " events -> %s (%s)\n", tty ? "\r" : "", written,
             o.out, elfm_format_name(o.fmt));
+  if (dropped_trig)
+    cli_message("convert", 0, "note: %" PRId64 " trigger edges not written (CSV has no place for them)",
+                dropped_trig);
   return rc;
 }
