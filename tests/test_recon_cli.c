@@ -1,0 +1,137 @@
+/* test_recon_cli.c — `eventlfm recon` as a user runs it: outputs
+ * (summary.json with counts/parameters/timing, EXR volumes, MIP PNGs),
+ * exit codes (0 ok, 1 failure with file named on stderr, 2 usage). */
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "check.h"
+#include "elfm_datasets.h"
+#include "elfm_recon.h"
+
+static char dir[] = "/tmp/elfm_recon_cli_XXXXXX";
+
+/* Run eventlfm with args; stderr to dir/err.txt; returns the exit code. */
+static int run(const char *args)
+{
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+static int file_has(const char *name, const char *text)
+{
+  char path[700], buf[8192];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  return strstr(buf, text) != NULL;
+}
+
+static int exists(const char *rel)
+{
+  char path[700];
+  snprintf(path, sizeof path, "%s/%s", dir, rel);
+  return access(path, R_OK) == 0;
+}
+
+int main(void)
+{
+  char bin[600];
+  snprintf(bin, sizeof bin, "%s/eventlfm", ELFM_BINARY_DIR);
+  if (access(bin, X_OK) != 0) SKIP("%s not built", bin);
+  if (!mkdtemp(dir)) SKIP("cannot make a temporary directory");
+  elfm_error err;
+  elfm_scene *sc = NULL;
+  CHECK_OK(elfm_scene_load("stage", &sc, &err), &err);
+  CHECK_OK(elfm_scene_set_param(sc, "duration_ms=6", &err), &err);
+  char sim[700];
+  snprintf(sim, sizeof sim, "%s/sim", dir);
+  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
+  CHECK_OK(elfm_sim_run(sc, sim, &so, NULL, &err), &err);
+  elfm_scene_free(sc);
+
+  char args[3000];
+  snprintf(args, sizeof args,
+           "recon --calib %s/calib.json --events %s/events.raw --out %s/r --save-volumes --save-mips "
+           "--ghost agree:0.3,mad:3 --threads 2 --dt-us 2000",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 0);
+  CHECK(file_has("err.txt", "volumes/s")); /* final line on stderr */
+  CHECK(exists("r/volumes/vol_000000.exr") && exists("r/volumes/vol_000002.exr"));
+  CHECK(exists("r/mips/mip_000000.png"));
+  char path[700];
+  snprintf(path, sizeof path, "%s/r/summary.json", dir);
+  FILE *f = fopen(path, "r");
+  char buf[16384];
+  size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
+  if (f) fclose(f);
+  buf[n] = '\0';
+  cJSON *root = cJSON_Parse(buf);
+  CHECK(root != NULL);
+  if (root) {
+    cJSON *c = cJSON_GetObjectItem(root, "counts"), *t = cJSON_GetObjectItem(root, "timing");
+    cJSON *p = cJSON_GetObjectItem(root, "parameters");
+    CHECK(c && cJSON_GetObjectItem(c, "events") && cJSON_GetObjectItem(c, "events")->valuedouble > 1000);
+    /* 6 ms at 2 ms per window, +1 for the sensor latency/jitter tail */
+    int nvol = c && cJSON_GetObjectItem(c, "volumes") ? (int)cJSON_GetObjectItem(c, "volumes")->valuedouble : 0;
+    CHECK(nvol == 3 || nvol == 4);
+    char last[64], after[64];
+    snprintf(last, sizeof last, "r/volumes/vol_%06d.exr", nvol - 1);
+    snprintf(after, sizeof after, "r/volumes/vol_%06d.exr", nvol);
+    CHECK(exists(last) && !exists(after));
+    CHECK(cJSON_GetObjectItem(c, "saved_mips")->valuedouble == nvol);
+    CHECK(t && cJSON_GetObjectItem(t, "events_per_s") && cJSON_GetObjectItem(t, "volumes_per_s") &&
+          cJSON_GetObjectItem(t, "realtime_factor") && cJSON_GetObjectItem(t, "peak_rss_mb"));
+    CHECK(p && cJSON_GetObjectItem(p, "dt_us")->valuedouble == 2000);
+    CHECK(p && !strcmp(cJSON_GetObjectItem(p, "ghost_threshold")->valuestring, "mad"));
+    CHECK(p && cJSON_GetObjectItem(p, "ghost_agree_frac")->valuedouble == 0.3);
+    cJSON_Delete(root);
+  }
+  elfm_volume *v = NULL;
+  snprintf(path, sizeof path, "%s/r/volumes/vol_000001.exr", dir);
+  CHECK_OK(elfm_volume_read_exr(path, &v, &err), &err);
+  if (v) {
+    CHECK_EQ_INT(v->frame, 1);
+    CHECK_EQ_INT(v->nz, 101);
+    elfm_volume_free(v);
+  }
+
+  /* usage errors: exit 2 */
+  CHECK_EQ_INT(run("recon"), 2);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --median 4", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --dt-us 10", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --ghost frac", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --repr dots", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  /* failures: exit 1 naming the file */
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/none.raw --out %s/r", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(file_has("err.txt", "none.raw"));
+  snprintf(args, sizeof args, "recon --calib %s/events.raw --events %s/events.raw --out %s/r", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(file_has("err.txt", "events.raw"));
+  snprintf(path, sizeof path, "%s/cut.raw", dir);
+  snprintf(args, sizeof args, "head -c 30000 %s/events.raw > %s", sim, path);
+  CHECK(system(args) == 0);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s --out %s/r2 --quiet", sim, path, dir);
+  int rc = run(args);
+  CHECK(rc == 0 || (rc == 1 && file_has("err.txt", "cut.raw"))); /* cut on a word boundary is valid */
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --tiff %s/events.raw --out %s/r3 --quiet", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(file_has("err.txt", "events.raw"));
+
+  snprintf(args, sizeof args, "rm -rf '%s'", dir);
+  if (system(args) != 0) fprintf(stderr, "could not remove %s\n", dir);
+  return check_report();
+}
