@@ -11,8 +11,8 @@
  *  2. the frame's detections go into a FLANN exact k-d tree
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:
- *     gate_um + missed x (gate_growth_um_per_frame + speed_gate_frac x
- *     speed x frame interval);
+ *     gate_um + missed x gate_growth_um_per_frame + min(missed, short_gap)
+ *     x speed_gate_frac x speed x frame interval;
  *  3. tracks and detections joined by a candidate pair form connected
  *     groups; each group is solved optimally (the Hungarian solver of
  *     elfm_score.h: most pairs, then least total cost; cost = squared
