@@ -208,18 +208,18 @@ static int view_main(const view_opts *o)
       free(rgb);
     }
   } else if (o->bench_frames) {
-    double mean = 0, worst = 0;
+    double mean = 0, worst = 0, cpu = 0;
     st = elfm_viewer_bench(v, o->bench_frames, o->width, o->height, !o->have_at, &mean, &worst,
-                           &err);
+                           &cpu, &err);
     if (st != ELFM_OK) {
       rc = cli_fail("view", &err);
     } else {
       fprintf(stderr,
               "eventlfm view: bench %d frames %dx%d, %zu tracks, %zu points, %s, %s: "
-              "%.3f ms/frame mean (%.1f fps), %.3f ms worst\n",
+              "%.3f ms/frame mean (%.1f fps), %.3f ms worst, %.3f ms CPU/frame\n",
               o->bench_frames, o->width, o->height, data->tracks.n_lines,
               data->tracks.n_points, o->have_at ? "cursor fixed" : "cursor sweeping",
-              o->full_detail ? "full detail" : "level of detail", mean, mean > 0 ? 1000.0 / mean : 0.0, worst);
+              o->full_detail ? "full detail" : "level of detail", mean, mean > 0 ? 1000.0 / mean : 0.0, worst, cpu);
     }
   } else {
     st = elfm_viewer_run(v, &err);

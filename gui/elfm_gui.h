@@ -209,9 +209,12 @@ elfm_status elfm_viewer_run(elfm_viewer *v, elfm_error *err);
  * waiting for each frame to finish (glFinish); *ms_mean and *ms_max receive
  * the frame times. sweep = 1: the cursor plays through the recording (what
  * playback costs); 0: the cursor stays where it is (INT64_MAX: everything
- * drawn, the worst case). */
+ * drawn, the worst case). *cpu_ms_mean: CPU time of the whole process
+ * (all renderer threads) per frame: with a software renderer on a busy
+ * machine, a steadier figure than the wall time. */
 elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height, int sweep,
-                              double *ms_mean, double *ms_max, elfm_error *err);
+                              double *ms_mean, double *ms_max, double *cpu_ms_mean,
+                              elfm_error *err);
 
 /* Write top-down RGB rows as an 8-bit PNG (libpng). */
 elfm_status elfm_png_write_rgb(const char *path, int width, int height, const uint8_t *rgb,

@@ -42,12 +42,18 @@ static elfm_status series_upload(elfm_viewer *v, const elfm_view_series *s, gui_
   glGenBuffers(1, &g->vbo);
   glBindVertexArray(g->vao);
   glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
+  glGenBuffers(1, &g->ebo);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ebo); /* recorded in the VAO */
   float *buf = NULL;
-  elfm_status st = gui_series_build(s, v->data->t_min_us, g, &buf, err);
+  uint32_t *idx = NULL;
+  elfm_status st = gui_series_build(s, v->data->t_min_us, g, &buf, &idx, err);
   if (st != ELFM_OK) return st;
   glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(g->n_vertices * GUI_VERTEX_FLOATS * sizeof *buf),
                buf, GL_STATIC_DRAW);
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(g->n_indices * sizeof *idx), idx,
+               GL_STATIC_DRAW);
   free(buf);
+  free(idx);
   return ELFM_OK;
 }
 
@@ -244,6 +250,7 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
 static void series_gl_free(gui_series_gl *g)
 {
   if (g->vbo) glDeleteBuffers(1, &g->vbo);
+  if (g->ebo) glDeleteBuffers(1, &g->ebo);
   if (g->vao) glDeleteVertexArrays(1, &g->vao);
   gui_series_arrays_free(g);
   memset(g, 0, sizeof *g);
@@ -281,13 +288,6 @@ void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip)
 }
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us) { v->cursor_us = t_us; }
 
-static void draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
-{
-  if (!g->n_lines) return;
-  gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
-  glBindVertexArray(g->vao);
-  glMultiDrawArrays(GL_LINE_STRIP, g->draw_first, g->draw_count, g->n_lines);
-}
 
 void gui_draw(elfm_viewer *v, int width, int height)
 {
@@ -342,11 +342,11 @@ void gui_draw(elfm_viewer *v, int width, int height)
   glUniform1f(l->u_cursor, cursor_ms);
   if (v->opt.show_truth && v->truth.n_lines) {
     glUniform4f(l->u_color, 0.62f, 0.62f, 0.62f, 0.8f);
-    draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
+    gui_series_draw(&v->truth, px_per_um, v->opt.full_detail);
   }
   glUniform1i(l->u_mode, (int)v->mode);
   glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
-  draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
+  gui_series_draw(&v->tracks, px_per_um, v->opt.full_detail);
 
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots
@@ -438,8 +438,16 @@ static double now_s(void)
   return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+static double cpu_s(void)
+{
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
 elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int height, int sweep,
-                              double *ms_mean, double *ms_max, elfm_error *err)
+                              double *ms_mean, double *ms_max, double *cpu_ms_mean,
+                              elfm_error *err)
 {
   if (n_frames < 1)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "benchmark needs >= 1 frame");
@@ -451,6 +459,7 @@ elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int heigh
   /* One untimed frame first: shader compilation in Mesa is lazy. */
   gui_draw(v, width, height);
   glFinish();
+  double cpu0 = cpu_s();
   for (int i = 0; i < n_frames; i++) {
     /* The cursor sweeps the recording and the camera turns: what a user
      * playing back while orbiting sees. */
@@ -466,6 +475,7 @@ elfm_status elfm_viewer_bench(elfm_viewer *v, int n_frames, int width, int heigh
     if (ms > worst) worst = ms;
   }
   glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  *cpu_ms_mean = 1000.0 * (cpu_s() - cpu0) / n_frames;
   *ms_mean = total / n_frames;
   *ms_max = worst;
   return ELFM_OK;
