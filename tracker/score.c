@@ -341,11 +341,11 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
       size_t ra = ord[cur].idx, rb = cur + 1 < j ? ord[cur + 1].idx : ra;
       double ta = elfm_table_get(tt, ra, c[1]), tb = elfm_table_get(tt, rb, c[1]);
       double w = tb > ta ? (t - ta) / (tb - ta) : 0.0;
-      if (t == ta) w = 0.0;
       double val[4];
       for (int q = 0; q < 4; q++) {
         double a = elfm_table_get(tt, ra, c[2 + q]), b = elfm_table_get(tt, rb, c[2 + q]);
-        val[q] = a + w * (b - a);
+        /* on a sample, its value exactly (a + 1 * (b - a) may round off b) */
+        val[q] = t == ta ? a : t == tb ? b : a + w * (b - a);
       }
       if (!(val[3] > 0.0) || !inside(o, val[0], val[1], val[2])) continue;
       if (tr->n_pts == cap && (s = truth_grow(tr, &cap, err)) != ELFM_OK) break;
