@@ -63,8 +63,9 @@ typedef struct elfm_recon_options {
 } elfm_recon_options;
 
 /* Defaults: dt 1000 us exponential time surface tau 1000 us, both
- * polarities, 3x3 median, auto path, no ghost suppression
- * (see docs/recon.md for the measured ghost comparison), all threads. */
+ * polarities, 3x3 median, auto path, ghost suppression by view agreement
+ * 0.3 and no threshold (docs/recon.md has the measured comparison), all
+ * threads. */
 void elfm_recon_options_default(elfm_recon_options *o);
 
 /* Receives each volume in frame order (vol->frame counts windows from 0,

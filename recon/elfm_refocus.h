@@ -63,7 +63,7 @@ typedef struct elfm_refocus_options {
   int crop_margin_px;              /* widen each view's crop box (default 0) */
   elfm_ghost_threshold threshold;  /* default NONE */
   double threshold_value;          /* ABS: value; FRAC_MAX: fraction; MAD: k */
-  double agree_frac;               /* 0 = off; else in (0, 1] */
+  double agree_frac;               /* 0 = off; else in (0, 1]; default 0.3 (docs/recon.md) */
 } elfm_refocus_options;
 
 void elfm_refocus_options_default(elfm_refocus_options *o);

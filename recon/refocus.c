@@ -19,7 +19,10 @@ void elfm_refocus_options_default(elfm_refocus_options *o)
   o->crop_margin_px = 0;
   o->threshold = ELFM_GHOST_THR_NONE;
   o->threshold_value = 0.0;
-  o->agree_frac = 0.0;
+  /* View agreement removed far more ghosts than any threshold at equal
+   * recall on simulated flow and stage (tests/test_recon_sim --study,
+   * docs/recon.md): 0.3 of the views (7-8 of 25) must see signal. */
+  o->agree_frac = 0.3;
 }
 
 void elfm_refocus_plan_free(elfm_refocus_plan *p)

@@ -133,6 +133,7 @@ static void test_dense_sparse_agree(const elfm_calib *c)
   for (int mode = 0; mode < 4; mode++) {
     elfm_refocus_options o;
     elfm_refocus_options_default(&o);
+    o.agree_frac = 0.0;
     if (mode == 1) o.agree_frac = 0.6;
     if (mode == 2) { o.threshold = ELFM_GHOST_THR_FRAC_MAX; o.threshold_value = 0.3; }
     if (mode == 3) { o.threshold = ELFM_GHOST_THR_MAD; o.threshold_value = 3; o.agree_frac = 0.3; }
@@ -225,6 +226,7 @@ static void test_ghost_rules(const elfm_calib *c)
   for (int mode = 0; mode < 3; mode++) {
     elfm_refocus_options o;
     elfm_refocus_options_default(&o);
+    o.agree_frac = 0.0;
     if (mode == 1) o.agree_frac = 0.5;
     if (mode == 2) { o.threshold = ELFM_GHOST_THR_ABS; o.threshold_value = 1e6; }
     elfm_refocus_plan *p = NULL;
