@@ -5,6 +5,7 @@
 #include <inttypes.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "elfm_datasets.h"
@@ -44,13 +45,15 @@ static void usage(FILE *f)
           "  -h, --help         this text\n");
 }
 
+/* Progress every 10 %: one updating line on a terminal, else one line each. */
 static int progress(void *user, int64_t done_us, int64_t total_us)
 {
   int *last = user;
   int pct = total_us > 0 ? (int)(100 * done_us / total_us) : 100;
-  if (pct / 10 != *last / 10 || done_us == total_us) {
-    fprintf(stderr, "\rsimulate: %3d%%", pct);
-    if (done_us == total_us) fputc('\n', stderr);
+  if (pct / 10 != *last / 10) {
+    int tty = isatty(STDERR_FILENO);
+    fprintf(stderr, "%ssimulate: %3d%%%s", tty ? "\r" : "", pct,
+            (!tty || done_us == total_us) ? "\n" : "");
     *last = pct;
   }
   return 0;
@@ -132,7 +135,6 @@ int cmd_simulate(int argc, char **argv)
     elfm_sim_options so = {o.quiet ? NULL : progress, &last, !o.no_truth};
     elfm_sim_stats st;
     if (elfm_sim_run(s, o.out, &so, &st, &err)) {
-      if (!o.quiet) fputc('\n', stderr);
       rc = cli_fail("simulate", &err);
     } else {
       fprintf(stderr,
