@@ -54,6 +54,10 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
                    "peaks: options out of range (radii and kz > 0, relative <= 1, fit half-widths 0..8/16)");
     return NULL;
   }
+  if ((double)w * h * nz >= 4294967295.0) {  /* the voxel counts are 32-bit */
+    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: volume of %d x %d x %d is too large", w, h, nz);
+    return NULL;
+  }
   elfm_peaks *p = calloc(1, sizeof *p);
   if (!p) goto nomem;
   p->opt = *o;
@@ -241,28 +245,26 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
 
   /* Threshold: max of the three enabled rules. One branch-free pass (it
    * vectorises) for the maximum, the non-zero count and NaN. */
-  /* Four independent accumulators so the loop is not one long dependency
-   * chain (the volume is ~8 MB: this pass is memory-bound then). */
-  float mx[4] = {-INFINITY, -INFINITY, -INFINITY, -INFINITY};
-  size_t nzc[4] = {0, 0, 0, 0};
-  int nan_seen = 0;
-  size_t i4 = 0;
-  for (; i4 + 4 <= nvox; i4 += 4)
-    for (int k = 0; k < 4; k++) {
-      float f = d[i4 + (size_t)k];
-      nan_seen |= f != f;
-      mx[k] = f > mx[k] ? f : mx[k];
-      nzc[k] += f != 0;
-    }
-  for (; i4 < nvox; i4++) {
-    float f = d[i4];
-    nan_seen |= f != f;
-    mx[0] = f > mx[0] ? f : mx[0];
-    nzc[0] += f != 0;
+  /* One pass on the bit patterns, in integers so that it vectorises: for
+   * IEEE floats |f| > inf (as unsigned magnitude bits) is NaN, magnitude 0
+   * is zero, and among non-negative floats the integer order is the float
+   * order (negative values never make a peak: only a positive maximum
+   * matters). */
+  uint32_t mag_max = 0, nz_count = 0;
+  int32_t imax = INT32_MIN;
+  for (size_t i = 0; i < nvox; i++) {
+    uint32_t b;
+    memcpy(&b, &d[i], sizeof b);
+    uint32_t mag = b & 0x7fffffffu;
+    int32_t sb = (int32_t)b;
+    mag_max = mag > mag_max ? mag : mag_max;
+    imax = sb > imax ? sb : imax;
+    nz_count += mag != 0;
   }
-  float vmax = mx[0];
-  for (int k = 1; k < 4; k++) vmax = mx[k] > vmax ? mx[k] : vmax;
-  size_t nonzero = nzc[0] + nzc[1] + nzc[2] + nzc[3];
+  int nan_seen = mag_max > 0x7f800000u;
+  size_t nonzero = nz_count;
+  float vmax = 0;
+  if (imax > 0) memcpy(&vmax, &imax, sizeof vmax);
   if (nan_seen) {
     size_t i = 0;
     while (!isnan(d[i])) i++;
@@ -278,11 +280,20 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
      * sampling more densely until there are enough of them. */
     int nonzero_only = nonzero * 2 < nvox;
     size_t n = 0;
-    for (size_t stride = nvox / PEAKS_NOISE_SAMPLES + 1;; stride = stride / 4 + 1) {
+    /* Runs of 1,024 consecutive voxels spread over the volume (sequential
+     * reads: single strided voxels cost a cache miss each); more runs until
+     * there are enough non-zero samples or the whole volume was seen. */
+    const size_t run = 1024;
+    for (size_t nruns = 64;; nruns *= 8) {
       n = 0;
-      for (size_t i = stride / 2; i < nvox && n < PEAKS_NOISE_SAMPLES; i += stride)
-        if (!nonzero_only || d[i] != 0) p->sample[n++] = d[i];
-      if (n >= PEAKS_NOISE_SAMPLES / 16 || stride == 1) break;
+      size_t step = nvox / nruns;
+      if (step < run) step = run;
+      for (size_t s0 = 0; s0 < nvox && n < PEAKS_NOISE_SAMPLES; s0 += step) {
+        size_t e = s0 + run < nvox ? s0 + run : nvox;
+        for (size_t i = s0; i < e && n < PEAKS_NOISE_SAMPLES; i++)
+          if (!nonzero_only || d[i] != 0) p->sample[n++] = d[i];
+      }
+      if (n >= PEAKS_NOISE_SAMPLES / 16 || step == run) break;
     }
     double med, sig;
     robust_stats(p->sample, n, &med, &sig);
