@@ -170,6 +170,79 @@ static void test_step_response(void)
   elfm_scene_free(s);
 }
 
+/* The same bead, light off at 20 ms, with one sensor parameter changed:
+ * OFF events of the 16 central pixels of view (0,0) -> count, mean delay after the edge,
+ * largest count in one pixel. */
+typedef struct step_stats {
+  long n;
+  double mean_delay_us, min_delay_us;
+  int max_per_pixel;
+  int64_t dropped;
+} step_stats;
+
+static step_stats step_with(const char *param)
+{
+  const char *p[] = {QUIET,
+                     "objects.count=1",
+                     "objects.flux_hz=[120000,120000]",
+                     "motion.place_radius_um=0",
+                     "motion.z_min_um=0",
+                     "motion.z_max_um=0",
+                     "illumination={\"type\":\"periodic\",\"pulse_us\":20000,\"period_us\":40000}",
+                     "duration_ms=32",
+                     param};
+  step_stats r = {0, 0, 1e9, 0, 0};
+  elfm_scene *s = load("blink", p, (int)(sizeof p / sizeof *p));
+  if (!s) return r;
+  ev_store st;
+  store_init(&st);
+  elfm_error err;
+  elfm_sim_stats ss;
+  CHECK_OK(elfm_sim_run_sink(s, store_sink, &st, NULL, &ss, &err), &err);
+  r.dropped = ss.n_dropped_refractory;
+  const elfm_calib *c = elfm_scene_calib(s);
+  int u0 = (int)c->views[12].cx_px, v0 = (int)c->views[12].cy_px; /* view (0,0) */
+  for (int y = v0 - 1; y <= v0 + 2; y++) {
+    for (int x = u0 - 1; x <= u0 + 2; x++) {
+      int n = 0;
+      for (size_t i = 0; i < st.n; i++) {
+        if (st.x[i] != x || st.y[i] != y || st.p[i]) continue;
+        double d = (double)(st.t[i] - elfm_scene_t0_us(s) - 20000);
+        r.n++;
+        n++;
+        r.mean_delay_us += d;
+        if (d < r.min_delay_us) r.min_delay_us = d;
+      }
+      if (n > r.max_per_pixel) r.max_per_pixel = n;
+    }
+  }
+  if (r.n) r.mean_delay_us /= (double)r.n;
+  store_free(&st);
+  elfm_scene_free(s);
+  return r;
+}
+
+/* Latency, refractory period and photoreceptor bandwidth do what they say. */
+static void test_sensor_timing(void)
+{
+  step_stats fast = step_with("sensor.latency_us=0");
+  step_stats late = step_with("sensor.latency_us=300");
+  step_stats refr = step_with("sensor.refractory_us=5000");
+  step_stats slow = step_with("sensor.cutoff_hz_at_background=100");
+  fprintf(stderr, "sensor: delay %.0f us (latency 0), %.0f us (latency 300), %.0f us (cutoff 100 Hz)\n",
+          fast.mean_delay_us, late.mean_delay_us, slow.mean_delay_us);
+  CHECK(fast.n > 30);
+  /* Latency shifts every event by itself (no jitter here). */
+  CHECK_NEAR(late.mean_delay_us - fast.mean_delay_us, 300, 2);
+  CHECK(late.min_delay_us >= 300);
+  /* Refractory 5 ms over the 12 ms after the edge: <= 3 events per pixel. */
+  CHECK(refr.max_per_pixel <= 3 && fast.max_per_pixel > 3);
+  CHECK(refr.dropped > 0 && fast.dropped == 0);
+  /* A 20x slower photoreceptor (tau 1.6 ms at background) spreads the OFF
+   * run over milliseconds instead of ~0.1 ms. */
+  CHECK(slow.mean_delay_us > 5 * fast.mean_delay_us && slow.mean_delay_us > 500);
+}
+
 /* Every event of one moving bead lies near its image in some view. */
 static void test_moving_bead_on_path(void)
 {
@@ -409,6 +482,7 @@ int main(void)
 {
   test_static_noise();
   test_step_response();
+  test_sensor_timing();
   test_moving_bead_on_path();
   test_roundtrip_and_seed();
   test_truth_file();
