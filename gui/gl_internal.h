@@ -36,20 +36,20 @@ typedef struct gui_lines_prog {
 /* A level is used while its segments stay under this length on screen:
  * a polyline of 1.5-pixel chords strays < 1 pixel from the full one. */
 #define GUI_LOD_MAX_SEG_PX 1.5
-#define GUI_RESTART_INDEX 0xFFFFFFFFu
 
-/* A series on the GPU (series_lod.c): every level of every polyline in one
- * vertex buffer, one index list per level with a restart index after each
- * polyline, all uploaded once. Polylines appear in every list in the same
- * order: by mean segment length, longest first. */
+/* A series on the GPU: every level of every polyline in one buffer,
+ * uploaded once. Per frame only the draw lists (first/count per polyline)
+ * are refilled on the CPU: level by zoom, count cut at the time cursor. */
 typedef struct gui_series_gl {
-  GLuint vao, vbo, ebo;
+  GLuint vao, vbo;
   GLsizei n_lines;
-  size_t n_vertices, n_indices;          /* over all levels */
-  size_t lvl_base[GUI_LOD_LEVELS];       /* first index of each level's list */
-  GLsizei *lvl_offset[GUI_LOD_LEVELS];   /* [level][rank], n_lines + 1 entries:
-                                            where each polyline's indices start */
-  float *seg_um;                         /* [rank]: mean 3D segment length, falling */
+  size_t n_vertices;                    /* over all levels */
+  GLint *lvl_first[GUI_LOD_LEVELS];     /* [level][line] first vertex */
+  GLsizei *lvl_count[GUI_LOD_LEVELS];   /* [level][line] vertex count */
+  float *t_ms;                          /* n_vertices: each vertex's time (cursor cut) */
+  float *seg_um;                        /* per line: mean 3D segment length at level 0 */
+  GLint *draw_first;                    /* per line, refilled each frame */
+  GLsizei *draw_count;
 } gui_series_gl;
 
 struct elfm_viewer {
@@ -111,13 +111,12 @@ elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int 
                               int *height, elfm_error *err);
 
 /* series_lod.c: build all levels of a series into a 5-float vertex array
- * and a 32-bit index array (both malloc'ed: the caller uploads then frees
- * them) plus g's CPU tables; free those tables; draw (bound program, set
- * uniforms) at the level of detail for px_per_um. */
+ * (malloc'ed, the caller uploads then frees it) and g's index arrays;
+ * free g's arrays; refill g's draw lists for a zoom and a cursor. */
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
-                             float **vertices, uint32_t **indices, elfm_error *err);
+                             float **vertices, elfm_error *err);
 void gui_series_arrays_free(gui_series_gl *g);
-void gui_series_draw(const gui_series_gl *g, double px_per_um, int full_detail);
+void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail);
 
 /* viewer.c: draw one frame into the bound framebuffer. */
 void gui_draw(elfm_viewer *v, int width, int height);

@@ -1,23 +1,16 @@
-/* series_lod.c — polylines on the GPU: levels of detail, a handful of
- * draw calls, nothing uploaded per frame.
+/* series_lod.c — polylines on the GPU with levels of detail and a cut at
+ * the time cursor, so a frame draws only what can be seen.
  *
- * Two costs were measured with Mesa llvmpipe (docs/viewer.md):
- *  - per draw call: one line strip per track (glMultiDrawArrays) cost about
- *    as much per track as 1,000 points did, so 1,000 tracks are drawn with
- *    primitive restart: one index list, a restart index between tracks, one
- *    glDrawElements per level of detail in use (at most GUI_LOD_LEVELS).
- *  - per vertex: at 1 kHz a track moves well under a pixel per frame at the
- *    default zoom. Every polyline is stored at 8 levels (every point, every
- *    2nd, ... 128th, always ending on its last point). Per frame each track
- *    uses the coarsest level whose chords stay under GUI_LOD_MAX_SEG_PX on
- *    screen, judged from its mean 3D segment length (projection only
- *    shortens, so a steady track is never undersampled).
- * Tracks are ordered by mean segment length, longest first, in every
- * level's index list; the level a track needs falls with that length, so
- * the tracks drawn at one level are one contiguous run of the list: one
- * draw call per level.
- * The time cursor stays a uniform: the fragment shader ends every segment
- * exactly at it.
+ * 1,000 tracks of 1,000 points at 1 kHz move well under a pixel per frame
+ * at the default zoom: most of a million segments would fall inside one
+ * pixel each. Every polyline is uploaded at 8 levels (every point, every
+ * 2nd, 4th, ... 128th, always ending on the last point), in one buffer at
+ * creation. Each frame picks, per polyline, the coarsest level whose chords
+ * stay under GUI_LOD_MAX_SEG_PX on screen (from the polyline's mean 3D
+ * segment length: projection only shortens, so this never undersamples a
+ * steady track) and, when the cursor is inside the recording, draws the
+ * points up to it plus the one segment that crosses it (the fragment shader
+ * ends that segment exactly at the cursor). Nothing is uploaded per frame.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -35,137 +28,116 @@ static size_t level_count(size_t n, int level)
 void gui_series_arrays_free(gui_series_gl *g)
 {
   for (int l = 0; l < GUI_LOD_LEVELS; l++) {
-    free(g->lvl_offset[l]);
-    g->lvl_offset[l] = NULL;
+    free(g->lvl_first[l]);
+    free(g->lvl_count[l]);
+    g->lvl_first[l] = NULL;
+    g->lvl_count[l] = NULL;
   }
+  free(g->t_ms);
   free(g->seg_um);
-  g->seg_um = NULL;
-}
-
-typedef struct seg_order {
-  double seg_um;
-  size_t line;
-} seg_order;
-
-static int seg_order_cmp(const void *a, const void *b)
-{
-  const seg_order *x = a, *y = b;
-  if (x->seg_um != y->seg_um) return x->seg_um > y->seg_um ? -1 : 1;
-  return x->line < y->line ? -1 : x->line > y->line;
-}
-
-static double mean_segment_um(const elfm_view_series *s, size_t k)
-{
-  size_t a = s->first[k], n = s->first[k + 1] - a;
-  if (n < 2) return 0.0;
-  double len = 0;
-  for (size_t i = a + 1; i < a + n; i++) {
-    const float *p0 = s->xyz_um + 3 * (i - 1), *p1 = s->xyz_um + 3 * i;
-    double dx = (double)p1[0] - p0[0], dy = (double)p1[1] - p0[1], dz = (double)p1[2] - p0[2];
-    len += sqrt(dx * dx + dy * dy + dz * dz);
-  }
-  return len / (double)(n - 1);
+  free(g->draw_first);
+  free(g->draw_count);
+  g->t_ms = g->seg_um = NULL;
+  g->draw_first = NULL;
+  g->draw_count = NULL;
 }
 
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
-                             float **vertices, uint32_t **indices, elfm_error *err)
+                             float **vertices, elfm_error *err)
 {
   *vertices = NULL;
-  *indices = NULL;
-  size_t nv = 0, ni = 0;
+  size_t total = 0;
   for (int l = 0; l < GUI_LOD_LEVELS; l++)
-    for (size_t k = 0; k < s->n_lines; k++) {
-      size_t c = level_count(s->first[k + 1] - s->first[k], l);
-      nv += c;
-      ni += c + 1; /* + the restart index */
-    }
-  /* Indices are 32-bit with 0xFFFFFFFF reserved for restarts. */
-  if (nv >= (size_t)UINT32_MAX || ni > (size_t)INT32_MAX)
+    for (size_t k = 0; k < s->n_lines; k++)
+      total += level_count(s->first[k + 1] - s->first[k], l);
+  if (total > (size_t)INT32_MAX || s->n_lines > (size_t)INT32_MAX)
     return elfm_error_set(err, ELFM_ERR_RANGE, NULL, -1, "too many points to draw (%zu)",
                           s->n_points);
-  size_t nl = s->n_lines;
-  seg_order *order = malloc((nl ? nl : 1) * sizeof *order);
-  g->seg_um = malloc((nl ? nl : 1) * sizeof *g->seg_um);
-  int ok = order && g->seg_um;
+  size_t nl = s->n_lines ? s->n_lines : 1;
+  int ok = 1;
   for (int l = 0; l < GUI_LOD_LEVELS; l++) {
-    g->lvl_offset[l] = malloc((nl + 1) * sizeof *g->lvl_offset[l]);
-    ok &= g->lvl_offset[l] != NULL;
+    g->lvl_first[l] = malloc(nl * sizeof *g->lvl_first[l]);
+    g->lvl_count[l] = malloc(nl * sizeof *g->lvl_count[l]);
+    ok &= g->lvl_first[l] && g->lvl_count[l];
   }
-  float *vb = malloc((nv ? nv : 1) * GUI_VERTEX_FLOATS * sizeof *vb);
-  uint32_t *ib = malloc((ni ? ni : 1) * sizeof *ib);
-  if (!ok || !vb || !ib) {
-    free(order);
-    free(vb);
-    free(ib);
+  g->t_ms = malloc((total ? total : 1) * sizeof *g->t_ms);
+  g->seg_um = malloc(nl * sizeof *g->seg_um);
+  g->draw_first = malloc(nl * sizeof *g->draw_first);
+  g->draw_count = malloc(nl * sizeof *g->draw_count);
+  float *buf = malloc((total ? total : 1) * GUI_VERTEX_FLOATS * sizeof *buf);
+  if (!ok || !g->t_ms || !g->seg_um || !g->draw_first || !g->draw_count || !buf) {
+    free(buf);
     gui_series_arrays_free(g);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory for vertices");
   }
-  for (size_t k = 0; k < nl; k++) {
-    order[k].seg_um = mean_segment_um(s, k);
-    order[k].line = k;
-  }
-  qsort(order, nl, sizeof *order, seg_order_cmp);
-  for (size_t r = 0; r < nl; r++) g->seg_um[r] = (float)order[r].seg_um;
-
-  size_t q = 0, qi = 0;
+  size_t q = 0;
   for (int l = 0; l < GUI_LOD_LEVELS; l++) {
     size_t stride = (size_t)1 << l;
-    g->lvl_base[l] = qi;
-    for (size_t r = 0; r < nl; r++) {
-      size_t k = order[r].line, a = s->first[k], n = s->first[k + 1] - a;
+    for (size_t k = 0; k < s->n_lines; k++) {
+      size_t a = s->first[k], n = s->first[k + 1] - a;
       /* Golden-ratio steps around the colour map: neighbouring ids get far
        * apart colours in "by track" mode. */
       float key = (float)fmod((double)k * 0.6180339887498949, 1.0);
+      g->lvl_first[l][k] = (GLint)q;
       size_t c = level_count(n, l);
-      g->lvl_offset[l][r] = (GLsizei)(qi - g->lvl_base[l]);
+      g->lvl_count[l][k] = (GLsizei)c;
       for (size_t j = 0; j < c; j++) {
         size_t i = a + (j + 1 == c ? n - 1 : j * stride);
-        float *v = vb + q * GUI_VERTEX_FLOATS;
+        float *v = buf + q * GUI_VERTEX_FLOATS;
         v[0] = s->xyz_um[3 * i];
         v[1] = s->xyz_um[3 * i + 1];
         v[2] = s->xyz_um[3 * i + 2];
         v[3] = (float)((double)(s->t_us[i] - t0_us) / 1000.0);
         v[4] = key;
-        ib[qi++] = (uint32_t)q++;
+        g->t_ms[q] = v[3];
+        q++;
       }
-      ib[qi++] = GUI_RESTART_INDEX;
+      if (l == 0) {
+        double len = 0;
+        for (size_t i = a + 1; i < a + n; i++) {
+          const float *p0 = s->xyz_um + 3 * (i - 1), *p1 = s->xyz_um + 3 * i;
+          len += sqrt((double)(p1[0] - p0[0]) * (p1[0] - p0[0]) +
+                      (double)(p1[1] - p0[1]) * (p1[1] - p0[1]) +
+                      (double)(p1[2] - p0[2]) * (p1[2] - p0[2]));
+        }
+        g->seg_um[k] = n > 1 ? (float)(len / (double)(n - 1)) : 0.0f;
+      }
     }
-    g->lvl_offset[l][nl] = (GLsizei)(qi - g->lvl_base[l]);
   }
-  free(order);
-  g->n_lines = (GLsizei)nl;
-  g->n_vertices = nv;
-  g->n_indices = ni;
-  *vertices = vb;
-  *indices = ib;
+  g->n_lines = (GLsizei)s->n_lines;
+  g->n_vertices = total;
+  *vertices = buf;
   return ELFM_OK;
 }
 
-static int lod_level(float seg_um, double px_per_um)
+/* Number of vertices in t[0..n) with t <= cursor (t sorted ascending). */
+static size_t count_upto(const float *t, size_t n, float cursor)
 {
-  double seg_px = seg_um * px_per_um;
-  if (!(seg_px > 0)) return GUI_LOD_LEVELS - 1; /* a track standing still */
-  double f = floor(log2(GUI_LOD_MAX_SEG_PX / seg_px));
-  return f < 0 ? 0 : f > GUI_LOD_LEVELS - 1 ? GUI_LOD_LEVELS - 1 : (int)f;
+  size_t lo = 0, hi = n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (t[mid] <= cursor) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo;
 }
 
-void gui_series_draw(const gui_series_gl *g, double px_per_um, int full_detail)
+void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
 {
-  if (!g->n_lines) return;
-  glBindVertexArray(g->vao);
-  glEnable(GL_PRIMITIVE_RESTART);
-  glPrimitiveRestartIndex(GUI_RESTART_INDEX);
-  GLsizei r = 0;
-  while (r < g->n_lines) {
-    /* The run of tracks (in falling segment length) that use level l. */
-    int l = full_detail ? 0 : lod_level(g->seg_um[r], px_per_um);
-    GLsizei e = full_detail ? g->n_lines : r + 1;
-    while (e < g->n_lines && lod_level(g->seg_um[e], px_per_um) == l) e++;
-    size_t first = g->lvl_base[l] + (size_t)g->lvl_offset[l][r];
-    GLsizei count = g->lvl_offset[l][e] - g->lvl_offset[l][r];
-    glDrawElements(GL_LINE_STRIP, count, GL_UNSIGNED_INT,
-                   (const void *)(first * sizeof(uint32_t)));
-    r = e;
+  for (GLsizei k = 0; k < g->n_lines; k++) {
+    int l = 0;
+    double seg_px = g->seg_um[k] * px_per_um;
+    if (seg_px > 0 && !full_detail) {
+      double f = floor(log2(GUI_LOD_MAX_SEG_PX / seg_px));
+      l = f < 0 ? 0 : f > GUI_LOD_LEVELS - 1 ? GUI_LOD_LEVELS - 1 : (int)f;
+    }
+    GLint first = g->lvl_first[l][k];
+    GLsizei count = g->lvl_count[l][k];
+    if (count > 0 && g->t_ms[first + count - 1] > cursor_ms) {
+      size_t m = count_upto(g->t_ms + first, (size_t)count, cursor_ms);
+      count = m == 0 ? 0 : (GLsizei)(m + 1 < (size_t)count ? m + 1 : (size_t)count);
+    }
+    g->draw_first[k] = first;
+    g->draw_count[k] = count;
   }
-  glDisable(GL_PRIMITIVE_RESTART);
 }

@@ -42,18 +42,12 @@ static elfm_status series_upload(elfm_viewer *v, const elfm_view_series *s, gui_
   glGenBuffers(1, &g->vbo);
   glBindVertexArray(g->vao);
   glBindBuffer(GL_ARRAY_BUFFER, g->vbo);
-  glGenBuffers(1, &g->ebo);
-  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g->ebo); /* recorded in the VAO */
   float *buf = NULL;
-  uint32_t *idx = NULL;
-  elfm_status st = gui_series_build(s, v->data->t_min_us, g, &buf, &idx, err);
+  elfm_status st = gui_series_build(s, v->data->t_min_us, g, &buf, err);
   if (st != ELFM_OK) return st;
   glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(g->n_vertices * GUI_VERTEX_FLOATS * sizeof *buf),
                buf, GL_STATIC_DRAW);
-  glBufferData(GL_ELEMENT_ARRAY_BUFFER, (GLsizeiptr)(g->n_indices * sizeof *idx), idx,
-               GL_STATIC_DRAW);
   free(buf);
-  free(idx);
   return ELFM_OK;
 }
 
@@ -250,7 +244,6 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
 static void series_gl_free(gui_series_gl *g)
 {
   if (g->vbo) glDeleteBuffers(1, &g->vbo);
-  if (g->ebo) glDeleteBuffers(1, &g->ebo);
   if (g->vao) glDeleteVertexArrays(1, &g->vao);
   gui_series_arrays_free(g);
   memset(g, 0, sizeof *g);
@@ -288,6 +281,16 @@ void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip)
 }
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us) { v->cursor_us = t_us; }
 
+/* One line strip per polyline (glMultiDrawArrays). Drawing all of them with
+ * one primitive-restart index list instead measured no faster on llvmpipe
+ * and would lose the cut at the cursor (docs/viewer.md). */
+static void draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
+{
+  if (!g->n_lines) return;
+  gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
+  glBindVertexArray(g->vao);
+  glMultiDrawArrays(GL_LINE_STRIP, g->draw_first, g->draw_count, g->n_lines);
+}
 
 void gui_draw(elfm_viewer *v, int width, int height)
 {
@@ -342,11 +345,11 @@ void gui_draw(elfm_viewer *v, int width, int height)
   glUniform1f(l->u_cursor, cursor_ms);
   if (v->opt.show_truth && v->truth.n_lines) {
     glUniform4f(l->u_color, 0.62f, 0.62f, 0.62f, 0.8f);
-    gui_series_draw(&v->truth, px_per_um, v->opt.full_detail);
+    draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
   }
   glUniform1i(l->u_mode, (int)v->mode);
   glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
-  gui_series_draw(&v->tracks, px_per_um, v->opt.full_detail);
+  draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
 
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots
