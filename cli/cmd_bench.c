@@ -138,6 +138,8 @@ struct scene_info {
   char name[64];
   char dir[PATH_MAX];
   int64_t events, t_first_us, t_last_us;
+  int is_stage;              /* a stage scene: score the mean velocity too */
+  double stage_v_um_per_ms[3];
 };
 
 /* ---------------------------------------------------------------------- */
@@ -262,6 +264,50 @@ static void summary_read(const char *run_dir, double *volumes, double stage_s[4]
   cJSON_Delete(o);
 }
 
+/* A stage scene moves every bead with the stage: its velocity is the mean
+ * over truth ids of (last - first position) / (last - first time). Ids are
+ * per pass through the field, so each is one straight segment. */
+static elfm_status truth_stage_velocity(const char *truth_csv, double v[3], elfm_error *err)
+{
+  elfm_table *t = NULL;
+  elfm_status s = elfm_table_load_csv(truth_csv, &t, err);
+  if (s != ELFM_OK) return s;
+  static const char *const names[] = {"id", "t_us", "x_um", "y_um", "z_um"};
+  int c[5];
+  if ((s = elfm_table_require(t, names, 5, c, err)) != ELFM_OK) { elfm_table_free(t); return s; }
+  /* first and last row of each id, ids in order of appearance (a few hundred at most) */
+  enum { MAX_IDS = 4096 };
+  static double ids[MAX_IDS];
+  static size_t first[MAX_IDS], last[MAX_IDS];
+  int n_ids = 0;
+  for (size_t r = 0; r < t->n_rows; r++) {
+    double id = elfm_table_get(t, r, c[0]);
+    int k = 0;
+    while (k < n_ids && ids[k] != id) k++;
+    if (k == n_ids) {
+      if (n_ids == MAX_IDS) break;
+      ids[n_ids] = id;
+      first[n_ids] = r;
+      n_ids++;
+    }
+    last[k] = r;
+  }
+  double sum[3] = {0, 0, 0};
+  int n = 0;
+  for (int k = 0; k < n_ids; k++) {
+    double dt_ms = (elfm_table_get(t, last[k], c[1]) - elfm_table_get(t, first[k], c[1])) * 1e-3;
+    if (!(dt_ms > 0)) continue;
+    for (int a = 0; a < 3; a++)
+      sum[a] += (elfm_table_get(t, last[k], c[2 + a]) - elfm_table_get(t, first[k], c[2 + a])) / dt_ms;
+    n++;
+  }
+  elfm_table_free(t);
+  if (n == 0)
+    return elfm_error_set(err, ELFM_ERR_FORMAT, truth_csv, -1, "no moving object in the truth");
+  for (int a = 0; a < 3; a++) v[a] = sum[a] / n;
+  return ELFM_OK;
+}
+
 /* Count the events of a recording (streaming; memory independent of size). */
 static elfm_status count_events(const char *path, struct scene_info *si, elfm_error *err)
 {
@@ -336,7 +382,7 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
   fprintf(f, "scene,axis,setting,args,status,wall_s,events,span_s,events_per_s,volumes,"
              "volumes_per_s,realtime_factor,peak_rss_mb,f1,recall,precision,rmse_x_um,rmse_y_um,"
              "rmse_z_um,alpha,beta,jaccard_tracks,jaccard_detections,pareto_f1,pareto_alpha,"
-             "recon_s,peaks_s,link_s,smooth_s\n");
+             "recon_s,peaks_s,link_s,smooth_s,stage_velocity_rel_error\n");
   for (int i = 0; i < n; i++) {
     const struct point_result *p = &pts[i];
     char args[256];
@@ -358,7 +404,9 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
       fmt_num(b, sizeof b, "%.4g", p->stage_s[k]);
       fprintf(f, ",%s", b);
     }
-    fprintf(f, "\n");
+    char b[64];
+    fmt_num(b, sizeof b, "%.5g", p->score.has_stage ? p->score.stage_rel_error : NAN);
+    fprintf(f, ",%s\n", b);
   }
   return fclose(f) == 0 ? 0 : -1;
 }
@@ -417,7 +465,18 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
             p->scene, p->sp->axis, p->sp->setting, p->status, c[0], c[1], c[2], c[3], c[4], c[5],
             c[6], c[7], c[8], c[9], p->pareto_f1 ? "F1 " : "", p->pareto_alpha ? "alpha" : "", st);
   }
-  fprintf(f, "\nPlots: `bench_error_vs_speed.png` (error against real-time factor, Pareto "
+  for (int i = 0; i < n; i++)
+    if (pts[i].score.has_stage && pts[i].score.n_frames > 0 && !strcmp(pts[i].status, "ok")) {
+      fprintf(f, "\nStage scenes, relative error of the mean track velocity against the truth's "
+                 "stage velocity:\n\n| scene | setting | error |\n|---|---|---:|\n");
+      for (int j = 0; j < n; j++)
+        if (pts[j].score.has_stage && !strcmp(pts[j].status, "ok"))
+          fprintf(f, "| %s | %s | %.4f |\n", pts[j].scene, pts[j].sp->setting,
+                  pts[j].score.stage_rel_error);
+      break;
+    }
+  if (op->figures)
+    fprintf(f, "\nPlots: `bench_error_vs_speed.png` (error against real-time factor, Pareto "
              "fronts as lines), `fig_s4.png` (time surface vs accumulation, MIPs at 1, 5, 10 ms).\n");
   if (n_comps > 0) {
     fprintf(f, "\n## Component benchmarks (same run)\n");
@@ -793,6 +852,15 @@ int cmd_bench(int argc, char **argv)
         path_fmt(p2, sizeof p2, "%s/calib_dz%g.json", si->dir, SWEEP[k].z_step_um);
         if (elfm_calib_save(&c2, p2, &err) != ELFM_OK) return cli_fail("bench", &err);
       }
+      if (!strncmp(si->name, "stage", 5)) {
+        char tp[PATH_MAX];
+        path_fmt(tp, sizeof tp, "%s/truth.csv", si->dir);
+        if (truth_stage_velocity(tp, si->stage_v_um_per_ms, &err) != ELFM_OK)
+          return cli_fail("bench", &err);
+        si->is_stage = 1;
+        fprintf(stderr, "eventlfm bench: %s: stage velocity from truth (%.4f, %.4f, %.4f) um/ms\n",
+                tok, si->stage_v_um_per_ms[0], si->stage_v_um_per_ms[1], si->stage_v_um_per_ms[2]);
+      }
       n_sc++;
     }
   }
@@ -865,6 +933,10 @@ int cmd_bench(int argc, char **argv)
         path_fmt(dets, sizeof dets, "%s/detections.csv", run);
         elfm_score_options so;
         elfm_score_options_default(&so);
+        if (si->is_stage) {
+          so.have_stage = 1;
+          memcpy(so.stage_v_um_per_ms, si->stage_v_um_per_ms, sizeof so.stage_v_um_per_ms);
+        }
         elfm_calib cal;
         elfm_error err;
         elfm_error_clear(&err);
