@@ -10,6 +10,8 @@
  *   - truth: stage speeds, sweep, helix speeds, everything inside the field.
  */
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 
 #include "check.h"
 #include "elfm_datasets.h"
@@ -478,6 +480,48 @@ static void test_truth_motion(void)
   }
 }
 
+static elfm_status count_sink(void *user, const elfm_event_chunk *c, elfm_error *err)
+{
+  (void)err;
+  *(int64_t *)user += (int64_t)c->n;
+  return ELFM_OK;
+}
+
+/* Peak RSS (kB) of a child process simulating `stage` for duration_ms. */
+static long child_peak_kb(int duration_ms)
+{
+  pid_t pid = fork();
+  if (pid == 0) {
+    char kv[64];
+    snprintf(kv, sizeof kv, "duration_ms=%d", duration_ms);
+    elfm_error err;
+    elfm_scene *s = NULL;
+    int64_t n = 0;
+    if (elfm_scene_load("stage", &s, &err) || elfm_scene_set_param(s, kv, &err) ||
+        elfm_sim_run_sink(s, count_sink, &n, NULL, NULL, &err))
+      _exit(1);
+    elfm_scene_free(s);
+    _exit(n > 0 ? 0 : 1);
+  }
+  int status = 0;
+  struct rusage ru;
+  if (pid < 0 || wait4(pid, &status, 0, &ru) != pid || !WIFEXITED(status) ||
+      WEXITSTATUS(status) != 0)
+    return -1;
+  return ru.ru_maxrss;
+}
+
+/* Memory does not grow with the recording: 10x the duration, same peak. */
+static void test_memory_bounded(void)
+{
+  long short_kb = child_peak_kb(15), long_kb = child_peak_kb(150);
+  fprintf(stderr, "memory: peak %ld kB for 15 ms, %ld kB for 150 ms of stage\n", short_kb, long_kb);
+  CHECK(short_kb > 0 && long_kb > 0);
+  /* A few MB of slack: buffers grow to the busiest slice, which a longer
+   * run may meet; the pixel state alone is ~30 MB. */
+  CHECK_MSG(long_kb - short_kb < 4096, "peak grew by %ld kB", long_kb - short_kb);
+}
+
 int main(void)
 {
   test_static_noise();
@@ -487,5 +531,6 @@ int main(void)
   test_roundtrip_and_seed();
   test_truth_file();
   test_truth_motion();
+  test_memory_bounded();
   return check_report();
 }
