@@ -4,7 +4,8 @@
  * (default: flow, 20 beads, ~13 Mev/s) or of a recording.
  *
  *   bench_refocus [--scene NAME] [--objects N] [--ms N] [--events E --calib C]
- *                 [--median 0|3|5] [--dt-us N] [--reps N]
+ *                 [--median 0|3|5] [--dt-us N] [--reps N] [--agree F (0 = off)]
+ *                 [--path dense|sparse|both]
  *
  * Steps, each timed on its own: events -> frames (framer), median, refocus.
  * Frames are built once and kept (sparse, in memory); refocusing then runs
@@ -180,12 +181,15 @@ int main(int argc, char **argv)
 {
   const char *scene = "flow", *events = NULL, *calib_path = NULL;
   int objects = 0, ms = 100, median = 3, reps = 3;
+  double agree = -1; /* < 0: the library default */
+  int only = -1;     /* --path: 0 dense, 1 sparse, -1 both */
   int64_t dt_us = 1000;
   static const struct option opts[] = {
     {"scene", required_argument, 0, 's'}, {"objects", required_argument, 0, 'o'},
     {"ms", required_argument, 0, 'm'}, {"events", required_argument, 0, 'e'},
     {"calib", required_argument, 0, 'c'}, {"median", required_argument, 0, 'M'},
     {"dt-us", required_argument, 0, 'd'}, {"reps", required_argument, 0, 'r'},
+    {"agree", required_argument, 0, 'a'}, {"path", required_argument, 0, 'p'},
     {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   int ch;
   while ((ch = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
@@ -198,9 +202,12 @@ int main(int argc, char **argv)
     case 'M': median = atoi(optarg); break;
     case 'd': dt_us = atoll(optarg); break;
     case 'r': reps = atoi(optarg); break;
+    case 'a': agree = atof(optarg); break;
+    case 'p': only = !strcmp(optarg, "dense") ? 0 : !strcmp(optarg, "sparse") ? 1 : -1; break;
     case 'h':
       printf("usage: bench_refocus [--scene NAME] [--objects N] [--ms N] [--events E --calib C]\n"
-             "                     [--median 0|3|5] [--dt-us N] [--reps N]\n");
+             "                     [--median 0|3|5] [--dt-us N] [--reps N] [--agree F]\n"
+             "                     [--path dense|sparse|both]\n");
       return 0;
     default: return 2;
     }
@@ -293,14 +300,19 @@ int main(int argc, char **argv)
          1e6 * b.t_median / (double)b.n_frames);
   elfm_refocus_plan *plan = NULL;
   t0 = now_s();
-  if (elfm_refocus_plan_create(&cal, NULL, &plan, &err)) {
+  elfm_refocus_options ro;
+  elfm_refocus_options_default(&ro);
+  if (agree >= 0) ro.agree_frac = agree;
+  printf("ghost rule: view agreement %.2f\n", ro.agree_frac);
+  if (elfm_refocus_plan_create(&cal, &ro, &plan, &err)) {
     fprintf(stderr, "bench_refocus: %s\n", err.message);
     return 1;
   }
   printf("plan: %.1f ms\n", 1e3 * (now_s() - t0));
-  double vps[2][2];
+  double vps[2][2] = {{0, 0}, {0, 0}};
   for (int path = 0; path < 2; path++)
     for (int th = 1; th <= 2; th++) {
+      if (only >= 0 && path != only) continue;
       int r = path == 0 ? 1 : reps; /* dense is slow: one pass is plenty of frames */
       double cpu = 0;
       vps[path][th - 1] = run_refocus(plan, path ? ELFM_PATH_SPARSE : ELFM_PATH_DENSE, &b, th, r, &cal, &cpu);
@@ -308,8 +320,9 @@ int main(int argc, char **argv)
              "(%.0f volumes/s per busy core)\n", path ? "sparse" : "dense", th, th > 1 ? "s" : " ",
              vps[path][th - 1], 1e3 / vps[path][th - 1], 1e3 * cpu, 1.0 / cpu);
     }
-  printf("sparse/dense: %.1fx (1 thread), %.1fx (2 threads)\n", vps[1][0] / vps[0][0],
-         vps[1][1] / vps[0][1]);
+  if (only < 0)
+    printf("sparse/dense: %.1fx (1 thread), %.1fx (2 threads)\n", vps[1][0] / vps[0][0],
+           vps[1][1] / vps[0][1]);
   for (size_t i = 0; i < b.n_frames; i++) {
     free(b.frames[i].idx);
     free(b.frames[i].val);

@@ -62,6 +62,11 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
                           o.threshold_value);
   if (c->n_views <= 0 || c->n_views > ELFM_MAX_VIEWS || c->n_views > 254)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "calibration has %d views", c->n_views);
+  /* The sparse path keeps one bit per view and voxel in a 32-bit mask. */
+  if (o.agree_frac > 0.0 && c->n_views > 32)
+    return elfm_error_set(err, ELFM_ERR_UNSUPPORTED, NULL, -1,
+                          "the view-agreement rule handles up to 32 views (calibration has %d): "
+                          "set agree_frac to 0", c->n_views);
   if (c->view_w_px <= 0 || c->view_h_px <= 0 || c->view_w_px > 8192 || c->view_h_px > 8192 ||
       c->sensor_width_px <= 0 || c->sensor_height_px <= 0)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
@@ -191,13 +196,10 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->row_lo = malloc((size_t)p->nz * p->h * sizeof *ws->row_lo);
   ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
-  if (p->need) {
-    ws->vox_cnt = calloc(nvox, 1);
-    ws->vox_last = calloc(nvox, 1);
-  }
+  if (p->need) ws->vox_mask = calloc(nvox, sizeof *ws->vox_mask);
   if (!ws->plane_cnt || !ws->row_start || !ws->sorted || !ws->runs || !ws->vals ||
       !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows ||
-      (p->need && (!ws->vox_cnt || !ws->vox_last))) {
+      (p->need && !ws->vox_mask)) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   }
@@ -216,8 +218,7 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->vals);
   free(ws->row_lo);
   free(ws->row_hi);
-  free(ws->vox_cnt);
-  free(ws->vox_last);
+  free(ws->vox_mask);
   free(ws->row_dirty);
   free(ws->rows);
   free(ws);

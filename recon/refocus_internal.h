@@ -52,8 +52,7 @@ struct elfm_refocus_workspace {
   size_t n_runs, cap_runs;
   float *vals;
   size_t n_vals, cap_vals;
-  uint8_t *vox_cnt;           /* [nz*H*W] agreeing views (agreement on) */
-  uint8_t *vox_last;          /* [nz*H*W] last view + 1 that counted */
+  uint32_t *vox_mask;         /* [nz*H*W] bit v: view v sees signal (agreement on) */
   uint8_t *row_dirty;         /* [nz*H] */
   int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
   uint32_t *rows;             /* dirty rows k*H + Y */

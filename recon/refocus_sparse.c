@@ -24,19 +24,13 @@ static void sparse_clear(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refo
   const size_t W = (size_t)p->w;
   if (ws->dirty_data != vol->data || ws->dirty_all) {
     memset(vol->data, 0, W * p->h * p->nz * sizeof *vol->data);
-    if (p->need) {
-      memset(ws->vox_cnt, 0, W * p->h * p->nz);
-      memset(ws->vox_last, 0, W * p->h * p->nz);
-    }
+    if (p->need) memset(ws->vox_mask, 0, W * p->h * p->nz * sizeof *ws->vox_mask);
     for (size_t i = 0; i < ws->n_rows; i++) ws->row_dirty[ws->rows[i]] = 0;
   } else {
     for (size_t i = 0; i < ws->n_rows; i++) {
       const size_t r = ws->rows[i], lo = (size_t)ws->row_lo[r], n = (size_t)(ws->row_hi[r] - ws->row_lo[r]);
       memset(vol->data + r * W + lo, 0, n * sizeof *vol->data);
-      if (p->need) {
-        memset(ws->vox_cnt + r * W + lo, 0, n);
-        memset(ws->vox_last + r * W + lo, 0, n);
-      }
+      if (p->need) memset(ws->vox_mask + r * W + lo, 0, n * sizeof *ws->vox_mask);
       ws->row_dirty[r] = 0;
     }
   }
@@ -64,8 +58,8 @@ static int cmp_u32(const void *a, const void *b)
 }
 
 /* Sort the listed non-zero pixels by row (counting sort) and column, then
- * cut each view's rows into runs, view by view (the agreement count relies
- * on one view's contributions being contiguous). */
+ * cut each view's rows into runs, view by view (one view's runs then hit
+ * the same plane rows together, which keeps them in cache). */
 static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *frame,
                                elfm_refocus_workspace *ws, elfm_error *err)
 {
@@ -174,15 +168,11 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const float *bb = b + i0;
         float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
         for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
-        if (p->need) {
-          const size_t at = (size_t)r * W + (size_t)(Xs + i0);
-          uint8_t *cnt = ws->vox_cnt + at, *last = ws->vox_last + at;
-          const uint8_t id = (uint8_t)(run->view + 1);
+        if (p->need) { /* branch-free: the bit is set when the view adds signal */
+          uint32_t *mask = ws->vox_mask + (size_t)r * W + (size_t)(Xs + i0);
+          const uint32_t bit = 1u << run->view;
           for (int i = 0; i < m; i++)
-            if ((w0 * bb[i] != 0.0f || w1 * bb[i + 1] != 0.0f) && last[i] != id) {
-              last[i] = id;
-              cnt[i]++;
-            }
+            mask[i] |= bit & (0u - (uint32_t)(w0 * bb[i] != 0.0f || w1 * bb[i + 1] != 0.0f));
         }
       }
     }
@@ -192,8 +182,12 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
     float *row = vol->data + r * W;
     const float *inv = p->inv_count + r * W;
     for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= inv[X];
-    if (p->need)
-      elfm_ghost_agree_row(p, (int)(r / (size_t)H), (int)(r % (size_t)H), row, ws->vox_cnt + r * W);
+    if (p->need) {
+      const uint32_t *mask = ws->vox_mask + r * W;
+      const uint8_t *need = p->need + r * W;
+      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++)
+        if (__builtin_popcount(mask[X]) < need[X]) row[X] = 0.0f;
+    }
   }
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
   return ELFM_OK;
