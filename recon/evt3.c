@@ -20,6 +20,9 @@
  * and no branch that depends on the word type except vectors'.
  */
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "events_internal.h"
 
@@ -63,6 +66,21 @@ static const uint8_t evt3_cnt6[64] = {
     1, 2, 2, 3, 2, 3, 3, 4, 2, 3, 3, 4, 3, 4, 4, 5,
     2, 3, 3, 4, 3, 4, 4, 5, 3, 4, 4, 5, 4, 5, 5, 6,
 };
+
+/* X[0..7] = x0 + pos[0..7]: the x of one 6-bit half of a vector mask.
+ * One SSE2 add and store where available (every x86-64), else a loop. */
+#if defined(__SSE2__)
+static inline void put_x8(uint16_t *X, const uint8_t *pos, uint32_t x0)
+{
+  const __m128i p = _mm_unpacklo_epi8(_mm_loadl_epi64((const __m128i *)pos), _mm_setzero_si128());
+  _mm_storeu_si128((__m128i *)X, _mm_add_epi16(p, _mm_set1_epi16((short)x0)));
+}
+#else
+static inline void put_x8(uint16_t *X, const uint8_t *pos, uint32_t x0)
+{
+  for (int i = 0; i < 8; i++) X[i] = (uint16_t)(x0 + pos[i]);
+}
+#endif
 
 /* What the fast loop reads and updates, kept together so it can live in
  * memory next to the stack while the loop keeps its own values in
@@ -127,9 +145,9 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
       for (uint32_t i = 0; i < 12; i++) P[n + i] = p;
       /* x of the set bits: 8 slots per 6-bit half (room for 16). */
       const uint8_t *lo = evt3_pos6[mask & 63], *hi = evt3_pos6[mask >> 6];
-      for (uint32_t i = 0; i < 8; i++) X[n + i] = (uint16_t)(x0 + lo[i]);
+      put_x8(X + n, lo, x0);
       n += evt3_cnt6[mask & 63];
-      for (uint32_t i = 0; i < 8; i++) X[n + i] = (uint16_t)(x0 + 6 + hi[i]);
+      put_x8(X + n, hi, x0 + 6);
       n += evt3_cnt6[mask >> 6];
       voff += nbits;
       continue;
