@@ -665,17 +665,19 @@ struct component {
   const char *what;
   int quick_skip;               /* too long for --quick even when shortened */
   const char *quick_args[6];    /* NULL-terminated */
+  const char *full_args[6];     /* without --quick (NULL-terminated) */
 };
 static const struct component COMPONENTS[] = {
     {"bench_decode", "EVT3/EVT2/DAT decode vs the memory-read ceiling", 0,
-     {"--events", "10000000", "--reps", "3", NULL}},
+     {"--events", "10000000", "--reps", "3", NULL}, {NULL}},
     {"bench_refocus", "sparse vs dense refocusing, 1 and 2 threads", 0,
-     {"--ms", "20", "--reps", "2", NULL}},
-    {"bench_link", "FLANN linking vs brute force, 100/1000/10000 objects", 0, {"10", NULL}},
-    /* its dense-spline case alone takes minutes per track */
-    {"bench_smooth", "Ceres smoothing per 1000-point track", 1, {"1", NULL}},
-    {"bench_simulate", "simulator speed", 0, {"flow", "100", "100", NULL}},
-    {"bench_pipeline_score", "Hungarian solver and scoring", 0, {"--quick", NULL}},
+     {"--ms", "20", "--reps", "2", NULL}, {NULL}},
+    {"bench_link", "FLANN linking vs brute force, 100/1000/10000 objects", 0, {"10", NULL},
+     {NULL}},
+    /* its dense-spline case alone takes minutes per track: one repeat */
+    {"bench_smooth", "Ceres smoothing per 1000-point track", 1, {"1", NULL}, {"1", NULL}},
+    {"bench_simulate", "simulator speed", 0, {"flow", "100", "100", NULL}, {NULL}},
+    {"bench_pipeline_score", "Hungarian solver and scoring", 0, {"--quick", NULL}, {NULL}},
 };
 #define N_COMPONENTS ((int)(sizeof COMPONENTS / sizeof COMPONENTS[0]))
 
@@ -712,10 +714,11 @@ static int run_components(const char *self, const char *dir, int quick, double t
     int na = 0;
     char shown[128] = "";
     argv[na++] = exe;
-    for (int a = 0; quick && cp->quick_args[a] && na < 7; a++) {
-      argv[na++] = (char *)cp->quick_args[a];
+    const char *const *args = quick ? cp->quick_args : cp->full_args;
+    for (int a = 0; args[a] && na < 7; a++) {
+      argv[na++] = (char *)args[a];
       size_t l = strlen(shown);
-      path_fmt(shown + l, sizeof shown - l, " %s", cp->quick_args[a]);
+      path_fmt(shown + l, sizeof shown - l, " %s", args[a]);
     }
     argv[na] = NULL;
     fprintf(stderr, "eventlfm bench: component %s%s (%s) ...\n", cp->name, shown, cp->what);
