@@ -8,3 +8,5 @@ elfm_add_test(test_tracks test_tracks.c TIMEOUT 60)
 # the long ones (stage_accel, blink, blink_moving, worm) labelled slow.
 elfm_add_test(test_track_e2e test_track_e2e.c TIMEOUT 300)
 elfm_add_test(test_track_e2e_slow test_track_e2e.c ARGS slow LABELS slow TIMEOUT 3000)
+add_test(NAME track_cli COMMAND ${CMAKE_SOURCE_DIR}/tests/track_cli.sh ${CMAKE_BINARY_DIR}/eventlfm)
+set_tests_properties(track_cli PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)

@@ -1,0 +1,35 @@
+#!/bin/sh
+# eventlfm track on bad input: clear message naming the file, non-zero exit,
+# no crash; usage errors exit 2. Usage: track_cli.sh BINARY
+bin=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() {  # expected-exit-code pattern-in-stderr command...
+  want=$1; pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -ne "$want" ]; then echo "FAIL: exit $rc (want $want): $*"; cat "$tmp/err"; fail=$((fail+1)); return; fi
+  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/err"; then
+    echo "FAIL: stderr lacks '$pat': $*"; cat "$tmp/err"; fail=$((fail+1)); fi
+}
+check 2 "required" "$bin" track
+check 2 "unknown option" "$bin" track --calib a --events b --out c --bogus
+check 2 "motion" "$bin" track --calib a --events b --out c --motion sideways
+check 2 "stage-velocity" "$bin" track --calib a --events b --out c --stage-velocity-um-per-ms 1,2
+check 2 "max-outlier-frac" "$bin" track --calib a --events b --out c --max-outlier-frac 2
+check 1 "$tmp/nope.json" "$bin" track --calib "$tmp/nope.json" --events "$tmp/e.raw" --out "$tmp/o" -q
+# a valid calibration, then broken event files
+"$bin" calib from-optics --out "$tmp/calib.json" >/dev/null 2>&1 || { echo "SKIP: calib from-optics failed"; exit 77; }
+check 1 "$tmp/missing.raw" "$bin" track --calib "$tmp/calib.json" --events "$tmp/missing.raw" --out "$tmp/o1" -q
+printf 't_us,x,y,p\n100,5,5,1\n200,5,5,notanumber\n' > "$tmp/bad.csv"
+check 1 "bad.csv" "$bin" track --calib "$tmp/calib.json" --events "$tmp/bad.csv" --out "$tmp/o2" -q
+printf '%% evt 3.0\n%% geometry 1280x720\n%% end\n' > "$tmp/trunc.raw"
+printf '\001\002\003' >> "$tmp/trunc.raw"
+check 1 "trunc.raw: byte" "$bin" track --calib "$tmp/calib.json" --events "$tmp/trunc.raw" --out "$tmp/o3" -q
+# an empty recording: valid outputs with headers only
+printf 't_us,x,y,p\n' > "$tmp/empty.csv"
+check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
+head -1 "$tmp/o4/tracks.csv" 2>/dev/null | grep -q '^track_id,frame,t_us,x_um,y_um,z_um' || { echo "FAIL: empty run has no tracks.csv header"; fail=$((fail+1)); }
+grep -q '"volumes"' "$tmp/o4/summary.json" 2>/dev/null || { echo "FAIL: empty run has no summary.json"; fail=$((fail+1)); }
+[ $fail -eq 0 ] && echo "track_cli: all cases behave"
+exit $fail
