@@ -196,6 +196,33 @@ void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip);
 /* Tracks are drawn up to the time cursor t_us (INT64_MAX: everything). */
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us);
 
+/* What the keys do (viewer_run.c maps keys to these; docs/viewer.md). */
+typedef enum elfm_viewer_cmd {
+  ELFM_CMD_RESET_VIEW,      /* r */
+  ELFM_CMD_CYCLE_COLOR,     /* c: time -> depth -> track -> time */
+  ELFM_CMD_PLAY_PAUSE,      /* space; from the end, playback starts over */
+  ELFM_CMD_STEP_FORWARD,    /* right arrow: one frame (pauses) */
+  ELFM_CMD_STEP_BACK,       /* left arrow */
+  ELFM_CMD_STEP_FORWARD_10, /* shift + right arrow */
+  ELFM_CMD_STEP_BACK_10,    /* shift + left arrow */
+  ELFM_CMD_HOME,            /* Home: cursor to the start */
+  ELFM_CMD_END,             /* End: cursor to the end (everything shown) */
+  ELFM_CMD_FASTER,          /* +: playback speed x 2 */
+  ELFM_CMD_SLOWER,          /* -: playback speed / 2 */
+  ELFM_CMD_TOGGLE_TRUTH,    /* t */
+  ELFM_CMD_TOGGLE_DETECTIONS, /* d */
+  ELFM_CMD_TOGGLE_MIP       /* m */
+} elfm_viewer_cmd;
+
+void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd);
+/* Playback: when playing, move the cursor by wall_s seconds of wall time at
+ * the playback speed (by default the whole recording in 10 s); stops at the
+ * end. */
+void elfm_viewer_advance(elfm_viewer *v, double wall_s);
+int64_t elfm_viewer_cursor(const elfm_viewer *v);
+int elfm_viewer_playing(const elfm_viewer *v);
+elfm_color_mode elfm_viewer_color_mode(const elfm_viewer *v);
+
 /* Render one frame at width x height into an off-screen framebuffer and read
  * it back as top-down rows of RGB bytes into rgb (3 * width * height bytes,
  * caller-owned). */

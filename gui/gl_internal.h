@@ -61,6 +61,7 @@ struct elfm_viewer {
   int64_t cursor_us;        /* tracks shown up to here */
   int playing;
   double play_us_per_s;     /* playback speed: recording us per wall second */
+  double play_default_us_per_s;
   double line_width_px;
 
   gui_lines_prog lines;

@@ -212,6 +212,7 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
   /* Play the whole recording in 10 s of wall time by default. */
   double span = (double)(data->t_max_us - data->t_min_us);
   v->play_us_per_s = span > 0 ? span / 10.0 : 1000.0;
+  v->play_default_us_per_s = v->play_us_per_s;
   elfm_camera_reset(&v->cam, data->box_min_um, data->box_max_um);
 
   elfm_status st = gui_shaders_create(v, err);

@@ -1,63 +1,45 @@
 /* viewer_run.c — the interactive loop: mouse orbit camera, keys, playback.
  *
  * GLFW callbacks find the viewer through the window's user pointer (no
- * global state). Controls:
+ * global state); keys become elfm_viewer_command()s (controls.c). Controls:
  *   left-drag rotate, right-drag (or shift+left-drag) pan, scroll zoom,
  *   r reset camera, c cycle colour (time -> depth -> track), space play/pause,
  *   left/right arrows one frame (shift: 10 frames), home/end, +/- playback
  *   speed, t truth, d detections, m MIP plane, q or Esc quit.
  */
-#include <math.h>
 #include <stdio.h>
 
 #include "gl_internal.h"
 
 static elfm_viewer *viewer_of(GLFWwindow *w) { return glfwGetWindowUserPointer(w); }
 
-static void cursor_clamp(elfm_viewer *v)
-{
-  const elfm_view_data *d = v->data;
-  if (v->cursor_us < d->t_min_us) v->cursor_us = d->t_min_us;
-  if (v->cursor_us > d->t_max_us) v->cursor_us = d->t_max_us;
-}
-
 static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
   (void)scancode;
   elfm_viewer *v = viewer_of(w);
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-  const elfm_view_data *d = v->data;
-  int64_t step = d->frame_dt_us * ((mods & GLFW_MOD_SHIFT) ? 10 : 1);
+  int shift = (mods & GLFW_MOD_SHIFT) != 0;
   switch (key) {
   case GLFW_KEY_ESCAPE:
   case GLFW_KEY_Q: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
-  case GLFW_KEY_R: elfm_camera_reset(&v->cam, d->box_min_um, d->box_max_um); break;
-  case GLFW_KEY_C: v->mode = (elfm_color_mode)(((int)v->mode + 1) % 3); break;
-  case GLFW_KEY_T: v->opt.show_truth = !v->opt.show_truth; break;
-  case GLFW_KEY_D: v->opt.show_detections = !v->opt.show_detections; break;
-  case GLFW_KEY_M: v->opt.show_mip = !v->opt.show_mip; break;
-  case GLFW_KEY_SPACE:
-    /* Play from the start when the cursor sits at the end. */
-    if (!v->playing && v->cursor_us >= d->t_max_us) v->cursor_us = d->t_min_us;
-    v->playing = !v->playing;
-    break;
+  case GLFW_KEY_R: elfm_viewer_command(v, ELFM_CMD_RESET_VIEW); break;
+  case GLFW_KEY_C: elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR); break;
+  case GLFW_KEY_T: elfm_viewer_command(v, ELFM_CMD_TOGGLE_TRUTH); break;
+  case GLFW_KEY_D: elfm_viewer_command(v, ELFM_CMD_TOGGLE_DETECTIONS); break;
+  case GLFW_KEY_M: elfm_viewer_command(v, ELFM_CMD_TOGGLE_MIP); break;
+  case GLFW_KEY_SPACE: elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE); break;
   case GLFW_KEY_RIGHT:
-    v->playing = 0;
-    if (v->cursor_us >= d->t_max_us) break;
-    v->cursor_us += step;
-    cursor_clamp(v);
+    elfm_viewer_command(v, shift ? ELFM_CMD_STEP_FORWARD_10 : ELFM_CMD_STEP_FORWARD);
     break;
   case GLFW_KEY_LEFT:
-    v->playing = 0;
-    v->cursor_us -= step;
-    cursor_clamp(v);
+    elfm_viewer_command(v, shift ? ELFM_CMD_STEP_BACK_10 : ELFM_CMD_STEP_BACK);
     break;
-  case GLFW_KEY_HOME: v->cursor_us = d->t_min_us; break;
-  case GLFW_KEY_END: v->cursor_us = d->t_max_us; v->playing = 0; break;
+  case GLFW_KEY_HOME: elfm_viewer_command(v, ELFM_CMD_HOME); break;
+  case GLFW_KEY_END: elfm_viewer_command(v, ELFM_CMD_END); break;
   case GLFW_KEY_EQUAL:
-  case GLFW_KEY_KP_ADD: v->play_us_per_s *= 2.0; break;
+  case GLFW_KEY_KP_ADD: elfm_viewer_command(v, ELFM_CMD_FASTER); break;
   case GLFW_KEY_MINUS:
-  case GLFW_KEY_KP_SUBTRACT: v->play_us_per_s *= 0.5; break;
+  case GLFW_KEY_KP_SUBTRACT: elfm_viewer_command(v, ELFM_CMD_SLOWER); break;
   default: break;
   }
 }
@@ -111,13 +93,7 @@ elfm_status elfm_viewer_run(elfm_viewer *v, elfm_error *err)
   double last = glfwGetTime();
   while (!glfwWindowShouldClose(w)) {
     double now = glfwGetTime();
-    if (v->playing) {
-      v->cursor_us += (int64_t)llround((now - last) * v->play_us_per_s);
-      if (v->cursor_us >= v->data->t_max_us) {
-        v->cursor_us = v->data->t_max_us;
-        v->playing = 0;
-      }
-    }
+    elfm_viewer_advance(v, now - last);
     last = now;
     int fw, fh;
     glfwGetFramebufferSize(w, &fw, &fh);

@@ -360,6 +360,76 @@ int main(int argc, char **argv)
   CHECK_MSG(before == nb, "before the cursor: %d of %d drawn", before, nb);
   CHECK_MSG(after == 0, "after the cursor: %d of %d still drawn", after, na);
 
+  /* 2b. The keys' commands: frame steps, home/end, playback at its speed,
+   * colour cycle, layer toggles, camera reset. Frames are 1 ms apart. */
+  elfm_viewer_set_cursor(v, INT64_MAX);
+  elfm_viewer_command(v, ELFM_CMD_STEP_BACK);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 99000);
+  elfm_viewer_command(v, ELFM_CMD_STEP_BACK_10);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 89000);
+  elfm_viewer_command(v, ELFM_CMD_STEP_FORWARD);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 90000);
+  elfm_viewer_command(v, ELFM_CMD_HOME);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 0);
+  elfm_viewer_command(v, ELFM_CMD_STEP_BACK);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 0);
+  elfm_viewer_command(v, ELFM_CMD_END);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 100000);
+  elfm_viewer_command(v, ELFM_CMD_STEP_FORWARD);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 100000);
+  /* Play from the end starts over; 100 ms recording plays in 10 s. */
+  elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE);
+  CHECK(elfm_viewer_playing(v));
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 0);
+  elfm_viewer_advance(v, 1.0);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 10000);
+  elfm_viewer_command(v, ELFM_CMD_FASTER);
+  elfm_viewer_advance(v, 1.0);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 30000);
+  elfm_viewer_command(v, ELFM_CMD_SLOWER);
+  elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE);
+  CHECK(!elfm_viewer_playing(v));
+  elfm_viewer_advance(v, 1.0);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 30000);
+  elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE);
+  elfm_viewer_advance(v, 100.0);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 100000);
+  CHECK(!elfm_viewer_playing(v));
+  CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TIME);
+  elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
+  CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_DEPTH);
+  elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
+  CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TRACK);
+  elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
+  CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TIME);
+  /* `t` hides the grey truth line, a second `t` shows it again. */
+  int grey_on[2];
+  for (int k = 0; k < 2; k++) {
+    elfm_viewer_command(v, ELFM_CMD_TOGGLE_TRUTH);
+    render(v);
+    grey_on[k] = 0;
+    for (int i = 10; i <= 90; i += 20) {
+      double tc, tr;
+      project(v, truth_pos, i, &tc, &tr);
+      for (int dr = -2; dr <= 2; dr++)
+        for (int dc = -2; dc <= 2; dc++) {
+          const uint8_t *p = px((int)tc + dc, (int)tr + dr);
+          grey_on[k] |= saturation(p) < 12 && p[0] > 110 && p[0] < 200;
+        }
+    }
+  }
+  CHECK(!grey_on[0]);
+  CHECK(grey_on[1]);
+  /* `r` brings the camera back after a drag and a zoom. */
+  elfm_camera cam0 = *elfm_viewer_camera(v);
+  elfm_camera_rotate(elfm_viewer_camera(v), 120, -40);
+  elfm_camera_zoom(elfm_viewer_camera(v), 4);
+  CHECK(fabs(elfm_viewer_camera(v)->yaw_rad - cam0.yaw_rad) > 0.1);
+  elfm_viewer_command(v, ELFM_CMD_RESET_VIEW);
+  CHECK_NEAR(elfm_viewer_camera(v)->yaw_rad, cam0.yaw_rad, 1e-12);
+  CHECK_NEAR(elfm_viewer_camera(v)->pitch_rad, cam0.pitch_rad, 1e-12);
+  CHECK_NEAR(elfm_viewer_camera(v)->half_height_um, cam0.half_height_um, 1e-9);
+
   /* 3. Colour by depth: B runs from z=-40 to 40, so blue-ish to red-ish. */
   elfm_viewer_set_cursor(v, INT64_MAX);
   elfm_viewer_set_color_mode(v, ELFM_COLOR_DEPTH);

@@ -1,0 +1,64 @@
+/* controls.c — what the viewer's keys do, apart from GLFW: the time cursor,
+ * playback, colour mode, layers, camera reset. viewer_run.c maps keys to
+ * these commands; tests call them directly. */
+#include <math.h>
+
+#include "gl_internal.h"
+
+static void cursor_step(elfm_viewer *v, int64_t frames)
+{
+  const elfm_view_data *d = v->data;
+  v->playing = 0;
+  int64_t c = v->cursor_us > d->t_max_us ? d->t_max_us : v->cursor_us;
+  c += frames * d->frame_dt_us;
+  if (c < d->t_min_us) c = d->t_min_us;
+  if (c > d->t_max_us) c = d->t_max_us;
+  v->cursor_us = c;
+}
+
+void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd)
+{
+  const elfm_view_data *d = v->data;
+  switch (cmd) {
+  case ELFM_CMD_RESET_VIEW: elfm_camera_reset(&v->cam, d->box_min_um, d->box_max_um); break;
+  case ELFM_CMD_CYCLE_COLOR: v->mode = (elfm_color_mode)(((int)v->mode + 1) % 3); break;
+  case ELFM_CMD_PLAY_PAUSE:
+    if (!v->playing && v->cursor_us >= d->t_max_us) v->cursor_us = d->t_min_us;
+    v->playing = !v->playing;
+    break;
+  case ELFM_CMD_STEP_FORWARD: cursor_step(v, 1); break;
+  case ELFM_CMD_STEP_BACK: cursor_step(v, -1); break;
+  case ELFM_CMD_STEP_FORWARD_10: cursor_step(v, 10); break;
+  case ELFM_CMD_STEP_BACK_10: cursor_step(v, -10); break;
+  case ELFM_CMD_HOME: v->cursor_us = d->t_min_us; break;
+  case ELFM_CMD_END:
+    v->cursor_us = d->t_max_us;
+    v->playing = 0;
+    break;
+  /* Between 1/1024 and 1024 times the default speed. */
+  case ELFM_CMD_FASTER:
+    if (v->play_us_per_s < 1024 * v->play_default_us_per_s) v->play_us_per_s *= 2.0;
+    break;
+  case ELFM_CMD_SLOWER:
+    if (v->play_us_per_s > v->play_default_us_per_s / 1024) v->play_us_per_s *= 0.5;
+    break;
+  case ELFM_CMD_TOGGLE_TRUTH: v->opt.show_truth = !v->opt.show_truth; break;
+  case ELFM_CMD_TOGGLE_DETECTIONS: v->opt.show_detections = !v->opt.show_detections; break;
+  case ELFM_CMD_TOGGLE_MIP: v->opt.show_mip = !v->opt.show_mip; break;
+  }
+}
+
+void elfm_viewer_advance(elfm_viewer *v, double wall_s)
+{
+  if (!v->playing || !(wall_s > 0)) return;
+  const elfm_view_data *d = v->data;
+  v->cursor_us += (int64_t)llround(wall_s * v->play_us_per_s);
+  if (v->cursor_us >= d->t_max_us) {
+    v->cursor_us = d->t_max_us;
+    v->playing = 0;
+  }
+}
+
+int64_t elfm_viewer_cursor(const elfm_viewer *v) { return v->cursor_us; }
+int elfm_viewer_playing(const elfm_viewer *v) { return v->playing; }
+elfm_color_mode elfm_viewer_color_mode(const elfm_viewer *v) { return v->mode; }
