@@ -309,6 +309,27 @@ int main(int argc, char **argv)
     return 1;
   }
   printf("plan: %.1f ms\n", 1e3 * (now_s() - t0));
+  {
+    /* how sparse the output is: voxels the sparse path writes in one volume */
+    elfm_refocus_workspace *ws = NULL;
+    elfm_volume *vol = elfm_refocus_volume_create(plan, &err);
+    elfm_frame *f = elfm_frame_create(cal.sensor_width_px, cal.sensor_height_px, &err);
+    if (vol && f && !elfm_refocus_workspace_create(plan, &ws, &err)) {
+      double sum = 0;
+      size_t nvox = (size_t)vol->w * vol->h * vol->nz;
+      for (size_t i = b.n_frames / 2; i < b.n_frames / 2 + 10 && i < b.n_frames; i++) {
+        unpack(&b.frames[i], f);
+        elfm_refocus_execute_path(plan, ELFM_PATH_SPARSE, f, vol, ws, &err);
+        size_t nz = 0;
+        for (size_t j = 0; j < nvox; j++) nz += vol->data[j] != 0.0f;
+        sum += (double)nz / (double)nvox;
+      }
+      printf("output: %.0f%% of the voxels non-zero (mean of 10 volumes)\n", 100.0 * sum / 10.0);
+    }
+    elfm_refocus_workspace_free(ws);
+    elfm_volume_free(vol);
+    elfm_frame_free(f);
+  }
   double vps[2][2] = {{0, 0}, {0, 0}};
   for (int path = 0; path < 2; path++)
     for (int th = 1; th <= 2; th++) {

@@ -2,13 +2,14 @@
  *
  * The paper cleans its time surfaces with a 3x3 median before refocusing.
  * Two shortcuts make it cost O(listed pixels) instead of O(sensor):
- *  - a pixel's median can only be non-zero if its window holds a listed
- *    pixel, so only the neighbourhoods of listed pixels are visited (each
- *    candidate once, marked in a byte map that is reset through the list);
  *  - sorted, a window is negatives, zeros, positives: if fewer than half
  *    (5 of 9, 13 of 25) are positive and fewer than half negative, the
- *    middle one is a zero and no sorting is needed. Isolated noise events
- *    all end here.
+ *    middle one is a zero;
+ *  - so each listed pixel adds 1 to the positive or negative count of every
+ *    window it lies in (a 16-bit counter per pixel: low byte positive, high
+ *    byte negative), and only windows reaching half are sorted. Isolated
+ *    noise events never do. The counters are reset through the list of
+ *    pixels they were raised at.
  * Otherwise 3x3 uses the 19-exchange median network (Paeth, Graphics Gems,
  * "Median finding on a 3x3 grid"), 5x5 an insertion sort of 25.
  */
@@ -18,8 +19,8 @@
 
 struct elfm_median {
   int size, w, h;
-  uint8_t *mark;      /* 1: candidate already computed for the current frame */
-  uint32_t *cand;     /* candidates visited, to reset `mark` */
+  uint16_t *count;    /* per pixel: windows' positive (low byte) / negative (high byte) count */
+  uint32_t *cand;     /* pixels whose count was raised, to reset `count` */
   size_t cand_cap;
 };
 
@@ -33,10 +34,10 @@ elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_e
   elfm_median *m = calloc(1, sizeof *m);
   size_t n = (size_t)w * (size_t)h;
   if (m) {
-    m->mark = calloc(n, 1);
+    m->count = calloc(n, sizeof *m->count);
     m->cand = malloc(n * sizeof *m->cand);
   }
-  if (!m || !m->mark || !m->cand) {
+  if (!m || !m->count || !m->cand) {
     elfm_median_free(m);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (median %d x %d)", w, h);
   }
@@ -51,7 +52,7 @@ elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_e
 void elfm_median_free(elfm_median *m)
 {
   if (!m) return;
-  free(m->mark);
+  free(m->count);
   free(m->cand);
   free(m);
 }
@@ -129,25 +130,32 @@ void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out)
   out->index = in->index;
   out->n_events = in->n_events;
   if (in->w != m->w || in->h != m->h || out->w != m->w || out->h != m->h) return;
-  const int r = m->size / 2;
+  const int r = m->size / 2, half = (m->size * m->size + 1) / 2;
   size_t nc = 0;
   for (size_t i = 0; i < in->nnz; i++) {
+    const float a = in->data[in->idx[i]];
+    if (a == 0.0f) continue;
+    const uint16_t inc = a > 0.0f ? 1 : 256;
     int x0 = (int)(in->idx[i] % (uint32_t)m->w), y0 = (int)(in->idx[i] / (uint32_t)m->w);
     for (int y = y0 - r; y <= y0 + r; y++) {
       if (y < 0 || y >= m->h) continue;
       for (int x = x0 - r; x <= x0 + r; x++) {
         if (x < 0 || x >= m->w) continue;
         uint32_t c = (uint32_t)y * (uint32_t)m->w + (uint32_t)x;
-        if (m->mark[c]) continue;
-        m->mark[c] = 1;
-        m->cand[nc++] = c;
-        float v = median_at(m, in->data, x, y);
-        if (v != 0.0f) {
-          out->data[c] = v;
-          out->idx[out->nnz++] = c;
-        }
+        if (m->count[c] == 0) m->cand[nc++] = c;
+        m->count[c] += inc;
       }
     }
   }
-  for (size_t i = 0; i < nc; i++) m->mark[m->cand[i]] = 0;
+  for (size_t i = 0; i < nc; i++) {
+    uint32_t c = m->cand[i];
+    uint16_t k = m->count[c];
+    m->count[c] = 0;
+    if ((k & 0xff) < half && (k >> 8) < half) continue;
+    float v = median_at(m, in->data, (int)(c % (uint32_t)m->w), (int)(c / (uint32_t)m->w));
+    if (v != 0.0f) {
+      out->data[c] = v;
+      out->idx[out->nnz++] = c;
+    }
+  }
 }
