@@ -275,10 +275,18 @@ static elfm_status truth_stage_velocity(const char *truth_csv, double v[3], elfm
   static const char *const names[] = {"id", "t_us", "x_um", "y_um", "z_um"};
   int c[5];
   if ((s = elfm_table_require(t, names, 5, c, err)) != ELFM_OK) { elfm_table_free(t); return s; }
-  /* first and last row of each id, ids in order of appearance (a few hundred at most) */
+  /* first and last row of each id, ids in order of appearance (a stage
+   * scene has a few hundred passes; more are not needed for a mean) */
   enum { MAX_IDS = 4096 };
-  static double ids[MAX_IDS];
-  static size_t first[MAX_IDS], last[MAX_IDS];
+  double *ids = malloc(MAX_IDS * sizeof *ids);
+  size_t *first = malloc(MAX_IDS * sizeof *first), *last = malloc(MAX_IDS * sizeof *last);
+  if (!ids || !first || !last) {
+    free(ids);
+    free(first);
+    free(last);
+    elfm_table_free(t);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory");
+  }
   int n_ids = 0;
   for (size_t r = 0; r < t->n_rows; r++) {
     double id = elfm_table_get(t, r, c[0]);
@@ -302,6 +310,9 @@ static elfm_status truth_stage_velocity(const char *truth_csv, double v[3], elfm
     n++;
   }
   elfm_table_free(t);
+  free(ids);
+  free(first);
+  free(last);
   if (n == 0)
     return elfm_error_set(err, ELFM_ERR_FORMAT, truth_csv, -1, "no moving object in the truth");
   for (int a = 0; a < 3; a++) v[a] = sum[a] / n;
@@ -869,7 +880,9 @@ int cmd_bench(int argc, char **argv)
   }
 
   /* Sweep. */
-  static struct point_result pts[BENCH_MAX_POINTS * 4];
+  struct point_result *pts = calloc(BENCH_MAX_POINTS * 4, sizeof *pts);
+  if (!pts) return cli_message("bench", CLI_FAIL, "out of memory");
+  int rc_out = CLI_OK;
   int n_pts = 0, n_total = 0;
   for (int s = 0; s < n_sc; s++)
     for (int k = 0, m = 0; k < N_SWEEP; k++)
@@ -903,7 +916,7 @@ int cmd_bench(int argc, char **argv)
       for (int q = 0; q < 4; q++) p->stage_s[q] = NAN;
       char run[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], logp[PATH_MAX];
       path_fmt(run, sizeof run, "%s/runs/%s_%02d", dir, si->name, k);
-      if (mkdir_p(run) != 0) return cli_message("bench", CLI_FAIL, "cannot create %s", run);
+      if (mkdir_p(run) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot create %s", run); goto out; }
       if (sp->z_step_um > 0) path_fmt(calib, sizeof calib, "%s/calib_dz%g.json", si->dir, sp->z_step_um);
       else path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
@@ -968,7 +981,7 @@ int cmd_bench(int argc, char **argv)
 
   char p[PATH_MAX];
   path_fmt(p, sizeof p, "%s/bench.csv", dir);
-  if (write_csv(p, pts, n_pts) != 0) return cli_message("bench", CLI_FAIL, "cannot write %s", p);
+  if (write_csv(p, pts, n_pts) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot write %s", p); goto out; }
   int fig_ok = 1;
   if (op.figures) {
     if (write_plot(dir, sc, n_sc, pts, n_pts, 120) != 0) {
@@ -979,7 +992,7 @@ int cmd_bench(int argc, char **argv)
     if (fig_s4(self, dir, &sc[0], op.timeout_s) != 0) fig_ok = 0;
   }
   if (write_md(dir, &op, sc, n_sc, pts, n_pts, comp_names, n_comps, host) != 0)
-    return cli_message("bench", CLI_FAIL, "cannot write %s/bench.md", dir);
+    { rc_out = cli_message("bench", CLI_FAIL, "cannot write %s/bench.md", dir); goto out; }
 
   /* Short summary on stdout: the best point per scene. */
   int n_ok = 0;
@@ -997,7 +1010,12 @@ int cmd_bench(int argc, char **argv)
              pts[fast].sp->setting, pts[fast].rtf, pts[fast].events_per_s * 1e-6,
              pts[fast].score.f1, pts[fast].score.alpha);
   }
-  if (n_ok == 0) return cli_message("bench", CLI_FAIL, "no sweep point ran; see %s/runs/*/track.log", dir);
+  if (n_ok == 0) {
+    rc_out = cli_message("bench", CLI_FAIL, "no sweep point ran; see %s/runs/*/track.log", dir);
+    goto out;
+  }
   if (!fig_ok) cli_message("bench", CLI_OK, "some figures are missing (see the logs in %s)", dir);
-  return CLI_OK;
+out:
+  free(pts);
+  return rc_out;
 }
