@@ -78,8 +78,8 @@ typedef struct elfm_view_data {
 /* Load what `path` names:
  *   - a directory: its tracks.csv (or, without one, truth.csv as the main
  *     lines), detections.csv, MIP pictures (mips/ or mip/ *.png) or else
- *     volumes (volumes/ or exr/ *.exr), and calib.json from the directory or
- *     its parent. A picture's or volume's time comes from its name:
+ *     volumes (volumes/ or exr/ *.exr), and calib.json from the directory,
+ *     its parent, or the path its summary.json names ("calib"). A picture's or volume's time comes from its name:
  *     "t<digits>" or "t_us<digits>" is a time in us, otherwise its last
  *     number is a frame index (mapped to time through the frame and t_us
  *     columns of tracks.csv/detections.csv);

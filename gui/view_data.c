@@ -12,6 +12,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include <cjson/cJSON.h>
+
 #include "elfm_calib.h"
 #include "elfm_gui.h"
 #include "elfm_table.h"
@@ -320,16 +322,46 @@ static elfm_status finish_bounds(elfm_view_data *d, const frame_clock *fc, int k
   return ELFM_OK;
 }
 
+/* The calib.json a run used, as its summary.json names it ("calib"), or "". */
+static void calib_from_summary(const char *dir, char *out, size_t size)
+{
+  out[0] = '\0';
+  char p[1024];
+  if (snprintf(p, sizeof p, "%s/summary.json", dir) >= (int)sizeof p) return;
+  FILE *f = fopen(p, "rb");
+  if (!f) return;
+  /* summary.json is a few kB; 1 MB is far beyond any we write. */
+  char *text = malloc(1 << 20);
+  size_t n = text ? fread(text, 1, (1 << 20) - 1, f) : 0;
+  fclose(f);
+  if (!text) return;
+  text[n] = '\0';
+  cJSON *root = cJSON_Parse(text);
+  free(text);
+  const cJSON *c = root ? cJSON_GetObjectItemCaseSensitive(root, "calib") : NULL;
+  if (cJSON_IsString(c) && c->valuestring) snprintf(out, size, "%s", c->valuestring);
+  cJSON_Delete(root);
+}
+
+/* calib.json beside the data, one level up, or the one summary.json names
+ * (eventlfm track keeps the calibration with the simulation or recording,
+ * not in its output directory). A broken summary.json is not an error: it
+ * only offers a hint. */
 static elfm_status load_calib_box(const char *dir, elfm_view_data *d, elfm_error *err)
 {
-  const char *cands[2] = {"calib.json", "../calib.json"};
-  for (int k = 0; k < 2; k++) {
-    char p[1024];
-    elfm_status st = join_path(p, sizeof p, dir, cands[k], err);
-    if (st != ELFM_OK) return st;
+  char cands[3][1024];
+  int n = 0;
+  for (int k = 0; k < 2; k++)
+    if (snprintf(cands[n], sizeof cands[n], "%s/%s", dir, k ? "../calib.json" : "calib.json") <
+        (int)sizeof cands[n])
+      n++;
+  calib_from_summary(dir, cands[n], sizeof cands[n]);
+  if (cands[n][0]) n++;
+  for (int k = 0; k < n; k++) {
+    const char *p = cands[k];
     if (!file_exists(p)) continue;
     elfm_calib c;
-    st = elfm_calib_load(p, &c, err);
+    elfm_status st = elfm_calib_load(p, &c, err);
     if (st != ELFM_OK) return st;
     /* SPEC §3: voxel X is at (X - (W-1)/2) um_per_px. */
     d->box_min_um[0] = -0.5 * (c.view_w_px - 1) * c.um_per_px;

@@ -252,6 +252,27 @@ static void test_load(void)
   CHECK(strstr(err.file, "calib.json") != NULL);
   remove(tpath("calib.json"));
 
+  /* Elsewhere, found through the run's summary.json ("calib": path). */
+  mkdir(tpath("sim"), 0755);
+  mkdir(tpath("trk"), 0755);
+  CHECK_OK(elfm_calib_save(&c, tpath("sim/calib.json"), &err), &err);
+  write_file("trk/tracks.csv", tracks_csv);
+  char summary[1200];
+  snprintf(summary, sizeof summary, "{\"events\": \"x.raw\", \"calib\": \"%s\"}",
+           tpath("sim/calib.json"));
+  write_file("trk/summary.json", summary);
+  CHECK_OK(elfm_view_data_load(tpath("trk"), NULL, &d, &err), &err);
+  if (d) {
+    CHECK(d->box_from_calib);
+    CHECK(strstr(d->calib_path, "sim/calib.json") != NULL);
+  }
+  elfm_view_data_free(d);
+  /* A summary.json that is not JSON only loses the hint. */
+  write_file("trk/summary.json", "{ not json");
+  CHECK_OK(elfm_view_data_load(tpath("trk"), NULL, &d, &err), &err);
+  if (d) CHECK(!d->box_from_calib);
+  elfm_view_data_free(d);
+
   /* MIP pictures: time from "t<digits>" / "t_us" names, or a frame index
    * through the tracks' frame clock (frame 0 at 1000 us, 1000 us a frame). */
   mkdir(tpath("run/mips"), 0755);
