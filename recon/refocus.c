@@ -196,9 +196,10 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->row_lo = malloc((size_t)p->nz * p->h * sizeof *ws->row_lo);
   ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
+  ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
   if (p->need) ws->vox_mask = calloc(nvox, sizeof *ws->vox_mask);
   if (!ws->plane_cnt || !ws->row_start || !ws->sorted || !ws->runs || !ws->vals ||
-      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows ||
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old ||
       (p->need && !ws->vox_mask)) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
@@ -221,6 +222,7 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->vox_mask);
   free(ws->row_dirty);
   free(ws->rows);
+  free(ws->rows_old);
   free(ws);
 }
 

@@ -55,8 +55,9 @@ struct elfm_refocus_workspace {
   uint32_t *vox_mask;         /* [nz*H*W] bit v: view v sees signal (agreement on) */
   uint8_t *row_dirty;         /* [nz*H] */
   int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
-  uint32_t *rows;             /* dirty rows k*H + Y */
+  uint32_t *rows;             /* dirty rows k*H + Y, in plane order */
   size_t n_rows;
+  uint32_t *rows_old;         /* the previous call's rows while they are cleared */
   const float *dirty_data;    /* volume data the dirty rows refer to */
   int dirty_all;              /* that volume may be non-zero anywhere */
 };

@@ -19,24 +19,42 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void sparse_clear(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws)
+/* Start a call: when the volume is not the one this workspace last wrote
+ * sparsely (or was written densely), clear it whole; otherwise keep the
+ * previous call's rows in rows_old, to be cleared plane by plane just
+ * before each plane is scattered (the plane is then in cache once). */
+static size_t sparse_begin(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws)
 {
-  const size_t W = (size_t)p->w;
+  size_t n_old = 0;
   if (ws->dirty_data != vol->data || ws->dirty_all) {
-    memset(vol->data, 0, W * p->h * p->nz * sizeof *vol->data);
-    if (p->need) memset(ws->vox_mask, 0, W * p->h * p->nz * sizeof *ws->vox_mask);
+    const size_t nvox = (size_t)p->w * p->h * p->nz;
+    memset(vol->data, 0, nvox * sizeof *vol->data);
+    if (p->need) memset(ws->vox_mask, 0, nvox * sizeof *ws->vox_mask);
     for (size_t i = 0; i < ws->n_rows; i++) ws->row_dirty[ws->rows[i]] = 0;
   } else {
-    for (size_t i = 0; i < ws->n_rows; i++) {
-      const size_t r = ws->rows[i], lo = (size_t)ws->row_lo[r], n = (size_t)(ws->row_hi[r] - ws->row_lo[r]);
-      memset(vol->data + r * W + lo, 0, n * sizeof *vol->data);
-      if (p->need) memset(ws->vox_mask + r * W + lo, 0, n * sizeof *ws->vox_mask);
-      ws->row_dirty[r] = 0;
-    }
+    uint32_t *t = ws->rows_old;
+    ws->rows_old = ws->rows;
+    ws->rows = t;
+    n_old = ws->n_rows;
   }
   ws->n_rows = 0;
   ws->dirty_data = vol->data;
   ws->dirty_all = 0;
+  return n_old;
+}
+
+/* Clear the previous call's rows of plane k: rows_old[*at ..] in plane order. */
+static void sparse_clear_plane(const elfm_refocus_plan *p, elfm_volume *vol,
+                               elfm_refocus_workspace *ws, int k, size_t *at, size_t n_old)
+{
+  const size_t W = (size_t)p->w, H = (size_t)p->h;
+  for (; *at < n_old && ws->rows_old[*at] / H == (size_t)k; (*at)++) {
+    const size_t r = ws->rows_old[*at], lo = (size_t)ws->row_lo[r];
+    const size_t n = (size_t)(ws->row_hi[r] - ws->row_lo[r]);
+    memset(vol->data + r * W + lo, 0, n * sizeof *vol->data);
+    if (p->need) memset(ws->vox_mask + r * W + lo, 0, n * sizeof *ws->vox_mask);
+    ws->row_dirty[r] = 0;
+  }
 }
 
 static int grow(void **buf, size_t *cap, size_t need, size_t elem)
@@ -137,13 +155,16 @@ static inline void mark_row(elfm_refocus_workspace *ws, uint32_t r, int lo, int 
 elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,
                                 elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err)
 {
-  sparse_clear(p, vol, ws);
   elfm_status st = sparse_runs(p, frame, ws, err);
   if (st) return st;
+  const size_t n_old = sparse_begin(p, vol, ws);
+  size_t old_at = 0;
   const int W = p->w, H = p->h;
   const elfm_refocus_run *runs = ws->runs;
   const size_t nr = ws->n_runs;
   for (int k = 0; k < p->nz; k++) {
+    sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
+    const size_t first_row = ws->n_rows;
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
     float *plane = vol->data + (size_t)k * W * H;
     for (size_t t = 0; t < nr; t++) {
@@ -176,17 +197,18 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         }
       }
     }
-  }
-  for (size_t i = 0; i < ws->n_rows; i++) {
-    const size_t r = ws->rows[i];
-    float *row = vol->data + r * W;
-    const float *inv = p->inv_count + r * W;
-    for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= inv[X];
-    if (p->need) {
-      const uint32_t *mask = ws->vox_mask + r * W;
-      const uint8_t *need = p->need + r * W;
-      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++)
-        if (__builtin_popcount(mask[X]) < need[X]) row[X] = 0.0f;
+    /* mean over sampling views (and agreement) while the plane is in cache */
+    for (size_t i = first_row; i < ws->n_rows; i++) {
+      const size_t r = ws->rows[i];
+      float *row = vol->data + r * W;
+      const float *inv = p->inv_count + r * W;
+      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= inv[X];
+      if (p->need) {
+        const uint32_t *mask = ws->vox_mask + r * W;
+        const uint8_t *need = p->need + r * W;
+        for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++)
+          if (__builtin_popcount(mask[X]) < need[X]) row[X] = 0.0f;
+      }
     }
   }
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
