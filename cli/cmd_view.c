@@ -23,6 +23,8 @@ static const char view_usage[] =
   "\n"
   "options:\n"
   "  --truth FILE          overlay a simulator truth.csv in grey\n"
+  "  --mips DIR            MIP pictures / volumes from elsewhere, e.g. the output of\n"
+  "                        eventlfm recon --save-mips (DIR or DIR/mips, DIR/volumes)\n"
   "  --color MODE          time (default), depth or track\n"
   "  --screenshot OUT.png  render one picture off-screen and exit\n"
   "  --at-us T             time cursor for the picture (default: the end)\n"
@@ -43,6 +45,7 @@ static const char view_usage[] =
 typedef struct view_opts {
   const char *input;
   const char *truth;
+  const char *mips;
   const char *screenshot;
   const char *color;
   int64_t at_us;
@@ -69,10 +72,11 @@ static int parse_pair(const char *s, int *a, int *b)
 
 static int view_parse(int argc, char **argv, view_opts *o)
 {
-  enum { O_TRUTH = 256, O_COLOR, O_SHOT, O_AT, O_SIZE, O_BENCH, O_SYN, O_NOTRUTH, O_NODET,
+  enum { O_TRUTH = 256, O_MIPS, O_COLOR, O_SHOT, O_AT, O_SIZE, O_BENCH, O_SYN, O_NOTRUTH, O_NODET,
          O_NOMIP, O_FULL };
   static const struct option longopts[] = {
     {"truth", required_argument, NULL, O_TRUTH},
+    {"mips", required_argument, NULL, O_MIPS},
     {"color", required_argument, NULL, O_COLOR},
     {"colour", required_argument, NULL, O_COLOR},
     {"screenshot", required_argument, NULL, O_SHOT},
@@ -99,6 +103,7 @@ static int view_parse(int argc, char **argv, view_opts *o)
       fputs(view_usage, stdout);
       return -1;
     case O_TRUTH: o->truth = optarg; break;
+    case O_MIPS: o->mips = optarg; break;
     case O_COLOR: o->color = optarg; break;
     case O_SHOT: o->screenshot = optarg; break;
     case O_AT:
@@ -161,7 +166,11 @@ static int view_main(const view_opts *o)
                        ? elfm_view_data_synthetic((size_t)o->syn_tracks, (size_t)o->syn_points,
                                                   &data, &err)
                        : elfm_view_data_load(o->input, o->truth, &data, &err);
-  if (st != ELFM_OK) return cli_fail("view", &err);
+  if (st == ELFM_OK && o->mips) st = elfm_view_data_load_mips(data, o->mips, &err);
+  if (st != ELFM_OK) {
+    elfm_view_data_free(data);
+    return cli_fail("view", &err);
+  }
   cli_message("view", 0,
               "%zu tracks (%zu points), %zu truth lines, %zu detections, %zu %s; "
               "t %.3f..%.3f ms; box %s",

@@ -72,6 +72,10 @@ typedef struct elfm_view_data {
   double box_min_um[3], box_max_um[3];
   int box_from_calib;
   int volume_w_px, volume_h_px; /* calib.json's view_size_px (x-y panel of a MIP), 0 if none */
+  /* Frame index -> time, from the frame and t_us columns of the CSVs:
+   * t = frame0_t_us + (frame - frame0) * us_per_frame (when has_frame_clock). */
+  int has_frame_clock;
+  double frame0, frame0_t_us, us_per_frame;
   char calib_path[1024];       /* "" when none was found */
 } elfm_view_data;
 
@@ -91,6 +95,13 @@ typedef struct elfm_view_data {
  * error: there would be nothing to show. */
 elfm_status elfm_view_data_load(const char *path, const char *truth_path,
                                 elfm_view_data **out, elfm_error *err);
+
+/* Replace the MIPs with those of `dir`: a folder of *.png MIPs or *.exr
+ * volumes, or a run directory with mips/ or volumes/ (eventlfm recon
+ * --save-mips names them by frame number: mips/mip_000123.png). Frame
+ * numbers become times through d's frame clock. On failure d is unchanged;
+ * finding nothing usable is an error naming the directory. */
+elfm_status elfm_view_data_load_mips(elfm_view_data *d, const char *dir, elfm_error *err);
 
 /* Synthetic data: n_tracks helices of n_points each (one point per 1 ms
  * frame), inside a 130 x 130 x 200 um box: benchmark and test input.

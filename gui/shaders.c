@@ -90,7 +90,12 @@ static const char *tex_fs =
   "uniform sampler2D u_tex;\n"
   "uniform float u_alpha;\n"
   "out vec4 o_color;\n"
-  "void main() { o_color = vec4(texture(u_tex, v_uv).rgb, u_alpha); }\n";
+  "void main() {\n"
+  "  vec3 c = texture(u_tex, v_uv).rgb;\n"
+  /* Dark means empty in a MIP: let it fade out so the box and the tracks
+   * behind stay visible (full opacity from a third of full brightness). */
+  "  o_color = vec4(c, u_alpha * clamp(3.0 * max(c.r, max(c.g, c.b)), 0.0, 1.0));\n"
+  "}\n";
 
 static elfm_status shader_compile(GLenum type, const char *src, const char *name,
                                   GLuint *out, elfm_error *err)

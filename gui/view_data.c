@@ -223,52 +223,61 @@ static int mip_cmp(const void *a, const void *b)
   return (x->t_us > y->t_us) - (x->t_us < y->t_us);
 }
 
-/* MIP PNGs first (they are what recon made for viewing); else volumes. */
+/* Add every *.png (vol = 0) or *.exr (vol = 1) of `sub` whose name gives a
+ * time; returns how many were added. */
+static elfm_status mips_scan_dir(const char *sub, int vol, const frame_clock *fc,
+                                 elfm_view_data *d, size_t *added, elfm_error *err)
+{
+  *added = 0;
+  const char *ext = vol ? ".exr" : ".png";
+  DIR *dp = opendir(sub);
+  if (!dp) return ELFM_OK;
+  struct dirent *e;
+  size_t cap = d->n_mips;
+  elfm_status st = ELFM_OK;
+  while (st == ELFM_OK && (e = readdir(dp))) {
+    size_t len = strlen(e->d_name);
+    if (len < 5 || strcmp(e->d_name + len - 4, ext)) continue;
+    int64_t t;
+    if (!mip_time_from_name(e->d_name, fc, &t)) continue;
+    if (d->n_mips == cap) {
+      size_t nc = cap ? 2 * cap : 64;
+      elfm_view_mip *m = realloc(d->mips, nc * sizeof *m);
+      if (!m) {
+        st = elfm_error_set(err, ELFM_ERR_NOMEM, sub, -1, "out of memory");
+        break;
+      }
+      d->mips = m;
+      cap = nc;
+    }
+    elfm_view_mip *m = &d->mips[d->n_mips];
+    st = join_path(m->path, sizeof m->path, sub, e->d_name, err);
+    if (st != ELFM_OK) break;
+    m->t_us = t;
+    m->is_volume = vol;
+    d->n_mips++;
+    (*added)++;
+  }
+  closedir(dp);
+  if (st == ELFM_OK && d->n_mips) qsort(d->mips, d->n_mips, sizeof *d->mips, mip_cmp);
+  return st;
+}
+
+/* In a run directory: MIP PNGs first (what recon made for viewing), else
+ * volumes. `dir` itself may also be such a folder of pictures or volumes. */
 static elfm_status mips_scan(const char *dir, const frame_clock *fc, elfm_view_data *d,
                              elfm_error *err)
 {
-  static const char *const subdirs[] = {"mips", "mip", "MIP", "volumes", "exr"};
+  static const char *const subdirs[] = {"mips", "mip", "MIP", ".", "volumes", "exr", "."};
   for (size_t s = 0; s < sizeof subdirs / sizeof subdirs[0]; s++) {
-    int vol = s >= 3;
-    const char *ext = vol ? ".exr" : ".png";
+    int vol = s >= 4;
     char sub[1024];
     elfm_status st = join_path(sub, sizeof sub, dir, subdirs[s], err);
     if (st != ELFM_OK) return st;
     if (!dir_exists(sub)) continue;
-    DIR *dp = opendir(sub);
-    if (!dp) continue;
-    struct dirent *e;
-    size_t cap = 0;
-    while ((e = readdir(dp))) {
-      size_t len = strlen(e->d_name);
-      if (len < 5 || strcmp(e->d_name + len - 4, ext)) continue;
-      int64_t t;
-      if (!mip_time_from_name(e->d_name, fc, &t)) continue;
-      if (d->n_mips == cap) {
-        size_t nc = cap ? 2 * cap : 64;
-        elfm_view_mip *m = realloc(d->mips, nc * sizeof *m);
-        if (!m) {
-          closedir(dp);
-          return elfm_error_set(err, ELFM_ERR_NOMEM, sub, -1, "out of memory");
-        }
-        d->mips = m;
-        cap = nc;
-      }
-      elfm_view_mip *m = &d->mips[d->n_mips];
-      st = join_path(m->path, sizeof m->path, sub, e->d_name, err);
-      if (st != ELFM_OK) {
-        closedir(dp);
-        return st;
-      }
-      m->t_us = t;
-      m->is_volume = vol;
-      d->n_mips++;
-    }
-    closedir(dp);
-    if (d->n_mips) {
-      qsort(d->mips, d->n_mips, sizeof *d->mips, mip_cmp);
-      return ELFM_OK;
-    }
+    size_t added = 0;
+    st = mips_scan_dir(sub, vol, fc, d, &added, err);
+    if (st != ELFM_OK || added) return st;
   }
   return ELFM_OK;
 }
@@ -467,6 +476,10 @@ elfm_status elfm_view_data_load(const char *path, const char *truth_path,
   if (st == ELFM_OK) st = load_calib_box(dir, d, err);
   if (st == ELFM_OK) st = mips_scan(dir, &fc, d, err);
   if (st == ELFM_OK) st = finish_bounds(d, &fc, 0, err);
+  d->has_frame_clock = fc.valid;
+  d->frame0 = fc.frame0;
+  d->frame0_t_us = fc.t0_us;
+  d->us_per_frame = fc.us_per_frame;
   if (st != ELFM_OK) {
     elfm_view_data_free(d);
     return st;
@@ -528,6 +541,31 @@ elfm_status elfm_view_data_synthetic(size_t n_tracks, size_t n_points, elfm_view
     return st;
   }
   *out = d;
+  return ELFM_OK;
+}
+
+elfm_status elfm_view_data_load_mips(elfm_view_data *d, const char *dir, elfm_error *err)
+{
+  if (!dir_exists(dir))
+    return elfm_error_set(err, ELFM_ERR_IO, dir, -1, "not a directory");
+  frame_clock fc = {d->has_frame_clock, d->frame0, d->frame0_t_us, d->us_per_frame};
+  elfm_view_mip *old = d->mips;
+  size_t n_old = d->n_mips;
+  d->mips = NULL;
+  d->n_mips = 0;
+  elfm_status st = mips_scan(dir, &fc, d, err);
+  if (st == ELFM_OK && d->n_mips == 0)
+    st = elfm_error_set(err, ELFM_ERR_FORMAT, dir, -1,
+                        "no MIP pictures (*.png) or volumes (*.exr) named with a time "
+                        "(t<us>) or a frame number%s",
+                        fc.valid ? "" : " (frame numbers need the frame column of tracks.csv)");
+  if (st != ELFM_OK) {
+    free(d->mips);
+    d->mips = old;
+    d->n_mips = n_old;
+    return st;
+  }
+  free(old);
   return ELFM_OK;
 }
 

@@ -297,6 +297,31 @@ static void test_load(void)
     CHECK_EQ_INT(d->n_mips, 1);
     if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 3000);
   }
+  /* MIPs from elsewhere (--mips): recon names them by frame number. */
+  mkdir(tpath("rec"), 0755);
+  mkdir(tpath("rec/mips"), 0755);
+  write_file("rec/mips/mip_000000.png", "x");
+  write_file("rec/mips/mip_000001.png", "x");
+  CHECK_OK(elfm_view_data_load(tpath("run"), NULL, &d, &err), &err);
+  if (d) {
+    CHECK(d->has_frame_clock);
+    CHECK_OK(elfm_view_data_load_mips(d, tpath("rec"), &err), &err);
+    CHECK_EQ_INT(d->n_mips, 2);
+    if (d->n_mips == 2) {
+      CHECK_EQ_INT(d->mips[0].t_us, 1000);
+      CHECK_EQ_INT(d->mips[1].t_us, 2000);
+    }
+    /* The folder itself works too; failures leave the MIPs as they were. */
+    CHECK_OK(elfm_view_data_load_mips(d, tpath("rec/mips"), &err), &err);
+    CHECK_EQ_INT(d->n_mips, 2);
+    CHECK_EQ_INT(elfm_view_data_load_mips(d, tpath("nodir"), &err), ELFM_ERR_IO);
+    CHECK(strstr(err.file, "nodir") != NULL);
+    CHECK_EQ_INT(elfm_view_data_load_mips(d, tpath("emptydir2"), &err), ELFM_ERR_IO);
+    mkdir(tpath("emptydir2"), 0755);
+    CHECK_EQ_INT(elfm_view_data_load_mips(d, tpath("emptydir2"), &err), ELFM_ERR_FORMAT);
+    CHECK(strstr(err.file, "emptydir2") != NULL);
+    CHECK_EQ_INT(d->n_mips, 2);
+  }
   elfm_view_data_free(d);
 }
 
