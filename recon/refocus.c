@@ -30,7 +30,6 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   if (!p) return;
   free(p->box);
   free(p->shift);
-  free(p->inv_count);
   free(p->count);
   free(p->need);
   free(p);
@@ -91,10 +90,9 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   size_t nvox = (size_t)p->w * p->h * nz;
   p->box = calloc((size_t)p->nv, sizeof *p->box);
   p->shift = calloc((size_t)p->nv * nz, sizeof *p->shift);
-  p->inv_count = calloc(nvox, sizeof *p->inv_count);
   p->count = calloc(nvox, 1);
   if (o.agree_frac > 0.0) p->need = calloc(nvox, 1);
-  if (!p->box || !p->shift || !p->inv_count || !p->count || (o.agree_frac > 0.0 && !p->need)) {
+  if (!p->box || !p->shift || !p->count || (o.agree_frac > 0.0 && !p->need)) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
   }
@@ -144,13 +142,13 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
       }
     }
   }
-  for (size_t i = 0; i < nvox; i++) {
-    p->inv_count[i] = p->count[i] ? 1.0f / (float)p->count[i] : 0.0f;
-    if (p->need) {
+  p->inv_table[0] = 0.0f;
+  for (int n = 1; n < 256; n++) p->inv_table[n] = 1.0f / (float)n;
+  if (p->need)
+    for (size_t i = 0; i < nvox; i++) {
       int n = (int)ceil(o.agree_frac * p->count[i] - 1e-9);
       p->need[i] = (uint8_t)(n < 1 && p->count[i] ? 1 : n);
     }
-  }
   *out = p;
   return ELFM_OK;
 }
@@ -273,8 +271,8 @@ static void refocus_dense(const elfm_refocus_plan *p, const elfm_frame *frame, e
         }
       }
     }
-    const float *inv = p->inv_count + (size_t)k * W * H;
-    for (size_t i = 0; i < (size_t)W * H; i++) plane[i] *= inv[i];
+    const uint8_t *cnt = p->count + (size_t)k * W * H;
+    for (size_t i = 0; i < (size_t)W * H; i++) plane[i] *= p->inv_table[cnt[i]];
     if (p->need)
       for (int Y = 0; Y < H; Y++)
         elfm_ghost_agree_row(p, k, Y, plane + (size_t)Y * W, ws->plane_cnt + (size_t)Y * W);

@@ -25,8 +25,8 @@ struct elfm_refocus_plan {
   double box_area;            /* sum of crop box areas, px */
   elfm_refocus_box *box;      /* [nv] */
   elfm_refocus_shift *shift;  /* [k * nv + v] */
-  float *inv_count;           /* [k][Y][X]: 1 / views sampling, 0 if none */
   uint8_t *count;             /* [k][Y][X]: views sampling */
+  float inv_table[256];       /* 1 / n, 0 for n = 0 */
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
 };
 

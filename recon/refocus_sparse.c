@@ -201,8 +201,10 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
     for (size_t i = first_row; i < ws->n_rows; i++) {
       const size_t r = ws->rows[i];
       float *row = vol->data + r * W;
-      const float *inv = p->inv_count + r * W;
-      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= inv[X];
+      /* 1/count through a 256-entry table: the counts are 2 MB of bytes,
+       * a float inverse per voxel would be 8.4 MB of memory traffic */
+      const uint8_t *cnt = p->count + r * W;
+      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= p->inv_table[cnt[X]];
       if (p->need) {
         const uint32_t *mask = ws->vox_mask + r * W;
         const uint8_t *need = p->need + r * W;
