@@ -297,6 +297,7 @@ static void test_load(void)
     CHECK_EQ_INT(d->n_mips, 1);
     if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 3000);
   }
+  elfm_view_data_free(d);
   /* MIPs from elsewhere (--mips): recon names them by frame number. */
   mkdir(tpath("rec"), 0755);
   mkdir(tpath("rec/mips"), 0755);

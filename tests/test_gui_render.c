@@ -12,7 +12,10 @@
  * colour by depth and by track, truth grey, detections white, the MIP plane,
  * and the CLI's --screenshot PNG.
  */
+#define _GNU_SOURCE /* dl_iterate_phdr */
+#include <dlfcn.h>
 #include <errno.h>
+#include <link.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,16 +29,31 @@
 #include "elfm_pipeline.h"
 
 /* Under AddressSanitizer: Mesa and Xlib keep allocations for the process's
- * life (driver caches); our own leaks are still reported. The two 56-byte
- * blocks that UBSan's runtime allocates for itself when Mesa's threads start
- * are listed too (their stack ends inside libubsan). */
+ * life (driver caches); our own leaks are still reported. Mesa's driver is
+ * unloaded when GLFW terminates, and its leftovers would then show as
+ * "<unknown module>"; pin_gl_modules() keeps it loaded so the names below
+ * match. */
 const char *__lsan_default_suppressions(void);
 const char *__lsan_default_suppressions(void)
 {
   return "leak:libGLX_mesa.so\nleak:swrast_dri.so\nleak:libgallium\nleak:libLLVM\n"
-         "leak:libX11.so\nleak:libglapi.so\nleak:libGLdispatch.so\nleak:libdrm\n"
-         "leak:libubsan.so\n";
+         "leak:libX11.so\nleak:libglapi.so\nleak:libGLdispatch.so\nleak:libdrm\n";
 }
+
+static int pin_one(struct dl_phdr_info *info, size_t size, void *data)
+{
+  (void)size;
+  (void)data;
+  const char *n = info->dlpi_name;
+  if (n && *n &&
+      (strstr(n, "_dri.so") || strstr(n, "gallium") || strstr(n, "LLVM") ||
+       strstr(n, "GLX_mesa") || strstr(n, "glapi")))
+    dlopen(n, RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE); /* handle not needed: never closed */
+  return 0;
+}
+
+/* Keep the OpenGL driver's libraries mapped until exit (see above). */
+static void pin_gl_modules(void) { dl_iterate_phdr(pin_one, NULL); }
 
 #define W 640
 #define H 480
@@ -259,6 +277,7 @@ int main(int argc, char **argv)
     elfm_view_data_free(d);
     return check_report();
   }
+  pin_gl_modules();
 
   /* 1. Everything shown, colour by time, no MIP (checked on its own). */
   elfm_viewer_show(v, 1, 1, 0);
