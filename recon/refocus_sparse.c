@@ -139,6 +139,16 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   return ELFM_OK;
 }
 
+/* Bits set in x (SWAR; a baseline x86-64 build has no popcnt instruction
+ * and would call libgcc for __builtin_popcount). Vectorises. */
+static inline uint32_t popcount32(uint32_t x)
+{
+  x = x - ((x >> 1) & 0x55555555u);
+  x = (x & 0x33333333u) + ((x >> 2) & 0x33333333u);
+  x = (x + (x >> 4)) & 0x0f0f0f0fu;
+  return (x * 0x01010101u) >> 24;
+}
+
 static inline void mark_row(elfm_refocus_workspace *ws, uint32_t r, int lo, int hi)
 {
   if (!ws->row_dirty[r]) {
@@ -182,6 +192,7 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const int Y = run->row - s->iy - dy;
         if (Y < s->ylo || Y >= s->yhi) continue;
         const float wy = dy ? s->fy : 1.0f - s->fy;
+        if (wy == 0.0f) continue; /* an integer row shift: one row only */
         const float w0 = wy * gx0, w1 = wy * gx1;
         const uint32_t r = (uint32_t)k * (uint32_t)H + (uint32_t)Y;
         mark_row(ws, r, Xs + i0, Xs + i1);
@@ -189,11 +200,17 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const float *bb = b + i0;
         float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
         for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
-        if (p->need) { /* branch-free: the bit is set when the view adds signal */
-          uint32_t *mask = ws->vox_mask + (size_t)r * W + (size_t)(Xs + i0);
+        if (p->need) {
+          /* A run's pixels are all non-zero, so voxel i gets signal unless it
+           * is an end whose only tap has weight 0: i = 0 needs w1, i = n
+           * needs w0. (Products that underflow to 0, values < ~1e-30, and
+           * exact cancellations in signed frames are the only cases where
+           * this differs from the dense path's "sample != 0".) */
+          const int ia = w1 != 0.0f ? i0 : (i0 > 1 ? i0 : 1);
+          const int ib = w0 != 0.0f ? i1 : (i1 < run->n ? i1 : run->n);
+          uint32_t *mask = ws->vox_mask + (size_t)r * W + (size_t)Xs;
           const uint32_t bit = 1u << run->view;
-          for (int i = 0; i < m; i++)
-            mask[i] |= bit & (0u - (uint32_t)(w0 * bb[i] != 0.0f || w1 * bb[i + 1] != 0.0f));
+          for (int i = ia; i < ib; i++) mask[i] |= bit;
         }
       }
     }
@@ -209,7 +226,7 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const uint32_t *mask = ws->vox_mask + r * W;
         const uint8_t *need = p->need + r * W;
         for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++)
-          if (__builtin_popcount(mask[X]) < need[X]) row[X] = 0.0f;
+          row[X] = popcount32(mask[X]) >= need[X] ? row[X] : 0.0f;
       }
     }
   }
