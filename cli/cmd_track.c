@@ -49,7 +49,7 @@ typedef struct track_ctx {
   FILE *fdet, *ftr;
   char p_det[1100], p_tr[1100];
   elfm_track_store store;
-  int64_t n_frames, n_det, n_points_kept, n_rejected, first_frame, last_frame;
+  int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;
   int64_t first_t_us, last_t_us;
   double t_peaks, t_link, t_smooth;
   elfm_fwhm *fw;
@@ -89,8 +89,9 @@ static void usage(FILE *f)
     "smoothing:\n"
     "  --motion auto|stage|free   auto: model chosen per track (BIC) among constant\n"
     "                       velocity, constant acceleration and spline; stage: rigid\n"
-    "                       motion (no spline, new tracks predict with the stage\n"
-    "                       velocity when given); free: smoothing spline for all\n"
+    "                       motion (no spline; with a stage velocity, new tracks\n"
+    "                       predict with it and tracks far from it are dropped);\n"
+    "                       free: smoothing spline for all\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
     "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
@@ -136,6 +137,22 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_error *err)
     c->n_rejected++;
     elfm_track_free(t);
     return ELFM_OK;
+  }
+  /* Rigid stage motion with a known velocity: a track moving otherwise
+   * (more than 25 % of the stage speed + 0.1 um/ms off) is not part of the
+   * sample (ghosts joined across gaps). */
+  if (st == ELFM_OK && c->o->motion == MOTION_STAGE && c->o->has_stage_v) {
+    double v[3], d2 = 0, s2 = 0;
+    elfm_track_mean_velocity(t, v);
+    for (int a = 0; a < 3; a++) {
+      d2 += (v[a] - c->o->stage_v[a]) * (v[a] - c->o->stage_v[a]);
+      s2 += c->o->stage_v[a] * c->o->stage_v[a];
+    }
+    if (sqrt(d2) > 0.25 * sqrt(s2) + 0.1) {
+      c->n_rejected_stage++;
+      elfm_track_free(t);
+      return ELFM_OK;
+    }
   }
   if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
   if (st != ELFM_OK) {
@@ -301,6 +318,7 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
+  cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
   int nm[5] = {0, 0, 0, 0, 0};
   for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;

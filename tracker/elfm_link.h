@@ -18,6 +18,7 @@
  *     elfm_score.h: most pairs, then least total cost; cost = squared
  *     anisotropic distance over the squared gate, plus gap_cost per missed
  *     frame so a continuing track beats one coming back from a gap);
+ *  3b. a rescue round for tracks that missed frames (rescue_gate_factor);
  *  4. unmatched detections start tracks; a track that has missed more
  *     than max_gap_frames consecutive frames ends. Ended tracks with at
  *     least min_points real points become "finished" and can be taken with
@@ -73,6 +74,13 @@ typedef struct elfm_link_options {
   /* Candidate search: the FLANN k-d tree (default) or brute force over all
    * pairs (for the benchmark and as a cross-check; same candidates). */
   int brute_force;
+  /* Rescue round: tracks that missed frames and detections still unmatched
+   * after the main assignment are assigned again (optimally) within
+   * rescue_gate_factor x their gate, before any birth: a bead seen again
+   * off its extrapolated path continues its track instead of starting a
+   * new one (flow: tracks coasted through gaps while a twin was born). 0 = off;
+   * default 2.5. Skipped when leftovers exceed 500 x 500. */
+  double rescue_gate_factor;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);

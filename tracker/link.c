@@ -70,6 +70,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->lag_tau_us = 0;
   o->birth_speed_um_per_ms = 5.0;
   o->speed_gate_frac = 0.3;
+  o->rescue_gate_factor = 2.5;
   o->trail_us = 2000;
 }
 
@@ -81,6 +82,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       o->max_candidates > 1024 || !(o->lag_tau_us >= 0) ||
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
       !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
+      !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
@@ -576,6 +578,49 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
       l->track_det[l->rows[r]] = l->cols[c];
       l->det_track[l->cols[c]] = l->rows[r];
+    }
+  }
+
+  /* 3b. Rescue: unmatched tracks that have missed frames against unmatched
+   * detections, within a wider gate, one optimal assignment. */
+  if (o->rescue_gate_factor > 0) {
+    int nr = 0, nc = 0;
+    for (size_t i = 0; i < nt; i++)
+      if (l->track_det[i] < 0 && l->live[i].missed > 0 && l->live[i].t->n >= 3)
+        l->rows[nr++] = (int)i;  /* established tracks only: a 2-point one has no reliable path */
+    for (size_t j = 0; j < nd; j++)
+      if (l->det_track[j] < 0) l->cols[nc++] = (int)j;
+    size_t need = (size_t)nr * (size_t)nc;
+    if (nr > 0 && nc > 0 && nr <= 500 && nc <= 500) {
+      if (need > l->cap_cost) {
+        size_t c = need + need / 2;
+        if (!grow((void **)&l->cost, c, sizeof(double)))
+          return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+        l->cap_cost = c;
+      }
+      int any = 0;
+      for (int r = 0; r < nr; r++) {
+        const live_track *lt = &l->live[l->rows[r]];
+        double g = o->rescue_gate_factor * lt->gate_um, g2 = g * g;
+        for (int c = 0; c < nc; c++) {
+          const elfm_detection *dd = &det[l->cols[c]];
+          double dx = dd->x_um - lt->pred[0], dy = dd->y_um - lt->pred[1],
+                 dz = (dd->z_um - lt->pred[2]) / kz;
+          double d2 = dx * dx + dy * dy + dz * dz;
+          l->cost[(size_t)r * nc + c] = d2 < g2 ? d2 / g2 : INFINITY;
+          any |= d2 < g2;
+        }
+      }
+      if (any) {
+        st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+        if (st != ELFM_OK) return st;
+        for (int r = 0; r < nr; r++) {
+          int c = l->row_to_col[r];
+          if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
+          l->track_det[l->rows[r]] = l->cols[c];
+          l->det_track[l->cols[c]] = l->rows[r];
+        }
+      }
     }
   }
 
