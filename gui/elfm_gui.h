@@ -15,13 +15,13 @@
  *      off-screen framebuffer and reads it back; elfm_viewer_run() is the
  *      interactive loop; elfm_viewer_bench() times frames.
  *
- * Errors: every call returns an elfm_status and fills the caller's
+ * Errors: every call that can fail returns an elfm_status and fills the caller's
  * elfm_error; ELFM_ERR_DISPLAY when there is no display or no OpenGL 3.3.
  * Nothing here prints or exits.
  *
- * Threads: GLFW must be driven from the main thread, and GLFW is initialised
- * per process, so at most one elfm_viewer exists at a time (create returns
- * ELFM_ERR_INVALID for a second one only if GLFW itself refuses; do not).
+ * Threads: GLFW must be driven from the main thread, and each viewer
+ * initialises and terminates GLFW (process-wide library state), so keep at
+ * most one elfm_viewer at a time; viewers one after another are fine.
  */
 #ifndef ELFM_GUI_H
 #define ELFM_GUI_H
