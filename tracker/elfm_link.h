@@ -5,9 +5,10 @@
  *     at most `short_gap` missed frames from a constant-acceleration fit
  *     to its last `short_history` real points (objects on curved paths:
  *     the flow scene's beads turn ~17 degrees per millisecond), after
- *     longer gaps from a constant velocity fitted to its last `history`
- *     points (extrapolating an acceleration over 50 frames diverges); a
- *     track with one point predicts with prior_velocity_um_per_ms;
+ *     longer gaps with that fit's current velocity but no acceleration
+ *     (extrapolating an acceleration over 50 frames diverges); tracks of 2-3
+ *     points use a constant velocity fitted to their last `history` points,
+ *     a track with one point prior_velocity_um_per_ms;
  *  2. the frame's detections go into a FLANN exact k-d tree
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:

@@ -415,6 +415,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     if (lt.has_short && lt.missed <= o->short_gap)
       for (int a = 0; a < 3; a++)
         lt.pred[a] = lt.fit_pos[a] + lt.fit_vel[a] * dt_ms + 0.5 * lt.fit_acc[a] * dt_ms * dt_ms;
+    else if (lt.has_short)  /* long gap: the current velocity, no acceleration */
+      for (int a = 0; a < 3; a++) lt.pred[a] = lt.fit_pos[a] + lt.fit_vel[a] * dt_ms;
     else
       for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
     /* The gate widens with each missed frame, more for fast objects: an
