@@ -19,13 +19,17 @@ elfm_status elfm_evt2_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
   const size_t end = pos + ((r->len - pos) & ~(size_t)3);
   size_t n = c->n;
   const size_t cap = c->cap;
-  int64_t *T = c->t_us;
-  uint16_t *X = c->x, *Y = c->y;
-  uint8_t *P = c->p;
+  /* restrict: the arrays never overlap (keeps the pointers in registers). */
+  int64_t *restrict const T = c->t_us;
+  uint16_t *restrict const X = c->x;
+  uint16_t *restrict const Y = c->y;
+  uint8_t *restrict const P = c->p;
   const uint32_t xlim = r->x_lim, ylim = r->y_lim;
   elfm_status st = ELFM_OK;
 
-  while (pos < end && n < cap) {
+  /* One event per word at most: bound the loop once, not per word. */
+  const size_t stop = pos + 4 * ((end - pos) / 4 < cap - n ? (end - pos) / 4 : cap - n);
+  while (pos < stop) {
     const uint32_t w = elfm_le32(b + pos);
     const uint32_t type = w >> 28;
     if (type <= 1) { /* CD_OFF, CD_ON */
