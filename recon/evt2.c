@@ -29,11 +29,15 @@ elfm_status elfm_evt2_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
 
   /* One event per word at most: bound the loop once, not per word. */
   const size_t stop = pos + 4 * ((end - pos) / 4 < cap - n ? (end - pos) / 4 : cap - n);
+  /* Words before the first TIME_HIGH are dropped; after it, events need
+   * no check of that. */
+  if (!s.seen_th)
+    while (pos < stop && (elfm_le32(b + pos) >> 28) != 0x8) pos += 4;
   while (pos < stop) {
     const uint32_t w = elfm_le32(b + pos);
     const uint32_t type = w >> 28;
     if (type <= 1) { /* CD_OFF, CD_ON */
-      if (s.seen_th) {
+      {
         const uint32_t x = (w >> 11) & 0x7FF, y = w & 0x7FF;
         const int64_t t = s.t_high | ((w >> 22) & 63);
         if ((x >= xlim) | (y >= ylim)) {
