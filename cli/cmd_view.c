@@ -225,10 +225,11 @@ static int view_main(const view_opts *o)
     } else {
       fprintf(stderr,
               "eventlfm view: bench %d frames %dx%d, %zu tracks, %zu points, %s, %s: "
-              "%.3f ms/frame mean (%.1f fps), %.3f ms worst, %.3f ms CPU/frame\n",
+              "%.3f ms/frame mean (%.1f fps), %.3f ms worst, %.3f ms CPU/frame; "
+              "%zu vertices in the last frame\n",
               o->bench_frames, o->width, o->height, data->tracks.n_lines,
               data->tracks.n_points, o->have_at ? "cursor fixed" : "cursor sweeping",
-              o->full_detail ? "full detail" : "level of detail", mean, mean > 0 ? 1000.0 / mean : 0.0, worst, cpu);
+              o->full_detail ? "full detail" : "level of detail", mean, mean > 0 ? 1000.0 / mean : 0.0, worst, cpu, elfm_viewer_drawn_vertices(v));
     }
   } else {
     st = elfm_viewer_run(v, &err);

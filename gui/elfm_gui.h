@@ -231,6 +231,9 @@ void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd);
  * end. */
 void elfm_viewer_advance(elfm_viewer *v, double wall_s);
 int64_t elfm_viewer_cursor(const elfm_viewer *v);
+/* Track and truth vertices sent to OpenGL in the last frame drawn (after
+ * the level of detail and the cursor cut). */
+size_t elfm_viewer_drawn_vertices(const elfm_viewer *v);
 int elfm_viewer_playing(const elfm_viewer *v);
 elfm_color_mode elfm_viewer_color_mode(const elfm_viewer *v);
 

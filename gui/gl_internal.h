@@ -33,9 +33,9 @@ typedef struct gui_lines_prog {
  * its last). 8 levels reach 1 point in 128, enough for 1 kHz tracks seen
  * whole; together they hold < 2x the points. */
 #define GUI_LOD_LEVELS 8
-/* A level is used while its segments stay under this length on screen:
- * a polyline of 1.5-pixel chords strays < 1 pixel from the full one. */
-#define GUI_LOD_MAX_SEG_PX 1.5
+/* A level is used while it strays from the full polyline by at most this
+ * much on screen (in space and, along the chords, in time). */
+#define GUI_LOD_MAX_ERR_PX 0.5
 
 /* A series on the GPU: every level of every polyline in one buffer,
  * uploaded once. Per frame only the draw lists (first/count per polyline)
@@ -47,7 +47,7 @@ typedef struct gui_series_gl {
   GLint *lvl_first[GUI_LOD_LEVELS];     /* [level][line] first vertex */
   GLsizei *lvl_count[GUI_LOD_LEVELS];   /* [level][line] vertex count */
   float *t_ms;                          /* n_vertices: each vertex's time (cursor cut) */
-  float *seg_um;                        /* per line: mean 3D segment length at level 0 */
+  float *lvl_err_um[GUI_LOD_LEVELS];    /* [level][line] largest deviation from level 0 */
   GLint *draw_first;                    /* per line, refilled each frame */
   GLsizei *draw_count;
 } gui_series_gl;
@@ -63,6 +63,7 @@ struct elfm_viewer {
   double play_us_per_s;     /* playback speed: recording us per wall second */
   double play_default_us_per_s;
   double line_width_px;
+  size_t drawn_vertices;    /* in the last frame (elfm_viewer_drawn_vertices) */
 
   gui_lines_prog lines;
   GLuint prog_overlay;
@@ -117,7 +118,8 @@ elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int 
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
                              float **vertices, elfm_error *err);
 void gui_series_arrays_free(gui_series_gl *g);
-void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail);
+/* ... and returns the number of vertices the draw lists hold. */
+size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail);
 
 /* viewer.c: draw one frame into the bound framebuffer. */
 void gui_draw(elfm_viewer *v, int width, int height);

@@ -1,16 +1,23 @@
-/* series_lod.c — polylines on the GPU with levels of detail and a cut at
- * the time cursor, so a frame draws only what can be seen.
+/* series_lod.c — polylines on the GPU with error-bounded levels of detail
+ * and a cut at the time cursor, so a frame draws only what can be seen.
  *
- * 1,000 tracks of 1,000 points at 1 kHz move well under a pixel per frame
- * at the default zoom: most of a million segments would fall inside one
- * pixel each. Every polyline is uploaded at 8 levels (every point, every
- * 2nd, 4th, ... 128th, always ending on the last point), in one buffer at
- * creation. Each frame picks, per polyline, the coarsest level whose chords
- * stay under GUI_LOD_MAX_SEG_PX on screen (from the polyline's mean 3D
- * segment length: projection only shortens, so this never undersamples a
- * steady track) and, when the cursor is inside the recording, draws the
- * points up to it plus the one segment that crosses it (the fragment shader
- * ends that segment exactly at the cursor). Nothing is uploaded per frame.
+ * With Mesa's software renderer the frame time grows with the number of
+ * line segments drawn (docs/viewer.md), and 1,000 tracks of 1,000 points at
+ * 1 kHz move well under a pixel per frame at the default zoom. Every
+ * polyline is uploaded at 8 levels (every point, every 2nd, 4th, ... 128th,
+ * always ending on its last point), in one buffer, at creation.
+ *
+ * For each polyline and level we store its error: the largest distance
+ * between an original point and where the coarse polyline is at that
+ * point's time (time-interpolated along the chord). It bounds what the eye
+ * sees both in shape and in the colour-by-time and the cursor cut, which
+ * the shaders interpolate in time along each chord. Each frame picks, per
+ * polyline, the coarsest level whose error is under GUI_LOD_MAX_ERR_PX on
+ * screen (an orthographic projection never lengthens a distance).
+ *
+ * When the cursor is inside the recording, a polyline is drawn up to it
+ * plus the one segment that crosses it (the fragment shader ends that
+ * segment exactly at the cursor). Per frame only the draw lists change.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -25,21 +32,51 @@ static size_t level_count(size_t n, int level)
   return (n - 1 + stride - 1) / stride + 1; /* ceil((n-1)/stride) chords */
 }
 
+/* Index (within the polyline) of vertex j of a level with c vertices. */
+static size_t level_point(size_t j, size_t c, size_t n, size_t stride)
+{
+  return j + 1 == c ? n - 1 : j * stride;
+}
+
 void gui_series_arrays_free(gui_series_gl *g)
 {
   for (int l = 0; l < GUI_LOD_LEVELS; l++) {
     free(g->lvl_first[l]);
     free(g->lvl_count[l]);
+    free(g->lvl_err_um[l]);
     g->lvl_first[l] = NULL;
     g->lvl_count[l] = NULL;
+    g->lvl_err_um[l] = NULL;
   }
   free(g->t_ms);
-  free(g->seg_um);
   free(g->draw_first);
   free(g->draw_count);
-  g->t_ms = g->seg_um = NULL;
+  g->t_ms = NULL;
   g->draw_first = NULL;
   g->draw_count = NULL;
+}
+
+/* Largest distance (um) between points a..a+n-1 and the level's polyline
+ * evaluated at each point's time. */
+static double level_error_um(const elfm_view_series *s, size_t a, size_t n, int level)
+{
+  size_t c = level_count(n, level), stride = (size_t)1 << level;
+  double worst = 0;
+  for (size_t j = 0; j + 1 < c; j++) {
+    size_t i0 = a + level_point(j, c, n, stride), i1 = a + level_point(j + 1, c, n, stride);
+    const float *p0 = s->xyz_um + 3 * i0, *p1 = s->xyz_um + 3 * i1;
+    double t0 = (double)s->t_us[i0], t1 = (double)s->t_us[i1];
+    for (size_t i = i0 + 1; i < i1; i++) {
+      double w = t1 > t0 ? ((double)s->t_us[i] - t0) / (t1 - t0) : 0.5;
+      double d2 = 0;
+      for (int ax = 0; ax < 3; ax++) {
+        double q = p0[ax] + w * (p1[ax] - p0[ax]) - s->xyz_um[3 * i + ax];
+        d2 += q * q;
+      }
+      if (d2 > worst) worst = d2;
+    }
+  }
+  return sqrt(worst);
 }
 
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
@@ -58,14 +95,14 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
   for (int l = 0; l < GUI_LOD_LEVELS; l++) {
     g->lvl_first[l] = malloc(nl * sizeof *g->lvl_first[l]);
     g->lvl_count[l] = malloc(nl * sizeof *g->lvl_count[l]);
-    ok &= g->lvl_first[l] && g->lvl_count[l];
+    g->lvl_err_um[l] = malloc(nl * sizeof *g->lvl_err_um[l]);
+    ok &= g->lvl_first[l] && g->lvl_count[l] && g->lvl_err_um[l];
   }
   g->t_ms = malloc((total ? total : 1) * sizeof *g->t_ms);
-  g->seg_um = malloc(nl * sizeof *g->seg_um);
   g->draw_first = malloc(nl * sizeof *g->draw_first);
   g->draw_count = malloc(nl * sizeof *g->draw_count);
   float *buf = malloc((total ? total : 1) * GUI_VERTEX_FLOATS * sizeof *buf);
-  if (!ok || !g->t_ms || !g->seg_um || !g->draw_first || !g->draw_count || !buf) {
+  if (!ok || !g->t_ms || !g->draw_first || !g->draw_count || !buf) {
     free(buf);
     gui_series_arrays_free(g);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory for vertices");
@@ -81,8 +118,9 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
       g->lvl_first[l][k] = (GLint)q;
       size_t c = level_count(n, l);
       g->lvl_count[l][k] = (GLsizei)c;
+      g->lvl_err_um[l][k] = l == 0 ? 0.0f : (float)level_error_um(s, a, n, l);
       for (size_t j = 0; j < c; j++) {
-        size_t i = a + (j + 1 == c ? n - 1 : j * stride);
+        size_t i = a + level_point(j, c, n, stride);
         float *v = buf + q * GUI_VERTEX_FLOATS;
         v[0] = s->xyz_um[3 * i];
         v[1] = s->xyz_um[3 * i + 1];
@@ -91,16 +129,6 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
         v[4] = key;
         g->t_ms[q] = v[3];
         q++;
-      }
-      if (l == 0) {
-        double len = 0;
-        for (size_t i = a + 1; i < a + n; i++) {
-          const float *p0 = s->xyz_um + 3 * (i - 1), *p1 = s->xyz_um + 3 * i;
-          len += sqrt((double)(p1[0] - p0[0]) * (p1[0] - p0[0]) +
-                      (double)(p1[1] - p0[1]) * (p1[1] - p0[1]) +
-                      (double)(p1[2] - p0[2]) * (p1[2] - p0[2]));
-        }
-        g->seg_um[k] = n > 1 ? (float)(len / (double)(n - 1)) : 0.0f;
       }
     }
   }
@@ -122,15 +150,15 @@ static size_t count_upto(const float *t, size_t n, float cursor)
   return lo;
 }
 
-void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
+size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
 {
+  size_t drawn = 0;
+  double max_err_um = GUI_LOD_MAX_ERR_PX / px_per_um;
   for (GLsizei k = 0; k < g->n_lines; k++) {
     int l = 0;
-    double seg_px = g->seg_um[k] * px_per_um;
-    if (seg_px > 0 && !full_detail) {
-      double f = floor(log2(GUI_LOD_MAX_SEG_PX / seg_px));
-      l = f < 0 ? 0 : f > GUI_LOD_LEVELS - 1 ? GUI_LOD_LEVELS - 1 : (int)f;
-    }
+    if (!full_detail)
+      for (l = GUI_LOD_LEVELS - 1; l > 0; l--)
+        if (g->lvl_err_um[l][k] <= max_err_um) break;
     GLint first = g->lvl_first[l][k];
     GLsizei count = g->lvl_count[l][k];
     if (count > 0 && g->t_ms[first + count - 1] > cursor_ms) {
@@ -139,5 +167,7 @@ void gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int
     }
     g->draw_first[k] = first;
     g->draw_count[k] = count;
+    drawn += (size_t)count;
   }
+  return drawn;
 }

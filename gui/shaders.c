@@ -1,7 +1,7 @@
 /* shaders.c — the viewer's GLSL 3.30 programs: compiled and linked once.
  *
  *  lines:   tracks, truth, detections and the box. Colour by time, depth,
- *           track or a flat colour (u_mode), computed in the vertex shader;
+ *           track or a flat colour (u_mode), per fragment;
  *           the time cursor is a uniform the fragment shader compares each
  *           fragment's interpolated time with, so scrubbing never touches
  *           the vertex buffers and a segment ends exactly at the cursor.
@@ -22,9 +22,29 @@ static const char *lines_vs =
   "uniform mat4 u_mvp;\n"
   "uniform int u_mode;\n"
   "uniform float u_t0, u_t1, u_z0, u_z1, u_point_size;\n"
-  "uniform vec4 u_color;\n"
   "out float v_t;\n"
-  "out vec4 v_color;\n"
+  "out float v_s;\n"
+  "void main() {\n"
+  "  gl_Position = u_mvp * vec4(a_pos, 1.0);\n"
+  "  gl_PointSize = u_point_size;\n"
+  "  v_t = a_t;\n"
+  "  float s = a_key;\n"
+  "  if (u_mode == 0) s = (a_t - u_t0) / max(u_t1 - u_t0, 1e-6);\n"
+  "  else if (u_mode == 1) s = (a_pos.z - u_z0) / max(u_z1 - u_z0, 1e-6);\n"
+  "  v_s = s;\n"
+  "}\n";
+
+/* The colour map is evaluated per fragment from the interpolated time or
+ * depth: a long chord of a coarse level of detail (series_lod.c) then still
+ * runs through the map's colours instead of blending its two ends. */
+static const char *lines_fs =
+  "#version 330 core\n"
+  "in float v_t;\n"
+  "in float v_s;\n"
+  "uniform int u_mode;\n"
+  "uniform vec4 u_color;\n"
+  "uniform float u_cursor, u_trail;\n"
+  "out vec4 o_color;\n"
   "vec3 turbo(float s) {\n"
   "  float x = 0.10 + 0.85 * clamp(s, 0.0, 1.0);\n"
   "  vec4 v4 = vec4(1.0, x, x * x, x * x * x);\n"
@@ -38,24 +58,8 @@ static const char *lines_vs =
   "      dot(v2, vec2(-89.90310912, 27.34824973))), 0.0, 1.0);\n"
   "}\n"
   "void main() {\n"
-  "  gl_Position = u_mvp * vec4(a_pos, 1.0);\n"
-  "  gl_PointSize = u_point_size;\n"
-  "  v_t = a_t;\n"
-  "  float s = a_key;\n"
-  "  if (u_mode == 0) s = (a_t - u_t0) / max(u_t1 - u_t0, 1e-6);\n"
-  "  else if (u_mode == 1) s = (a_pos.z - u_z0) / max(u_z1 - u_z0, 1e-6);\n"
-  "  v_color = u_mode == 3 ? u_color : vec4(turbo(s), u_color.a);\n"
-  "}\n";
-
-static const char *lines_fs =
-  "#version 330 core\n"
-  "in float v_t;\n"
-  "in vec4 v_color;\n"
-  "uniform float u_cursor, u_trail;\n"
-  "out vec4 o_color;\n"
-  "void main() {\n"
   "  if (v_t > u_cursor || (u_trail >= 0.0 && v_t < u_cursor - u_trail)) discard;\n"
-  "  o_color = v_color;\n"
+  "  o_color = u_mode == 3 ? u_color : vec4(turbo(v_s), u_color.a);\n"
   "}\n";
 
 static const char *overlay_vs =

@@ -281,16 +281,18 @@ void elfm_viewer_show(elfm_viewer *v, int truth, int detections, int mip)
   v->opt.show_mip = mip;
 }
 void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us) { v->cursor_us = t_us; }
+size_t elfm_viewer_drawn_vertices(const elfm_viewer *v) { return v->drawn_vertices; }
 
 /* One line strip per polyline (glMultiDrawArrays). Drawing all of them with
  * one primitive-restart index list instead measured no faster on llvmpipe
  * and would lose the cut at the cursor (docs/viewer.md). */
-static void draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
+static size_t draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
 {
-  if (!g->n_lines) return;
-  gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
+  if (!g->n_lines) return 0;
+  size_t drawn = gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
   glBindVertexArray(g->vao);
   glMultiDrawArrays(GL_LINE_STRIP, g->draw_first, g->draw_count, g->n_lines);
+  return drawn;
 }
 
 void gui_draw(elfm_viewer *v, int width, int height)
@@ -344,13 +346,14 @@ void gui_draw(elfm_viewer *v, int width, int height)
   glDrawArrays(GL_LINES, 0, v->n_box);
 
   glUniform1f(l->u_cursor, cursor_ms);
+  v->drawn_vertices = 0;
   if (v->opt.show_truth && v->truth.n_lines) {
     glUniform4f(l->u_color, 0.62f, 0.62f, 0.62f, 0.8f);
-    draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
+    v->drawn_vertices += draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
   }
   glUniform1i(l->u_mode, (int)v->mode);
   glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
-  draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
+  v->drawn_vertices += draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
 
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots

@@ -565,20 +565,57 @@ int main(int argc, char **argv)
   elfm_viewer_free(v);
   elfm_view_data_free(d);
 
-  /* 7. Level of detail: 200 helices of 1000 points drawn with sub-pixel
-   * chords merged look like the full-detail picture (< 3 % of the lit
-   * pixels differ visibly). */
-  elfm_view_data *syn = NULL;
-  CHECK_OK(elfm_view_data_synthetic(200, 1000, &syn, &err), &err);
+  /* 7. Level of detail: 200 smooth tracks of 1000 points (1 kHz wiggles
+   * that never cross themselves) drawn with coarse levels look like the
+   * full-detail picture (< 3 % of the lit pixels differ visibly) while far
+   * fewer vertices are drawn. */
+  elfm_view_data *syn = calloc(1, sizeof *syn);
+  if (syn) {
+    size_t nt = 200, np = 1000;
+    elfm_view_series *se = &syn->tracks;
+    se->first = malloc((nt + 1) * sizeof *se->first);
+    se->id = malloc(nt * sizeof *se->id);
+    se->xyz_um = malloc(3 * nt * np * sizeof *se->xyz_um);
+    se->t_us = malloc(nt * np * sizeof *se->t_us);
+    for (size_t k = 0; k < nt; k++) {
+      se->first[k] = k * np;
+      se->id[k] = (int64_t)k;
+      double x0 = -60 + (double)(k % 20) * 3, y0 = -60 + (double)(k / 20) * 12;
+      for (size_t i = 0; i < np; i++) {
+        double u = (double)i / np;
+        float *p = se->xyz_um + 3 * (k * np + i);
+        p[0] = (float)(x0 + 60 * u);
+        p[1] = (float)(y0 + 3 * sin(2 * M_PI * 4 * u + k));
+        p[2] = (float)(-80 + (double)k * 0.8 + 20 * u);
+        se->t_us[k * np + i] = (int64_t)(i * 1000);
+      }
+    }
+    se->first[nt] = nt * np;
+    se->n_lines = nt;
+    se->n_points = nt * np;
+    syn->t_min_us = 0;
+    syn->t_max_us = (int64_t)(np - 1) * 1000;
+    syn->frame_dt_us = 1000;
+    for (int a = 0; a < 3; a++) {
+      syn->box_min_um[a] = -100;
+      syn->box_max_um[a] = 100;
+    }
+  }
   static uint8_t full[W * H * 3];
+  size_t drawn[2] = {0, 0};
   for (int pass = 0; syn && pass < 2; pass++) {
     o.full_detail = pass;
     v = NULL;
     CHECK_OK(elfm_viewer_create(&o, syn, &v, &err), &err);
     if (!v) break;
     CHECK_OK(elfm_viewer_render_rgb(v, W, H, pass ? full : img, &err), &err);
+    drawn[pass] = elfm_viewer_drawn_vertices(v);
     elfm_viewer_free(v);
   }
+  o.full_detail = 0;
+  CHECK_EQ_INT(drawn[1], 200 * 1000);
+  CHECK_MSG(drawn[0] * 4 < drawn[1], "level of detail drew %zu of %zu vertices", drawn[0],
+            drawn[1]);
   long lit = 0, differ = 0;
   for (size_t i = 0; i < (size_t)W * H; i++) {
     lit += saturation(full + 3 * i) > 80;
@@ -586,6 +623,8 @@ int main(int argc, char **argv)
     for (int k = 0; k < 3; k++) m = abs(full[3 * i + k] - img[3 * i + k]) > m ? abs(full[3 * i + k] - img[3 * i + k]) : m;
     differ += m > 60;
   }
+  fprintf(stderr, "note: level of detail drew %zu of %zu vertices; %ld of %ld lit pixels differ\n",
+          drawn[0], drawn[1], differ, lit);
   CHECK_MSG(lit > 5000, "full-detail picture has only %ld lit pixels", lit);
   CHECK_MSG(differ * 100 < 3 * lit, "level of detail changed %ld of %ld lit pixels", differ, lit);
   elfm_view_data_free(syn);
