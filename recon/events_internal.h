@@ -36,14 +36,15 @@
 /* EVT3 decoder state (all times absolute microseconds). The last word of
  * each type is kept whole in regs[type] (ADDR_Y: y, VECT_BASE_X: base x
  * and polarity, TIME_LOW: low time bits), which lets the decoder update
- * its state with one store instead of a branch per word type. */
+ * its state with one store instead of a branch per word type. Vectors
+ * add their advance (12 or 8 columns) to regs[VECT_BASE_X] above bit 16,
+ * so a new VECT_BASE_X word restarts it by being stored. */
 typedef struct elfm_evt3_state {
   uint32_t regs[16];  /* last word of each type; 0 = none yet */
   int64_t t_high;     /* loops << 24 | TIME_HIGH << 12 */
   int64_t loops;      /* 2^24 us loops counted so far */
   int64_t t_emit;     /* time of the last event stored (order check) */
   uint32_t prev_th;   /* last TIME_HIGH value (12 bits) */
-  uint32_t voff;      /* x advance of vectors since VECT_BASE_X (+12/+8) */
   int seen_th;        /* words before the first TIME_HIGH are dropped */
   int seen_y;         /* events before the first ADDR_Y are dropped */
 } elfm_evt3_state;

@@ -89,7 +89,6 @@ typedef struct evt3_fast_state {
   uint32_t regs[16];  /* as elfm_evt3_state.regs */
   uint32_t lims[16];  /* largest valid 11-bit payload + 1, per word type */
   int64_t t_high;
-  uint32_t voff;
   uint32_t xlim;
 } evt3_fast_state;
 
@@ -119,21 +118,21 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
   uint8_t *restrict const P = c->p;
   size_t n = *n_io;
   const int64_t t_high = fs->t_high;
-  uint32_t voff = fs->voff;
   for (; q < stop; q += 2) {
     const uint32_t w = elfm_le16(q);
     const uint32_t type = w >> 12;
     /* ADDR_Y, ADDR_X, VECT_BASE_X, VECT_12, VECT_8, TIME_LOW */
     if (!((0x7Du >> type) & 1)) break;
     const uint32_t pl = w & 0x7FF;
-    if ((pl >= fs->lims[type]) | ((type == 0x6) & ((w & 0xFFF) < (fs->regs[0x6] & 0xFFF)))) break;
+    /* (A TIME_LOW word compares whole: both carry type 6 on top.) */
+    if ((pl >= fs->lims[type]) | ((type == 0x6) & (w < fs->regs[0x6]))) break;
     if (type - 0x4 <= 1) { /* VECT_12, VECT_8 */
       const uint32_t nbits = type == 0x4 ? 12 : 8;
       const uint32_t mask = w & ((1u << nbits) - 1);
       const uint32_t base = fs->regs[0x3];
-      const uint32_t x0 = (base & 0x7FF) + voff;
+      const uint32_t x0 = (base & 0x7FF) + (base >> 16);
       const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask | 1);
-      if ((base >> 12) != 0x3 || (mask && xhi >= fs->xlim)) break;
+      if (((base >> 12) & 0xF) != 0x3 || (mask && xhi >= fs->xlim)) break;
       /* t, y and p are the same for the whole vector: broadcast them
        * into 12 slots (vectorised stores), then place the x of each set
        * bit; slots past the last set bit are scratch. */
@@ -149,11 +148,10 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
       n += evt3_cnt6[mask & 63];
       put_x8(X + n, hi, x0 + 6);
       n += evt3_cnt6[mask >> 6];
-      voff += nbits;
+      fs->regs[0x3] = base + (nbits << 16);
       continue;
     }
     fs->regs[type] = w;
-    voff &= 0u - (uint32_t)(type != 0x3); /* VECT_BASE_X restarts vectors */
     T[n] = t_high | (int64_t)(fs->regs[0x6] & 0xFFF);
     X[n] = (uint16_t)pl;
     Y[n] = (uint16_t)(fs->regs[0x0] & 0x7FF);
@@ -161,7 +159,6 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
     n += type == 0x2;
   }
   *n_io = n;
-  fs->voff = voff;
   return q;
 }
 
@@ -187,7 +184,6 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
   fs.lims[0x0] = ylim;
   fs.lims[0x2] = xlim;
   fs.t_high = s.t_high;
-  fs.voff = s.voff;
   fs.xlim = xlim;
 #define T_EMIT() (n > n0 ? T[n - 1] : s.t_emit)
 #define T_NOW() (fs.t_high | (int64_t)(fs.regs[0x6] & 0xFFF))
@@ -246,7 +242,6 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
     case 0x3: /* VECT_BASE_X */
       if (!s.seen_th) break;
       fs.regs[0x3] = w;
-      fs.voff = 0;
       break;
     case 0x4:   /* VECT_12 */
     case 0x5: { /* VECT_8 */
@@ -254,9 +249,9 @@ elfm_status elfm_evt3_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
       const uint32_t nbits = type == 0x4 ? 12 : 8;
       const uint32_t mask = w & ((1u << nbits) - 1);
       const uint32_t base = fs.regs[0x3];
-      const uint32_t x0 = (base & 0x7FF) + fs.voff;
-      fs.voff += nbits;
-      if (!s.seen_y || (base >> 12) != 0x3 || !mask) break;
+      const uint32_t x0 = (base & 0x7FF) + (base >> 16);
+      fs.regs[0x3] = base + (nbits << 16);
+      if (!s.seen_y || ((base >> 12) & 0xF) != 0x3 || !mask) break;
       /* Highest set bit must land inside the sensor. */
       const uint32_t xhi = x0 + 31 - (uint32_t)__builtin_clz(mask);
       if (xhi >= xlim) {
@@ -317,7 +312,6 @@ out:
   c->n = n;
   memcpy(s.regs, fs.regs, sizeof s.regs);
   s.t_high = fs.t_high;
-  s.voff = fs.voff;
   r->st.evt3 = s;
   return st;
 #undef T_EMIT
