@@ -878,6 +878,8 @@ int cmd_bench(int argc, char **argv)
     }
   }
 
+  if (n_sc == 0) return cli_message("bench", CLI_USAGE, "--scenes: no scene named");
+
   /* Sweep. */
   struct point_result *pts = calloc(BENCH_MAX_POINTS * 4, sizeof *pts);
   if (!pts) return cli_message("bench", CLI_FAIL, "out of memory");

@@ -64,6 +64,7 @@ int main(void)
   CHECK_EQ_INT(run("bench --duration-ms 5", out, sizeof out), 2);
   CHECK_EQ_INT(run("bench --max-points 0", out, sizeof out), 2);
   CHECK_EQ_INT(run("bench --bogus", out, sizeof out), 2);
+  CHECK_EQ_INT(run("bench --scenes , --out b0", out, sizeof out), 2);
   CHECK_EQ_INT(run("demo --duration-ms abc", out, sizeof out), 2);
   CHECK_EQ_INT(run("demo extra", out, sizeof out), 2);
 
