@@ -91,13 +91,26 @@ int main(void)
   char *csv = slurp("b/bench.csv");
   CHECK(csv != NULL);
   if (csv) {
-    int rows = 0, ok = 0;
+    int rows = 0, ok = 0, pareto = 0;
     for (char *line = strchr(csv, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
       rows++;
       if (strstr(line, ",ok,")) ok++;
+      /* fields 24-25 are pareto_f1, pareto_alpha; 7 is events, 12 the RTF */
+      int field = 1, pf1 = -1;
+      double events = -1, rtf = -1;
+      for (char *q = line + 1; *q && *q != '\n'; q++) {
+        if (*q != ',') continue;
+        field++;
+        if (field == 7) events = atof(q + 1);
+        if (field == 12) rtf = atof(q + 1);
+        if (field == 24) pf1 = atoi(q + 1);
+      }
+      pareto += pf1 == 1;
+      CHECK_MSG(events > 1000 && rtf > 0, "events %g rtf %g", events, rtf);
     }
     CHECK_EQ_INT(rows, 2);
     CHECK_EQ_INT(ok, 2);
+    CHECK_MSG(pareto >= 1, "no point on the F1 Pareto front");
   }
   char *md = slurp("b/bench.md");
   CHECK(md != NULL && strstr(md, "| flow | baseline |") != NULL);
