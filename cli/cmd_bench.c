@@ -950,6 +950,7 @@ int cmd_bench(int argc, char **argv)
         path_fmt(dets, sizeof dets, "%s/detections.csv", run);
         elfm_score_options so;
         elfm_score_options_default(&so);
+        if (p->volumes > 0) so.n_frames_hint = (int64_t)p->volumes; /* frames 0..volumes-1 */
         if (si->is_stage) {
           so.have_stage = 1;
           memcpy(so.stage_v_um_per_ms, si->stage_v_um_per_ms, sizeof so.stage_v_um_per_ms);

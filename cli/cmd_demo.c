@@ -18,6 +18,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli.h"
 #include "elfm_tracker.h"
 
@@ -115,6 +117,29 @@ static int track_plot(const char *dir)
   while (waitpid(pid, &st, 0) < 0)
     if (errno != EINTR) return -1;
   return WIFEXITED(st) && WEXITSTATUS(st) == 0 ? 0 : -1;
+}
+
+/* The tracker's volume count from its summary.json (counts.volumes), or 0:
+ * the run's frames are 0 .. volumes - 1, which scoring needs to count truth
+ * in frames where nothing was detected at the start or the end. */
+static int64_t summary_volumes(const char *track_dir)
+{
+  char p[PATH_MAX];
+  if (path_fmt(p, sizeof p, "%s/summary.json", track_dir) != 0) return 0;
+  FILE *f = fopen(p, "rb");
+  if (!f) return 0;
+  char *text = malloc(1 << 22);
+  size_t n = text ? fread(text, 1, (1 << 22) - 1, f) : 0;
+  fclose(f);
+  if (!text) return 0;
+  text[n] = '\0';
+  cJSON *o = cJSON_Parse(text);
+  free(text);
+  const cJSON *c = cJSON_GetObjectItemCaseSensitive(o, "counts");
+  const cJSON *v = cJSON_GetObjectItemCaseSensitive(c, "volumes");
+  int64_t vol = cJSON_IsNumber(v) && v->valuedouble > 0 ? (int64_t)v->valuedouble : 0;
+  cJSON_Delete(o);
+  return vol;
 }
 
 static int count_events(const char *path, int64_t *n, int64_t *t0, int64_t *t1, elfm_error *err)
@@ -222,6 +247,7 @@ int cmd_demo(int argc, char **argv)
   elfm_score_options so;
   elfm_score_options_default(&so);
   elfm_score_options_set_calib(&so, &cal);
+  so.n_frames_hint = summary_volumes(trk);
   elfm_score_result r;
   if (elfm_score_files(truth, tracks, access(dets, R_OK) == 0 ? dets : NULL, &so, &r, &err) !=
       ELFM_OK)

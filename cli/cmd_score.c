@@ -22,7 +22,7 @@ static void score_usage(FILE *f)
           "usage: eventlfm score --truth truth.csv (--tracks tracks.csv | --detections detections.csv)\n"
           "                      [--tracks tracks.csv] [--detections detections.csv]\n"
           "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
-          "                      [--eps-um 4] [--kz 4] [--json]\n"
+          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--json]\n"
           "\n"
           "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
           "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
@@ -31,6 +31,8 @@ static void score_usage(FILE *f)
           "              (without --detections, the tracks' raw points are the detections)\n"
           "  tracks:     ISBI 2012 alpha, beta, track and detection Jaccard (Chenouard 2014)\n"
           "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
+          "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
+          "before the first or after the last row of the files count too.\n"
           "--json prints one JSON object on stdout instead of the table.\n");
 }
 
@@ -118,7 +120,8 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
 
 int cmd_score(int argc, char **argv)
 {
-  enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON };
+  enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
+         OPT_NFRAMES };
   static const struct option longopts[] = {
       {"truth", required_argument, NULL, OPT_TRUTH},
       {"tracks", required_argument, NULL, OPT_TRACKS},
@@ -128,6 +131,7 @@ int cmd_score(int argc, char **argv)
       {"eps-um", required_argument, NULL, OPT_EPS},
       {"kz", required_argument, NULL, OPT_KZ},
       {"json", no_argument, NULL, OPT_JSON},
+      {"n-frames", required_argument, NULL, OPT_NFRAMES},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
   struct score_opts op;
@@ -160,6 +164,11 @@ int cmd_score(int argc, char **argv)
       if (!(op.so.kz > 0)) return cli_message("score", CLI_USAGE, "--kz must be positive");
       break;
     case OPT_JSON: op.json = 1; break;
+    case OPT_NFRAMES:
+      if (!cli_parse_int64("score", "--n-frames", optarg, &op.so.n_frames_hint)) return CLI_USAGE;
+      if (op.so.n_frames_hint < 1 || op.so.n_frames_hint > 50000000)
+        return cli_message("score", CLI_USAGE, "--n-frames must be 1..50000000");
+      break;
     default:
       cli_message("score", CLI_USAGE, "unknown option or missing value: '%s'",
                   argv[optind - 1]);

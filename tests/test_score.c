@@ -174,6 +174,32 @@ int main(void)
     CHECK_NEAR(r.precision, 1.0, TOL);
     CHECK_NEAR(r.f1, 2.0 * 36.0 / (40.0 + 36.0), TOL);
     elfm_table_free(de2);
+    /* nothing detected in the first 3 and the last 2 frames: without the
+     * run's frame count those frames are unknown (16 of 20 scored); with
+     * n_frames_hint = 20 they count as missed, times extrapolated */
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 3; f < NF - 2; f++)
+      for (int o = 0; o < 2; o++) {
+        double x, y, z;
+        pos(o, frame_t(f), &x, &y, &z);
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
+      }
+    elfm_table *de3 = parse(&b, "detections.csv");
+    r = run(truth, NULL, de3, NULL);
+    CHECK_EQ_INT(r.n_frames, 15);
+    CHECK_NEAR(r.recall, 1.0, TOL);
+    elfm_score_options oh;
+    elfm_score_options_default(&oh);
+    oh.n_frames_hint = NF;
+    r = run(truth, NULL, de3, &oh);
+    CHECK_EQ_INT(r.n_frames, NF);
+    CHECK_EQ_INT(r.n_truth_points, 2 * NF);
+    CHECK_NEAR(r.recall, 30.0 / 40.0, TOL);
+    /* a hint beyond the truth's time range adds no truth points */
+    oh.n_frames_hint = 1000;
+    r = run(truth, NULL, de3, &oh);
+    CHECK_EQ_INT(r.n_truth_points, 2 * 25); /* truth ends at 25 ms: frames 0..24 */
+    elfm_table_free(de3);
     elfm_table_free(tr);
     elfm_table_free(de);
   }

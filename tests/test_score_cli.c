@@ -102,6 +102,20 @@ int main(void)
     CHECK_NEAR(jnum(o, "stage_velocity_rel_error"), 0.5, 1e-12);
     cJSON_Delete(o);
   }
+  /* --n-frames 25: frames 20..24 (21..25 ms, extrapolated) count too: 50
+   * truth points, 20 matched */
+  rc = run("--truth truth.csv --tracks tracks.csv --json --n-frames 25", out, sizeof out, err,
+           sizeof err);
+  CHECK_EQ_INT(rc, 0);
+  o = cJSON_Parse(out);
+  CHECK(o != NULL);
+  if (o) {
+    CHECK_NEAR(jnum(o, "recall"), 0.4, 1e-12);
+    CHECK_NEAR(jnum(o, "n_truth_points"), 50, 0);
+    cJSON_Delete(o);
+  }
+  CHECK_EQ_INT(run("--truth truth.csv --tracks tracks.csv --n-frames 0", out, sizeof out, err,
+                   sizeof err), 2);
   /* the readable table */
   rc = run("--truth truth.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
   CHECK_EQ_INT(rc, 0);

@@ -21,6 +21,8 @@
  * t_us is an error). Frames missing from both files (no detection, no track
  * point) but lying between known frames get a t_us interpolated linearly
  * between their known neighbours, so that truth there still counts as missed.
+ * Frames before the first or after the last row are unknown unless the
+ * caller gives the run's frame count (n_frames_hint below).
  * A run with no row at all has no frame list: if the truth shows any object
  * (bright, inside the volume) it scores recall = F1 = alpha = beta = Jaccard
  * = 0, with n_truth_points = 0 (unknown) and precision undefined (NaN).
@@ -126,9 +128,14 @@ typedef struct elfm_score_options {
   double x_half_um, y_half_um, z_min_um, z_max_um;
   int have_stage;          /* 1: compute stage_rel_error against stage_v */
   double stage_v_um_per_ms[3];
+  /* > 0: the run had frames 0 .. n_frames_hint - 1 (e.g. summary.json's
+   * volume count); frames before the first or after the last row of the
+   * files then count too, their t_us extrapolated with the mean frame
+   * spacing. 0 (default): only the span of frames seen in the files. */
+  int64_t n_frames_hint;
 } elfm_score_options;
 
-/* eps 4, kz 4, no bounds, no stage. */
+/* eps 4, kz 4, no bounds, no stage, no frame-count hint. */
 void elfm_score_options_default(elfm_score_options *o);
 /* Volume bounds from a calibration (SPEC §3 voxel grid). */
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c);

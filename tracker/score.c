@@ -37,6 +37,7 @@ void elfm_score_options_default(elfm_score_options *o)
   memset(o, 0, sizeof *o);
   o->eps_um = 4.0; /* SPEC §7 */
   o->kz = 4.0;     /* SPEC §7 */
+  o->n_frames_hint = 0;
 }
 
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c)
@@ -178,7 +179,8 @@ static elfm_status frames_fill(frames_t *fr, const elfm_table *t, int c_frame, i
 }
 
 static elfm_status frames_build(frames_t *fr, const elfm_table *dets, const int *cd,
-                                const elfm_table *trk, const int *ct, elfm_error *err)
+                                const elfm_table *trk, const int *ct, int64_t n_frames_hint,
+                                elfm_error *err)
 {
   int64_t fmin = INT64_MAX, fmax = INT64_MIN;
   elfm_status s;
@@ -187,6 +189,14 @@ static elfm_status frames_build(frames_t *fr, const elfm_table *dets, const int 
   fr->n = 0;
   fr->f_min = 0;
   if (fmin > fmax) return ELFM_OK; /* no rows at all: nothing to score */
+  /* The run's frames 0 .. n_frames_hint - 1 all count, also those before
+   * the first and after the last row (times extrapolated below). */
+  int known_lo = 0, known_hi = 0;
+  int64_t kmin = fmin, kmax = fmax;
+  if (n_frames_hint > 0) {
+    if (fmin > 0) fmin = 0;
+    if (fmax < n_frames_hint - 1) fmax = n_frames_hint - 1;
+  }
   if (fmax - fmin + 1 > SCORE_MAX_FRAME_SPAN)
     return elfm_error_set(err, ELFM_ERR_RANGE, dets ? dets->path : trk->path, -1,
                           "frame indices span %lld..%lld: more than %lld frames",
@@ -225,6 +235,18 @@ static elfm_status frames_build(frames_t *fr, const elfm_table *dets, const int 
                                            (double)(k - prev) / (double)(i - prev);
     }
     prev = i;
+  }
+  /* Frames outside the known range (only with a hint): extrapolate with the
+   * mean spacing of the known frames; with a single known frame there is no
+   * spacing and they stay unknown (NaN: never scored). */
+  known_lo = (int)(kmin - fr->f_min);
+  known_hi = (int)(kmax - fr->f_min);
+  if (s == ELFM_OK && known_hi > known_lo) {
+    double step = (fr->t_us[known_hi] - fr->t_us[known_lo]) / (double)(known_hi - known_lo);
+    for (int i = 0; i < known_lo; i++)
+      fr->t_us[i] = fr->t_us[known_lo] - step * (double)(known_lo - i);
+    for (int i = known_hi + 1; i < fr->n; i++)
+      fr->t_us[i] = fr->t_us[known_hi] + step * (double)(i - known_hi);
   }
   free(src_row);
   free(src_tab);
@@ -336,7 +358,7 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
     size_t cur = i;
     for (int f = 0; f < fr->n && s == ELFM_OK; f++) {
       double t = fr->t_us[f];
-      if (t < t_first || t > t_last) continue;
+      if (!(t >= t_first && t <= t_last)) continue; /* also skips unknown (NaN) times */
       while (cur + 1 < j && elfm_table_get(tt, ord[cur + 1].idx, c[1]) < t) cur++;
       size_t ra = ord[cur].idx, rb = cur + 1 < j ? ord[cur + 1].idx : ra;
       double ta = elfm_table_get(tt, ra, c[1]), tb = elfm_table_get(tt, rb, c[1]);
@@ -1007,7 +1029,8 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   cands_t cand;
   memset(&cand, 0, sizeof cand);
 
-  if ((s = frames_build(&fr, detections, cd, tracks, ct, err)) != ELFM_OK) goto done;
+  if ((s = frames_build(&fr, detections, cd, tracks, ct, opt->n_frames_hint, err)) != ELFM_OK)
+    goto done;
   out->n_frames = fr.n;
   if ((s = truth_build(&tr, truth, &fr, opt, err)) != ELFM_OK) goto done;
 
