@@ -69,10 +69,44 @@ static int grow(void **buf, size_t *cap, size_t need, size_t elem)
   return 1;
 }
 
-static int cmp_u32(const void *a, const void *b)
+/* Sort a row's columns in place without allocating (glibc's qsort may
+ * malloc a merge buffer): insertion sort for the usual handful of pixels,
+ * heapsort when a row is busy. */
+static void sift_down(uint32_t *a, size_t i, size_t n)
 {
-  uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-  return (x > y) - (x < y);
+  for (;;) {
+    size_t c = 2 * i + 1;
+    if (c >= n) return;
+    if (c + 1 < n && a[c + 1] > a[c]) c++;
+    if (a[i] >= a[c]) return;
+    uint32_t t = a[i];
+    a[i] = a[c];
+    a[c] = t;
+    i = c;
+  }
+}
+
+static void sort_u32(uint32_t *a, size_t n)
+{
+  if (n <= 32) {
+    for (size_t i = 1; i < n; i++) {
+      uint32_t v = a[i];
+      size_t j = i;
+      while (j > 0 && a[j - 1] > v) {
+        a[j] = a[j - 1];
+        j--;
+      }
+      a[j] = v;
+    }
+    return;
+  }
+  for (size_t i = n / 2; i-- > 0;) sift_down(a, i, n);
+  for (size_t e = n - 1; e > 0; e--) {
+    uint32_t t = a[0];
+    a[0] = a[e];
+    a[e] = t;
+    sift_down(a, 0, e);
+  }
 }
 
 /* Sort the listed non-zero pixels by row (counting sort) and column, then
@@ -102,7 +136,7 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   start[0] = 0;
   for (int y = 0; y < p->sh; y++) {
     size_t a = start[y], b = start[y + 1];
-    if (b - a > 1) qsort(ws->sorted + a, b - a, sizeof *ws->sorted, cmp_u32);
+    if (b - a > 1) sort_u32(ws->sorted + a, b - a);
   }
   ws->n_runs = 0;
   ws->n_vals = 0;

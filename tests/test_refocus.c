@@ -154,6 +154,10 @@ static void test_dense_sparse_agree(const elfm_calib *c)
       }
       for (int b = 0; b < 5; b++)
         render_bead(f, c, -50.0 + 25 * b, 40.0 - 20 * b, -80.0 + 40 * b + rep, 200.0);
+      /* a busy row (listed right to left, across view boxes): the sparse
+       * path's row sort on more than a handful of pixels */
+      for (int x = 1000; x > 300; x -= 1 + (x % 3 == 0))
+        elfm_frame_set(f, (uint32_t)(360 * f->w + x), (float)(1 + x % 97));
       CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, vd, wd, &err), &err);
       if (rep == 1) /* reuse a volume the dense path filled: must be cleared */
         CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, vs, wsp, &err), &err);
