@@ -39,7 +39,8 @@ static const char view_usage[] =
   "\n"
   "controls: left-drag rotate, right-drag pan, scroll zoom, r reset view,\n"
   "c colour by time/depth/track, space play/pause, left/right arrows one frame\n"
-  "(shift: 10), home/end, +/- speed, t truth, d detections, m MIP, q/Esc quit.\n"
+  "(shift: 10), home/end, +/- speed, t truth, d detections, m MIP, h help,\n"
+  "q/Esc quit.\n"
   "Needs a display with OpenGL 3.3 (for scripts: xvfb-run -a eventlfm view ...).\n";
 
 typedef struct view_opts {

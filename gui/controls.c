@@ -45,6 +45,7 @@ void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd)
   case ELFM_CMD_TOGGLE_TRUTH: v->opt.show_truth = !v->opt.show_truth; break;
   case ELFM_CMD_TOGGLE_DETECTIONS: v->opt.show_detections = !v->opt.show_detections; break;
   case ELFM_CMD_TOGGLE_MIP: v->opt.show_mip = !v->opt.show_mip; break;
+  case ELFM_CMD_TOGGLE_HELP: v->show_help = !v->show_help; break;
   }
 }
 

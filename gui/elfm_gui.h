@@ -222,7 +222,8 @@ typedef enum elfm_viewer_cmd {
   ELFM_CMD_SLOWER,          /* -: playback speed / 2 */
   ELFM_CMD_TOGGLE_TRUTH,    /* t */
   ELFM_CMD_TOGGLE_DETECTIONS, /* d */
-  ELFM_CMD_TOGGLE_MIP       /* m */
+  ELFM_CMD_TOGGLE_MIP,      /* m */
+  ELFM_CMD_TOGGLE_HELP      /* h: the key help lines in the window */
 } elfm_viewer_cmd;
 
 void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd);

@@ -93,6 +93,7 @@ struct elfm_viewer {
   /* interactive state */
   double mouse_x, mouse_y;
   int drag_rotate, drag_pan;
+  int show_help;            /* key help lines in the window (h) */
   char status_line[128];    /* shown bottom-left in the window, e.g. errors */
 };
 

@@ -236,10 +236,11 @@ static void hud(elfm_viewer *v, int height, int u, int s)
   snprintf(txt, sizeof txt, "%s%s", d->truth.n_lines && v->opt.show_truth ? "TRUTH: GREY  " : "",
            d->n_detections && v->opt.show_detections ? "DETECTIONS: WHITE" : "");
   ov_text(v, x, y + 22 * s, s, col_dim, txt);
-  if (v->opt.visible) {
+  if (v->opt.visible && v->show_help) {
     ov_text(v, x, y + 33 * s, s, col_dim,
-            "DRAG: ROTATE  RIGHT-DRAG: PAN  SCROLL: ZOOM  R: RESET  C: COLOUR  "
-            "SPACE: PLAY  ARROWS: STEP  T D M: TRUTH DETECTIONS MIP");
+            "DRAG ROTATE  RIGHT-DRAG PAN  SCROLL ZOOM  R RESET  C COLOUR");
+    ov_text(v, x, y + 44 * s, s, col_dim,
+            "SPACE PLAY  ARROWS STEP  +/- SPEED  T D M LAYERS  H HELP  Q QUIT");
   }
   if (v->status_line[0])
     ov_text(v, 20 * u + 200 * u, height - 24 * u - 7 * s, s, col_text, v->status_line);

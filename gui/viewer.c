@@ -208,6 +208,7 @@ elfm_status elfm_viewer_create(const elfm_viewer_options *opt, const elfm_view_d
   v->data = data;
   v->opt = *opt;
   v->mode = opt->color_mode;
+  v->show_help = 1;
   v->cursor_us = INT64_MAX;
   /* Play the whole recording in 10 s of wall time by default. */
   double span = (double)(data->t_max_us - data->t_min_us);

@@ -5,7 +5,7 @@
  *   left-drag rotate, right-drag (or shift+left-drag) pan, scroll zoom,
  *   r reset camera, c cycle colour (time -> depth -> track), space play/pause,
  *   left/right arrows one frame (shift: 10 frames), home/end, +/- playback
- *   speed, t truth, d detections, m MIP plane, q or Esc quit.
+ *   speed, t truth, d detections, m MIP plane, h key help, q or Esc quit.
  */
 #include <stdio.h>
 
@@ -27,6 +27,7 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
   case GLFW_KEY_T: elfm_viewer_command(v, ELFM_CMD_TOGGLE_TRUTH); break;
   case GLFW_KEY_D: elfm_viewer_command(v, ELFM_CMD_TOGGLE_DETECTIONS); break;
   case GLFW_KEY_M: elfm_viewer_command(v, ELFM_CMD_TOGGLE_MIP); break;
+  case GLFW_KEY_H: elfm_viewer_command(v, ELFM_CMD_TOGGLE_HELP); break;
   case GLFW_KEY_SPACE: elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE); break;
   case GLFW_KEY_RIGHT:
     elfm_viewer_command(v, shift ? ELFM_CMD_STEP_FORWARD_10 : ELFM_CMD_STEP_FORWARD);
