@@ -157,6 +157,26 @@ static void test_files(void)
   by_write(&b, path_of("vec_out.raw"));
   expect_read_error(path_of("vec_out.raw"), NULL, ELFM_ERR_RANGE, (int64_t)h + 10, 0, "vector past width");
 
+  /* DAT without geometry: the caller's --geometry applies; x beyond it. */
+  b.n = 0;
+  by_str(&b, "% Data file containing Event2D events.\n");
+  by_put(&b, "\0\x08", 2);
+  size_t hd = b.n;
+  by_u32(&b, 10);
+  by_u32(&b, (5u << 14) | 49u); /* x 49 y 5: fine */
+  by_u32(&b, 20);
+  by_u32(&b, (5u << 14) | 60u); /* x 60 >= 50 */
+  by_write(&b, path_of("geo.dat"));
+  {
+    elfm_reader_options small = {50, 50, 0};
+    expect_read_error(path_of("geo.dat"), &small, ELFM_ERR_RANGE, (int64_t)hd + 8, 0, "DAT x outside --geometry");
+    ev_list l = {0};
+    elfm_error err;
+    CHECK_OK(ev_decode_file(path_of("geo.dat"), NULL, 4, &l, &err), &err); /* no geometry: fine */
+    CHECK_EQ_INT(l.n, 2);
+    ev_free(&l);
+  }
+
   /* Time going back: TIME_LOW 100 then 50 under one TIME_HIGH. */
   b.n = 0;
   by_str(&b, EVT3_HDR);
