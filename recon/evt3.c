@@ -124,8 +124,9 @@ static const uint8_t *evt3_fast(const uint8_t *q, const uint8_t *stop, elfm_even
     /* ADDR_Y, ADDR_X, VECT_BASE_X, VECT_12, VECT_8, TIME_LOW */
     if (!((0x7Du >> type) & 1)) break;
     const uint32_t pl = w & 0x7FF;
-    /* (A TIME_LOW word compares whole: both carry type 6 on top.) */
-    if ((pl >= fs->lims[type]) | ((type == 0x6) & (w < fs->regs[0x6]))) break;
+    /* A TIME_LOW below the last: less than regs[TIME_LOW] - 0x6000 only
+     * for a TIME_LOW word (others wrap to large values or exceed 0xFFF). */
+    if ((pl >= fs->lims[type]) | (w - 0x6000u < fs->regs[0x6] - 0x6000u)) break;
     if (type - 0x4 <= 1) { /* VECT_12, VECT_8 */
       const uint32_t nbits = type == 0x4 ? 12 : 8;
       const uint32_t mask = w & ((1u << nbits) - 1);
