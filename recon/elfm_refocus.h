@@ -58,7 +58,7 @@ typedef enum elfm_ghost_threshold {
 typedef struct elfm_refocus_options {
   elfm_refocus_path path;
   /* AUTO: sparse when listed pixels < sparse_max_fill x (sum of crop box
-   * areas). Default from bench_refocus (docs/recon.md). */
+   * areas). Default 0.05, from bench_refocus (docs/recon.md). */
   double sparse_max_fill;
   int crop_margin_px;              /* widen each view's crop box (default 0) */
   elfm_ghost_threshold threshold;  /* default NONE */

@@ -11,11 +11,10 @@ void elfm_refocus_options_default(elfm_refocus_options *o)
 {
   memset(o, 0, sizeof *o);
   o->path = ELFM_PATH_AUTO;
-  /* Sparse costs ~ listed pixels x planes x 4 scattered adds, dense ~ views x
-   * W x H x planes x 4 gathered madds over the crop boxes: per pixel, a
-   * scatter costs about as much as a gather, so the crossover is near a
-   * fill of 1/2; bench_refocus measures it (docs/recon.md). */
-  o->sparse_max_fill = 0.25;
+  /* bench_refocus on flow (docs/recon.md): sparse costs ~0.8 us of CPU per
+   * listed pixel (11k pixels: 9 ms), dense ~20 ms whatever the frame, so
+   * they cross near 25k pixels, 5 % of the 25 crop boxes (533k px). */
+  o->sparse_max_fill = 0.05;
   o->crop_margin_px = 0;
   o->threshold = ELFM_GHOST_THR_NONE;
   o->threshold_value = 0.0;
