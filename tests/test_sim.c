@@ -135,7 +135,7 @@ static void test_step_response(void)
     if (c->views[k].i == 0 && c->views[k].j == 0) k0 = k;
   CHECK(k0 >= 0);
   double u0 = c->views[k0].cx_px, v0 = c->views[k0].cy_px;
-  double want_off = 0, want_on = 0;
+  double want_off = 0;
   long got_off = 0, got_on = 0;
   int n_pix = 0;
   for (int y = (int)v0 - 6; y <= (int)v0 + 6; y++) {
@@ -147,7 +147,6 @@ static void test_step_response(void)
       n_pix++;
       /* Start offset uniform in the dead band, floor: D/C - 1/2 on average. */
       want_off += D / C - 0.5;
-      want_on += D / C - 0.5;
       for (size_t i = 0; i < st.n; i++) {
         if (st.x[i] != x || st.y[i] != y) continue;
         int64_t t = st.t[i] - elfm_scene_t0_us(s);
