@@ -52,8 +52,7 @@ static void sparse_clear_plane(const elfm_refocus_plan *p, elfm_volume *vol,
     const size_t r = ws->rows_old[*at], lo = (size_t)ws->row_lo[r];
     const size_t n = (size_t)(ws->row_hi[r] - ws->row_lo[r]);
     memset(vol->data + r * W + lo, 0, n * sizeof *vol->data);
-    if (p->need) memset(ws->vox_mask + r * W + lo, 0, n * sizeof *ws->vox_mask);
-    ws->row_dirty[r] = 0;
+    ws->row_dirty[r] = 0; /* (the view masks were zeroed as they were read) */
   }
 }
 
@@ -230,12 +229,11 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const float w0 = wy * gx0, w1 = wy * gx1;
         const uint32_t r = (uint32_t)k * (uint32_t)H + (uint32_t)Y;
         mark_row(ws, r, Xs + i0, Xs + i1);
-        const int m = i1 - i0;
-        const float *bb = b + i0;
-        float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
-        for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
         if (p->need) {
-          /* A run's pixels are all non-zero, so voxel i gets signal unless it
+          /* Agreement first: only mark which views reach which voxels; the
+           * values are gathered afterwards for the voxels that pass (a few
+           * percent), so nothing is accumulated only to be zeroed.
+           * A run's pixels are all non-zero, so voxel i gets signal unless it
            * is an end whose only tap has weight 0: i = 0 needs w1, i = n
            * needs w0. (Products that underflow to 0, values < ~1e-30, and
            * exact cancellations in signed frames are the only cases where
@@ -245,23 +243,55 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
           uint32_t *mask = ws->vox_mask + (size_t)r * W + (size_t)Xs;
           const uint32_t bit = 1u << run->view;
           for (int i = ia; i < ib; i++) mask[i] |= bit;
+        } else {
+          const int m = i1 - i0;
+          const float *bb = b + i0;
+          float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
+          for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
         }
       }
     }
-    /* mean over sampling views (and agreement) while the plane is in cache */
+    /* while the plane is in cache: the mean over sampling views, or (with
+     * agreement) the gather of the voxels enough views agree on */
     for (size_t i = first_row; i < ws->n_rows; i++) {
       const size_t r = ws->rows[i];
       float *row = vol->data + r * W;
       /* 1/count through a 256-entry table: the counts are 2 MB of bytes,
        * a float inverse per voxel would be 8.4 MB of memory traffic */
       const uint8_t *cnt = p->count + r * W;
-      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= p->inv_table[cnt[X]];
-      if (p->need) {
-        const uint32_t *mask = ws->vox_mask + r * W;
-        const uint8_t *need = p->need + r * W;
-        for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++)
-          row[X] = popcount32(mask[X]) >= need[X] ? row[X] : 0.0f;
+      if (!p->need) {
+        for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= p->inv_table[cnt[X]];
+        continue;
       }
+      uint32_t *mask = ws->vox_mask + r * W;
+      const uint8_t *need = p->need + r * W;
+      const int Y = (int)(r % (size_t)H);
+      /* The masks are zeroed as they are read (no clearing pass next time),
+       * and the row's extent shrinks to the voxels actually written, which
+       * is all the next call has to clear. */
+      int lo = ws->row_hi[r], hi = lo;
+      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) {
+        uint32_t bits = mask[X];
+        mask[X] = 0;
+        if (!bits || popcount32(bits) < need[X]) continue;
+        if (lo > X) lo = X;
+        hi = X + 1;
+        /* the dense path's sum, in its view order and arithmetic: views
+         * without a bit add an exact 0 there */
+        float sum = 0.0f;
+        for (; bits; bits &= bits - 1) {
+          const elfm_refocus_shift *s = sk + __builtin_ctz(bits);
+          const float w00 = (1.0f - s->fx) * (1.0f - s->fy), w01 = s->fx * (1.0f - s->fy);
+          const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
+          const float *r0 = frame->data + (size_t)(Y + s->iy) * (size_t)p->sw + (size_t)(X + s->ix);
+          const float *r1 = r0 + p->sw;
+          sum += w00 * r0[0] + w01 * r0[1] + w10 * r1[0] + w11 * r1[1];
+        }
+        row[X] = sum * p->inv_table[cnt[X]];
+      }
+      if (lo > hi) lo = hi;
+      ws->row_lo[r] = lo;
+      ws->row_hi[r] = hi;
     }
   }
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
