@@ -688,12 +688,18 @@ static const struct component COMPONENTS[] = {
     {"bench_smooth", "Ceres smoothing per 1000-point track", 0, {"1", NULL}, {"1", NULL}},
     {"bench_simulate", "simulator speed", 0, {"flow", "100", "100", NULL}, {NULL}},
     {"bench_pipeline_score", "Hungarian solver and scoring", 0, {"--quick", NULL}, {NULL}},
+    /* {calib} and {events}: the first scene's files */
+    {"bench_peaks", "3D peak detection on refocused volumes", 0,
+     {"{calib}", "{events}", "50", "3", NULL}, {"{calib}", "{events}", NULL}},
 };
 #define N_COMPONENTS ((int)(sizeof COMPONENTS / sizeof COMPONENTS[0]))
 
-static int run_components(const char *self, const char *dir, int quick, double timeout_s,
-                          const char **names, int *n_out)
+static int run_components(const char *self, const char *dir, const char *scene_dir, int quick,
+                          double timeout_s, const char **names, int *n_out)
 {
+  char calib[PATH_MAX], events[PATH_MAX];
+  path_fmt(calib, sizeof calib, "%s/calib.json", scene_dir);
+  path_fmt(events, sizeof events, "%s/events.raw", scene_dir);
   char bdir[PATH_MAX];
   path_fmt(bdir, sizeof bdir, "%s", self);
   char *slash = strrchr(bdir, '/');
@@ -722,13 +728,15 @@ static int run_components(const char *self, const char *dir, int quick, double t
     }
     char *argv[8];
     int na = 0;
-    char shown[128] = "";
+    char shown[3 * PATH_MAX] = "";
     argv[na++] = exe;
     const char *const *args = quick ? cp->quick_args : cp->full_args;
     for (int a = 0; args[a] && na < 7; a++) {
-      argv[na++] = (char *)args[a];
+      const char *arg = !strcmp(args[a], "{calib}") ? calib
+                        : !strcmp(args[a], "{events}") ? events : args[a];
+      argv[na++] = (char *)arg;
       size_t l = strlen(shown);
-      path_fmt(shown + l, sizeof shown - l, " %s", args[a]);
+      path_fmt(shown + l, sizeof shown - l, " %s", arg);
     }
     argv[na] = NULL;
     fprintf(stderr, "eventlfm bench: component %s%s (%s) ...\n", cp->name, shown, cp->what);
@@ -977,9 +985,11 @@ int cmd_bench(int argc, char **argv)
     mark_pareto(pts, n_pts, si->name, err_alpha, 1);
   }
 
-  const char *comp_names[8];
+  const char *comp_names[16];
   int n_comps = 0;
-  if (op.components) run_components(self, dir, op.quick, op.quick ? 180 : op.timeout_s, comp_names, &n_comps);
+  if (op.components)
+    run_components(self, dir, sc[0].dir, op.quick, op.quick ? 180 : op.timeout_s, comp_names,
+                   &n_comps);
 
   char p[PATH_MAX];
   path_fmt(p, sizeof p, "%s/bench.csv", dir);
