@@ -28,6 +28,7 @@ typedef struct track_opts {
   int max_det;
   int lag_correct;
   int resolution;
+  int views_rule;  /* threshold x N/n where n of N views sample a voxel */
   int quiet;
   double max_outlier_frac;
 } track_opts;
@@ -43,6 +44,7 @@ typedef struct fwhm_list {
 
 typedef struct track_ctx {
   const track_opts *o;
+  const elfm_calib *calib;
   elfm_peaks *pk;
   elfm_linker *lk;
   elfm_detection *det;
@@ -81,6 +83,10 @@ static void usage(FILE *f)
     "detection:\n"
     "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (50 on time\n"
     "                       surfaces), --threshold-rel F (0.35 of the maximum for counts)\n"
+    "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all depths)\n"
+    "  --threshold-min V    floor of that depth-scaled threshold\n"
+    "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
+    "                       the threshold x N/n (default on)\n"
     "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 15)\n"
     "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
     "linking:\n"
@@ -200,6 +206,27 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   if (!c->pk) {
     c->pk = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
     if (!c->pk) return err ? err->code : ELFM_ERR_INVALID;
+    if (o->views_rule) {
+      /* views sampling each voxel, from a plan of the same calibration and
+       * crop options as the one refocusing (elfm_peaks_set_view_counts) */
+      elfm_refocus_plan *plan = NULL;
+      elfm_status s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
+      if (s != ELFM_OK) return s;
+      size_t nvox = (size_t)v->w * v->h * v->nz;
+      uint8_t *cnt = malloc(nvox);
+      if (!cnt) {
+        elfm_refocus_plan_free(plan);
+        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
+      }
+      for (int k = 0; k < v->nz; k++)
+        for (int Y = 0; Y < v->h; Y++)
+          for (int X = 0; X < v->w; X++)
+            cnt[((size_t)k * v->h + Y) * v->w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
+      elfm_refocus_plan_free(plan);
+      s = elfm_peaks_set_view_counts(c->pk, cnt, c->calib->n_views, err);
+      free(cnt);
+      if (s != ELFM_OK) return s;
+    }
     c->vol_w = v->w;
     c->vol_h = v->h;
     c->vol_nz = v->nz;
@@ -337,6 +364,9 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);
+  cJSON_AddNumberToObject(par, "threshold_depth_um", o->peaks.depth_range_um);
+  cJSON_AddNumberToObject(par, "threshold_min", o->peaks.absolute_min);
+  cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "radius_xy_um", o->peaks.radius_xy_um);
   cJSON_AddNumberToObject(par, "radius_z_um", o->peaks.radius_z_um);
   cJSON_AddNumberToObject(par, "min_separation_um", o->peaks.min_separation_um);
@@ -424,7 +454,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE
 };
 
 int cmd_track(int argc, char **argv)
@@ -450,6 +480,7 @@ int cmd_track(int argc, char **argv)
    * it removed most deep beads (flow recall 0.79 -> 0.36, F1 0.87 -> 0.53);
    * the detector's threshold and the linker reject the ghosts instead. */
   o.recon.refocus.agree_frac = 0;
+  o.views_rule = 1;
   int thr_given = 0;
   static const struct option lo[] = {
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -461,7 +492,11 @@ int cmd_track(int argc, char **argv)
       {"agree", required_argument, 0, O_AGREE}, {"threads", required_argument, 0, O_THREADS},
       {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
       {"threshold-k", required_argument, 0, O_THK}, {"threshold-abs", required_argument, 0, O_THA},
-      {"threshold-rel", required_argument, 0, O_THR}, {"radius-xy-um", required_argument, 0, O_RXY},
+      {"threshold-rel", required_argument, 0, O_THR},
+      {"threshold-depth-um", required_argument, 0, O_THDEPTH},
+      {"threshold-min", required_argument, 0, O_THMIN},
+      {"views-rule", required_argument, 0, O_VIEWSRULE},
+      {"radius-xy-um", required_argument, 0, O_RXY},
       {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
       {"refine", required_argument, 0, O_REFINE}, {"max-detections", required_argument, 0, O_MAXDET},
       {"gate-um", required_argument, 0, O_GATE}, {"max-gap", required_argument, 0, O_MAXGAP},
@@ -524,6 +559,13 @@ int cmd_track(int argc, char **argv)
     case O_TO: if (!cli_parse_int64(C, "--to-us", a, &o.recon.to_us)) return CLI_USAGE; break;
     case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
     case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
+    case O_THDEPTH: if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_VIEWSRULE:
+      if (!strcmp(a, "on")) o.views_rule = 1;
+      else if (!strcmp(a, "off")) o.views_rule = 0;
+      else return cli_message(C, CLI_USAGE, "--views-rule must be on or off, not '%s'", a);
+      break;
+    case O_THMIN: if (!cli_parse_double(C, "--threshold-min", a, &o.peaks.absolute_min)) return CLI_USAGE; break;
     case O_THR: thr_given = 1; if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
     case O_RXY: if (!cli_parse_double(C, "--radius-xy-um", a, &o.peaks.radius_xy_um)) return CLI_USAGE; break;
     case O_RZ: if (!cli_parse_double(C, "--radius-z-um", a, &o.peaks.radius_z_um)) return CLI_USAGE; break;
@@ -607,6 +649,7 @@ int cmd_track(int argc, char **argv)
   track_ctx c;
   memset(&c, 0, sizeof c);
   c.o = &o;
+  c.calib = &calib;
   elfm_track_store_init(&c.store);
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);

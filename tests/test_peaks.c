@@ -169,6 +169,83 @@ int main(void)
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
   CHECK_EQ_INT(n, 1);
 
+  /* Depth-dependent threshold (elfm_peaks.h): a faint blob at z = 40 um
+   * (amplitude 30) is below the absolute 50 but above 50 / (1 + (40/40)^2)
+   * = 25; one of amplitude 20 is below that and above the floor 15 only
+   * deeper, at z = -48 (50 / 2.44 = 20.5 -> missed, the floor is 15). */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  add_blob(v, 5, 5, 40, 30, SXY, SZ);
+  add_blob(v, -12, -10, 0, 30, SXY, SZ);   /* same amplitude in focus: below 50 */
+  add_blob(v, 12, -10, -48, 20, SXY, SZ);
+  {
+    elfm_peaks_options od = o;
+    od.absolute = 50;
+    od.radius_xy_um = 3;
+    od.min_separation_um = 4;
+    elfm_peaks *pd = elfm_peaks_create(&od, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pd, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 0);                     /* rule off: nothing above 50 */
+    elfm_peaks_free(pd);
+    od.depth_range_um = 40;
+    od.absolute_min = 15;
+    pd = elfm_peaks_create(&od, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pd, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 1);
+    if (n == 1) CHECK_NEAR(det[0].z_um, 40, 0.5);
+    /* floor above the scaled value: z = 40 needs 26 > 25 */
+    elfm_peaks_free(pd);
+    od.absolute_min = 31;
+    pd = elfm_peaks_create(&od, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pd, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 0);
+    elfm_peaks_free(pd);
+    od.depth_range_um = -1;
+    CHECK(elfm_peaks_create(&od, v->w, v->h, v->nz, &err) == NULL);
+  }
+
+  /* View counts (elfm_peaks_set_view_counts): two blobs of 80 over a
+   * threshold of 50; where 10 of 25 views sample, the threshold becomes
+   * 50 x 25/10 = 125 and that blob goes; where 20 do, 62.5: it stays; a
+   * voxel no view samples never gives a peak. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  add_blob(v, -15, 0, 0, 80, SXY, SZ);
+  add_blob(v, 15, 0, 0, 80, SXY, SZ);
+  add_blob(v, 0, 20, -30, 200, SXY, SZ);
+  {
+    elfm_peaks_options ov = o;
+    ov.absolute = 50;
+    ov.radius_xy_um = 3;
+    ov.min_separation_um = 4;
+    elfm_peaks *pv = elfm_peaks_create(&ov, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pv, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 3);
+    size_t nvox = (size_t)64 * 60 * 51;
+    uint8_t *cnt = malloc(nvox);
+    for (size_t i = 0; i < nvox; i++) {
+      int X = (int)(i % 64), Y = (int)(i / 64 % 60);
+      cnt[i] = Y > 45 ? 0 : X < 32 ? 10 : 20;
+    }
+    CHECK_OK(elfm_peaks_set_view_counts(pv, cnt, 25, &err), &err);
+    memset(cnt, 0, nvox);                   /* copied: the caller's array may go */
+    CHECK_OK(elfm_peaks_detect(pv, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 1);
+    if (n == 1) CHECK_NEAR(det[0].x_um, 15, 0.1);
+    CHECK_EQ_INT(elfm_peaks_set_view_counts(pv, cnt, 0, &err), ELFM_ERR_INVALID);
+    CHECK_OK(elfm_peaks_set_view_counts(pv, NULL, 0, &err), &err);   /* off again */
+    CHECK_OK(elfm_peaks_detect(pv, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 3);
+    free(cnt);
+    elfm_peaks_free(pv);
+  }
+
+  /* A single bright voxel at the end of the last row (the row-maximum
+   * skip must still see it) and one at the very first voxel. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  v->data[(size_t)64 * 60 * 51 - 1] = 500;
+  v->data[0] = 400;
+  CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
+  CHECK_EQ_INT(n, 2);
+
   /* Empty volume: no peaks, no error. */
   memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);

@@ -50,6 +50,13 @@ typedef struct elfm_peaks_options {
    * strided sample of the volume (of its non-zero voxels when most voxels
    * are zero, as in thresholded time surfaces). */
   double absolute, relative, k_sigma;
+  /* Depth-dependent absolute rule (0 = off): at depth z the absolute term is
+   * max(absolute_min, absolute / (1 + (z / depth_range_um)^2)). Why: a
+   * point's image in a view is a Gaussian of variance s0^2 + (a z)^2
+   * (diffraction of the sub-aperture NA plus its geometric defocus disc), so
+   * its peak - and the refocused peak, a mean over the views - falls as
+   * 1 / (1 + (z / zr)^2) with zr = s0 / a; the floor keeps ghosts out. */
+  double depth_range_um, absolute_min;
   double radius_xy_um;       /* local-maximum box half-size, lateral (default 3 um ~ 0.8 FWHM) */
   double radius_z_um;        /* axial half-size (default 15 um = 5 x lateral) */
   double min_separation_um;  /* anisotropic, see above (default 4 um, the scoring gate) */
@@ -74,6 +81,17 @@ void elfm_peaks_free(elfm_peaks *p);
  * are an error (ELFM_ERR_NUMERIC). Does not allocate. */
 elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detection *out,
                               int cap, int *n_out, elfm_error *err);
+
+/* Optional: how many views sample each voxel (w x h x nz, z-major like the
+ * volume, as elfm_refocus_plan_views_at gives them) and the number of lit
+ * views. The volume is a mean over the sampling views, so where only n of
+ * the N views sample a voxel a single view's image weighs N/n times more:
+ * a peak must then exceed the threshold x N/n (a real object is seen by all
+ * n, and its mean does not depend on n; a ghost made of one or two views'
+ * images does). Voxels no view samples never give a peak. The counts are
+ * copied; NULL turns the rule off. ELFM_ERR_NOMEM when the copy fails. */
+elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int n_views,
+                                       elfm_error *err);
 
 /* The threshold the last detect call used (for reports). */
 double elfm_peaks_last_threshold(const elfm_peaks *p);

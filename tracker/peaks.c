@@ -21,6 +21,9 @@ struct elfm_peaks {
   size_t cand_cap;
   peak_cand *cand;   /* candidates of the current volume */
   float *sample;     /* noise sample */
+  double *thr_plane; /* threshold per z plane of the current volume */
+  uint8_t *views;    /* views sampling each voxel (NULL: rule off) */
+  int n_views;
   int32_t *row_max;  /* per (y, z) row: its maximum voxel's bits as int32 (float order for >= 0) */
   double last_threshold;
 };
@@ -48,7 +51,8 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   }
   if (!(o->radius_xy_um > 0) || !(o->radius_z_um > 0) || !(o->kz > 0) ||
       !(o->min_separation_um >= 0) || !isfinite(o->absolute) || !isfinite(o->relative) ||
-      !isfinite(o->k_sigma) || o->relative > 1 || o->fit_half_xy < 0 || o->fit_half_z < 0 ||
+      !isfinite(o->k_sigma) || !(o->depth_range_um >= 0) || !isfinite(o->depth_range_um) ||
+      !isfinite(o->absolute_min) || o->relative > 1 || o->fit_half_xy < 0 || o->fit_half_z < 0 ||
       o->fit_half_xy > 8 || o->fit_half_z > 16 || o->refine < ELFM_REFINE_GAUSSIAN ||
       o->refine > ELFM_REFINE_NONE) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
@@ -72,7 +76,8 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   p->cand = malloc(p->cand_cap * sizeof *p->cand);
   p->sample = malloc(PEAKS_NOISE_SAMPLES * sizeof *p->sample);
   p->row_max = malloc((size_t)h * nz * sizeof *p->row_max);
-  if (!p->cand || !p->sample || !p->row_max) goto nomem;
+  p->thr_plane = malloc((size_t)nz * sizeof *p->thr_plane);
+  if (!p->cand || !p->sample || !p->row_max || !p->thr_plane) goto nomem;
   return p;
 nomem:
   elfm_peaks_free(p);
@@ -86,7 +91,27 @@ void elfm_peaks_free(elfm_peaks *p)
   free(p->cand);
   free(p->sample);
   free(p->row_max);
+  free(p->thr_plane);
+  free(p->views);
   free(p);
+}
+
+elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int n_views,
+                                       elfm_error *err)
+{
+  if (!p) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: NULL detector");
+  free(p->views);
+  p->views = NULL;
+  p->n_views = 0;
+  if (!count) return ELFM_OK;
+  if (n_views < 1 || n_views > 255)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: %d views (1..255)", n_views);
+  size_t nvox = (size_t)p->w * p->h * p->nz;
+  p->views = malloc(nvox);
+  if (!p->views) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "peaks: out of memory");
+  memcpy(p->views, count, nvox);
+  p->n_views = n_views;
+  return ELFM_OK;
 }
 
 double elfm_peaks_last_threshold(const elfm_peaks *p) { return p ? p->last_threshold : NAN; }
@@ -305,8 +330,8 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
     return elfm_error_set(err, ELFM_ERR_NUMERIC, NULL, -1,
                           "peaks: NaN voxel at index %zu of frame %lld", i, (long long)v->frame);
   }
+  /* thr: the depth-independent rules; the absolute one is per plane below */
   double thr = -INFINITY;
-  if (o->absolute > 0) thr = o->absolute;
   if (o->relative > 0 && o->relative * vmax > thr) thr = o->relative * vmax;
   if (o->k_sigma > 0 && nonzero > 0) {
     /* A strided sample of the volume; in mostly-zero volumes (thresholded
@@ -334,6 +359,25 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
     double t = med + o->k_sigma * sig;
     if (t > thr) thr = t;
   }
+  /* Absolute rule per plane: abs / (1 + (z / depth_range)^2), at least
+   * absolute_min (see elfm_peaks.h: the peak of a defocused image falls as
+   * 1 / sigma(z)^2). */
+  double thr0 = thr;
+  for (int k = 0; k < nz; k++) {
+    double t = thr0;
+    if (o->absolute > 0) {
+      double a = o->absolute;
+      if (o->depth_range_um > 0) {
+        double q = elfm_volume_z_um(v, k) / o->depth_range_um;
+        a = o->absolute / (1 + q * q);
+        if (a < o->absolute_min) a = o->absolute_min;
+      }
+      if (a > t) t = a;
+    }
+    if (t == -INFINITY) t = 0;
+    p->thr_plane[k] = t;
+  }
+  thr = o->absolute > thr0 ? o->absolute : thr0;
   if (thr == -INFINITY) thr = 0;
   p->last_threshold = thr;
 
@@ -344,11 +388,12 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
   if (rx < 1) rx = 1;
   if (rz < 1) rz = 1;
   size_t nc = 0;
-  /* compare in float: a voxel passes when its float value exceeds thr */
-  const float thr_f = thr > 0 ? (float)thr : 0.0f;
-  int32_t thr_bits;
-  memcpy(&thr_bits, &thr_f, sizeof thr_bits);
-  for (int z = 0; z < nz; z++)
+  for (int z = 0; z < nz; z++) {
+    /* compare in float: a voxel passes when its float value exceeds thr */
+    const double thr = p->thr_plane[z];
+    const float thr_f = thr > 0 ? (float)thr : 0.0f;
+    int32_t thr_bits;
+    memcpy(&thr_bits, &thr_f, sizeof thr_bits);
     for (int y = 0; y < h; y++) {
       /* a row whose maximum is not above the threshold has no candidate
        * (thr_f >= 0, where the bits' integer order is the float order) */
@@ -359,9 +404,15 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
         if (!(c > thr_f) || (double)c <= thr) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
+        if (p->views) {
+          /* threshold x N / n where n views sample the voxel (elfm_peaks.h) */
+          int nv = p->views[((size_t)z * h + y) * w + x];
+          if (nv == 0 || (double)c * nv <= thr * p->n_views) continue;
+        }
         if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z};
       }
     }
+  }
   qsort(p->cand, nc, sizeof *p->cand, cand_cmp);
 
   /* Minimum separation (anisotropic) against the stronger accepted peaks,
