@@ -19,7 +19,7 @@
  *     elfm_score.h: most pairs, then least total cost; cost = squared
  *     anisotropic distance over the squared gate, plus gap_cost per missed
  *     frame so a continuing track beats one coming back from a gap);
- *  3b. a rescue round for tracks that missed frames (rescue_gate_factor);
+ *  3b. a rescue round for established tracks left unmatched (rescue_gate_factor);
  *  4. unmatched detections start tracks; a track that has missed more
  *     than max_gap_frames consecutive frames ends. Ended tracks with at
  *     least min_points real points become "finished" and can be taken with

@@ -583,12 +583,16 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     }
   }
 
-  /* 3b. Rescue: unmatched tracks that have missed frames against unmatched
-   * detections, within a wider gate, one optimal assignment. */
+  /* 3b. Rescue: unmatched established tracks against unmatched
+   * detections, within a wider gate, one optimal assignment. Also tracks
+   * seen in the previous frame: on the flow scene a track whose prediction
+   * missed by more than the gate right after a real point let a twin be
+   * born on the same bead (flow 100 ms: 40 -> 29 tracks for 20 beads,
+   * alpha 0.545 -> 0.562). */
   if (o->rescue_gate_factor > 0) {
     int nr = 0, nc = 0;
     for (size_t i = 0; i < nt; i++)
-      if (l->track_det[i] < 0 && l->live[i].missed > 0 && l->live[i].t->n >= 3)
+      if (l->track_det[i] < 0 && l->live[i].t->n >= 3)
         l->rows[nr++] = (int)i;  /* established tracks only: a 2-point one has no reliable path */
     for (size_t j = 0; j < nd; j++)
       if (l->det_track[j] < 0) l->cols[nc++] = (int)j;
