@@ -91,6 +91,8 @@ static void usage(FILE *f)
     "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
     "linking:\n"
     "  --gate-um G (6), --max-gap N frames (50), --min-points N (5)\n"
+    "  --lead-sigmas K      with --lag-correct: ON events lead a moving object by ~K x\n"
+    "                       its width along the motion; move detections back by that\n"
     "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5; 0 off)\n"
     "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
     "smoothing:\n"
@@ -369,6 +371,7 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(par, "threshold_min", o->peaks.absolute_min);
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
+  cJSON_AddNumberToObject(par, "lead_sigmas", o->link.lead_sigmas);
   cJSON_AddNumberToObject(par, "radius_xy_um", o->peaks.radius_xy_um);
   cJSON_AddNumberToObject(par, "radius_z_um", o->peaks.radius_z_um);
   cJSON_AddNumberToObject(par, "min_separation_um", o->peaks.min_separation_um);
@@ -456,7 +459,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD
 };
 
 int cmd_track(int argc, char **argv)
@@ -499,6 +502,7 @@ int cmd_track(int argc, char **argv)
       {"threshold-min", required_argument, 0, O_THMIN},
       {"views-rule", required_argument, 0, O_VIEWSRULE},
       {"rescue-factor", required_argument, 0, O_RESCUE},
+      {"lead-sigmas", required_argument, 0, O_LEAD},
       {"radius-xy-um", required_argument, 0, O_RXY},
       {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
       {"refine", required_argument, 0, O_REFINE}, {"max-detections", required_argument, 0, O_MAXDET},
@@ -563,6 +567,7 @@ int cmd_track(int argc, char **argv)
     case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
     case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
     case O_THDEPTH: if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
     case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
     case O_VIEWSRULE:
       if (!strcmp(a, "on")) o.views_rule = 1;

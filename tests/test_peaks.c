@@ -246,6 +246,26 @@ int main(void)
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
   CHECK_EQ_INT(n, 2);
 
+  /* Leading-edge term: a detection of width 2 um along x (sigma_x), moving
+   * slowly along +x (trail 0.001 um: lag ~ its length), moves back by
+   * 0.7 x 2 um; along y it uses sigma_y; with lead 0 nothing but the lag. */
+  {
+    elfm_detection dl;
+    memset(&dl, 0, sizeof dl);
+    dl.sigma_x_um = 2.0;
+    dl.sigma_y_um = 1.0;
+    dl.sigma_z_um = 8.0;
+    elfm_detection_correct_lag_lead(&dl, 0.001, 0, 0, 1000, 0.7);
+    CHECK_NEAR(dl.x_um, 0.001 - 1.4, 1e-3);
+    CHECK_NEAR(dl.y_um, 0, 1e-12);
+    dl.x_um = dl.y_um = dl.z_um = 0;
+    elfm_detection_correct_lag_lead(&dl, 0, -0.001, 0, 1000, 0.7);
+    CHECK_NEAR(dl.y_um, -(0.001 - 0.7), 1e-3);
+    dl.x_um = dl.y_um = dl.z_um = 0;
+    elfm_detection_correct_lag_lead(&dl, 0.001, 0, 0, 1000, 0);
+    CHECK_NEAR(dl.x_um, 0.001, 1e-4);
+  }
+
   /* Empty volume: no peaks, no error. */
   memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);

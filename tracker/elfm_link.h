@@ -58,6 +58,10 @@ typedef struct elfm_link_options {
    * detection attached to a track with a velocity is moved forward by the
    * surface's lag, in the caller's array too. 0 = off. */
   double lag_tau_us;
+  /* With it, the ON leading-edge term (elfm_detection_correct_lag_lead):
+   * detections move back by lead_sigmas x their width along the motion.
+   * Default 0. */
+  double lead_sigmas;
   /* Velocity a new track predicts with until it has two points (um/ms):
    * zero, or the stage velocity when the whole sample moves together. */
   double prior_velocity_um_per_ms[3];

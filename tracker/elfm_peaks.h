@@ -110,6 +110,15 @@ double elfm_peaks_trail_lag_um(double trail_um, double sigma_um);
 void elfm_detection_correct_lag(elfm_detection *d, double vx_um_per_ms, double vy_um_per_ms,
                                 double vz_um_per_ms, double tau_us);
 
+/* The same with a leading-edge term for surfaces of ON events only: a
+ * moving object's light rises only on its leading half, so ON events sit
+ * ahead of its centre by about its width along the motion (sigma). The
+ * shift forward is trail lag - lead_sigmas x sigma (negative: backward).
+ * lead_sigmas 0 is elfm_detection_correct_lag. */
+void elfm_detection_correct_lag_lead(elfm_detection *d, double vx_um_per_ms,
+                                     double vy_um_per_ms, double vz_um_per_ms, double tau_us,
+                                     double lead_sigmas);
+
 #ifdef __cplusplus
 }
 #endif

@@ -79,7 +79,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
   if (!o || !(o->gate_um > 0) || !isfinite(o->gate_um) || !(o->gate_growth_um_per_frame >= 0) ||
       !isfinite(o->gate_growth_um_per_frame) || !(o->kz > 0) || o->max_gap_frames < 0 ||
       o->min_points < 1 || o->history < 2 || o->short_history < 4 || o->short_gap < 0 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
-      o->max_candidates > 1024 || !(o->lag_tau_us >= 0) ||
+      o->max_candidates > 1024 || !(o->lag_tau_us >= 0) || !isfinite(o->lead_sigmas) ||
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
       !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
       !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
@@ -307,8 +307,9 @@ elfm_track *elfm_link_pop_finished(elfm_linker *l)
 static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elfm_error *err)
 {
   if (l->o.lag_tau_us > 0 && lt->t->n >= 2)
-    elfm_detection_correct_lag(d, current_velocity(lt)[0], current_velocity(lt)[1],
-                               current_velocity(lt)[2], l->o.lag_tau_us);
+    elfm_detection_correct_lag_lead(d, current_velocity(lt)[0], current_velocity(lt)[1],
+                                    current_velocity(lt)[2], l->o.lag_tau_us,
+                                    l->o.lead_sigmas);
   elfm_status st = elfm_track_append(lt->t, d, err);
   if (st != ELFM_OK) return st;
   lt->last_frame = d->frame;
@@ -321,8 +322,9 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
     /* the first velocity: correct the two points it came from alike, so
      * later fits do not mix corrected and uncorrected points */
     for (int k = 0; k < 2; k++)
-      elfm_detection_correct_lag(&lt->t->pts[k], lt->vel_um_per_ms[0], lt->vel_um_per_ms[1],
-                                 lt->vel_um_per_ms[2], l->o.lag_tau_us);
+      elfm_detection_correct_lag_lead(&lt->t->pts[k], lt->vel_um_per_ms[0],
+                                      lt->vel_um_per_ms[1], lt->vel_um_per_ms[2],
+                                      l->o.lag_tau_us, l->o.lead_sigmas);
     d->x_um = lt->t->pts[1].x_um;
     d->y_um = lt->t->pts[1].y_um;
     d->z_um = lt->t->pts[1].z_um;

@@ -490,6 +490,12 @@ double elfm_peaks_trail_lag_um(double trail_um, double sigma_um)
 
 void elfm_detection_correct_lag(elfm_detection *d, double vx, double vy, double vz, double tau_us)
 {
+  elfm_detection_correct_lag_lead(d, vx, vy, vz, tau_us, 0.0);
+}
+
+void elfm_detection_correct_lag_lead(elfm_detection *d, double vx, double vy, double vz,
+                                     double tau_us, double lead_sigmas)
+{
   double speed = sqrt(vx * vx + vy * vy + vz * vz);
   if (!d || !(speed > 0) || !(tau_us > 0) || !isfinite(speed)) return;
   double ux = vx / speed, uy = vy / speed, uz = vz / speed;
@@ -498,7 +504,7 @@ void elfm_detection_correct_lag(elfm_detection *d, double vx, double vy, double 
               uz * uz * d->sigma_z_um * d->sigma_z_um;
   double s = s2 > 0 ? sqrt(s2) : 0;
   if (!(s > 0)) return;
-  double lag = elfm_peaks_trail_lag_um(speed * tau_us * 1e-3, s);
+  double lag = elfm_peaks_trail_lag_um(speed * tau_us * 1e-3, s) - lead_sigmas * s;
   d->x_um += ux * lag;
   d->y_um += uy * lag;
   d->z_um += uz * lag;
