@@ -28,7 +28,8 @@ typedef struct track_opts {
   int max_det;
   int lag_correct;
   int resolution;
-  int views_rule;  /* threshold x N/n where n of N views sample a voxel */
+  int views_rule;  /* threshold x (N/n)^views_exponent where n of N views sample a voxel */
+  double views_exponent;
   int quiet;
   double max_outlier_frac;
 } track_opts;
@@ -86,7 +87,7 @@ static void usage(FILE *f)
     "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all depths)\n"
     "  --threshold-min V    floor of that depth-scaled threshold\n"
     "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
-    "                       the threshold x N/n (default on)\n"
+    "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
     "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 15)\n"
     "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
     "linking:\n"
@@ -227,7 +228,7 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
           for (int X = 0; X < v->w; X++)
             cnt[((size_t)k * v->h + Y) * v->w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
       elfm_refocus_plan_free(plan);
-      s = elfm_peaks_set_view_counts(c->pk, cnt, c->calib->n_views, err);
+      s = elfm_peaks_set_view_counts(c->pk, cnt, c->calib->n_views, o->views_exponent, err);
       free(cnt);
       if (s != ELFM_OK) return s;
     }
@@ -371,6 +372,7 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(par, "threshold_depth_um", o->peaks.depth_range_um);
   cJSON_AddNumberToObject(par, "threshold_min", o->peaks.absolute_min);
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
+  cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
   cJSON_AddNumberToObject(par, "lead_sigmas", o->link.lead_sigmas);
   cJSON_AddNumberToObject(par, "link_kz", o->link.kz);
@@ -461,7 +463,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP
 };
 
 int cmd_track(int argc, char **argv)
@@ -488,6 +490,7 @@ int cmd_track(int argc, char **argv)
    * the detector's threshold and the linker reject the ghosts instead. */
   o.recon.refocus.agree_frac = 0;
   o.views_rule = 1;
+  o.views_exponent = 0.5;
   /* Linker distance with z / 1.5, not the scoring's z / 4: the detector
    * localises z ~2.5x worse than x/y (RMSE 1.1 vs 0.44 um on flow), so z/4
    * let tracks jump between beads passing 10-20 um apart in z. Flow 100 ms,
@@ -512,6 +515,7 @@ int cmd_track(int argc, char **argv)
       {"rescue-factor", required_argument, 0, O_RESCUE},
       {"lead-sigmas", required_argument, 0, O_LEAD},
       {"link-kz", required_argument, 0, O_LINKKZ},
+      {"views-exponent", required_argument, 0, O_VEXP},
       {"radius-xy-um", required_argument, 0, O_RXY},
       {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
       {"refine", required_argument, 0, O_REFINE}, {"max-detections", required_argument, 0, O_MAXDET},
@@ -576,6 +580,7 @@ int cmd_track(int argc, char **argv)
     case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
     case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
     case O_THDEPTH: if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_VEXP: if (!cli_parse_double(C, "--views-exponent", a, &o.views_exponent)) return CLI_USAGE; break;
     case O_LINKKZ: if (!cli_parse_double(C, "--link-kz", a, &o.link.kz)) return CLI_USAGE; break;
     case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
     case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;

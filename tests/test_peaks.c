@@ -225,13 +225,13 @@ int main(void)
       int X = (int)(i % 64), Y = (int)(i / 64 % 60);
       cnt[i] = Y > 45 ? 0 : X < 32 ? 10 : 20;
     }
-    CHECK_OK(elfm_peaks_set_view_counts(pv, cnt, 25, &err), &err);
+    CHECK_OK(elfm_peaks_set_view_counts(pv, cnt, 25, 1.0, &err), &err);
     memset(cnt, 0, nvox);                   /* copied: the caller's array may go */
     CHECK_OK(elfm_peaks_detect(pv, v, det, 16, &n, &err), &err);
     CHECK_EQ_INT(n, 1);
     if (n == 1) CHECK_NEAR(det[0].x_um, 15, 0.1);
-    CHECK_EQ_INT(elfm_peaks_set_view_counts(pv, cnt, 0, &err), ELFM_ERR_INVALID);
-    CHECK_OK(elfm_peaks_set_view_counts(pv, NULL, 0, &err), &err);   /* off again */
+    CHECK_EQ_INT(elfm_peaks_set_view_counts(pv, cnt, 0, 1.0, &err), ELFM_ERR_INVALID);
+    CHECK_OK(elfm_peaks_set_view_counts(pv, NULL, 0, 1.0, &err), &err);   /* off again */
     CHECK_OK(elfm_peaks_detect(pv, v, det, 16, &n, &err), &err);
     CHECK_EQ_INT(n, 3);
     free(cnt);

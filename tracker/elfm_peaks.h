@@ -84,14 +84,16 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
 
 /* Optional: how many views sample each voxel (w x h x nz, z-major like the
  * volume, as elfm_refocus_plan_views_at gives them) and the number of lit
- * views. The volume is a mean over the sampling views, so where only n of
- * the N views sample a voxel a single view's image weighs N/n times more:
- * a peak must then exceed the threshold x N/n (a real object is seen by all
- * n, and its mean does not depend on n; a ghost made of one or two views'
- * images does). Voxels no view samples never give a peak. The counts are
- * copied; NULL turns the rule off. ELFM_ERR_NOMEM when the copy fails. */
+ * views N. The volume is a mean over the sampling views, so where only n of
+ * the N views sample a voxel a single view's image weighs N/n times more
+ * and the noise of the mean grows as sqrt(N/n): a peak must there exceed
+ * the threshold x (N/n)^exponent (1: ghosts of one or two views' images;
+ * 0.5: noise; a real object is seen by all n and its mean does not depend
+ * on n). Voxels no view samples never give a peak. The counts are copied;
+ * NULL turns the rule off. ELFM_ERR_INVALID for N outside 1..255 or an
+ * exponent outside 0..4, ELFM_ERR_NOMEM when the copy fails. */
 elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int n_views,
-                                       elfm_error *err);
+                                       double exponent, elfm_error *err);
 
 /* The threshold the last detect call used (for reports). */
 double elfm_peaks_last_threshold(const elfm_peaks *p);

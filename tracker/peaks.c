@@ -24,6 +24,7 @@ struct elfm_peaks {
   double *thr_plane; /* threshold per z plane of the current volume */
   uint8_t *views;    /* views sampling each voxel (NULL: rule off) */
   int n_views;
+  double view_scale[256]; /* threshold factor (N / n)^exponent by view count n */
   int32_t *row_max;  /* per (y, z) row: its maximum voxel's bits as int32 (float order for >= 0) */
   double last_threshold;
 };
@@ -97,7 +98,7 @@ void elfm_peaks_free(elfm_peaks *p)
 }
 
 elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int n_views,
-                                       elfm_error *err)
+                                       double exponent, elfm_error *err)
 {
   if (!p) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: NULL detector");
   free(p->views);
@@ -106,11 +107,15 @@ elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int 
   if (!count) return ELFM_OK;
   if (n_views < 1 || n_views > 255)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: %d views (1..255)", n_views);
+  if (!(exponent >= 0 && exponent <= 4))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: view exponent %g (0..4)", exponent);
   size_t nvox = (size_t)p->w * p->h * p->nz;
   p->views = malloc(nvox);
   if (!p->views) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "peaks: out of memory");
   memcpy(p->views, count, nvox);
   p->n_views = n_views;
+  p->view_scale[0] = INFINITY;  /* no view: never a peak */
+  for (int k = 1; k < 256; k++) p->view_scale[k] = pow((double)n_views / k, exponent);
   return ELFM_OK;
 }
 
@@ -405,9 +410,9 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
         if (p->views) {
-          /* threshold x N / n where n views sample the voxel (elfm_peaks.h) */
-          int nv = p->views[((size_t)z * h + y) * w + x];
-          if (nv == 0 || (double)c * nv <= thr * p->n_views) continue;
+          /* threshold x (N / n)^e where n views sample the voxel (elfm_peaks.h) */
+          double f = p->view_scale[p->views[((size_t)z * h + y) * w + x]];
+          if (!((double)c > thr * f)) continue;
         }
         if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z};
       }
