@@ -211,12 +211,20 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
 {
   const double t_start = now_s();
   double t_progress = t_start;
+  /* A source error (a corrupt block in the file) ends the run, but the
+   * frames completed before it are still refocused and delivered. */
+  elfm_status src_st = ELFM_OK;
+  elfm_error src_err;
+  elfm_error_clear(&src_err);
   for (;;) {
     int nb = 0, got = 1;
     while (nb < r->nslots) {
-      elfm_status st = r->src.tiff ? source_tiff_next(r, r->slots[nb].frame, &got, err)
-                                   : source_events_next(r, r->slots[nb].frame, &got, err);
-      if (st) return st;
+      src_st = r->src.tiff ? source_tiff_next(r, r->slots[nb].frame, &got, &src_err)
+                           : source_events_next(r, r->slots[nb].frame, &got, &src_err);
+      if (src_st) {
+        got = 0;
+        break;
+      }
       if (!got) break;
       if (r->first_window_us == INT64_MIN) r->first_window_us = r->slots[nb].frame->t_start_us;
       double span = (double)(r->slots[nb].frame->t_end_us - r->first_window_us) * 1e-6;
@@ -259,7 +267,8 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
     }
     if (!got) break;
   }
-  return ELFM_OK;
+  if (src_st && err) *err = src_err;
+  return src_st;
 }
 
 static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)
