@@ -242,6 +242,25 @@ static void test_runs(const char *dir, const elfm_calib *cal)
   }
   CHECK(elfm_volume_read_exr(path, &back, &err) != ELFM_OK && back == NULL); /* not an EXR */
   CHECK(strstr(err.file, "events.raw") != NULL);
+  /* a cut EXR: an error naming the file, no crash */
+  {
+    char cut_exr[700];
+    snprintf(cut_exr, sizeof cut_exr, "%s/cut.exr", dir);
+    FILE *ie = fopen(exr, "rb"), *oe = fopen(cut_exr, "wb");
+    if (ie && oe) {
+      fseek(ie, 0, SEEK_END);
+      long len = ftell(ie);
+      fseek(ie, 0, SEEK_SET);
+      for (long i = 0; i < len / 2; i++) fputc(fgetc(ie), oe);
+    }
+    if (ie) fclose(ie);
+    if (oe) fclose(oe);
+    elfm_status se = elfm_volume_read_exr(cut_exr, &back, &err);
+    CHECK(se != ELFM_OK && back == NULL);
+    CHECK(strstr(err.file, "cut.exr") != NULL);
+    elfm_volume_free(back);
+    back = NULL;
+  }
   CHECK_OK(elfm_volume_write_mip_png(c1.keep, png, 0, 1, &err), &err);
   png_image im;
   memset(&im, 0, sizeof im);
