@@ -240,12 +240,34 @@ int main(void)
     free(p0); free(v); free(d); free(perm); free(tag);
   }
 
-  /* 5b. Rescue: a bead circling at 3 um/ms (radius 30 um) is dark for 10
-   * frames; the straight extrapolation leaves it ~9 um off, outside the
-   * gate. Without the rescue round it comes back as a second track. */
+  /* 5b. Rescue: a bead moving at 3 um/ms along x is dark for 10 frames and
+   * comes back 15 um to the side of its line (gate after 10 missed frames:
+   * 6 + 0.5 + 6 x 0.3 x 3 = 11.9 um; rescue gate 2.5 x that). Without the
+   * rescue round it comes back as a second track. */
   for (int rescue = 0; rescue < 2; rescue++) {
     elfm_link_options orr = o;
     orr.rescue_gate_factor = rescue ? 2.5 : 0;
+    elfm_linker *l = elfm_link_create(&orr, &err);
+    for (int f = 0; f < 60; f++) {
+      if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+      elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+    CHECK_MSG(n == (rescue ? 1 : 2), "rescue %d: %d tracks", rescue, n);
+    elfm_link_free(l);
+  }
+
+  /* 5b'. Turn model: a bead circling at 3 um/ms (radius 30 um, 5.7 degrees
+   * per ms) is dark for 10 frames; a straight extrapolation leaves it ~9 um
+   * off, outside the gate once the rescue round is off; the constant-rate
+   * turn keeps it on the circle: one track of all 50 points. */
+  {
+    elfm_link_options orr = o;
+    orr.rescue_gate_factor = 0;
     elfm_linker *l = elfm_link_create(&orr, &err);
     for (int f = 0; f < 60; f++) {
       if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
@@ -255,8 +277,12 @@ int main(void)
     CHECK_OK(elfm_link_finish(l, &err), &err);
     int n = 0;
     elfm_track *t;
-    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
-    CHECK_MSG(n == (rescue ? 1 : 2), "rescue %d: %d tracks", rescue, n);
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      CHECK_EQ_INT((int)t->n, 50);
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == 1, "circling bead after a 10-frame gap: %d tracks", n);
     elfm_link_free(l);
   }
 

@@ -1,12 +1,13 @@
 /* elfm_link.h — streaming frame-to-frame linking of detections into tracks.
  *
  * Per frame (elfm_link_step):
- *  1. every live track predicts its position at the frame's time: after
- *     at most `short_gap` missed frames from a constant-acceleration fit
- *     to its last `short_history` real points (objects on curved paths:
- *     the flow scene's beads turn ~17 degrees per millisecond), after
- *     longer gaps with that fit's current velocity but no acceleration
- *     (extrapolating an acceleration over 50 frames diverges); tracks of 2-3
+ *  1. every live track predicts its position at the frame's time from a
+ *     constant-acceleration fit to its last `short_history` real points:
+ *     in the next frame with that fit (objects on curved paths: the flow
+ *     scene's beads turn ~17 degrees per millisecond), after missed frames
+ *     as a constant-rate turn (the fit's velocity rotating at the rate its
+ *     normal acceleration gives, at constant speed: it stays on the circle
+ *     where an extrapolated acceleration diverges); tracks of 2-3
  *     points use a constant velocity fitted to their last `history` points,
  *     a track with one point prior_velocity_um_per_ms;
  *  2. the frame's detections go into a FLANN exact k-d tree
@@ -51,7 +52,7 @@ typedef struct elfm_link_options {
   int min_points;                  /* default 5 real points */
   int history;                     /* default 20 points for the long velocity fit */
   int short_history;               /* default 8 points for the short acceleration fit */
-  int short_gap;                   /* default 6 missed frames */
+  int short_gap;                   /* default 6: missed frames the gate widens for turns */
   double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
   int max_candidates;              /* per track, default 8 */
   /* Time-surface lag correction (elfm_peaks.h): when tau_us > 0, each
