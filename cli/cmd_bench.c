@@ -126,6 +126,7 @@ struct point_result {
   const struct sweep_point *sp;
   const char *status;   /* "ok", "unsupported", "failed", "timeout", "score failed" */
   double wall_s, peak_rss_mb;
+  double cpu_s; /* user + system time of the child, all its threads */
   int64_t events;
   double span_s, events_per_s, volumes, volumes_per_s, rtf;
   elfm_score_result score;
@@ -164,7 +165,7 @@ static int mkdir_p(const char *path)
  * code, 128+signal when killed by a signal, -1 when it could not start,
  * -2 on timeout. */
 static int run_child(char *const argv[], int use_path, const char *log_path, double timeout_s,
-                     double *wall_s, double *peak_rss_mb)
+                     double *wall_s, double *peak_rss_mb, double *cpu_s)
 {
   double t0 = cli_now_s();
   fflush(stdout);
@@ -199,6 +200,9 @@ static int run_child(char *const argv[], int use_path, const char *log_path, dou
   }
   if (wall_s) *wall_s = cli_now_s() - t0;
   if (peak_rss_mb) *peak_rss_mb = (double)ru.ru_maxrss / 1024.0; /* Linux: kB */
+  if (cpu_s)
+    *cpu_s = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+             (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
   if (timed_out) return -2;
   if (WIFEXITED(st)) return WEXITSTATUS(st);
   if (WIFSIGNALED(st)) return 128 + WTERMSIG(st);
@@ -393,7 +397,7 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
   fprintf(f, "scene,axis,setting,args,status,wall_s,events,span_s,events_per_s,volumes,"
              "volumes_per_s,realtime_factor,peak_rss_mb,f1,recall,precision,rmse_x_um,rmse_y_um,"
              "rmse_z_um,alpha,beta,jaccard_tracks,jaccard_detections,pareto_f1,pareto_alpha,"
-             "recon_s,peaks_s,link_s,smooth_s,stage_velocity_rel_error\n");
+             "recon_s,peaks_s,link_s,smooth_s,stage_velocity_rel_error,cpu_s,realtime_factor_cpu\n");
   for (int i = 0; i < n; i++) {
     const struct point_result *p = &pts[i];
     char args[256];
@@ -417,6 +421,10 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
     }
     char b[64];
     fmt_num(b, sizeof b, "%.5g", p->score.has_stage ? p->score.stage_rel_error : NAN);
+    fprintf(f, ",%s", b);
+    fmt_num(b, sizeof b, "%.5g", p->cpu_s);
+    fprintf(f, ",%s", b);
+    fmt_num(b, sizeof b, "%.5g", p->cpu_s > 0 ? p->span_s / p->cpu_s : NAN);
     fprintf(f, ",%s\n", b);
   }
   return fclose(f) == 0 ? 0 : -1;
@@ -443,7 +451,9 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
   fprintf(f, "# eventlfm bench%s\n\n", op->quick ? " --quick" : "");
   fprintf(f, "Machine: %s. Every point runs `eventlfm track` as a child process; wall time "
              "includes process start, reading the events and writing all outputs. Real-time "
-             "factor = recording span / wall time (>= 1: faster than the camera). Errors from "
+             "factor = recording span / wall time (>= 1: faster than the camera); RTF (CPU) = "
+             "recording span / CPU time of the run, all threads (less sensitive to other load "
+             "on the machine). Errors from "
              "`eventlfm score` definitions (SPEC 7, eps 4 um, kz 4). Pareto: not beaten in both "
              "speed and error by another point of the same scene (F1 / alpha).\n\n", host);
   for (int s = 0; s < n_sc; s++)
@@ -452,12 +462,13 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
             sc[s].t_last_us > sc[s].t_first_us
                 ? (double)sc[s].events / ((double)(sc[s].t_last_us - sc[s].t_first_us)) : 0.0,
             (long long)op->seed);
-  fprintf(f, "\n| scene | axis | setting | status | Mev/s | volumes/s | RTF | peak MB | F1 | "
+  fprintf(f, "\n| scene | axis | setting | status | Mev/s | volumes/s | RTF | RTF (CPU) | peak MB | F1 | "
              "RMSE x | RMSE y | RMSE z | alpha | beta | Pareto | recon / peaks / link / smooth s |\n");
-  fprintf(f, "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
+  fprintf(f, "|---|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n");
   for (int i = 0; i < n; i++) {
     const struct point_result *p = &pts[i];
-    char c[10][32];
+    char c[11][32];
+    fmt_num(c[10], 32, "%.3f", p->cpu_s > 0 && !strcmp(p->status, "ok") ? p->span_s / p->cpu_s : NAN);
     fmt_num(c[0], 32, "%.2f", p->events_per_s * 1e-6);
     fmt_num(c[1], 32, "%.0f", p->volumes_per_s);
     fmt_num(c[2], 32, "%.3f", p->rtf);
@@ -472,9 +483,9 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
     if (isfinite(p->stage_s[0]))
       path_fmt(st, sizeof st, "%.2f / %.2f / %.2f / %.2f", p->stage_s[0], p->stage_s[1],
                p->stage_s[2], p->stage_s[3]);
-    fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s%s | %s |\n",
-            p->scene, p->sp->axis, p->sp->setting, p->status, c[0], c[1], c[2], c[3], c[4], c[5],
-            c[6], c[7], c[8], c[9], p->pareto_f1 ? "F1 " : "", p->pareto_alpha ? "alpha" : "", st);
+    fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s%s | %s |\n",
+            p->scene, p->sp->axis, p->sp->setting, p->status, c[0], c[1], c[2], c[10], c[3], c[4],
+            c[5], c[6], c[7], c[8], c[9], p->pareto_f1 ? "F1 " : "", p->pareto_alpha ? "alpha" : "", st);
   }
   for (int i = 0; i < n; i++)
     if (pts[i].score.has_stage && pts[i].score.n_frames > 0 && !strcmp(pts[i].status, "ok")) {
@@ -556,7 +567,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
   char logp[PATH_MAX], cwd[PATH_MAX];
   path_fmt(logp, sizeof logp, "%s/plot/gnuplot.log", dir);
   if (!getcwd(cwd, sizeof cwd) || chdir(dir) != 0) return -1;
-  int rc = run_child(argv, 1, logp, timeout_s, NULL, NULL);
+  int rc = run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL);
   if (chdir(cwd) != 0) return -1;
   return rc == 0 ? 0 : -1;
 }
@@ -610,7 +621,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
       char *argv[] = {(char *)self, "recon", "--calib", calib, "--events", ev, "--out", out,
                       "--repr", (char *)reprs[r], "--dt-us", dt, "--tau-us", dt, "--from-us",
                       from, "--to-us", to, "--save-mips", "--quiet", NULL};
-      int rc = run_child(argv, 0, logp, timeout_s, NULL, NULL);
+      int rc = run_child(argv, 0, logp, timeout_s, NULL, NULL, NULL);
       if (rc != 0 || newest_png(out, pngs[r][k], PATH_MAX) != 0) {
         /* MIPs may sit in a sub-directory */
         char sub[PATH_MAX];
@@ -639,7 +650,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
   char logp[PATH_MAX];
   path_fmt(logp, sizeof logp, "%s/fig_s4/gnuplot.log", dir);
   char *argv[] = {"gnuplot", p, NULL};
-  return run_child(argv, 1, logp, timeout_s, NULL, NULL) == 0 ? 0 : -1;
+  return run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL) == 0 ? 0 : -1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -741,7 +752,7 @@ static int run_components(const char *self, const char *dir, const char *scene_d
     argv[na] = NULL;
     fprintf(stderr, "eventlfm bench: component %s%s (%s) ...\n", cp->name, shown, cp->what);
     double wall = 0;
-    int rc = run_child(argv, 0, logp, timeout_s, &wall, NULL);
+    int rc = run_child(argv, 0, logp, timeout_s, &wall, NULL, NULL);
     FILE *f = fopen(logp, "a");
     if (f) {
       fprintf(f, "[eventlfm bench: `%s%s` (%s) exited %d after %.1f s%s]\n", cp->name, shown,
@@ -850,7 +861,7 @@ int cmd_bench(int argc, char **argv)
       char *sargv[] = {self, "simulate", si->name, "--out", si->dir, "--seed", seed,
                        "--duration-ms", dur, NULL};
       double wall = 0;
-      int rc = run_child(sargv, 0, logp, op.timeout_s, &wall, NULL);
+      int rc = run_child(sargv, 0, logp, op.timeout_s, &wall, NULL, NULL);
       if (rc != 0)
         return cli_message("bench", CLI_FAIL, "simulate %s failed (exit %d); see %s", tok, rc, logp);
       char ev[PATH_MAX];
@@ -942,7 +953,7 @@ int cmd_bench(int argc, char **argv)
       targv[na++] = run;
       for (int a = 0; sp->args[a]; a++) targv[na++] = (char *)sp->args[a];
       targv[na] = NULL;
-      int rc = run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb);
+      int rc = run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb, &p->cpu_s);
       if (rc != 0) p->peak_rss_mb = NAN; /* a rejected run's memory means nothing */
       if (rc == 2) p->status = "unsupported";
       else if (rc == -2) p->status = "timeout";
