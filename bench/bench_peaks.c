@@ -93,6 +93,7 @@ int main(int argc, char **argv)
   double *ms = malloc((size_t)rounds * sizeof *ms);
   long total = 0;
   double checksum = 0;
+  int above_abs = 0;  /* volumes whose threshold was set by the noise rule, not the absolute 50 */
   for (int r = 0; r < rounds; r++) {
     long tot = 0;
     double cs = 0, t = 0;
@@ -104,6 +105,7 @@ int main(int argc, char **argv)
         return 1;
       }
       t += now_s() - t0;
+      if (r == 0 && elfm_peaks_last_threshold(pk) > po.absolute) above_abs++;
       tot += n;
       for (int j = 0; j < n; j++) cs += det[j].x_um + 3 * det[j].y_um + 7 * det[j].z_um;
     }
@@ -115,6 +117,7 @@ int main(int argc, char **argv)
   printf("volumes %d of %d x %d x %d, rounds %d\n", k.n, k.v[0]->w, k.v[0]->h, k.v[0]->nz,
          rounds);
   printf("peaks per round %ld, position checksum %.6f\n", total, checksum);
+  printf("volumes where the 6-sigma noise rule set the threshold: %d of %d\n", above_abs, k.n);
   printf("ms per volume: median %.3f, min %.3f, max %.3f\n", ms[rounds / 2], ms[0],
          ms[rounds - 1]);
   for (int i = 0; i < k.n; i++) elfm_volume_free(k.v[i]);

@@ -266,6 +266,38 @@ int main(void)
     CHECK_NEAR(dl.x_um, 0.001, 1e-4);
   }
 
+  /* Threshold = max of the rules. Non-negative noise in [0, 4]: median ~2,
+   * MAD ~1, so 6 sigma gives ~2 + 6 x 1.48 = 10.9; with an absolute 8 the
+   * noise rule wins, with an absolute 30 the absolute one. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  {
+    uint64_t sd = 777;
+    for (size_t i = 0; i < (size_t)64 * 60 * 51; i++) {
+      sd ^= sd << 13; sd ^= sd >> 7; sd ^= sd << 17;
+      v->data[i] = (float)(4.0 * (double)(sd >> 11) / 9007199254740992.0);
+    }
+    elfm_peaks_options on = o;
+    on.k_sigma = 6;
+    on.relative = 0;
+    on.absolute = 0;
+    elfm_peaks *pn = elfm_peaks_create(&on, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pn, v, det, 16, &n, &err), &err);
+    double t_noise = elfm_peaks_last_threshold(pn);
+    CHECK_MSG(t_noise > 9 && t_noise < 13, "noise threshold %g", t_noise);
+    elfm_peaks_free(pn);
+    on.absolute = 8;
+    pn = elfm_peaks_create(&on, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pn, v, det, 16, &n, &err), &err);
+    CHECK_NEAR(elfm_peaks_last_threshold(pn), t_noise, 1e-9);
+    elfm_peaks_free(pn);
+    on.absolute = 30;
+    pn = elfm_peaks_create(&on, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(pn, v, det, 16, &n, &err), &err);
+    CHECK_NEAR(elfm_peaks_last_threshold(pn), 30, 1e-12);
+    CHECK_EQ_INT(n, 0);
+    elfm_peaks_free(pn);
+  }
+
   /* Empty volume: no peaks, no error. */
   memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
