@@ -179,9 +179,9 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   *out = NULL;
   elfm_refocus_workspace *ws = calloc(1, sizeof *ws);
   if (!ws) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
-  size_t nvox = (size_t)p->w * p->h * p->nz;
   ws->plan = p;
-  ws->plane_cnt = calloc((size_t)p->w * p->h, 1);
+  /* dense: a plane of counts; sparse agreement: two rows (counts, pass) */
+  ws->plane_cnt = calloc((size_t)p->w * (size_t)(p->h > 2 ? p->h : 2), 1);
   ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);
   ws->cap_sorted = 1u << 14;
   ws->sorted = malloc(ws->cap_sorted * sizeof *ws->sorted);
@@ -194,10 +194,33 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
   ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
-  if (p->need) ws->vox_mask = calloc(nvox, sizeof *ws->vox_mask);
+  int sup_ok = 1;
+  if (p->need) {
+    size_t area = 0, rows = 0;
+    ws->sup_off = malloc((size_t)p->nv * sizeof *ws->sup_off);
+    ws->sup_row_off = malloc((size_t)p->nv * sizeof *ws->sup_row_off);
+    ws->sup_ylo = malloc((size_t)p->nv * sizeof *ws->sup_ylo);
+    ws->sup_yhi = malloc((size_t)p->nv * sizeof *ws->sup_yhi);
+    ws->agree_cand = malloc((size_t)p->w * sizeof *ws->agree_cand);
+    ws->agree_sum = malloc((size_t)p->w * sizeof *ws->agree_sum);
+    sup_ok = ws->sup_off && ws->sup_row_off && ws->sup_ylo && ws->sup_yhi && ws->agree_cand &&
+             ws->agree_sum;
+    for (int v = 0; sup_ok && v < p->nv; v++) {
+      const elfm_refocus_box *b = &p->box[v];
+      ws->sup_off[v] = area;
+      ws->sup_row_off[v] = rows;
+      ws->sup_ylo[v] = ws->sup_yhi[v] = 0;
+      area += (size_t)(b->x1 - b->x0) * (size_t)(b->y1 - b->y0);
+      rows += (size_t)(b->y1 - b->y0);
+    }
+    if (sup_ok) {
+      ws->sup = calloc(area + 1, 1);
+      ws->sup_row = calloc(rows + 1, 1);
+      sup_ok = ws->sup && ws->sup_row;
+    }
+  }
   if (!ws->plane_cnt || !ws->row_start || !ws->sorted || !ws->runs || !ws->vals ||
-      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old ||
-      (p->need && !ws->vox_mask)) {
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !sup_ok) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   }
@@ -216,7 +239,14 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->vals);
   free(ws->row_lo);
   free(ws->row_hi);
-  free(ws->vox_mask);
+  free(ws->sup);
+  free(ws->sup_off);
+  free(ws->sup_row);
+  free(ws->sup_row_off);
+  free(ws->sup_ylo);
+  free(ws->sup_yhi);
+  free(ws->agree_cand);
+  free(ws->agree_sum);
   free(ws->row_dirty);
   free(ws->rows);
   free(ws->rows_old);

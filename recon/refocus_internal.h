@@ -52,7 +52,18 @@ struct elfm_refocus_workspace {
   size_t n_runs, cap_runs;
   float *vals;
   size_t n_vals, cap_vals;
-  uint32_t *vox_mask;         /* [nz*H*W] bit v: view v sees signal (agreement on) */
+  /* agreement on: per view, a byte map over its crop box (row stride = box
+   * width) that is 1 where a voxel sampling that sensor position could see
+   * signal (either bilinear tap column or row is a listed pixel: the frame's
+   * support dilated by the 2 x 2 tap footprint), and a per-row "any" flag.
+   * All zero between calls (cleared at the end of each call). */
+  uint8_t *sup;               /* views' maps, view v at sup + sup_off[v] */
+  size_t *sup_off;            /* [nv] */
+  uint8_t *sup_row;           /* [sum of box heights] row has a 1 */
+  size_t *sup_row_off;        /* [nv] */
+  int *sup_ylo, *sup_yhi;     /* [nv] box rows [lo, hi) touched this call */
+  int32_t *agree_cand;        /* [W] one row's candidate voxels */
+  float *agree_sum;           /* [W] their sums */
   uint8_t *row_dirty;         /* [nz*H] */
   int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
   uint32_t *rows;             /* dirty rows k*H + Y, in plane order */
