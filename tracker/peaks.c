@@ -61,7 +61,7 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
       o->fit_half_xy > 8 || o->fit_half_z > 16 || o->refine < ELFM_REFINE_GAUSSIAN ||
       o->refine > ELFM_REFINE_NONE) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                   "peaks: options out of range (radii and kz > 0, relative <= 1, fit half-widths 0..8/16)");
+                   "peaks: options out of range (radii and kz > 0, relative <= 1, depth range >= 0, fit half-widths 0..8/16)");
     return NULL;
   }
   if ((double)w * h * nz >= 4294967295.0) {  /* the voxel counts are 32-bit */
