@@ -31,6 +31,7 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->shift);
   free(p->count);
   free(p->need);
+  free(p->need_row_min);
   free(p);
 }
 
@@ -90,8 +91,11 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   p->box = calloc((size_t)p->nv, sizeof *p->box);
   p->shift = calloc((size_t)p->nv * nz, sizeof *p->shift);
   p->count = calloc(nvox, 1);
-  if (o.agree_frac > 0.0) p->need = calloc(nvox, 1);
-  if (!p->box || !p->shift || !p->count || (o.agree_frac > 0.0 && !p->need)) {
+  if (o.agree_frac > 0.0) {
+    p->need = calloc(nvox, 1);
+    p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
+  }
+  if (!p->box || !p->shift || !p->count || (o.agree_frac > 0.0 && (!p->need || !p->need_row_min))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
   }
@@ -147,6 +151,17 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     for (size_t i = 0; i < nvox; i++) {
       int n = (int)ceil(o.agree_frac * p->count[i] - 1e-9);
       p->need[i] = (uint8_t)(n < 1 && p->count[i] ? 1 : n);
+    }
+  if (p->need)
+    for (size_t r = 0; r < (size_t)p->h * (size_t)nz; r++) {
+      /* the sparse path skips a row where fewer views have signal than
+       * this: no voxel of the row can pass */
+      uint8_t m = 255;
+      for (size_t X = 0; X < (size_t)p->w; X++) {
+        const uint8_t q = p->need[r * (size_t)p->w + X];
+        if (q && q < m) m = q;
+      }
+      p->need_row_min[r] = m;
     }
   *out = p;
   return ELFM_OK;
@@ -210,7 +225,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
       ws->sup_off[v] = area;
       ws->sup_row_off[v] = rows;
       ws->sup_ylo[v] = ws->sup_yhi[v] = 0;
-      area += (size_t)(b->x1 - b->x0) * (size_t)(b->y1 - b->y0);
+      /* a zero margin of W columns on each side (refocus_sparse.c) */
+      area += ((size_t)(b->x1 - b->x0) + 2 * (size_t)p->w) * (size_t)(b->y1 - b->y0);
       rows += (size_t)(b->y1 - b->y0);
     }
     if (sup_ok) {

@@ -28,6 +28,7 @@ struct elfm_refocus_plan {
   uint8_t *count;             /* [k][Y][X]: views sampling */
   float inv_table[256];       /* 1 / n, 0 for n = 0 */
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
+  uint8_t *need_row_min;      /* [k][Y]: least non-zero `need` of the row (255: none) */
 };
 
 /* A run of consecutive non-zero pixels of one sensor row inside one view's
@@ -52,9 +53,9 @@ struct elfm_refocus_workspace {
   size_t n_runs, cap_runs;
   float *vals;
   size_t n_vals, cap_vals;
-  /* agreement on: per view, a byte map over its crop box (row stride = box
-   * width) that is 1 where a voxel sampling that sensor position could see
-   * signal (either bilinear tap column or row is a listed pixel: the frame's
+  /* agreement on: per view, a byte map over its crop box with a zero margin
+   * of W columns on each side (row stride = box width + 2 W) that is 1
+   * where a voxel sampling that sensor position could see signal (either bilinear tap column or row is a listed pixel: the frame's
    * support dilated by the 2 x 2 tap footprint), and a per-row "any" flag.
    * All zero between calls (cleared at the end of each call). */
   uint8_t *sup;               /* views' maps, view v at sup + sup_off[v] */
