@@ -309,6 +309,33 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5d. Hysteresis: a weak detection continues a track but never starts
+   * one. A bead seen strong for 10 frames, then weak for 20: one track of
+   * 30 points. A weak-only object: no track, id -3. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    for (int f = 0; f < 30; f++) {
+      elfm_detection d[2];
+      d[0] = mk(1.0 * f, 0, 0);
+      d[0].weak = f >= 10;
+      d[1] = mk(-40, 30, 0);
+      d[1].weak = 1;
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, 2, &err), &err);
+      CHECK(elfm_link_last_track_id(l, 0) >= 0);
+      CHECK(elfm_link_last_track_id(l, 1) == -3);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      CHECK_EQ_INT((int)t->n, 30);
+      elfm_track_free(t);
+    }
+    CHECK_EQ_INT(n, 1);
+    elfm_link_free(l);
+  }
+
   /* 6. Bad input. */
   {
     elfm_linker *l = elfm_link_create(&o, &err);

@@ -298,6 +298,37 @@ int main(void)
     elfm_peaks_free(pn);
   }
 
+  /* Hysteresis: blobs of 80 and 40 over a threshold of 50 with a low one of
+   * 30: both found, the second marked weak; without it only the first. */
+  memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+  add_blob(v, -12, 0, 0, 80, SXY, SZ);
+  add_blob(v, 12, 0, 0, 40, SXY, SZ);
+  {
+    elfm_peaks_options oh = o;
+    oh.absolute = 50;
+    oh.radius_xy_um = 3;
+    oh.min_separation_um = 4;
+    elfm_peaks *ph = elfm_peaks_create(&oh, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(ph, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 1);
+    if (n == 1) CHECK_EQ_INT(det[0].weak, 0);
+    elfm_peaks_free(ph);
+    oh.hysteresis_low = 30;
+    ph = elfm_peaks_create(&oh, v->w, v->h, v->nz, &err);
+    CHECK_OK(elfm_peaks_detect(ph, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 2);
+    if (n == 2) {
+      CHECK_EQ_INT(det[0].weak, 0);
+      CHECK_NEAR(det[0].x_um, -12, 0.1);
+      CHECK_EQ_INT(det[1].weak, 1);
+      CHECK_NEAR(det[1].x_um, 12, 0.1);
+    }
+    CHECK_NEAR(elfm_peaks_last_threshold(ph), 50, 1e-12);
+    elfm_peaks_free(ph);
+    oh.hysteresis_low = -1;
+    CHECK(elfm_peaks_create(&oh, v->w, v->h, v->nz, &err) == NULL);
+  }
+
   /* Empty volume: no peaks, no error. */
   memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);

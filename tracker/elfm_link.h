@@ -21,7 +21,7 @@
  *     anisotropic distance over the squared gate, plus gap_cost per missed
  *     frame so a continuing track beats one coming back from a gap);
  *  3b. a rescue round for established tracks left unmatched (rescue_gate_factor);
- *  4. unmatched detections start tracks; a track that has missed more
+ *  4. unmatched detections start tracks (weak ones do not); a track that has missed more
  *     than max_gap_frames consecutive frames ends. Ended tracks with at
  *     least min_points real points become "finished" and can be taken with
  *     elfm_link_pop_finished as soon as they end (shorter ones are dropped).
@@ -120,8 +120,9 @@ size_t elfm_link_n_live(const elfm_linker *l);
 int64_t elfm_link_n_started(const elfm_linker *l);
 
 /* Id of the track detection i of the LAST step joined (a new track when it
- * matched none), -2 when it was suppressed as a trail, -1 when i is out of
- * range. */
+ * matched none), -2 when it was suppressed as a trail, -3 when it was weak
+ * (elfm_detection.weak: it may continue a track, never start one) and
+ * joined none, -1 when i is out of range. */
 int64_t elfm_link_last_track_id(const elfm_linker *l, int i);
 
 #ifdef __cplusplus

@@ -36,6 +36,7 @@ typedef struct elfm_detection {
   double x_um, y_um, z_um;
   double intensity;          /* refined peak value, volume units */
   double sigma_x_um, sigma_y_um, sigma_z_um;
+  int weak;                  /* 1: above the low (hysteresis) threshold only */
 } elfm_detection;
 
 typedef enum elfm_refine_mode {
@@ -57,6 +58,12 @@ typedef struct elfm_peaks_options {
    * its peak - and the refocused peak, a mean over the views - falls as
    * 1 / (1 + (z / zr)^2) with zr = s0 / a; the floor keeps ghosts out. */
   double depth_range_um, absolute_min;
+  /* Hysteresis (0 = off): peaks between this absolute value and the
+   * threshold above are kept but marked weak; the linker lets a weak
+   * detection continue a track, never start one (as Canny's edge
+   * hysteresis): a bead dimmed by defocus stays tracked while ghosts of
+   * the same brightness, which have no track to continue, are dropped. */
+  double hysteresis_low;
   double radius_xy_um;       /* local-maximum box half-size, lateral (default 3 um ~ 0.8 FWHM) */
   double radius_z_um;        /* axial half-size (default 15 um = 5 x lateral) */
   double min_separation_um;  /* anisotropic, see above (default 4 um, the scoring gate) */

@@ -678,6 +678,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   const size_t nt_before_births = nt;
   for (size_t j = 0; j < nd; j++) {
     if (l->det_track[j] >= 0) continue;
+    if (det[j].weak) {  /* hysteresis: a weak detection only continues a track */
+      l->det_id[j] = -3;
+      l->det_speed[j] = NAN;
+      continue;
+    }
     if (o->trail_us > 0 && in_trail(l, nt_before_births, det, &det[j])) {
       l->det_id[j] = -2;
       l->det_speed[j] = NAN;

@@ -17,6 +17,7 @@
 typedef struct peak_cand {
   float value;
   int32_t x, y, z;
+  int32_t weak;   /* above the low (hysteresis) threshold only */
 } peak_cand;
 
 struct elfm_peaks {
@@ -26,6 +27,7 @@ struct elfm_peaks {
   peak_cand *cand;   /* candidates of the current volume */
   float *sample;     /* noise sample */
   double *thr_plane; /* threshold per z plane of the current volume */
+  double *thr_low;   /* hysteresis (low) threshold per plane; = thr_plane when off */
   uint8_t *views;    /* views sampling each voxel (NULL: rule off) */
   int n_views;
   double view_scale[256]; /* threshold factor (N / n)^exponent by view count n */
@@ -57,7 +59,7 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   if (!(o->radius_xy_um > 0) || !(o->radius_z_um > 0) || !(o->kz > 0) ||
       !(o->min_separation_um >= 0) || !isfinite(o->absolute) || !isfinite(o->relative) ||
       !isfinite(o->k_sigma) || !(o->depth_range_um >= 0) || !isfinite(o->depth_range_um) ||
-      !isfinite(o->absolute_min) || o->relative > 1 || o->fit_half_xy < 0 || o->fit_half_z < 0 ||
+      !isfinite(o->absolute_min) || !(o->hysteresis_low >= 0) || !isfinite(o->hysteresis_low) || o->relative > 1 || o->fit_half_xy < 0 || o->fit_half_z < 0 ||
       o->fit_half_xy > 8 || o->fit_half_z > 16 || o->refine < ELFM_REFINE_GAUSSIAN ||
       o->refine > ELFM_REFINE_NONE) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
@@ -82,7 +84,8 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   p->sample = malloc(PEAKS_NOISE_SAMPLES * sizeof *p->sample);
   p->row_max = malloc((size_t)h * nz * sizeof *p->row_max);
   p->thr_plane = malloc((size_t)nz * sizeof *p->thr_plane);
-  if (!p->cand || !p->sample || !p->row_max || !p->thr_plane) goto nomem;
+  p->thr_low = malloc((size_t)nz * sizeof *p->thr_low);
+  if (!p->cand || !p->sample || !p->row_max || !p->thr_plane || !p->thr_low) goto nomem;
   return p;
 nomem:
   elfm_peaks_free(p);
@@ -97,6 +100,7 @@ void elfm_peaks_free(elfm_peaks *p)
   free(p->sample);
   free(p->row_max);
   free(p->thr_plane);
+  free(p->thr_low);
   free(p->views);
   free(p);
 }
@@ -386,6 +390,13 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
     }
     if (t == -INFINITY) t = 0;
     p->thr_plane[k] = t;
+    /* low threshold: the hysteresis value in place of the absolute rule */
+    double lo = t;
+    if (o->hysteresis_low > 0) {
+      lo = thr0 > o->hysteresis_low ? thr0 : o->hysteresis_low;
+      if (lo > t) lo = t;
+    }
+    p->thr_low[k] = lo;
   }
   thr = o->absolute > thr0 ? o->absolute : thr0;
   if (thr == -INFINITY) thr = 0;
@@ -399,8 +410,9 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
   if (rz < 1) rz = 1;
   size_t nc = 0;
   for (int z = 0; z < nz; z++) {
-    /* compare in float: a voxel passes when its float value exceeds thr */
-    const double thr = p->thr_plane[z];
+    /* compare in float: a voxel passes when its float value exceeds thr
+     * (the low threshold; above thr_hi the peak is strong) */
+    const double thr = p->thr_low[z], thr_hi = p->thr_plane[z];
     const float thr_f = thr > 0 ? (float)thr : 0.0f;
     int32_t thr_bits;
     memcpy(&thr_bits, &thr_f, sizeof thr_bits);
@@ -414,12 +426,14 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
         if (!(c > thr_f) || (double)c <= thr) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
+        int weak = !((double)c > thr_hi);
         if (p->views) {
           /* threshold x (N / n)^e where n views sample the voxel (elfm_peaks.h) */
           double f = p->view_scale[p->views[((size_t)z * h + y) * w + x]];
           if (!((double)c > thr * f)) continue;
+          weak = !((double)c > thr_hi * f);
         }
-        if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z};
+        if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z, weak};
       }
     }
   }
@@ -446,6 +460,7 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
     refine_axis(d, ic, (size_t)w, pc->y, h, o->fit_half_xy, o->refine, &oy, &sy, &vy);
     refine_axis(d, ic, (size_t)w * h, pc->z, nz, o->fit_half_z, o->refine, &oz, &sz, &vz);
     elfm_detection *det = &out[n++];
+    det->weak = pc->weak;
     det->frame = v->frame;
     det->t_us = v->t_us;
     det->x_um = elfm_volume_x_um(v, pc->x + ox);
