@@ -13,6 +13,8 @@
 struct score_opts {
   const char *truth, *tracks, *detections, *calib;
   int json;
+  int window_given;          /* --window-us was given */
+  const char *window_source; /* where the window came from, for the table */
   elfm_score_options so;
 };
 
@@ -22,7 +24,7 @@ static void score_usage(FILE *f)
           "usage: eventlfm score --truth truth.csv (--tracks tracks.csv | --detections detections.csv)\n"
           "                      [--tracks tracks.csv] [--detections detections.csv]\n"
           "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
-          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--json]\n"
+          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--window-us W] [--json]\n"
           "\n"
           "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
           "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
@@ -33,6 +35,10 @@ static void score_usage(FILE *f)
           "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
           "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
           "before the first or after the last row of the files count too.\n"
+          "--window-us W: a frame stands for the events of (t_us - W, t_us]; an object counts\n"
+          "when it was bright for at least half of that window (blinking objects whose pulse\n"
+          "ended just before the window's end). Default: parameters.dt_us of the summary.json beside\n"
+          "tracks.csv (the run's accumulation time) if there is one, else 0 (bright at t_us).\n"
           "--json prints one JSON object on stdout instead of the table.\n");
 }
 
@@ -84,6 +90,7 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   }
   cJSON_AddNumberToObject(o, "eps_um", op->so.eps_um);
   cJSON_AddNumberToObject(o, "kz", op->so.kz);
+  cJSON_AddNumberToObject(o, "window_us", op->so.window_us);
   char *text = cJSON_PrintUnformatted(o);
   cJSON_Delete(o);
   if (!text) return cli_message("score", CLI_FAIL, "out of memory");
@@ -94,8 +101,9 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
 
 static void print_table(const struct score_opts *op, const elfm_score_result *r)
 {
-  printf("scoring (eps %.3g um, kz %.3g, %d frames%s)\n", op->so.eps_um, op->so.kz, r->n_frames,
-         op->so.have_bounds ? ", truth inside the volume only" : "");
+  printf("scoring (eps %.3g um, kz %.3g, %d frames%s, window %.0f us%s)\n", op->so.eps_um,
+         op->so.kz, r->n_frames, op->so.have_bounds ? ", truth inside the volume only" : "",
+         op->so.window_us, op->window_source ? op->window_source : "");
   printf("detections%s\n", r->detections_from_tracks ? " (raw points of the tracks)" : "");
   printf("  truth points %10lld   detections %10lld   matched %10lld\n",
          (long long)r->n_truth_points, (long long)r->n_detections,
@@ -118,10 +126,36 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
            r->stage_rel_error);
 }
 
+/* The run's accumulation time from the summary.json that `eventlfm track`
+ * writes beside tracks.csv. Absent or unreadable: the window stays 0 (the
+ * summary is a convenience, not an input the score depends on). */
+static void window_from_summary(struct score_opts *op)
+{
+  char path[4096];
+  const char *slash = strrchr(op->tracks, '/');
+  int dir_len = slash ? (int)(slash - op->tracks) + 1 : 0;
+  if (snprintf(path, sizeof path, "%.*ssummary.json", dir_len, op->tracks) >= (int)sizeof path)
+    return;
+  FILE *f = fopen(path, "rb");
+  if (!f) return;
+  char buf[1 << 16];
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  cJSON *j = cJSON_Parse(buf);
+  const cJSON *par = cJSON_GetObjectItemCaseSensitive(j, "parameters");
+  const cJSON *dt = cJSON_GetObjectItemCaseSensitive(par, "dt_us");
+  if (cJSON_IsNumber(dt) && dt->valuedouble > 0 && dt->valuedouble <= 1e9) {
+    op->so.window_us = dt->valuedouble;
+    op->window_source = " from summary.json";
+  }
+  cJSON_Delete(j);
+}
+
 int cmd_score(int argc, char **argv)
 {
   enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
-         OPT_NFRAMES };
+         OPT_NFRAMES, OPT_WINDOW };
   static const struct option longopts[] = {
       {"truth", required_argument, NULL, OPT_TRUTH},
       {"tracks", required_argument, NULL, OPT_TRACKS},
@@ -132,6 +166,7 @@ int cmd_score(int argc, char **argv)
       {"kz", required_argument, NULL, OPT_KZ},
       {"json", no_argument, NULL, OPT_JSON},
       {"n-frames", required_argument, NULL, OPT_NFRAMES},
+      {"window-us", required_argument, NULL, OPT_WINDOW},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
   struct score_opts op;
@@ -169,6 +204,12 @@ int cmd_score(int argc, char **argv)
       if (op.so.n_frames_hint < 1 || op.so.n_frames_hint > 50000000)
         return cli_message("score", CLI_USAGE, "--n-frames must be 1..50000000");
       break;
+    case OPT_WINDOW:
+      if (!cli_parse_double("score", "--window-us", optarg, &op.so.window_us)) return CLI_USAGE;
+      if (op.so.window_us < 0 || op.so.window_us > 1e9)
+        return cli_message("score", CLI_USAGE, "--window-us must be 0..1e9");
+      op.window_given = 1;
+      break;
     default:
       cli_message("score", CLI_USAGE, "unknown option or missing value: '%s'",
                   argv[optind - 1]);
@@ -190,6 +231,7 @@ int cmd_score(int argc, char **argv)
     if (elfm_calib_load(op.calib, &cal, &err) != ELFM_OK) return cli_fail("score", &err);
     elfm_score_options_set_calib(&op.so, &cal);
   }
+  if (!op.window_given && op.tracks) window_from_summary(&op);
   elfm_score_result r;
   if (elfm_score_files(op.truth, op.tracks, op.detections, &op.so, &r, &err) != ELFM_OK)
     return cli_fail("score", &err);

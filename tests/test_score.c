@@ -88,6 +88,24 @@ static void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double
   }
 }
 
+/* Truth where B is lit only during two 980 us pulses, [3010, 3990) and
+ * [12010, 12990) us: each lights most of the window of frame 3 (t 4000)
+ * or frame 12 (t 13000) but has ended by the frame's t_us, as a 1 ms LED
+ * pulse does before a time surface's window end (SPEC §5). */
+static elfm_table *make_truth_pulsed(void)
+{
+  buf_t b = {0};
+  bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
+  for (int t = 0; t <= 25000; t += 100)
+    for (int o = 0; o < 2; o++) {
+      double x, y, z;
+      pos(o, t, &x, &y, &z);
+      int lit = o == 0 || (t >= 3010 && t < 3990) || (t >= 12010 && t < 12990);
+      bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,%d\n", o + 7, t, x, y, z, lit);
+    }
+  return parse(&b, "truth.csv");
+}
+
 static const char *TRACK_HEADER =
     "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um,vx_um_per_ms,vy_um_per_ms,"
     "vz_um_per_ms,intensity\n";
@@ -542,6 +560,47 @@ int main(void)
     CHECK_EQ_INT(r.n_missed_tracks, 2);
     CHECK(isnan(r.precision));
     elfm_table_free(tk);
+  }
+
+  /* Blinking: B seen at frames 3 and 12 only, one track linked across the
+   * dark gap (frames 4..11 gap-closed, raw empty). With the window rule the
+   * pulses count at the frames whose window they lit, and frames where B is
+   * dark and the track only virtual cost nothing: a perfect run scores 1.
+   * (Before: every frame was dark at t_us, or the 10-frame span cost 40 >
+   * d(X, empty) = 8, so B's track paired with nothing.) */
+  {
+    elfm_table *pulsed = make_truth_pulsed();
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 3, 12, 0, 0, 0, 4, 11);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_options o;
+    elfm_score_options_default(&o);
+    o.window_us = 1000;
+    elfm_score_result r = run(pulsed, tr, NULL, &o);
+    CHECK_EQ_INT(r.n_truth_points, 22);
+    CHECK_EQ_INT(r.n_true_positives, 22);
+    CHECK_EQ_INT(r.n_truth_tracks, 2);
+    CHECK_EQ_INT(r.n_paired_tracks, 2);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 1.0, TOL);
+    /* The literal rule (window 0): B is dark at every frame time, so only A
+     * counts and B's two real points form a spurious track: beta = 80 / 88. */
+    o.window_us = 0;
+    r = run(pulsed, tr, NULL, &o);
+    CHECK_EQ_INT(r.n_truth_tracks, 1);
+    CHECK_EQ_INT(r.n_spurious_tracks, 1);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 80.0 / 88.0, TOL);
+    /* Half the window must be lit: a 1900 us window holds 19 samples of
+     * which 9 are lit, so B does not count at all ("any light in the
+     * window" would count it). */
+    o.window_us = 1900;
+    r = run(pulsed, tr, NULL, &o);
+    CHECK_EQ_INT(r.n_truth_points, 20);
+    elfm_table_free(tr);
+    elfm_table_free(pulsed);
   }
 
   elfm_table_free(truth);

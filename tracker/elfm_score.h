@@ -45,12 +45,20 @@
  *    importer we treat the frames between its first and last real point as
  *    its span S(Y); frames of the span without a real point are "virtual":
  *    they never match and are never counted as spurious detections.
+ *    R(Y) is the set of frames where Y has a real point.
  *  - A truth track X is one truth id at every frame where it counts (above);
  *    F(X) is that set of frames.
- *  - d(X, Y) = sum over frames t in F(X) u S(Y) of
+ *  - d(X, Y) = sum over frames t in F(X) u R(Y) of
  *        d_t      if X and a real point of Y exist at t and d_t < eps,
- *        eps      otherwise (one of them missing, virtual, or beyond the gate).
- *    d(X, empty) = eps * |F(X)|;  d(Ybar, empty) = eps * |S(Ybar)|.
+ *        eps      otherwise (one of them missing, or beyond the gate).
+ *    d(X, empty) = eps * |F(X)|;  d(Ybar, empty) = eps * |R(Ybar)|.
+ *    A frame where X does not count and Y has only a virtual (gap-filled)
+ *    point carries no information and adds nothing: SPEC §7 leaves virtual
+ *    rows out. (The official evaluator's truth tracks have a point at every
+ *    frame of their span, so there the question never arises; for a blinking
+ *    bead, whose truth is dark between pulses, charging eps for every dark
+ *    frame of a correctly gap-closed track would pair it with nothing.)
+ *    A frame where X counts and Y is virtual still costs eps (a miss).
  *  - Pairing: a pair (X, Y) is feasible if at least one frame matches. Each
  *    truth track is assigned to one feasible candidate or to its own dummy
  *    track (cost d(X, empty)), each candidate to at most one truth track,
@@ -133,6 +141,17 @@ typedef struct elfm_score_options {
    * files then count too, their t_us extrapolated with the mean frame
    * spacing. 0 (default): only the span of frames seen in the files. */
   int64_t n_frames_hint;
+  /* > 0: a frame stands for the window (t_us - window_us, t_us] of events
+   * that built it (the accumulation time dt of `eventlfm track`), and an
+   * object counts at that frame when it was bright for at least half of that
+   * window (by its truth samples), not only at t_us. Why: a time surface's
+   * t_us is its window's end (SPEC §5), so a 1 ms LED pulse that lit a window
+   * has often ended by t_us, and the literal rule would call every blink
+   * frame dark; "any light in the window" would instead also count the next
+   * window, which sees only the pulse's OFF edge. With 1 ms pulses and 1 ms
+   * windows exactly one frame per pulse counts. Positions are still
+   * interpolated at t_us. 0 (default): the literal SPEC §7 rule. */
+  double window_us;
 } elfm_score_options;
 
 /* eps 4, kz 4, no bounds, no stage, no frame-count hint. */

@@ -355,11 +355,24 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
      * fall inside its time range with one cursor. */
     double t_first = elfm_table_get(tt, ord[i].idx, c[1]);
     double t_last = elfm_table_get(tt, ord[j - 1].idx, c[1]);
-    size_t cur = i;
+    size_t cur = i, wcur = i;
     for (int f = 0; f < fr->n && s == ELFM_OK; f++) {
       double t = fr->t_us[f];
       if (!(t >= t_first && t <= t_last)) continue; /* also skips unknown (NaN) times */
       while (cur + 1 < j && elfm_table_get(tt, ord[cur + 1].idx, c[1]) < t) cur++;
+      /* Window rule (elfm_score.h, window_us): bright for at least half of
+       * the samples in (t - window, t]; samples are dense (<= 100 us, SPEC
+       * §6). With no sample inside the window, the value at t decides. */
+      int window_votes = -1; /* -1: no vote, 0 dark, 1 lit */
+      if (o->window_us > 0) {
+        while (wcur < j && elfm_table_get(tt, ord[wcur].idx, c[1]) <= t - o->window_us) wcur++;
+        int64_t n_in = 0, n_lit = 0;
+        for (size_t q = wcur; q < j && elfm_table_get(tt, ord[q].idx, c[1]) <= t; q++) {
+          n_in++;
+          n_lit += elfm_table_get(tt, ord[q].idx, c[5]) > 0;
+        }
+        if (n_in > 0) window_votes = 2 * n_lit >= n_in;
+      }
       size_t ra = ord[cur].idx, rb = cur + 1 < j ? ord[cur + 1].idx : ra;
       double ta = elfm_table_get(tt, ra, c[1]), tb = elfm_table_get(tt, rb, c[1]);
       double w = tb > ta ? (t - ta) / (tb - ta) : 0.0;
@@ -369,7 +382,8 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
         /* on a sample, its value exactly (a + 1 * (b - a) may round off b) */
         val[q] = t == ta ? a : t == tb ? b : a + w * (b - a);
       }
-      if (!(val[3] > 0.0) || !inside(o, val[0], val[1], val[2])) continue;
+      int lit = window_votes >= 0 ? window_votes : val[3] > 0.0;
+      if (!lit || !inside(o, val[0], val[1], val[2])) continue;
       if (tr->n_pts == cap && (s = truth_grow(tr, &cap, err)) != ELFM_OK) break;
       tr->pf[tr->n_pts] = f;
       tr->px[tr->n_pts] = val[0];
@@ -459,15 +473,16 @@ static int64_t lower_x(const truth_t *tr, int64_t a, int64_t b, double x0)
 }
 
 /* Number of visible frames of object k within frame slots [f0, f1]. */
-static int64_t truth_count_in(const truth_t *tr, int k, int f0, int f1)
+/* 1 if truth object k counts at frame slot f (its points are in frame order). */
+static int truth_has(const truth_t *tr, int k, int f)
 {
-  int64_t a = tr->obj_off[k], b = tr->obj_off[k + 1];
-  int64_t lo = a, hi = b;
-  while (lo < hi) { int64_t m = lo + (hi - lo) / 2; if (tr->pf[m] < f0) lo = m + 1; else hi = m; }
-  int64_t first = lo;
-  lo = first; hi = b;
-  while (lo < hi) { int64_t m = lo + (hi - lo) / 2; if (tr->pf[m] <= f1) lo = m + 1; else hi = m; }
-  return lo - first;
+  int64_t lo = tr->obj_off[k], hi = tr->obj_off[k + 1];
+  while (lo < hi) {
+    int64_t m = lo + (hi - lo) / 2;
+    if (tr->pf[m] < f) lo = m + 1;
+    else hi = m;
+  }
+  return lo < tr->obj_off[k + 1] && tr->pf[lo] == f;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -786,11 +801,13 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
         acc_d2[k] += d * d;
       }
     }
-    int span = cd->pf[b - 1] - cd->pf[a] + 1;
+    int n_real = b - a;
     for (int t = 0; t < n_touched; t++) {
       int k = touched[t];
       int64_t fx = tr->obj_off[k + 1] - tr->obj_off[k];
-      int64_t both = truth_count_in(tr, k, cd->pf[a], cd->pf[b - 1]);
+      /* |F(X) u R(Y)| = |F(X)| + |R(Y)| - |F(X) n R(Y)| (see elfm_score.h) */
+      int64_t both = 0;
+      for (int q = a; q < b; q++) both += truth_has(tr, k, cd->pf[q]);
       if (n_pairs == cap_pairs) {
         size_t nc = cap_pairs ? 2 * cap_pairs : 256;
         pair_t *np = realloc(pairs, nc * sizeof *np);
@@ -804,7 +821,7 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
       pp->matched = acc_m[k];
       pp->saving = acc_s[k];
       pp->sum_d2 = acc_d2[k];
-      pp->cost = g->eps * (double)(fx + span - both) - acc_s[k];
+      pp->cost = g->eps * (double)(fx + n_real - both) - acc_s[k];
       acc_m[k] = 0;
       acc_s[k] = 0;
       acc_d2[k] = 0;
@@ -901,7 +918,7 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
     for (int c = 0; c < n_c; c++) {
       if (cand_used[c]) continue;
       int a = cd->off[c], b = cd->off[c + 1];
-      d_spur += g->eps * (double)(cd->pf[b - 1] - cd->pf[a] + 1);
+      d_spur += g->eps * (double)(b - a);
       fp += b - a;
       spurious++;
     }
