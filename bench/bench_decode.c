@@ -30,7 +30,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "elfm_events.h"
+#include "elfm_recon.h"
 
 #define W 1280
 #define H 720

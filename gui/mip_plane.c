@@ -14,7 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "elfm_pipeline.h"
+#include "elfm_recon.h"
 #include "gl_internal.h"
 
 /* Index of the last MIP with t_us <= t, or -1. */

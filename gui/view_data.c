@@ -14,9 +14,9 @@
 
 #include <cjson/cJSON.h>
 
-#include "elfm_calib.h"
+#include "elfm_recon.h"
 #include "elfm_gui.h"
-#include "elfm_table.h"
+#include "elfm_tracker.h"
 
 typedef enum view_kind { KIND_TRACKS, KIND_TRUTH, KIND_DETECTIONS } view_kind;
 

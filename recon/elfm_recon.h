@@ -17,14 +17,8 @@
 #include "elfm_events.h"
 #include "elfm_calib.h"
 #include "elfm_volume.h"
-#if __has_include("elfm_frames.h")
 #include "elfm_frames.h"
-#endif
-#if __has_include("elfm_refocus.h")
 #include "elfm_refocus.h"
-#endif
-#if __has_include("elfm_pipeline.h")
 #include "elfm_pipeline.h"
-#endif
 
 #endif

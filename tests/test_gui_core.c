@@ -11,7 +11,7 @@
 #include <sys/wait.h>
 
 #include "check.h"
-#include "elfm_calib.h"
+#include "elfm_recon.h"
 #include "elfm_gui.h"
 
 static char tmpdir[256];

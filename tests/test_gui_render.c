@@ -26,7 +26,7 @@
 
 #include "check.h"
 #include "elfm_gui.h"
-#include "elfm_pipeline.h"
+#include "elfm_recon.h"
 
 /* Under AddressSanitizer: Mesa and Xlib keep allocations for the process's
  * life (driver caches); our own leaks are still reported. Mesa's driver is

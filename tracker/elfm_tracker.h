@@ -13,26 +13,12 @@
 #define ELFM_TRACKER_H
 
 #include "elfm_recon.h"
-#if __has_include("elfm_table.h")
 #include "elfm_table.h"
-#endif
-#if __has_include("elfm_peaks.h")
 #include "elfm_peaks.h"
-#endif
-#if __has_include("elfm_link.h")
 #include "elfm_link.h"
-#endif
-#if __has_include("elfm_smooth.h")
 #include "elfm_smooth.h"
-#endif
-#if __has_include("elfm_tracks.h")
 #include "elfm_tracks.h"
-#endif
-#if __has_include("elfm_analysis.h")
 #include "elfm_analysis.h"
-#endif
-#if __has_include("elfm_score.h")
 #include "elfm_score.h"
-#endif
 
 #endif
