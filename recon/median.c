@@ -22,6 +22,8 @@ struct elfm_median {
   uint16_t *count;    /* per pixel: windows' positive (low byte) / negative (high byte) count */
   uint32_t *cand;     /* pixels whose count was raised, to reset `count` */
   size_t cand_cap;
+  uint32_t *row_start; /* [h + 1] counting sort of the listed pixels by row */
+  uint32_t *sorted;    /* [w * h] the listed pixels in row order */
 };
 
 elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_error *err)
@@ -35,9 +37,11 @@ elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_e
   size_t n = (size_t)w * (size_t)h;
   if (m) {
     m->count = calloc(n, sizeof *m->count);
-    m->cand = malloc(n * sizeof *m->cand);
+    m->cand = malloc((n + 1) * sizeof *m->cand); /* + 1: written one past the last */
+    m->row_start = malloc(((size_t)h + 1) * sizeof *m->row_start);
+    m->sorted = malloc(n * sizeof *m->sorted);
   }
-  if (!m || !m->count || !m->cand) {
+  if (!m || !m->count || !m->cand || !m->row_start || !m->sorted) {
     elfm_median_free(m);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (median %d x %d)", w, h);
   }
@@ -54,10 +58,20 @@ void elfm_median_free(elfm_median *m)
   if (!m) return;
   free(m->count);
   free(m->cand);
+  free(m->row_start);
+  free(m->sorted);
   free(m);
 }
 
-#define SORT2(a, b) do { if ((a) > (b)) { float t_ = (a); (a) = (b); (b) = t_; } } while (0)
+/* Compare-exchange as min/max (minss/maxss), not a branch: in a bead's
+ * image the order of neighbours is unpredictable. */
+#define SORT2(a, b)                                 \
+  do {                                              \
+    const float lo_ = (a) > (b) ? (b) : (a);        \
+    const float hi_ = (a) > (b) ? (a) : (b);        \
+    (a) = lo_;                                      \
+    (b) = hi_;                                      \
+  } while (0)
 
 static float median9(float *p)
 {
@@ -131,19 +145,42 @@ void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out)
   out->n_events = in->n_events;
   if (in->w != m->w || in->h != m->h || out->w != m->w || out->h != m->h) return;
   const int r = m->size / 2, half = (m->size * m->size + 1) / 2;
-  size_t nc = 0;
+  /* Visit the listed pixels in row order (a counting sort by row): the
+   * counters they raise, the candidates and the windows then move down the
+   * frame a few rows at a time and stay in cache. In the framer's (event)
+   * order every pixel's 9 counters were a cache miss: bench_refocus on flow,
+   * median 2.2 -> see docs/recon.md. */
+  uint32_t *start = m->row_start;
+  for (int y = 0; y <= m->h; y++) start[y] = 0;
+  size_t n = 0;
   for (size_t i = 0; i < in->nnz; i++) {
-    const float a = in->data[in->idx[i]];
-    if (a == 0.0f) continue;
+    const uint32_t pix = in->idx[i];
+    if (pix >= (uint32_t)m->w * (uint32_t)m->h || in->data[pix] == 0.0f) continue;
+    start[pix / (uint32_t)m->w + 1]++;
+    n++;
+  }
+  for (int y = 0; y < m->h; y++) start[y + 1] += start[y];
+  for (size_t i = 0; i < in->nnz; i++) {
+    const uint32_t pix = in->idx[i];
+    if (pix >= (uint32_t)m->w * (uint32_t)m->h || in->data[pix] == 0.0f) continue;
+    m->sorted[start[pix / (uint32_t)m->w]++] = pix;
+  }
+  size_t nc = 0;
+  for (size_t i = 0; i < n; i++) {
+    const uint32_t pix = m->sorted[i];
+    const float a = in->data[pix];
     const uint16_t inc = a > 0.0f ? 1 : 256;
-    int x0 = (int)(in->idx[i] % (uint32_t)m->w), y0 = (int)(in->idx[i] / (uint32_t)m->w);
-    for (int y = y0 - r; y <= y0 + r; y++) {
-      if (y < 0 || y >= m->h) continue;
-      for (int x = x0 - r; x <= x0 + r; x++) {
-        if (x < 0 || x >= m->w) continue;
-        uint32_t c = (uint32_t)y * (uint32_t)m->w + (uint32_t)x;
-        if (m->count[c] == 0) m->cand[nc++] = c;
-        m->count[c] += inc;
+    int x0 = (int)(pix % (uint32_t)m->w), y0 = (int)(pix / (uint32_t)m->w);
+    /* clipped to the frame; a counter raised from 0 lists its pixel (no
+     * branch: whether a neighbour was already raised is unpredictable) */
+    const int ya = y0 - r < 0 ? 0 : y0 - r, yb = y0 + r >= m->h ? m->h - 1 : y0 + r;
+    const int xa = x0 - r < 0 ? 0 : x0 - r, xb = x0 + r >= m->w ? m->w - 1 : x0 + r;
+    for (int y = ya; y <= yb; y++) {
+      uint32_t c = (uint32_t)y * (uint32_t)m->w + (uint32_t)xa;
+      for (int x = xa; x <= xb; x++, c++) {
+        m->cand[nc] = c;
+        nc += m->count[c] == 0;
+        m->count[c] = (uint16_t)(m->count[c] + inc);
       }
     }
   }
