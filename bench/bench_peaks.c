@@ -14,7 +14,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "elfm_pipeline.h"
+#include "elfm_recon.h"
 #include "elfm_tracker.h"
 
 typedef struct keep {

@@ -7,10 +7,9 @@
 
 #include <stddef.h>
 
-#include "elfm_error.h"
+#include "elfm_recon.h"
 #include "elfm_peaks.h"
 #include "elfm_tracks.h"
-#include "elfm_volume.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -34,7 +34,7 @@
 
 #include <stdint.h>
 
-#include "elfm_error.h"
+#include "elfm_recon.h"
 #include "elfm_peaks.h"
 #include "elfm_tracks.h"
 

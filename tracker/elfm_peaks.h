@@ -21,8 +21,7 @@
 
 #include <stdint.h>
 
-#include "elfm_error.h"
-#include "elfm_volume.h"
+#include "elfm_recon.h"
 
 #ifdef __cplusplus
 extern "C" {

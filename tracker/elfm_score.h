@@ -90,8 +90,7 @@
 
 #include <stdint.h>
 
-#include "elfm_calib.h"
-#include "elfm_error.h"
+#include "elfm_recon.h"
 #include "elfm_table.h"
 
 #ifdef __cplusplus

@@ -39,7 +39,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "elfm_error.h"
+#include "elfm_recon.h"
 #include "elfm_tracks.h"
 
 #ifdef __cplusplus

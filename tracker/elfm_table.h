@@ -16,7 +16,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "elfm_error.h"
+#include "elfm_recon.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -17,7 +17,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "elfm_error.h"
+#include "elfm_recon.h"
 #include "elfm_peaks.h"
 
 #ifdef __cplusplus
