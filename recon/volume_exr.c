@@ -11,6 +11,7 @@
 #include "elfm_pipeline.h"
 
 #include <openexr.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -140,6 +141,16 @@ elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error
                           ch->entries[c].name.str);
       goto done;
     }
+  /* Attributes are numbers from a file: check them before they become axes
+   * (and t_us an int64: beyond +-2^62 us the conversion is undefined). */
+  if (!(isfinite(t_us) && fabs(t_us) < 4.0e18) || !(isfinite(um_per_px) && um_per_px > 0) ||
+      !isfinite(z_min) || !(isfinite(z_step) && z_step > 0)) {
+    st = elfm_error_set(err, ELFM_ERR_RANGE, path, -1,
+                        "attributes out of range: t_us %g, um_per_px %g, z_min_um %g, "
+                        "z_step_um %g",
+                        t_us, um_per_px, z_min, z_step);
+    goto done;
+  }
   v = elfm_volume_create(w, h, nz, um_per_px, z_min, z_step, err);
   if (!v) {
     st = err ? err->code : ELFM_ERR_NOMEM;

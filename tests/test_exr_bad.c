@@ -1,0 +1,85 @@
+/* test_exr_bad.c — the EXR volume reader rejects attributes that cannot be
+ * a volume's axes (found by fuzz_exr: a t_us of 2e257 was converted to
+ * int64, undefined behaviour). A good file is written, one attribute value
+ * patched in its bytes, and read back. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+
+/* Overwrite the double value of attribute `name` in an EXR header:
+ * name\0 "double"\0 int32 size (8) value. Returns 1 when found. */
+static int patch_double(unsigned char *buf, size_t n, const char *name, double value)
+{
+  size_t nl = strlen(name);
+  for (size_t i = 0; i + nl + 8 + 4 + 8 <= n; i++) {
+    if (memcmp(buf + i, name, nl + 1) == 0 && memcmp(buf + i + nl + 1, "double", 7) == 0) {
+      memcpy(buf + i + nl + 1 + 7 + 4, &value, 8); /* little-endian host, as EXR */
+      return 1;
+    }
+  }
+  return 0;
+}
+
+static void expect_rejected(const unsigned char *good, size_t n, const char *attr, double value)
+{
+  unsigned char *buf = malloc(n);
+  memcpy(buf, good, n);
+  CHECK_MSG(patch_double(buf, n, attr, value), "attribute %s not found", attr);
+  const char *path = "exr_bad_patched.exr";
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (f) {
+    fwrite(buf, 1, n, f);
+    fclose(f);
+  }
+  elfm_volume *v = NULL;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_status s = elfm_volume_read_exr(path, &v, &err);
+  CHECK_MSG(s == ELFM_ERR_RANGE, "%s = %g: got %s (%s)", attr, value, elfm_status_str(s),
+            err.message);
+  CHECK(v == NULL);
+  CHECK(strstr(err.file, "exr_bad_patched.exr") != NULL);
+  elfm_volume_free(v);
+  remove(path);
+  free(buf);
+}
+
+int main(void)
+{
+  elfm_error err;
+  elfm_volume *v = elfm_volume_create(4, 3, 2, 0.926, -2.0, 2.0, &err);
+  CHECK(v != NULL);
+  if (!v) return check_report();
+  for (int i = 0; i < 24; i++) v->data[i] = (float)i;
+  v->t_us = 1000000000000;
+  const char *path = "exr_bad_good.exr";
+  CHECK_OK(elfm_volume_write_exr(v, path, &err), &err);
+  elfm_volume_free(v);
+
+  FILE *f = fopen(path, "rb");
+  CHECK(f != NULL);
+  if (!f) return check_report();
+  unsigned char good[1 << 16];
+  size_t n = fread(good, 1, sizeof good, f);
+  fclose(f);
+  CHECK(n > 100 && n < sizeof good);
+
+  /* The unpatched file reads back (t_us near 1e12 exactly). */
+  elfm_volume *back = NULL;
+  CHECK_OK(elfm_volume_read_exr(path, &back, &err), &err);
+  if (back) CHECK_EQ_INT(back->t_us, 1000000000000LL);
+  elfm_volume_free(back);
+
+  expect_rejected(good, n, "t_us", 2.36e257);
+  expect_rejected(good, n, "t_us", -1e19);
+  expect_rejected(good, n, "um_per_px", 0.0);
+  expect_rejected(good, n, "um_per_px", -0.5);
+  expect_rejected(good, n, "z_step_um", 0.0);
+  expect_rejected(good, n, "z_min_um", 1.0 / 0.0);
+  remove(path);
+  return check_report();
+}
