@@ -8,8 +8,9 @@
  *  - so each listed pixel adds 1 to the positive or negative count of every
  *    window it lies in (a 16-bit counter per pixel: low byte positive, high
  *    byte negative), and only windows reaching half are sorted. Isolated
- *    noise events never do. The counters are reset through the list of
- *    pixels they were raised at.
+ *    noise events never do. The pixels are visited in row order, so the
+ *    counters are a ring of `size` rows; each row's are reset through the
+ *    list of columns they were raised at.
  * Otherwise 3x3 uses the 19-exchange median network (Paeth, Graphics Gems,
  * "Median finding on a 3x3 grid"), 5x5 an insertion sort of 25.
  */
@@ -19,9 +20,11 @@
 
 struct elfm_median {
   int size, w, h;
-  uint16_t *count;    /* per pixel: windows' positive (low byte) / negative (high byte) count */
-  uint32_t *cand;     /* pixels whose count was raised, to reset `count` */
-  size_t cand_cap;
+  /* Rows are finished in order, so only the size rows an input row can
+   * reach are live: a ring of `size` rows (row y in slot y % size). */
+  uint16_t *count;    /* [size][w] windows' positive (low byte) / negative (high byte) count */
+  uint32_t *cand;     /* [size][w + 1] columns whose count was raised, per ring row */
+  size_t ncand[5];    /* per ring row */
   uint32_t *row_start; /* [h + 1] counting sort of the listed pixels by row */
   uint32_t *sorted;    /* [w * h] the listed pixels in row order */
 };
@@ -36,8 +39,9 @@ elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_e
   elfm_median *m = calloc(1, sizeof *m);
   size_t n = (size_t)w * (size_t)h;
   if (m) {
-    m->count = calloc(n, sizeof *m->count);
-    m->cand = malloc((n + 1) * sizeof *m->cand); /* + 1: written one past the last */
+    m->count = calloc((size_t)size * (size_t)w, sizeof *m->count);
+    /* + 1: the branch-free list writes one past its last entry */
+    m->cand = malloc((size_t)size * ((size_t)w + 1) * sizeof *m->cand);
     m->row_start = malloc(((size_t)h + 1) * sizeof *m->row_start);
     m->sorted = malloc(n * sizeof *m->sorted);
   }
@@ -48,7 +52,6 @@ elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_e
   m->size = size;
   m->w = w;
   m->h = h;
-  m->cand_cap = n;
   *out = m;
   return ELFM_OK;
 }
@@ -145,54 +148,66 @@ void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out)
   out->n_events = in->n_events;
   if (in->w != m->w || in->h != m->h || out->w != m->w || out->h != m->h) return;
   const int r = m->size / 2, half = (m->size * m->size + 1) / 2;
-  /* Visit the listed pixels in row order (a counting sort by row): the
-   * counters they raise, the candidates and the windows then move down the
-   * frame a few rows at a time and stay in cache. In the framer's (event)
-   * order every pixel's 9 counters were a cache miss: bench_refocus on flow,
-   * median 2.2 -> see docs/recon.md. */
+  /* The listed pixels in row order (a counting sort by row). Each raises
+   * the counters of the windows it lies in; row y's counts are complete
+   * once input row y + r is in, and are then read and reset, so the counters
+   * are a ring of `size` rows that stays in L1 (a full-sensor counter array
+   * missed the cache on nearly every pixel: docs/recon.md). */
+  const uint32_t W = (uint32_t)m->w, R = (uint32_t)m->size;
   uint32_t *start = m->row_start;
   for (int y = 0; y <= m->h; y++) start[y] = 0;
-  size_t n = 0;
-  for (size_t i = 0; i < in->nnz; i++) {
-    const uint32_t pix = in->idx[i];
-    if (pix >= (uint32_t)m->w * (uint32_t)m->h || in->data[pix] == 0.0f) continue;
-    start[pix / (uint32_t)m->w + 1]++;
-    n++;
-  }
+  for (size_t i = 0; i < in->nnz; i++)
+    if (in->idx[i] < W * (uint32_t)m->h) start[in->idx[i] / W + 1]++;
   for (int y = 0; y < m->h; y++) start[y + 1] += start[y];
   for (size_t i = 0; i < in->nnz; i++) {
     const uint32_t pix = in->idx[i];
-    if (pix >= (uint32_t)m->w * (uint32_t)m->h || in->data[pix] == 0.0f) continue;
-    m->sorted[start[pix / (uint32_t)m->w]++] = pix;
+    if (pix < W * (uint32_t)m->h) m->sorted[start[pix / W]++] = pix;
   }
-  size_t nc = 0;
-  for (size_t i = 0; i < n; i++) {
-    const uint32_t pix = m->sorted[i];
-    const float a = in->data[pix];
-    const uint16_t inc = a > 0.0f ? 1 : 256;
-    int x0 = (int)(pix % (uint32_t)m->w), y0 = (int)(pix / (uint32_t)m->w);
-    /* clipped to the frame; a counter raised from 0 lists its pixel (no
-     * branch: whether a neighbour was already raised is unpredictable) */
-    const int ya = y0 - r < 0 ? 0 : y0 - r, yb = y0 + r >= m->h ? m->h - 1 : y0 + r;
-    const int xa = x0 - r < 0 ? 0 : x0 - r, xb = x0 + r >= m->w ? m->w - 1 : x0 + r;
-    for (int y = ya; y <= yb; y++) {
-      uint32_t c = (uint32_t)y * (uint32_t)m->w + (uint32_t)xa;
-      for (int x = xa; x <= xb; x++, c++) {
-        m->cand[nc] = c;
-        nc += m->count[c] == 0;
-        m->count[c] = (uint16_t)(m->count[c] + inc);
+  /* now row y's pixels are sorted[start[y - 1] .. start[y]) (start[-1] = 0) */
+  for (int yi = 0; yi < m->h + r; yi++) {
+    if (yi < m->h) {
+      const uint32_t i0 = yi ? start[yi - 1] : 0, i1 = start[yi];
+      const int ya = yi - r < 0 ? 0 : yi - r, yb = yi + r >= m->h ? m->h - 1 : yi + r;
+      for (uint32_t i = i0; i < i1; i++) {
+        const uint32_t pix = m->sorted[i];
+        const float a = in->data[pix];
+        if (a == 0.0f) continue;
+        const uint16_t inc = a > 0.0f ? 1 : 256;
+        const int x0 = (int)(pix % W);
+        const int xa = x0 - r < 0 ? 0 : x0 - r, xb = x0 + r >= m->w ? m->w - 1 : x0 + r;
+        for (int y = ya; y <= yb; y++) {
+          const size_t slot = (size_t)y % R;
+          uint16_t *cnt = m->count + slot * W;
+          uint32_t *cand = m->cand + slot * (W + 1);
+          size_t nc = m->ncand[slot];
+          /* a counter raised from 0 lists its column (no branch: whether a
+           * neighbour already raised it is unpredictable) */
+          for (int x = xa; x <= xb; x++) {
+            cand[nc] = (uint32_t)x;
+            nc += cnt[x] == 0;
+            cnt[x] = (uint16_t)(cnt[x] + inc);
+          }
+          m->ncand[slot] = nc;
+        }
       }
     }
-  }
-  for (size_t i = 0; i < nc; i++) {
-    uint32_t c = m->cand[i];
-    uint16_t k = m->count[c];
-    m->count[c] = 0;
-    if ((k & 0xff) < half && (k >> 8) < half) continue;
-    float v = median_at(m, in->data, (int)(c % (uint32_t)m->w), (int)(c / (uint32_t)m->w));
-    if (v != 0.0f) {
-      out->data[c] = v;
-      out->idx[out->nnz++] = c;
+    const int yo = yi - r; /* complete: read, reset, take the medians */
+    if (yo < 0) continue;
+    const size_t slot = (size_t)yo % R;
+    uint16_t *cnt = m->count + slot * W;
+    const uint32_t *cand = m->cand + slot * (W + 1);
+    for (size_t j = 0; j < m->ncand[slot]; j++) {
+      const uint32_t x = cand[j];
+      const uint16_t k = cnt[x];
+      cnt[x] = 0;
+      if ((k & 0xff) < half && (k >> 8) < half) continue;
+      const float v = median_at(m, in->data, (int)x, yo);
+      if (v != 0.0f) {
+        const uint32_t c = (uint32_t)yo * W + x;
+        out->data[c] = v;
+        out->idx[out->nnz++] = c;
+      }
     }
+    m->ncand[slot] = 0;
   }
 }
