@@ -218,8 +218,10 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
     ws->sup_yhi = malloc((size_t)p->nv * sizeof *ws->sup_yhi);
     ws->agree_cand = malloc((size_t)p->w * sizeof *ws->agree_cand);
     ws->agree_sum = malloc((size_t)p->w * sizeof *ws->agree_sum);
+    ws->agree_list = malloc((size_t)p->h * 32);
+    ws->agree_n = malloc((size_t)p->h * sizeof *ws->agree_n);
     sup_ok = ws->sup_off && ws->sup_row_off && ws->sup_ylo && ws->sup_yhi && ws->agree_cand &&
-             ws->agree_sum;
+             ws->agree_sum && ws->agree_list && ws->agree_n;
     for (int v = 0; sup_ok && v < p->nv; v++) {
       const elfm_refocus_box *b = &p->box[v];
       ws->sup_off[v] = area;
@@ -263,6 +265,8 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->sup_yhi);
   free(ws->agree_cand);
   free(ws->agree_sum);
+  free(ws->agree_list);
+  free(ws->agree_n);
   free(ws->row_dirty);
   free(ws->rows);
   free(ws->rows_old);

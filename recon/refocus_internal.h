@@ -65,6 +65,8 @@ struct elfm_refocus_workspace {
   int *sup_ylo, *sup_yhi;     /* [nv] box rows [lo, hi) touched this call */
   int32_t *agree_cand;        /* [W] one row's candidate voxels */
   float *agree_sum;           /* [W] their sums */
+  uint8_t *agree_list;        /* [H][32] per volume row, the views with signal */
+  int *agree_n;               /* [H] their number */
   uint8_t *row_dirty;         /* [nz*H] */
   int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
   uint32_t *rows;             /* dirty rows k*H + Y, in plane order */
