@@ -286,6 +286,7 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
   int *nlist = ws->agree_n;
   memset(nlist, 0, (size_t)H * sizeof *nlist);
   for (int v = 0; v < nv; v++) {
+    if (ws->sup_ylo[v] >= ws->sup_yhi[v]) continue; /* no signal in this view */
     const elfm_refocus_shift *s = sk + v;
     const elfm_refocus_box *bx = &p->box[v];
     int y0 = ylo[v], y1 = yhi[v];
