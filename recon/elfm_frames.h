@@ -119,7 +119,9 @@ int64_t elfm_framer_origin_us(const elfm_framer *f);
 typedef struct elfm_median elfm_median;
 
 /* A size x size (3 or 5) median for w x h frames, with zero padding outside
- * the sensor. Holds a w*h marker array. Free with elfm_median_free. */
+ * the sensor. Holds a ring of `size` rows of counters and a w*h list of the
+ * frame's non-zero pixels in row order (no per-frame allocation). Free with
+ * elfm_median_free. */
 elfm_status elfm_median_create(int size, int w, int h, elfm_median **out, elfm_error *err);
 void elfm_median_free(elfm_median *m);
 
