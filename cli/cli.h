@@ -9,6 +9,7 @@
 #ifndef ELFM_CLI_H
 #define ELFM_CLI_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "elfm_recon.h"
@@ -43,6 +44,17 @@ int cli_message(const char *cmd, int code, const char *fmt, ...)
 int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out);
 int cli_parse_int64(const char *cmd, const char *opt, const char *s, int64_t *out);
 int cli_parse_int(const char *cmd, const char *opt, const char *s, int *out);
+
+/* "1280x720" -> 1280, 720 (both 1..65536); 1 on success, 0 otherwise. */
+int cli_parse_geometry(const char *s, int *w, int *h);
+
+/* snprintf for paths and labels: returns 0, or -1 when the text did not fit
+ * (the caller then meets a missing file, never an overflow). */
+int cli_path_fmt(char *out, size_t n, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
 
 /* Seconds of a monotonic clock (for timing figures). */
 double cli_now_s(void);

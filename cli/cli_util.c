@@ -67,6 +67,28 @@ int cli_parse_int(const char *cmd, const char *opt, const char *s, int *out)
   return 1;
 }
 
+int cli_parse_geometry(const char *s, int *w, int *h)
+{
+  char *end;
+  long a = strtol(s, &end, 10);
+  if (end == s || *end != 'x') return 0;
+  const char *s2 = end + 1;
+  long b = strtol(s2, &end, 10);
+  if (end == s2 || *end || a < 1 || b < 1 || a > 65536 || b > 65536) return 0;
+  *w = (int)a;
+  *h = (int)b;
+  return 1;
+}
+
+int cli_path_fmt(char *out, size_t n, const char *fmt, ...)
+{
+  va_list ap;
+  va_start(ap, fmt);
+  int k = vsnprintf(out, n, fmt, ap);
+  va_end(ap);
+  return k < 0 || (size_t)k >= n ? -1 : 0;
+}
+
 double cli_now_s(void)
 {
   struct timespec ts;

@@ -39,21 +39,6 @@
 #include "cli.h"
 #include "elfm_tracker.h"
 
-/* snprintf for paths and labels: returns 0, or -1 when the text did not fit
- * (the caller then meets a missing file, never an overflow). */
-static int path_fmt(char *out, size_t n, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-static int path_fmt(char *out, size_t n, const char *fmt, ...)
-{
-  va_list ap;
-  va_start(ap, fmt);
-  int k = vsnprintf(out, n, fmt, ap);
-  va_end(ap);
-  return k < 0 || (size_t)k >= n ? -1 : 0;
-}
 
 #define BENCH_MAX_ARGS 8
 #define BENCH_MAX_POINTS 64
@@ -149,7 +134,7 @@ struct scene_info {
 static int mkdir_p(const char *path)
 {
   char buf[PATH_MAX];
-  if (path_fmt(buf, sizeof buf, "%s", path) >= (int)sizeof buf) return -1;
+  if (cli_path_fmt(buf, sizeof buf, "%s", path) >= (int)sizeof buf) return -1;
   for (char *p = buf + 1; *p; p++) {
     if (*p != '/') continue;
     *p = '\0';
@@ -251,7 +236,7 @@ static void summary_read(const char *run_dir, double *volumes, double stage_s[4]
   *volumes = -1;
   for (int k = 0; k < 4; k++) stage_s[k] = NAN;
   char p[PATH_MAX];
-  path_fmt(p, sizeof p, "%s/summary.json", run_dir);
+  cli_path_fmt(p, sizeof p, "%s/summary.json", run_dir);
   char *text = read_text(p);
   if (!text) return;
   cJSON *o = cJSON_Parse(text);
@@ -373,8 +358,8 @@ static void mark_pareto(struct point_result *pts, int n, const char *scene,
 
 static void fmt_num(char *buf, size_t n, const char *fmt, double v)
 {
-  if (isfinite(v)) path_fmt(buf, n, fmt, v);
-  else path_fmt(buf, n, "%s", "");
+  if (isfinite(v)) cli_path_fmt(buf, n, fmt, v);
+  else cli_path_fmt(buf, n, "%s", "");
 }
 
 static void join_args(const struct sweep_point *sp, char *buf, size_t n)
@@ -382,11 +367,11 @@ static void join_args(const struct sweep_point *sp, char *buf, size_t n)
   buf[0] = '\0';
   for (int a = 0; sp->args[a]; a++) {
     size_t l = strlen(buf);
-    path_fmt(buf + l, n - l, "%s%s", a ? " " : "", sp->args[a]);
+    cli_path_fmt(buf + l, n - l, "%s%s", a ? " " : "", sp->args[a]);
   }
   if (sp->z_step_um > 0) {
     size_t l = strlen(buf);
-    path_fmt(buf + l, n - l, "%scalib z step %g um", buf[0] ? " " : "", sp->z_step_um);
+    cli_path_fmt(buf + l, n - l, "%scalib z step %g um", buf[0] ? " " : "", sp->z_step_um);
   }
 }
 
@@ -433,7 +418,7 @@ static int write_csv(const char *path, const struct point_result *pts, int n)
 static void md_component(FILE *f, const char *dir, const char *name)
 {
   char p[PATH_MAX];
-  path_fmt(p, sizeof p, "%s/components/%s.txt", dir, name);
+  cli_path_fmt(p, sizeof p, "%s/components/%s.txt", dir, name);
   char *t = read_text(p);
   if (!t) return;
   fprintf(f, "\n### %s\n\n```\n%s%s```\n", name, t, (t[0] && t[strlen(t) - 1] != '\n') ? "\n" : "");
@@ -445,7 +430,7 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
                     int n_comps, const char *host)
 {
   char path[PATH_MAX];
-  path_fmt(path, sizeof path, "%s/bench.md", dir);
+  cli_path_fmt(path, sizeof path, "%s/bench.md", dir);
   FILE *f = fopen(path, "w");
   if (!f) return -1;
   fprintf(f, "# eventlfm bench%s\n\n", op->quick ? " --quick" : "");
@@ -481,7 +466,7 @@ static int write_md(const char *dir, const struct bench_opts *op, const struct s
     fmt_num(c[9], 32, "%.3f", p->score.beta);
     char st[96] = "";
     if (isfinite(p->stage_s[0]))
-      path_fmt(st, sizeof st, "%.2f / %.2f / %.2f / %.2f", p->stage_s[0], p->stage_s[1],
+      cli_path_fmt(st, sizeof st, "%.2f / %.2f / %.2f / %.2f", p->stage_s[0], p->stage_s[1],
                p->stage_s[2], p->stage_s[3]);
     fprintf(f, "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s%s | %s |\n",
             p->scene, p->sp->axis, p->sp->setting, p->status, c[0], c[1], c[2], c[10], c[3], c[4],
@@ -513,12 +498,12 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
                       const struct point_result *pts, int n, double timeout_s)
 {
   char p[PATH_MAX];
-  path_fmt(p, sizeof p, "%s/plot", dir);
+  cli_path_fmt(p, sizeof p, "%s/plot", dir);
   if (mkdir_p(p) != 0) return -1;
   for (int s = 0; s < n_sc; s++) {
     for (int which = 0; which < 3; which++) {
       const char *suffix = which == 0 ? "" : which == 1 ? "_pf1" : "_palpha";
-      path_fmt(p, sizeof p, "%s/plot/%s%s.dat", dir, sc[s].name, suffix);
+      cli_path_fmt(p, sizeof p, "%s/plot/%s%s.dat", dir, sc[s].name, suffix);
       FILE *f = fopen(p, "w");
       if (!f) return -1;
       fprintf(f, "# rtf err_f1 err_alpha setting (err = 1 - F1, 1 - alpha)\n");
@@ -541,7 +526,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
       fclose(f);
     }
   }
-  path_fmt(p, sizeof p, "%s/plot.gnuplot", dir);
+  cli_path_fmt(p, sizeof p, "%s/plot.gnuplot", dir);
   FILE *g = fopen(p, "w");
   if (!g) return -1;
   fprintf(g, "# written by eventlfm bench; run from this directory: gnuplot plot.gnuplot\n"
@@ -565,7 +550,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
   fclose(g);
   char *argv[] = {"gnuplot", "plot.gnuplot", NULL};
   char logp[PATH_MAX], cwd[PATH_MAX];
-  path_fmt(logp, sizeof logp, "%s/plot/gnuplot.log", dir);
+  cli_path_fmt(logp, sizeof logp, "%s/plot/gnuplot.log", dir);
   if (!getcwd(cwd, sizeof cwd) || chdir(dir) != 0) return -1;
   int rc = run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL);
   if (chdir(cwd) != 0) return -1;
@@ -592,7 +577,7 @@ static int newest_png(const char *dir, char *out, size_t n)
   }
   closedir(d);
   if (!best[0]) return -1;
-  path_fmt(out, n, "%s/%s", dir, best);
+  cli_path_fmt(out, n, "%s/%s", dir, best);
   return 0;
 }
 
@@ -607,17 +592,17 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
   for (int r = 0; r < 2; r++)
     for (int k = 0; k < 3; k++) {
       char out[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], dt[32], from[32], to[32], logp[PATH_MAX];
-      path_fmt(out, sizeof out, "%s/fig_s4/%s_%dms", dir, reprs[r], dts_ms[k]);
+      cli_path_fmt(out, sizeof out, "%s/fig_s4/%s_%dms", dir, reprs[r], dts_ms[k]);
       if (mkdir_p(out) != 0) return -1;
-      path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
-      path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
-      path_fmt(dt, sizeof dt, "%d", dts_ms[k] * 1000);
+      cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
+      cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
+      cli_path_fmt(dt, sizeof dt, "%d", dts_ms[k] * 1000);
       /* exactly one window [t_end - dt, t_end): one MIP per run. The time
        * surface decays with tau = dt, so that a longer window also shows a
        * longer history (with a fixed 1 ms tau all three would look alike). */
-      path_fmt(from, sizeof from, "%lld", (long long)(t_end - dts_ms[k] * 1000));
-      path_fmt(to, sizeof to, "%lld", (long long)t_end);
-      path_fmt(logp, sizeof logp, "%s/recon.log", out);
+      cli_path_fmt(from, sizeof from, "%lld", (long long)(t_end - dts_ms[k] * 1000));
+      cli_path_fmt(to, sizeof to, "%lld", (long long)t_end);
+      cli_path_fmt(logp, sizeof logp, "%s/recon.log", out);
       char *argv[] = {(char *)self, "recon", "--calib", calib, "--events", ev, "--out", out,
                       "--repr", (char *)reprs[r], "--dt-us", dt, "--tau-us", dt, "--from-us",
                       from, "--to-us", to, "--save-mips", "--quiet", NULL};
@@ -625,7 +610,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
       if (rc != 0 || newest_png(out, pngs[r][k], PATH_MAX) != 0) {
         /* MIPs may sit in a sub-directory */
         char sub[PATH_MAX];
-        path_fmt(sub, sizeof sub, "%s/mips", out);
+        cli_path_fmt(sub, sizeof sub, "%s/mips", out);
         if (rc != 0 || newest_png(sub, pngs[r][k], PATH_MAX) != 0) {
           fprintf(stderr, "eventlfm bench: Fig. S4 panel %s %d ms: recon %s (see %s)\n",
                   reprs[r], dts_ms[k], rc != 0 ? "failed" : "wrote no PNG", logp);
@@ -634,7 +619,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
       }
     }
   char p[PATH_MAX];
-  path_fmt(p, sizeof p, "%s/fig_s4.gnuplot", dir);
+  cli_path_fmt(p, sizeof p, "%s/fig_s4.gnuplot", dir);
   FILE *g = fopen(p, "w");
   if (!g) return -1;
   fprintf(g, "set terminal pngcairo size 1500,1000 font 'sans,11'\nset output '%s/fig_s4.png'\n"
@@ -648,7 +633,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
   fprintf(g, "unset multiplot\n");
   fclose(g);
   char logp[PATH_MAX];
-  path_fmt(logp, sizeof logp, "%s/fig_s4/gnuplot.log", dir);
+  cli_path_fmt(logp, sizeof logp, "%s/fig_s4/gnuplot.log", dir);
   char *argv[] = {"gnuplot", p, NULL};
   return run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL) == 0 ? 0 : -1;
 }
@@ -709,21 +694,21 @@ static int run_components(const char *self, const char *dir, const char *scene_d
                           double timeout_s, const char **names, int *n_out)
 {
   char calib[PATH_MAX], events[PATH_MAX];
-  path_fmt(calib, sizeof calib, "%s/calib.json", scene_dir);
-  path_fmt(events, sizeof events, "%s/events.raw", scene_dir);
+  cli_path_fmt(calib, sizeof calib, "%s/calib.json", scene_dir);
+  cli_path_fmt(events, sizeof events, "%s/events.raw", scene_dir);
   char bdir[PATH_MAX];
-  path_fmt(bdir, sizeof bdir, "%s", self);
+  cli_path_fmt(bdir, sizeof bdir, "%s", self);
   char *slash = strrchr(bdir, '/');
   if (slash) *slash = '\0';
   char cdir[PATH_MAX];
-  path_fmt(cdir, sizeof cdir, "%s/components", dir);
+  cli_path_fmt(cdir, sizeof cdir, "%s/components", dir);
   if (mkdir_p(cdir) != 0) return -1;
   int n = 0;
   for (int i = 0; i < N_COMPONENTS; i++) {
     const struct component *cp = &COMPONENTS[i];
     char exe[PATH_MAX], logp[PATH_MAX];
-    path_fmt(exe, sizeof exe, "%s/bench/%s", bdir, cp->name);
-    path_fmt(logp, sizeof logp, "%s/%s.txt", cdir, cp->name);
+    cli_path_fmt(exe, sizeof exe, "%s/bench/%s", bdir, cp->name);
+    cli_path_fmt(logp, sizeof logp, "%s/%s.txt", cdir, cp->name);
     if (access(exe, X_OK) != 0) {
       fprintf(stderr, "eventlfm bench: %s not built (%s), skipped\n", cp->name, exe);
       continue;
@@ -747,7 +732,7 @@ static int run_components(const char *self, const char *dir, const char *scene_d
                         : !strcmp(args[a], "{events}") ? events : args[a];
       argv[na++] = (char *)arg;
       size_t l = strlen(shown);
-      path_fmt(shown + l, sizeof shown - l, " %s", arg);
+      cli_path_fmt(shown + l, sizeof shown - l, " %s", arg);
     }
     argv[na] = NULL;
     fprintf(stderr, "eventlfm bench: component %s%s (%s) ...\n", cp->name, shown, cp->what);
@@ -800,7 +785,7 @@ int cmd_bench(int argc, char **argv)
     case OPT_SCENES:
       if (strlen(optarg) >= sizeof op.scenes || !optarg[0])
         return cli_message("bench", CLI_USAGE, "--scenes: bad list '%s'", optarg);
-      path_fmt(op.scenes, sizeof op.scenes, "%s", optarg);
+      cli_path_fmt(op.scenes, sizeof op.scenes, "%s", optarg);
       break;
     case OPT_DUR:
       if (!cli_parse_int("bench", "--duration-ms", optarg, &op.duration_ms)) return CLI_USAGE;
@@ -828,7 +813,7 @@ int cmd_bench(int argc, char **argv)
   }
   if (optind < argc)
     return cli_message("bench", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
-  if (!op.scenes[0]) path_fmt(op.scenes, sizeof op.scenes, "%s", op.quick ? "flow" : "flow,stage");
+  if (!op.scenes[0]) cli_path_fmt(op.scenes, sizeof op.scenes, "%s", op.quick ? "flow" : "flow,stage");
   if (op.duration_ms < 0) op.duration_ms = op.quick ? 50 : 300;
   if (op.timeout_s < 0) op.timeout_s = op.quick ? 300 : 1800;
 
@@ -844,19 +829,19 @@ int cmd_bench(int argc, char **argv)
   int n_sc = 0;
   {
     char list[256];
-    path_fmt(list, sizeof list, "%s", op.scenes);
+    cli_path_fmt(list, sizeof list, "%s", op.scenes);
     for (char *save = NULL, *tok = strtok_r(list, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
       if (n_sc == 8) return cli_message("bench", CLI_USAGE, "--scenes: at most 8 scenes");
       struct scene_info *si = &sc[n_sc];
       memset(si, 0, sizeof *si);
-      path_fmt(si->name, sizeof si->name, "%s", tok);
-      path_fmt(si->dir, sizeof si->dir, "%s/sim_%s", dir, tok);
+      cli_path_fmt(si->name, sizeof si->name, "%s", tok);
+      cli_path_fmt(si->dir, sizeof si->dir, "%s/sim_%s", dir, tok);
       char dur[32], seed[32], logp[PATH_MAX];
-      path_fmt(dur, sizeof dur, "%d", op.duration_ms);
-      path_fmt(seed, sizeof seed, "%lld", (long long)op.seed);
+      cli_path_fmt(dur, sizeof dur, "%d", op.duration_ms);
+      cli_path_fmt(seed, sizeof seed, "%lld", (long long)op.seed);
       if (mkdir_p(si->dir) != 0)
         return cli_message("bench", CLI_FAIL, "cannot create %s", si->dir);
-      path_fmt(logp, sizeof logp, "%s/simulate.log", si->dir);
+      cli_path_fmt(logp, sizeof logp, "%s/simulate.log", si->dir);
       fprintf(stderr, "eventlfm bench: simulating %s (%d ms) ...\n", tok, op.duration_ms);
       char *sargv[] = {self, "simulate", si->name, "--out", si->dir, "--seed", seed,
                        "--duration-ms", dur, NULL};
@@ -865,7 +850,7 @@ int cmd_bench(int argc, char **argv)
       if (rc != 0)
         return cli_message("bench", CLI_FAIL, "simulate %s failed (exit %d); see %s", tok, rc, logp);
       char ev[PATH_MAX];
-      path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
+      cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       elfm_error err;
       elfm_error_clear(&err);
       if (count_events(ev, si, &err) != ELFM_OK) return cli_fail("bench", &err);
@@ -873,7 +858,7 @@ int cmd_bench(int argc, char **argv)
               (long long)si->events, wall);
       /* calibrations with other plane spacings */
       char cp[PATH_MAX];
-      path_fmt(cp, sizeof cp, "%s/calib.json", si->dir);
+      cli_path_fmt(cp, sizeof cp, "%s/calib.json", si->dir);
       elfm_calib cal;
       if (elfm_calib_load(cp, &cal, &err) != ELFM_OK) return cli_fail("bench", &err);
       for (int k = 0; k < N_SWEEP; k++) {
@@ -881,12 +866,12 @@ int cmd_bench(int argc, char **argv)
         elfm_calib c2 = cal;
         c2.z_step_um = SWEEP[k].z_step_um;
         char p2[PATH_MAX];
-        path_fmt(p2, sizeof p2, "%s/calib_dz%g.json", si->dir, SWEEP[k].z_step_um);
+        cli_path_fmt(p2, sizeof p2, "%s/calib_dz%g.json", si->dir, SWEEP[k].z_step_um);
         if (elfm_calib_save(&c2, p2, &err) != ELFM_OK) return cli_fail("bench", &err);
       }
       if (!strncmp(si->name, "stage", 5)) {
         char tp[PATH_MAX];
-        path_fmt(tp, sizeof tp, "%s/truth.csv", si->dir);
+        cli_path_fmt(tp, sizeof tp, "%s/truth.csv", si->dir);
         if (truth_stage_velocity(tp, si->stage_v_um_per_ms, &err) != ELFM_OK)
           return cli_fail("bench", &err);
         si->is_stage = 1;
@@ -912,7 +897,7 @@ int cmd_bench(int argc, char **argv)
   {
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
     size_t l = strlen(host);
-    path_fmt(host + l, sizeof host - l, ", %ld CPUs online", ncpu);
+    cli_path_fmt(host + l, sizeof host - l, ", %ld CPUs online", ncpu);
   }
   for (int s = 0; s < n_sc; s++) {
     struct scene_info *si = &sc[s];
@@ -935,12 +920,12 @@ int cmd_bench(int argc, char **argv)
       p->events_per_s = p->volumes = p->volumes_per_s = p->rtf = NAN;
       for (int q = 0; q < 4; q++) p->stage_s[q] = NAN;
       char run[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], logp[PATH_MAX];
-      path_fmt(run, sizeof run, "%s/runs/%s_%02d", dir, si->name, k);
+      cli_path_fmt(run, sizeof run, "%s/runs/%s_%02d", dir, si->name, k);
       if (mkdir_p(run) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot create %s", run); goto out; }
-      if (sp->z_step_um > 0) path_fmt(calib, sizeof calib, "%s/calib_dz%g.json", si->dir, sp->z_step_um);
-      else path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
-      path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
-      path_fmt(logp, sizeof logp, "%s/track.log", run);
+      if (sp->z_step_um > 0) cli_path_fmt(calib, sizeof calib, "%s/calib_dz%g.json", si->dir, sp->z_step_um);
+      else cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
+      cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
+      cli_path_fmt(logp, sizeof logp, "%s/track.log", run);
       char *targv[8 + BENCH_MAX_ARGS + 1];
       int na = 0;
       targv[na++] = self;
@@ -964,9 +949,9 @@ int cmd_bench(int argc, char **argv)
         p->rtf = p->span_s / p->wall_s;
         summary_read(run, &p->volumes, p->stage_s);
         char truth[PATH_MAX], tracks[PATH_MAX], dets[PATH_MAX];
-        path_fmt(truth, sizeof truth, "%s/truth.csv", si->dir);
-        path_fmt(tracks, sizeof tracks, "%s/tracks.csv", run);
-        path_fmt(dets, sizeof dets, "%s/detections.csv", run);
+        cli_path_fmt(truth, sizeof truth, "%s/truth.csv", si->dir);
+        cli_path_fmt(tracks, sizeof tracks, "%s/tracks.csv", run);
+        cli_path_fmt(dets, sizeof dets, "%s/detections.csv", run);
         elfm_score_options so;
         elfm_score_options_default(&so);
         if (p->volumes > 0) so.n_frames_hint = (int64_t)p->volumes; /* frames 0..volumes-1 */
@@ -1003,7 +988,7 @@ int cmd_bench(int argc, char **argv)
                    &n_comps);
 
   char p[PATH_MAX];
-  path_fmt(p, sizeof p, "%s/bench.csv", dir);
+  cli_path_fmt(p, sizeof p, "%s/bench.csv", dir);
   if (write_csv(p, pts, n_pts) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot write %s", p); goto out; }
   int fig_ok = 1;
   if (op.figures) {

@@ -41,19 +41,6 @@ static void usage(FILE *f)
           "  -h, --help       this text\n");
 }
 
-static int parse_geometry(const char *s, int *w, int *h)
-{
-  char *end;
-  long a = strtol(s, &end, 10);
-  if (end == s || *end != 'x') return 0;
-  const char *s2 = end + 1;
-  long b = strtol(s2, &end, 10);
-  if (end == s2 || *end || a < 1 || b < 1 || a > 65536 || b > 65536) return 0;
-  *w = (int)a;
-  *h = (int)b;
-  return 1;
-}
-
 static int ends_with(const char *s, const char *suffix)
 {
   size_t a = strlen(s), b = strlen(suffix);
@@ -134,7 +121,7 @@ int cmd_convert(int argc, char **argv)
         return cli_message("convert", CLI_USAGE, "--format must be evt3 or csv, got '%s'", optarg);
       break;
     case 'g':
-      if (!parse_geometry(optarg, &o.width, &o.height))
+      if (!cli_parse_geometry(optarg, &o.width, &o.height))
         return cli_message("convert", CLI_USAGE, "--geometry expects WIDTHxHEIGHT, got '%s'",
                            optarg);
       break;

@@ -23,21 +23,6 @@
 #include "cli.h"
 #include "elfm_tracker.h"
 
-/* snprintf for paths and labels: returns 0, or -1 when the text did not fit
- * (the caller then meets a missing file, never an overflow). */
-static int path_fmt(char *out, size_t n, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-static int path_fmt(char *out, size_t n, const char *fmt, ...)
-{
-  va_list ap;
-  va_start(ap, fmt);
-  int k = vsnprintf(out, n, fmt, ap);
-  va_end(ap);
-  return k < 0 || (size_t)k >= n ? -1 : 0;
-}
 
 struct demo_opts {
   const char *out;
@@ -83,7 +68,7 @@ static int run_sub(int (*fn)(int, char **), char **argv)
 static int track_plot(const char *dir)
 {
   char script[PATH_MAX], logp[PATH_MAX];
-  path_fmt(script, sizeof script, "%s/tracks.gnuplot", dir);
+  cli_path_fmt(script, sizeof script, "%s/tracks.gnuplot", dir);
   FILE *g = fopen(script, "w");
   if (!g) return -1;
   fprintf(g,
@@ -101,7 +86,7 @@ static int track_plot(const char *dir)
           "unset multiplot\n",
           dir, dir, dir, dir, dir);
   fclose(g);
-  path_fmt(logp, sizeof logp, "%s/tracks_gnuplot.log", dir);
+  cli_path_fmt(logp, sizeof logp, "%s/tracks_gnuplot.log", dir);
   fflush(stdout);
   fflush(stderr);
   pid_t pid = fork();
@@ -125,7 +110,7 @@ static int track_plot(const char *dir)
 static int64_t summary_volumes(const char *track_dir)
 {
   char p[PATH_MAX];
-  if (path_fmt(p, sizeof p, "%s/summary.json", track_dir) != 0) return 0;
+  if (cli_path_fmt(p, sizeof p, "%s/summary.json", track_dir) != 0) return 0;
   FILE *f = fopen(p, "rb");
   if (!f) return 0;
   char *text = malloc(1 << 22);
@@ -203,18 +188,18 @@ int cmd_demo(int argc, char **argv)
   if (make_dir(op.out) != 0 || !realpath(op.out, dir))
     return cli_message("demo", CLI_FAIL, "cannot create %s: %s", op.out, strerror(errno));
   char sim[PATH_MAX], trk[PATH_MAX], mips[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX];
-  path_fmt(sim, sizeof sim, "%s/sim", dir);
-  path_fmt(trk, sizeof trk, "%s/track", dir);
-  path_fmt(mips, sizeof mips, "%s/recon", dir); /* recon writes recon/mips/ */
-  path_fmt(calib, sizeof calib, "%s/calib.json", sim);
-  path_fmt(ev, sizeof ev, "%s/events.raw", sim);
+  cli_path_fmt(sim, sizeof sim, "%s/sim", dir);
+  cli_path_fmt(trk, sizeof trk, "%s/track", dir);
+  cli_path_fmt(mips, sizeof mips, "%s/recon", dir); /* recon writes recon/mips/ */
+  cli_path_fmt(calib, sizeof calib, "%s/calib.json", sim);
+  cli_path_fmt(ev, sizeof ev, "%s/events.raw", sim);
   if (make_dir(sim) || make_dir(trk) || make_dir(mips))
     return cli_message("demo", CLI_FAIL, "cannot create directories in %s", dir);
 
   /* 1. simulate */
   char dur[32], seed[32];
-  path_fmt(dur, sizeof dur, "%d", op.duration_ms);
-  path_fmt(seed, sizeof seed, "%lld", (long long)op.seed);
+  cli_path_fmt(dur, sizeof dur, "%d", op.duration_ms);
+  cli_path_fmt(seed, sizeof seed, "%lld", (long long)op.seed);
   fprintf(stderr, "eventlfm demo: [1/4] simulating %s, %d ms ...\n", op.scene, op.duration_ms);
   double t0 = cli_now_s();
   char *sargv[] = {"simulate", (char *)op.scene, "--out", sim, "--seed", seed,
@@ -239,9 +224,9 @@ int cmd_demo(int argc, char **argv)
   /* 3. score */
   fprintf(stderr, "eventlfm demo: [3/4] scoring ...\n");
   char truth[PATH_MAX], tracks[PATH_MAX], dets[PATH_MAX];
-  path_fmt(truth, sizeof truth, "%s/truth.csv", sim);
-  path_fmt(tracks, sizeof tracks, "%s/tracks.csv", trk);
-  path_fmt(dets, sizeof dets, "%s/detections.csv", trk);
+  cli_path_fmt(truth, sizeof truth, "%s/truth.csv", sim);
+  cli_path_fmt(tracks, sizeof tracks, "%s/tracks.csv", trk);
+  cli_path_fmt(dets, sizeof dets, "%s/detections.csv", trk);
   elfm_calib cal;
   if (elfm_calib_load(calib, &cal, &err) != ELFM_OK) return cli_fail("demo", &err);
   elfm_score_options so;
@@ -259,8 +244,8 @@ int cmd_demo(int argc, char **argv)
     fprintf(stderr, "eventlfm demo: [4/4] MIPs and track plot ...\n");
     char from[32], to[32];
     int64_t win = span_s > 0.02 ? 10000 : 2000;
-    path_fmt(from, sizeof from, "%lld", (long long)(t_last - win));
-    path_fmt(to, sizeof to, "%lld", (long long)t_last);
+    cli_path_fmt(from, sizeof from, "%lld", (long long)(t_last - win));
+    cli_path_fmt(to, sizeof to, "%lld", (long long)t_last);
     char *rargv[] = {"recon", "--calib", calib, "--events", ev, "--out", mips, "--from-us", from,
                      "--to-us", to, "--save-mips", NULL};
     if (run_sub(cmd_recon, rargv) != CLI_OK) {

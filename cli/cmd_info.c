@@ -45,20 +45,6 @@ static void usage(FILE *f)
           "  -h, --help       this text\n");
 }
 
-/* "1280x720" -> 1280, 720 (both 1..65536). */
-static int parse_geometry(const char *s, int *w, int *h)
-{
-  char *end;
-  long a = strtol(s, &end, 10);
-  if (end == s || *end != 'x') return 0;
-  const char *s2 = end + 1;
-  long b = strtol(s2, &end, 10);
-  if (end == s2 || *end || a < 1 || b < 1 || a > 65536 || b > 65536) return 0;
-  *w = (int)a;
-  *h = (int)b;
-  return 1;
-}
-
 static void add_int(cJSON *o, const char *key, int64_t v)
 {
   char buf[32];
@@ -108,7 +94,7 @@ int cmd_info(int argc, char **argv)
     switch (ch) {
     case 'j': o.json = 1; break;
     case 'g':
-      if (!parse_geometry(optarg, &o.width, &o.height))
+      if (!cli_parse_geometry(optarg, &o.width, &o.height))
         return cli_message("info", CLI_USAGE, "--geometry expects WIDTHxHEIGHT, got '%s'", optarg);
       break;
     case 'h': usage(stdout); return CLI_OK;
