@@ -46,9 +46,16 @@ typedef struct fwhm_list {
 typedef struct track_ctx {
   const track_opts *o;
   const elfm_calib *calib;
-  elfm_peaks *pk;
+  /* Peak detection runs on the recon driver's worker threads (the worker
+   * hook): one detector workspace per thread, one detection buffer per
+   * batch slot, read back in frame order by the linking callback. */
+  int n_threads, n_slots;
+  elfm_peaks **pk;       /* [n_threads] */
+  elfm_detection *det;   /* [n_slots][max_det] */
+  int *det_n;            /* [n_slots] */
+  double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
+  int have_first;
   elfm_linker *lk;
-  elfm_detection *det;
   FILE *fdet, *ftr;
   char p_det[1100], p_tr[1100];
   elfm_track_store store;
@@ -207,34 +214,68 @@ static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, el
   return ELFM_OK;
 }
 
-static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
+/* Detectors and buffers for the driver's layout, before the run: the
+ * volume geometry comes from a plan of the same calibration and options as
+ * the one refocusing. With the views rule, the views sampling each voxel
+ * (elfm_peaks_set_view_counts) are counted once and copied to each detector. */
+static elfm_status peaks_setup(track_ctx *c, elfm_error *err)
 {
-  track_ctx *c = user;
   const track_opts *o = c->o;
-  if (!c->pk) {
-    c->pk = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
-    if (!c->pk) return err ? err->code : ELFM_ERR_INVALID;
-    if (o->views_rule) {
-      /* views sampling each voxel, from a plan of the same calibration and
-       * crop options as the one refocusing (elfm_peaks_set_view_counts) */
-      elfm_refocus_plan *plan = NULL;
-      elfm_status s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
-      if (s != ELFM_OK) return s;
-      size_t nvox = (size_t)v->w * v->h * v->nz;
-      uint8_t *cnt = malloc(nvox);
-      if (!cnt) {
-        elfm_refocus_plan_free(plan);
-        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
-      }
+  elfm_status s = elfm_recon_layout(&o->recon, &c->n_threads, &c->n_slots, err);
+  if (s != ELFM_OK) return s;
+  c->pk = calloc((size_t)c->n_threads, sizeof *c->pk);
+  c->det = malloc((size_t)c->n_slots * (size_t)o->max_det * sizeof *c->det);
+  c->det_n = calloc((size_t)c->n_slots, sizeof *c->det_n);
+  c->det_s = calloc((size_t)c->n_slots, sizeof *c->det_s);
+  if (!c->pk || !c->det || !c->det_n || !c->det_s)
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
+  elfm_refocus_plan *plan = NULL;
+  s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
+  if (s != ELFM_OK) return s;
+  elfm_volume *v = elfm_refocus_volume_create(plan, err);
+  uint8_t *cnt = NULL;
+  if (!v) s = err ? err->code : ELFM_ERR_NOMEM;
+  if (s == ELFM_OK && o->views_rule) {
+    size_t nvox = (size_t)v->w * v->h * v->nz;
+    cnt = malloc(nvox);
+    if (!cnt) s = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
+    else
       for (int k = 0; k < v->nz; k++)
         for (int Y = 0; Y < v->h; Y++)
           for (int X = 0; X < v->w; X++)
             cnt[((size_t)k * v->h + Y) * v->w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
-      elfm_refocus_plan_free(plan);
-      s = elfm_peaks_set_view_counts(c->pk, cnt, c->calib->n_views, o->views_exponent, err);
-      free(cnt);
-      if (s != ELFM_OK) return s;
-    }
+  }
+  for (int t = 0; s == ELFM_OK && t < c->n_threads; t++) {
+    c->pk[t] = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
+    if (!c->pk[t]) s = err ? err->code : ELFM_ERR_INVALID;
+    else if (cnt)
+      s = elfm_peaks_set_view_counts(c->pk[t], cnt, c->calib->n_views, o->views_exponent, err);
+  }
+  free(cnt);
+  elfm_volume_free(v);
+  elfm_refocus_plan_free(plan);
+  return s;
+}
+
+/* Worker thread: detect the peaks of the slot's volume into its buffer. */
+static elfm_status detect_worker(const elfm_volume *v, int slot, int thread, void *user,
+                                 elfm_error *err)
+{
+  track_ctx *c = user;
+  double t0 = cli_now_s();
+  elfm_status st = elfm_peaks_detect(c->pk[thread], v, c->det + (size_t)slot * c->o->max_det,
+                                     c->o->max_det, &c->det_n[slot], err);
+  c->det_s[slot] = cli_now_s() - t0;
+  return st;
+}
+
+/* Calling thread, frame order: link the slot's detections, write them. */
+static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  track_ctx *c = user;
+  const track_opts *o = c->o;
+  if (!c->have_first) {
+    c->have_first = 1;
     c->vol_w = v->w;
     c->vol_h = v->h;
     c->vol_nz = v->nz;
@@ -244,13 +285,11 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
     c->first_frame = v->frame;
     c->first_t_us = v->t_us;
   }
-  double t0 = cli_now_s();
-  int n = 0;
-  elfm_status st = elfm_peaks_detect(c->pk, v, c->det, o->max_det, &n, err);
-  if (st != ELFM_OK) return st;
+  elfm_detection *det = c->det + (size_t)slot * o->max_det;
+  const int n = c->det_n[slot];
+  c->t_peaks += c->det_s[slot];
   double t1 = cli_now_s();
-  c->t_peaks += t1 - t0;
-  st = elfm_link_step(c->lk, v->frame, v->t_us, c->det, n, err);
+  elfm_status st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
   if (st != ELFM_OK) return st;
   c->t_link += cli_now_s() - t1;
   /* after linking: the lag correction (when on) has moved the detections,
@@ -260,21 +299,21 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
-    st = elfm_detections_write(c->fdet, c->p_det, &c->det[j], 1, err);
+    st = elfm_detections_write(c->fdet, c->p_det, &det[j], 1, err);
     if (st != ELFM_OK) return st;
     kept++;
   }
   if (o->resolution && v->frame % 10 == 0 && n > 0) {
     int m = 0;
     /* isolation 3 x the paper's lateral FWHM of 3.9 um */
-    st = elfm_analysis_fwhm(v, c->det, n, 12.0, c->fw, o->max_det, &m, err);
+    st = elfm_analysis_fwhm(v, det, n, 12.0, c->fw, o->max_det, &m, err);
     if (st != ELFM_OK) return st;
     for (int k = 0; k < m; k++) {
       /* the speed of the track the bead belongs to: find its detection */
       double speed = NAN;
       for (int j = 0; j < n; j++)
-        if (c->det[j].x_um == c->fw[k].x_um && c->det[j].y_um == c->fw[k].y_um &&
-            c->det[j].z_um == c->fw[k].z_um) {
+        if (det[j].x_um == c->fw[k].x_um && det[j].y_um == c->fw[k].y_um &&
+            det[j].z_um == c->fw[k].z_um) {
           speed = elfm_link_last_speed(c->lk, j);
           break;
         }
@@ -699,12 +738,15 @@ int cmd_track(int argc, char **argv)
   snprintf(p_sum, sizeof p_sum, "%s/summary.json", o.out);
   int rc = CLI_FAIL;
   FILE *fx = NULL;
-  c.det = malloc((size_t)o.max_det * sizeof *c.det);
   c.fw = o.resolution ? malloc((size_t)o.max_det * sizeof *c.fw) : NULL;
-  if (!c.det || (o.resolution && !c.fw)) {
+  if (o.resolution && !c.fw) {
     cli_message(C, CLI_FAIL, "out of memory");
     goto done;
   }
+  if (peaks_setup(&c, &err) != ELFM_OK) { cli_fail(C, &err); goto done; }
+  o.recon.worker = detect_worker;
+  o.recon.worker_user = &c;
+  o.recon.on_volume_slot = on_volume;
   c.lk = elfm_link_create(&o.link, &err);
   if (!c.lk) { cli_fail(C, &err); goto done; }
   c.fdet = fopen(c.p_det, "w");
@@ -725,7 +767,7 @@ int cmd_track(int argc, char **argv)
   double t0 = cli_now_s();
   elfm_recon_stats rs;
   memset(&rs, 0, sizeof rs);
-  elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, on_volume, &c, &rs, &err);
+  elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, NULL, &c, &rs, &err);
   if (!o.quiet) fputc('\n', stderr);
   if (st == ELFM_OK) st = elfm_link_finish(c.lk, &err);
   if (st == ELFM_OK) st = drain(&c, &err);
@@ -761,7 +803,10 @@ done:
   if (c.fdet) fclose(c.fdet);
   if (c.ftr) fclose(c.ftr);
   elfm_link_free(c.lk);
-  elfm_peaks_free(c.pk);
+  for (int t = 0; c.pk && t < c.n_threads; t++) elfm_peaks_free(c.pk[t]);
+  free(c.pk);
+  free(c.det_n);
+  free(c.det_s);
   elfm_track_store_clear(&c.store);
   free(c.det);
   free(c.fw);

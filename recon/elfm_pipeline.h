@@ -37,7 +37,7 @@ typedef struct elfm_recon_stats {
   double span_s;           /* recording span processed: windows' end - first window start */
   double wall_s;           /* the whole run */
   double read_s, frame_s;  /* reading/decoding, building frames (calling thread) */
-  double refocus_s;        /* wall time of the parallel median + refocus sections */
+  double refocus_s;        /* wall time of the parallel median + refocus sections (with the worker hook) */
   double callback_s;       /* time spent in the callback */
   double events_per_s, volumes_per_s;
   double realtime_factor;  /* span_s / wall_s: > 1 is faster than real time */
@@ -46,6 +46,20 @@ typedef struct elfm_recon_stats {
 /* Called now and then (about every 0.25 s of wall time) on the calling
  * thread with the stats so far; may be NULL. */
 typedef void (*elfm_recon_progress_fn)(const elfm_recon_stats *s, void *user);
+
+/* Optional per-volume work done on the worker thread right after the
+ * volume is refocused (e.g. peak detection), so that it runs in parallel
+ * across the batch. `slot` (0 .. slots-1, see elfm_recon_layout) names the
+ * batch slot the volume lives in; `thread` (0 .. threads-1) the worker, so
+ * the hook can use a per-thread workspace and store its output per slot.
+ * The same slot is passed to on_volume_slot for this volume afterwards, in
+ * frame order. Must not touch state shared with other slots or threads. A
+ * non-OK return stops the run like a callback error. */
+typedef elfm_status (*elfm_volume_worker_fn)(const elfm_volume *vol, int slot, int thread,
+                                             void *user, elfm_error *err);
+/* The ordered callback with the volume's batch slot (see above). */
+typedef elfm_status (*elfm_volume_slot_fn)(const elfm_volume *vol, int slot, void *user,
+                                           elfm_error *err);
 
 typedef struct elfm_recon_options {
   elfm_framer_options framer;   /* dt, stride, representation, tau, polarity, start */
@@ -60,7 +74,18 @@ typedef struct elfm_recon_options {
   int64_t tiff_frame_us;        /* TIFF stacks: time between pages; 0 = dt_us */
   elfm_recon_progress_fn progress;
   void *progress_user;
+  /* Optional (NULL: off). With on_volume_slot set it is called in frame
+   * order instead of the on_volume argument, with the `user` argument. */
+  elfm_volume_worker_fn worker;
+  void *worker_user;
+  elfm_volume_slot_fn on_volume_slot;
 } elfm_recon_options;
+
+/* The worker threads and batch slots elfm_recon_run will use with `o`
+ * (for sizing per-thread workspaces and per-slot outputs of a worker hook).
+ * ELFM_ERR_INVALID for out-of-range threads / batch. */
+elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *slots,
+                              elfm_error *err);
 
 /* Defaults: dt 1000 us exponential time surface tau 1000 us, both
  * polarities, 3x3 median, auto path, ghost suppression by view agreement

@@ -87,15 +87,25 @@ static void run_free(run *r)
   elfm_tiff_close(r->src.tiff);
 }
 
+elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *slots,
+                              elfm_error *err)
+{
+  if (o->threads < 0 || o->threads > 1024 || o->batch < 0 || o->batch > 4096)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "threads %d / batch %d out of range",
+                          o->threads, o->batch);
+  *threads = o->threads > 0 ? o->threads : omp_get_max_threads();
+  /* Two frames per thread: dynamic scheduling evens out frames of different
+   * event counts while keeping the slots' memory (a volume each) small. */
+  *slots = o->batch > 0 ? o->batch : 2 * *threads;
+  return ELFM_OK;
+}
+
 static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_options *opt,
                              int use_median, elfm_error *err)
 {
   r->opt = opt;
   if (opt->median != 0 && opt->median != 3 && opt->median != 5)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "median %d: use 0, 3 or 5", opt->median);
-  if (opt->threads < 0 || opt->threads > 1024 || opt->batch < 0 || opt->batch > 4096)
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "threads %d / batch %d out of range",
-                          opt->threads, opt->batch);
   if (opt->from_us >= opt->to_us)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "from_us %lld is not before to_us %lld",
                           (long long)opt->from_us, (long long)opt->to_us);
@@ -103,10 +113,8 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   if (st) return st;
   st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan, err);
   if (st) return st;
-  r->threads = opt->threads > 0 ? opt->threads : omp_get_max_threads();
-  /* Two frames per thread: dynamic scheduling evens out frames of different
-   * event counts while keeping the slots' memory (a volume each) small. */
-  r->nslots = opt->batch > 0 ? opt->batch : 2 * r->threads;
+  st = elfm_recon_layout(opt, &r->threads, &r->nslots, err);
+  if (st) return st;
   r->slots = calloc((size_t)r->nslots, sizeof *r->slots);
   r->medians = calloc((size_t)r->threads, sizeof *r->medians);
   if (!r->slots || !r->medians)
@@ -234,6 +242,8 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
     if (nb == 0) break;
     double t0 = now_s();
     const elfm_refocus_plan *plan = r->plan;
+    const elfm_volume_worker_fn worker = r->opt->worker;
+    void *const worker_user = r->opt->worker_user;
 #pragma omp parallel for num_threads(r->threads) schedule(dynamic, 1)
     for (int i = 0; i < nb; i++) {
       slot *s = &r->slots[i];
@@ -243,6 +253,8 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
         in = s->filtered;
       }
       s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
+      if (s->status == ELFM_OK && worker)
+        s->status = worker(s->vol, i, omp_get_thread_num(), worker_user, &s->err);
     }
     r->st.refocus_s += now_s() - t0;
     for (int i = 0; i < nb; i++) {
@@ -254,7 +266,9 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
       if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
       else r->st.frames_dense++;
       t0 = now_s();
-      elfm_status st = on_volume ? on_volume(s->vol, user, err) : ELFM_OK;
+      elfm_status st = r->opt->on_volume_slot ? r->opt->on_volume_slot(s->vol, i, user, err)
+                       : on_volume                ? on_volume(s->vol, user, err)
+                                                  : ELFM_OK;
       r->st.callback_s += now_s() - t0;
       if (st) return st;
       r->st.frames++;
