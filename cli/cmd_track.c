@@ -443,7 +443,14 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   add_num(tim, "volumes_per_s", wall_s > 0 ? (double)c->n_frames / wall_s : NAN);
   add_num(tim, "realtime_factor", wall_s > 0 ? rs->span_s / wall_s : NAN);
   add_num(tim, "peak_rss_mb", cli_peak_rss_mb());
+  /* recon_s: the driver without the ordered callback (linking, writing,
+   * smoothing); it contains peak detection, which runs on the workers.
+   * peaks_s is that detection's time summed over the workers (CPU s). */
   add_num(tim, "recon_s", rs->wall_s - rs->callback_s);
+  add_num(tim, "read_s", rs->read_s);
+  add_num(tim, "frame_s", rs->frame_s);
+  add_num(tim, "parallel_s", rs->refocus_s);
+  add_num(tim, "callback_s", rs->callback_s);
   add_num(tim, "peaks_s", c->t_peaks);
   add_num(tim, "link_s", c->t_link);
   add_num(tim, "smooth_s", c->t_smooth);
