@@ -55,6 +55,10 @@ typedef struct track_ctx {
   int *det_n;            /* [n_slots] */
   double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
   int have_first;
+  elfm_track **fin;      /* finished tracks being smoothed (drain) */
+  elfm_status *fin_st;
+  elfm_error *fin_err;
+  size_t fin_cap;
   elfm_linker *lk;
   FILE *fdet, *ftr;
   char p_det[1100], p_tr[1100];
@@ -146,11 +150,9 @@ static void progress(const elfm_recon_stats *s, void *user)
           s->span_s, s->frames, s->volumes_per_s, elfm_link_n_live(c->lk));
 }
 
-static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_error *err)
+/* Filter a smoothed track (st: its smoothing's status) and write it. */
+static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elfm_error *err)
 {
-  double t0 = cli_now_s();
-  elfm_status st = elfm_track_smooth(t, &c->o->smooth, err);
-  c->t_smooth += cli_now_s() - t0;
   /* A track whose points the robust fit mostly rejects is not one object
    * (ghosts joined across gaps: on the stage scene such tracks ran against
    * the stage and biased its velocity by 1 %). */
@@ -184,14 +186,49 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_error *err)
   return elfm_track_store_add(&c->store, t, err);
 }
 
+/* Smooth, filter and write the tracks the linker has finished. Each track
+ * is its own single-threaded Ceres problem, so when several finish at once
+ * (most of them at the end of the recording) they are smoothed in parallel;
+ * filtering and writing stay in the linker's order, so the output does not
+ * depend on the thread count. */
 static elfm_status drain(track_ctx *c, elfm_error *err)
 {
+  size_t n = 0;
   elfm_track *t;
+  elfm_status st = ELFM_OK;
   while ((t = elfm_link_pop_finished(c->lk))) {
-    elfm_status st = finish_track(c, t, err);
-    if (st != ELFM_OK) return st;
+    if (n == c->fin_cap) {
+      size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
+      elfm_track **a = realloc(c->fin, cap * sizeof *a);
+      elfm_status *b = realloc(c->fin_st, cap * sizeof *b);
+      elfm_error *e = realloc(c->fin_err, cap * sizeof *e);
+      if (a) c->fin = a;
+      if (b) c->fin_st = b;
+      if (e) c->fin_err = e;
+      if (!a || !b || !e) {
+        elfm_track_free(t);
+        st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
+        break;
+      }
+      c->fin_cap = cap;
+    }
+    c->fin[n++] = t;
   }
-  return ELFM_OK;
+  double t0 = cli_now_s();
+  const elfm_smooth_options *so = &c->o->smooth;
+  const int nt = n > 1 && c->n_threads > 1 ? c->n_threads : 1;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
+  for (size_t i = 0; i < n; i++) c->fin_st[i] = elfm_track_smooth(c->fin[i], so, &c->fin_err[i]);
+  c->t_smooth += cli_now_s() - t0;
+  for (size_t i = 0; i < n; i++) {
+    if (st == ELFM_OK) {
+      if (c->fin_st[i] != ELFM_OK && err) *err = c->fin_err[i];
+      st = finish_track(c, c->fin[i], c->fin_st[i], err);
+    } else {
+      elfm_track_free(c->fin[i]);
+    }
+  }
+  return st;
 }
 
 static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, elfm_error *err)
@@ -813,6 +850,9 @@ done:
   for (int t = 0; c.pk && t < c.n_threads; t++) elfm_peaks_free(c.pk[t]);
   free(c.pk);
   free(c.det_n);
+  free(c.fin);
+  free(c.fin_st);
+  free(c.fin_err);
   free(c.det_s);
   elfm_track_store_clear(&c.store);
   free(c.det);
