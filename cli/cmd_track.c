@@ -92,6 +92,8 @@ static void usage(FILE *f)
     "  --ghost none|abs|frac|mad  ghost threshold, --ghost-value V,\n"
     "  --agree F            view-agreement ghost rule (default 0 = off for tracking)\n"
     "  --threads N, --from-us T, --to-us T\n"
+    "  --batch N            volumes refocused (and searched for peaks) per parallel\n"
+    "                       batch (default 0 = 2 x threads)\n"
     "detection:\n"
     "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (50 on time\n"
     "                       surfaces), --threshold-rel F (0.35 of the maximum for counts)\n"
@@ -552,7 +554,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH
 };
 
 int cmd_track(int argc, char **argv)
@@ -595,6 +597,7 @@ int cmd_track(int argc, char **argv)
       {"median", required_argument, 0, O_MEDIAN}, {"path", required_argument, 0, O_PATH},
       {"ghost", required_argument, 0, O_GHOST}, {"ghost-value", required_argument, 0, O_GHOSTV},
       {"agree", required_argument, 0, O_AGREE}, {"threads", required_argument, 0, O_THREADS},
+      {"batch", required_argument, 0, O_BATCH},
       {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
       {"threshold-k", required_argument, 0, O_THK}, {"threshold-abs", required_argument, 0, O_THA},
       {"threshold-rel", required_argument, 0, O_THR},
@@ -665,6 +668,10 @@ int cmd_track(int argc, char **argv)
     case O_GHOSTV: if (!cli_parse_double(C, "--ghost-value", a, &o.recon.refocus.threshold_value)) return CLI_USAGE; break;
     case O_AGREE: if (!cli_parse_double(C, "--agree", a, &o.recon.refocus.agree_frac)) return CLI_USAGE; break;
     case O_THREADS: if (!cli_parse_int(C, "--threads", a, &o.recon.threads)) return CLI_USAGE; break;
+    case O_BATCH:
+      if (!cli_parse_int(C, "--batch", a, &o.recon.batch)) return CLI_USAGE;
+      if (o.recon.batch < 0 || o.recon.batch > 4096) return cli_message(C, CLI_USAGE, "--batch must be 0..4096");
+      break;
     case O_FROM: if (!cli_parse_int64(C, "--from-us", a, &o.recon.from_us)) return CLI_USAGE; break;
     case O_TO: if (!cli_parse_int64(C, "--to-us", a, &o.recon.to_us)) return CLI_USAGE; break;
     case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;

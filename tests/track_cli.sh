@@ -16,6 +16,7 @@ check 2 "required" "$bin" track
 check 2 "unknown option" "$bin" track --calib a --events b --out c --bogus
 check 2 "motion" "$bin" track --calib a --events b --out c --motion sideways
 check 2 "stage-velocity" "$bin" track --calib a --events b --out c --stage-velocity-um-per-ms 1,2
+check 2 "batch" "$bin" track --calib a --events b --out c --batch -1
 check 2 "max-outlier-frac" "$bin" track --calib a --events b --out c --max-outlier-frac 2
 check 1 "$tmp/nope.json" "$bin" track --calib "$tmp/nope.json" --events "$tmp/e.raw" --out "$tmp/o" -q
 # a valid calibration, then broken event files
