@@ -1,0 +1,18 @@
+#!/bin/bash
+# measure_scenes.sh — the per-scene table of the README: simulate, track
+# (/usr/bin/time -v), score. EVENTLFM=path/to/eventlfm OUT=dir to change.
+set -u
+B=${EVENTLFM:-$(cd "$(dirname "$0")/.." && pwd)/build/eventlfm}
+M=${OUT:-/tmp/eventlfm_measure}; rm -rf "$M"; mkdir -p "$M"
+cd "$M"
+TIME="/usr/bin/time -v"; [ -x /usr/bin/time ] || TIME=""   # Debian package "time"
+for sc in "flow 100 1" "flow 100 2" "stage 200 1" "blink 200 1" "worm 200 1"; do
+  set -- $sc; scene=$1; ms=$2; seed=$3; d=$M/${scene}_s${seed}
+  "$B" simulate $scene --out $d --duration-ms $ms --seed $seed --quiet 2>$d.sim.txt
+  extra=""; [ $scene = worm ] && extra="--dt-us 2000"
+  [ $scene = stage ] && extra="--motion stage"
+  $TIME "$B" track --calib $d/calib.json --events $d/events.raw --out $d/t $extra 2> $d.track.txt
+  sv=""; [ $scene = stage ] && sv="--stage-velocity-um-per-ms 0,2.5,0"
+  "$B" score --truth $d/truth.csv --tracks $d/t/tracks.csv --detections $d/t/detections.csv --calib $d/calib.json $sv > $d.score.txt 2>&1
+  echo "== $sc"; tail -1 $d.track.txt | head -1; grep -E "eventlfm track:|Elapsed|Maximum resident" $d.track.txt | tail -3; cat $d.score.txt
+done
