@@ -50,7 +50,8 @@ static void usage(FILE *f)
           "  --path P           auto | dense | sparse (default auto)\n"
           "  --ghost G          comma list of: none, abs:V, frac:F (of the maximum),\n"
           "                     mad:K (median + K robust sigma), agree:F (a voxel needs\n"
-          "                     signal in F of its views); default none\n"
+          "                     signal in F of its views); default agree:0.3 (the\n"
+          "                     measured best, docs/recon.md), none turns it off\n"
           "  --crop-margin-px N widen each view's crop box (default 0)\n"
           "  --threads N        worker threads (default: all)\n"
           "  --batch N          frames per parallel batch (default 2 x threads)\n"
@@ -147,12 +148,19 @@ static const char *thr_name(elfm_ghost_threshold t)
          t == ELFM_GHOST_THR_MAD ? "mad" : "none";
 }
 
+/* run_err: the error that stopped the run early, or NULL. The summary then
+ * says so ("input_error"), so that the counts of a run cut short by a bad
+ * file are not mistaken for the whole recording's. */
 static int write_summary(const recon_args *a, const recon_out *o, const elfm_calib *cal,
-                         const elfm_recon_stats *s)
+                         const elfm_recon_stats *s, const elfm_error *run_err)
 {
   cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
   cJSON_AddStringToObject(in, "calib", a->calib);
   cJSON_AddStringToObject(in, a->tiff ? "tiff" : "events", a->tiff ? a->tiff : a->events);
+  if (run_err) {
+    char msg[1200];
+    cJSON_AddStringToObject(root, "input_error", elfm_error_format(run_err, msg, sizeof msg));
+  }
   cJSON *p = cJSON_AddObjectToObject(root, "parameters");
   const elfm_recon_options *r = &a->ro;
   cJSON_AddNumberToObject(p, "dt_us", (double)r->framer.dt_us);
@@ -329,7 +337,7 @@ int cmd_recon(int argc, char **argv)
   elfm_status st = a.tiff ? elfm_recon_run_tiff(a.tiff, &cal, r, on_volume, &o, &s, &err)
                           : elfm_recon_run(a.events, &cal, r, on_volume, &o, &s, &err);
   if (!a.quiet) fputc('\n', stderr);
-  if (!write_summary(&a, &o, &cal, &s)) return CLI_FAIL;
+  if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL)) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
   if (!a.quiet)
     fprintf(stderr, "recon: %lld events -> %lld volumes (%lld sparse) in %.2f s: %.0f volumes/s, "

@@ -127,6 +127,25 @@ int main(void)
   snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s --out %s/r2 --quiet", sim, path, dir);
   int rc = run(args);
   CHECK(rc == 0 || (rc == 1 && file_has("err.txt", "cut.raw"))); /* cut on a word boundary is valid */
+  /* Cut inside a word (the other parity of 30000 or 30001 bytes): exit 1
+   * naming file and byte, and the summary of what was read says the input
+   * ended in an error rather than passing for the whole recording. */
+  snprintf(args, sizeof args, "head -c %d %s/events.raw > %s", rc == 0 ? 30001 : 30000, sim, path);
+  CHECK(system(args) == 0);
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s --out %s/r4 --quiet", sim, path, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(file_has("err.txt", "cut.raw: byte"));
+  {
+    char sum[800];
+    snprintf(sum, sizeof sum, "%s/r4/summary.json", dir);
+    FILE *f = fopen(sum, "rb");
+    char text[1 << 14];
+    size_t n = f ? fread(text, 1, sizeof text - 1, f) : 0;
+    if (f) fclose(f);
+    text[n] = '\0';
+    CHECK_MSG(strstr(text, "\"input_error\"") && strstr(text, "cut.raw: byte"),
+              "summary.json of a truncated input lacks input_error");
+  }
   snprintf(args, sizeof args, "recon --calib %s/calib.json --tiff %s/events.raw --out %s/r3 --quiet", sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
   CHECK(file_has("err.txt", "events.raw"));
