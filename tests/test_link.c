@@ -336,6 +336,50 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5e. Weak gate: a weak detection joins a track only within weak_gate_um
+   * of its prediction, in the main round (4.5 um off, inside the 6 um gate)
+   * and in the rescue round (9 um off, inside 2.5 x 6 um); a strong
+   * detection at the same place still joins, and without the weak gate the
+   * weak one does too. */
+  {
+    const double off_um[2] = {4.5, 9.0};
+    for (int c = 0; c < 2; c++)
+      for (int mode = 0; mode < 3; mode++) {  /* 0 weak+gate, 1 strong+gate, 2 weak no gate */
+        elfm_link_options ow = o;
+        ow.weak_gate_um = mode == 2 ? 0 : 3;
+        elfm_linker *l = elfm_link_create(&ow, &err);
+        CHECK(l != NULL);
+        if (!l) continue;
+        for (int f = 0; f < 10; f++) {
+          elfm_detection d = mk(1.0 * f, 0, 0);
+          CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+        }
+        int64_t id0 = elfm_link_last_track_id(l, 0);
+        elfm_detection d = mk(10.0, off_um[c], 0);
+        d.weak = mode != 1;
+        CHECK_OK(elfm_link_step(l, 10, T0 + 10 * 1000, &d, 1, &err), &err);
+        int64_t id = elfm_link_last_track_id(l, 0);
+        if (mode == 0) CHECK_MSG(id == -3, "weak %.1f um off joined track %lld", off_um[c], (long long)id);
+        else CHECK_MSG(id == id0, "mode %d, %.1f um off: id %lld, want %lld", mode, off_um[c],
+                       (long long)id, (long long)id0);
+        /* after the miss, a weak detection inside the weak gate joins */
+        if (mode != 0) {
+          elfm_link_free(l);
+          continue;
+        }
+        elfm_detection d2 = mk(11.0, 0.5, 0);
+        d2.weak = 1;
+        CHECK_OK(elfm_link_step(l, 11, T0 + 11 * 1000, &d2, 1, &err), &err);
+        CHECK(elfm_link_last_track_id(l, 0) == id0);
+        elfm_link_free(l);
+      }
+    elfm_link_options bad = o;
+    bad.weak_gate_um = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad.weak_gate_um = NAN;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+  }
+
   /* 6. Bad input. */
   {
     elfm_linker *l = elfm_link_create(&o, &err);

@@ -87,6 +87,12 @@ typedef struct elfm_link_options {
    * new one (flow: tracks coasted through gaps while a twin was born). 0 = off;
    * default 2.5. Skipped when leftovers exceed 500 x 500. */
   double rescue_gate_factor;
+  /* Weak (hysteresis) detections may join a track only within this
+   * anisotropic distance of its prediction (and within its gate), in the
+   * main and the rescue round: a ghost as bright as a deep bead must then
+   * also sit where a track expects one. 0 = off (weak detections use the
+   * track's gate, the rescue gate too). */
+  double weak_gate_um;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);

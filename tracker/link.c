@@ -71,6 +71,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->birth_speed_um_per_ms = 5.0;
   o->speed_gate_frac = 0.3;
   o->rescue_gate_factor = 2.5;
+  o->weak_gate_um = 0;
   o->trail_us = 2000;
 }
 
@@ -83,6 +84,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
       !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
       !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
+      !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
@@ -386,6 +388,13 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
+/* Is d a weak detection too far (squared anisotropic distance d2) from a
+ * track's prediction to join it? */
+static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
+{
+  return d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um;
+}
+
 /* Is d in the trail of a detection just matched to a moving track? */
 static int in_trail(const elfm_linker *l, size_t nt, const elfm_detection *det,
                     const elfm_detection *d)
@@ -495,7 +504,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         double dx = det[j].x_um - lt->pred[0], dy = det[j].y_um - lt->pred[1],
                dz = (det[j].z_um - lt->pred[2]) / kz;
         double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 >= g2) continue;
+        if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
         double cost = d2 / g2 + o->gap_cost * lt->missed;
         if (c == o->max_candidates && cost >= lc[c - 1].cost) continue;
         int k = c < o->max_candidates ? c++ : c - 1;
@@ -544,7 +553,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         double dx = det[j].x_um - lt->pred[0], dy = det[j].y_um - lt->pred[1],
                dz = (det[j].z_um - lt->pred[2]) / kz;
         double d2 = dx * dx + dy * dy + dz * dz;
-        if (d2 >= g2) continue;
+        if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
         l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
             (link_cand){j, d2 / g2 + o->gap_cost * lt->missed};
       }
@@ -648,8 +657,9 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
           double dx = dd->x_um - lt->pred[0], dy = dd->y_um - lt->pred[1],
                  dz = (dd->z_um - lt->pred[2]) / kz;
           double d2 = dx * dx + dy * dy + dz * dz;
-          l->cost[(size_t)r * nc + c] = d2 < g2 ? d2 / g2 : INFINITY;
-          any |= d2 < g2;
+          int ok = d2 < g2 && !weak_out(o, dd, d2);
+          l->cost[(size_t)r * nc + c] = ok ? d2 / g2 : INFINITY;
+          any |= ok;
         }
       }
       if (any) {
