@@ -32,6 +32,9 @@ typedef struct track_opts {
   double views_exponent;
   int quiet;
   double max_outlier_frac;
+  double guided_low;  /* track-guided search: min value near a prediction (0 = off) */
+  double guided_radius_um;
+  int guided_min_points;
 } track_opts;
 
 /* Speed bins for the resolution figures (um/ms): static, slow, moderate, fast. */
@@ -54,6 +57,7 @@ typedef struct track_ctx {
   elfm_detection *det;   /* [n_slots][max_det] */
   int *det_n;            /* [n_slots] */
   double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
+  double *pred;          /* [max_det][3] track predictions (guided search) */
   int have_first;
   elfm_track **fin;      /* finished tracks being smoothed (drain) */
   elfm_status *fin_st;
@@ -114,6 +118,10 @@ static void usage(FILE *f)
     "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5; 0 off)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
+    "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
+    "                       predicts its bead and no peak lies within the weak gate,\n"
+    "                       take the local maximum above V within --guided-radius-um\n"
+    "                       R (1.5, z x link-kz) as a weak peak (default 0 = off)\n"
     "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
     "smoothing:\n"
     "  --motion auto|stage|free   auto: model chosen per track (BIC) among constant\n"
@@ -268,7 +276,8 @@ static elfm_status peaks_setup(track_ctx *c, elfm_error *err)
   c->det = malloc((size_t)c->n_slots * (size_t)o->max_det * sizeof *c->det);
   c->det_n = calloc((size_t)c->n_slots, sizeof *c->det_n);
   c->det_s = calloc((size_t)c->n_slots, sizeof *c->det_s);
-  if (!c->pk || !c->det || !c->det_n || !c->det_s)
+  c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
+  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->pred)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -327,9 +336,32 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
     c->first_t_us = v->t_us;
   }
   elfm_detection *det = c->det + (size_t)slot * o->max_det;
-  const int n = c->det_n[slot];
+  int n = c->det_n[slot];
   c->t_peaks += c->det_s[slot];
   double t1 = cli_now_s();
+  if (o->guided_low > 0 && o->link.weak_gate_um > 0) {
+    /* Track-guided search: where an established track expects its bead
+     * and no peak lies within the weak gate, take the local maximum above
+     * guided_low there (weak: it can only continue that track). Deep beads
+     * fade below the global threshold (25-55 on the surface, docs). */
+    int np = 0;
+    elfm_status sp = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred, o->max_det, &np, err);
+    if (sp != ELFM_OK) return sp;
+    const double g = o->link.weak_gate_um, kz = o->link.kz, gs = o->guided_radius_um;
+    for (int k = 0; k < np && n < o->max_det; k++) {
+      const double *q = c->pred + 3 * (size_t)k;
+      int near = 0;
+      for (int j = 0; j < n && !near; j++) {
+        double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1], dz = (det[j].z_um - q[2]) / kz;
+        near = dx * dx + dy * dy + dz * dz < g * g;
+      }
+      if (near) continue;
+      int found = 0;
+      sp = elfm_peaks_find_near(c->pk[0], v, q, gs, gs * kz, o->guided_low, &det[n], &found, err);
+      if (sp != ELFM_OK) return sp;
+      n += found;
+    }
+  }
   elfm_status st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
   if (st != ELFM_OK) return st;
   c->t_link += cli_now_s() - t1;
@@ -461,6 +493,9 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
   cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);
+  cJSON_AddNumberToObject(par, "guided_low", o->guided_low);
+  cJSON_AddNumberToObject(par, "guided_radius_um", o->guided_radius_um);
+  cJSON_AddNumberToObject(par, "guided_min_points", o->guided_min_points);
   cJSON_AddNumberToObject(par, "lead_sigmas", o->link.lead_sigmas);
   cJSON_AddNumberToObject(par, "link_kz", o->link.kz);
   cJSON_AddNumberToObject(par, "radius_xy_um", o->peaks.radius_xy_um);
@@ -557,7 +592,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH, O_WEAKGATE
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH, O_WEAKGATE, O_GUIDED, O_GUIDEDR, O_GUIDEDM
 };
 
 int cmd_track(int argc, char **argv)
@@ -598,6 +633,9 @@ int cmd_track(int argc, char **argv)
    * 0.914 -> 0.929; blink unchanged. At 6 um the RMSE passed 0.5 um, at
    * 3-4 um tracks broke (docs/tracker.md "Weak gate"). */
   o.link.weak_gate_um = 5;
+  /* guided search (off by default; docs/tracker.md "Track-guided search") */
+  o.guided_radius_um = 1.5;
+  o.guided_min_points = 10;
   int thr_given = 0, low_given = 0;
   static const struct option lo[] = {
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -616,6 +654,9 @@ int cmd_track(int argc, char **argv)
       {"views-rule", required_argument, 0, O_VIEWSRULE},
       {"rescue-factor", required_argument, 0, O_RESCUE},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
+      {"guided-low", required_argument, 0, O_GUIDED},
+      {"guided-radius-um", required_argument, 0, O_GUIDEDR},
+      {"guided-min-points", required_argument, 0, O_GUIDEDM},
       {"lead-sigmas", required_argument, 0, O_LEAD},
       {"link-kz", required_argument, 0, O_LINKKZ},
       {"views-exponent", required_argument, 0, O_VEXP},
@@ -692,6 +733,9 @@ int cmd_track(int argc, char **argv)
     case O_VEXP: if (!cli_parse_double(C, "--views-exponent", a, &o.views_exponent)) return CLI_USAGE; break;
     case O_LINKKZ: if (!cli_parse_double(C, "--link-kz", a, &o.link.kz)) return CLI_USAGE; break;
     case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
+    case O_GUIDEDR: if (!cli_parse_double(C, "--guided-radius-um", a, &o.guided_radius_um)) return CLI_USAGE; break;
+    case O_GUIDEDM: if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
+    case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
     case O_WEAKGATE: if (!cli_parse_double(C, "--weak-gate-um", a, &o.link.weak_gate_um)) return CLI_USAGE; break;
     case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
     case O_VIEWSRULE:
@@ -761,6 +805,9 @@ int cmd_track(int argc, char **argv)
   if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (!(o.guided_low >= 0) || !(o.guided_radius_um > 0) || o.guided_min_points < 1)
+    return cli_message(C, CLI_USAGE,
+                       "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
   if (!thr_given) {
     if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
     else {
@@ -876,6 +923,7 @@ done:
   free(c.fin_st);
   free(c.fin_err);
   free(c.det_s);
+  free(c.pred);
   elfm_track_store_clear(&c.store);
   free(c.det);
   free(c.fw);

@@ -329,6 +329,45 @@ int main(void)
     CHECK(elfm_peaks_create(&oh, v->w, v->h, v->nz, &err) == NULL);
   }
 
+  /* Track-guided search: a faint blob (amplitude 30) the detector misses
+   * at threshold 50 is found near a prediction 1 um off, weak, at the blob;
+   * not from 8 um away with a 3 um radius, not above its height, and the
+   * bright blob beside it does not capture the search. */
+  {
+    memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
+    const double F[3] = {-6.1, 4.3, -20.5};
+    add_blob(v, F[0], F[1], F[2], 30, SXY, SZ);
+    add_blob(v, 10.0, -10.0, 10.0, 150, SXY, SZ);
+    elfm_peaks_options og = o;
+    og.absolute = 50;
+    elfm_peaks *pg = elfm_peaks_create(&og, v->w, v->h, v->nz, &err);
+    CHECK(pg != NULL);
+    int ng = 0, found = 0;
+    CHECK_OK(elfm_peaks_detect(pg, v, det, 16, &ng, &err), &err);
+    CHECK_EQ_INT(ng, 1);  /* only the bright blob */
+    elfm_detection g;
+    const double q[3] = {F[0] + 0.8, F[1] - 0.6, F[2] + 2.0};
+    CHECK_OK(elfm_peaks_find_near(pg, v, q, 3.0, 6.0, 20, &g, &found, &err), &err);
+    CHECK_EQ_INT(found, 1);
+    if (found) {
+      CHECK(g.weak == 1);
+      CHECK_NEAR(g.x_um, F[0], 0.1);
+      CHECK_NEAR(g.y_um, F[1], 0.1);
+      CHECK_NEAR(g.z_um, F[2], 0.5);
+      CHECK(g.frame == v->frame && g.t_us == v->t_us);
+    }
+    const double far[3] = {F[0] + 8.0, F[1], F[2]};
+    CHECK_OK(elfm_peaks_find_near(pg, v, far, 3.0, 6.0, 20, &g, &found, &err), &err);
+    CHECK_EQ_INT(found, 0);  /* only the blob's slope is within reach: no maximum */
+    CHECK_OK(elfm_peaks_find_near(pg, v, q, 3.0, 6.0, 31, &g, &found, &err), &err);
+    CHECK_EQ_INT(found, 0);
+    const double out_q[3] = {500, 0, 0};
+    CHECK_OK(elfm_peaks_find_near(pg, v, out_q, 3.0, 6.0, 1, &g, &found, &err), &err);
+    CHECK_EQ_INT(found, 0);
+    CHECK_EQ_INT(elfm_peaks_find_near(pg, v, q, -1, 6.0, 1, &g, &found, &err), ELFM_ERR_INVALID);
+    elfm_peaks_free(pg);
+  }
+
   /* Empty volume: no peaks, no error. */
   memset(v->data, 0, sizeof(float) * 64 * 60 * 51);
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);

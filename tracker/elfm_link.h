@@ -111,6 +111,13 @@ void elfm_link_free(elfm_linker *l);
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det,
                            int n, elfm_error *err);
 
+/* Where the live tracks of at least min_points real points expect their
+ * object in the frame at t_us (the predictions elfm_link_step will use),
+ * xyz_um[3 k .. 3 k + 2] for k < *n_out <= cap, in the linker's order.
+ * Changes nothing. For track-guided detection (cmd_track). */
+elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us, int min_points,
+                              double *xyz_um, int cap, int *n_out, elfm_error *err);
+
 /* End every live track (end of the recording): they become finished. */
 elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err);
 

@@ -101,6 +101,17 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
 elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int n_views,
                                        double exponent, elfm_error *err);
 
+/* Track-guided search: the largest voxel above min_value that is a local
+ * maximum of its 3x3x3 neighbourhood within the ellipsoid of half-axes
+ * radius_xy_um, radius_xy_um, radius_z_um around xyz_um, refined as in
+ * elfm_peaks_detect into *out, marked weak; *found = 1, else 0. For a bead
+ * whose track predicts it where the global threshold saw nothing (deep
+ * beads fade to 25-55 on the time surface). Reads only the options of p
+ * (safe next to a detect call on another thread), no allocation. */
+elfm_status elfm_peaks_find_near(const elfm_peaks *p, const elfm_volume *v, const double xyz_um[3],
+                                 double radius_xy_um, double radius_z_um, double min_value,
+                                 elfm_detection *out, int *found, elfm_error *err);
+
 /* The threshold the last detect call used (for reports). */
 double elfm_peaks_last_threshold(const elfm_peaks *p);
 

@@ -388,6 +388,36 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
+/* Fill lt->pred and lt->gate_um for a frame at t_us (lt->missed set). */
+static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us)
+{
+  double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3;
+  /* the next frame: the constant-acceleration fit (it keeps the change
+   * of speed, e.g. stage_accel); after a miss: the constant-rate turn
+   * (flow 100 ms, seeds 1 / 2: alpha 0.589 -> 0.627, 0.552 -> 0.566; with
+   * the straight line from short_gap frames on, and the acceleration
+   * before, tracks broke where beads turned while unseen) */
+  if (lt->has_short && lt->missed <= 0)
+    for (int a = 0; a < 3; a++)
+      lt->pred[a] = lt->fit_pos[a] + lt->fit_vel[a] * dt_ms + 0.5 * lt->fit_acc[a] * dt_ms * dt_ms;
+  else if (lt->has_short)  /* long gap: keep turning, at constant speed */
+    predict_turn(lt->fit_pos, lt->fit_vel, lt->fit_acc, dt_ms, lt->pred);
+  else
+    for (int a = 0; a < 3; a++) lt->pred[a] = lt->last[a] + lt->vel_um_per_ms[a] * dt_ms;
+  /* The gate widens with each missed frame, more for fast objects: an
+   * unseen turn moves the object off the extrapolated line by ~ speed x
+   * turn angle (speed_gate_frac = 0.3: ~17 degrees per frame, flow scene),
+   * for at most short_gap frames: beyond, the gate would swallow ghosts
+   * (a 50-frame gap at 2.5 um/ms gave a 46 um gate on the stage scene). */
+  const double *cv = lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
+  double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
+  double frame_ms = dt_ms / (lt->missed + 1);
+  int turn_frames = lt->missed < o->short_gap ? lt->missed : o->short_gap;
+  lt->gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
+               turn_frames * o->speed_gate_frac * speed * frame_ms;
+  if (lt->t->n == 1) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
+}
+
 /* Is d a weak detection too far (squared anisotropic distance d2) from a
  * track's prediction to join it? */
 static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
@@ -450,31 +480,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       if (st != ELFM_OK) return st;
       continue;
     }
-    double dt_ms = (double)(t_us - lt.last_t_us) * 1e-3;
-    /* the next frame: the constant-acceleration fit (it keeps the change
-     * of speed, e.g. stage_accel); after a miss: the constant-rate turn
-     * (flow 100 ms, seeds 1 / 2: alpha 0.589 -> 0.627, 0.552 -> 0.566; with
-     * the straight line from short_gap frames on, and the acceleration
-     * before, tracks broke where beads turned while unseen) */
-    if (lt.has_short && lt.missed <= 0)
-      for (int a = 0; a < 3; a++)
-        lt.pred[a] = lt.fit_pos[a] + lt.fit_vel[a] * dt_ms + 0.5 * lt.fit_acc[a] * dt_ms * dt_ms;
-    else if (lt.has_short)  /* long gap: keep turning, at constant speed */
-      predict_turn(lt.fit_pos, lt.fit_vel, lt.fit_acc, dt_ms, lt.pred);
-    else
-      for (int a = 0; a < 3; a++) lt.pred[a] = lt.last[a] + lt.vel_um_per_ms[a] * dt_ms;
-    /* The gate widens with each missed frame, more for fast objects: an
-     * unseen turn moves the object off the extrapolated line by ~ speed x
-     * turn angle (speed_gate_frac = 0.3: ~17 degrees per frame, flow scene),
-     * for at most short_gap frames: beyond, the gate would swallow ghosts
-     * (a 50-frame gap at 2.5 um/ms gave a 46 um gate on the stage scene). */
-    const double *cv = lt.has_short ? lt.fit_vel : lt.vel_um_per_ms;
-    double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
-    double frame_ms = dt_ms / (lt.missed + 1);
-    int turn_frames = lt.missed < o->short_gap ? lt.missed : o->short_gap;
-    lt.gate_um = o->gate_um + lt.missed * o->gate_growth_um_per_frame +
-                 turn_frames * o->speed_gate_frac * speed * frame_ms;
-    if (lt.t->n == 1) lt.gate_um += o->birth_speed_um_per_ms * dt_ms;
+    predict_track(o, &lt, t_us);
     l->live[w++] = lt;
   }
   l->n_live = w;
@@ -706,6 +712,24 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     l->det_id[j] = -1;
     l->det_speed[j] = NAN;
   }
+  return ELFM_OK;
+}
+
+elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us, int min_points,
+                              double *xyz_um, int cap, int *n_out, elfm_error *err)
+{
+  if (!l || !n_out || cap < 0 || (cap > 0 && !xyz_um))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: bad arguments to predict");
+  int n = 0;
+  for (size_t i = 0; i < l->n_live && n < cap; i++) {
+    live_track lt = l->live[i];
+    lt.missed = (int)(frame - lt.last_frame - 1);
+    if (lt.missed < 0 || lt.missed > l->o.max_gap_frames || (int)lt.t->n < min_points) continue;
+    predict_track(&l->o, &lt, t_us);
+    memcpy(xyz_um + 3 * (size_t)n, lt.pred, sizeof lt.pred);
+    n++;
+  }
+  *n_out = n;
   return ELFM_OK;
 }
 

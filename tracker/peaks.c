@@ -303,6 +303,79 @@ static void scan_rows(const float *restrict d, int w, size_t nrows, int32_t *res
   *nonzero_out = nonzero;
 }
 
+/* Refine the peak at voxel (x, y, z) of v and fill det (elfm_peaks_detect). */
+static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, int x, int y, int z,
+                           int weak, elfm_detection *det)
+{
+  const int w = v->w, h = v->h, nz = v->nz;
+  const float *d = v->data;
+  size_t ic = ((size_t)z * h + y) * w + x;
+  double ox, oy, oz, sx, sy, sz, vx, vy, vz;
+  refine_axis(d, ic, 1, x, w, o->fit_half_xy, o->refine, &ox, &sx, &vx);
+  refine_axis(d, ic, (size_t)w, y, h, o->fit_half_xy, o->refine, &oy, &sy, &vy);
+  refine_axis(d, ic, (size_t)w * h, z, nz, o->fit_half_z, o->refine, &oz, &sz, &vz);
+  det->weak = weak;
+  det->frame = v->frame;
+  det->t_us = v->t_us;
+  det->x_um = elfm_volume_x_um(v, x + ox);
+  det->y_um = elfm_volume_y_um(v, y + oy);
+  det->z_um = elfm_volume_z_um(v, z + oz);
+  /* Each axis' fit runs through the voxel centre of the other two; for a
+   * separable blob the peak value is the product of the three per-axis
+   * gains over the centre voxel. */
+  double f0 = d[ic];
+  det->intensity = f0 > 0 ? vx * (vy / f0) * (vz / f0) : f0;
+  det->sigma_x_um = sx * v->um_per_px;
+  det->sigma_y_um = sy * v->um_per_px;
+  det->sigma_z_um = sz * v->z_step_um;
+}
+
+elfm_status elfm_peaks_find_near(const elfm_peaks *p, const elfm_volume *v, const double xyz_um[3],
+                                 double radius_xy_um, double radius_z_um, double min_value,
+                                 elfm_detection *out, int *found, elfm_error *err)
+{
+  if (!p || !v || !v->data || !xyz_um || !out || !found || !(radius_xy_um >= 0) ||
+      !(radius_z_um >= 0) || !(v->um_per_px > 0) || !(v->z_step_um > 0))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: bad arguments to find_near");
+  *found = 0;
+  if (!isfinite(xyz_um[0]) || !isfinite(xyz_um[1]) || !isfinite(xyz_um[2])) return ELFM_OK;
+  const int w = v->w, h = v->h, nz = v->nz;
+  /* voxel box around the point, clipped to the volume (the inverse of
+   * elfm_volume_x_um etc.: voxel i sits at origin + i x step) */
+  double cx = (xyz_um[0] - elfm_volume_x_um(v, 0)) / v->um_per_px,
+         cy = (xyz_um[1] - elfm_volume_y_um(v, 0)) / v->um_per_px,
+         cz = (xyz_um[2] - elfm_volume_z_um(v, 0)) / v->z_step_um;
+  double rx = radius_xy_um / v->um_per_px, rz = radius_z_um / v->z_step_um;
+  double fx0 = ceil(cx - rx), fx1 = floor(cx + rx), fy0 = ceil(cy - rx), fy1 = floor(cy + rx),
+         fz0 = ceil(cz - rz), fz1 = floor(cz + rz);
+  if (fx1 < 0 || fy1 < 0 || fz1 < 0 || fx0 > w - 1 || fy0 > h - 1 || fz0 > nz - 1) return ELFM_OK;
+  int x0 = fx0 < 0 ? 0 : (int)fx0, x1 = fx1 > w - 1 ? w - 1 : (int)fx1;
+  int y0 = fy0 < 0 ? 0 : (int)fy0, y1 = fy1 > h - 1 ? h - 1 : (int)fy1;
+  int z0 = fz0 < 0 ? 0 : (int)fz0, z1 = fz1 > nz - 1 ? nz - 1 : (int)fz1;
+  const float *d = v->data;
+  int bx = -1, by = -1, bz = -1;
+  float best = 0;
+  for (int z = z0; z <= z1; z++)
+    for (int y = y0; y <= y1; y++)
+      for (int x = x0; x <= x1; x++) {
+        float c = d[((size_t)z * h + y) * w + x];
+        if (isnan(c))
+          return elfm_error_set(err, ELFM_ERR_NUMERIC, NULL, -1, "peaks: NaN voxel");
+        double ex = (x - cx) / rx, ey = (y - cy) / rx, ez = rz > 0 ? (z - cz) / rz : 0;
+        if (rx > 0 && ex * ex + ey * ey + ez * ez > 1) continue;  /* ellipsoid, as the gate */
+        if (!((double)c > min_value) || (bx >= 0 && !(c > best))) continue;
+        if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;  /* a maximum, not a slope */
+        best = c;
+        bx = x;
+        by = y;
+        bz = z;
+      }
+  if (bx < 0) return ELFM_OK;
+  fill_detection(&p->opt, v, bx, by, bz, 1, out);
+  *found = 1;
+  return ELFM_OK;
+}
+
 elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detection *out, int cap,
                               int *n_out, elfm_error *err)
 {
@@ -454,26 +527,7 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
       if (dx * dx + dy * dy + dz * dz < sep2) keep = 0;
     }
     if (!keep) continue;
-    size_t ic = ((size_t)pc->z * h + pc->y) * w + pc->x;
-    double ox, oy, oz, sx, sy, sz, vx, vy, vz;
-    refine_axis(d, ic, 1, pc->x, w, o->fit_half_xy, o->refine, &ox, &sx, &vx);
-    refine_axis(d, ic, (size_t)w, pc->y, h, o->fit_half_xy, o->refine, &oy, &sy, &vy);
-    refine_axis(d, ic, (size_t)w * h, pc->z, nz, o->fit_half_z, o->refine, &oz, &sz, &vz);
-    elfm_detection *det = &out[n++];
-    det->weak = pc->weak;
-    det->frame = v->frame;
-    det->t_us = v->t_us;
-    det->x_um = elfm_volume_x_um(v, pc->x + ox);
-    det->y_um = elfm_volume_y_um(v, pc->y + oy);
-    det->z_um = elfm_volume_z_um(v, pc->z + oz);
-    /* Each axis' fit runs through the voxel centre of the other two; for a
-     * separable blob the peak value is the product of the three per-axis
-     * gains over the centre voxel. */
-    double f0 = d[ic];
-    det->intensity = f0 > 0 ? vx * (vy / f0) * (vz / f0) : f0;
-    det->sigma_x_um = sx * v->um_per_px;
-    det->sigma_y_um = sy * v->um_per_px;
-    det->sigma_z_um = sz * v->z_step_um;
+    fill_detection(o, v, pc->x, pc->y, pc->z, pc->weak, &out[n++]);
   }
   *n_out = n;
   return ELFM_OK;
