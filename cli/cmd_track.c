@@ -454,12 +454,17 @@ static cJSON *fwhm_summary(fwhm_list *l)
 }
 
 static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s, const char *path,
-                         elfm_error *err)
+                         const elfm_error *input_err, elfm_error *err)
 {
   const track_opts *o = c->o;
   cJSON *j = cJSON_CreateObject();
   cJSON_AddStringToObject(j, "events", o->events);
   cJSON_AddStringToObject(j, "calib", o->calib);
+  if (input_err) {
+    /* The run stopped at a bad input: the counts are of what was read. */
+    char msg[1200];
+    cJSON_AddStringToObject(j, "input_error", elfm_error_format(input_err, msg, sizeof msg));
+  }
   cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
   cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
   cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
@@ -882,6 +887,18 @@ int cmd_track(int argc, char **argv)
   memset(&rs, 0, sizeof rs);
   elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, NULL, &c, &rs, &err);
   if (!o.quiet) fputc('\n', stderr);
+  /* An error in the event file (truncated, corrupt) stops reading, but what
+   * was read before it is good: finish the tracks, write every output, and
+   * only then report the error and exit 1. Nothing already computed is lost.
+   * Errors of our own (outputs, memory) still stop at once. */
+  elfm_error input_err;
+  elfm_error_clear(&input_err);
+  int input_failed = st != ELFM_OK && !strcmp(err.file, o.events);
+  if (input_failed) {
+    input_err = err;
+    elfm_error_clear(&err);
+    st = ELFM_OK;
+  }
   if (st == ELFM_OK) st = elfm_link_finish(c.lk, &err);
   if (st == ELFM_OK) st = drain(&c, &err);
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
@@ -900,7 +917,12 @@ int cmd_track(int argc, char **argv)
     if (st == ELFM_OK) st = close_file(&fx, p_tm, &err);
   }
   double wall = cli_now_s() - t0;
-  if (st == ELFM_OK) st = write_summary(&c, &rs, wall, p_sum, &err);
+  if (st == ELFM_OK) st = write_summary(&c, &rs, wall, p_sum, input_failed ? &input_err : NULL, &err);
+  if (input_failed) {
+    cli_fail(C, &input_err);
+    if (st != ELFM_OK) cli_fail(C, &err);
+    goto done;
+  }
   if (st != ELFM_OK) {
     cli_fail(C, &err);
     goto done;

@@ -27,6 +27,22 @@ check 1 "bad.csv" "$bin" track --calib "$tmp/calib.json" --events "$tmp/bad.csv"
 printf '%% evt 3.0\n%% geometry 1280x720\n%% end\n' > "$tmp/trunc.raw"
 printf '\001\002\003' >> "$tmp/trunc.raw"
 check 1 "trunc.raw: byte" "$bin" track --calib "$tmp/calib.json" --events "$tmp/trunc.raw" --out "$tmp/o3" -q
+# a recording cut inside a word halfway: exit 1 naming file and byte, and
+# nothing already read is lost: the tracks of the first half are written
+"$bin" simulate flow --out "$tmp/sim" --duration-ms 30 --quiet >/dev/null 2>&1 || { echo "SKIP: simulate failed"; exit 77; }
+size=$(wc -c < "$tmp/sim/events.raw")
+half=$((size / 2))
+head -c "$half" "$tmp/sim/events.raw" > "$tmp/half.raw"
+# data words are 2 bytes after a text header of either parity: move the cut
+# by one byte if it fell between two words
+if "$bin" info "$tmp/half.raw" >/dev/null 2>&1; then
+  head -c $((half + 1)) "$tmp/sim/events.raw" > "$tmp/half.raw"
+fi
+check 1 "half.raw: byte" "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/half.raw" --out "$tmp/o5" -q
+rows=$(($(wc -l < "$tmp/o5/tracks.csv" 2>/dev/null || echo 1) - 1))
+[ "$rows" -gt 10 ] || { echo "FAIL: truncated input lost the tracks read before the error ($rows rows)"; fail=$((fail+1)); }
+grep -q '"input_error"' "$tmp/o5/summary.json" 2>/dev/null || { echo "FAIL: summary.json does not record the input error"; fail=$((fail+1)); }
+[ -s "$tmp/o5/tracks_isbi.xml" ] || { echo "FAIL: truncated input left no ISBI XML"; fail=$((fail+1)); }
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
