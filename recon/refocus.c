@@ -196,7 +196,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   if (!ws) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   ws->plan = p;
   /* dense: a plane of counts; sparse agreement: two rows (counts, pass) */
-  ws->plane_cnt = calloc((size_t)p->w * (size_t)(p->h > 2 ? p->h : 2), 1);
+  /* + 32: the sparse path's block adds store whole 32-byte blocks */
+  ws->plane_cnt = calloc((size_t)p->w * (size_t)(p->h > 2 ? p->h : 2) + 32, 1);
   ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);
   ws->cap_sorted = 1u << 14;
   ws->sorted = malloc(ws->cap_sorted * sizeof *ws->sorted);
@@ -232,7 +233,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
       rows += (size_t)(b->y1 - b->y0);
     }
     if (sup_ok) {
-      ws->sup = calloc(area + 1, 1);
+      /* + 32: the block adds read up to 31 bytes past a map row's W voxels */
+      ws->sup = calloc(area + 32, 1);
       ws->sup_row = calloc(rows + 1, 1);
       sup_ok = ws->sup && ws->sup_row;
     }

@@ -242,6 +242,44 @@ static void agree_support_clear(const elfm_refocus_plan *p, elfm_refocus_workspa
   }
 }
 
+/* Agreement, step 2 on one row: cnt[X] = sum over the n >= 1 views of
+ * src[j][X], X = 0..W-1. Adding view by view into cnt makes every view's
+ * add wait for the previous view's store to the same bytes (store-to-load
+ * forwarding, ~5 cycles: it was the hottest instruction under perf); with
+ * AVX2 a 32-byte block is summed over all views in a register and stored
+ * once. The blocks read up to 31 bytes past src[j] + W and write up to 31
+ * past cnt + W (both buffers are padded for it, refocus.c). */
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+__attribute__((target("avx2")))
+static void agree_count_row_avx2(uint8_t *cnt, const uint8_t *const *src, int n, int W)
+{
+  for (int q = 0; q < W; q += 32) {
+    __m256i acc = _mm256_loadu_si256((const __m256i *)(const void *)(src[0] + q));
+    for (int j = 1; j < n; j++)
+      acc = _mm256_add_epi8(acc, _mm256_loadu_si256((const __m256i *)(const void *)(src[j] + q)));
+    _mm256_storeu_si256((__m256i *)(void *)(cnt + q), acc);
+  }
+}
+#define ELFM_HAVE_AVX2_PATH 1
+#endif
+
+static inline void agree_count_row(uint8_t *cnt, const uint8_t *const *src, int n, int W, int avx2)
+{
+#ifdef ELFM_HAVE_AVX2_PATH
+  if (avx2) {
+    agree_count_row_avx2(cnt, src, n, W);
+    return;
+  }
+#else
+  (void)avx2;
+#endif
+  if (n < 1) return;
+  memcpy(cnt, src[0], (size_t)W);
+  for (int j = 1; j < n; j++)
+    for (int i = 0; i < W; i++) cnt[i] = (uint8_t)(cnt[i] + src[j][i]);
+}
+
 /* Agreement on plane k, row by row.
  * Step 2: add the views' support rows (shifted by the plane's integer
  * shift) into a byte count per voxel: ~W/16 vector adds per view and row,
@@ -258,7 +296,7 @@ static void agree_support_clear(const elfm_refocus_plan *p, elfm_refocus_workspa
 __attribute__((target_clones("avx2", "default")))
 #endif
 static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol,
-                        elfm_refocus_workspace *ws, int k)
+                        elfm_refocus_workspace *ws, int k, int avx2)
 {
   const int W = p->w, H = p->h, nv = p->nv;
   const size_t SW = (size_t)p->sw;
@@ -304,18 +342,13 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
     const int n = nlist[Y];
     const uint8_t *list = lists + (size_t)Y * 32;
     if (n < p->need_row_min[r]) continue;
-    /* n >= need_row_min >= 1: the first view's row is copied, not added */
-    memcpy(cnt, ws->sup + (map_at[list[0]] + (ptrdiff_t)Y * map_stride[list[0]]), (size_t)W);
-    for (int j = 1; j < n; j++) {
-      const int v = list[j];
-      /* the whole row X = 0..W-1, not [xlo, xhi): the maps' zero margins
-       * (W wide) and zero last column give 0 outside [xlo, xhi), and every
-       * view then stores to the same bytes of cnt (stores and loads at
-       * varying offsets defeat store-to-load forwarding: bench_refocus on flow,
-       * 3.5 -> 2.9 ms CPU per volume with this change) */
-      const uint8_t *src = ws->sup + (map_at[v] + (ptrdiff_t)Y * map_stride[v]);
-      for (int i = 0; i < W; i++) cnt[i] = (uint8_t)(cnt[i] + src[i]);
-    }
+    /* the whole row X = 0..W-1 of each view, not [xlo, xhi): the maps'
+     * zero margins (W wide) and zero last column give 0 outside [xlo, xhi)
+     * (bench_refocus on flow: 3.5 -> 2.9 ms CPU per volume with this) */
+    const uint8_t *src[32];
+    for (int j = 0; j < n; j++)
+      src[j] = ws->sup + (map_at[list[j]] + (ptrdiff_t)Y * map_stride[list[j]]);
+    agree_count_row(cnt, src, n, W, avx2);
     const uint8_t *need = p->need + r * (size_t)W;
     uint8_t hit = 0;
     for (int X = 0; X < W; X++) {
@@ -330,8 +363,10 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
     float *sum = ws->agree_sum;
     uint8_t *seen = pass; /* pass[] is read into cand[] first */
     int nc = 0;
-    for (int X = 0; X < W; X++)
-      if (pass[X]) cand[nc++] = X;
+    for (int X = 0; X < W; X++) { /* no branch: pass[X] is unpredictable */
+      cand[nc] = X;
+      nc += pass[X];
+    }
     for (int c = 0; c < nc; c++) {
       sum[c] = 0.0f;
       seen[c] = 0;
@@ -344,9 +379,12 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
       const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
       const float *r0 = frame->data + (size_t)(Y + s->iy) * SW;
       const float *r1 = r0 + SW;
-      for (int c = 0; c < nc; c++) {
+      /* cand[] is sorted: the view samples cand[c0 .. c1) */
+      int c0 = 0, c1 = nc;
+      while (c0 < c1 && cand[c0] < s->xlo) c0++;
+      while (c1 > c0 && cand[c1 - 1] >= s->xhi) c1--;
+      for (int c = c0; c < c1; c++) {
         const int X = cand[c];
-        if (X < s->xlo || X >= s->xhi) continue;
         const int u = X + s->ix; /* both taps in the crop box (plan) */
         const float a = w00 * r0[u] + w01 * r0[u + 1] + w10 * r1[u] + w11 * r1[u + 1];
         sum[c] += a;
@@ -376,9 +414,14 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
   size_t old_at = 0;
   if (p->need) {
     agree_support(p, ws);
+#ifdef ELFM_HAVE_AVX2_PATH
+    const int avx2 = __builtin_cpu_supports("avx2");
+#else
+    const int avx2 = 0;
+#endif
     for (int k = 0; k < p->nz; k++) {
       sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
-      agree_plane(p, frame, vol, ws, k);
+      agree_plane(p, frame, vol, ws, k, avx2);
     }
     agree_support_clear(p, ws);
     elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
