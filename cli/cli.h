@@ -56,6 +56,20 @@ int cli_path_fmt(char *out, size_t n, const char *fmt, ...)
 #endif
     ;
 
+/* The reconstruction options' names, one table each, shared by recon, track
+ * and bench so that a name means the same everywhere. The parsers print
+ * "OPT must be a, b or c, not 'x'" (a usage error) and return 0 when s is not
+ * a name; on success they store the value and return 1. The namers return
+ * the name of a value ("?" for a value outside the table). */
+int cli_parse_repr(const char *cmd, const char *s, elfm_repr *out);
+int cli_parse_polarity(const char *cmd, const char *s, elfm_polarity *out);
+int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *out);
+int cli_parse_ghost_threshold(const char *cmd, const char *s, elfm_ghost_threshold *out);
+const char *cli_repr_name(elfm_repr v);
+const char *cli_polarity_name(elfm_polarity v);
+const char *cli_refocus_path_name(elfm_refocus_path v);
+const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
+
 /* Seconds of a monotonic clock (for timing figures). */
 double cli_now_s(void);
 /* Peak resident set size of this process in MB (0 when unknown). */

@@ -8,6 +8,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <sys/resource.h>
 #include <time.h>
 
@@ -88,6 +89,87 @@ int cli_path_fmt(char *out, size_t n, const char *fmt, ...)
   va_end(ap);
   return k < 0 || (size_t)k >= n ? -1 : 0;
 }
+
+typedef struct {
+  const char *name;
+  int value;
+} name_value;
+
+static const name_value repr_names[] = {
+    {"exp", ELFM_REPR_EXP}, {"lin", ELFM_REPR_LIN}, {"count", ELFM_REPR_COUNT}};
+static const name_value polarity_names[] = {
+    {"both", ELFM_POL_BOTH}, {"on", ELFM_POL_ON}, {"off", ELFM_POL_OFF}, {"signed", ELFM_POL_SIGNED}};
+static const name_value path_names[] = {
+    {"auto", ELFM_PATH_AUTO}, {"dense", ELFM_PATH_DENSE}, {"sparse", ELFM_PATH_SPARSE}};
+static const name_value ghost_names[] = {
+    {"none", ELFM_GHOST_THR_NONE}, {"abs", ELFM_GHOST_THR_ABS},
+    {"frac", ELFM_GHOST_THR_FRAC_MAX}, {"mad", ELFM_GHOST_THR_MAD}};
+#define N_OF(t) (sizeof(t) / sizeof((t)[0]))
+
+/* Look s up in t; on failure print the choices ("a, b or c") for opt. */
+static int parse_name(const char *cmd, const char *opt, const char *s, const name_value *t,
+                      size_t n, int *out)
+{
+  for (size_t i = 0; s && i < n; i++)
+    if (!strcmp(s, t[i].name)) {
+      *out = t[i].value;
+      return 1;
+    }
+  char choices[200] = "";
+  size_t len = 0;
+  for (size_t i = 0; i < n && len < sizeof choices; i++)
+    len += (size_t)snprintf(choices + len, sizeof choices - len, "%s%s",
+                            i == 0 ? "" : i + 1 == n ? " or " : ", ", t[i].name);
+  cli_message(cmd, CLI_USAGE, "%s must be %s, not '%s'", opt, choices, s ? s : "");
+  return 0;
+}
+
+static const char *name_of(const name_value *t, size_t n, int v)
+{
+  for (size_t i = 0; i < n; i++)
+    if (t[i].value == v) return t[i].name;
+  return "?";
+}
+
+int cli_parse_repr(const char *cmd, const char *s, elfm_repr *out)
+{
+  int v = 0;
+  if (!parse_name(cmd, "--repr", s, repr_names, N_OF(repr_names), &v)) return 0;
+  *out = (elfm_repr)v;
+  return 1;
+}
+
+int cli_parse_polarity(const char *cmd, const char *s, elfm_polarity *out)
+{
+  int v = 0;
+  if (!parse_name(cmd, "--polarity", s, polarity_names, N_OF(polarity_names), &v)) return 0;
+  *out = (elfm_polarity)v;
+  return 1;
+}
+
+int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *out)
+{
+  int v = 0;
+  if (!parse_name(cmd, "--path", s, path_names, N_OF(path_names), &v)) return 0;
+  *out = (elfm_refocus_path)v;
+  return 1;
+}
+
+int cli_parse_ghost_threshold(const char *cmd, const char *s, elfm_ghost_threshold *out)
+{
+  int v = 0;
+  if (!parse_name(cmd, "--ghost", s, ghost_names, N_OF(ghost_names), &v)) return 0;
+  *out = (elfm_ghost_threshold)v;
+  return 1;
+}
+
+const char *cli_repr_name(elfm_repr v) { return name_of(repr_names, N_OF(repr_names), (int)v); }
+const char *cli_polarity_name(elfm_polarity v)
+{ return name_of(polarity_names, N_OF(polarity_names), (int)v); }
+const char *cli_refocus_path_name(elfm_refocus_path v)
+{ return name_of(path_names, N_OF(path_names), (int)v); }
+const char *cli_ghost_threshold_name(elfm_ghost_threshold v)
+{ return name_of(ghost_names, N_OF(ghost_names), (int)v); }
 
 double cli_now_s(void)
 {

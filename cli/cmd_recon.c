@@ -130,24 +130,6 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   return ELFM_OK;
 }
 
-static const char *repr_name(elfm_repr r)
-{
-  return r == ELFM_REPR_EXP ? "exp" : r == ELFM_REPR_LIN ? "lin" : "count";
-}
-static const char *pol_name(elfm_polarity p)
-{
-  return p == ELFM_POL_ON ? "on" : p == ELFM_POL_OFF ? "off" : p == ELFM_POL_SIGNED ? "signed" : "both";
-}
-static const char *path_name(elfm_refocus_path p)
-{
-  return p == ELFM_PATH_DENSE ? "dense" : p == ELFM_PATH_SPARSE ? "sparse" : "auto";
-}
-static const char *thr_name(elfm_ghost_threshold t)
-{
-  return t == ELFM_GHOST_THR_ABS ? "abs" : t == ELFM_GHOST_THR_FRAC_MAX ? "frac" :
-         t == ELFM_GHOST_THR_MAD ? "mad" : "none";
-}
-
 /* run_err: the error that stopped the run early, or NULL. The summary then
  * says so ("input_error"), so that the counts of a run cut short by a bad
  * file are not mistaken for the whole recording's. */
@@ -165,13 +147,13 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   const elfm_recon_options *r = &a->ro;
   cJSON_AddNumberToObject(p, "dt_us", (double)r->framer.dt_us);
   cJSON_AddNumberToObject(p, "stride_us", (double)(r->framer.stride_us ? r->framer.stride_us : r->framer.dt_us));
-  cJSON_AddStringToObject(p, "repr", repr_name(r->framer.repr));
+  cJSON_AddStringToObject(p, "repr", cli_repr_name(r->framer.repr));
   cJSON_AddNumberToObject(p, "tau_us", r->framer.tau_us);
-  cJSON_AddStringToObject(p, "polarity", pol_name(r->framer.polarity));
+  cJSON_AddStringToObject(p, "polarity", cli_polarity_name(r->framer.polarity));
   cJSON_AddStringToObject(p, "start", r->framer.start == ELFM_START_FIRST_TRIGGER ? "trigger" : "first");
   cJSON_AddNumberToObject(p, "median", r->median);
-  cJSON_AddStringToObject(p, "path", path_name(r->refocus.path));
-  cJSON_AddStringToObject(p, "ghost_threshold", thr_name(r->refocus.threshold));
+  cJSON_AddStringToObject(p, "path", cli_refocus_path_name(r->refocus.path));
+  cJSON_AddStringToObject(p, "ghost_threshold", cli_ghost_threshold_name(r->refocus.threshold));
   cJSON_AddNumberToObject(p, "ghost_threshold_value", r->refocus.threshold_value);
   cJSON_AddNumberToObject(p, "ghost_agree_frac", r->refocus.agree_frac);
   cJSON_AddNumberToObject(p, "crop_margin_px", r->refocus.crop_margin_px);
@@ -278,25 +260,9 @@ int cmd_recon(int argc, char **argv)
     usage(stderr);
     return cli_message("recon", CLI_USAGE, "--calib, --out and one of --events / --tiff are required");
   }
-  if (a.repr_s) {
-    if (!strcmp(a.repr_s, "exp")) r->framer.repr = ELFM_REPR_EXP;
-    else if (!strcmp(a.repr_s, "lin")) r->framer.repr = ELFM_REPR_LIN;
-    else if (!strcmp(a.repr_s, "count")) r->framer.repr = ELFM_REPR_COUNT;
-    else return cli_message("recon", CLI_USAGE, "--repr: '%s' is not exp, lin or count", a.repr_s);
-  }
-  if (a.pol_s) {
-    if (!strcmp(a.pol_s, "both")) r->framer.polarity = ELFM_POL_BOTH;
-    else if (!strcmp(a.pol_s, "on")) r->framer.polarity = ELFM_POL_ON;
-    else if (!strcmp(a.pol_s, "off")) r->framer.polarity = ELFM_POL_OFF;
-    else if (!strcmp(a.pol_s, "signed")) r->framer.polarity = ELFM_POL_SIGNED;
-    else return cli_message("recon", CLI_USAGE, "--polarity: '%s' is not both, on, off or signed", a.pol_s);
-  }
-  if (a.path_s) {
-    if (!strcmp(a.path_s, "auto")) r->refocus.path = ELFM_PATH_AUTO;
-    else if (!strcmp(a.path_s, "dense")) r->refocus.path = ELFM_PATH_DENSE;
-    else if (!strcmp(a.path_s, "sparse")) r->refocus.path = ELFM_PATH_SPARSE;
-    else return cli_message("recon", CLI_USAGE, "--path: '%s' is not auto, dense or sparse", a.path_s);
-  }
+  if (a.repr_s && !cli_parse_repr("recon", a.repr_s, &r->framer.repr)) return CLI_USAGE;
+  if (a.pol_s && !cli_parse_polarity("recon", a.pol_s, &r->framer.polarity)) return CLI_USAGE;
+  if (a.path_s && !cli_parse_refocus_path("recon", a.path_s, &r->refocus.path)) return CLI_USAGE;
   if (a.start_s) {
     if (!strcmp(a.start_s, "first")) r->framer.start = ELFM_START_FIRST_EVENT;
     else if (!strcmp(a.start_s, "trigger")) r->framer.start = ELFM_START_FIRST_TRIGGER;

@@ -691,36 +691,16 @@ int cmd_track(int argc, char **argv)
     case O_DT: if (!cli_parse_int64(C, "--dt-us", a, &o.recon.framer.dt_us)) return CLI_USAGE; break;
     case O_STRIDE: if (!cli_parse_int64(C, "--stride-us", a, &o.recon.framer.stride_us)) return CLI_USAGE; break;
     case O_TAU: if (!cli_parse_double(C, "--tau-us", a, &o.recon.framer.tau_us)) return CLI_USAGE; break;
-    case O_REPR:
-      if (!strcmp(a, "exp")) o.recon.framer.repr = ELFM_REPR_EXP;
-      else if (!strcmp(a, "lin")) o.recon.framer.repr = ELFM_REPR_LIN;
-      else if (!strcmp(a, "count")) o.recon.framer.repr = ELFM_REPR_COUNT;
-      else return cli_message(C, CLI_USAGE, "--repr must be exp, lin or count, not '%s'", a);
-      break;
-    case O_POL:
-      if (!strcmp(a, "both")) o.recon.framer.polarity = ELFM_POL_BOTH;
-      else if (!strcmp(a, "on")) o.recon.framer.polarity = ELFM_POL_ON;
-      else if (!strcmp(a, "off")) o.recon.framer.polarity = ELFM_POL_OFF;
-      else if (!strcmp(a, "signed")) o.recon.framer.polarity = ELFM_POL_SIGNED;
-      else return cli_message(C, CLI_USAGE, "--polarity must be both, on, off or signed, not '%s'", a);
-      break;
+    case O_REPR: if (!cli_parse_repr(C, a, &o.recon.framer.repr)) return CLI_USAGE; break;
+    case O_POL: if (!cli_parse_polarity(C, a, &o.recon.framer.polarity)) return CLI_USAGE; break;
     case O_MEDIAN:
       if (!cli_parse_int(C, "--median", a, &o.recon.median)) return CLI_USAGE;
       if (o.recon.median != 0 && o.recon.median != 3 && o.recon.median != 5)
         return cli_message(C, CLI_USAGE, "--median must be 0, 3 or 5");
       break;
-    case O_PATH:
-      if (!strcmp(a, "auto")) o.recon.refocus.path = ELFM_PATH_AUTO;
-      else if (!strcmp(a, "dense")) o.recon.refocus.path = ELFM_PATH_DENSE;
-      else if (!strcmp(a, "sparse")) o.recon.refocus.path = ELFM_PATH_SPARSE;
-      else return cli_message(C, CLI_USAGE, "--path must be auto, dense or sparse, not '%s'", a);
-      break;
+    case O_PATH: if (!cli_parse_refocus_path(C, a, &o.recon.refocus.path)) return CLI_USAGE; break;
     case O_GHOST:
-      if (!strcmp(a, "none")) o.recon.refocus.threshold = ELFM_GHOST_THR_NONE;
-      else if (!strcmp(a, "abs")) o.recon.refocus.threshold = ELFM_GHOST_THR_ABS;
-      else if (!strcmp(a, "frac")) o.recon.refocus.threshold = ELFM_GHOST_THR_FRAC_MAX;
-      else if (!strcmp(a, "mad")) o.recon.refocus.threshold = ELFM_GHOST_THR_MAD;
-      else return cli_message(C, CLI_USAGE, "--ghost must be none, abs, frac or mad, not '%s'", a);
+      if (!cli_parse_ghost_threshold(C, a, &o.recon.refocus.threshold)) return CLI_USAGE;
       break;
     case O_GHOSTV: if (!cli_parse_double(C, "--ghost-value", a, &o.recon.refocus.threshold_value)) return CLI_USAGE; break;
     case O_AGREE: if (!cli_parse_double(C, "--agree", a, &o.recon.refocus.agree_frac)) return CLI_USAGE; break;
