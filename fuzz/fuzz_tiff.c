@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "elfm_recon.h"
+#include "fuzz_file_common.h"
 
 /* Frames above 4 Mpixel are refused by the harness (not by the loader,
  * which allows up to 32768^2 pages) to keep each run's memory small. */
@@ -16,15 +17,10 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
   char path[] = "/tmp/fuzz_tiff_XXXXXX";
-  int fd = mkstemp(path);
-  if (fd < 0) return 0;
-  size_t off = 0;
-  while (off < size) {
-    ssize_t n = write(fd, data + off, size - off);
-    if (n <= 0) break;
-    off += (size_t)n;
+  if (fuzz_write_temp(path, data, size) != 0) {
+    unlink(path);
+    return 0;
   }
-  close(fd);
   elfm_error err;
   elfm_tiff_stack *s = NULL;
   if (elfm_tiff_open(path, &s, &err) == ELFM_OK) {
