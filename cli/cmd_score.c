@@ -3,6 +3,7 @@
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <cjson/cJSON.h>
@@ -138,11 +139,16 @@ static void window_from_summary(struct score_opts *op)
     return;
   FILE *f = fopen(path, "rb");
   if (!f) return;
-  char buf[1 << 16];
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  /* Whole file: the summary lists every track, so it has no fixed size. */
+  long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+  char *buf = size >= 0 && size < (1L << 30) && fseek(f, 0, SEEK_SET) == 0
+                  ? malloc((size_t)size + 1) : NULL;
+  size_t n = buf ? fread(buf, 1, (size_t)size, f) : 0;
   fclose(f);
+  if (!buf) return;
   buf[n] = '\0';
   cJSON *j = cJSON_Parse(buf);
+  free(buf);
   const cJSON *par = cJSON_GetObjectItemCaseSensitive(j, "parameters");
   const cJSON *dt = cJSON_GetObjectItemCaseSensitive(par, "dt_us");
   if (cJSON_IsNumber(dt) && dt->valuedouble > 0 && dt->valuedouble <= 1e9) {

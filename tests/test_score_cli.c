@@ -144,6 +144,31 @@ int main(void)
   CHECK_EQ_INT(rc, 1);
   CHECK_MSG(strstr(err, "calib.json") != NULL, "stderr: %s", err);
 
+  /* The window comes from the run's summary.json beside tracks.csv, however
+   * long the summary (it lists every track: this one is > 64 KiB, with the
+   * parameters last), and --window-us overrides it. */
+  {
+    size_t cap = 200000, len = 0;
+    char *big = malloc(cap);
+    CHECK(big != NULL);
+    if (big) {
+      len += (size_t)snprintf(big + len, cap - len, "{\"tracks\": [");
+      for (int i = 0; i < 3000; i++)
+        len += (size_t)snprintf(big + len, cap - len, "%s{\"id\": %d, \"model\": \"spline\"}",
+                                i ? ", " : "", i);
+      snprintf(big + len, cap - len, "], \"parameters\": {\"dt_us\": 1000}}\n");
+      CHECK(strlen(big) > 65536);
+      write_file("summary.json", big);
+      free(big);
+    }
+    rc = run("--truth truth.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    CHECK_MSG(strstr(out, "window 1000 us from summary.json") != NULL, "stdout: %s", out);
+    rc = run("--truth truth.csv --tracks tracks.csv --window-us 0", out, sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    CHECK_MSG(strstr(out, "window 0 us)") != NULL, "stdout: %s", out);
+  }
+
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
