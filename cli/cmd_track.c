@@ -873,7 +873,7 @@ int cmd_track(int argc, char **argv)
    * Errors of our own (outputs, memory) still stop at once. */
   elfm_error input_err;
   elfm_error_clear(&input_err);
-  int input_failed = st != ELFM_OK && !strcmp(err.file, o.events);
+  int input_failed = st != ELFM_OK && rs.input_error;
   if (input_failed) {
     input_err = err;
     elfm_error_clear(&err);

@@ -41,6 +41,10 @@ typedef struct elfm_recon_stats {
   double callback_s;       /* time spent in the callback */
   double events_per_s, volumes_per_s;
   double realtime_factor;  /* span_s / wall_s: > 1 is faster than real time */
+  int input_error;         /* 1: the run stopped at an error of its input (a truncated or
+                            * corrupt file) after delivering every volume built before it;
+                            * what was delivered is good, so a caller may finish its own
+                            * outputs before reporting the error */
 } elfm_recon_stats;
 
 /* Called now and then (about every 0.25 s of wall time) on the calling

@@ -282,6 +282,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
     if (!got) break;
   }
   if (src_st && err) *err = src_err;
+  r->st.input_error = src_st != ELFM_OK;
   return src_st;
 }
 

@@ -173,6 +173,7 @@ static void test_runs(const char *dir, const elfm_calib *cal)
   CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, &st, &err) == ELFM_ERR_INVALID);
   CHECK(strstr(err.message, "stop here") != NULL);
   CHECK_EQ_INT(c2.n, 4); /* volumes 0..3 delivered, the 5th refused */
+  CHECK_EQ_INT(st.input_error, 0); /* the caller's error, not the input's */
 
   /* bad inputs */
   char missing[700];
@@ -206,11 +207,13 @@ static void test_runs(const char *dir, const elfm_calib *cal)
   memset(&c2, 0, sizeof c2);
   c2.fail_at = -1;
   elfm_recon_options_default(&o);
-  elfm_status s = elfm_recon_run(cut, cal, &o, on_volume, &c2, NULL, &err);
+  elfm_status s = elfm_recon_run(cut, cal, &o, on_volume, &c2, &st, &err);
   if (s != ELFM_OK) {
     CHECK(strstr(err.file, "cut.raw") != NULL);
     CHECK(err.offset >= 0 || err.line > 0);
   }
+  /* the run says the error was its input's, so callers may keep what came */
+  CHECK_EQ_INT(st.input_error, s != ELFM_OK);
   CHECK(c2.n > 0 && c2.n < c1.n);
 
   /* EXR round trip and MIP of the kept volume */
