@@ -90,9 +90,11 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   size_t nvox = (size_t)p->w * p->h * nz;
   p->box = calloc((size_t)p->nv, sizeof *p->box);
   p->shift = calloc((size_t)p->nv * nz, sizeof *p->shift);
-  p->count = calloc(nvox, 1);
+  /* + 32: the sparse path's AVX2 code reads a row's need and count in
+   * blocks of 32 bytes, the last one past the end of the row */
+  p->count = calloc(nvox + 32, 1);
   if (o.agree_frac > 0.0) {
-    p->need = calloc(nvox, 1);
+    p->need = calloc(nvox + 32, 1);
     p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
   }
   if (!p->box || !p->shift || !p->count || (o.agree_frac > 0.0 && (!p->need || !p->need_row_min))) {
@@ -199,6 +201,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   /* + 32: the sparse path's block adds store whole 32-byte blocks */
   ws->plane_cnt = calloc((size_t)p->w * (size_t)(p->h > 2 ? p->h : 2) + 32, 1);
   ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);
+  ws->row_bits = calloc(((size_t)p->sw + 63) / 64, sizeof *ws->row_bits);
   ws->cap_sorted = 1u << 14;
   ws->sorted = malloc(ws->cap_sorted * sizeof *ws->sorted);
   ws->cap_runs = 1u << 12;
@@ -239,7 +242,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
       sup_ok = ws->sup && ws->sup_row;
     }
   }
-  if (!ws->plane_cnt || !ws->row_start || !ws->sorted || !ws->runs || !ws->vals ||
+  if (!ws->plane_cnt || !ws->row_start || !ws->row_bits || !ws->sorted || !ws->runs || !ws->vals ||
       !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !sup_ok) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
@@ -254,6 +257,7 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   if (!ws) return;
   free(ws->plane_cnt);
   free(ws->row_start);
+  free(ws->row_bits);
   free(ws->sorted);
   free(ws->runs);
   free(ws->vals);

@@ -47,6 +47,8 @@ struct elfm_refocus_workspace {
   uint8_t *plane_cnt;         /* [W*H] agreeing views on one plane */
   /* sparse: the frame's listed pixels sorted by row, then cut into runs */
   uint32_t *row_start;        /* [sh + 1] counting sort by sensor row */
+  uint64_t *row_bits;         /* [(sw + 63) / 64] one sensor row's columns, a bit each;
+                               * all zero between uses */
   uint32_t *sorted;           /* [cap_sorted] columns, grouped by row */
   size_t cap_sorted;
   elfm_refocus_run *runs;

@@ -69,26 +69,14 @@ static int grow(void **buf, size_t *cap, size_t need, size_t elem)
   return 1;
 }
 
-/* Sort a row's columns in place without allocating (glibc's qsort may
- * malloc a merge buffer): insertion sort for the usual handful of pixels,
- * heapsort when a row is busy. */
-static void sift_down(uint32_t *a, size_t i, size_t n)
+/* Sort a row's n distinct columns in place: insertion sort for the usual
+ * handful, otherwise through a bit per sensor column (bits[], all zero on
+ * entry and on return): set, then read back in order. A busy row (several
+ * beads across its 5 views at ~20 Mev/s) has dozens of pixels, where a
+ * comparison sort was a tenth of the sparse path under perf. */
+static void sort_cols(uint32_t *a, size_t n, uint64_t *bits)
 {
-  for (;;) {
-    size_t c = 2 * i + 1;
-    if (c >= n) return;
-    if (c + 1 < n && a[c + 1] > a[c]) c++;
-    if (a[i] >= a[c]) return;
-    uint32_t t = a[i];
-    a[i] = a[c];
-    a[c] = t;
-    i = c;
-  }
-}
-
-static void sort_u32(uint32_t *a, size_t n)
-{
-  if (n <= 32) {
+  if (n <= 16) {
     for (size_t i = 1; i < n; i++) {
       uint32_t v = a[i];
       size_t j = i;
@@ -100,12 +88,20 @@ static void sort_u32(uint32_t *a, size_t n)
     }
     return;
   }
-  for (size_t i = n / 2; i-- > 0;) sift_down(a, i, n);
-  for (size_t e = n - 1; e > 0; e--) {
-    uint32_t t = a[0];
-    a[0] = a[e];
-    a[e] = t;
-    sift_down(a, 0, e);
+  uint32_t lo = UINT32_MAX, hi = 0;
+  for (size_t i = 0; i < n; i++) {
+    bits[a[i] >> 6] |= (uint64_t)1 << (a[i] & 63);
+    if (a[i] < lo) lo = a[i];
+    if (a[i] > hi) hi = a[i];
+  }
+  size_t k = 0;
+  for (uint32_t w = lo >> 6; w <= hi >> 6; w++) {
+    uint64_t b = bits[w];
+    bits[w] = 0;
+    while (b) {
+      a[k++] = (w << 6) + (uint32_t)__builtin_ctzll(b);
+      b &= b - 1;
+    }
   }
 }
 
@@ -136,7 +132,7 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   start[0] = 0;
   for (int y = 0; y < p->sh; y++) {
     size_t a = start[y], b = start[y + 1];
-    if (b - a > 1) sort_u32(ws->sorted + a, b - a);
+    if (b - a > 1) sort_cols(ws->sorted + a, b - a, ws->row_bits);
   }
   ws->n_runs = 0;
   ws->n_vals = 0;
@@ -280,6 +276,106 @@ static inline void agree_count_row(uint8_t *cnt, const uint8_t *const *src, int 
     for (int i = 0; i < W; i++) cnt[i] = (uint8_t)(cnt[i] + src[j][i]);
 }
 
+/* Agreement, steps 2 and 3 with AVX2 on one row (plane k, row Y), the
+ * scalar steps fused so that nothing is a loop over the row's W voxels:
+ * the count is compared with `need` 32 voxels at a time into a bit mask of
+ * candidates; then the gather takes 8 voxels X0 .. X0 + 7 from the lowest
+ * candidate X0 on, summed over all the listed views in registers (a row's
+ * candidates are ~7 voxels in one or two clusters, over ~23 views at
+ * ~20 Mev/s: one candidate at a time, with a load-add-store of its sum per
+ * view, was half of agree_plane under perf), and stores the kept voxels
+ * with one masked store.
+ * Lanes outside a view's [xlo, xhi) are masked loads: 0 and never read, so
+ * they add exactly 0, as the view not sampling them does in the dense path.
+ * The arithmetic is the dense path's, in its order (AVX2 has no FMA): the
+ * same floats. wv[j][4] are the bilinear weights of list[j]; pass[] holds
+ * (W + 31) / 32 words. Reads up to 31
+ * bytes past the row in `need`, `count` and the maps (all padded). Widens [*lo, *hi) by the kept voxels. */
+#ifdef ELFM_HAVE_AVX2_PATH
+__attribute__((target("avx2")))
+static void agree_row_avx2(const elfm_refocus_plan *p, const elfm_refocus_shift *sk,
+                           const uint8_t *list, const float (*wv)[4],
+                           const uint8_t *const *src, int n, const float *frame, int Y,
+                           const uint8_t *need, const uint8_t *count, uint32_t *pass,
+                           float *row, int *lo, int *hi)
+{
+  const int W = p->w;
+  const size_t SW = (size_t)p->sw;
+  /* step 2: counts and the candidate mask, 32 voxels per block */
+  const int nb = (W + 31) / 32;
+  uint32_t any = 0;
+  for (int b = 0; b < nb; b++) {
+    const int q = 32 * b;
+    __m256i acc = _mm256_loadu_si256((const __m256i *)(const void *)(src[0] + q));
+    for (int j = 1; j < n; j++)
+      acc = _mm256_add_epi8(acc, _mm256_loadu_si256((const __m256i *)(const void *)(src[j] + q)));
+    const __m256i nd = _mm256_loadu_si256((const __m256i *)(const void *)(need + q));
+    /* cnt >= need (unsigned) and cnt != 0 */
+    const __m256i ge = _mm256_cmpeq_epi8(_mm256_max_epu8(acc, nd), acc);
+    const __m256i nz = _mm256_xor_si256(_mm256_cmpeq_epi8(acc, _mm256_setzero_si256()),
+                                        _mm256_set1_epi8(-1));
+    uint32_t m = (uint32_t)_mm256_movemask_epi8(_mm256_and_si256(ge, nz));
+    if (W - q < 32) m &= (1u << (W - q)) - 1u;
+    pass[b] = m;
+    any |= m;
+  }
+  if (!any) return;
+  /* step 3: gather 8 voxels from each lowest candidate left */
+  const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  const __m256i bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  for (int b = 0; b < nb;) {
+    if (!pass[b]) { b++; continue; }
+    const int X0 = 32 * b + __builtin_ctz(pass[b]);
+    /* the lanes' candidate bits, X0 .. X0 + 7 (may cross into block b + 1) */
+    uint64_t bits = pass[b] >> (X0 - 32 * b);
+    if (b + 1 < nb) bits |= (uint64_t)pass[b + 1] << (32 - (X0 - 32 * b));
+    bits &= 0xFFu;
+    const __m256i xv = _mm256_add_epi32(_mm256_set1_epi32(X0), lane);
+    __m256 sum = _mm256_setzero_ps();
+    __m256i seen = _mm256_setzero_si256();
+    for (int j = 0; j < n; j++) {
+      const elfm_refocus_shift *s = sk + list[j];
+      if (s->xlo >= X0 + 8 || s->xhi <= X0) continue;
+      const __m256i m = _mm256_and_si256(_mm256_cmpgt_epi32(xv, _mm256_set1_epi32(s->xlo - 1)),
+                                         _mm256_cmpgt_epi32(_mm256_set1_epi32(s->xhi), xv));
+      /* the first tap of lane 0; a masked lane's address is never read */
+      const float *r0 = frame + (size_t)(Y + s->iy) * SW;
+      const float *r1 = r0 + SW;
+      const ptrdiff_t u = (ptrdiff_t)X0 + s->ix;
+      const __m256 a00 = _mm256_maskload_ps(r0 + u, m), a01 = _mm256_maskload_ps(r0 + u + 1, m);
+      const __m256 a10 = _mm256_maskload_ps(r1 + u, m), a11 = _mm256_maskload_ps(r1 + u + 1, m);
+      __m256 a = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(wv[j][0]), a00),
+                               _mm256_mul_ps(_mm256_set1_ps(wv[j][1]), a01));
+      a = _mm256_add_ps(a, _mm256_mul_ps(_mm256_set1_ps(wv[j][2]), a10));
+      a = _mm256_add_ps(a, _mm256_mul_ps(_mm256_set1_ps(wv[j][3]), a11));
+      sum = _mm256_add_ps(sum, a);
+      /* a != 0 is all ones (-1) in the lane: subtracting it counts one */
+      seen = _mm256_sub_epi32(seen, _mm256_castps_si256(_mm256_cmp_ps(a, _mm256_setzero_ps(), _CMP_NEQ_UQ)));
+    }
+    /* kept: a candidate lane whose non-zero samples reach need[X]; the
+     * value is the mean over the views sampling the voxel, 1 / count[X]
+     * from the plan's table */
+    const __m256i cand = _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32((int)bits), bit), bit);
+    const __m256i nd = _mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(need + X0)));
+    const __m256i ci = _mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)(const void *)(count + X0)));
+    const __m256i keep = _mm256_andnot_si256(_mm256_cmpgt_epi32(nd, seen), cand);
+    const __m256 val = _mm256_mul_ps(sum, _mm256_i32gather_ps(p->inv_table, ci, 4));
+    _mm256_maskstore_ps(row + X0, keep, val);
+    const unsigned kb = (unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(keep));
+    if (kb) {
+      if (X0 + __builtin_ctz(kb) < *lo) *lo = X0 + __builtin_ctz(kb);
+      *hi = X0 + 32 - __builtin_clz(kb);
+    }
+    /* drop the candidates X0 .. X0 + 7 */
+    const int e = X0 + 8;
+    for (int q = b; q < nb && 32 * q < e; q++) {
+      const int drop = e - 32 * q; /* bits [0, drop) of block q */
+      pass[q] &= drop >= 32 ? 0u : ~((1u << drop) - 1u);
+    }
+  }
+}
+#endif
+
 /* Agreement on plane k, row by row.
  * Step 2: add the views' support rows (shifted by the plane's integer
  * shift) into a byte count per voxel: ~W/16 vector adds per view and row,
@@ -306,8 +402,13 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
    * flag and map row start (agreement is on: nv <= 32, plan) */
   int ylo[32], yhi[32];
   ptrdiff_t flag_at[32], map_at[32], map_stride[32];
+  float wk[32][4]; /* bilinear weights, as the dense path computes them */
   for (int v = 0; v < nv; v++) {
     const elfm_refocus_shift *s = sk + v;
+    wk[v][0] = (1.0f - s->fx) * (1.0f - s->fy);
+    wk[v][1] = s->fx * (1.0f - s->fy);
+    wk[v][2] = (1.0f - s->fx) * s->fy;
+    wk[v][3] = s->fx * s->fy;
     const elfm_refocus_box *bx = &p->box[v];
     ylo[v] = s->ylo;
     yhi[v] = s->xlo < s->xhi ? s->yhi : s->ylo;
@@ -346,10 +447,23 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
      * zero margins (W wide) and zero last column give 0 outside [xlo, xhi)
      * (bench_refocus on flow: 3.5 -> 2.9 ms CPU per volume with this) */
     const uint8_t *src[32];
-    for (int j = 0; j < n; j++)
+    float wl[32][4];
+    for (int j = 0; j < n; j++) {
       src[j] = ws->sup + (map_at[list[j]] + (ptrdiff_t)Y * map_stride[list[j]]);
-    agree_count_row(cnt, src, n, W, avx2);
+      memcpy(wl[j], wk[list[j]], sizeof wl[j]);
+    }
     const uint8_t *need = p->need + r * (size_t)W;
+#ifdef ELFM_HAVE_AVX2_PATH
+    if (avx2) {
+      int lo = W, hi = 0;
+      agree_row_avx2(p, sk, list, wl, src, n, frame->data, Y, need, p->count + r * (size_t)W,
+                     (uint32_t *)(void *)ws->agree_cand,
+                     vol->data + r * (size_t)W, &lo, &hi);
+      if (lo < hi) mark_row(ws, (uint32_t)r, lo, hi);
+      continue;
+    }
+#endif
+    agree_count_row(cnt, src, n, W, avx2);
     uint8_t hit = 0;
     for (int X = 0; X < W; X++) {
       const uint8_t ok = (uint8_t)((cnt[X] >= need[X]) & (cnt[X] != 0));
@@ -367,6 +481,9 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
       cand[nc] = X;
       nc += pass[X];
     }
+    float *row = vol->data + r * (size_t)W;
+    const uint8_t *count = p->count + r * (size_t)W;
+    int lo = W, hi = 0;
     for (int c = 0; c < nc; c++) {
       sum[c] = 0.0f;
       seen[c] = 0;
@@ -391,9 +508,6 @@ static void agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elf
         seen[c] = (uint8_t)(seen[c] + (a != 0.0f));
       }
     }
-    float *row = vol->data + r * (size_t)W;
-    const uint8_t *count = p->count + r * (size_t)W;
-    int lo = W, hi = 0;
     for (int c = 0; c < nc; c++) {
       const int X = cand[c];
       if (seen[c] < need[X]) continue;
