@@ -336,14 +336,24 @@ static void agree_row_avx2(const elfm_refocus_plan *p, const elfm_refocus_shift 
     for (int j = 0; j < n; j++) {
       const elfm_refocus_shift *s = sk + list[j];
       if (s->xlo >= X0 + 8 || s->xhi <= X0) continue;
-      const __m256i m = _mm256_and_si256(_mm256_cmpgt_epi32(xv, _mm256_set1_epi32(s->xlo - 1)),
-                                         _mm256_cmpgt_epi32(_mm256_set1_epi32(s->xhi), xv));
-      /* the first tap of lane 0; a masked lane's address is never read */
+      /* the first tap of lane 0 */
       const float *r0 = frame + (size_t)(Y + s->iy) * SW;
       const float *r1 = r0 + SW;
       const ptrdiff_t u = (ptrdiff_t)X0 + s->ix;
-      const __m256 a00 = _mm256_maskload_ps(r0 + u, m), a01 = _mm256_maskload_ps(r0 + u + 1, m);
-      const __m256 a10 = _mm256_maskload_ps(r1 + u, m), a11 = _mm256_maskload_ps(r1 + u + 1, m);
+      __m256 a00, a01, a10, a11;
+      if (s->xlo <= X0 && X0 + 8 <= s->xhi) { /* all lanes sampled: the usual case */
+        a00 = _mm256_loadu_ps(r0 + u);
+        a01 = _mm256_loadu_ps(r0 + u + 1);
+        a10 = _mm256_loadu_ps(r1 + u);
+        a11 = _mm256_loadu_ps(r1 + u + 1);
+      } else { /* a masked lane's address is never read */
+        const __m256i m = _mm256_and_si256(_mm256_cmpgt_epi32(xv, _mm256_set1_epi32(s->xlo - 1)),
+                                           _mm256_cmpgt_epi32(_mm256_set1_epi32(s->xhi), xv));
+        a00 = _mm256_maskload_ps(r0 + u, m);
+        a01 = _mm256_maskload_ps(r0 + u + 1, m);
+        a10 = _mm256_maskload_ps(r1 + u, m);
+        a11 = _mm256_maskload_ps(r1 + u + 1, m);
+      }
       __m256 a = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(wv[j][0]), a00),
                                _mm256_mul_ps(_mm256_set1_ps(wv[j][1]), a01));
       a = _mm256_add_ps(a, _mm256_mul_ps(_mm256_set1_ps(wv[j][2]), a10));
