@@ -276,8 +276,14 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
     double now = now_s();
     if (r->opt->progress && now - t_progress >= 0.25) {
       t_progress = now;
-      r->st.wall_s = now - t_start;
-      r->opt->progress(&r->st, r->opt->progress_user);
+      /* the rates so far (they were only set at the end: the progress
+       * line said 0 volumes/s) */
+      elfm_recon_stats st = r->st;
+      st.wall_s = now - t_start;
+      st.events_per_s = (double)st.events / st.wall_s;
+      st.volumes_per_s = (double)st.frames / st.wall_s;
+      st.realtime_factor = st.span_s / st.wall_s;
+      r->opt->progress(&st, r->opt->progress_user);
     }
     if (!got) break;
   }
