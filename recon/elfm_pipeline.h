@@ -58,8 +58,11 @@ typedef void (*elfm_recon_progress_fn)(const elfm_recon_stats *s, void *user);
  * the hook can use a per-thread workspace and store its output per slot.
  * The same slot is passed to on_volume_slot for this volume afterwards, in
  * frame order. Must not touch state shared with other slots or threads. A
- * non-OK return stops the run like a callback error. */
-typedef elfm_status (*elfm_volume_worker_fn)(const elfm_volume *vol, int slot, int thread,
+ * non-OK return stops the run like a callback error. `frame` is the frame
+ * the volume was refocused from (after the median filter) and `plan` the
+ * run's refocus plan, for per-view tests such as elfm_refocus_view_support. */
+typedef elfm_status (*elfm_volume_worker_fn)(const elfm_volume *vol, const elfm_frame *frame,
+                                             const elfm_refocus_plan *plan, int slot, int thread,
                                              void *user, elfm_error *err);
 /* The ordered callback with the volume's batch slot (see above). */
 typedef elfm_status (*elfm_volume_slot_fn)(const elfm_volume *vol, int slot, void *user,

@@ -83,6 +83,16 @@ void elfm_refocus_plan_size(const elfm_refocus_plan *p, int *w, int *h, int *nz)
 int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k);
 const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
 
+/* View support of voxel (X, Y, k) in `frame`: the number of views whose
+ * bilinear sample there (the one the refocus averages) is non-zero; with
+ * n_sampling non-NULL, *n_sampling = the views that sample the voxel at
+ * all. A bead at the voxel is seen by most of the views, a ghost (images
+ * of other objects that happen to line up there) by a few: a test for a
+ * detected peak, where the agreement rule is a test for every voxel.
+ * 0 outside the volume. O(views). */
+int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
+                              int k, int *n_sampling);
+
 /* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
  * The workspace remembers which rows of the volume it last wrote on the
  * sparse path, so it clears only those next time: between two executes

@@ -254,7 +254,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
       }
       s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
       if (s->status == ELFM_OK && worker)
-        s->status = worker(s->vol, i, omp_get_thread_num(), worker_user, &s->err);
+        s->status = worker(s->vol, in, plan, i, omp_get_thread_num(), worker_user, &s->err);
     }
     r->st.refocus_s += now_s() - t0;
     for (int i = 0; i < nb; i++) {

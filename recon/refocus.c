@@ -184,6 +184,27 @@ int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k)
 
 const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p) { return &p->calib; }
 
+int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
+                              int k, int *n_sampling)
+{
+  int n = 0, ns = 0;
+  if (X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz)
+    for (int v = 0; v < p->nv; v++) {
+      const elfm_refocus_shift *s = p->shift + (size_t)k * p->nv + v;
+      if (X < s->xlo || X >= s->xhi || Y < s->ylo || Y >= s->yhi) continue;
+      ns++;
+      /* the dense path's sample, weights and taps */
+      const float w00 = (1.0f - s->fx) * (1.0f - s->fy), w01 = s->fx * (1.0f - s->fy);
+      const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
+      const float *r0 = frame->data + (size_t)(Y + s->iy) * (size_t)p->sw + (X + s->ix);
+      const float *r1 = r0 + p->sw;
+      const float a = w00 * r0[0] + w01 * r0[1] + w10 * r1[0] + w11 * r1[1];
+      n += a != 0.0f;
+    }
+  if (n_sampling) *n_sampling = ns;
+  return n;
+}
+
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)
 {
   return elfm_volume_create(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,

@@ -406,10 +406,14 @@ static double weighted_sum(const elfm_volume *v)
   return sum;
 }
 
-static elfm_status hook_worker(const elfm_volume *v, int slot, int thread, void *user, elfm_error *err)
+static elfm_status hook_worker(const elfm_volume *v, const elfm_frame *frame,
+                               const elfm_refocus_plan *plan, int slot, int thread, void *user,
+                               elfm_error *err)
 {
   hook_ctx *h = user;
-  if (slot < 0 || slot >= h->slots || thread < 0 || thread >= h->threads) {
+  /* the frame the volume came from, and the run's plan */
+  if (!frame || !plan || frame->t_us != v->t_us || slot < 0 || slot >= h->slots ||
+      thread < 0 || thread >= h->threads) {
 #pragma omp atomic write
     h->bad_args = 1;
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "slot %d thread %d", slot, thread);

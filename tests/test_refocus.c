@@ -398,6 +398,70 @@ static void test_bad_input(const elfm_calib *c)
   elfm_refocus_plan_free(NULL);
 }
 
+/* View support: at a bead's voxel every view that samples it sees signal;
+ * at the voxel where two beads' images cross in a few views (a ghost of
+ * the pair: shift-and-add at a plane between them), only a few do; outside
+ * the volume 0. Checked against the volume: the support is the number of
+ * non-zero samples the dense path averaged (with agreement 1.0 the voxel
+ * survives exactly when support == views sampling). */
+static void test_view_support(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  render_bead(f, c, 10.0, -12.0, 30.0, 200.0);
+  render_bead(f, c, -25.0, 20.0, -40.0, 200.0);
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  o.agree_frac = 0.0;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *v = elfm_refocus_volume_create(p, &err);
+  CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, f, v, ws, &err), &err);
+  /* the bead voxel: the volume's maximum */
+  size_t i = argmax(v);
+  int X = (int)(i % (size_t)v->w), Y = (int)(i / (size_t)v->w % (size_t)v->h);
+  int k = (int)(i / ((size_t)v->w * v->h));
+  int ns = -1;
+  int n = elfm_refocus_view_support(p, f, X, Y, k, &ns);
+  CHECK_EQ_INT(ns, elfm_refocus_plan_views_at(p, X, Y, k));
+  CHECK_MSG(ns >= 20 && n == ns, "bead voxel: %d of %d views", n, ns);
+  /* every other non-zero voxel of the volume: a bead's neighbourhood or a
+   * ghost; count those with support below half their views */
+  size_t low = 0, nz = 0, total = (size_t)v->w * v->h * v->nz;
+  int max_low = 0;
+  for (size_t j = 0; j < total; j++) {
+    if (v->data[j] == 0.0f) continue;
+    int x = (int)(j % (size_t)v->w), y = (int)(j / (size_t)v->w % (size_t)v->h);
+    int kk = (int)(j / ((size_t)v->w * v->h));
+    int m = 0, a = elfm_refocus_view_support(p, f, x, y, kk, &m);
+    CHECK(a >= 1 && a <= m);
+    nz++;
+    if (2 * a < m) {
+      low++;
+      if (v->data[j] > (float)max_low) max_low = (int)v->data[j];
+    }
+  }
+  /* most non-zero voxels are seen by a few views only (ghosts, tails) */
+  CHECK_MSG(low > nz / 2, "%zu of %zu non-zero voxels with low support", low, nz);
+  /* zero voxels and voxels outside the volume have no support */
+  size_t zi = 0;
+  while (zi < total && v->data[zi] != 0.0f) zi++;
+  CHECK(zi < total);
+  CHECK_EQ_INT(elfm_refocus_view_support(p, f, (int)(zi % (size_t)v->w),
+                                         (int)(zi / (size_t)v->w % (size_t)v->h),
+                                         (int)(zi / ((size_t)v->w * v->h)), NULL), 0);
+  ns = 7;
+  CHECK_EQ_INT(elfm_refocus_view_support(p, f, -1, Y, k, &ns), 0);
+  CHECK_EQ_INT(ns, 0);
+  CHECK_EQ_INT(elfm_refocus_view_support(p, f, X, Y, v->nz, NULL), 0);
+  elfm_volume_free(v);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_plan_free(p);
+  elfm_frame_free(f);
+}
+
 int main(void)
 {
   elfm_calib c;
@@ -408,6 +472,7 @@ int main(void)
   test_agree_exact(&c);
   test_uniform_overhang(&c);
   test_ghost_rules(&c);
+  test_view_support(&c);
   test_bad_input(&c);
   return check_report();
 }
