@@ -144,9 +144,13 @@ int main(void)
   CHECK_EQ_INT(rc, 1);
   CHECK_MSG(strstr(err, "calib.json") != NULL, "stderr: %s", err);
 
-  /* The window comes from the run's summary.json beside tracks.csv, however
-   * long the summary (it lists every track: this one is > 64 KiB, with the
-   * parameters last), and --window-us overrides it. */
+  /* By default the window is 0 (SPEC 7 as written) even with a summary;
+   * --window-us run takes it from the run's summary.json beside tracks.csv,
+   * however long the summary (it lists every track: this one is > 64 KiB,
+   * with the parameters last); without one that is an error. */
+  rc = run("--truth truth.csv --tracks tracks.csv --window-us run", out, sizeof out, err, sizeof err);
+  CHECK_EQ_INT(rc, 1);
+  CHECK_MSG(strstr(err, "summary.json") != NULL, "stderr: %s", err);
   {
     size_t cap = 200000, len = 0;
     char *big = malloc(cap);
@@ -161,12 +165,18 @@ int main(void)
       write_file("summary.json", big);
       free(big);
     }
-    rc = run("--truth truth.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
+    rc = run("--truth truth.csv --tracks tracks.csv --window-us run", out, sizeof out, err, sizeof err);
     CHECK_EQ_INT(rc, 0);
     CHECK_MSG(strstr(out, "window 1000 us from summary.json") != NULL, "stdout: %s", out);
-    rc = run("--truth truth.csv --tracks tracks.csv --window-us 0", out, sizeof out, err, sizeof err);
+    rc = run("--truth truth.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
     CHECK_EQ_INT(rc, 0);
     CHECK_MSG(strstr(out, "window 0 us)") != NULL, "stdout: %s", out);
+    rc = run("--truth truth.csv --tracks tracks.csv --window-us run --window-us 500", out,
+             sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    CHECK_MSG(strstr(out, "window 500 us)") != NULL, "stdout: %s", out);
+    rc = run("--truth truth.csv --tracks tracks.csv --window-us soon", out, sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 2);
   }
 
   char cmd[600];
