@@ -145,8 +145,9 @@ typedef struct elfm_score_options {
    * object counts at that frame when it was bright for at least half of that
    * window (by its truth samples), not only at t_us. Why: a time surface's
    * t_us is its window's end (SPEC §5), so a 1 ms LED pulse that lit a window
-   * has often ended by t_us, and the literal rule would call every blink
-   * frame dark; "any light in the window" would instead also count the next
+   * may have ended by t_us, and the literal rule then calls that frame dark
+   * (blink, 200 ms: one of each bead's 5 pulses, F1 0.80 against 1.00,
+   * docs/bench.md); "any light in the window" would instead also count the next
    * window, which sees only the pulse's OFF edge. With 1 ms pulses and 1 ms
    * windows exactly one frame per pulse counts. Positions are still
    * interpolated at t_us. 0 (default): the literal SPEC §7 rule. */
