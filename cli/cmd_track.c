@@ -516,9 +516,13 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
   cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
-  cJSON_AddNumberToObject(par, "repr", fo->repr);
-  cJSON_AddNumberToObject(par, "polarity", fo->polarity);
+  cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
+  cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "median", o->recon.median);
+  cJSON_AddStringToObject(par, "path", cli_refocus_path_name(o->recon.refocus.path));
+  cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(o->recon.refocus.threshold));
+  cJSON_AddNumberToObject(par, "ghost_threshold_value", o->recon.refocus.threshold_value);
+  cJSON_AddNumberToObject(par, "ghost_agree_frac", o->recon.refocus.agree_frac);
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
