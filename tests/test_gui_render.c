@@ -99,7 +99,10 @@ static void ensure_display(char **argv)
    * same moment (other test runs on this machine) unlikely. */
   char num[16];
   snprintf(num, sizeof num, "%d", 100 + (int)(getpid() % 800));
-  char *args[] = {found, "-a", "-n", num, "-s", "-screen 0 1280x1024x24", argv[0], NULL};
+  /* -noreset: Xvfb otherwise resets when its last client leaves, and a
+   * viewer created during the reset cannot open the display (seen under
+   * ctest -j2: "Failed to open display" between two viewers) */
+  char *args[] = {found, "-a", "-n", num, "-s", "-screen 0 1280x1024x24 -noreset", argv[0], NULL};
   execv(found, args);
   SKIP("could not start xvfb-run: %s", strerror(errno));
 }
