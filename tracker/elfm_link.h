@@ -93,6 +93,13 @@ typedef struct elfm_link_options {
    * also sit where a track expects one. 0 = off (weak detections use the
    * track's gate, the rescue gate too). */
   double weak_gate_um;
+  /* Stitching (step 5): a track reaching stitch_points real points (>= 4)
+   * may be joined to a live track dark since before its first point, when
+   * its points lie within stitch_gate_um (root mean square, anisotropic)
+   * of that track's last stitch_history real points. 0 = off. */
+  int stitch_points;
+  double stitch_gate_um;  /* default 8 um */
+  int stitch_history;     /* default 100 points */
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);
