@@ -360,6 +360,45 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5h. Swap review: P moves along +x at 3 um/ms, Q at 20 degrees to it at
+   * the same speed; they meet at frame 30, and while closer than 5 um the
+   * detector sees one detection between them (frames 29-31). The linker
+   * without the review lets P's track coast and close its gap on Q: the
+   * track that started on P ends on Q. With it the junction is revisited 6
+   * frames later and the tails are exchanged: each track ends on its own
+   * object. */
+  for (int review = 0; review < 2; review++) {
+    elfm_link_options ow = o;
+    ow.swap_points = review ? 6 : 0;
+    elfm_linker *l = elfm_link_create(&ow, &err);
+    CHECK(l != NULL);
+    const double th = 20 * M_PI / 180;
+    for (int f = 0; f < 60; f++) {
+      double t = f - 30, px = 3 * t, py = 0, qx = 3 * t * cos(th), qy = 3 * t * sin(th);
+      elfm_detection d[2];
+      int n = 0;
+      if (hypot(px - qx, py - qy) < 5) d[n++] = mk(0.5 * (px + qx), 0.5 * (py + qy), 5);
+      else {
+        d[n++] = mk(px, py, 5);
+        d[n++] = mk(qx, qy, 5);
+      }
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0, own = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      /* started on P (y = 0) or on Q (y < 0): does it end on the same one? */
+      int start_p = fabs(t->pts[0].y_um) < 1, end_p = fabs(t->pts[t->n - 1].y_um) < 1;
+      own += start_p == end_p;
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == 2 && own == (review ? 2 : 0), "swap review %d: %d tracks, %d on their own object",
+              review, n, own);
+    elfm_link_free(l);
+  }
+
   /* 5d. Hysteresis: a weak detection continues a track but never starts
    * one. A bead seen strong for 10 frames, then weak for 20: one track of
    * 30 points. A weak-only object: no track, id -3. */
@@ -479,6 +518,13 @@ int main(void)
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
     bad.stitch_points = 3;  /* a young track needs 4 points for its path */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 3;    /* a tail needs 4 points for its fit */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 6;
+    bad.swap_ratio = 1.5;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
     bad.history = 1;

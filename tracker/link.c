@@ -20,6 +20,8 @@ typedef struct live_track {
   double pred[3];           /* prediction for the current frame */
   double gate_um;           /* gate for the current frame */
   int missed;               /* frames missed before the current frame */
+  size_t tail0;             /* index of the point that closed the last gap (0 none) */
+  int review;               /* that gap closing is still to be reviewed (step 6) */
 } live_track;
 
 typedef struct link_cand {
@@ -76,6 +78,8 @@ void elfm_link_options_default(elfm_link_options *o)
   o->stitch_points = 0;
   o->stitch_gate_um = 8.0;
   o->stitch_history = 100;
+  o->swap_points = 0;
+  o->swap_ratio = 0.5;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
@@ -89,7 +93,8 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
       !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) || o->stitch_points < 0 ||
       (o->stitch_points > 0 && o->stitch_points < 4) || !(o->stitch_gate_um >= 0) ||
-      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 ||
+      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 || o->swap_points < 0 ||
+      (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
@@ -417,12 +422,141 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
     elfm_track_free(y->t);
     *d = *y;      /* continue with the young track's state (its own fits) */
     d->t = keep;
+    d->tail0 = 0; /* y's gap closing (if any) indexed y's points */
+    d->review = 0;
     y->t = NULL;  /* removed below, keeping the order */
   }
   size_t w = 0;
   for (size_t i = 0; i < nl; i++)
     if (l->live[i].t) l->live[w++] = l->live[i];
   l->n_live = w;
+  return ELFM_OK;
+}
+
+/* Squared anisotropic distance, at the middle of the gap, between the end
+ * state of pts[h0 .. h1) and the start state of pts[t0 .. t1) (quadratic
+ * fits, turning as in predict_track); INFINITY when either has < 4 points. */
+/* Squared anisotropic distance, at the middle of the gap, between the end
+ * state of hp[0 .. hn) and the start state of tp[0 .. tn) (quadratic fits
+ * over up to short_history points, turning as in predict_track); INFINITY
+ * when either has fewer than 4 points. */
+static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp, size_t tn,
+                             int short_history, double kz)
+{
+  size_t sh = (size_t)short_history;
+  size_t hk = hn < sh ? hn : sh, tk = tn < sh ? tn : sh;
+  if (hk < 4 || tk < 4) return INFINITY;
+  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
+  double hpos[3], hvel[3], hacc[3], tpos[3], tvel[3], tacc[3], a[3], b[3];
+  if (!fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) || !fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
+    return INFINITY;
+  int64_t tm = th + (tt - th) / 2;
+  predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
+  predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/* Replace track a's points from a_t0 on by b's from b_t0 on and vice versa. */
+static elfm_status exchange_tails(elfm_track *a, size_t a_t0, elfm_track *b, size_t b_t0,
+                                  elfm_error *err)
+{
+  size_t an = a_t0 + (b->n - b_t0), bn = b_t0 + (a->n - a_t0);
+  elfm_detection *pa = malloc((an ? an : 1) * sizeof *pa), *pb = malloc((bn ? bn : 1) * sizeof *pb);
+  if (!pa || !pb) {
+    free(pa);
+    free(pb);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+  }
+  memcpy(pa, a->pts, a_t0 * sizeof *pa);
+  memcpy(pa + a_t0, b->pts + b_t0, (b->n - b_t0) * sizeof *pa);
+  memcpy(pb, b->pts, b_t0 * sizeof *pb);
+  memcpy(pb + b_t0, a->pts + a_t0, (a->n - a_t0) * sizeof *pb);
+  free(a->pts);
+  free(b->pts);
+  a->pts = pa;
+  a->n = a->cap = an;
+  b->pts = pb;
+  b->n = b->cap = bn;
+  return ELFM_OK;
+}
+
+static void refresh_state(const elfm_link_options *o, live_track *lt)
+{
+  const elfm_detection *p = &lt->t->pts[lt->t->n - 1];
+  lt->last_frame = p->frame;
+  lt->last_t_us = p->t_us;
+  lt->last[0] = p->x_um;
+  lt->last[1] = p->y_um;
+  lt->last[2] = p->z_um;
+  fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
+}
+
+/* 6. Swap review, a deferred decision at close passes. Two flow beads
+ * passing within a few um give one detection for a few frames; one track
+ * coasts, the other takes the shared detections, and when they part the
+ * coasting track may close its gap on the other bead (flow seed 2: beads 5
+ * and 16, frames 45-52; seed 7: beads 2 and 15). A frame later nothing
+ * tells them apart, but once the tails have swap_points points their
+ * motion does. So a track B that closed a gap (head up to frame hB, tail
+ * from fB) is revisited once its tail has swap_points points, if its own
+ * junction does not fit (head and tail extrapolated to the middle of the
+ * gap miss each other by more than gate_um). Every other track A with a
+ * point inside the gap (hB < frame <= fB) may have taken B's object there:
+ * for each such split of A, B's head joined to A's tail and A's head to
+ * B's tail are compared with the junctions as they are; when the best
+ * exchange fits swap_ratio times better (root of the summed squared
+ * distances), the tails are exchanged. Each gap closing is reviewed once. */
+static elfm_status review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const size_t K = (size_t)o->swap_points;
+  const int sh = o->short_history;
+  const double kz = o->kz;
+  for (size_t b = 0; b < l->n_live; b++) {
+    live_track *B = &l->live[b];
+    if (!B->review || B->t->n - B->tail0 < K) continue;
+    const elfm_detection *bp = B->t->pts;
+    const size_t bt = B->tail0, bn = B->t->n;
+    const int64_t hB = bp[bt - 1].frame, fB = bp[bt].frame;
+    const double jb = junction_cost2(bp, bt, bp + bt, bn - bt, sh, kz);
+    double best_ratio = o->swap_ratio * o->swap_ratio;
+    size_t best_a = 0, best_s = 0;
+    int found = 0;
+    for (size_t a = 0; a < l->n_live; a++) {
+      if (a == b) continue;
+      const elfm_detection *ap = l->live[a].t->pts;
+      const size_t an = l->live[a].t->n;
+      for (size_t s = an; s-- > 4;) {
+        if (ap[s].frame <= hB) break;
+        if (ap[s].frame > fB || an - s < K) continue;
+        double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, kz);
+        double alt = junction_cost2(bp, bt, ap + s, an - s, sh, kz) +
+                     junction_cost2(ap, s, bp + bt, bn - bt, sh, kz);
+        if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur) {
+          best_ratio = alt / cur;
+          best_a = a;
+          best_s = s;
+          found = 1;
+        }
+      }
+    }
+    if (found) {
+      live_track *A = &l->live[best_a];
+      elfm_status st = exchange_tails(B->t, bt, A->t, best_s, err);
+      if (st != ELFM_OK) return st;
+      for (size_t j = 0; j < nd; j++) {
+        if (l->det_id[j] == A->t->id) l->det_id[j] = B->t->id;
+        else if (l->det_id[j] == B->t->id) l->det_id[j] = A->t->id;
+      }
+      refresh_state(o, A);
+      refresh_state(o, B);
+      A->tail0 = bt;
+      A->review = 0;
+      B->tail0 = best_s;
+    }
+    B->review = 0;
+  }
   return ELFM_OK;
 }
 
@@ -811,6 +945,10 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     if (j < 0) continue;
     st = attach(l, &l->live[i], &det[j], err);
     if (st != ELFM_OK) return st;
+    if (l->live[i].missed > 0 && l->live[i].t->n >= 5) {
+      l->live[i].tail0 = l->live[i].t->n - 1;
+      l->live[i].review = 1;
+    }
     l->det_id[j] = l->live[i].t->id;
     const double *v = current_velocity(&l->live[i]);
     l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
@@ -836,7 +974,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     l->det_id[j] = -1;
     l->det_speed[j] = NAN;
   }
-  if (o->stitch_points > 0) return stitch(l, frame, nd, err);
+  if (o->stitch_points > 0) {
+    st = stitch(l, frame, nd, err);
+    if (st != ELFM_OK) return st;
+  }
+  if (o->swap_points > 0) return review_swaps(l, nd, err);
   return ELFM_OK;
 }
 
