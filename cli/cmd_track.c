@@ -121,6 +121,11 @@ static void usage(FILE *f)
     "                       its width along the motion; move detections back by that\n"
     "  --link-kz K          axial scale of the linker's distance sqrt(dx2+dy2+(dz/K)2) (1.5)\n"
     "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5; 0 off)\n"
+    "  --stitch-points N    a new track of N points continues a dark one when its points\n"
+    "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
+    "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
+    "  --swap-points N      review a gap closing that does not fit when its new tail\n"
+    "                       has N points; exchange tails with a better fit (6; 0 off)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
@@ -533,6 +538,11 @@ static int write_summary(track_ctx *c, const elfm_recon_stats *rs, double wall_s
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
+  cJSON_AddNumberToObject(par, "stitch_points", o->link.stitch_points);
+  cJSON_AddNumberToObject(par, "stitch_gate_um", o->link.stitch_gate_um);
+  cJSON_AddNumberToObject(par, "stitch_history", o->link.stitch_history);
+  cJSON_AddNumberToObject(par, "swap_points", o->link.swap_points);
+  cJSON_AddNumberToObject(par, "swap_ratio", o->link.swap_ratio);
   cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);
   cJSON_AddNumberToObject(par, "guided_low", o->guided_low);
   cJSON_AddNumberToObject(par, "guided_radius_um", o->guided_radius_um);
@@ -633,7 +643,7 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
   O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
   O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH, O_WEAKGATE, O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP
+  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH, O_WEAKGATE, O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN
 };
 
 int cmd_track(int argc, char **argv)
@@ -684,7 +694,21 @@ int cmd_track(int argc, char **argv)
    * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
    * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
   o.view_support = 0.3;
-  int thr_given = 0, low_given = 0;
+  /* Stitching a new track of 5 points onto a dark track whose recent path
+   * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
+   * circle and come back onto their own path after gaps no extrapolation
+   * bridges. Flow 100 ms seeds 1 / 2: alpha 0.677 -> 0.697 / 0.646 ->
+   * 0.691, 7 -> 3 / 6 -> 1 spurious tracks; blink unchanged; worm 0.327 ->
+   * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
+   * gave the same to +-0.01. Off in --motion stage (below). */
+  o.link.stitch_points = 5;
+  /* Swap review of gap closings that do not fit, after 6 points of the new
+   * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9: alpha 0.697,
+   * 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the other six
+   * unchanged; stage, blink, worm unchanged. 5-8 points and ratios 0.4-0.5
+   * gave the same; 0.7 swapped wrongly (4 seeds down by 0.01-0.04). */
+  o.link.swap_points = 6;
+  int thr_given = 0, low_given = 0, stitch_given = 0;
   static const struct option lo[] = {
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
       {"out", required_argument, 0, O_OUT}, {"dt-us", required_argument, 0, O_DT},
@@ -701,6 +725,9 @@ int cmd_track(int argc, char **argv)
       {"threshold-min", required_argument, 0, O_THMIN},
       {"views-rule", required_argument, 0, O_VIEWSRULE},
       {"rescue-factor", required_argument, 0, O_RESCUE},
+      {"stitch-points", required_argument, 0, O_STITCHN},
+      {"stitch-gate-um", required_argument, 0, O_STITCHG},
+      {"swap-points", required_argument, 0, O_SWAPN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
       {"view-support", required_argument, 0, O_VSUP},
@@ -772,6 +799,12 @@ int cmd_track(int argc, char **argv)
     case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
     case O_WEAKGATE: if (!cli_parse_double(C, "--weak-gate-um", a, &o.link.weak_gate_um)) return CLI_USAGE; break;
     case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
+    case O_STITCHN:
+      if (!cli_parse_int(C, "--stitch-points", a, &o.link.stitch_points)) return CLI_USAGE;
+      stitch_given = 1;
+      break;
+    case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
+    case O_STITCHG: if (!cli_parse_double(C, "--stitch-gate-um", a, &o.link.stitch_gate_um)) return CLI_USAGE; break;
     case O_VIEWSRULE:
       if (!strcmp(a, "on")) o.views_rule = 1;
       else if (!strcmp(a, "off")) o.views_rule = 0;
@@ -863,6 +896,12 @@ int cmd_track(int argc, char **argv)
   if (o.motion == MOTION_STAGE) {
     o.smooth.allow_spline = 0;
     if (o.has_stage_v) memcpy(o.link.prior_velocity_um_per_ms, o.stage_v, sizeof o.stage_v);
+    /* Everything translates with the stage, so no object comes back onto a
+     * path, while a bead trailing another on the same line (or re-entering
+     * the field on it) lies on that path: stitching joined two such
+     * beads, the track was rejected for outliers (stage 200 ms alpha 0.717
+     * -> 0.677). */
+    if (!stitch_given) o.link.stitch_points = 0;
   } else if (o.motion == MOTION_FREE && o.smooth.model == ELFM_MODEL_AUTO) {
     o.smooth.model = ELFM_MODEL_SPLINE;
   }

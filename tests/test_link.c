@@ -309,6 +309,96 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5g. Stitching: bead A circles at 3.5 um/ms (radius 20 um) and is dark
+   * for 25 frames, during which it runs half an orbit ahead of any
+   * extrapolation (a flow bead speeding up unseen): it comes back 40 um from
+   * the prediction, beyond the rescue gate, but onto its own earlier path.
+   * Bead B circles 60 um away all along. Without stitching A comes back as
+   * a new track; with it, one track of A's 75 points and B untouched. Then
+   * a bead on a straight line at 2.5 um/ms is lost, and a second bead
+   * starts on its path 75 um behind 5 ms later (out of reach at 1.5 x 2.5
+   * um/ms): never stitched. */
+  for (int stitch = 0; stitch < 2; stitch++) {
+    elfm_link_options os = o;
+    os.stitch_points = stitch ? 5 : 0;
+    elfm_linker *l = elfm_link_create(&os, &err);
+    CHECK(l != NULL);
+    const double w = 3.5 / 20;  /* rad/ms */
+    for (int f = 0; f < 100; f++) {
+      elfm_detection d[2];
+      int n = 0;
+      double pa = w * f + (f >= 65 ? M_PI : 0), pb = -w * f;
+      if (f < 40 || f >= 65) d[n++] = mk(20 * cos(pa) + 0.1 * (urand() - 0.5), 20 * sin(pa), 5);
+      d[n++] = mk(60 + 20 * cos(pb), 20 * sin(pb) + 0.1 * (urand() - 0.5), 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0, n75 = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      if (t->n == 75 && t->pts[0].x_um < 30) n75++;
+      if (t->pts[0].x_um > 30) CHECK_EQ_INT((int)t->n, 100);  /* B */
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == (stitch ? 2 : 3) && n75 == stitch, "stitch %d: %d tracks, %d of A's 75", stitch,
+              n, n75);
+    elfm_link_free(l);
+    /* out of reach */
+    l = elfm_link_create(&os, &err);
+    for (int f = 0; f < 60; f++) {
+      elfm_detection d;
+      if (f < 30) d = mk(0, 2.5 * f, 5);
+      else if (f < 35) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+      else d = mk(0, 2.5 * (f - 35), 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    n = 0;
+    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+    CHECK_MSG(n == 2, "stitch %d, trailing bead out of reach: %d tracks", stitch, n);
+    elfm_link_free(l);
+  }
+
+  /* 5h. Swap review: P moves along +x at 3 um/ms, Q at 20 degrees to it at
+   * the same speed; they meet at frame 30, and while closer than 5 um the
+   * detector sees one detection between them (frames 29-31). The linker
+   * without the review lets P's track coast and close its gap on Q: the
+   * track that started on P ends on Q. With it the junction is revisited 6
+   * frames later and the tails are exchanged: each track ends on its own
+   * object. */
+  for (int review = 0; review < 2; review++) {
+    elfm_link_options ow = o;
+    ow.swap_points = review ? 6 : 0;
+    elfm_linker *l = elfm_link_create(&ow, &err);
+    CHECK(l != NULL);
+    const double th = 20 * M_PI / 180;
+    for (int f = 0; f < 60; f++) {
+      double t = f - 30, px = 3 * t, py = 0, qx = 3 * t * cos(th), qy = 3 * t * sin(th);
+      elfm_detection d[2];
+      int n = 0;
+      if (hypot(px - qx, py - qy) < 5) d[n++] = mk(0.5 * (px + qx), 0.5 * (py + qy), 5);
+      else {
+        d[n++] = mk(px, py, 5);
+        d[n++] = mk(qx, qy, 5);
+      }
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0, own = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      /* started on P (y = 0) or on Q (y < 0): does it end on the same one? */
+      int start_p = fabs(t->pts[0].y_um) < 1, end_p = fabs(t->pts[t->n - 1].y_um) < 1;
+      own += start_p == end_p;
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == 2 && own == (review ? 2 : 0), "swap review %d: %d tracks, %d on their own object",
+              review, n, own);
+    elfm_link_free(l);
+  }
+
   /* 5d. Hysteresis: a weak detection continues a track but never starts
    * one. A bead seen strong for 10 frames, then weak for 20: one track of
    * 30 points. A weak-only object: no track, id -3. */
@@ -425,6 +515,16 @@ int main(void)
     elfm_link_free(l);
     elfm_link_options bad = o;
     bad.gate_um = 0;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.stitch_points = 3;  /* a young track needs 4 points for its path */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 3;    /* a tail needs 4 points for its fit */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 6;
+    bad.swap_ratio = 1.5;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
     bad.history = 1;

@@ -25,6 +25,10 @@
  *     than max_gap_frames consecutive frames ends. Ended tracks with at
  *     least min_points real points become "finished" and can be taken with
  *     elfm_link_pop_finished as soon as they end (shorter ones are dropped).
+ *  5. stitching (optional): a track reaching stitch_points points continues a
+ *     dark live track whose recent path it follows;
+ *  6. swap review (optional): a gap closing that does not fit is revisited
+ *     a few frames later and the tails of two tracks exchanged when that fits.
  * Memory: live tracks plus finished tracks not yet popped; per-frame
  * scratch is reused (it grows only when a frame has more objects than any
  * earlier one).
@@ -93,6 +97,21 @@ typedef struct elfm_link_options {
    * also sit where a track expects one. 0 = off (weak detections use the
    * track's gate, the rescue gate too). */
   double weak_gate_um;
+  /* Stitching (step 5): a track reaching stitch_points real points (>= 4)
+   * may be joined to a live track dark since before its first point, when
+   * its points lie within stitch_gate_um (root mean square, anisotropic)
+   * of that track's last stitch_history real points. 0 = off. */
+  int stitch_points;
+  double stitch_gate_um;  /* default 8 um */
+  int stitch_history;     /* default 100 points */
+  /* Swap review (step 6): a gap closing whose junction does not fit (the
+   * track's head and new tail, extrapolated to the middle of the gap, more
+   * than gate_um apart) is revisited once the tail has swap_points real
+   * points (>= 4); if another track seen during the gap fits better with
+   * the tails exchanged (summed junction distance swap_ratio times smaller,
+   * 0 < swap_ratio <= 1), they are exchanged. 0 = off (default; track: 6). */
+  int swap_points;
+  double swap_ratio;      /* default 0.5 */
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);

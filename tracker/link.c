@@ -20,6 +20,8 @@ typedef struct live_track {
   double pred[3];           /* prediction for the current frame */
   double gate_um;           /* gate for the current frame */
   int missed;               /* frames missed before the current frame */
+  size_t tail0;             /* index of the point that closed the last gap (0 none) */
+  int review;               /* that gap closing is still to be reviewed (step 6) */
 } live_track;
 
 typedef struct link_cand {
@@ -73,6 +75,11 @@ void elfm_link_options_default(elfm_link_options *o)
   o->rescue_gate_factor = 2.5;
   o->weak_gate_um = 0;
   o->trail_us = 2000;
+  o->stitch_points = 0;
+  o->stitch_gate_um = 8.0;
+  o->stitch_history = 100;
+  o->swap_points = 0;
+  o->swap_ratio = 0.5;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
@@ -84,7 +91,10 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
       !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
       !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
-      !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) ||
+      !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) || o->stitch_points < 0 ||
+      (o->stitch_points > 0 && o->stitch_points < 4) || !(o->stitch_gate_um >= 0) ||
+      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 || o->swap_points < 0 ||
+      (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
@@ -204,6 +214,46 @@ static int uf_find(int *uf, int a)
   return a;
 }
 
+/* Least-squares p = c0 + c1 t + c2 t^2 over pts[k0 .. k1) (t in ms from
+ * tr): position, velocity and acceleration at tr. 0 when fewer than 3
+ * distinct times (outputs untouched). */
+static int fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
+                    double vel[3], double acc[3])
+{
+  /* normal equations of p = c0 + c1 t + c2 t^2 over the window */
+  double S[5] = {0, 0, 0, 0, 0}, R[3][3] = {{0}};
+  for (size_t k = k0; k < k1; k++) {
+    double tm = (double)(pts[k].t_us - tr) * 1e-3, tp = 1;
+    const double p[3] = {pts[k].x_um, pts[k].y_um, pts[k].z_um};
+    for (int e = 0; e < 5; e++, tp *= tm) S[e] += tp;
+    for (int a = 0; a < 3; a++) {
+      R[a][0] += p[a];
+      R[a][1] += tm * p[a];
+      R[a][2] += tm * tm * p[a];
+    }
+  }
+  double M[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
+  double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
+               M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
+               M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+  if (!(fabs(det) > 1e-9)) return 0;  /* fewer than 3 distinct times */
+  for (int a = 0; a < 3; a++) {
+    double c[3];
+    for (int j = 0; j < 3; j++) {  /* Cramer: replace column j by R[a] */
+      double A[3][3];
+      memcpy(A, M, sizeof A);
+      for (int r = 0; r < 3; r++) A[r][j] = R[a][r];
+      c[j] = (A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+              A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+              A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0])) / det;
+    }
+    pos[a] = c[0];
+    vel[a] = c[1];
+    acc[a] = 2 * c[2];
+  }
+  return 1;
+}
+
 /* Least-squares fits over the recent real points, times relative to the
  * last point in ms (never float absolute times): a constant velocity over
  * `history` points and a constant acceleration over `short_history`. */
@@ -234,38 +284,7 @@ static void fit_velocity(live_track *lt, int history, int short_history, const d
   }
   k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
   if (n - k0 < 4) return;
-  /* normal equations of p = c0 + c1 t + c2 t^2 over the short window */
-  double S[5] = {0, 0, 0, 0, 0}, R[3][3] = {{0}};
-  for (size_t k = k0; k < n; k++) {
-    double tm = (double)(t->pts[k].t_us - tr) * 1e-3, tp = 1;
-    const double p[3] = {t->pts[k].x_um, t->pts[k].y_um, t->pts[k].z_um};
-    for (int e = 0; e < 5; e++, tp *= tm) S[e] += tp;
-    for (int a = 0; a < 3; a++) {
-      R[a][0] += p[a];
-      R[a][1] += tm * p[a];
-      R[a][2] += tm * tm * p[a];
-    }
-  }
-  double M[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
-  double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
-               M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
-               M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
-  if (!(fabs(det) > 1e-9)) return;  /* fewer than 3 distinct times */
-  for (int a = 0; a < 3; a++) {
-    double c[3];
-    for (int j = 0; j < 3; j++) {  /* Cramer: replace column j by R[a] */
-      double A[3][3];
-      memcpy(A, M, sizeof A);
-      for (int r = 0; r < 3; r++) A[r][j] = R[a][r];
-      c[j] = (A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-              A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-              A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0])) / det;
-    }
-    lt->fit_pos[a] = c[0];
-    lt->fit_vel[a] = c[1];
-    lt->fit_acc[a] = 2 * c[2];
-  }
-  lt->has_short = 1;
+  lt->has_short = fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
 }
 
 /* Position after dt_ms of a constant-rate turn (the coordinated-turn
@@ -300,6 +319,245 @@ static void predict_turn(const double p0[3], const double v[3], const double acc
 static const double *current_velocity(const live_track *lt)
 {
   return lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
+}
+
+/* Mean squared anisotropic distance from each point of y to the nearest of
+ * the last `history` real points of d (its recent path). */
+static double path_distance2(const elfm_track *y, const elfm_track *d, size_t history, double kz)
+{
+  size_t h0 = d->n > history ? d->n - history : 0;
+  double sum = 0;
+  for (size_t j = 0; j < y->n; j++) {
+    double best = INFINITY;
+    for (size_t k = h0; k < d->n; k++) {
+      double ex = y->pts[j].x_um - d->pts[k].x_um, ey = y->pts[j].y_um - d->pts[k].y_um,
+             ez = (y->pts[j].z_um - d->pts[k].z_um) / kz;
+      double e2 = ex * ex + ey * ey + ez * ez;
+      if (e2 < best) best = e2;
+    }
+    sum += best;
+  }
+  return y->n ? sum / (double)y->n : INFINITY;
+}
+
+/* 5. Stitching: a track that has just reached stitch_points real points
+ * (young) may be the continuation of a live track dark since before the
+ * young one's first point (dormant). The forward gap closing cannot find
+ * it after a long gap on a curved path: flow beads circle (radius 8-20 um,
+ * ~17 degrees per ms), and an extrapolation over 10-40 frames missed the
+ * true continuation by 20-140 um, no closer than other beads' tracks. But
+ * such paths recirculate (a droplet's streaming; a blinking bead stays
+ * put), so the object comes back onto its own earlier path: the young
+ * track's points are compared with the dormant one's recent path (mean
+ * squared distance to its nearest point). Measured on flow 100 ms seeds 1
+ * and 2 over all dormant/young pairs: the same bead 1.0-7.0 um (9 of 14
+ * such pairs; the others 11-20 um), different beads >= 10 um except one
+ * track that had already swapped. Pairs within stitch_gate_um are assigned
+ * optimally; the young track's points are appended to the dormant one,
+ * which continues with the young one's state (its own fits). */
+static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const size_t nl = l->n_live;
+  elfm_status st = reserve(l, nl, nd, err);
+  if (st != ELFM_OK) return st;
+  int nr = 0, nc = 0;
+  for (size_t i = 0; i < nl; i++) {
+    const live_track *lt = &l->live[i];
+    if (lt->last_frame < frame && lt->t->n >= (size_t)o->stitch_points) l->rows[nr++] = (int)i;
+    else if (lt->last_frame == frame && lt->t->n == (size_t)o->stitch_points) l->cols[nc++] = (int)i;
+  }
+  if (nr == 0 || nc == 0 || nr > 500 || nc > 500) return ELFM_OK;
+  size_t need = (size_t)nr * (size_t)nc;
+  if (need > l->cap_cost) {
+    size_t c = need + need / 2;
+    if (!grow((void **)&l->cost, c, sizeof(double)))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    l->cap_cost = c;
+  }
+  const double g2 = o->stitch_gate_um * o->stitch_gate_um;
+  int any = 0;
+  for (int c = 0; c < nc; c++) {
+    const live_track *y = &l->live[l->cols[c]];
+    for (int r = 0; r < nr; r++) {
+      const live_track *d = &l->live[l->rows[r]];
+      double *cost = &l->cost[(size_t)r * nc + c];
+      *cost = INFINITY;
+      int64_t gap = y->t->pts[0].frame - d->last_frame - 1;
+      if (gap < 0 || gap > o->max_gap_frames) continue;
+      /* Reachable: from the dormant end to the young start at no more than
+       * 1.5 x the faster one's speed. Without it a bead trailing another on
+       * the same line (stage scene) lies on the other's path, and stitching
+       * them ran tracks backwards (stage alpha 0.717 -> 0.075). */
+      const double *vd = current_velocity(d), *vy = current_velocity(y);
+      double sd = sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]),
+             sy = sqrt(vy[0] * vy[0] + vy[1] * vy[1] + vy[2] * vy[2]);
+      double reach = o->stitch_gate_um + 1.5 * (sd > sy ? sd : sy) *
+                                             (double)(y->t->pts[0].t_us - d->last_t_us) * 1e-3;
+      double jx = y->t->pts[0].x_um - d->last[0], jy = y->t->pts[0].y_um - d->last[1],
+             jz = (y->t->pts[0].z_um - d->last[2]) / o->kz;
+      if (jx * jx + jy * jy + jz * jz > reach * reach) continue;
+      double h2 = path_distance2(y->t, d->t, (size_t)o->stitch_history, o->kz);
+      if (h2 < g2) {
+        *cost = h2 / g2;
+        any = 1;
+      }
+    }
+  }
+  if (!any) return ELFM_OK;
+  st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+  if (st != ELFM_OK) return st;
+  for (int r = 0; r < nr; r++) {
+    int c = l->row_to_col[r];
+    if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
+    live_track *d = &l->live[l->rows[r]], *y = &l->live[l->cols[c]];
+    for (size_t k = 0; k < y->t->n; k++) {
+      st = elfm_track_append(d->t, &y->t->pts[k], err);
+      if (st != ELFM_OK) return st;
+    }
+    /* this frame's detection now belongs to the dormant track */
+    for (size_t j = 0; j < nd; j++)
+      if (l->det_id[j] == y->t->id) l->det_id[j] = d->t->id;
+    elfm_track *keep = d->t;
+    elfm_track_free(y->t);
+    *d = *y;      /* continue with the young track's state (its own fits) */
+    d->t = keep;
+    d->tail0 = 0; /* y's gap closing (if any) indexed y's points */
+    d->review = 0;
+    y->t = NULL;  /* removed below, keeping the order */
+  }
+  size_t w = 0;
+  for (size_t i = 0; i < nl; i++)
+    if (l->live[i].t) l->live[w++] = l->live[i];
+  l->n_live = w;
+  return ELFM_OK;
+}
+
+/* Squared anisotropic distance, at the middle of the gap, between the end
+ * state of pts[h0 .. h1) and the start state of pts[t0 .. t1) (quadratic
+ * fits, turning as in predict_track); INFINITY when either has < 4 points. */
+/* Squared anisotropic distance, at the middle of the gap, between the end
+ * state of hp[0 .. hn) and the start state of tp[0 .. tn) (quadratic fits
+ * over up to short_history points, turning as in predict_track); INFINITY
+ * when either has fewer than 4 points. */
+static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp, size_t tn,
+                             int short_history, double kz)
+{
+  size_t sh = (size_t)short_history;
+  size_t hk = hn < sh ? hn : sh, tk = tn < sh ? tn : sh;
+  if (hk < 4 || tk < 4) return INFINITY;
+  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
+  double hpos[3], hvel[3], hacc[3], tpos[3], tvel[3], tacc[3], a[3], b[3];
+  if (!fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) || !fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
+    return INFINITY;
+  int64_t tm = th + (tt - th) / 2;
+  predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
+  predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/* Replace track a's points from a_t0 on by b's from b_t0 on and vice versa. */
+static elfm_status exchange_tails(elfm_track *a, size_t a_t0, elfm_track *b, size_t b_t0,
+                                  elfm_error *err)
+{
+  size_t an = a_t0 + (b->n - b_t0), bn = b_t0 + (a->n - a_t0);
+  elfm_detection *pa = malloc((an ? an : 1) * sizeof *pa), *pb = malloc((bn ? bn : 1) * sizeof *pb);
+  if (!pa || !pb) {
+    free(pa);
+    free(pb);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+  }
+  memcpy(pa, a->pts, a_t0 * sizeof *pa);
+  memcpy(pa + a_t0, b->pts + b_t0, (b->n - b_t0) * sizeof *pa);
+  memcpy(pb, b->pts, b_t0 * sizeof *pb);
+  memcpy(pb + b_t0, a->pts + a_t0, (a->n - a_t0) * sizeof *pb);
+  free(a->pts);
+  free(b->pts);
+  a->pts = pa;
+  a->n = a->cap = an;
+  b->pts = pb;
+  b->n = b->cap = bn;
+  return ELFM_OK;
+}
+
+static void refresh_state(const elfm_link_options *o, live_track *lt)
+{
+  const elfm_detection *p = &lt->t->pts[lt->t->n - 1];
+  lt->last_frame = p->frame;
+  lt->last_t_us = p->t_us;
+  lt->last[0] = p->x_um;
+  lt->last[1] = p->y_um;
+  lt->last[2] = p->z_um;
+  fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
+}
+
+/* 6. Swap review, a deferred decision at close passes. Two flow beads
+ * passing within a few um give one detection for a few frames; one track
+ * coasts, the other takes the shared detections, and when they part the
+ * coasting track may close its gap on the other bead (flow seed 2: beads 5
+ * and 16, frames 45-52; seed 7: beads 2 and 15). A frame later nothing
+ * tells them apart, but once the tails have swap_points points their
+ * motion does. So a track B that closed a gap (head up to frame hB, tail
+ * from fB) is revisited once its tail has swap_points points, if its own
+ * junction does not fit (head and tail extrapolated to the middle of the
+ * gap miss each other by more than gate_um). Every other track A with a
+ * point inside the gap (hB < frame <= fB) may have taken B's object there:
+ * for each such split of A, B's head joined to A's tail and A's head to
+ * B's tail are compared with the junctions as they are; when the best
+ * exchange fits swap_ratio times better (root of the summed squared
+ * distances), the tails are exchanged. Each gap closing is reviewed once. */
+static elfm_status review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const size_t K = (size_t)o->swap_points;
+  const int sh = o->short_history;
+  const double kz = o->kz;
+  for (size_t b = 0; b < l->n_live; b++) {
+    live_track *B = &l->live[b];
+    if (!B->review || B->t->n - B->tail0 < K) continue;
+    const elfm_detection *bp = B->t->pts;
+    const size_t bt = B->tail0, bn = B->t->n;
+    const int64_t hB = bp[bt - 1].frame, fB = bp[bt].frame;
+    const double jb = junction_cost2(bp, bt, bp + bt, bn - bt, sh, kz);
+    double best_ratio = o->swap_ratio * o->swap_ratio;
+    size_t best_a = 0, best_s = 0;
+    int found = 0;
+    for (size_t a = 0; a < l->n_live; a++) {
+      if (a == b) continue;
+      const elfm_detection *ap = l->live[a].t->pts;
+      const size_t an = l->live[a].t->n;
+      for (size_t s = an; s-- > 4;) {
+        if (ap[s].frame <= hB) break;
+        if (ap[s].frame > fB || an - s < K) continue;
+        double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, kz);
+        double alt = junction_cost2(bp, bt, ap + s, an - s, sh, kz) +
+                     junction_cost2(ap, s, bp + bt, bn - bt, sh, kz);
+        if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur) {
+          best_ratio = alt / cur;
+          best_a = a;
+          best_s = s;
+          found = 1;
+        }
+      }
+    }
+    if (found) {
+      live_track *A = &l->live[best_a];
+      elfm_status st = exchange_tails(B->t, bt, A->t, best_s, err);
+      if (st != ELFM_OK) return st;
+      for (size_t j = 0; j < nd; j++) {
+        if (l->det_id[j] == A->t->id) l->det_id[j] = B->t->id;
+        else if (l->det_id[j] == B->t->id) l->det_id[j] = A->t->id;
+      }
+      refresh_state(o, A);
+      refresh_state(o, B);
+      A->tail0 = bt;
+      A->review = 0;
+      B->tail0 = best_s;
+    }
+    B->review = 0;
+  }
+  return ELFM_OK;
 }
 
 static elfm_status end_track(elfm_linker *l, elfm_track *t, elfm_error *err)
@@ -687,6 +945,10 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     if (j < 0) continue;
     st = attach(l, &l->live[i], &det[j], err);
     if (st != ELFM_OK) return st;
+    if (l->live[i].missed > 0 && l->live[i].t->n >= 5) {
+      l->live[i].tail0 = l->live[i].t->n - 1;
+      l->live[i].review = 1;
+    }
     l->det_id[j] = l->live[i].t->id;
     const double *v = current_velocity(&l->live[i]);
     l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
@@ -712,6 +974,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     l->det_id[j] = -1;
     l->det_speed[j] = NAN;
   }
+  if (o->stitch_points > 0) {
+    st = stitch(l, frame, nd, err);
+    if (st != ELFM_OK) return st;
+  }
+  if (o->swap_points > 0) return review_swaps(l, nd, err);
   return ELFM_OK;
 }
 
