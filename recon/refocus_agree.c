@@ -290,12 +290,15 @@ typedef struct agree_rowv {
 } agree_rowv;
 
 __attribute__((target("avx2"), always_inline))
-static inline __m256i agree_window(const agree_rowv *rv, int j)
+static inline __m256i agree_window(const agree_rowv *rv, int j, int narrow)
 {
   const int a = rv->list[j];
   const uint8_t *src = rv->sup8 + rv->at[a];
   const __m256i lo = _mm256_loadu_si256((const __m256i *)(const void *)src);
-  const __m256i hi = _mm256_loadu_si256((const __m256i *)(const void *)(src + 8));
+  /* lane i takes its top bits from lane i + 1; with W <= 192 the lanes
+   * that matter (0 .. 2) have it in the same load */
+  const __m256i hi = narrow ? _mm256_permute4x64_epi64(lo, _MM_SHUFFLE(3, 3, 2, 1))
+                            : _mm256_loadu_si256((const __m256i *)(const void *)(src + 8));
   const __m256i w = _mm256_or_si256(_mm256_srl_epi64(lo, rv->shr[a]), _mm256_sll_epi64(hi, rv->shl[a]));
   return _mm256_and_si256(w, _mm256_load_si256((const __m256i *)(const void *)(rv->mask + (size_t)a * rv->ld)));
 }
@@ -307,13 +310,14 @@ static inline __m256i agree_window(const agree_rowv *rv, int j)
  * (storing them for the adders to load back cost more than the count:
  * bench_refocus flow at 21 Mev/s, 0.71 ms of CPU per volume for the
  * windows, stored, 0.27 ms for the adders). */
-__attribute__((target("avx2")))
-static __m256i count_ge_avx2(const agree_rowv *rv, int n, const uint64_t *nb, size_t nw)
+__attribute__((target("avx2"), always_inline))
+static inline __m256i count_ge_avx2(const agree_rowv *rv, int n, const uint64_t *nb, size_t nw,
+                                    int narrow)
 {
   __m256i c[6];
   for (int b = 0; b < 6; b++) c[b] = _mm256_setzero_si256();
   int j = 0;
-#define W_(i) agree_window(rv, j + (i))
+#define W_(i) agree_window(rv, j + (i), narrow)
   for (; j + 8 <= n; j += 8) {
     __m256i a2, b2, a4, b4, a8, t;
     CSA(a2, c[0], c[0], W_(0), W_(1));
@@ -371,11 +375,11 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
   agree_view av[32];
   const int na = agree_views(p, ws, k, av);
   if (!na) return;
-  uint64_t *win = ws->agree_win, *cand = ws->agree_candw;
+  uint64_t *cand = ws->agree_candw;
   const uint64_t *valid = ws->agree_mask + 32 * ld; /* X < W */
   int list[32];
   ptrdiff_t at[32], at0[32], step[32];
-  int ident[32], y_all0 = 0, y_all1 = H;
+  int n = 0, next_change = 0; /* the list holds for rows up to next_change */
   __m128i shr[32], shl[32];
   for (int a = 0; a < na; a++) {
     const int sh = (int)(av[a].bit0 & 7); /* the same on every row: strides are whole bytes */
@@ -384,9 +388,6 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
     /* byte of row Y's window: (bit0 + Y stride) / 8, strides whole bytes */
     at0[a] = (av[a].bit0 - sh) / 8;
     step[a] = av[a].stride / 8;
-    ident[a] = a;
-    if (av[a].y0 > y_all0) y_all0 = av[a].y0;
-    if (av[a].y1 < y_all1) y_all1 = av[a].y1;
   }
   const uint8_t *sup8 = (const uint8_t *)(const void *)ws->sup;
   agree_rowv rv = {sup8, at, list, shr, shl, ws->agree_mask, ld};
@@ -404,15 +405,17 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       _mm_prefetch((const char *)(p->count + r * (size_t)W + (size_t)X), _MM_HINT_T0);
     }
     for (int a = 0; a < na; a++) at[a] = at0[a] + (ptrdiff_t)Y * step[a];
-    /* the views sampling the row with signal near it: on most rows all of
-     * them (building the list view by view was 18 % of the time) */
-    int n = na;
-    rv.list = ident;
-    if (Y < y_all0 || Y >= y_all1) {
+    /* the views sampling the row with signal near it, rebuilt only where
+     * a view's rows begin or end (building it on every row was 18 % of
+     * the time) */
+    if (Y >= next_change) {
       n = 0;
-      for (int a = 0; a < na; a++)
+      next_change = H;
+      for (int a = 0; a < na; a++) {
         if (Y >= av[a].y0 && Y < av[a].y1) list[n++] = a;
-      rv.list = list;
+        if (av[a].y0 > Y && av[a].y0 < next_change) next_change = av[a].y0;
+        if (av[a].y1 > Y && av[a].y1 < next_change) next_change = av[a].y1;
+      }
     }
     if (n < T) continue;
     const uint64_t *nb = p->need_bits + r * 6 * p->need_words;
@@ -423,23 +426,15 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
     for (size_t q = 0; q < nch; q++) {
       rv.sup8 = sup8 + 32 * q;
       rv.mask = ws->agree_mask + 4 * q;
-      const __m256i ge = _mm256_and_si256(count_ge_avx2(&rv, n, nb + 4 * q, p->need_words),
-                                          _mm256_load_si256((const __m256i *)(const void *)(valid + 4 * q)));
+      const __m256i ge = _mm256_and_si256(
+          W <= 192 ? count_ge_avx2(&rv, n, nb + 4 * q, p->need_words, 1)
+                   : count_ge_avx2(&rv, n, nb + 4 * q, p->need_words, 0),
+          _mm256_load_si256((const __m256i *)(const void *)(valid + 4 * q)));
       _mm256_storeu_si256((__m256i *)(void *)(cand + 4 * q), ge);
       any = _mm256_or_si256(any, ge);
     }
     cand[4 * nch] = 0;
     if (_mm256_testz_si256(any, any)) continue;
-    /* the windows again, kept for the gather (a quarter of the rows) */
-    for (int j = 0; j < n; j++) {
-      uint64_t *o = win + (size_t)j * ld;
-      for (size_t q = 0; q < nch; q++) {
-        rv.sup8 = sup8 + 32 * q;
-        rv.mask = ws->agree_mask + 4 * q;
-        _mm256_store_si256((__m256i *)(void *)(o + 4 * q), agree_window(&rv, j));
-      }
-      o[4 * nch] = 0;
-    }
     const uint8_t *need = p->need + r * (size_t)W;
     const uint8_t *count = p->count + r * (size_t)W;
     float *out = vol->data + r * (size_t)W;
@@ -452,14 +447,24 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       if (i == 4 * nch) break;
       const int X0 = 64 * (int)i + __builtin_ctzll(cand[i]);
       const unsigned cb = bits8(cand, X0);
-      /* the views with support under X0 .. X0 + 7, in view order */
+      /* the views with support under X0 .. X0 + 7, in view order: 8 bits
+       * of each map row (storing the row's windows for this cost more) */
       uint32_t vm = 0;
-      for (int j = 0; j < n; j++) vm |= (uint32_t)(bits8(win + (size_t)j * ld, X0) != 0) << j;
+      for (int j = 0; j < n; j++) {
+        const agree_view *a = &av[list[j]];
+        const size_t b = (size_t)(at[list[j]] * 8 + (av[a - av].bit0 & 7) + X0);
+        uint16_t m16;
+        memcpy(&m16, sup8 + (b >> 3), sizeof m16);
+        unsigned m = (unsigned)(m16 >> (b & 7)) & 0xFFu;
+        if (a->xlo > X0 || X0 + 8 > a->xhi) /* lanes the view samples only */
+          m &= (0xFFu << (a->xlo > X0 ? a->xlo - X0 : 0)) & (0xFFu >> (X0 + 8 > a->xhi ? X0 + 8 - a->xhi : 0));
+        vm |= (uint32_t)(m != 0) << j;
+      }
       const __m256i xv = _mm256_add_epi32(_mm256_set1_epi32(X0), lane);
       __m256 sum = _mm256_setzero_ps();
       __m256i seen = _mm256_setzero_si256();
       for (; vm; vm &= vm - 1) {
-        const agree_view *a = &av[rv.list[__builtin_ctz(vm)]];
+        const agree_view *a = &av[list[__builtin_ctz(vm)]];
         const float *t0 = frame->data + (row0 + a->tap + X0), *t1 = t0 + SW;
         __m256 a00, a01, a10, a11;
         if (a->xlo <= X0 && X0 + 8 <= a->xhi) { /* all lanes sampled: the usual case */
