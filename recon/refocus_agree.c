@@ -116,6 +116,7 @@ static int agree_views(const elfm_refocus_plan *p, elfm_refocus_workspace *ws, i
 {
   const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
   const size_t ld = ws->agree_win_ld;
+  const size_t nmw = 4 * (((size_t)p->w + 255) / 256); /* words of a window */
   int na = 0;
   for (int v = 0; v < p->nv; v++) {
     const elfm_refocus_shift *s = sk + v;
@@ -142,7 +143,7 @@ static int agree_views(const elfm_refocus_plan *p, elfm_refocus_workspace *ws, i
     a->w[2] = (1.0f - s->fx) * s->fy;
     a->w[3] = s->fx * s->fy;
     uint64_t *m = ws->agree_mask + (size_t)na * ld;
-    for (size_t i = 0; i < ld; i++) m[i] = range_word(s->xlo, s->xhi, 64 * (int)i);
+    for (size_t i = 0; i < nmw; i++) m[i] = range_word(s->xlo, s->xhi, 64 * (int)i);
     na++;
   }
   return na;
@@ -378,15 +379,21 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
   uint64_t *cand = ws->agree_candw;
   const uint64_t *valid = ws->agree_mask + 32 * ld; /* X < W */
   int list[32];
-  ptrdiff_t at[32], at0[32], step[32];
+  ptrdiff_t at[32], step[32];
   int n = 0, next_change = 0; /* the list holds for rows up to next_change */
+  /* for the views under a candidate group, 8 list entries at a time: the
+   * byte of the window (per row), the bit in it and the voxels sampled
+   * (per list); entries n .. 31 read byte 0 */
+  int32_t l_at[32], l_sh[32], l_xlo[32], l_xhi[32];
+  const int vm_simd = ws->sup_bytes < (size_t)INT32_MAX;
   __m128i shr[32], shl[32];
   for (int a = 0; a < na; a++) {
     const int sh = (int)(av[a].bit0 & 7); /* the same on every row: strides are whole bytes */
     shr[a] = _mm_cvtsi32_si128(sh);
     shl[a] = _mm_cvtsi32_si128(64 - sh);
-    /* byte of row Y's window: (bit0 + Y stride) / 8, strides whole bytes */
-    at0[a] = (av[a].bit0 - sh) / 8;
+    /* byte of row Y's window: (bit0 + Y stride) / 8, strides whole bytes;
+     * advanced row by row */
+    at[a] = (av[a].bit0 - sh) / 8;
     step[a] = av[a].stride / 8;
   }
   const uint8_t *sup8 = (const uint8_t *)(const void *)ws->sup;
@@ -394,6 +401,8 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i bitv = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
   for (int Y = 0; Y < H; Y++) {
+    if (Y)
+      for (int a = 0; a < na; a++) at[a] += step[a];
     const size_t r = (size_t)k * (size_t)H + (size_t)Y;
     const int T = p->need_row_min[r];
     if (T > p->nv) continue; /* 255: no voxel of the row is sampled */
@@ -404,7 +413,6 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       _mm_prefetch((const char *)(p->need + r * (size_t)W + (size_t)X), _MM_HINT_T0);
       _mm_prefetch((const char *)(p->count + r * (size_t)W + (size_t)X), _MM_HINT_T0);
     }
-    for (int a = 0; a < na; a++) at[a] = at0[a] + (ptrdiff_t)Y * step[a];
     /* the views sampling the row with signal near it, rebuilt only where
      * a view's rows begin or end (building it on every row was 18 % of
      * the time) */
@@ -412,10 +420,16 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       n = 0;
       next_change = H;
       for (int a = 0; a < na; a++) {
-        if (Y >= av[a].y0 && Y < av[a].y1) list[n++] = a;
+        if (Y >= av[a].y0 && Y < av[a].y1) {
+          l_sh[n] = (int32_t)(av[a].bit0 & 7);
+          l_xlo[n] = av[a].xlo;
+          l_xhi[n] = av[a].xhi;
+          list[n++] = a;
+        }
         if (av[a].y0 > Y && av[a].y0 < next_change) next_change = av[a].y0;
         if (av[a].y1 > Y && av[a].y1 < next_change) next_change = av[a].y1;
       }
+      for (int j = n; j < 32; j++) l_sh[j] = l_xlo[j] = l_xhi[j] = 0;
     }
     if (n < T) continue;
     const uint64_t *nb = p->need_bits + r * 6 * p->need_words;
@@ -440,6 +454,7 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
     float *out = vol->data + r * (size_t)W;
     /* pixel row0 + tap + X: the first tap of X, in the frame for X in [xlo, xhi) */
     const ptrdiff_t row0 = (ptrdiff_t)Y * (ptrdiff_t)SW;
+    for (int j = 0; j < 32; j++) l_at[j] = j < n ? (int32_t)at[list[j]] : 0;
     int lo = W, hi = 0;
     size_t i = 0;
     for (;;) {
@@ -448,8 +463,29 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       const int X0 = 64 * (int)i + __builtin_ctzll(cand[i]);
       const unsigned cb = bits8(cand, X0);
       /* the views with support under X0 .. X0 + 7, in view order: 8 bits
-       * of each map row (storing the row's windows for this cost more) */
+       * of each map row (storing the row's windows for this cost more),
+       * 8 views per gather (one by one it was ~12 % of agree_plane) */
       uint32_t vm = 0;
+      if (vm_simd) {
+        const __m256i x0v = _mm256_set1_epi32(X0), ff = _mm256_set1_epi32(0xFF);
+        const __m256i zero = _mm256_setzero_si256();
+        for (int j = 0; j < n; j += 8) {
+          const __m256i b = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_sh + j)), x0v);
+          const __m256i idx = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_at + j)),
+                                               _mm256_srli_epi32(b, 3));
+          const __m256i g = _mm256_i32gather_epi32((const int *)(const void *)sup8, idx, 1);
+          const __m256i bits = _mm256_srlv_epi32(g, _mm256_and_si256(b, _mm256_set1_epi32(7)));
+          const __m256i lo_sh = _mm256_max_epi32(
+              _mm256_sub_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_xlo + j)), x0v), zero);
+          const __m256i hi_sh = _mm256_max_epi32(
+              _mm256_sub_epi32(_mm256_add_epi32(x0v, _mm256_set1_epi32(8)),
+                               _mm256_loadu_si256((const __m256i *)(const void *)(l_xhi + j))), zero);
+          const __m256i m = _mm256_and_si256(_mm256_sllv_epi32(ff, lo_sh), _mm256_srlv_epi32(ff, hi_sh));
+          const __m256i z = _mm256_cmpeq_epi32(_mm256_and_si256(bits, m), zero);
+          vm |= (uint32_t)(~_mm256_movemask_ps(_mm256_castsi256_ps(z)) & 0xFF) << j;
+        }
+        if (n < 32) vm &= (1u << n) - 1u;
+      } else
       for (int j = 0; j < n; j++) {
         const agree_view *a = &av[list[j]];
         const size_t b = (size_t)(at[list[j]] * 8 + (av[a - av].bit0 & 7) + X0);
