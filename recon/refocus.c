@@ -276,8 +276,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
           keep >= 64 ? ~(uint64_t)0 : ((uint64_t)1 << keep) - 1;
     }
     if (sup_ok) {
-      ws->sup_bytes = ((bits + 256 * nch + 128) / 64 + 1) * sizeof *ws->sup;
-      ws->sup = calloc(ws->sup_bytes, 1);
+      ws->sup = calloc((bits + 256 * nch + 128) / 64 + 1, sizeof *ws->sup);
       sup_ok = ws->sup != NULL;
     }
   }

@@ -281,30 +281,30 @@ static void agree_plane_portable(const elfm_refocus_plan *p, const elfm_frame *f
     l = _mm256_xor_si256(u_, c);                                    \
   } while (0)
 
-/* A row's listed views, for the windows of one 256-voxel chunk: view
- * a = list[j]'s window is the 256 bits from bit sh[a] of the 40 bytes at
- * sup8 + at[a], masked to the voxels it samples (mask[a * ld]). */
+/* A row's listed views, for the windows of one 256-voxel chunk: entry j's
+ * window is the 256 bits from bit sh of the 40 bytes at sup8 + at[j],
+ * masked to the voxels the view samples (mask[j] + q4). Indexed by list
+ * entry, not by view: per view and row the window then costs ~14
+ * instructions with its adders, ~19 through the view index. */
 typedef struct agree_rowv {
   const uint8_t *sup8;
   const ptrdiff_t *at;
-  const int *list;
-  const __m128i *shr, *shl; /* [a]: sh and 64 - sh */
-  const uint64_t *mask;
-  size_t ld;
+  const __m128i *shr, *shl; /* sh and 64 - sh */
+  const uint64_t *const *mask;
+  size_t q4;
 } agree_rowv;
 
 __attribute__((target("avx2"), always_inline))
 static inline __m256i agree_window(const agree_rowv *rv, int j, int narrow)
 {
-  const int a = rv->list[j];
-  const uint8_t *src = rv->sup8 + rv->at[a];
+  const uint8_t *src = rv->sup8 + rv->at[j];
   const __m256i lo = _mm256_loadu_si256((const __m256i *)(const void *)src);
   /* lane i takes its top bits from lane i + 1; with W <= 192 the lanes
    * that matter (0 .. 2) have it in the same load */
   const __m256i hi = narrow ? _mm256_permute4x64_epi64(lo, _MM_SHUFFLE(3, 3, 2, 1))
                             : _mm256_loadu_si256((const __m256i *)(const void *)(src + 8));
-  const __m256i w = _mm256_or_si256(_mm256_srl_epi64(lo, rv->shr[a]), _mm256_sll_epi64(hi, rv->shl[a]));
-  return _mm256_and_si256(w, _mm256_load_si256((const __m256i *)(const void *)(rv->mask + (size_t)a * rv->ld)));
+  const __m256i w = _mm256_or_si256(_mm256_srl_epi64(lo, rv->shr[j]), _mm256_sll_epi64(hi, rv->shl[j]));
+  return _mm256_and_si256(w, _mm256_load_si256((const __m256i *)(const void *)(rv->mask[j] + rv->q4)));
 }
 
 /* Step 2 on one 256-voxel chunk of the row's n <= 32 views against the
@@ -382,31 +382,49 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
   if (!na) return;
   uint64_t *cand = ws->agree_candw;
   const uint64_t *valid = ws->agree_mask + 32 * ld; /* X < W */
+  /* the row's list of views: list[j] = a, in view order, with its window
+   * (byte at[j] of the maps, advanced row by row, shift counts, lane mask)
+   * and, for the views under a candidate group 8 entries at a time, the
+   * window byte (l_at, per row), the bit in it and the voxels sampled;
+   * entries n .. 31 read byte 0 */
   int list[32];
   ptrdiff_t at[32], step[32];
-  int n = 0, next_change = 0; /* the list holds for rows up to next_change */
-  /* for the views under a candidate group, 8 list entries at a time: the
-   * byte of the window (per row), the bit in it and the voxels sampled
-   * (per list); entries n .. 31 read byte 0 */
-  int32_t l_at[32], l_sh[32], l_xlo[32], l_xhi[32];
-  const int vm_simd = ws->sup_bytes < (size_t)INT32_MAX;
   __m128i shr[32], shl[32];
-  for (int a = 0; a < na; a++) {
-    const int sh = (int)(av[a].bit0 & 7); /* the same on every row: strides are whole bytes */
-    shr[a] = _mm_cvtsi32_si128(sh);
-    shl[a] = _mm_cvtsi32_si128(64 - sh);
-    /* byte of row Y's window: (bit0 + Y stride) / 8, strides whole bytes;
-     * advanced row by row */
-    at[a] = (av[a].bit0 - sh) / 8;
-    step[a] = av[a].stride / 8;
-  }
+  const uint64_t *mask[32];
+  int32_t l_at[32], l_sh[32], l_xlo[32], l_xhi[32];
+  int n = 0, next_change = 0; /* the list holds for rows up to next_change */
   const uint8_t *sup8 = (const uint8_t *)(const void *)ws->sup;
-  agree_rowv rv = {sup8, at, list, shr, shl, ws->agree_mask, ld};
+  agree_rowv rv = {sup8, at, shr, shl, mask, 0};
   const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
   const __m256i bitv = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
   for (int Y = 0; Y < H; Y++) {
-    if (Y)
-      for (int a = 0; a < na; a++) at[a] += step[a];
+    /* the views sampling the row with signal near it, rebuilt only where
+     * a view's rows begin or end (building it on every row was 18 % of
+     * the time) */
+    if (Y >= next_change) {
+      n = 0;
+      next_change = H;
+      for (int a = 0; a < na; a++) {
+        if (Y >= av[a].y0 && Y < av[a].y1) {
+          const int sh = (int)(av[a].bit0 & 7); /* the same on every row: strides are whole bytes */
+          /* byte of row Y's window: (bit0 + Y stride) / 8 */
+          step[n] = av[a].stride / 8;
+          at[n] = (av[a].bit0 - sh) / 8 + (ptrdiff_t)Y * step[n];
+          shr[n] = _mm_cvtsi32_si128(sh);
+          shl[n] = _mm_cvtsi32_si128(64 - sh);
+          mask[n] = ws->agree_mask + (size_t)a * ld;
+          l_sh[n] = sh;
+          l_xlo[n] = av[a].xlo;
+          l_xhi[n] = av[a].xhi;
+          list[n++] = a;
+        }
+        if (av[a].y0 > Y && av[a].y0 < next_change) next_change = av[a].y0;
+        if (av[a].y1 > Y && av[a].y1 < next_change) next_change = av[a].y1;
+      }
+      for (int j = n; j < 32; j++) l_sh[j] = l_xlo[j] = l_xhi[j] = 0;
+    } else {
+      for (int j = 0; j < n; j++) at[j] += step[j];
+    }
     const size_t r = (size_t)k * (size_t)H + (size_t)Y;
     const int T = p->need_row_min[r];
     if (T > p->nv) continue; /* 255: no voxel of the row is sampled */
@@ -417,24 +435,6 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       _mm_prefetch((const char *)(p->need + r * (size_t)W + (size_t)X), _MM_HINT_T0);
       _mm_prefetch((const char *)(p->count + r * (size_t)W + (size_t)X), _MM_HINT_T0);
     }
-    /* the views sampling the row with signal near it, rebuilt only where
-     * a view's rows begin or end (building it on every row was 18 % of
-     * the time) */
-    if (Y >= next_change) {
-      n = 0;
-      next_change = H;
-      for (int a = 0; a < na; a++) {
-        if (Y >= av[a].y0 && Y < av[a].y1) {
-          l_sh[n] = (int32_t)(av[a].bit0 & 7);
-          l_xlo[n] = av[a].xlo;
-          l_xhi[n] = av[a].xhi;
-          list[n++] = a;
-        }
-        if (av[a].y0 > Y && av[a].y0 < next_change) next_change = av[a].y0;
-        if (av[a].y1 > Y && av[a].y1 < next_change) next_change = av[a].y1;
-      }
-      for (int j = n; j < 32; j++) l_sh[j] = l_xlo[j] = l_xhi[j] = 0;
-    }
     if (n < T) continue;
     const uint64_t *nb = p->need_bits + r * 6 * p->need_words;
     /* candidates, X < W only (the windows run on past the row), kept in a
@@ -443,7 +443,7 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
     __m256i any = _mm256_setzero_si256();
     for (size_t q = 0; q < nch; q++) {
       rv.sup8 = sup8 + 32 * q;
-      rv.mask = ws->agree_mask + 4 * q;
+      rv.q4 = 4 * q;
       const __m256i ge = _mm256_and_si256(
           W <= 192 ? count_ge_avx2(&rv, n, nb + 4 * q, p->need_words, 1)
                    : count_ge_avx2(&rv, n, nb + 4 * q, p->need_words, 0),
@@ -458,7 +458,7 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
     float *out = vol->data + r * (size_t)W;
     /* pixel row0 + tap + X: the first tap of X, in the frame for X in [xlo, xhi) */
     const ptrdiff_t row0 = (ptrdiff_t)Y * (ptrdiff_t)SW;
-    for (int j = 0; j < 32; j++) l_at[j] = j < n ? (int32_t)at[list[j]] : 0;
+    for (int j = 0; j < 32; j++) l_at[j] = j < n ? (int32_t)at[j] : 0;
     int lo = W, hi = 0;
     size_t i = 0;
     for (;;) {
@@ -468,38 +468,28 @@ static void agree_plane_avx2(const elfm_refocus_plan *p, const elfm_frame *frame
       const unsigned cb = bits8(cand, X0);
       /* the views with support under X0 .. X0 + 7, in view order: 8 bits
        * of each map row (storing the row's windows for this cost more),
-       * 8 views per gather (one by one it was ~12 % of agree_plane) */
+       * 8 views per gather (one by one it was ~12 % of agree_plane); byte
+       * offsets fit int32: the maps are at most 32 views x (8192 + 2002)^2
+       * bits (plan limits), 415 MB */
       uint32_t vm = 0;
-      if (vm_simd) {
-        const __m256i x0v = _mm256_set1_epi32(X0), ff = _mm256_set1_epi32(0xFF);
-        const __m256i zero = _mm256_setzero_si256();
-        for (int j = 0; j < n; j += 8) {
-          const __m256i b = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_sh + j)), x0v);
-          const __m256i idx = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_at + j)),
-                                               _mm256_srli_epi32(b, 3));
-          const __m256i g = _mm256_i32gather_epi32((const int *)(const void *)sup8, idx, 1);
-          const __m256i bits = _mm256_srlv_epi32(g, _mm256_and_si256(b, _mm256_set1_epi32(7)));
-          const __m256i lo_sh = _mm256_max_epi32(
-              _mm256_sub_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_xlo + j)), x0v), zero);
-          const __m256i hi_sh = _mm256_max_epi32(
-              _mm256_sub_epi32(_mm256_add_epi32(x0v, _mm256_set1_epi32(8)),
-                               _mm256_loadu_si256((const __m256i *)(const void *)(l_xhi + j))), zero);
-          const __m256i m = _mm256_and_si256(_mm256_sllv_epi32(ff, lo_sh), _mm256_srlv_epi32(ff, hi_sh));
-          const __m256i z = _mm256_cmpeq_epi32(_mm256_and_si256(bits, m), zero);
-          vm |= (uint32_t)(~_mm256_movemask_ps(_mm256_castsi256_ps(z)) & 0xFF) << j;
-        }
-        if (n < 32) vm &= (1u << n) - 1u;
-      } else
-      for (int j = 0; j < n; j++) {
-        const agree_view *a = &av[list[j]];
-        const size_t b = (size_t)(at[list[j]] * 8 + (av[a - av].bit0 & 7) + X0);
-        uint16_t m16;
-        memcpy(&m16, sup8 + (b >> 3), sizeof m16);
-        unsigned m = (unsigned)(m16 >> (b & 7)) & 0xFFu;
-        if (a->xlo > X0 || X0 + 8 > a->xhi) /* lanes the view samples only */
-          m &= (0xFFu << (a->xlo > X0 ? a->xlo - X0 : 0)) & (0xFFu >> (X0 + 8 > a->xhi ? X0 + 8 - a->xhi : 0));
-        vm |= (uint32_t)(m != 0) << j;
+      const __m256i x0v = _mm256_set1_epi32(X0), ff = _mm256_set1_epi32(0xFF);
+      const __m256i zero = _mm256_setzero_si256();
+      for (int j = 0; j < n; j += 8) {
+        const __m256i b = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_sh + j)), x0v);
+        const __m256i idx = _mm256_add_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_at + j)),
+                                             _mm256_srli_epi32(b, 3));
+        const __m256i g = _mm256_i32gather_epi32((const int *)(const void *)sup8, idx, 1);
+        const __m256i bits = _mm256_srlv_epi32(g, _mm256_and_si256(b, _mm256_set1_epi32(7)));
+        const __m256i lo_sh = _mm256_max_epi32(
+            _mm256_sub_epi32(_mm256_loadu_si256((const __m256i *)(const void *)(l_xlo + j)), x0v), zero);
+        const __m256i hi_sh = _mm256_max_epi32(
+            _mm256_sub_epi32(_mm256_add_epi32(x0v, _mm256_set1_epi32(8)),
+                             _mm256_loadu_si256((const __m256i *)(const void *)(l_xhi + j))), zero);
+        const __m256i m = _mm256_and_si256(_mm256_sllv_epi32(ff, lo_sh), _mm256_srlv_epi32(ff, hi_sh));
+        const __m256i z = _mm256_cmpeq_epi32(_mm256_and_si256(bits, m), zero);
+        vm |= (uint32_t)(~_mm256_movemask_ps(_mm256_castsi256_ps(z)) & 0xFF) << j;
       }
+      if (n < 32) vm &= (1u << n) - 1u;
       const __m256i xv = _mm256_add_epi32(_mm256_set1_epi32(X0), lane);
       __m256 sum = _mm256_setzero_ps();
       __m256i seen = _mm256_setzero_si256();

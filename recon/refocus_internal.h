@@ -69,7 +69,6 @@ struct elfm_refocus_workspace {
    * and >= 256 ceil(W / 256) + 128 after the last one, which the windows
    * read across. All zero between calls (cleared at the end of each). */
   uint64_t *sup;
-  size_t sup_bytes;           /* its size */
   size_t *sup_bit;            /* [nv] */
   size_t *sup_stride_bits;    /* [nv] */
   int *sup_ylo, *sup_yhi;     /* [nv] box rows [lo, hi) touched this call */
