@@ -178,20 +178,41 @@ static inline uint64_t u64_or(uint64_t a, uint64_t b) { return a | b; }
 static inline uint64_t u64_andnot(uint64_t a, uint64_t b) { return ~a & b; }
 static inline uint64_t u64_xor(uint64_t a, uint64_t b) { return a ^ b; }
 
+/* carry-save adder on words: h:l = a + b + c */
+static inline void csa_u64(uint64_t *h, uint64_t *l, uint64_t a, uint64_t b, uint64_t c)
+{
+  const uint64_t u = a ^ b;
+  *h = (a & b) | (u & c);
+  *l = u ^ c;
+}
+
+/* w (weight 2^b0) into the counter planes c[b0 .. 5], no branch (a ripple
+ * that stops when the carry is 0 mispredicted: ~15 % of the portable path) */
+static inline void ripple_u64(uint64_t *c, int b0, uint64_t w)
+{
+  for (int b = b0; b < 6; b++) {
+    const uint64_t t = c[b] & w;
+    c[b] ^= w;
+    w = t;
+  }
+}
+
 /* Step 2 on one word of n <= 32 view windows (win[j * ld]) against the
- * need planes nb[b * nw]: a ripple counter per view (the portable path
- * favours plain code over speed). */
+ * need planes nb[b * nw]: the AVX2 path's adders on 64 voxels. */
 static uint64_t count_ge_u64(const uint64_t *win, size_t ld, int n, const uint64_t *nb, size_t nw)
 {
   uint64_t c[6] = {0, 0, 0, 0, 0, 0};
-  for (int j = 0; j < n; j++) {
-    uint64_t carry = win[(size_t)j * ld];
-    for (int b = 0; b < 6 && carry; b++) {
-      const uint64_t t = c[b] & carry;
-      c[b] ^= carry;
-      carry = t;
-    }
+  int j = 0;
+#define W_(i) win[(size_t)(j + (i)) * ld]
+  for (; j + 4 <= n; j += 4) {
+    uint64_t a2, b2, a4;
+    csa_u64(&a2, &c[0], c[0], W_(0), W_(1));
+    csa_u64(&b2, &c[0], c[0], W_(2), W_(3));
+    csa_u64(&a4, &c[1], c[1], a2, b2);
+    ripple_u64(c, 2, a4);
   }
+  for (; j < n; j++) ripple_u64(c, 0, W_(0));
+#undef W_
   uint64_t d[6], ge;
   for (int b = 0; b < 6; b++) d[b] = nb[(size_t)b * nw];
   AGREE_GE(c, d, ge, uint64_t, u64_and, u64_or, u64_andnot, u64_xor, 0, ~(uint64_t)0);
@@ -244,10 +265,12 @@ static void agree_plane_portable(const elfm_refocus_plan *p, const elfm_frame *f
         float sum = 0.0f;
         int seen = 0;
         /* views in view order; those without a support bit at X have an
-         * exactly-0 sample (and so do views not sampling X: their bit is 0) */
-        for (int j = 0; j < n; j++) {
-          if (!((win[(size_t)j * ld + i] >> (X & 63)) & 1)) continue;
-          const agree_view *a = &av[list[j]];
+         * exactly-0 sample (and so do views not sampling X: their bit is 0);
+         * a mask of them first (testing the bit in the loop mispredicted) */
+        uint32_t vm = 0;
+        for (int j = 0; j < n; j++) vm |= (uint32_t)((win[(size_t)j * ld + i] >> (X & 63)) & 1) << j;
+        for (; vm; vm &= vm - 1) {
+          const agree_view *a = &av[list[__builtin_ctz(vm)]];
           const elfm_refocus_shift *s = sk + a->v;
           const float *r0 = frame->data + (size_t)(Y + s->iy) * SW + (ptrdiff_t)(X + s->ix);
           const float *r1 = r0 + SW;
