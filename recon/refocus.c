@@ -32,6 +32,7 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->count);
   free(p->need);
   free(p->need_row_min);
+  free(p->need_bits);
   free(p);
 }
 
@@ -61,7 +62,8 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
                           o.threshold_value);
   if (c->n_views <= 0 || c->n_views > ELFM_MAX_VIEWS || c->n_views > 254)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "calibration has %d views", c->n_views);
-  /* The sparse path keeps one bit per view and voxel in a 32-bit mask. */
+  /* The sparse path keeps a row's views in 32-bit masks and counts them in
+   * 6 bit planes (refocus_agree.c). */
   if (o.agree_frac > 0.0 && c->n_views > 32)
     return elfm_error_set(err, ELFM_ERR_UNSUPPORTED, NULL, -1,
                           "the view-agreement rule handles up to 32 views (calibration has %d): "
@@ -90,14 +92,17 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   size_t nvox = (size_t)p->w * p->h * nz;
   p->box = calloc((size_t)p->nv, sizeof *p->box);
   p->shift = calloc((size_t)p->nv * nz, sizeof *p->shift);
-  /* + 32: the sparse path's AVX2 code reads a row's need and count in
-   * blocks of 32 bytes, the last one past the end of the row */
+  /* + 32: the sparse path's AVX2 code reads a row's need and count 8
+   * bytes at a time from any voxel on, up to 7 past the end of the row */
   p->count = calloc(nvox + 32, 1);
   if (o.agree_frac > 0.0) {
     p->need = calloc(nvox + 32, 1);
     p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
+    p->need_words = ((size_t)p->w + 63) / 64;
+    p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || (o.agree_frac > 0.0 && (!p->need || !p->need_row_min))) {
+  if (!p->box || !p->shift || !p->count ||
+      (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
   }
@@ -164,6 +169,13 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
         if (q && q < m) m = q;
       }
       p->need_row_min[r] = m;
+      uint64_t *nb = p->need_bits + r * 6 * p->need_words;
+      for (size_t X = 0; X < (size_t)p->w; X++) {
+        const size_t i = r * (size_t)p->w + X;
+        const unsigned q = p->count[i] ? p->need[i] : 63u; /* 63 > 32 views: never reached */
+        for (int b = 0; b < 6; b++)
+          nb[(size_t)b * p->need_words + X / 64] |= (uint64_t)((q >> b) & 1u) << (X % 64);
+      }
     }
   *out = p;
   return ELFM_OK;
@@ -218,9 +230,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   elfm_refocus_workspace *ws = calloc(1, sizeof *ws);
   if (!ws) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   ws->plan = p;
-  /* dense: a plane of counts; sparse agreement: two rows (counts, pass) */
-  /* + 32: the sparse path's block adds store whole 32-byte blocks */
-  ws->plane_cnt = calloc((size_t)p->w * (size_t)(p->h > 2 ? p->h : 2) + 32, 1);
+  /* dense: a plane of counts of agreeing views */
+  ws->plane_cnt = calloc((size_t)p->w * (size_t)p->h, 1);
   ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);
   ws->row_bits = calloc(((size_t)p->sw + 63) / 64, sizeof *ws->row_bits);
   ws->cap_sorted = 1u << 14;
@@ -236,31 +247,37 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
   int sup_ok = 1;
   if (p->need) {
-    size_t area = 0, rows = 0;
-    ws->sup_off = malloc((size_t)p->nv * sizeof *ws->sup_off);
-    ws->sup_row_off = malloc((size_t)p->nv * sizeof *ws->sup_row_off);
+    /* support bit maps (refocus_agree.c), packed: 25 views x 145 rows x
+     * 19 bytes = 69 kB at the paper's geometry, where byte maps with
+     * margins were 1.5 MB. Padding: a window starts up to W - 1 bits
+     * before its row and reads up to 256 ceil(W / 256) + 64 bits on */
+    const size_t nch = ((size_t)p->w + 255) / 256;
+    size_t bits = 64 * (((size_t)p->w + 63) / 64);
+    ws->agree_win_ld = 4 * nch + 4;
+    ws->sup_bit = malloc((size_t)p->nv * sizeof *ws->sup_bit);
+    ws->sup_stride_bits = malloc((size_t)p->nv * sizeof *ws->sup_stride_bits);
     ws->sup_ylo = malloc((size_t)p->nv * sizeof *ws->sup_ylo);
     ws->sup_yhi = malloc((size_t)p->nv * sizeof *ws->sup_yhi);
-    ws->agree_cand = malloc((size_t)p->w * sizeof *ws->agree_cand);
-    ws->agree_sum = malloc((size_t)p->w * sizeof *ws->agree_sum);
-    ws->agree_list = malloc((size_t)p->h * 32);
-    ws->agree_n = malloc((size_t)p->h * sizeof *ws->agree_n);
-    sup_ok = ws->sup_off && ws->sup_row_off && ws->sup_ylo && ws->sup_yhi && ws->agree_cand &&
-             ws->agree_sum && ws->agree_list && ws->agree_n;
+    ws->agree_win = aligned_alloc(32, 32 * ws->agree_win_ld * sizeof *ws->agree_win);
+    /* 32 views' lane masks, then the voxels X < W */
+    ws->agree_mask = aligned_alloc(32, 33 * ws->agree_win_ld * sizeof *ws->agree_mask);
+    ws->agree_candw = malloc(ws->agree_win_ld * sizeof *ws->agree_candw);
+    sup_ok = ws->sup_bit && ws->sup_stride_bits && ws->sup_ylo && ws->sup_yhi && ws->agree_win &&
+             ws->agree_mask && ws->agree_candw;
     for (int v = 0; sup_ok && v < p->nv; v++) {
-      const elfm_refocus_box *b = &p->box[v];
-      ws->sup_off[v] = area;
-      ws->sup_row_off[v] = rows;
+      ws->sup_bit[v] = bits;
+      ws->sup_stride_bits[v] = 8 * (((size_t)(p->box[v].x1 - p->box[v].x0) + 7) / 8);
       ws->sup_ylo[v] = ws->sup_yhi[v] = 0;
-      /* a zero margin of W columns on each side (refocus_sparse.c) */
-      area += ((size_t)(b->x1 - b->x0) + 2 * (size_t)p->w) * (size_t)(b->y1 - b->y0);
-      rows += (size_t)(b->y1 - b->y0);
+      bits += ws->sup_stride_bits[v] * (size_t)(p->box[v].y1 - p->box[v].y0);
+    }
+    for (size_t i = 0; sup_ok && i < ws->agree_win_ld; i++) {
+      const size_t keep = (size_t)p->w > 64 * i ? (size_t)p->w - 64 * i : 0;
+      ws->agree_mask[32 * ws->agree_win_ld + i] =
+          keep >= 64 ? ~(uint64_t)0 : ((uint64_t)1 << keep) - 1;
     }
     if (sup_ok) {
-      /* + 32: the block adds read up to 31 bytes past a map row's W voxels */
-      ws->sup = calloc(area + 32, 1);
-      ws->sup_row = calloc(rows + 1, 1);
-      sup_ok = ws->sup && ws->sup_row;
+      ws->sup = calloc((bits + 256 * nch + 128) / 64 + 1, sizeof *ws->sup);
+      sup_ok = ws->sup != NULL;
     }
   }
   if (!ws->plane_cnt || !ws->row_start || !ws->row_bits || !ws->sorted || !ws->runs || !ws->vals ||
@@ -285,15 +302,13 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->row_lo);
   free(ws->row_hi);
   free(ws->sup);
-  free(ws->sup_off);
-  free(ws->sup_row);
-  free(ws->sup_row_off);
+  free(ws->sup_bit);
+  free(ws->sup_stride_bits);
   free(ws->sup_ylo);
   free(ws->sup_yhi);
-  free(ws->agree_cand);
-  free(ws->agree_sum);
-  free(ws->agree_list);
-  free(ws->agree_n);
+  free(ws->agree_win);
+  free(ws->agree_mask);
+  free(ws->agree_candw);
   free(ws->row_dirty);
   free(ws->rows);
   free(ws->rows_old);

@@ -29,6 +29,11 @@ struct elfm_refocus_plan {
   float inv_table[256];       /* 1 / n, 0 for n = 0 */
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
   uint8_t *need_row_min;      /* [k][Y]: least non-zero `need` of the row (255: none) */
+  /* [k][Y][b][need_words]: bit b of each voxel's `need`, 63 where no view
+   * samples it (the sparse path's bit-sliced compare, refocus_agree.c);
+   * + 4 words of padding at the end; NULL if off */
+  uint64_t *need_bits;
+  size_t need_words;          /* ceil(W / 64) */
 };
 
 /* A run of consecutive non-zero pixels of one sensor row inside one view's
@@ -55,20 +60,26 @@ struct elfm_refocus_workspace {
   size_t n_runs, cap_runs;
   float *vals;
   size_t n_vals, cap_vals;
-  /* agreement on: per view, a byte map over its crop box with a zero margin
-   * of W columns on each side (row stride = box width + 2 W) that is 1
-   * where a voxel sampling that sensor position could see signal (either bilinear tap column or row is a listed pixel: the frame's
-   * support dilated by the 2 x 2 tap footprint), and a per-row "any" flag.
-   * All zero between calls (cleared at the end of each call). */
-  uint8_t *sup;               /* views' maps, view v at sup + sup_off[v] */
-  size_t *sup_off;            /* [nv] */
-  uint8_t *sup_row;           /* [sum of box heights] row has a 1 */
-  size_t *sup_row_off;        /* [nv] */
+  /* agreement on (refocus_agree.c): per view, a bit map over its crop box,
+   * bit c of box row y at bit sup_bit[v] + y sup_stride_bits[v] + c of
+   * sup, set where a voxel whose first tap is there could see signal
+   * (either tap column or row is a listed pixel: the frame's support
+   * dilated by the 2 x 2 tap footprint). Rows are packed (stride: the box
+   * width rounded up to bytes), with >= W zero bits before the first map
+   * and >= 256 ceil(W / 256) + 128 after the last one, which the windows
+   * read across. All zero between calls (cleared at the end of each). */
+  uint64_t *sup;
+  size_t *sup_bit;            /* [nv] */
+  size_t *sup_stride_bits;    /* [nv] */
   int *sup_ylo, *sup_yhi;     /* [nv] box rows [lo, hi) touched this call */
-  int32_t *agree_cand;        /* [W] one row's candidate voxels */
-  float *agree_sum;           /* [W] their sums */
-  uint8_t *agree_list;        /* [H][32] per volume row, the views with signal */
-  int *agree_n;               /* [H] their number */
+  uint64_t *agree_win;        /* [32][agree_win_ld] one row's view windows, 32-byte aligned */
+  size_t agree_win_ld;        /* 4 ceil(W / 256) + 4 words */
+  uint64_t *agree_mask;       /* [33][agree_win_ld] a plane's views' sampled voxels [xlo, xhi),
+                               * then the voxels X < W; 32-byte aligned */
+  uint64_t *agree_candw;      /* [agree_win_ld] one row's candidates, a bit per voxel */
+  /* tests only (through this header): 1 runs the portable agreement code
+   * even where AVX2 is available; the result is the same */
+  int agree_portable;
   uint8_t *row_dirty;         /* [nz*H] */
   int32_t *row_lo, *row_hi;   /* [nz*H] written columns [lo, hi) of a dirty row */
   uint32_t *rows;             /* dirty rows k*H + Y, in plane order */
@@ -86,6 +97,29 @@ void elfm_ghost_agree_row(const elfm_refocus_plan *p, int k, int Y, float *row,
  * whole volume when rows == NULL. */
 void elfm_ghost_threshold_apply(const elfm_refocus_plan *p, elfm_volume *vol,
                                 const uint32_t *rows, size_t n_rows);
+
+/* Remember that row r (k*H + Y) was written in columns [lo, hi). */
+static inline void elfm_refocus_mark_row(elfm_refocus_workspace *ws, uint32_t r, int lo, int hi)
+{
+  if (!ws->row_dirty[r]) {
+    ws->row_dirty[r] = 1;
+    ws->rows[ws->n_rows++] = r;
+    ws->row_lo[r] = lo;
+    ws->row_hi[r] = hi;
+  } else {
+    if (lo < ws->row_lo[r]) ws->row_lo[r] = lo;
+    if (hi > ws->row_hi[r]) ws->row_hi[r] = hi;
+  }
+}
+
+/* refocus_agree.c: the agreement rule on the sparse path. Support maps
+ * from ws->runs (start of call), plane k's kept voxels, maps cleared (end
+ * of call); avx2 from elfm_agree_avx2 (0: the portable code). */
+void elfm_agree_support(const elfm_refocus_plan *p, elfm_refocus_workspace *ws);
+void elfm_agree_support_clear(const elfm_refocus_plan *p, elfm_refocus_workspace *ws);
+int elfm_agree_avx2(const elfm_refocus_workspace *ws);
+void elfm_agree_plane(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol,
+                      elfm_refocus_workspace *ws, int k, int avx2);
 
 /* refocus_sparse.c */
 elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,

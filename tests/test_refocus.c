@@ -15,6 +15,7 @@
 
 #include "check.h"
 #include "elfm_recon.h"
+#include "refocus_internal.h" /* the workspace's agree_portable switch */
 
 /* The lenslet field stop: a view's image ends half a view pitch (154 px,
  * SPEC §2) from its centre; nothing of it reaches the neighbours' crops. */
@@ -189,8 +190,10 @@ static void test_dense_sparse_agree(const elfm_calib *c)
  * Checked with the paper's views and with views moved so that every plane's
  * shift is a whole pixel (bilinear weights 0 and 1: the taps of weight 0
  * must not count), for 1 view, 30 % and all views, over a sequence of
- * frames through one workspace and volume (rows cleared between frames). */
-static void test_agree_exact(const elfm_calib *c0)
+ * frames through one workspace and volume (rows cleared between frames).
+ * portable: the sparse workspace runs the portable agreement code (the one
+ * used on CPUs without AVX2), which must give the same result. */
+static void test_agree_exact(const elfm_calib *c0, int portable)
 {
   elfm_error err;
   elfm_frame *f = elfm_frame_create(c0->sensor_width_px, c0->sensor_height_px, &err);
@@ -214,6 +217,7 @@ static void test_agree_exact(const elfm_calib *c0)
       elfm_refocus_workspace *wd = NULL, *wsp = NULL;
       CHECK_OK(elfm_refocus_workspace_create(p, &wd, &err), &err);
       CHECK_OK(elfm_refocus_workspace_create(p, &wsp, &err), &err);
+      wsp->agree_portable = portable;
       elfm_volume *vd = elfm_refocus_volume_create(p, &err), *vs = elfm_refocus_volume_create(p, &err);
       const size_t nvox = (size_t)vd->w * vd->h * vd->nz;
       uint32_t s = 99u + 7u * (uint32_t)(geo * 3 + fi);
@@ -236,16 +240,16 @@ static void test_agree_exact(const elfm_calib *c0)
         CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, f, vs, wsp, &err), &err);
         float m = vmax(vd), d = maxdiff(vd, vs);
         CHECK(m > 0.0f);
-        CHECK_MSG(d <= 1e-4f * m, "geo %d agree %g rep %d: dense/sparse differ by %g (max %g)",
-                  geo, fracs[fi], rep, d, m);
+        CHECK_MSG(d <= 1e-4f * m, "%s geo %d agree %g rep %d: dense/sparse differ by %g (max %g)",
+                  portable ? "portable" : "default", geo, fracs[fi], rep, d, m);
         if (!signed_frame) {
           size_t mismatch = 0, kept = 0;
           for (size_t i = 0; i < nvox; i++) {
             mismatch += (vd->data[i] != 0.0f) != (vs->data[i] != 0.0f);
             kept += vd->data[i] != 0.0f;
           }
-          CHECK_MSG(mismatch == 0, "geo %d agree %g rep %d: %zu voxels kept by one path only",
-                    geo, fracs[fi], rep, mismatch);
+          CHECK_MSG(mismatch == 0, "%s geo %d agree %g rep %d: %zu voxels kept by one path only",
+                    portable ? "portable" : "default", geo, fracs[fi], rep, mismatch);
           kept_total += kept;
         }
       }
@@ -258,6 +262,55 @@ static void test_agree_exact(const elfm_calib *c0)
       elfm_refocus_plan_free(p);
     }
   }
+  elfm_frame_free(f);
+}
+
+/* The portable agreement code and the default one (AVX2 where the CPU has
+ * it) give the same floats, voxel for voxel, on a busy frame (beads,
+ * noise, a dense row), over a sequence of frames through one workspace. */
+static void test_agree_portable_same(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+  elfm_refocus_workspace *wa = NULL, *wb = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &wa, &err), &err);
+  CHECK_OK(elfm_refocus_workspace_create(p, &wb, &err), &err);
+  wb->agree_portable = 1;
+  elfm_volume *va = elfm_refocus_volume_create(p, &err), *vb = elfm_refocus_volume_create(p, &err);
+  const size_t nvox = (size_t)va->w * va->h * va->nz;
+  uint32_t s = 4242u;
+  size_t kept = 0;
+  for (int rep = 0; rep < 3; rep++) {
+    elfm_frame_clear(f);
+    for (int i = 0; i < 4000; i++) {
+      s = s * 1664525u + 1013904223u;
+      uint32_t pix = (s >> 4) % (uint32_t)(f->w * f->h);
+      s = s * 1664525u + 1013904223u;
+      elfm_frame_set(f, pix, (float)(1 + (s >> 24) % 200));
+    }
+    for (int b = 0; b < 12; b++)
+      render_bead(f, c, -70.0 + 13 * b + rep, 60.0 - 11 * b, -88.0 + 16 * b + 3 * rep, 180.0);
+    for (int x = 200; x < 1100; x += 1 + x % 2)
+      elfm_frame_set(f, (uint32_t)(300 * f->w + x), (float)(1 + x % 53));
+    CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, f, va, wa, &err), &err);
+    CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, f, vb, wb, &err), &err);
+    size_t differ = 0;
+    for (size_t i = 0; i < nvox; i++) {
+      differ += memcmp(&va->data[i], &vb->data[i], sizeof(float)) != 0;
+      kept += va->data[i] != 0.0f;
+    }
+    CHECK_MSG(differ == 0, "rep %d: %zu voxels differ between portable and default", rep, differ);
+  }
+  CHECK(kept > 0);
+  elfm_volume_free(va);
+  elfm_volume_free(vb);
+  elfm_refocus_workspace_free(wa);
+  elfm_refocus_workspace_free(wb);
+  elfm_refocus_plan_free(p);
   elfm_frame_free(f);
 }
 
@@ -469,7 +522,9 @@ int main(void)
   CHECK_EQ_INT(c.n_views, 25);
   test_bead_positions(&c);
   test_dense_sparse_agree(&c);
-  test_agree_exact(&c);
+  test_agree_exact(&c, 0);
+  test_agree_exact(&c, 1);
+  test_agree_portable_same(&c);
   test_uniform_overhang(&c);
   test_ghost_rules(&c);
   test_view_support(&c);
