@@ -515,6 +515,23 @@ static void test_view_support(const elfm_calib *c)
   elfm_frame_free(f);
 }
 
+/* Another geometry for the sparse agreement code, which packs a row of W
+ * voxels into 64-bit words and 256-bit registers (one load per window when
+ * W <= 192, two above; two 256-voxel chunks above 256): the central 3 x 3
+ * views of the paper's 5 x 5 (9 views, a 3 x 3 Fourier LFM) with crop boxes
+ * of w x h px, which may overlap and overhang the sensor. */
+static void other_geometry(const elfm_calib *c, int w, int h, int central3x3, elfm_calib *out)
+{
+  *out = *c;
+  out->view_w_px = w;
+  out->view_h_px = h;
+  if (central3x3) {
+    const int keep[9] = {6, 7, 8, 11, 12, 13, 16, 17, 18};
+    for (int i = 0; i < 9; i++) out->views[i] = c->views[keep[i]];
+    out->n_views = 9;
+  }
+}
+
 int main(void)
 {
   elfm_calib c;
@@ -525,6 +542,14 @@ int main(void)
   test_agree_exact(&c, 0);
   test_agree_exact(&c, 1);
   test_agree_portable_same(&c);
+  /* other widths (one chunk of two loads; two chunks) and view counts */
+  const int geos[3][3] = {{200, 120, 1}, {300, 64, 0}, {61, 150, 1}};
+  for (int g = 0; g < 3; g++) {
+    elfm_calib o;
+    other_geometry(&c, geos[g][0], geos[g][1], geos[g][2], &o);
+    test_agree_exact(&o, 0);        /* default == dense */
+    test_agree_portable_same(&o);   /* portable == default, bit for bit */
+  }
   test_uniform_overhang(&c);
   test_ghost_rules(&c);
   test_view_support(&c);
