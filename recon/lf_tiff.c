@@ -25,6 +25,7 @@ struct elfm_tiff_stack {
   char msg[256];
   int w, h, page, done;
   void *line;
+  size_t line_cap; /* bytes of line: pages may differ in sample size (8, 16, 32 bits) */
 };
 
 struct elfm_tiff_writer {
@@ -135,6 +136,8 @@ elfm_status elfm_tiff_open(const char *path, elfm_tiff_stack **out, elfm_error *
     tmsize_t n = TIFFScanlineSize(s->tif);
     if (n <= 0 || n > TIFF_MAX_ALLOC || !(s->line = malloc((size_t)n)))
       st = elfm_error_set(err, ELFM_ERR_FORMAT, path, -1, "page 0: bad scanline size");
+    else
+      s->line_cap = (size_t)n;
   }
   if (st) {
     elfm_tiff_close(s);
@@ -155,8 +158,19 @@ elfm_status elfm_tiff_read(elfm_tiff_stack *s, elfm_frame *out, int *got, elfm_e
     return elfm_error_set(err, ELFM_ERR_INVALID, s->path, -1, "frame %d x %d for %d x %d pages",
                           out->w, out->h, s->w, s->h);
   tmsize_t need = (tmsize_t)s->w * (bps / 8);
-  if (TIFFScanlineSize(s->tif) < need)
+  const tmsize_t line = TIFFScanlineSize(s->tif);
+  if (line < need)
     return elfm_error_set(err, ELFM_ERR_FORMAT, s->path, -1, "page %d: scanline too short", s->page);
+  /* TIFFReadScanline writes a whole scanline of this page, which is longer
+   * than page 0's when its samples are wider (libFuzzer found the overflow:
+   * an 8-bit page 0, then a 32-bit page of the same size) */
+  if ((size_t)line > s->line_cap) {
+    void *b = line <= TIFF_MAX_ALLOC ? realloc(s->line, (size_t)line) : NULL;
+    if (!b)
+      return elfm_error_set(err, ELFM_ERR_FORMAT, s->path, -1, "page %d: bad scanline size", s->page);
+    s->line = b;
+    s->line_cap = (size_t)line;
+  }
   elfm_frame_clear(out);
   for (int y = 0; y < s->h; y++) {
     s->msg[0] = '\0';

@@ -7,6 +7,7 @@
 #include <png.h>
 #include <stdlib.h>
 #include <string.h>
+#include <tiffio.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -384,6 +385,59 @@ static void test_tiff(const char *dir, const elfm_calib *cal)
   elfm_frame_free(f);
 }
 
+/* A stack whose pages differ in sample size (an 8-bit page 0, then a 32-bit
+ * float page of the same size): each page is read into the frame with its
+ * values. The reader sized its scanline buffer from page 0 and libtiff wrote
+ * the wider page's rows past it (a heap overflow libFuzzer found; under
+ * ASan this test fails without the fix). */
+static void test_tiff_mixed_depth(const char *dir)
+{
+  char path[600];
+  snprintf(path, sizeof path, "%s/mixed.tif", dir);
+  const int W = 37, H = 5;
+  TIFF *t = TIFFOpen(path, "w");
+  CHECK(t != NULL);
+  if (!t) return;
+  for (int page = 0; page < 2; page++) {
+    const int bits = page ? 32 : 8;
+    TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)W);
+    TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)H);
+    TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+    TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)bits);
+    TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, (uint16_t)(page ? SAMPLEFORMAT_IEEEFP : SAMPLEFORMAT_UINT));
+    TIFFSetField(t, TIFFTAG_PHOTOMETRIC, (uint16_t)PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(t, TIFFTAG_PLANARCONFIG, (uint16_t)PLANARCONFIG_CONTIG);
+    TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, (uint32_t)1);
+    for (int y = 0; y < H; y++) {
+      uint8_t row8[64];
+      float rowf[64];
+      for (int x = 0; x < W; x++) {
+        row8[x] = (uint8_t)(x + y);
+        rowf[x] = 1000.5f + (float)(x * y);
+      }
+      CHECK(TIFFWriteScanline(t, page ? (void *)rowf : (void *)row8, (uint32_t)y, 0) == 1);
+    }
+    CHECK(TIFFWriteDirectory(t) == 1);
+  }
+  TIFFClose(t);
+  elfm_error err;
+  elfm_tiff_stack *s = NULL;
+  CHECK_OK(elfm_tiff_open(path, &s, &err), &err);
+  if (!s) return;
+  elfm_frame *f = elfm_frame_create(W, H, &err);
+  int got = 0;
+  CHECK_OK(elfm_tiff_read(s, f, &got, &err), &err);
+  CHECK_EQ_INT(got, 1);
+  CHECK(f->data[3 * W + 7] == 10.0f);
+  CHECK_OK(elfm_tiff_read(s, f, &got, &err), &err);
+  CHECK_EQ_INT(got, 1);
+  CHECK_MSG(f->data[3 * W + 7] == 1021.5f, "page 1 value %g", f->data[3 * W + 7]);
+  CHECK_OK(elfm_tiff_read(s, f, &got, &err), &err);
+  CHECK_EQ_INT(got, 0);
+  elfm_frame_free(f);
+  elfm_tiff_close(s);
+}
+
 /* The worker hook: called once per volume on a worker thread with the
  * volume's slot; the ordered callback then gets that slot, in frame order.
  * The worker stores a weighted sum and the frame per slot; the ordered side
@@ -497,6 +551,7 @@ int main(void)
   test_runs(dir, &cal);
   test_worker_hook(dir, &cal);
   test_tiff(dir, &cal);
+  test_tiff_mixed_depth(dir);
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
