@@ -171,6 +171,34 @@ static int grow(void **p, size_t n, size_t size)
   return 1;
 }
 
+/* The cost matrix holds at least `need` entries (nr x nc of one
+ * assignment; it only grows). */
+static elfm_status reserve_cost(elfm_linker *l, size_t need, elfm_error *err)
+{
+  if (need <= l->cap_cost) return ELFM_OK;
+  size_t c = need + need / 2;
+  if (!grow((void **)&l->cost, c, sizeof(double)))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+  l->cap_cost = c;
+  return ELFM_OK;
+}
+
+/* Optimal assignment of the nr tracks l->rows to the nc detections l->cols
+ * over l->cost (nr x nc, +inf forbidden): each pair found becomes
+ * track_det / det_track. */
+static elfm_status assign_rows(elfm_linker *l, int nr, int nc, elfm_error *err)
+{
+  elfm_status st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+  if (st != ELFM_OK) return st;
+  for (int r = 0; r < nr; r++) {
+    int c = l->row_to_col[r];
+    if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
+    l->track_det[l->rows[r]] = l->cols[c];
+    l->det_track[l->cols[c]] = l->rows[r];
+  }
+  return ELFM_OK;
+}
+
 /* Make the scratch hold n_trk tracks and n_det detections. */
 static elfm_status reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_error *err)
 {
@@ -369,12 +397,8 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
   }
   if (nr == 0 || nc == 0 || nr > 500 || nc > 500) return ELFM_OK;
   size_t need = (size_t)nr * (size_t)nc;
-  if (need > l->cap_cost) {
-    size_t c = need + need / 2;
-    if (!grow((void **)&l->cost, c, sizeof(double)))
-      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
-    l->cap_cost = c;
-  }
+  st = reserve_cost(l, need, err);
+  if (st != ELFM_OK) return st;
   const double g2 = o->stitch_gate_um * o->stitch_gate_um;
   int any = 0;
   for (int c = 0; c < nc; c++) {
@@ -867,12 +891,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       continue;
     }
     size_t need = (size_t)nr * (size_t)nc;
-    if (need > l->cap_cost) {
-      size_t c = need + need / 2;
-      if (!grow((void **)&l->cost, c, sizeof(double)))
-        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
-      l->cap_cost = c;
-    }
+    st = reserve_cost(l, need, err);
+    if (st != ELFM_OK) return st;
     for (size_t k = 0; k < need; k++) l->cost[k] = INFINITY;
     for (int r = 0; r < nr; r++) {
       int i = l->rows[r];
@@ -881,14 +901,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         l->cost[(size_t)r * nc + l->det_local[lc->det]] = lc->cost;
       }
     }
-    st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+    st = assign_rows(l, nr, nc, err);
     if (st != ELFM_OK) return st;
-    for (int r = 0; r < nr; r++) {
-      int c = l->row_to_col[r];
-      if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
-      l->track_det[l->rows[r]] = l->cols[c];
-      l->det_track[l->cols[c]] = l->rows[r];
-    }
   }
 
   /* 3b. Rescue: unmatched established tracks against unmatched
@@ -906,12 +920,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       if (l->det_track[j] < 0) l->cols[nc++] = (int)j;
     size_t need = (size_t)nr * (size_t)nc;
     if (nr > 0 && nc > 0 && nr <= 500 && nc <= 500) {
-      if (need > l->cap_cost) {
-        size_t c = need + need / 2;
-        if (!grow((void **)&l->cost, c, sizeof(double)))
-          return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
-        l->cap_cost = c;
-      }
+      st = reserve_cost(l, need, err);
+      if (st != ELFM_OK) return st;
       int any = 0;
       for (int r = 0; r < nr; r++) {
         const live_track *lt = &l->live[l->rows[r]];
@@ -927,14 +937,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         }
       }
       if (any) {
-        st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+        st = assign_rows(l, nr, nc, err);
         if (st != ELFM_OK) return st;
-        for (int r = 0; r < nr; r++) {
-          int c = l->row_to_col[r];
-          if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
-          l->track_det[l->rows[r]] = l->cols[c];
-          l->det_track[l->cols[c]] = l->rows[r];
-        }
       }
     }
   }
