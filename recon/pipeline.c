@@ -214,6 +214,17 @@ static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_erro
   return ELFM_OK;
 }
 
+/* Wall time so far and the rates it gives (none while it is 0). */
+static void stats_set_rates(elfm_recon_stats *st, double wall_s)
+{
+  st->wall_s = wall_s;
+  if (wall_s > 0) {
+    st->events_per_s = (double)st->events / wall_s;
+    st->volumes_per_s = (double)st->frames / wall_s;
+    st->realtime_factor = st->span_s / wall_s;
+  }
+}
+
 static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
                             elfm_volume_fn on_volume, void *user, elfm_error *err)
 {
@@ -279,10 +290,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
       /* the rates so far (they were only set at the end: the progress
        * line said 0 volumes/s) */
       elfm_recon_stats st = r->st;
-      st.wall_s = now - t_start;
-      st.events_per_s = (double)st.events / st.wall_s;
-      st.volumes_per_s = (double)st.frames / st.wall_s;
-      st.realtime_factor = st.span_s / st.wall_s;
+      stats_set_rates(&st, now - t_start);
       r->opt->progress(&st, r->opt->progress_user);
     }
     if (!got) break;
@@ -294,12 +302,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
 
 static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)
 {
-  r->st.wall_s = wall_s;
-  if (wall_s > 0) {
-    r->st.events_per_s = (double)r->st.events / wall_s;
-    r->st.volumes_per_s = (double)r->st.frames / wall_s;
-    r->st.realtime_factor = r->st.span_s / wall_s;
-  }
+  stats_set_rates(&r->st, wall_s);
   if (out) *out = r->st;
 }
 
