@@ -339,9 +339,9 @@ static elfm_status detect_worker(const elfm_volume *v, const elfm_frame *frame,
      * nearest. */
     int kept = 0;
     for (int i = 0; i < c->det_n[slot]; i++) {
-      const int X = (int)lround(det[i].x_um / v->um_per_px + (v->w - 1) * 0.5);
-      const int Y = (int)lround(det[i].y_um / v->um_per_px + (v->h - 1) * 0.5);
-      const int K = (int)lround((det[i].z_um - v->z_min_um) / v->z_step_um);
+      const int X = (int)lround(elfm_volume_x_vox(v, det[i].x_um));
+      const int Y = (int)lround(elfm_volume_y_vox(v, det[i].y_um));
+      const int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
       int ns = 0;
       const int n = elfm_refocus_view_support(plan, frame, X, Y, K, &ns);
       if ((double)n >= c->o->view_support * ns && n > 0) det[kept++] = det[i];

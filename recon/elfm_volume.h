@@ -38,6 +38,13 @@ static inline double elfm_volume_y_um(const elfm_volume *v, double Y)
 { return (Y - (v->h - 1) * 0.5) * v->um_per_px; }
 static inline double elfm_volume_z_um(const elfm_volume *v, double k)
 { return v->z_min_um + k * v->z_step_um; }
+/* The inverses: voxel coordinates (fractional) of a position in um. */
+static inline double elfm_volume_x_vox(const elfm_volume *v, double x_um)
+{ return x_um / v->um_per_px + (v->w - 1) * 0.5; }
+static inline double elfm_volume_y_vox(const elfm_volume *v, double y_um)
+{ return y_um / v->um_per_px + (v->h - 1) * 0.5; }
+static inline double elfm_volume_z_vox(const elfm_volume *v, double z_um)
+{ return (z_um - v->z_min_um) / v->z_step_um; }
 
 #ifdef __cplusplus
 }

@@ -84,9 +84,9 @@ elfm_status elfm_analysis_fwhm(const elfm_volume *v, const elfm_detection *det, 
       iso = dx * dx + dy * dy >= isolation_um * isolation_um;
     }
     if (!iso) continue;
-    int X = (int)lround(det[i].x_um / v->um_per_px + (v->w - 1) * 0.5);
-    int Y = (int)lround(det[i].y_um / v->um_per_px + (v->h - 1) * 0.5);
-    int K = (int)lround((det[i].z_um - v->z_min_um) / v->z_step_um);
+    int X = (int)lround(elfm_volume_x_vox(v, det[i].x_um));
+    int Y = (int)lround(elfm_volume_y_vox(v, det[i].y_um));
+    int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
     if (X < 0 || X >= v->w || Y < 0 || Y >= v->h || K < 0 || K >= v->nz) continue;
     size_t ic = ((size_t)K * v->h + Y) * v->w + X;
     double peak = v->data[ic];
