@@ -31,25 +31,10 @@
 #include <unistd.h>
 
 #include "elfm_recon.h"
+#include "bench_clock.h"
 
 #define W 1280
 #define H 720
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* CPU time of this (single-threaded) process, user + system: on a shared
- * machine the wall clock also counts time other processes held the core. */
-static double cpu_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static uint64_t rng(uint64_t *s)
 {
@@ -194,7 +179,7 @@ static double decode_once(const char *path, elfm_event_chunk *c, int64_t *n_out,
 {
   elfm_error err;
   elfm_reader *r;
-  double t0 = now_s(), c0 = cpu_s();
+  double t0 = bench_wall_s(), c0 = bench_cpu_s();
   if (elfm_reader_open(path, NULL, &r, &err) != ELFM_OK) {
     char buf[1200];
     fprintf(stderr, "bench_decode: %s\n", elfm_error_format(&err, buf, sizeof buf));
@@ -214,8 +199,8 @@ static double decode_once(const char *path, elfm_event_chunk *c, int64_t *n_out,
     sum += c->t_us[c->n - 1] + c->x[c->n / 2];
   }
   elfm_reader_close(r);
-  double dt = now_s() - t0;
-  *cpu = cpu_s() - c0;
+  double dt = bench_wall_s() - t0;
+  *cpu = bench_cpu_s() - c0;
   *n_out = n;
   *check = sum;
   return dt;
@@ -237,7 +222,7 @@ static double mem_read_gbps(void)
   double best = 1e30;
   volatile uint64_t sink = 0;
   for (int rep = 0; rep < 3; rep++) {
-    double t0 = now_s();
+    double t0 = bench_wall_s();
     uint64_t s0 = 0, s1 = 0, s2 = 0, s3 = 0;
     for (size_t i = 0; i < n; i += 4) {
       s0 += a[i];
@@ -245,7 +230,7 @@ static double mem_read_gbps(void)
       s2 += a[i + 2];
       s3 += a[i + 3];
     }
-    double dt = now_s() - t0;
+    double dt = bench_wall_s() - t0;
     sink += s0 + s1 + s2 + s3;
     if (dt < best) best = dt;
   }
@@ -342,13 +327,13 @@ int main(int argc, char **argv)
   for (int k = 0; k < 3 && rc == 0; k++) {
     char path[1400];
     snprintf(path, sizeof path, "%s/%s", dir, fmts[k].file);
-    double tw = now_s();
+    double tw = bench_wall_s();
     if (fmts[k].write(path, n_events, gc) != 0) {
       fprintf(stderr, "bench_decode: cannot write %s\n", path);
       rc = 1;
       break;
     }
-    tw = now_s() - tw;
+    tw = bench_wall_s() - tw;
     long long bytes = file_size(path);
     warm(path);
     double *times = malloc(sizeof(double) * (size_t)reps);

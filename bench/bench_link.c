@@ -9,13 +9,7 @@
 #include <time.h>
 
 #include "elfm_tracker.h"
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+#include "bench_clock.h"
 
 static uint64_t rng = 12345;
 static double urand(void)
@@ -42,12 +36,12 @@ static double run(int n, int frames, int brute, const double *p0, const double *
       d[i].y_um = p0[3 * i + 1] + v[3 * i + 1] * f + 0.1 * (urand() - 0.5);
       d[i].z_um = p0[3 * i + 2] + v[3 * i + 2] * f + 0.4 * (urand() - 0.5);
     }
-    double t0 = now_s();
+    double t0 = bench_wall_s();
     if (elfm_link_step(l, f, 1000000000000LL + 1000LL * f, d, n, &err) != ELFM_OK) {
       fprintf(stderr, "link failed: %s\n", err.message);
       exit(1);
     }
-    t += now_s() - t0;
+    t += bench_wall_s() - t0;
   }
   elfm_link_finish(l, &err);
   size_t k = 0;

@@ -16,18 +16,12 @@
 
 #include "elfm_recon.h"
 #include "elfm_tracker.h"
+#include "bench_clock.h"
 
 typedef struct keep {
   elfm_volume **v;
   int n, cap;
 } keep;
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
 
 static elfm_status on_volume(const elfm_volume *vol, void *user, elfm_error *err)
 {
@@ -99,12 +93,12 @@ int main(int argc, char **argv)
     double cs = 0, t = 0;
     for (int i = 0; i < k.n; i++) {
       int n = 0;
-      double t0 = now_s();
+      double t0 = bench_wall_s();
       if (elfm_peaks_detect(pk, k.v[i], det, 10000, &n, &err) != ELFM_OK) {
         fprintf(stderr, "%s\n", err.message);
         return 1;
       }
-      t += now_s() - t0;
+      t += bench_wall_s() - t0;
       if (r == 0 && elfm_peaks_last_threshold(pk) > po.absolute) above_abs++;
       tot += n;
       for (int j = 0; j < n; j++) cs += det[j].x_um + 3 * det[j].y_um + 7 * det[j].z_um;

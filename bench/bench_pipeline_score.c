@@ -19,13 +19,7 @@
 #include <time.h>
 
 #include "elfm_tracker.h"
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 static double rnd(uint64_t *s)
 {
@@ -83,9 +77,9 @@ static int bench_hungarian(int quick)
     double best[2] = {1e30, 1e30};
     for (int rep = 0; rep < 3; rep++)
       for (int which = 0; which < 2; which++) {
-        double t0 = now_s();
+        double t0 = bench_wall_s();
         if (elfm_assign_hungarian(which ? g : c, n, n, r2c, NULL, ws, &err) != ELFM_OK) return 1;
-        double dt = now_s() - t0;
+        double dt = bench_wall_s() - t0;
         if (dt < best[which]) best[which] = dt;
       }
     printf("  %6d %14.3f %14.3f\n", n, best[0] * 1e3, best[1] * 1e3);
@@ -128,24 +122,24 @@ static int bench_score(int n_obj, int n_frames)
     }
   elfm_error err;
   elfm_table *truth = NULL, *tracks = NULL;
-  double tp0 = now_s();
+  double tp0 = bench_wall_s();
   if (elfm_table_parse(tb.s, tb.n, "truth.csv", &truth, &err) != ELFM_OK ||
       elfm_table_parse(kb.s, kb.n, "tracks.csv", &tracks, &err) != ELFM_OK) {
     fprintf(stderr, "parse: %s\n", err.message);
     return 1;
   }
-  double parse_s = now_s() - tp0;
+  double parse_s = bench_wall_s() - tp0;
   elfm_score_options o;
   elfm_score_options_default(&o);
   elfm_score_result r;
   double best = 1e30;
   for (int rep = 0; rep < 3; rep++) {
-    double t0 = now_s();
+    double t0 = bench_wall_s();
     if (elfm_score_tables(truth, tracks, NULL, &o, &r, &err) != ELFM_OK) {
       fprintf(stderr, "score: %s\n", err.message);
       return 1;
     }
-    double dt = now_s() - t0;
+    double dt = bench_wall_s() - t0;
     if (dt < best) best = dt;
   }
   printf("  %6d objects x %5d frames: score %8.1f ms (%.2f M track points/s), CSV parse %8.1f "

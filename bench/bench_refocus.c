@@ -22,22 +22,7 @@
 
 #include "elfm_datasets.h"
 #include "elfm_recon.h"
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* CPU seconds of the whole process: on a shared machine the wall clock
- * also counts other people's work, so both are reported. */
-static double cpu_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 typedef struct kept {          /* a frame kept as its listed pixels */
   uint32_t *idx;
@@ -84,16 +69,16 @@ static void drain(bench *b)
 {
   for (;;) {
     if (b->n_frames >= b->max_frames) return;
-    double t0 = now_s();
+    double t0 = bench_wall_s();
     int got = elfm_framer_next(b->framer, b->raw);
-    b->t_framer += now_s() - t0;
+    b->t_framer += bench_wall_s() - t0;
     if (!got) return;
     const elfm_frame *f = b->raw;
     b->nnz_raw += (double)b->raw->nnz;
     if (b->median) {
-      t0 = now_s();
+      t0 = bench_wall_s();
       elfm_median_apply(b->median, b->raw, b->filt);
-      b->t_median += now_s() - t0;
+      b->t_median += bench_wall_s() - t0;
       f = b->filt;
     }
     b->nnz_med += (double)f->nnz;
@@ -104,9 +89,9 @@ static void drain(bench *b)
 static elfm_status sink(void *user, const elfm_event_chunk *c, elfm_error *err)
 {
   bench *b = user;
-  double t0 = now_s();
+  double t0 = bench_wall_s();
   elfm_status st = elfm_framer_push(b->framer, c, err);
-  b->t_framer += now_s() - t0;
+  b->t_framer += bench_wall_s() - t0;
   b->events += (int64_t)c->n;
   drain(b);
   return st;
@@ -148,8 +133,8 @@ static double run_refocus(const elfm_refocus_plan *plan, elfm_refocus_path path,
 #pragma omp barrier
 #pragma omp single
     {
-      t0 = now_s();
-      c0 = cpu_s();
+      t0 = bench_wall_s();
+      c0 = bench_cpu_s();
     }
     if (ws && vol && f)
       for (int r = 0; r < reps; r++) {
@@ -165,8 +150,8 @@ static double run_refocus(const elfm_refocus_plan *plan, elfm_refocus_path path,
 #pragma omp barrier
 #pragma omp single
     {
-      t1 = now_s();
-      c1 = cpu_s();
+      t1 = bench_wall_s();
+      c1 = bench_cpu_s();
     }
     elfm_frame_free(f);
     elfm_volume_free(vol);
@@ -253,7 +238,7 @@ int main(int argc, char **argv)
   b.filt = elfm_frame_create(cal.sensor_width_px, cal.sensor_height_px, &err);
   if (median && elfm_median_create(median, cal.sensor_width_px, cal.sensor_height_px, &b.median, &err))
     return 1;
-  double t0 = now_s();
+  double t0 = bench_wall_s();
   double load[1] = {0};
   FILE *la = fopen("/proc/loadavg", "r");
   if (la) {
@@ -280,7 +265,7 @@ int main(int argc, char **argv)
   }
   elfm_framer_finish(b.framer);
   drain(&b);
-  double t_make = now_s() - t0;
+  double t_make = bench_wall_s() - t0;
   if (b.n_frames < 2) {
     fprintf(stderr, "bench_refocus: only %zu frames\n", b.n_frames);
     return 1;
@@ -299,7 +284,7 @@ int main(int argc, char **argv)
          1e6 * b.t_framer / (double)b.n_frames, (double)b.events / b.t_framer * 1e-6,
          1e6 * b.t_median / (double)b.n_frames);
   elfm_refocus_plan *plan = NULL;
-  t0 = now_s();
+  t0 = bench_wall_s();
   elfm_refocus_options ro;
   elfm_refocus_options_default(&ro);
   if (agree >= 0) ro.agree_frac = agree;
@@ -308,7 +293,7 @@ int main(int argc, char **argv)
     fprintf(stderr, "bench_refocus: %s\n", err.message);
     return 1;
   }
-  printf("plan: %.1f ms\n", 1e3 * (now_s() - t0));
+  printf("plan: %.1f ms\n", 1e3 * (bench_wall_s() - t0));
   {
     /* how sparse the output is: voxels the sparse path writes in one volume */
     elfm_refocus_workspace *ws = NULL;

@@ -16,21 +16,7 @@
 #include <unistd.h>
 
 #include "elfm_datasets.h"
-
-static double cpu_s(void)
-{
-  struct rusage ru;
-  getrusage(RUSAGE_SELF, &ru);
-  return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-         (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
-}
-
-static double wall_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#include "bench_clock.h"
 
 static void rm_out(const char *dir)
 {
@@ -71,9 +57,9 @@ int main(int argc, char **argv)
     return 1;
   }
   elfm_sim_stats st;
-  double c0 = cpu_s(), w0 = wall_s();
+  double c0 = bench_cpu_s(), w0 = bench_wall_s();
   elfm_status rc = elfm_sim_run(s, dir, NULL, &st, &err);
-  double cpu = cpu_s() - c0, wall = wall_s() - w0;
+  double cpu = bench_cpu_s() - c0, wall = bench_wall_s() - w0;
   rm_out(dir);
   if (rc) goto fail;
   struct rusage ru;

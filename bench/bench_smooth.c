@@ -7,13 +7,7 @@
 #include <time.h>
 
 #include "elfm_tracker.h"
-
-static double now_s(void)
-{
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+#include "bench_clock.h"
 
 int main(int argc, char **argv)
 {
@@ -52,13 +46,13 @@ int main(int argc, char **argv)
     elfm_smooth_info info;
     elfm_error err;
     int r = reps;  /* (dense QR on the spline's 3,000 unknowns took 169 s: not benchmarked) */
-    double t0 = now_s();
+    double t0 = bench_wall_s();
     for (int k = 0; k < r; k++)
       if (elfm_smooth_fit(&o, N, t, x, NULL, N, t, p, v, ps, vs, &info, &err) != ELFM_OK) {
         fprintf(stderr, "smooth failed: %s\n", err.message);
         return 1;
       }
-    double ms = 1e3 * (now_s() - t0) / r;
+    double ms = 1e3 * (bench_wall_s() - t0) / r;
     printf("%-35s  %23.2f  %s\n", cases[c].name, ms, elfm_motion_model_name(info.model));
     fflush(stdout);
   }
