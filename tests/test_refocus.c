@@ -42,6 +42,20 @@ static void render_bead(elfm_frame *f, const elfm_calib *c, double x, double y, 
   }
 }
 
+/* n random pixels set to base + 0..199 (negative for half of them when
+ * signed_values: cancelling samples), from the LCG state *s. */
+static void add_noise(elfm_frame *f, uint32_t *s, int n, float base, int signed_values)
+{
+  for (int i = 0; i < n; i++) {
+    *s = *s * 1664525u + 1013904223u;
+    uint32_t pix = (*s >> 4) % (uint32_t)(f->w * f->h);
+    *s = *s * 1664525u + 1013904223u;
+    float a = base + (float)((*s >> 24) % 200);
+    if (signed_values && ((*s >> 9) & 1)) a = -a;
+    elfm_frame_set(f, pix, a);
+  }
+}
+
 static size_t argmax(const elfm_volume *v)
 {
   size_t n = (size_t)v->w * v->h * v->nz, best = 0;
@@ -149,12 +163,7 @@ static void test_dense_sparse_agree(const elfm_calib *c)
     uint32_t s = 1234u + (uint32_t)mode;
     for (int rep = 0; rep < 2; rep++) {
       elfm_frame_clear(f);
-      for (int i = 0; i < 3000; i++) {
-        s = s * 1664525u + 1013904223u;
-        uint32_t pix = (s >> 4) % (uint32_t)(f->w * f->h);
-        s = s * 1664525u + 1013904223u;
-        elfm_frame_set(f, pix, (float)(20 + (s >> 24) % 200));
-      }
+      add_noise(f, &s, 3000, 20.0f, 0);
       for (int b = 0; b < 5; b++)
         render_bead(f, c, -50.0 + 25 * b, 40.0 - 20 * b, -80.0 + 40 * b + rep, 200.0);
       /* a busy row (listed right to left, across view boxes): the sparse
@@ -225,14 +234,7 @@ static void test_agree_exact(const elfm_calib *c0, int portable)
       for (int rep = 0; rep < 4; rep++) {
         const int signed_frame = rep == 3;
         elfm_frame_clear(f);
-        for (int i = 0; i < 2000; i++) {
-          s = s * 1664525u + 1013904223u;
-          uint32_t pix = (s >> 4) % (uint32_t)(f->w * f->h);
-          s = s * 1664525u + 1013904223u;
-          float a = (float)(1 + (s >> 24) % 200);
-          if (signed_frame && ((s >> 9) & 1)) a = -a;
-          elfm_frame_set(f, pix, a);
-        }
+        add_noise(f, &s, 2000, 1.0f, signed_frame);
         for (int b = 0; b < 6; b++)
           render_bead(f, &c, -60.0 + 23 * b + 3 * rep, 50.0 - 19 * b, -85.0 + 33 * b + 2 * rep,
                       signed_frame && b % 2 ? -150.0 : 150.0);
@@ -286,12 +288,7 @@ static void test_agree_portable_same(const elfm_calib *c)
   size_t kept = 0;
   for (int rep = 0; rep < 3; rep++) {
     elfm_frame_clear(f);
-    for (int i = 0; i < 4000; i++) {
-      s = s * 1664525u + 1013904223u;
-      uint32_t pix = (s >> 4) % (uint32_t)(f->w * f->h);
-      s = s * 1664525u + 1013904223u;
-      elfm_frame_set(f, pix, (float)(1 + (s >> 24) % 200));
-    }
+    add_noise(f, &s, 4000, 1.0f, 0);
     for (int b = 0; b < 12; b++)
       render_bead(f, c, -70.0 + 13 * b + rep, 60.0 - 11 * b, -88.0 + 16 * b + 3 * rep, 180.0);
     for (int x = 200; x < 1100; x += 1 + x % 2)
