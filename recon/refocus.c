@@ -206,11 +206,11 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
       if (X < s->xlo || X >= s->xhi || Y < s->ylo || Y >= s->yhi) continue;
       ns++;
       /* the dense path's sample, weights and taps */
-      const float w00 = (1.0f - s->fx) * (1.0f - s->fy), w01 = s->fx * (1.0f - s->fy);
-      const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
+      float w[4];
+      elfm_refocus_shift_weights(s, w);
       const float *r0 = frame->data + (size_t)(Y + s->iy) * (size_t)p->sw + (X + s->ix);
       const float *r1 = r0 + p->sw;
-      const float a = w00 * r0[0] + w01 * r0[1] + w10 * r1[0] + w11 * r1[1];
+      const float a = w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
       n += a != 0.0f;
     }
   if (n_sampling) *n_sampling = ns;
@@ -341,8 +341,9 @@ static void refocus_dense(const elfm_refocus_plan *p, const elfm_frame *frame, e
     if (p->need) memset(ws->plane_cnt, 0, (size_t)W * H);
     for (int v = 0; v < p->nv; v++) {
       const elfm_refocus_shift *s = &p->shift[(size_t)k * p->nv + v];
-      const float w00 = (1.0f - s->fx) * (1.0f - s->fy), w01 = s->fx * (1.0f - s->fy);
-      const float w10 = (1.0f - s->fx) * s->fy, w11 = s->fx * s->fy;
+      float w[4];
+      elfm_refocus_shift_weights(s, w);
+      const float w00 = w[0], w01 = w[1], w10 = w[2], w11 = w[3];
       const int n = s->xhi - s->xlo;
       for (int Y = s->ylo; Y < s->yhi; Y++) {
         /* both taps of X lie in the crop box, inside the sensor (plan) */

@@ -141,10 +141,7 @@ static int agree_views(const elfm_refocus_plan *p, elfm_refocus_workspace *ws, i
     /* voxel X of row Y has its first tap at box (X + ix - x0, Y - off);
      * ix - x0 > -W and the maps start >= W bits into ws->sup (refocus.c) */
     a->bit0 = (ptrdiff_t)ws->sup_bit[v] - (ptrdiff_t)off * a->stride + (s->ix - bx->x0);
-    a->w[0] = (1.0f - s->fx) * (1.0f - s->fy);
-    a->w[1] = s->fx * (1.0f - s->fy);
-    a->w[2] = (1.0f - s->fx) * s->fy;
-    a->w[3] = s->fx * s->fy;
+    elfm_refocus_shift_weights(s, a->w);
     uint64_t *m = ws->agree_mask + (size_t)na * ld;
     for (size_t i = 0; i < nmw; i++) m[i] = range_word(s->xlo, s->xhi, 64 * (int)i);
     na++;

@@ -14,6 +14,17 @@ typedef struct elfm_refocus_shift {
   int xlo, xhi, ylo, yhi; /* empty when lo >= hi */
 } elfm_refocus_shift;
 
+/* The bilinear weights of tap (0,0), (0,1), (1,0), (1,1) (row, column):
+ * every path computes them here, so that their sums are the same floats
+ * (the sparse agreement path keeps exactly the dense path's voxels). */
+static inline void elfm_refocus_shift_weights(const elfm_refocus_shift *s, float w[4])
+{
+  w[0] = (1.0f - s->fx) * (1.0f - s->fy);
+  w[1] = s->fx * (1.0f - s->fy);
+  w[2] = (1.0f - s->fx) * s->fy;
+  w[3] = s->fx * s->fy;
+}
+
 typedef struct elfm_refocus_box {
   int x0, y0, x1, y1; /* sensor pixels [x0, x1) x [y0, y1) */
 } elfm_refocus_box;
