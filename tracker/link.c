@@ -98,7 +98,8 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
-                   "history >= 2, 1 <= max_candidates <= 1024)");
+                   "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
+                   "stitch gate >= 0, 0 < swap ratio <= 1)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
