@@ -459,9 +459,6 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
 }
 
 /* Squared anisotropic distance, at the middle of the gap, between the end
- * state of pts[h0 .. h1) and the start state of pts[t0 .. t1) (quadratic
- * fits, turning as in predict_track); INFINITY when either has < 4 points. */
-/* Squared anisotropic distance, at the middle of the gap, between the end
  * state of hp[0 .. hn) and the start state of tp[0 .. tn) (quadratic fits
  * over up to short_history points, turning as in predict_track); INFINITY
  * when either has fewer than 4 points. */
