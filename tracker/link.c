@@ -9,52 +9,7 @@
 #include <string.h>
 
 #include "elfm_score.h"
-
-typedef struct live_track {
-  elfm_track *t;
-  int64_t last_frame, last_t_us;
-  double last[3];           /* last real position */
-  double vel_um_per_ms[3];  /* long constant-velocity fit; the prior with one point */
-  double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
-  int has_short;            /* the short fit exists (>= 4 points) */
-  double pred[3];           /* prediction for the current frame */
-  double gate_um;           /* gate for the current frame */
-  int missed;               /* frames missed before the current frame */
-  size_t tail0;             /* index of the point that closed the last gap (0 none) */
-  int review;               /* that gap closing is still to be reviewed (step 6) */
-} live_track;
-
-typedef struct link_cand {
-  int det;
-  double cost;
-} link_cand;
-
-struct elfm_linker {
-  elfm_link_options o;
-  live_track *live;
-  size_t n_live, cap_live;
-  elfm_track **fin;          /* FIFO of finished tracks: fin[fin_head .. fin_head+fin_n) */
-  size_t fin_head, fin_n, fin_cap;
-  int64_t next_id, last_frame, last_t_us;
-  int started;
-  /* per-frame scratch, grown on demand */
-  size_t cap_det, cap_trk;
-  float *pts;                /* n_det x 3, z scaled by 1/kz */
-  int *nn_idx;               /* max_candidates */
-  float *nn_dist;
-  link_cand *cand;           /* n_trk x max_candidates */
-  int *n_cand;               /* per track */
-  int *uf;                   /* union-find over tracks then detections */
-  int *comp_of, *comp_start, *comp_fill, *members; /* grouping */
-  int *track_det, *det_track, *det_local;
-  int64_t *det_id;
-  double *det_speed;
-  size_t cap_cost;
-  double *cost;
-  int *row_to_col;
-  int *rows, *cols;
-  elfm_assign_workspace *aws;
-};
+#include "link_internal.h"
 
 void elfm_link_options_default(elfm_link_options *o)
 {
@@ -172,9 +127,8 @@ static int grow(void **p, size_t n, size_t size)
   return 1;
 }
 
-/* The cost matrix holds at least `need` entries (nr x nc of one
- * assignment; it only grows). */
-static elfm_status reserve_cost(elfm_linker *l, size_t need, elfm_error *err)
+/* (contract in link_internal.h) */
+elfm_status elfm_link_reserve_cost(elfm_linker *l, size_t need, elfm_error *err)
 {
   if (need <= l->cap_cost) return ELFM_OK;
   size_t c = need + need / 2;
@@ -200,8 +154,8 @@ static elfm_status assign_rows(elfm_linker *l, int nr, int nc, elfm_error *err)
   return ELFM_OK;
 }
 
-/* Make the scratch hold n_trk tracks and n_det detections. */
-static elfm_status reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_error *err)
+/* (contract in link_internal.h) */
+elfm_status elfm_link_reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_error *err)
 {
   size_t mc = (size_t)l->o.max_candidates;
   if (n_det > l->cap_det) {
@@ -243,11 +197,9 @@ static int uf_find(int *uf, int a)
   return a;
 }
 
-/* Least-squares p = c0 + c1 t + c2 t^2 over pts[k0 .. k1) (t in ms from
- * tr): position, velocity and acceleration at tr. 0 when fewer than 3
- * distinct times (outputs untouched). */
-static int fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
-                    double vel[3], double acc[3])
+/* (contract in link_internal.h) */
+int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
+                       double pos[3], double vel[3], double acc[3])
 {
   /* normal equations of p = c0 + c1 t + c2 t^2 over the window */
   double S[5] = {0, 0, 0, 0, 0}, R[3][3] = {{0}};
@@ -283,10 +235,9 @@ static int fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
   return 1;
 }
 
-/* Least-squares fits over the recent real points, times relative to the
- * last point in ms (never float absolute times): a constant velocity over
- * `history` points and a constant acceleration over `short_history`. */
-static void fit_velocity(live_track *lt, int history, int short_history, const double prior[3])
+/* (contract in link_internal.h) */
+void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
+                            const double prior[3])
 {
   const elfm_track *t = lt->t;
   size_t n = t->n;
@@ -313,18 +264,12 @@ static void fit_velocity(live_track *lt, int history, int short_history, const d
   }
   k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
   if (n - k0 < 4) return;
-  lt->has_short = fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
+  lt->has_short = elfm_link_fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
 }
 
-/* Position after dt_ms of a constant-rate turn (the coordinated-turn
- * model): the velocity v keeps its length and rotates at omega = v x a /
- * |v|^2, the part of the acceleration normal to it; the tangential part is
- * dropped. Why: beyond a few frames an extrapolated acceleration diverges
- * and a straight line leaves a helix (flow beads turn ~17 degrees per ms),
- * while the turn stays on the circle of radius |v| / |omega|:
- *   p(t) = p0 + v sin(w t) / w + (k x v)(1 - cos(w t)) / w,  k = omega / w. */
-static void predict_turn(const double p0[3], const double v[3], const double acc[3],
-                         double dt_ms, double out[3])
+/* (the model, and why: link_internal.h) */
+void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
+                            double dt_ms, double out[3])
 {
   double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
   double om[3] = {0, 0, 0};
@@ -342,12 +287,6 @@ static void predict_turn(const double p0[3], const double v[3], const double acc
   double kv[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
   double s = sin(w * dt_ms) / w, c = (1 - cos(w * dt_ms)) / w;
   for (int a = 0; a < 3; a++) out[a] = p0[a] + v[a] * s + kv[a] * c;
-}
-
-/* The track's velocity now: the short fit's at its last point, else the long one. */
-static const double *current_velocity(const live_track *lt)
-{
-  return lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
 }
 
 /* Mean squared anisotropic distance from each point of y to the nearest of
@@ -388,7 +327,7 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
 {
   const elfm_link_options *o = &l->o;
   const size_t nl = l->n_live;
-  elfm_status st = reserve(l, nl, nd, err);
+  elfm_status st = elfm_link_reserve(l, nl, nd, err);
   if (st != ELFM_OK) return st;
   int nr = 0, nc = 0;
   for (size_t i = 0; i < nl; i++) {
@@ -398,7 +337,7 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
   }
   if (nr == 0 || nc == 0 || nr > 500 || nc > 500) return ELFM_OK;
   size_t need = (size_t)nr * (size_t)nc;
-  st = reserve_cost(l, need, err);
+  st = elfm_link_reserve_cost(l, need, err);
   if (st != ELFM_OK) return st;
   const double g2 = o->stitch_gate_um * o->stitch_gate_um;
   int any = 0;
@@ -414,7 +353,7 @@ static elfm_status stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *
        * 1.5 x the faster one's speed. Without it a bead trailing another on
        * the same line (stage scene) lies on the other's path, and stitching
        * them ran tracks backwards (stage alpha 0.717 -> 0.075). */
-      const double *vd = current_velocity(d), *vy = current_velocity(y);
+      const double *vd = elfm_link_current_velocity(d), *vy = elfm_link_current_velocity(y);
       double sd = sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]),
              sy = sqrt(vy[0] * vy[0] + vy[1] * vy[1] + vy[2] * vy[2]);
       double reach = o->stitch_gate_um + 1.5 * (sd > sy ? sd : sy) *
@@ -470,11 +409,12 @@ static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_det
   if (hk < 4 || tk < 4) return INFINITY;
   const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
   double hpos[3], hvel[3], hacc[3], tpos[3], tvel[3], tacc[3], a[3], b[3];
-  if (!fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) || !fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
+  if (!elfm_link_fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) ||
+      !elfm_link_fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
     return INFINITY;
   int64_t tm = th + (tt - th) / 2;
-  predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
-  predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
+  elfm_link_predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
+  elfm_link_predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
   double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
   return dx * dx + dy * dy + dz * dz;
 }
@@ -511,7 +451,7 @@ static void refresh_state(const elfm_link_options *o, live_track *lt)
   lt->last[0] = p->x_um;
   lt->last[1] = p->y_um;
   lt->last[2] = p->z_um;
-  fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
+  elfm_link_fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
 }
 
 /* 6. Swap review, a deferred decision at close passes. Two flow beads
@@ -617,8 +557,9 @@ elfm_track *elfm_link_pop_finished(elfm_linker *l)
 static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elfm_error *err)
 {
   if (l->o.lag_tau_us > 0 && lt->t->n >= 2)
-    elfm_detection_correct_lag_lead(d, current_velocity(lt)[0], current_velocity(lt)[1],
-                                    current_velocity(lt)[2], l->o.lag_tau_us,
+    elfm_detection_correct_lag_lead(d, elfm_link_current_velocity(lt)[0],
+                                    elfm_link_current_velocity(lt)[1],
+                                    elfm_link_current_velocity(lt)[2], l->o.lag_tau_us,
                                     l->o.lead_sigmas);
   elfm_status st = elfm_track_append(lt->t, d, err);
   if (st != ELFM_OK) return st;
@@ -627,7 +568,7 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
   lt->last[0] = d->x_um;
   lt->last[1] = d->y_um;
   lt->last[2] = d->z_um;
-  fit_velocity(lt, l->o.history, l->o.short_history, l->o.prior_velocity_um_per_ms);
+  elfm_link_fit_velocity(lt, l->o.history, l->o.short_history, l->o.prior_velocity_um_per_ms);
   if (l->o.lag_tau_us > 0 && lt->t->n == 2) {
     /* the first velocity: correct the two points it came from alike, so
      * later fits do not mix corrected and uncorrected points */
@@ -681,7 +622,7 @@ static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_
     for (int a = 0; a < 3; a++)
       lt->pred[a] = lt->fit_pos[a] + lt->fit_vel[a] * dt_ms + 0.5 * lt->fit_acc[a] * dt_ms * dt_ms;
   else if (lt->has_short)  /* long gap: keep turning, at constant speed */
-    predict_turn(lt->fit_pos, lt->fit_vel, lt->fit_acc, dt_ms, lt->pred);
+    elfm_link_predict_turn(lt->fit_pos, lt->fit_vel, lt->fit_acc, dt_ms, lt->pred);
   else
     for (int a = 0; a < 3; a++) lt->pred[a] = lt->last[a] + lt->vel_um_per_ms[a] * dt_ms;
   /* The gate widens with each missed frame, more for fast objects: an
@@ -714,7 +655,7 @@ static int in_trail(const elfm_linker *l, size_t nt, const elfm_detection *det,
     int k = l->track_det[i];
     const live_track *lt = &l->live[i];
     if (k < 0 || lt->t->n < 3) continue;  /* needs a velocity from >= 2 earlier points */
-    const double *v = current_velocity(lt);
+    const double *v = elfm_link_current_velocity(lt);
     double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     if (!(speed > 0)) continue;
     double e[3] = {d->x_um - det[k].x_um, d->y_um - det[k].y_um, d->z_um - det[k].z_um};
@@ -765,7 +706,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   }
   l->n_live = w;
   const size_t nt = l->n_live, nd = (size_t)n;
-  elfm_status st = reserve(l, nt, nd, err);
+  elfm_status st = elfm_link_reserve(l, nt, nd, err);
   if (st != ELFM_OK) return st;
   for (size_t j = 0; j < nd; j++) {
     det[j].frame = frame;
@@ -889,7 +830,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       continue;
     }
     size_t need = (size_t)nr * (size_t)nc;
-    st = reserve_cost(l, need, err);
+    st = elfm_link_reserve_cost(l, need, err);
     if (st != ELFM_OK) return st;
     for (size_t k = 0; k < need; k++) l->cost[k] = INFINITY;
     for (int r = 0; r < nr; r++) {
@@ -918,7 +859,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       if (l->det_track[j] < 0) l->cols[nc++] = (int)j;
     size_t need = (size_t)nr * (size_t)nc;
     if (nr > 0 && nc > 0 && nr <= 500 && nc <= 500) {
-      st = reserve_cost(l, need, err);
+      st = elfm_link_reserve_cost(l, need, err);
       if (st != ELFM_OK) return st;
       int any = 0;
       for (int r = 0; r < nr; r++) {
@@ -952,7 +893,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       l->live[i].review = 1;
     }
     l->det_id[j] = l->live[i].t->id;
-    const double *v = current_velocity(&l->live[i]);
+    const double *v = elfm_link_current_velocity(&l->live[i]);
     l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
   }
   const size_t nt_before_births = nt;

@@ -1,0 +1,107 @@
+/* link_internal.h — private to tracker/: the linker's state and the
+ * helpers of link.c (scratch, fits, prediction) that more than one step
+ * uses. Not public: callers use elfm_link.h. */
+#ifndef ELFM_LINK_INTERNAL_H
+#define ELFM_LINK_INTERNAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "elfm_link.h"
+#include "elfm_score.h"
+
+/* A track still being extended, with its fits and this frame's prediction. */
+typedef struct live_track {
+  elfm_track *t;
+  int64_t last_frame, last_t_us;
+  double last[3];           /* last real position */
+  double vel_um_per_ms[3];  /* long constant-velocity fit; the prior with one point */
+  double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
+  int has_short;            /* the short fit exists (>= 4 points) */
+  double pred[3];           /* prediction for the current frame */
+  double gate_um;           /* gate for the current frame */
+  int missed;               /* frames missed before the current frame */
+  size_t tail0;             /* index of the point that closed the last gap (0 none) */
+  int review;               /* that gap closing is still to be reviewed (step 6) */
+} live_track;
+
+/* One candidate detection of a track and the cost of joining it. */
+typedef struct link_cand {
+  int det;
+  double cost;
+} link_cand;
+
+/* The linker (opaque in elfm_link.h). */
+struct elfm_linker {
+  elfm_link_options o;
+  live_track *live;
+  size_t n_live, cap_live;
+  elfm_track **fin;          /* FIFO of finished tracks: fin[fin_head .. fin_head+fin_n) */
+  size_t fin_head, fin_n, fin_cap;
+  int64_t next_id, last_frame, last_t_us;
+  int started;
+  /* per-frame scratch, grown on demand */
+  size_t cap_det, cap_trk;
+  float *pts;                /* n_det x 3, z scaled by 1/kz */
+  int *nn_idx;               /* max_candidates */
+  float *nn_dist;
+  link_cand *cand;           /* n_trk x max_candidates */
+  int *n_cand;               /* per track */
+  int *uf;                   /* union-find over tracks then detections */
+  int *comp_of, *comp_start, *comp_fill, *members; /* grouping */
+  int *track_det, *det_track, *det_local;
+  int64_t *det_id;
+  double *det_speed;
+  size_t cap_cost;
+  double *cost;
+  int *row_to_col;
+  int *rows, *cols;
+  elfm_assign_workspace *aws;
+};
+
+/* The track's velocity now (um/ms): the short fit's at its last point, else
+ * the long one. */
+static inline const double *elfm_link_current_velocity(const live_track *lt)
+{
+  return lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
+}
+
+/* link.c: scratch. Both only grow, keep their contents, and on
+ * ELFM_ERR_NOMEM (err filled) leave every array valid and owned by l. */
+
+/* Make the per-frame scratch (candidates, grouping, rows/cols, det_*) hold
+ * n_trk tracks and n_det detections. */
+elfm_status elfm_link_reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_error *err);
+
+/* The cost matrix l->cost holds at least `need` entries (nr x nc of one
+ * assignment). */
+elfm_status elfm_link_reserve_cost(elfm_linker *l, size_t need, elfm_error *err);
+
+/* link.c: fits and prediction. */
+
+/* Least-squares p = c0 + c1 t + c2 t^2 over pts[k0 .. k1) (t in ms from
+ * tr): position, velocity and acceleration at tr. 0 when fewer than 3
+ * distinct times (outputs untouched). */
+int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
+                       double pos[3], double vel[3], double acc[3]);
+
+/* Least-squares fits over the recent real points of lt->t (at least one),
+ * times relative to the last point in ms (never float absolute times): a
+ * constant velocity over `history` points into lt->vel_um_per_ms (prior
+ * when fewer than 2 distinct times) and a constant acceleration over
+ * `short_history` into lt->fit_pos/fit_vel/fit_acc (lt->has_short says
+ * whether it exists: >= 4 points, 3 distinct times). */
+void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
+                            const double prior[3]);
+
+/* Position after dt_ms of a constant-rate turn (the coordinated-turn
+ * model): the velocity v keeps its length and rotates at omega = v x a /
+ * |v|^2, the part of the acceleration normal to it; the tangential part is
+ * dropped. Why: beyond a few frames an extrapolated acceleration diverges
+ * and a straight line leaves a helix (flow beads turn ~17 degrees per ms),
+ * while the turn stays on the circle of radius |v| / |omega|:
+ *   p(t) = p0 + v sin(w t) / w + (k x v)(1 - cos(w t)) / w,  k = omega / w. */
+void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
+                            double dt_ms, double out[3]);
+
+#endif
