@@ -1,6 +1,8 @@
-/* link_internal.h — private to tracker/: the linker's state and the
- * helpers of link.c (scratch, fits, prediction) that more than one step
- * uses. Not public: callers use elfm_link.h. */
+/* link_internal.h — private to tracker/: the linker's state and the helpers
+ * shared by link.c (life cycle and the per-frame linking, steps 1-4 of
+ * elfm_link_step, see elfm_link.h) and link_repair.c (the repair steps 5
+ * and 6 that step runs last: stitching and swap review). Not public:
+ * callers use elfm_link.h. */
 #ifndef ELFM_LINK_INTERNAL_H
 #define ELFM_LINK_INTERNAL_H
 
@@ -103,5 +105,20 @@ void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
  *   p(t) = p0 + v sin(w t) / w + (k x v)(1 - cos(w t)) / w,  k = omega / w. */
 void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
                             double dt_ms, double out[3]);
+
+/* link_repair.c: the repair steps, run by elfm_link_step after the frame's
+ * attachments and births; nd is the frame's detection count (their
+ * det_id are relabelled when a track they joined changes). */
+
+/* Step 5, stitching (o.stitch_points > 0): each track that reached
+ * stitch_points points in `frame` may be appended to a live track dark
+ * since before its first point; the young track is then freed and removed
+ * from l->live (order kept). */
+elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err);
+
+/* Step 6, swap review (o.swap_points > 0): each gap closing still to be
+ * reviewed whose tail has swap_points points is revisited once; the tails
+ * of two live tracks are exchanged when that fits better. */
+elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err);
 
 #endif

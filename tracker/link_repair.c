@@ -1,0 +1,251 @@
+/* link_repair.c — the linker's repair steps (see elfm_link.h), run at the
+ * end of each elfm_link_step once the frame's detections are attached and
+ * births made: they rewrite tracks already linked rather than link new
+ * detections.
+ *  5. stitching: a young track that retraces the recent path of a dormant
+ *     one is appended to it (elfm_link_stitch);
+ *  6. swap review: a gap closing that does not fit is revisited once its
+ *     tail has a few points, and two tracks' tails are exchanged when that
+ *     fits better (elfm_link_review_swaps).
+ * The per-frame linking, the scratch and the fits they use are in link.c;
+ * the linker's state in link_internal.h. */
+#include "link_internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Mean squared anisotropic distance from each point of y to the nearest of
+ * the last `history` real points of d (its recent path). */
+static double path_distance2(const elfm_track *y, const elfm_track *d, size_t history, double kz)
+{
+  size_t h0 = d->n > history ? d->n - history : 0;
+  double sum = 0;
+  for (size_t j = 0; j < y->n; j++) {
+    double best = INFINITY;
+    for (size_t k = h0; k < d->n; k++) {
+      double ex = y->pts[j].x_um - d->pts[k].x_um, ey = y->pts[j].y_um - d->pts[k].y_um,
+             ez = (y->pts[j].z_um - d->pts[k].z_um) / kz;
+      double e2 = ex * ex + ey * ey + ez * ez;
+      if (e2 < best) best = e2;
+    }
+    sum += best;
+  }
+  return y->n ? sum / (double)y->n : INFINITY;
+}
+
+/* 5. Stitching: a track that has just reached stitch_points real points
+ * (young) may be the continuation of a live track dark since before the
+ * young one's first point (dormant). The forward gap closing cannot find
+ * it after a long gap on a curved path: flow beads circle (radius 8-20 um,
+ * ~17 degrees per ms), and an extrapolation over 10-40 frames missed the
+ * true continuation by 20-140 um, no closer than other beads' tracks. But
+ * such paths recirculate (a droplet's streaming; a blinking bead stays
+ * put), so the object comes back onto its own earlier path: the young
+ * track's points are compared with the dormant one's recent path (mean
+ * squared distance to its nearest point). Measured on flow 100 ms seeds 1
+ * and 2 over all dormant/young pairs: the same bead 1.0-7.0 um (9 of 14
+ * such pairs; the others 11-20 um), different beads >= 10 um except one
+ * track that had already swapped. Pairs within stitch_gate_um are assigned
+ * optimally; the young track's points are appended to the dormant one,
+ * which continues with the young one's state (its own fits). */
+elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const size_t nl = l->n_live;
+  elfm_status st = elfm_link_reserve(l, nl, nd, err);
+  if (st != ELFM_OK) return st;
+  int nr = 0, nc = 0;
+  for (size_t i = 0; i < nl; i++) {
+    const live_track *lt = &l->live[i];
+    if (lt->last_frame < frame && lt->t->n >= (size_t)o->stitch_points) l->rows[nr++] = (int)i;
+    else if (lt->last_frame == frame && lt->t->n == (size_t)o->stitch_points) l->cols[nc++] = (int)i;
+  }
+  if (nr == 0 || nc == 0 || nr > 500 || nc > 500) return ELFM_OK;
+  size_t need = (size_t)nr * (size_t)nc;
+  st = elfm_link_reserve_cost(l, need, err);
+  if (st != ELFM_OK) return st;
+  const double g2 = o->stitch_gate_um * o->stitch_gate_um;
+  int any = 0;
+  for (int c = 0; c < nc; c++) {
+    const live_track *y = &l->live[l->cols[c]];
+    for (int r = 0; r < nr; r++) {
+      const live_track *d = &l->live[l->rows[r]];
+      double *cost = &l->cost[(size_t)r * nc + c];
+      *cost = INFINITY;
+      int64_t gap = y->t->pts[0].frame - d->last_frame - 1;
+      if (gap < 0 || gap > o->max_gap_frames) continue;
+      /* Reachable: from the dormant end to the young start at no more than
+       * 1.5 x the faster one's speed. Without it a bead trailing another on
+       * the same line (stage scene) lies on the other's path, and stitching
+       * them ran tracks backwards (stage alpha 0.717 -> 0.075). */
+      const double *vd = elfm_link_current_velocity(d), *vy = elfm_link_current_velocity(y);
+      double sd = sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]),
+             sy = sqrt(vy[0] * vy[0] + vy[1] * vy[1] + vy[2] * vy[2]);
+      double reach = o->stitch_gate_um + 1.5 * (sd > sy ? sd : sy) *
+                                             (double)(y->t->pts[0].t_us - d->last_t_us) * 1e-3;
+      double jx = y->t->pts[0].x_um - d->last[0], jy = y->t->pts[0].y_um - d->last[1],
+             jz = (y->t->pts[0].z_um - d->last[2]) / o->kz;
+      if (jx * jx + jy * jy + jz * jz > reach * reach) continue;
+      double h2 = path_distance2(y->t, d->t, (size_t)o->stitch_history, o->kz);
+      if (h2 < g2) {
+        *cost = h2 / g2;
+        any = 1;
+      }
+    }
+  }
+  if (!any) return ELFM_OK;
+  st = elfm_assign_hungarian(l->cost, nr, nc, l->row_to_col, NULL, l->aws, err);
+  if (st != ELFM_OK) return st;
+  for (int r = 0; r < nr; r++) {
+    int c = l->row_to_col[r];
+    if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
+    live_track *d = &l->live[l->rows[r]], *y = &l->live[l->cols[c]];
+    for (size_t k = 0; k < y->t->n; k++) {
+      st = elfm_track_append(d->t, &y->t->pts[k], err);
+      if (st != ELFM_OK) return st;
+    }
+    /* this frame's detection now belongs to the dormant track */
+    for (size_t j = 0; j < nd; j++)
+      if (l->det_id[j] == y->t->id) l->det_id[j] = d->t->id;
+    elfm_track *keep = d->t;
+    elfm_track_free(y->t);
+    *d = *y;      /* continue with the young track's state (its own fits) */
+    d->t = keep;
+    d->tail0 = 0; /* y's gap closing (if any) indexed y's points */
+    d->review = 0;
+    y->t = NULL;  /* removed below, keeping the order */
+  }
+  size_t w = 0;
+  for (size_t i = 0; i < nl; i++)
+    if (l->live[i].t) l->live[w++] = l->live[i];
+  l->n_live = w;
+  return ELFM_OK;
+}
+
+/* Squared anisotropic distance, at the middle of the gap, between the end
+ * state of hp[0 .. hn) and the start state of tp[0 .. tn) (quadratic fits
+ * over up to short_history points, turning as predict_track in link.c); INFINITY
+ * when either has fewer than 4 points. */
+static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp, size_t tn,
+                             int short_history, double kz)
+{
+  size_t sh = (size_t)short_history;
+  size_t hk = hn < sh ? hn : sh, tk = tn < sh ? tn : sh;
+  if (hk < 4 || tk < 4) return INFINITY;
+  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
+  double hpos[3], hvel[3], hacc[3], tpos[3], tvel[3], tacc[3], a[3], b[3];
+  if (!elfm_link_fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) ||
+      !elfm_link_fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
+    return INFINITY;
+  int64_t tm = th + (tt - th) / 2;
+  elfm_link_predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
+  elfm_link_predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
+  double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+/* Replace track a's points from a_t0 on by b's from b_t0 on and vice versa. */
+static elfm_status exchange_tails(elfm_track *a, size_t a_t0, elfm_track *b, size_t b_t0,
+                                  elfm_error *err)
+{
+  size_t an = a_t0 + (b->n - b_t0), bn = b_t0 + (a->n - a_t0);
+  elfm_detection *pa = malloc((an ? an : 1) * sizeof *pa), *pb = malloc((bn ? bn : 1) * sizeof *pb);
+  if (!pa || !pb) {
+    free(pa);
+    free(pb);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+  }
+  memcpy(pa, a->pts, a_t0 * sizeof *pa);
+  memcpy(pa + a_t0, b->pts + b_t0, (b->n - b_t0) * sizeof *pa);
+  memcpy(pb, b->pts, b_t0 * sizeof *pb);
+  memcpy(pb + b_t0, a->pts + a_t0, (a->n - a_t0) * sizeof *pb);
+  free(a->pts);
+  free(b->pts);
+  a->pts = pa;
+  a->n = a->cap = an;
+  b->pts = pb;
+  b->n = b->cap = bn;
+  return ELFM_OK;
+}
+
+/* lt's last point and fits again from its track's points, after
+ * exchange_tails rewrote them. */
+static void refresh_state(const elfm_link_options *o, live_track *lt)
+{
+  const elfm_detection *p = &lt->t->pts[lt->t->n - 1];
+  lt->last_frame = p->frame;
+  lt->last_t_us = p->t_us;
+  lt->last[0] = p->x_um;
+  lt->last[1] = p->y_um;
+  lt->last[2] = p->z_um;
+  elfm_link_fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
+}
+
+/* 6. Swap review, a deferred decision at close passes. Two flow beads
+ * passing within a few um give one detection for a few frames; one track
+ * coasts, the other takes the shared detections, and when they part the
+ * coasting track may close its gap on the other bead (flow seed 2: beads 5
+ * and 16, frames 45-52; seed 7: beads 2 and 15). A frame later nothing
+ * tells them apart, but once the tails have swap_points points their
+ * motion does. So a track B that closed a gap (head up to frame hB, tail
+ * from fB) is revisited once its tail has swap_points points, if its own
+ * junction does not fit (head and tail extrapolated to the middle of the
+ * gap miss each other by more than gate_um). Every other track A with a
+ * point inside the gap (hB < frame <= fB) may have taken B's object there:
+ * for each such split of A, B's head joined to A's tail and A's head to
+ * B's tail are compared with the junctions as they are; when the best
+ * exchange fits swap_ratio times better (root of the summed squared
+ * distances), the tails are exchanged. Each gap closing is reviewed once. */
+elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const size_t K = (size_t)o->swap_points;
+  const int sh = o->short_history;
+  const double kz = o->kz;
+  for (size_t b = 0; b < l->n_live; b++) {
+    live_track *B = &l->live[b];
+    if (!B->review || B->t->n - B->tail0 < K) continue;
+    const elfm_detection *bp = B->t->pts;
+    const size_t bt = B->tail0, bn = B->t->n;
+    const int64_t hB = bp[bt - 1].frame, fB = bp[bt].frame;
+    const double jb = junction_cost2(bp, bt, bp + bt, bn - bt, sh, kz);
+    double best_ratio = o->swap_ratio * o->swap_ratio;
+    size_t best_a = 0, best_s = 0;
+    int found = 0;
+    for (size_t a = 0; a < l->n_live; a++) {
+      if (a == b) continue;
+      const elfm_detection *ap = l->live[a].t->pts;
+      const size_t an = l->live[a].t->n;
+      for (size_t s = an; s-- > 4;) {
+        if (ap[s].frame <= hB) break;
+        if (ap[s].frame > fB || an - s < K) continue;
+        double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, kz);
+        double alt = junction_cost2(bp, bt, ap + s, an - s, sh, kz) +
+                     junction_cost2(ap, s, bp + bt, bn - bt, sh, kz);
+        if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur) {
+          best_ratio = alt / cur;
+          best_a = a;
+          best_s = s;
+          found = 1;
+        }
+      }
+    }
+    if (found) {
+      live_track *A = &l->live[best_a];
+      elfm_status st = exchange_tails(B->t, bt, A->t, best_s, err);
+      if (st != ELFM_OK) return st;
+      for (size_t j = 0; j < nd; j++) {
+        if (l->det_id[j] == A->t->id) l->det_id[j] = B->t->id;
+        else if (l->det_id[j] == B->t->id) l->det_id[j] = A->t->id;
+      }
+      refresh_state(o, A);
+      refresh_state(o, B);
+      A->tail0 = bt;
+      A->review = 0;
+      B->tail0 = best_s;
+    }
+    B->review = 0;
+  }
+  return ELFM_OK;
+}
