@@ -22,6 +22,13 @@
 /* Frame indices and ids must be integers well inside the double range. */
 #define SCORE_MAX_INDEX 1e15
 
+/* Required columns (elfm_score.h); the column index arrays c[] below
+ * follow this order. */
+static const char *const truth_cols[] = {"id", "t_us", "x_um", "y_um", "z_um", "brightness"};
+static const char *const det_cols[] = {"frame", "t_us", "x_um", "y_um", "z_um"};
+static const char *const track_cols[] = {"track_id", "frame", "t_us", "x_um", "y_um",
+                                         "z_um", "raw_x_um", "raw_y_um", "raw_z_um"};
+
 typedef struct {
   double eps, kz;
 } gate_t;
@@ -100,6 +107,30 @@ static elfm_status group_by_id(const elfm_table *t, int col, keyed_t *ord, elfm_
   return ELFM_OK;
 }
 
+/* Rows of t grouped by the id in column c_id (group_by_id) into *ord
+ * (n_rows entries; the caller frees it). Within an id the value in column
+ * c_seq must increase (truth times, a track's frames): *bad receives the
+ * first position in *ord whose value does not exceed its predecessor's,
+ * or n_rows when there is none; the caller words the error. */
+static elfm_status group_rows(const elfm_table *t, int c_id, int c_seq, keyed_t **ord,
+                              size_t *bad, elfm_error *err)
+{
+  size_t n = t->n_rows;
+  keyed_t *o = malloc((n ? n : 1) * sizeof *o);
+  if (!o) return nomem(err);
+  elfm_status s = group_by_id(t, c_id, o, err);
+  if (s != ELFM_OK) { free(o); return s; }
+  *bad = n;
+  for (size_t i = 1; i < n; i++)
+    if (o[i].key == o[i - 1].key &&
+        !(elfm_table_get(t, o[i].idx, c_seq) > elfm_table_get(t, o[i - 1].idx, c_seq))) {
+      *bad = i;
+      break;
+    }
+  *ord = o;
+  return ELFM_OK;
+}
+
 /* Union-find over nodes 0..n-1 (path halving). */
 static int uf_find(int *parent, int a)
 {
@@ -130,6 +161,21 @@ static elfm_status get_req(const elfm_table *t, size_t r, int col, const char *n
     return elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[r],
                                "column %s is empty (a value is required here)", name);
   *out = v;
+  return ELFM_OK;
+}
+
+/* The checks every row of truth.csv and tracks.csv passes first: columns
+ * c[0..n_req) hold values, and column c[0] (the id) is an integer. */
+static elfm_status check_row(const elfm_table *t, size_t r, const int *c,
+                             const char *const *names, int n_req, elfm_error *err)
+{
+  double v;
+  elfm_status s;
+  for (int k = 0; k < n_req; k++)
+    if ((s = get_req(t, r, c[k], names[k], &v, err)) != ELFM_OK) return s;
+  if (!is_index(elfm_table_get(t, r, c[0])))
+    return elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[r],
+                               "column %s must be an integer", names[0]);
   return ELFM_OK;
 }
 
@@ -305,41 +351,33 @@ static elfm_status truth_grow(truth_t *t, int64_t *cap, elfm_error *err)
 static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t *fr,
                                const elfm_score_options *o, elfm_error *err)
 {
-  static const char *const names[] = {"id", "t_us", "x_um", "y_um", "z_um", "brightness"};
   int c[6];
-  elfm_status s = elfm_table_require(tt, names, 6, c, err);
+  elfm_status s = elfm_table_require(tt, truth_cols, 6, c, err);
   if (s != ELFM_OK) return s;
   memset(tr, 0, sizeof *tr);
   size_t n = tt->n_rows;
   /* Validate every row. */
   for (size_t r = 0; r < n; r++) {
-    double v;
-    for (int k = 0; k < 6; k++)
-      if ((s = get_req(tt, r, c[k], names[k], &v, err)) != ELFM_OK) return s;
-    if (!is_index(elfm_table_get(tt, r, c[0])))
-      return elfm_error_set_line(err, ELFM_ERR_FORMAT, tt->path, tt->line[r],
-                                 "column id must be an integer");
+    if ((s = check_row(tt, r, c, truth_cols, 6, err)) != ELFM_OK) return s;
     if (elfm_table_get(tt, r, c[5]) < 0)
       return elfm_error_set_line(err, ELFM_ERR_RANGE, tt->path, tt->line[r],
                                  "brightness %g is negative", elfm_table_get(tt, r, c[5]));
   }
-  /* Group rows per id (stable: file order within an id). */
-  keyed_t *ord = malloc((n ? n : 1) * sizeof *ord);
-  if (!ord) return nomem(err);
-  if ((s = group_by_id(tt, c[0], ord, err)) != ELFM_OK) { free(ord); return s; }
-  int n_obj = 0;
-  for (size_t i = 0; i < n; i++) {
-    if (i == 0 || ord[i].key != ord[i - 1].key) { n_obj++; continue; }
-    double t0 = elfm_table_get(tt, ord[i - 1].idx, c[1]), t1 = elfm_table_get(tt, ord[i].idx, c[1]);
-    if (!(t1 > t0)) {
-      elfm_error_set_line(err, ELFM_ERR_FORMAT, tt->path, tt->line[ord[i].idx],
-                          "truth for id %.0f is not sorted by time: t_us %.0f follows %.0f "
-                          "(line %lld)",
-                          ord[i].key, t1, t0, (long long)tt->line[ord[i - 1].idx]);
-      free(ord);
-      return ELFM_ERR_FORMAT;
-    }
+  /* Group rows per id (stable: file order within an id), times increasing. */
+  keyed_t *ord;
+  size_t bad;
+  if ((s = group_rows(tt, c[0], c[1], &ord, &bad, err)) != ELFM_OK) return s;
+  if (bad < n) {
+    double t0 = elfm_table_get(tt, ord[bad - 1].idx, c[1]), t1 = elfm_table_get(tt, ord[bad].idx, c[1]);
+    elfm_error_set_line(err, ELFM_ERR_FORMAT, tt->path, tt->line[ord[bad].idx],
+                        "truth for id %.0f is not sorted by time: t_us %.0f follows %.0f "
+                        "(line %lld)",
+                        ord[bad].key, t1, t0, (long long)tt->line[ord[bad - 1].idx]);
+    free(ord);
+    return ELFM_ERR_FORMAT;
   }
+  int n_obj = 0;
+  for (size_t i = 0; i < n; i++) n_obj += (i == 0 || ord[i].key != ord[i - 1].key);
   tr->n_obj = n_obj;
   tr->obj_off = malloc(((size_t)n_obj + 1) * sizeof *tr->obj_off);
   if (!tr->obj_off) { free(ord); return nomem(err); }
@@ -425,9 +463,8 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
 static elfm_status truth_ids_seen(const elfm_table *tt, const elfm_score_options *o, int *n_ids,
                                   elfm_error *err)
 {
-  static const char *const names[] = {"id", "t_us", "x_um", "y_um", "z_um", "brightness"};
   int c[6];
-  elfm_status s = elfm_table_require(tt, names, 6, c, err);
+  elfm_status s = elfm_table_require(tt, truth_cols, 6, c, err);
   if (s != ELFM_OK) return s;
   double *ids = malloc((tt->n_rows + 1) * sizeof *ids);
   if (!ids) return nomem(err);
@@ -666,17 +703,11 @@ static void cands_free(cands_t *c)
 static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, const int *c,
                                const frames_t *fr, elfm_error *err)
 {
-  static const char *const names[] = {"track_id", "frame", "t_us", "x_um", "y_um", "z_um"};
   memset(cd, 0, sizeof *cd);
   size_t n = t->n_rows;
   elfm_status s;
   for (size_t r = 0; r < n; r++) {
-    double v;
-    for (int k = 0; k < 6; k++)
-      if ((s = get_req(t, r, c[k], names[k], &v, err)) != ELFM_OK) return s;
-    if (!is_index(elfm_table_get(t, r, c[0])))
-      return elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[r],
-                                 "column track_id must be an integer");
+    if ((s = check_row(t, r, c, track_cols, 6, err)) != ELFM_OK) return s;
     int n_raw = 0;
     for (int k = 6; k < 9; k++) n_raw += isfinite(elfm_table_get(t, r, c[k])) ? 1 : 0;
     if (n_raw != 0 && n_raw != 3)
@@ -684,23 +715,19 @@ static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, 
                                  "raw_x_um, raw_y_um, raw_z_um must be all present (a detection) "
                                  "or all empty (a gap-closing fill)");
   }
-  keyed_t *ord = malloc((n ? n : 1) * sizeof *ord);
-  if (!ord) return nomem(err);
-  if ((s = group_by_id(t, c[0], ord, err)) != ELFM_OK) { free(ord); return s; }
-  int n_tracks = 0;
-  for (size_t i = 0; i < n; i++) {
-    if (i > 0 && ord[i].key == ord[i - 1].key) {
-      double f0 = elfm_table_get(t, ord[i - 1].idx, c[1]), f1 = elfm_table_get(t, ord[i].idx, c[1]);
-      if (!(f1 > f0)) {
-        elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[ord[i].idx],
-                            "track %.0f: frame %.0f follows frame %.0f (line %lld); a track's "
-                            "rows must be in increasing frame order, one per frame",
-                            ord[i].key, f1, f0, (long long)t->line[ord[i - 1].idx]);
-        free(ord);
-        return ELFM_ERR_FORMAT;
-      }
-    }
+  keyed_t *ord;
+  size_t bad;
+  if ((s = group_rows(t, c[0], c[1], &ord, &bad, err)) != ELFM_OK) return s;
+  if (bad < n) {
+    double f0 = elfm_table_get(t, ord[bad - 1].idx, c[1]), f1 = elfm_table_get(t, ord[bad].idx, c[1]);
+    elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[ord[bad].idx],
+                        "track %.0f: frame %.0f follows frame %.0f (line %lld); a track's "
+                        "rows must be in increasing frame order, one per frame",
+                        ord[bad].key, f1, f0, (long long)t->line[ord[bad - 1].idx]);
+    free(ord);
+    return ELFM_ERR_FORMAT;
   }
+  int n_tracks = 0;
   /* Count tracks with at least one real point. */
   for (size_t i = 0; i < n;) {
     size_t j = i;
@@ -1029,13 +1056,10 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
                           "gate eps %g um and kz %g must be positive", opt->eps_um, opt->kz);
   gate_t g = {opt->eps_um, opt->kz};
 
-  static const char *const dnames[] = {"frame", "t_us", "x_um", "y_um", "z_um"};
-  static const char *const tnames[] = {"track_id", "frame", "t_us", "x_um", "y_um",
-                                       "z_um", "raw_x_um", "raw_y_um", "raw_z_um"};
   int cd[5], ct[9];
   elfm_status s;
-  if (detections && (s = elfm_table_require(detections, dnames, 5, cd, err)) != ELFM_OK) return s;
-  if (tracks && (s = elfm_table_require(tracks, tnames, 9, ct, err)) != ELFM_OK) return s;
+  if (detections && (s = elfm_table_require(detections, det_cols, 5, cd, err)) != ELFM_OK) return s;
+  if (tracks && (s = elfm_table_require(tracks, track_cols, 9, ct, err)) != ELFM_OK) return s;
 
   frames_t fr = {0, 0, NULL};
   truth_t tr;
@@ -1056,7 +1080,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
     for (size_t r = 0; r < detections->n_rows; r++) {
       double v[3] = {0, 0, 0};
       for (int a = 0; a < 3; a++)
-        if ((s = get_req(detections, r, cd[2 + a], dnames[2 + a], &v[a], err)) != ELFM_OK) goto done;
+        if ((s = get_req(detections, r, cd[2 + a], det_cols[2 + a], &v[a], err)) != ELFM_OK) goto done;
       dp.frame[dp.n] = (int)((int64_t)elfm_table_get(detections, r, cd[0]) - fr.f_min);
       dp.x[dp.n] = v[0];
       dp.y[dp.n] = v[1];
