@@ -300,15 +300,49 @@ static elfm_status frames_build(frames_t *fr, const elfm_table *dets, const int 
 }
 
 /* ---------------------------------------------------------------------- */
+/* Points at frame slots: the truth samples that count, the detections, the
+ * candidate tracks' real points. */
+
+typedef struct {
+  int64_t n;         /* points */
+  int *frame;        /* frame slot (0..n_frames-1) */
+  double *x, *y, *z; /* um */
+} points_t;
+
+static void points_free(points_t *p)
+{
+  free(p->frame);
+  free(p->x);
+  free(p->y);
+  free(p->z);
+}
+
+/* Room for cap points (at least 1), contents kept. On failure the arrays
+ * that did grow stay in p, so points_free still frees everything. */
+static elfm_status points_reserve(points_t *p, size_t cap, elfm_error *err)
+{
+  size_t m = cap ? cap : 1;
+  int *f = realloc(p->frame, m * sizeof *f);
+  if (f) p->frame = f;
+  double *x = realloc(p->x, m * sizeof *x);
+  if (x) p->x = x;
+  double *y = realloc(p->y, m * sizeof *y);
+  if (y) p->y = y;
+  double *z = realloc(p->z, m * sizeof *z);
+  if (z) p->z = z;
+  if (!f || !x || !y || !z) return nomem(err);
+  return ELFM_OK;
+}
+
+/* ---------------------------------------------------------------------- */
 /* (2) Truth at the frames */
 
 typedef struct {
   int n_obj;
-  int64_t n_pts;
-  /* per object k: visible points [obj_off[k], obj_off[k+1]) in frame order */
+  /* the points that count; those of object k are [obj_off[k], obj_off[k+1])
+   * in frame order */
+  points_t pt;
   int64_t *obj_off;
-  int *pf;            /* frame slot (0..n_frames-1) */
-  double *px, *py, *pz;
   /* per frame slot f: point indices [fr_off[f], fr_off[f+1]) sorted by x */
   int64_t *fr_off;
   int64_t *fr_pt;
@@ -316,11 +350,8 @@ typedef struct {
 
 static void truth_free(truth_t *t)
 {
+  points_free(&t->pt);
   free(t->obj_off);
-  free(t->pf);
-  free(t->px);
-  free(t->py);
-  free(t->pz);
   free(t->fr_off);
   free(t->fr_pt);
 }
@@ -330,22 +361,6 @@ static int inside(const elfm_score_options *o, double x, double y, double z)
   if (!o->have_bounds) return 1;
   return fabs(x) <= o->x_half_um && fabs(y) <= o->y_half_um && z >= o->z_min_um &&
          z <= o->z_max_um;
-}
-
-static elfm_status truth_grow(truth_t *t, int64_t *cap, elfm_error *err)
-{
-  int64_t nc = *cap ? *cap * 2 : 1024;
-  int *pf = realloc(t->pf, (size_t)nc * sizeof *pf);
-  if (pf) t->pf = pf;
-  double *px = realloc(t->px, (size_t)nc * sizeof *px);
-  if (px) t->px = px;
-  double *py = realloc(t->py, (size_t)nc * sizeof *py);
-  if (py) t->py = py;
-  double *pz = realloc(t->pz, (size_t)nc * sizeof *pz);
-  if (pz) t->pz = pz;
-  if (!pf || !px || !py || !pz) return nomem(err);
-  *cap = nc;
-  return ELFM_OK;
 }
 
 static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t *fr,
@@ -388,7 +403,7 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
   while (i < n && s == ELFM_OK) {
     size_t j = i;
     while (j < n && ord[j].key == ord[i].key) j++;
-    tr->obj_off[k] = tr->n_pts;
+    tr->obj_off[k] = tr->pt.n;
     /* Samples ord[i..j) of this object, increasing t. Walk the frames that
      * fall inside its time range with one cursor. */
     double t_first = elfm_table_get(tt, ord[i].idx, c[1]);
@@ -422,35 +437,38 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
       }
       int lit = window_votes >= 0 ? window_votes : val[3] > 0.0;
       if (!lit || !inside(o, val[0], val[1], val[2])) continue;
-      if (tr->n_pts == cap && (s = truth_grow(tr, &cap, err)) != ELFM_OK) break;
-      tr->pf[tr->n_pts] = f;
-      tr->px[tr->n_pts] = val[0];
-      tr->py[tr->n_pts] = val[1];
-      tr->pz[tr->n_pts] = val[2];
-      tr->n_pts++;
+      if (tr->pt.n == cap) {
+        cap = cap ? 2 * cap : 1024;
+        if ((s = points_reserve(&tr->pt, (size_t)cap, err)) != ELFM_OK) break;
+      }
+      tr->pt.frame[tr->pt.n] = f;
+      tr->pt.x[tr->pt.n] = val[0];
+      tr->pt.y[tr->pt.n] = val[1];
+      tr->pt.z[tr->pt.n] = val[2];
+      tr->pt.n++;
     }
     k++;
     i = j;
   }
   free(ord);
   if (s != ELFM_OK) return s;
-  tr->obj_off[n_obj] = tr->n_pts;
+  tr->obj_off[n_obj] = tr->pt.n;
 
   /* Per-frame index, sorted by x within a frame. */
   tr->fr_off = calloc((size_t)fr->n + 1, sizeof *tr->fr_off);
-  tr->fr_pt = malloc(((size_t)tr->n_pts + 1) * sizeof *tr->fr_pt);
-  keyed_t *tmp = malloc(((size_t)tr->n_pts + 1) * sizeof *tmp);
+  tr->fr_pt = malloc(((size_t)tr->pt.n + 1) * sizeof *tr->fr_pt);
+  keyed_t *tmp = malloc(((size_t)tr->pt.n + 1) * sizeof *tmp);
   if (!tr->fr_off || !tr->fr_pt || !tmp) { free(tmp); return nomem(err); }
-  for (int64_t p = 0; p < tr->n_pts; p++) tr->fr_off[tr->pf[p] + 1]++;
+  for (int64_t p = 0; p < tr->pt.n; p++) tr->fr_off[tr->pt.frame[p] + 1]++;
   for (int f = 0; f < fr->n; f++) tr->fr_off[f + 1] += tr->fr_off[f];
   int64_t *fill = malloc(((size_t)fr->n + 1) * sizeof *fill);
   if (!fill) { free(tmp); return nomem(err); }
   memcpy(fill, tr->fr_off, ((size_t)fr->n + 1) * sizeof *fill);
-  for (int64_t p = 0; p < tr->n_pts; p++) tr->fr_pt[fill[tr->pf[p]]++] = p;
+  for (int64_t p = 0; p < tr->pt.n; p++) tr->fr_pt[fill[tr->pt.frame[p]]++] = p;
   free(fill);
   for (int f = 0; f < fr->n; f++) {
     int64_t a = tr->fr_off[f], b = tr->fr_off[f + 1];
-    for (int64_t q = a; q < b; q++) tmp[q - a] = (keyed_t){tr->px[tr->fr_pt[q]], (size_t)tr->fr_pt[q]};
+    for (int64_t q = a; q < b; q++) tmp[q - a] = (keyed_t){tr->pt.x[tr->fr_pt[q]], (size_t)tr->fr_pt[q]};
     qsort(tmp, (size_t)(b - a), sizeof *tmp, keyed_cmp);
     for (int64_t q = a; q < b; q++) tr->fr_pt[q] = (int64_t)tmp[q - a].idx;
   }
@@ -503,7 +521,7 @@ static int64_t lower_x(const truth_t *tr, int64_t a, int64_t b, double x0)
 {
   while (a < b) {
     int64_t mid = a + (b - a) / 2;
-    if (tr->px[tr->fr_pt[mid]] < x0) a = mid + 1;
+    if (tr->pt.x[tr->fr_pt[mid]] < x0) a = mid + 1;
     else b = mid;
   }
   return a;
@@ -516,40 +534,14 @@ static int truth_has(const truth_t *tr, int k, int f)
   int64_t lo = tr->obj_off[k], hi = tr->obj_off[k + 1];
   while (lo < hi) {
     int64_t m = lo + (hi - lo) / 2;
-    if (tr->pf[m] < f) lo = m + 1;
+    if (tr->pt.frame[m] < f) lo = m + 1;
     else hi = m;
   }
-  return lo < tr->obj_off[k + 1] && tr->pf[lo] == f;
+  return lo < tr->obj_off[k + 1] && tr->pt.frame[lo] == f;
 }
 
 /* ---------------------------------------------------------------------- */
 /* (3) Detections per frame */
-
-typedef struct {
-  int n;             /* points */
-  int *frame;        /* slot */
-  double *x, *y, *z;
-} points_t;
-
-static void points_free(points_t *p)
-{
-  free(p->frame);
-  free(p->x);
-  free(p->y);
-  free(p->z);
-}
-
-static elfm_status points_alloc(points_t *p, size_t n, elfm_error *err)
-{
-  size_t m = n ? n : 1;
-  p->n = 0;
-  p->frame = malloc(m * sizeof *p->frame);
-  p->x = malloc(m * sizeof *p->x);
-  p->y = malloc(m * sizeof *p->y);
-  p->z = malloc(m * sizeof *p->z);
-  if (!p->frame || !p->x || !p->y || !p->z) return nomem(err);
-  return ELFM_OK;
-}
 
 static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const points_t *dp,
                                     const gate_t *g, elfm_score_result *out, elfm_error *err)
@@ -602,11 +594,11 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
     for (int i = 0; i < nt; i++) {
       int64_t p = tr->fr_pt[ta + i];
       int lo = 0, hi = nd;
-      double x0 = tr->px[p] - g->eps;
+      double x0 = tr->pt.x[p] - g->eps;
       while (lo < hi) { int m = (lo + hi) / 2; if (ds[da + m].key < x0) lo = m + 1; else hi = m; }
-      for (int j = lo; j < nd && ds[da + j].key < tr->px[p] + g->eps; j++) {
+      for (int j = lo; j < nd && ds[da + j].key < tr->pt.x[p] + g->eps; j++) {
         int di = (int)ds[da + j].idx;
-        if (dist_aniso(g, dp->x[di] - tr->px[p], dp->y[di] - tr->py[p], dp->z[di] - tr->pz[p]) < g->eps) {
+        if (dist_aniso(g, dp->x[di] - tr->pt.x[p], dp->y[di] - tr->pt.y[p], dp->z[di] - tr->pt.z[p]) < g->eps) {
           uf_union(parent, i, nt + j);
           any = 1;
         }
@@ -640,7 +632,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         int64_t p = tr->fr_pt[ta + rows[a]];
         for (int b = 0; b < nc; b++) {
           int di = (int)ds[da + cols[b]].idx;
-          double d = dist_aniso(g, dp->x[di] - tr->px[p], dp->y[di] - tr->py[p], dp->z[di] - tr->pz[p]);
+          double d = dist_aniso(g, dp->x[di] - tr->pt.x[p], dp->y[di] - tr->pt.y[p], dp->z[di] - tr->pt.z[p]);
           cost[(size_t)a * (size_t)nc + (size_t)b] = d < g->eps ? d : INFINITY;
         }
       }
@@ -649,7 +641,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         if (r2c[a] < 0) continue;
         int64_t p = tr->fr_pt[ta + rows[a]];
         int di = (int)ds[da + cols[r2c[a]]].idx;
-        double dx = dp->x[di] - tr->px[p], dy = dp->y[di] - tr->py[p], dz = dp->z[di] - tr->pz[p];
+        double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p], dz = dp->z[di] - tr->pt.z[p];
         tp++;
         sx += dx * dx;
         sy += dy * dy;
@@ -657,12 +649,12 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
       }
     }
   }
-  out->n_truth_points = tr->n_pts;
+  out->n_truth_points = tr->pt.n;
   out->n_detections = dp->n;
   out->n_true_positives = tp;
-  out->recall = tr->n_pts ? (double)tp / (double)tr->n_pts : NAN;
+  out->recall = tr->pt.n ? (double)tp / (double)tr->pt.n : NAN;
   out->precision = dp->n ? (double)tp / (double)dp->n : NAN;
-  out->f1 = (tr->n_pts + dp->n) ? 2.0 * (double)tp / (double)(tr->n_pts + dp->n) : NAN;
+  out->f1 = (tr->pt.n + dp->n) ? 2.0 * (double)tp / (double)(tr->pt.n + dp->n) : NAN;
   out->rmse_x_um = tp ? sqrt(sx / (double)tp) : NAN;
   out->rmse_y_um = tp ? sqrt(sy / (double)tp) : NAN;
   out->rmse_z_um = tp ? sqrt(sz / (double)tp) : NAN;
@@ -685,18 +677,14 @@ done:
 
 typedef struct {
   int n_tracks;
-  int *off;          /* real points of track c: [off[c], off[c+1]) in frame order */
-  int *pf;           /* frame slot */
-  double *x, *y, *z; /* smoothed */
+  int *off;    /* real points of track c: pt [off[c], off[c+1]) in frame order */
+  points_t pt; /* smoothed positions */
 } cands_t;
 
 static void cands_free(cands_t *c)
 {
   free(c->off);
-  free(c->pf);
-  free(c->x);
-  free(c->y);
-  free(c->z);
+  points_free(&c->pt);
 }
 
 /* Columns: 0 track_id 1 frame 2 t_us 3 x 4 y 5 z 6 raw_x 7 raw_y 8 raw_z */
@@ -738,12 +726,9 @@ static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, 
   }
   cd->n_tracks = n_tracks;
   cd->off = malloc(((size_t)n_tracks + 1) * sizeof *cd->off);
-  cd->pf = malloc((n ? n : 1) * sizeof *cd->pf);
-  cd->x = malloc((n ? n : 1) * sizeof *cd->x);
-  cd->y = malloc((n ? n : 1) * sizeof *cd->y);
-  cd->z = malloc((n ? n : 1) * sizeof *cd->z);
-  if (!cd->off || !cd->pf || !cd->x || !cd->y || !cd->z) { free(ord); return nomem(err); }
-  if (raw && (s = points_alloc(raw, n, err)) != ELFM_OK) { free(ord); return s; }
+  if (!cd->off) { free(ord); return nomem(err); }
+  if ((s = points_reserve(&cd->pt, n, err)) != ELFM_OK ||
+      (raw && (s = points_reserve(raw, n, err)) != ELFM_OK)) { free(ord); return s; }
   int k = 0, np = 0;
   for (size_t i = 0; i < n;) {
     size_t j = i;
@@ -752,10 +737,10 @@ static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, 
       size_t r = ord[j++].idx;
       if (!isfinite(elfm_table_get(t, r, c[6]))) continue;
       int f = (int)((int64_t)elfm_table_get(t, r, c[1]) - fr->f_min);
-      cd->pf[np] = f;
-      cd->x[np] = elfm_table_get(t, r, c[3]);
-      cd->y[np] = elfm_table_get(t, r, c[4]);
-      cd->z[np] = elfm_table_get(t, r, c[5]);
+      cd->pt.frame[np] = f;
+      cd->pt.x[np] = elfm_table_get(t, r, c[3]);
+      cd->pt.y[np] = elfm_table_get(t, r, c[4]);
+      cd->pt.z[np] = elfm_table_get(t, r, c[5]);
       np++;
       if (raw) {
         raw->frame[raw->n] = f;
@@ -769,6 +754,7 @@ static elfm_status cands_build(cands_t *cd, points_t *raw, const elfm_table *t, 
     i = j;
   }
   cd->off[n_tracks] = np;
+  cd->pt.n = np;
   free(ord);
   return ELFM_OK;
 }
@@ -814,12 +800,12 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
     int n_touched = 0;
     int a = cd->off[ci], b = cd->off[ci + 1];
     for (int q = a; q < b; q++) {
-      int f = cd->pf[q];
+      int f = cd->pt.frame[q];
       int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
-      for (int64_t m = lower_x(tr, fa, fb, cd->x[q] - g->eps);
-           m < fb && tr->px[tr->fr_pt[m]] < cd->x[q] + g->eps; m++) {
+      for (int64_t m = lower_x(tr, fa, fb, cd->pt.x[q] - g->eps);
+           m < fb && tr->pt.x[tr->fr_pt[m]] < cd->pt.x[q] + g->eps; m++) {
         int64_t p = tr->fr_pt[m];
-        double d = dist_aniso(g, cd->x[q] - tr->px[p], cd->y[q] - tr->py[p], cd->z[q] - tr->pz[p]);
+        double d = dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p], cd->pt.z[q] - tr->pt.z[p]);
         if (!(d < g->eps)) continue;
         int k = truth_obj_of(tr, p);
         if (acc_m[k] == 0) touched[n_touched++] = k;
@@ -834,7 +820,7 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
       int64_t fx = tr->obj_off[k + 1] - tr->obj_off[k];
       /* |F(X) u R(Y)| = |F(X)| + |R(Y)| - |F(X) n R(Y)| (see elfm_score.h) */
       int64_t both = 0;
-      for (int q = a; q < b; q++) both += truth_has(tr, k, cd->pf[q]);
+      for (int q = a; q < b; q++) both += truth_has(tr, k, cd->pt.frame[q]);
       if (n_pairs == cap_pairs) {
         size_t nc = cap_pairs ? 2 * cap_pairs : 256;
         pair_t *np = realloc(pairs, nc * sizeof *np);
@@ -1076,7 +1062,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if ((s = truth_build(&tr, truth, &fr, opt, err)) != ELFM_OK) goto done;
 
   if (detections) {
-    if ((s = points_alloc(&dp, detections->n_rows, err)) != ELFM_OK) goto done;
+    if ((s = points_reserve(&dp, detections->n_rows, err)) != ELFM_OK) goto done;
     for (size_t r = 0; r < detections->n_rows; r++) {
       double v[3] = {0, 0, 0};
       for (int a = 0; a < 3; a++)
