@@ -179,6 +179,19 @@ static elfm_status check_row(const elfm_table *t, size_t r, const int *c,
   return ELFM_OK;
 }
 
+/* Room for a need-entry cost matrix in *cost (capacity *cap): it grows only
+ * past the largest problem so far, so the per-frame and per-cluster
+ * assignments stop allocating once they have seen their largest. */
+static elfm_status reserve_cost(double **cost, size_t *cap, size_t need, elfm_error *err)
+{
+  if (need <= *cap) return ELFM_OK;
+  double *nb = realloc(*cost, need * sizeof *nb);
+  if (!nb) return nomem(err);
+  *cost = nb;
+  *cap = need;
+  return ELFM_OK;
+}
+
 /* ---------------------------------------------------------------------- */
 /* (1) Frames */
 
@@ -334,6 +347,45 @@ static elfm_status points_reserve(points_t *p, size_t cap, elfm_error *err)
   return ELFM_OK;
 }
 
+/* Points grouped per frame slot and sorted by x within a frame, for gated
+ * look-ups: entries [off[f], off[f+1]) of *by_x are {x, point index} of
+ * frame f. off has n_frames + 1 entries, by_x p->n (+1); the caller frees
+ * both. */
+static elfm_status index_by_frame(const points_t *p, int n_frames, int64_t **off_out,
+                                  keyed_t **by_x_out, elfm_error *err)
+{
+  int64_t *off = calloc((size_t)n_frames + 1, sizeof *off);
+  keyed_t *by_x = malloc(((size_t)p->n + 1) * sizeof *by_x);
+  int64_t *fill = malloc(((size_t)n_frames + 1) * sizeof *fill);
+  if (!off || !by_x || !fill) {
+    free(off);
+    free(by_x);
+    free(fill);
+    return nomem(err);
+  }
+  for (int64_t i = 0; i < p->n; i++) off[p->frame[i] + 1]++;
+  for (int f = 0; f < n_frames; f++) off[f + 1] += off[f];
+  memcpy(fill, off, ((size_t)n_frames + 1) * sizeof *fill);
+  for (int64_t i = 0; i < p->n; i++) by_x[fill[p->frame[i]]++] = (keyed_t){p->x[i], (size_t)i};
+  free(fill);
+  for (int f = 0; f < n_frames; f++)
+    qsort(by_x + off[f], (size_t)(off[f + 1] - off[f]), sizeof *by_x, keyed_cmp);
+  *off_out = off;
+  *by_x_out = by_x;
+  return ELFM_OK;
+}
+
+/* First position in by_x[a..b) whose x is >= x0. */
+static int64_t lower_x(const keyed_t *by_x, int64_t a, int64_t b, double x0)
+{
+  while (a < b) {
+    int64_t mid = a + (b - a) / 2;
+    if (by_x[mid].key < x0) a = mid + 1;
+    else b = mid;
+  }
+  return a;
+}
+
 /* ---------------------------------------------------------------------- */
 /* (2) Truth at the frames */
 
@@ -343,9 +395,10 @@ typedef struct {
    * in frame order */
   points_t pt;
   int64_t *obj_off;
-  /* per frame slot f: point indices [fr_off[f], fr_off[f+1]) sorted by x */
+  /* per frame slot f: fr_pt[fr_off[f] .. fr_off[f+1]) = {x, point index},
+   * sorted by x (index_by_frame) */
   int64_t *fr_off;
-  int64_t *fr_pt;
+  keyed_t *fr_pt;
 } truth_t;
 
 static void truth_free(truth_t *t)
@@ -455,25 +508,7 @@ static elfm_status truth_build(truth_t *tr, const elfm_table *tt, const frames_t
   tr->obj_off[n_obj] = tr->pt.n;
 
   /* Per-frame index, sorted by x within a frame. */
-  tr->fr_off = calloc((size_t)fr->n + 1, sizeof *tr->fr_off);
-  tr->fr_pt = malloc(((size_t)tr->pt.n + 1) * sizeof *tr->fr_pt);
-  keyed_t *tmp = malloc(((size_t)tr->pt.n + 1) * sizeof *tmp);
-  if (!tr->fr_off || !tr->fr_pt || !tmp) { free(tmp); return nomem(err); }
-  for (int64_t p = 0; p < tr->pt.n; p++) tr->fr_off[tr->pt.frame[p] + 1]++;
-  for (int f = 0; f < fr->n; f++) tr->fr_off[f + 1] += tr->fr_off[f];
-  int64_t *fill = malloc(((size_t)fr->n + 1) * sizeof *fill);
-  if (!fill) { free(tmp); return nomem(err); }
-  memcpy(fill, tr->fr_off, ((size_t)fr->n + 1) * sizeof *fill);
-  for (int64_t p = 0; p < tr->pt.n; p++) tr->fr_pt[fill[tr->pt.frame[p]]++] = p;
-  free(fill);
-  for (int f = 0; f < fr->n; f++) {
-    int64_t a = tr->fr_off[f], b = tr->fr_off[f + 1];
-    for (int64_t q = a; q < b; q++) tmp[q - a] = (keyed_t){tr->pt.x[tr->fr_pt[q]], (size_t)tr->fr_pt[q]};
-    qsort(tmp, (size_t)(b - a), sizeof *tmp, keyed_cmp);
-    for (int64_t q = a; q < b; q++) tr->fr_pt[q] = (int64_t)tmp[q - a].idx;
-  }
-  free(tmp);
-  return ELFM_OK;
+  return index_by_frame(&tr->pt, fr->n, &tr->fr_off, &tr->fr_pt, err);
 }
 
 /* Number of truth ids with at least one sample that counts (bright, inside
@@ -516,17 +551,6 @@ static int truth_obj_of(const truth_t *tr, int64_t p)
   return lo;
 }
 
-/* First index in fr_pt[a..b) whose x >= x0. */
-static int64_t lower_x(const truth_t *tr, int64_t a, int64_t b, double x0)
-{
-  while (a < b) {
-    int64_t mid = a + (b - a) / 2;
-    if (tr->pt.x[tr->fr_pt[mid]] < x0) a = mid + 1;
-    else b = mid;
-  }
-  return a;
-}
-
 /* Number of visible frames of object k within frame slots [f0, f1]. */
 /* 1 if truth object k counts at frame slot f (its points are in frame order). */
 static int truth_has(const truth_t *tr, int k, int f)
@@ -547,22 +571,12 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
                                     const gate_t *g, elfm_score_result *out, elfm_error *err)
 {
   /* Group detections per frame, sorted by x. */
-  elfm_status s = ELFM_OK;
-  int64_t *off = calloc((size_t)fr->n + 1, sizeof *off);
-  keyed_t *ds = malloc(((size_t)dp->n + 1) * sizeof *ds);
-  if (!off || !ds) { free(off); free(ds); return nomem(err); }
-  for (int i = 0; i < dp->n; i++) off[dp->frame[i] + 1]++;
-  for (int f = 0; f < fr->n; f++) off[f + 1] += off[f];
-  {
-    int64_t *fill = malloc(((size_t)fr->n + 1) * sizeof *fill);
-    if (!fill) { free(off); free(ds); return nomem(err); }
-    memcpy(fill, off, ((size_t)fr->n + 1) * sizeof *fill);
-    for (int i = 0; i < dp->n; i++) ds[fill[dp->frame[i]]++] = (keyed_t){dp->x[i], (size_t)i};
-    free(fill);
-  }
+  int64_t *off;
+  keyed_t *ds;
+  elfm_status s = index_by_frame(dp, fr->n, &off, &ds, err);
+  if (s != ELFM_OK) return s;
   int max_t = 0, max_d = 0;
   for (int f = 0; f < fr->n; f++) {
-    qsort(ds + off[f], (size_t)(off[f + 1] - off[f]), sizeof *ds, keyed_cmp);
     int nt = (int)(tr->fr_off[f + 1] - tr->fr_off[f]), nd = (int)(off[f + 1] - off[f]);
     if (nt > max_t) max_t = nt;
     if (nd > max_d) max_d = nd;
@@ -592,10 +606,8 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
     /* Edges d < eps: for each truth point, detections with |dx| < eps. */
     int any = 0;
     for (int i = 0; i < nt; i++) {
-      int64_t p = tr->fr_pt[ta + i];
-      int lo = 0, hi = nd;
-      double x0 = tr->pt.x[p] - g->eps;
-      while (lo < hi) { int m = (lo + hi) / 2; if (ds[da + m].key < x0) lo = m + 1; else hi = m; }
+      int64_t p = (int64_t)tr->fr_pt[ta + i].idx;
+      int lo = (int)(lower_x(ds, da, da + nd, tr->pt.x[p] - g->eps) - da);
       for (int j = lo; j < nd && ds[da + j].key < tr->pt.x[p] + g->eps; j++) {
         int di = (int)ds[da + j].idx;
         if (dist_aniso(g, dp->x[di] - tr->pt.x[p], dp->y[di] - tr->pt.y[p], dp->z[di] - tr->pt.z[p]) < g->eps) {
@@ -622,14 +634,9 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
       }
       if (nr == 0 || nc == 0) continue;
       size_t need = (size_t)nr * (size_t)nc;
-      if (need > cost_cap) {
-        double *nc2 = realloc(cost, need * sizeof *cost);
-        if (!nc2) { s = nomem(err); goto done; }
-        cost = nc2;
-        cost_cap = need;
-      }
+      if ((s = reserve_cost(&cost, &cost_cap, need, err)) != ELFM_OK) goto done;
       for (int a = 0; a < nr; a++) {
-        int64_t p = tr->fr_pt[ta + rows[a]];
+        int64_t p = (int64_t)tr->fr_pt[ta + rows[a]].idx;
         for (int b = 0; b < nc; b++) {
           int di = (int)ds[da + cols[b]].idx;
           double d = dist_aniso(g, dp->x[di] - tr->pt.x[p], dp->y[di] - tr->pt.y[p], dp->z[di] - tr->pt.z[p]);
@@ -639,7 +646,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
       if ((s = elfm_assign_hungarian(cost, nr, nc, r2c, NULL, ws, err)) != ELFM_OK) goto done;
       for (int a = 0; a < nr; a++) {
         if (r2c[a] < 0) continue;
-        int64_t p = tr->fr_pt[ta + rows[a]];
+        int64_t p = (int64_t)tr->fr_pt[ta + rows[a]].idx;
         int di = (int)ds[da + cols[r2c[a]]].idx;
         double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p], dz = dp->z[di] - tr->pt.z[p];
         tp++;
@@ -802,9 +809,9 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
     for (int q = a; q < b; q++) {
       int f = cd->pt.frame[q];
       int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
-      for (int64_t m = lower_x(tr, fa, fb, cd->pt.x[q] - g->eps);
-           m < fb && tr->pt.x[tr->fr_pt[m]] < cd->pt.x[q] + g->eps; m++) {
-        int64_t p = tr->fr_pt[m];
+      for (int64_t m = lower_x(tr->fr_pt, fa, fb, cd->pt.x[q] - g->eps);
+           m < fb && tr->fr_pt[m].key < cd->pt.x[q] + g->eps; m++) {
+        int64_t p = (int64_t)tr->fr_pt[m].idx;
         double d = dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p], cd->pt.z[q] - tr->pt.z[p]);
         if (!(d < g->eps)) continue;
         int k = truth_obj_of(tr, p);
@@ -873,12 +880,7 @@ static elfm_status score_tracks(const truth_t *tr, const cands_t *cd, const gate
     for (int c = 0; c < nc; c++) cand_used[cols[c]] = 0;
     int ncol = nc + nr;
     size_t need = (size_t)nr * (size_t)ncol;
-    if (need > cost_cap) {
-      double *nb = realloc(cost, need * sizeof *cost);
-      if (!nb) { s = nomem(err); goto done; }
-      cost = nb;
-      cost_cap = need;
-    }
+    if ((s = reserve_cost(&cost, &cost_cap, need, err)) != ELFM_OK) goto done;
     for (size_t e = 0; e < need; e++) cost[e] = INFINITY;
     for (int r = 0; r < nr; r++) {
       int k = rows[r];
