@@ -79,8 +79,12 @@ typedef struct track_ctx {
   double um_per_px, z_min_um, z_step_um;
 } track_ctx;
 
+static void track_defaults(track_opts *o);
+
 static void usage(FILE *f)
 {
+  track_opts d;
+  track_defaults(&d);
   fprintf(f,
     "usage: eventlfm track --calib calib.json --events FILE --out DIR [options]\n"
     "\n"
@@ -88,19 +92,12 @@ static void usage(FILE *f)
     "Writes DIR/detections.csv, tracks.csv (smoothed + raw), tracks_isbi.xml (ISBI 2012),\n"
     "tracks_trackmate.xml (TrackMate) and summary.json. Progress on stderr.\n"
     "\n"
-    "recon:\n"
-    "  --dt-us N            frame window (default 1000 = 1 kHz volumes)\n"
-    "  --stride-us N        window start to start (default = dt)\n"
-    "  --tau-us T           time-surface decay (default 1000)\n"
-    "  --repr exp|lin|count frame representation (default exp)\n"
-    "  --polarity both|on|off|signed (default on: OFF events trail moving beads)\n"
-    "  --median 0|3|5       median filter (default 0)\n"
-    "  --path auto|dense|sparse   refocus path\n"
-    "  --ghost none|abs|frac|mad  ghost threshold, --ghost-value V,\n"
-    "  --agree F            view-agreement ghost rule (default 0 = off for tracking)\n"
-    "  --threads N, --from-us T, --to-us T\n"
-    "  --batch N            volumes refocused (and searched for peaks) per parallel\n"
-    "                       batch (default 0 = 2 x threads)\n"
+    "recon (the same options as eventlfm recon's):\n");
+  cli_recon_options_usage(f, &d.recon);
+  fprintf(f,
+    "                       (polarity on: OFF events trail moving beads; median 0\n"
+    "                       and ghost none: the detector and linker reject ghosts;\n"
+    "                       a batch's volumes are searched for peaks in parallel too)\n"
     "detection:\n"
     "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (50 on time\n"
     "                       surfaces), --threshold-rel F (0.35 of the maximum for counts)\n"
@@ -640,60 +637,59 @@ static int close_file(FILE **f, const char *path, elfm_error *err)
 }
 
 enum {
-  O_CALIB = 1000, O_EVENTS, O_OUT, O_DT, O_STRIDE, O_TAU, O_REPR, O_POL, O_MEDIAN, O_PATH, O_GHOST,
-  O_GHOSTV, O_AGREE, O_THREADS, O_FROM, O_TO, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE,
-  O_MAXDET, O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES,
-  O_MAXOUT, O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_BATCH, O_WEAKGATE, O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN
+  O_CALIB = 1000, O_EVENTS, O_OUT, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE, O_MAXDET,
+  O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT,
+  O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
+  O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN
 };
 
-int cmd_track(int argc, char **argv)
+/* track's defaults: where they differ from the libraries', why. */
+static void track_defaults(track_opts *o)
 {
-  static const char *const C = "track";
-  track_opts o;
-  memset(&o, 0, sizeof o);
-  elfm_recon_options_default(&o.recon);
-  elfm_peaks_options_default(&o.peaks);
-  elfm_link_options_default(&o.link);
-  elfm_smooth_options_default(&o.smooth);
-  o.max_det = 10000;
-  o.max_outlier_frac = 1.0 / 3;
+  memset(o, 0, sizeof *o);
+  elfm_recon_options_default(&o->recon);
+  elfm_peaks_options_default(&o->peaks);
+  elfm_link_options_default(&o->link);
+  elfm_smooth_options_default(&o->smooth);
+  o->max_det = 10000;
+  o->max_outlier_frac = 1.0 / 3;
   /* Tracking defaults differ from `recon`'s, measured on the simulated flow
    * scene (docs/tracker.md): ON events only (a moving bead's OFF events form
    * a second peak ~5 um behind it: F1 0.79 -> 0.95), no median (recall
    * 0.86 -> 0.92 at equal precision), and an absolute threshold of 50 on the
    * 0..255 time surface (F1 0.88 at 45, 0.86 at 55, 0.65 at 30; the k-sigma
    * rule alone let ghosts through: precision 0.29). */
-  o.recon.framer.polarity = ELFM_POL_ON;
-  o.recon.median = 0;
+  o->recon.framer.polarity = ELFM_POL_ON;
+  o->recon.median = 0;
   /* No view-agreement ghost rule (recon's default 0.3): on ON-only frames
    * it removed most deep beads (flow recall 0.79 -> 0.36, F1 0.87 -> 0.53);
    * the detector's threshold and the linker reject the ghosts instead. */
-  o.recon.refocus.agree_frac = 0;
-  o.views_rule = 1;
-  o.views_exponent = 0.5;
+  o->recon.refocus.agree_frac = 0;
+  o->views_rule = 1;
+  o->views_exponent = 0.5;
   /* Linker distance with z / 1.5, not the scoring's z / 4: the detector
    * localises z ~2.5x worse than x/y (RMSE 1.1 vs 0.44 um on flow), so z/4
    * let tracks jump between beads passing 10-20 um apart in z. Flow 100 ms,
    * seeds 1 / 2: alpha 0.562 -> 0.577 / 0.466 -> 0.544; stage 200 ms 0.626
    * -> 0.625; worm 200 ms 0.325 -> 0.332 (docs/tracker.md). */
-  o.link.kz = 1.5;
+  o->link.kz = 1.5;
   /* Weak peaks join a track only within 5 um of its prediction (with the
    * hysteresis threshold 30 below). Flow 100 ms seeds 1 / 2, against 45
    * with the track's own gates: F1 0.886 -> 0.891 / 0.907 -> 0.922, alpha
    * 0.667 -> 0.676 / 0.612 -> 0.635, lateral RMSE <= 0.50 um; stage F1
    * 0.914 -> 0.929; blink unchanged. At 6 um the RMSE passed 0.5 um, at
    * 3-4 um tracks broke (docs/tracker.md "Weak gate"). */
-  o.link.weak_gate_um = 5;
+  o->link.weak_gate_um = 5;
   /* guided search (off by default; docs/tracker.md "Track-guided search") */
-  o.guided_radius_um = 1.5;
-  o.guided_min_points = 10;
+  o->guided_radius_um = 1.5;
+  o->guided_min_points = 10;
   /* View support 0.3 with the absolute threshold 45 (instead of no test at
    * 50): scripts/measure_scenes.sh scenes, F1 flow seeds 1 / 2 0.891 ->
    * 0.897 / 0.922 -> 0.925, stage 0.930 -> 0.945, worm 0.800 -> 0.825;
    * alpha 0.676 -> 0.677 / 0.634 -> 0.646, 0.669 -> 0.716, 0.290 -> 0.327;
    * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
    * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
-  o.view_support = 0.3;
+  o->view_support = 0.3;
   /* Stitching a new track of 5 points onto a dark track whose recent path
    * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
    * circle and come back onto their own path after gaps no extrapolation
@@ -701,24 +697,25 @@ int cmd_track(int argc, char **argv)
    * 0.691, 7 -> 3 / 6 -> 1 spurious tracks; blink unchanged; worm 0.327 ->
    * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
    * gave the same to +-0.01. Off in --motion stage (below). */
-  o.link.stitch_points = 5;
+  o->link.stitch_points = 5;
   /* Swap review of gap closings that do not fit, after 6 points of the new
    * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9: alpha 0.697,
    * 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the other six
    * unchanged; stage, blink, worm unchanged. 5-8 points and ratios 0.4-0.5
    * gave the same; 0.7 swapped wrongly (4 seeds down by 0.01-0.04). */
-  o.link.swap_points = 6;
+  o->link.swap_points = 6;
+}
+
+int cmd_track(int argc, char **argv)
+{
+  static const char *const C = "track";
+  track_opts o;
+  track_defaults(&o);
   int thr_given = 0, low_given = 0, stitch_given = 0;
   static const struct option lo[] = {
+      CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
-      {"out", required_argument, 0, O_OUT}, {"dt-us", required_argument, 0, O_DT},
-      {"stride-us", required_argument, 0, O_STRIDE}, {"tau-us", required_argument, 0, O_TAU},
-      {"repr", required_argument, 0, O_REPR}, {"polarity", required_argument, 0, O_POL},
-      {"median", required_argument, 0, O_MEDIAN}, {"path", required_argument, 0, O_PATH},
-      {"ghost", required_argument, 0, O_GHOST}, {"ghost-value", required_argument, 0, O_GHOSTV},
-      {"agree", required_argument, 0, O_AGREE}, {"threads", required_argument, 0, O_THREADS},
-      {"batch", required_argument, 0, O_BATCH},
-      {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
+      {"out", required_argument, 0, O_OUT},
       {"threshold-k", required_argument, 0, O_THK}, {"threshold-abs", required_argument, 0, O_THA},
       {"threshold-rel", required_argument, 0, O_THR},
       {"threshold-depth-um", required_argument, 0, O_THDEPTH},
@@ -748,40 +745,21 @@ int cmd_track(int argc, char **argv)
       {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
       {"max-outlier-frac", required_argument, 0, O_MAXOUT},
       {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  cli_recon_parse rp = {&o.recon, 0, 0};
   optind = 1;
   opterr = 0;
   int ch;
-  while ((ch = getopt_long(argc, argv, "hq", lo, NULL)) != -1) {
+  while ((ch = getopt_long(argc, argv, ":hq", lo, NULL)) != -1) {
     const char *a = optarg;
+    const int k = cli_parse_recon_option(C, ch, a, &rp);
+    if (k == 0) return CLI_USAGE;
+    if (k > 0) continue;
     switch (ch) {
     case 'h': usage(stdout); return CLI_OK;
     case 'q': o.quiet = 1; break;
     case O_CALIB: o.calib = a; break;
     case O_EVENTS: o.events = a; break;
     case O_OUT: o.out = a; break;
-    case O_DT: if (!cli_parse_int64(C, "--dt-us", a, &o.recon.framer.dt_us)) return CLI_USAGE; break;
-    case O_STRIDE: if (!cli_parse_int64(C, "--stride-us", a, &o.recon.framer.stride_us)) return CLI_USAGE; break;
-    case O_TAU: if (!cli_parse_double(C, "--tau-us", a, &o.recon.framer.tau_us)) return CLI_USAGE; break;
-    case O_REPR: if (!cli_parse_repr(C, a, &o.recon.framer.repr)) return CLI_USAGE; break;
-    case O_POL: if (!cli_parse_polarity(C, a, &o.recon.framer.polarity)) return CLI_USAGE; break;
-    case O_MEDIAN:
-      if (!cli_parse_int(C, "--median", a, &o.recon.median)) return CLI_USAGE;
-      if (o.recon.median != 0 && o.recon.median != 3 && o.recon.median != 5)
-        return cli_message(C, CLI_USAGE, "--median must be 0, 3 or 5");
-      break;
-    case O_PATH: if (!cli_parse_refocus_path(C, a, &o.recon.refocus.path)) return CLI_USAGE; break;
-    case O_GHOST:
-      if (!cli_parse_ghost_threshold(C, a, &o.recon.refocus.threshold)) return CLI_USAGE;
-      break;
-    case O_GHOSTV: if (!cli_parse_double(C, "--ghost-value", a, &o.recon.refocus.threshold_value)) return CLI_USAGE; break;
-    case O_AGREE: if (!cli_parse_double(C, "--agree", a, &o.recon.refocus.agree_frac)) return CLI_USAGE; break;
-    case O_THREADS: if (!cli_parse_int(C, "--threads", a, &o.recon.threads)) return CLI_USAGE; break;
-    case O_BATCH:
-      if (!cli_parse_int(C, "--batch", a, &o.recon.batch)) return CLI_USAGE;
-      if (o.recon.batch < 0 || o.recon.batch > 4096) return cli_message(C, CLI_USAGE, "--batch must be 0..4096");
-      break;
-    case O_FROM: if (!cli_parse_int64(C, "--from-us", a, &o.recon.from_us)) return CLI_USAGE; break;
-    case O_TO: if (!cli_parse_int64(C, "--to-us", a, &o.recon.to_us)) return CLI_USAGE; break;
     case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
     case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
     case O_THDEPTH: if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
@@ -864,14 +842,13 @@ int cmd_track(int argc, char **argv)
       if (!(o.max_outlier_frac >= 0 && o.max_outlier_frac <= 1))
         return cli_message(C, CLI_USAGE, "--max-outlier-frac must be in 0..1");
       break;
-    default:
-      return cli_message(C, CLI_USAGE, "unknown option '%s' (see eventlfm track --help)",
-                         argv[optind - 1]);
+    default: return cli_bad_option(C, ch, argv);
     }
   }
   if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   if (!(o.guided_low >= 0) || !(o.guided_radius_um > 0) || o.guided_min_points < 1)
     return cli_message(C, CLI_USAGE,
                        "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
