@@ -25,37 +25,46 @@ static void add_num(cJSON *o, const char *k, double v)
   else cJSON_AddNullToObject(o, k);
 }
 
+/* The median and spread of x (l->xy or l->z) over the beads whose track's
+ * speed lies in [lo, hi), or over all beads (those of unknown speed too)
+ * when `all`; tmp has room for l->n values. Returns the number of beads. */
+static size_t fwhm_median(const fwhm_list *l, const double *x, int all, double lo, double hi,
+                          double *tmp, double *med, double *spr)
+{
+  size_t m = 0;
+  for (size_t i = 0; i < l->n; i++)
+    if (all || (l->speed[i] >= lo && l->speed[i] < hi)) tmp[m++] = x[i];
+  elfm_analysis_median(tmp, m, med, spr);
+  return m;
+}
+
 static cJSON *fwhm_summary(const fwhm_list *l)
 {
   cJSON *r = cJSON_CreateObject();
   double *tmp = malloc((l->n ? l->n : 1) * sizeof *tmp);
   if (!tmp) return r;
+  /* the same figures for the lateral and the axial FWHM */
+  const double *const x[2] = {l->xy, l->z};
+  static const char *const median_key[2] = {"fwhm_xy_um_median", "fwhm_z_um_median"};
+  static const char *const spread_key[2] = {"fwhm_xy_um_spread", "fwhm_z_um_spread"};
   double med, spr;
   cJSON_AddNumberToObject(r, "n_beads", (double)l->n);
-  memcpy(tmp, l->xy, l->n * sizeof *tmp);
-  elfm_analysis_median(tmp, l->n, &med, &spr);
-  add_num(r, "fwhm_xy_um_median", med);
-  add_num(r, "fwhm_xy_um_spread", spr);
-  memcpy(tmp, l->z, l->n * sizeof *tmp);
-  elfm_analysis_median(tmp, l->n, &med, &spr);
-  add_num(r, "fwhm_z_um_median", med);
-  add_num(r, "fwhm_z_um_spread", spr);
+  for (int a = 0; a < 2; a++) {
+    fwhm_median(l, x[a], 1, 0, 0, tmp, &med, &spr);
+    add_num(r, median_key[a], med);
+    add_num(r, spread_key[a], spr);
+  }
   cJSON *bins = cJSON_AddArrayToObject(r, "by_speed");
   for (int b = 0; b + 1 < N_SPEED_BINS; b++) {
-    size_t m = 0;
-    for (size_t i = 0; i < l->n; i++)
-      if (l->speed[i] >= speed_edges[b] && l->speed[i] < speed_edges[b + 1]) tmp[m++] = l->xy[i];
+    const double lo = speed_edges[b], hi = speed_edges[b + 1];
     cJSON *o = cJSON_CreateObject();
-    cJSON_AddNumberToObject(o, "speed_min_um_per_ms", speed_edges[b]);
-    add_num(o, "speed_max_um_per_ms", b + 2 < N_SPEED_BINS ? speed_edges[b + 1] : NAN);
-    cJSON_AddNumberToObject(o, "n_beads", (double)m);
-    elfm_analysis_median(tmp, m, &med, &spr);
-    add_num(o, "fwhm_xy_um_median", med);
-    m = 0;
-    for (size_t i = 0; i < l->n; i++)
-      if (l->speed[i] >= speed_edges[b] && l->speed[i] < speed_edges[b + 1]) tmp[m++] = l->z[i];
-    elfm_analysis_median(tmp, m, &med, &spr);
-    add_num(o, "fwhm_z_um_median", med);
+    cJSON_AddNumberToObject(o, "speed_min_um_per_ms", lo);
+    add_num(o, "speed_max_um_per_ms", b + 2 < N_SPEED_BINS ? hi : NAN);
+    for (int a = 0; a < 2; a++) {
+      size_t m = fwhm_median(l, x[a], 0, lo, hi, tmp, &med, &spr);
+      if (a == 0) cJSON_AddNumberToObject(o, "n_beads", (double)m);
+      add_num(o, median_key[a], med);
+    }
     cJSON_AddItemToArray(bins, o);
   }
   free(tmp);
