@@ -175,10 +175,10 @@ int cmd_recon(int argc, char **argv)
   opterr = 0;
   int c;
   while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
-    int ok = cli_parse_recon_option("recon", c, optarg, &rp);
-    if (ok == 0) return CLI_USAGE;
-    if (ok > 0) continue;
-    ok = 1;
+    const int k = cli_parse_recon_option("recon", c, optarg, &rp);
+    if (k == 0) return CLI_USAGE;
+    if (k > 0) continue;
+    int ok = 1;
     switch (c) {
     case 'h': usage(stdout); return CLI_OK;
     case O_CALIB: a.calib = optarg; break;
