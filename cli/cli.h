@@ -9,8 +9,10 @@
 #ifndef ELFM_CLI_H
 #define ELFM_CLI_H
 
+#include <getopt.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "elfm_recon.h"
 
@@ -64,11 +66,69 @@ int cli_path_fmt(char *out, size_t n, const char *fmt, ...)
 int cli_parse_repr(const char *cmd, const char *s, elfm_repr *out);
 int cli_parse_polarity(const char *cmd, const char *s, elfm_polarity *out);
 int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *out);
-int cli_parse_ghost_threshold(const char *cmd, const char *s, elfm_ghost_threshold *out);
 const char *cli_repr_name(elfm_repr v);
 const char *cli_polarity_name(elfm_polarity v);
 const char *cli_refocus_path_name(elfm_refocus_path v);
 const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
+
+/* The reconstruction options recon and track share (--dt-us, --stride-us,
+ * --tau-us, --repr, --polarity, --median, --from-us, --to-us, --path,
+ * --ghost, --ghost-value, --agree, --threads, --batch): one parser, one set
+ * of checks and messages and one help text, so that an option means and
+ * checks the same in both commands. Each command keeps its own defaults:
+ * it sets them in the elfm_recon_options before parsing.
+ *
+ *   static const struct option opts[] = {CLI_RECON_LONG_OPTIONS, {"out", ...}, ...};
+ *   cli_recon_parse rp = {&ro, 0, 0};
+ *   while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+ *     int k = cli_parse_recon_option(cmd, c, optarg, &rp);
+ *     if (k == 0) return CLI_USAGE;
+ *     if (k > 0) continue;
+ *     switch (c) { ...the command's own options... }
+ *   }
+ *   if (!cli_check_recon_options(cmd, &rp)) return CLI_USAGE;
+ *
+ * The getopt codes sit far above the commands' own (which start at 256). */
+enum {
+  CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
+  CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
+  CLI_RO_THREADS, CLI_RO_BATCH
+};
+#define CLI_RECON_LONG_OPTIONS                                                                 \
+  {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
+  {"tau-us", required_argument, 0, CLI_RO_TAU}, {"repr", required_argument, 0, CLI_RO_REPR},      \
+  {"polarity", required_argument, 0, CLI_RO_POLARITY},                                         \
+  {"median", required_argument, 0, CLI_RO_MEDIAN},                                             \
+  {"from-us", required_argument, 0, CLI_RO_FROM}, {"to-us", required_argument, 0, CLI_RO_TO},   \
+  {"path", required_argument, 0, CLI_RO_PATH}, {"ghost", required_argument, 0, CLI_RO_GHOST},   \
+  {"ghost-value", required_argument, 0, CLI_RO_GHOST_VALUE},                                   \
+  {"agree", required_argument, 0, CLI_RO_AGREE},                                               \
+  {"threads", required_argument, 0, CLI_RO_THREADS},                                           \
+  {"batch", required_argument, 0, CLI_RO_BATCH}
+
+typedef struct cli_recon_parse {
+  elfm_recon_options *ro;  /* the command's defaults, then the options given */
+  /* A ghost threshold (--ghost abs|frac|mad) needs a value, from MODE:V or
+   * --ghost-value, which may come before or after the mode: checked at the
+   * end (cli_check_recon_options). */
+  int ghost_value_given;   /* by MODE:V or --ghost-value */
+  int ghost_value_option;  /* by --ghost-value */
+} cli_recon_parse;
+
+/* 1: `code` is a shared option and `arg` a good value (stored in p->ro);
+ * 0: it is one and `arg` is bad (message naming the option printed: a usage
+ * error); -1: `code` is not a shared option (the command's own). */
+int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon_parse *p);
+/* After the options: the checks between them (stride <= dt, from < to, a
+ * ghost threshold's value). 1 when good; 0 after printing the message. */
+int cli_check_recon_options(const char *cmd, const cli_recon_parse *p);
+/* The shared options' help lines, with the command's defaults `d`. */
+void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);
+
+/* getopt_long's answer for an option that is not the command's (c '?') or
+ * lacks its value (c ':', with ':' leading the optstring): the message
+ * naming it; returns CLI_USAGE. */
+int cli_bad_option(const char *cmd, int c, char *const argv[]);
 
 /* Seconds of a monotonic clock (for timing figures). */
 double cli_now_s(void);

@@ -30,17 +30,22 @@ int cli_message(const char *cmd, int code, const char *fmt, ...)
   return code;
 }
 
-int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out)
+/* The whole of s a finite number: 1 and *out, else 0 (no message). */
+static int finite_number(const char *s, double *out)
 {
   char *end = NULL;
   errno = 0;
   double v = s ? strtod(s, &end) : 0.0;
-  if (!s || end == s || *end != '\0' || errno == ERANGE || !isfinite(v)) {
-    cli_message(cmd, CLI_USAGE, "%s expects a finite number, got '%s'", opt, s ? s : "");
-    return 0;
-  }
+  if (!s || end == s || *end != '\0' || errno == ERANGE || !isfinite(v)) return 0;
   *out = v;
   return 1;
+}
+
+int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out)
+{
+  if (finite_number(s, out)) return 1;
+  cli_message(cmd, CLI_USAGE, "%s expects a finite number, got '%s'", opt, s ? s : "");
+  return 0;
 }
 
 int cli_parse_int64(const char *cmd, const char *opt, const char *s, int64_t *out)
@@ -155,14 +160,6 @@ int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *ou
   return 1;
 }
 
-int cli_parse_ghost_threshold(const char *cmd, const char *s, elfm_ghost_threshold *out)
-{
-  int v = 0;
-  if (!parse_name(cmd, "--ghost", s, ghost_names, N_OF(ghost_names), &v)) return 0;
-  *out = (elfm_ghost_threshold)v;
-  return 1;
-}
-
 const char *cli_repr_name(elfm_repr v) { return name_of(repr_names, N_OF(repr_names), (int)v); }
 const char *cli_polarity_name(elfm_polarity v)
 { return name_of(polarity_names, N_OF(polarity_names), (int)v); }
@@ -170,6 +167,258 @@ const char *cli_refocus_path_name(elfm_refocus_path v)
 { return name_of(path_names, N_OF(path_names), (int)v); }
 const char *cli_ghost_threshold_name(elfm_ghost_threshold v)
 { return name_of(ghost_names, N_OF(ghost_names), (int)v); }
+
+/* ---- the shared reconstruction options (cli.h) ---- */
+
+/* The library's ranges (elfm_framer_options_check, elfm_recon_layout),
+ * checked here too so that a bad value is a usage error naming the option
+ * rather than a run failure naming a struct field. */
+#define DT_US_MIN 50
+#define DT_US_MAX 10000000
+#define THREADS_MAX 1024
+#define BATCH_MAX 4096
+
+/* A 64-bit integer option in lo..hi; range: how the message states it. */
+static int int64_in(const char *cmd, const char *opt, const char *s, int64_t lo, int64_t hi,
+                    const char *range, int64_t *out)
+{
+  int64_t v;
+  if (!cli_parse_int64(cmd, opt, s, &v)) return 0;
+  if (v < lo || v > hi) {
+    cli_message(cmd, CLI_USAGE, "%s must be %s, not '%s'", opt, range, s);
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+static int int_in(const char *cmd, const char *opt, const char *s, int lo, int hi,
+                  const char *range, int *out)
+{
+  int64_t v;
+  if (!int64_in(cmd, opt, s, lo, hi, range, &v)) return 0;
+  *out = (int)v;
+  return 1;
+}
+
+/* A number option in lo..hi (lo excluded when lo_open). */
+static int double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,
+                     double hi, const char *range, double *out)
+{
+  double v;
+  if (!cli_parse_double(cmd, opt, s, &v)) return 0;
+  if (!(lo_open ? v > lo : v >= lo) || !(v <= hi)) {
+    cli_message(cmd, CLI_USAGE, "%s must be %s, not '%s'", opt, range, s);
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
+#define GHOST_ITEMS "none, abs[:V], frac[:F], mad[:K] or agree:F"
+
+/* One --ghost item (of the list `all`): none, abs[:V], frac[:F], mad[:K] or
+ * agree:F. A mode without a value takes --ghost-value's (checked at the end). */
+static int parse_ghost_item(const char *cmd, const char *item, const char *all, cli_recon_parse *p)
+{
+  elfm_refocus_options *r = &p->ro->refocus;
+  char name[16];
+  const char *colon = strchr(item, ':');
+  size_t len = colon ? (size_t)(colon - item) : strlen(item);
+  if (len == 0 || len >= sizeof name) goto bad;
+  memcpy(name, item, len);
+  name[len] = '\0';
+  if (!strcmp(name, "none")) {
+    if (colon) goto bad;
+    /* none: no ghost suppression at all, the agreement rule included */
+    r->threshold = ELFM_GHOST_THR_NONE;
+    r->agree_frac = 0;
+    return 1;
+  }
+  double v = 0;
+  if (!strcmp(name, "agree")) {
+    if (!colon) goto bad;
+    if (!finite_number(colon + 1, &v) || !(v >= 0 && v <= 1)) {
+      cli_message(cmd, CLI_USAGE, "--ghost agree:F must be a number 0..1, not '%s'", item);
+      return 0;
+    }
+    r->agree_frac = v;
+    return 1;
+  }
+  int mode = 0;
+  for (size_t i = 0; i < N_OF(ghost_names); i++)
+    if (ghost_names[i].value != ELFM_GHOST_THR_NONE && !strcmp(name, ghost_names[i].name))
+      mode = ghost_names[i].value;
+  if (!mode) goto bad;
+  r->threshold = (elfm_ghost_threshold)mode;
+  if (!colon) return 1;
+  const int frac = mode == ELFM_GHOST_THR_FRAC_MAX;
+  if (!finite_number(colon + 1, &v) || !(v >= 0) || (frac && !(v <= 1))) {
+    cli_message(cmd, CLI_USAGE, "--ghost %s:%s must be a number %s, not '%s'", name,
+                mode == ELFM_GHOST_THR_ABS ? "V" : frac ? "F" : "K", frac ? "0..1" : ">= 0", item);
+    return 0;
+  }
+  r->threshold_value = v;
+  p->ghost_value_given = 1;
+  return 1;
+bad:
+  if (strcmp(item, all))
+    cli_message(cmd, CLI_USAGE, "--ghost: '%s' (in '%s') is not " GHOST_ITEMS, item, all);
+  else
+    cli_message(cmd, CLI_USAGE, "--ghost: '%s' is not " GHOST_ITEMS, item);
+  return 0;
+}
+
+/* --ghost: a comma list of items, applied in order. */
+static int parse_ghost(const char *cmd, const char *s, cli_recon_parse *p)
+{
+  char buf[256];
+  if (cli_path_fmt(buf, sizeof buf, "%s", s) != 0) {
+    cli_message(cmd, CLI_USAGE, "--ghost: '%.40s...' is too long", s);
+    return 0;
+  }
+  char *item = buf;
+  for (;;) {
+    char *comma = strchr(item, ',');
+    if (comma) *comma = '\0';
+    if (!parse_ghost_item(cmd, item, s, p)) return 0;
+    if (!comma) return 1;
+    item = comma + 1;
+  }
+}
+
+int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon_parse *p)
+{
+  elfm_recon_options *ro = p->ro;
+  elfm_framer_options *fo = &ro->framer;
+  switch (code) {
+  case CLI_RO_DT:
+    return int64_in(cmd, "--dt-us", arg, DT_US_MIN, DT_US_MAX, "50..10000000", &fo->dt_us);
+  case CLI_RO_STRIDE:
+    /* <= dt is checked at the end: --dt-us may come after */
+    return int64_in(cmd, "--stride-us", arg, 0, DT_US_MAX, "0 (= dt) or 1..dt", &fo->stride_us);
+  case CLI_RO_TAU:
+    return double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
+  case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
+  case CLI_RO_POLARITY: return cli_parse_polarity(cmd, arg, &fo->polarity);
+  case CLI_RO_MEDIAN: {
+    int m;
+    if (!cli_parse_int(cmd, "--median", arg, &m)) return 0;
+    if (m != 0 && m != 3 && m != 5) {
+      cli_message(cmd, CLI_USAGE, "--median must be 0, 3 or 5, not '%s'", arg);
+      return 0;
+    }
+    ro->median = m;
+    return 1;
+  }
+  case CLI_RO_FROM: return cli_parse_int64(cmd, "--from-us", arg, &ro->from_us);
+  case CLI_RO_TO: return cli_parse_int64(cmd, "--to-us", arg, &ro->to_us);
+  case CLI_RO_PATH: return cli_parse_refocus_path(cmd, arg, &ro->refocus.path);
+  case CLI_RO_GHOST: return parse_ghost(cmd, arg, p);
+  case CLI_RO_GHOST_VALUE:
+    /* frac's <= 1 is checked at the end: the mode may come after */
+    if (!double_in(cmd, "--ghost-value", arg, 0, 0, HUGE_VAL, ">= 0", &ro->refocus.threshold_value))
+      return 0;
+    p->ghost_value_given = p->ghost_value_option = 1;
+    return 1;
+  case CLI_RO_AGREE:
+    return double_in(cmd, "--agree", arg, 0, 0, 1, "0..1", &ro->refocus.agree_frac);
+  case CLI_RO_THREADS:
+    return int_in(cmd, "--threads", arg, 0, THREADS_MAX, "0..1024 (0: all)", &ro->threads);
+  case CLI_RO_BATCH:
+    return int_in(cmd, "--batch", arg, 0, BATCH_MAX, "0..4096 (0: 2 x threads)", &ro->batch);
+  default: return -1;
+  }
+}
+
+int cli_check_recon_options(const char *cmd, const cli_recon_parse *p)
+{
+  const elfm_recon_options *ro = p->ro;
+  const elfm_framer_options *fo = &ro->framer;
+  const elfm_refocus_options *r = &ro->refocus;
+  const char *mode = cli_ghost_threshold_name(r->threshold);
+  int ok = 0;
+  if (fo->stride_us > fo->dt_us)
+    cli_message(cmd, CLI_USAGE, "--stride-us %" PRId64 " is longer than the window (--dt-us %" PRId64 ")",
+                fo->stride_us, fo->dt_us);
+  else if (ro->from_us >= ro->to_us)
+    cli_message(cmd, CLI_USAGE, "--from-us %" PRId64 " is not before --to-us %" PRId64,
+                ro->from_us, ro->to_us);
+  else if (r->threshold == ELFM_GHOST_THR_NONE && p->ghost_value_option)
+    cli_message(cmd, CLI_USAGE, "--ghost-value needs --ghost abs, frac or mad");
+  else if (r->threshold != ELFM_GHOST_THR_NONE && !p->ghost_value_given)
+    cli_message(cmd, CLI_USAGE, "--ghost %s needs a value: --ghost %s:V or --ghost-value V", mode, mode);
+  else if (r->threshold == ELFM_GHOST_THR_FRAC_MAX && !(r->threshold_value <= 1))
+    cli_message(cmd, CLI_USAGE, "--ghost frac needs a fraction 0..1 of the maximum, not %g",
+                r->threshold_value);
+  else
+    ok = 1;
+  if (!ok) return 0;
+  /* The library's own checks, for anything the above missed. */
+  elfm_error err;
+  elfm_error_clear(&err);
+  int threads, slots;
+  if (elfm_framer_options_check(fo, &err) != ELFM_OK ||
+      elfm_recon_layout(ro, &threads, &slots, &err) != ELFM_OK) {
+    cli_fail(cmd, &err);
+    return 0;
+  }
+  return 1;
+}
+
+/* The ghost rules of `r` as --ghost would give them ("agree:0.3", "none"). */
+static void ghost_text(const elfm_refocus_options *r, char *out, size_t n)
+{
+  int k = 0;
+  out[0] = '\0';
+  if (r->threshold != ELFM_GHOST_THR_NONE)
+    k = snprintf(out, n, "%s:%g", cli_ghost_threshold_name(r->threshold), r->threshold_value);
+  if (r->agree_frac > 0 && k >= 0 && (size_t)k < n)
+    snprintf(out + k, n - (size_t)k, "%sagree:%g", k ? "," : "", r->agree_frac);
+  if (!out[0]) snprintf(out, n, "none");
+}
+
+void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
+{
+  const elfm_framer_options *fo = &d->framer;
+  char stride[32], threads[32], batch[32], ghost[64];
+  /* 0 means "as the library chooses": say what it chooses */
+  if (fo->stride_us) snprintf(stride, sizeof stride, "%" PRId64, fo->stride_us);
+  else snprintf(stride, sizeof stride, "0 = dt");
+  if (d->threads) snprintf(threads, sizeof threads, "%d", d->threads);
+  else snprintf(threads, sizeof threads, "0 = all");
+  if (d->batch) snprintf(batch, sizeof batch, "%d", d->batch);
+  else snprintf(batch, sizeof batch, "0 = 2 x threads");
+  ghost_text(&d->refocus, ghost, sizeof ghost);
+  fprintf(f,
+          "  --dt-us N            window length, 50..10000000 us (default %" PRId64 ")\n"
+          "  --stride-us N        window start to start, 1..dt us (default %s)\n"
+          "  --repr R             exp | lin | count (default %s; exp, lin: time surfaces)\n"
+          "  --tau-us T           time-surface decay, > 0 us (default %g)\n"
+          "  --polarity P         both | on | off | signed (default %s)\n"
+          "  --median N           median filter 0 (off) | 3 | 5 (default %d)\n"
+          "  --from-us T          first event time to use (windows start here)\n"
+          "  --to-us T            stop before this event time\n"
+          "  --path P             refocus path auto | dense | sparse (default %s)\n"
+          "  --ghost G            ghost suppression, a comma list of: none (all off), abs:V,\n"
+          "                       frac:F (of the maximum, 0..1), mad:K (median + K robust\n"
+          "                       sigma), agree:F (a voxel needs signal in F of its views,\n"
+          "                       0..1; 0 = off) (default %s)\n"
+          "  --ghost-value V      the value of a bare --ghost abs, frac or mad\n"
+          "  --agree F            the same as --ghost agree:F\n"
+          "  --threads N          worker threads, 0..1024 (default %s)\n"
+          "  --batch N            volumes refocused per parallel batch, 0..4096\n"
+          "                       (default %s)\n",
+          fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, cli_polarity_name(fo->polarity),
+          d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
+}
+
+int cli_bad_option(const char *cmd, int c, char *const argv[])
+{
+  const char *opt = argv[optind - 1];
+  if (c == ':') return cli_message(cmd, CLI_USAGE, "option %s needs a value", opt);
+  return cli_message(cmd, CLI_USAGE, "unknown option '%s' (see eventlfm %s --help)", opt, cmd);
+}
 
 double cli_now_s(void)
 {

@@ -17,7 +17,7 @@ typedef struct recon_args {
   const char *calib, *events, *tiff, *out;
   elfm_recon_options ro;
   int save_volumes, save_mips, quiet;
-  const char *repr_s, *pol_s, *path_s, *ghost_s, *start_s;
+  const char *start_s;
 } recon_args;
 
 typedef struct recon_out {
@@ -29,6 +29,8 @@ typedef struct recon_out {
 
 static void usage(FILE *f)
 {
+  elfm_recon_options d;
+  elfm_recon_options_default(&d);
   fprintf(f,
           "usage: eventlfm recon --calib calib.json (--events FILE | --tiff STACK.tif) --out DIR\n"
           "                      [options]\n\n"
@@ -36,64 +38,19 @@ static void usage(FILE *f)
           "z planes of the calibration and writes DIR/summary.json; with --save-volumes\n"
           "DIR/volumes/vol_NNNNNN.exr (one float channel per z plane), with --save-mips\n"
           "DIR/mips/mip_NNNNNN.png (depth-colour-coded x-y, x-z, y-z projections).\n\n"
-          "frames:\n"
-          "  --dt-us N          window length, >= 50 (default 1000: 1 kHz volumes)\n"
-          "  --stride-us N      window start to start, <= dt (default dt)\n"
-          "  --repr R           exp | lin | count (default exp: time surface)\n"
-          "  --tau-us T         time-surface decay (default 1000)\n"
-          "  --polarity P       both | on | off | signed (default both)\n"
-          "  --start S          first (first event, default) | trigger (first trigger edge)\n"
-          "  --from-us T        first event time to use (windows start here)\n"
-          "  --to-us T          stop before this event time\n"
-          "  --median N         0 | 3 | 5 (default 3, the paper's)\n"
-          "refocusing:\n"
-          "  --path P           auto | dense | sparse (default auto)\n"
-          "  --ghost G          comma list of: none, abs:V, frac:F (of the maximum),\n"
-          "                     mad:K (median + K robust sigma), agree:F (a voxel needs\n"
-          "                     signal in F of its views); default agree:0.3 (the\n"
-          "                     measured best, docs/recon.md), none turns it off\n"
-          "  --crop-margin-px N widen each view's crop box (default 0)\n"
-          "  --threads N        worker threads (default: all)\n"
-          "  --batch N          frames per parallel batch (default 2 x threads)\n"
-          "  --tiff-frame-us N  TIFF: time between pages (default dt)\n"
+          "frames and refocusing (the same options as eventlfm track's):\n");
+  cli_recon_options_usage(f, &d);
+  fprintf(f,
+          "                       (median 3: the paper's; ghost agree:0.3: the measured\n"
+          "                       best, docs/recon.md)\n"
+          "  --start S            first (first event, default) | trigger (first trigger edge)\n"
+          "  --crop-margin-px N   widen each view's crop box (default 0)\n"
+          "  --tiff-frame-us N    TIFF: time between pages (default dt)\n"
           "output:\n"
-          "  --save-volumes     write every volume as EXR\n"
-          "  --save-mips        write every volume's MIP as PNG\n"
-          "  --quiet            no progress line\n"
-          "  -h, --help         this text\n");
-}
-
-static int parse_ghost(const char *s, elfm_refocus_options *r)
-{
-  char buf[256];
-  snprintf(buf, sizeof buf, "%s", s);
-  for (char *save = NULL, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-    char *colon = strchr(tok, ':');
-    double v = 0;
-    if (colon) {
-      *colon = '\0';
-      if (!cli_parse_double("recon", "--ghost", colon + 1, &v)) return 0;
-    }
-    if (!strcmp(tok, "none") && !colon) {
-      r->threshold = ELFM_GHOST_THR_NONE;
-      r->agree_frac = 0;
-    } else if (!strcmp(tok, "abs") && colon) {
-      r->threshold = ELFM_GHOST_THR_ABS;
-      r->threshold_value = v;
-    } else if (!strcmp(tok, "frac") && colon) {
-      r->threshold = ELFM_GHOST_THR_FRAC_MAX;
-      r->threshold_value = v;
-    } else if (!strcmp(tok, "mad") && colon) {
-      r->threshold = ELFM_GHOST_THR_MAD;
-      r->threshold_value = v;
-    } else if (!strcmp(tok, "agree") && colon) {
-      r->agree_frac = v;
-    } else {
-      cli_message("recon", CLI_USAGE, "--ghost: '%s' is not none, abs:V, frac:F, mad:K or agree:F", s);
-      return 0;
-    }
-  }
-  return 1;
+          "  --save-volumes       write every volume as EXR\n"
+          "  --save-mips          write every volume's MIP as PNG\n"
+          "  --quiet              no progress line\n"
+          "  -h, --help           this text\n");
 }
 
 static int make_dir(const char *path)
@@ -202,27 +159,25 @@ int cmd_recon(int argc, char **argv)
   recon_args a;
   memset(&a, 0, sizeof a);
   elfm_recon_options_default(&a.ro);
-  enum { O_CALIB = 256, O_EVENTS, O_TIFF, O_OUT, O_DT, O_STRIDE, O_REPR, O_TAU, O_POL, O_START,
-         O_FROM, O_TO, O_MEDIAN, O_PATH, O_GHOST, O_MARGIN, O_THREADS, O_BATCH, O_TIFF_US,
-         O_SAVE_V, O_SAVE_M, O_QUIET };
+  enum { O_CALIB = 256, O_EVENTS, O_TIFF, O_OUT, O_START, O_MARGIN, O_TIFF_US, O_SAVE_V,
+         O_SAVE_M, O_QUIET };
   static const struct option opts[] = {
+    CLI_RECON_LONG_OPTIONS,
     {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
     {"tiff", required_argument, 0, O_TIFF}, {"out", required_argument, 0, O_OUT},
-    {"dt-us", required_argument, 0, O_DT}, {"stride-us", required_argument, 0, O_STRIDE},
-    {"repr", required_argument, 0, O_REPR}, {"tau-us", required_argument, 0, O_TAU},
-    {"polarity", required_argument, 0, O_POL}, {"start", required_argument, 0, O_START},
-    {"from-us", required_argument, 0, O_FROM}, {"to-us", required_argument, 0, O_TO},
-    {"median", required_argument, 0, O_MEDIAN}, {"path", required_argument, 0, O_PATH},
-    {"ghost", required_argument, 0, O_GHOST}, {"crop-margin-px", required_argument, 0, O_MARGIN},
-    {"threads", required_argument, 0, O_THREADS}, {"batch", required_argument, 0, O_BATCH},
+    {"start", required_argument, 0, O_START}, {"crop-margin-px", required_argument, 0, O_MARGIN},
     {"tiff-frame-us", required_argument, 0, O_TIFF_US}, {"save-volumes", no_argument, 0, O_SAVE_V},
     {"save-mips", no_argument, 0, O_SAVE_M}, {"quiet", no_argument, 0, O_QUIET},
     {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   elfm_recon_options *r = &a.ro;
+  cli_recon_parse rp = {r, 0, 0};
   optind = 1;
   opterr = 0;
   int c;
-  while ((c = getopt_long(argc, argv, "h", opts, NULL)) != -1) {
+  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+    const int k = cli_parse_recon_option("recon", c, optarg, &rp);
+    if (k == 0) return CLI_USAGE;
+    if (k > 0) continue;
     int ok = 1;
     switch (c) {
     case 'h': usage(stdout); return CLI_OK;
@@ -230,28 +185,13 @@ int cmd_recon(int argc, char **argv)
     case O_EVENTS: a.events = optarg; break;
     case O_TIFF: a.tiff = optarg; break;
     case O_OUT: a.out = optarg; break;
-    case O_DT: ok = cli_parse_int64("recon", "--dt-us", optarg, &r->framer.dt_us); break;
-    case O_STRIDE: ok = cli_parse_int64("recon", "--stride-us", optarg, &r->framer.stride_us); break;
-    case O_TAU: ok = cli_parse_double("recon", "--tau-us", optarg, &r->framer.tau_us); break;
-    case O_FROM: ok = cli_parse_int64("recon", "--from-us", optarg, &r->from_us); break;
-    case O_TO: ok = cli_parse_int64("recon", "--to-us", optarg, &r->to_us); break;
-    case O_MEDIAN: ok = cli_parse_int("recon", "--median", optarg, &r->median); break;
     case O_MARGIN: ok = cli_parse_int("recon", "--crop-margin-px", optarg, &r->refocus.crop_margin_px); break;
-    case O_THREADS: ok = cli_parse_int("recon", "--threads", optarg, &r->threads); break;
-    case O_BATCH: ok = cli_parse_int("recon", "--batch", optarg, &r->batch); break;
     case O_TIFF_US: ok = cli_parse_int64("recon", "--tiff-frame-us", optarg, &r->tiff_frame_us); break;
-    case O_REPR: a.repr_s = optarg; break;
-    case O_POL: a.pol_s = optarg; break;
-    case O_PATH: a.path_s = optarg; break;
-    case O_GHOST: ok = parse_ghost(optarg, &r->refocus); break;
     case O_START: a.start_s = optarg; break;
     case O_SAVE_V: a.save_volumes = 1; break;
     case O_SAVE_M: a.save_mips = 1; break;
     case O_QUIET: a.quiet = 1; break;
-    default:
-      cli_message("recon", CLI_USAGE, "unknown or incomplete option '%s'", argv[optind - 1]);
-      usage(stderr);
-      return CLI_USAGE;
+    default: return cli_bad_option("recon", c, argv);
     }
     if (!ok) return CLI_USAGE;
   }
@@ -260,24 +200,14 @@ int cmd_recon(int argc, char **argv)
     usage(stderr);
     return cli_message("recon", CLI_USAGE, "--calib, --out and one of --events / --tiff are required");
   }
-  if (a.repr_s && !cli_parse_repr("recon", a.repr_s, &r->framer.repr)) return CLI_USAGE;
-  if (a.pol_s && !cli_parse_polarity("recon", a.pol_s, &r->framer.polarity)) return CLI_USAGE;
-  if (a.path_s && !cli_parse_refocus_path("recon", a.path_s, &r->refocus.path)) return CLI_USAGE;
   if (a.start_s) {
     if (!strcmp(a.start_s, "first")) r->framer.start = ELFM_START_FIRST_EVENT;
     else if (!strcmp(a.start_s, "trigger")) r->framer.start = ELFM_START_FIRST_TRIGGER;
     else return cli_message("recon", CLI_USAGE, "--start: '%s' is not first or trigger", a.start_s);
   }
-  if (r->median != 0 && r->median != 3 && r->median != 5)
-    return cli_message("recon", CLI_USAGE, "--median: %d is not 0, 3 or 5", r->median);
-  if (r->threads < 0 || r->batch < 0)
-    return cli_message("recon", CLI_USAGE, "--threads and --batch must be >= 0");
+  if (!cli_check_recon_options("recon", &rp)) return CLI_USAGE;
   elfm_error err;
   elfm_error_clear(&err);
-  if (elfm_framer_options_check(&r->framer, &err)) {
-    cli_fail("recon", &err);
-    return CLI_USAGE;
-  }
   if (a.tiff && r->median == 3 && !a.quiet)
     cli_message("recon", 0, "note: --median 3 also filters the TIFF frames (use --median 0 for raw)");
   elfm_calib cal;

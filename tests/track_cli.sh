@@ -18,6 +18,26 @@ check 2 "motion" "$bin" track --calib a --events b --out c --motion sideways
 check 2 "stage-velocity" "$bin" track --calib a --events b --out c --stage-velocity-um-per-ms 1,2
 check 2 "batch" "$bin" track --calib a --events b --out c --batch -1
 check 2 "max-outlier-frac" "$bin" track --calib a --events b --out c --max-outlier-frac 2
+# The recon options track shares with recon (cli_parse_recon_option): each
+# bad value is a usage error naming the option, with the same message from
+# both commands.
+for bad in "--dt-us 10" "--dt-us x" "--stride-us -1" "--stride-us 2000" "--tau-us 0" \
+           "--repr dots" "--polarity up" "--median 4" "--path fast" "--ghost bogus" \
+           "--ghost frac" "--ghost frac:2" "--ghost mad:-1" "--ghost agree:2" "--ghost mad:3," \
+           "--ghost-value 3" "--ghost-value -1" "--agree 1.5" "--threads -1" "--threads 5000" \
+           "--batch 5000" "--from-us x" "--from-us 5 --to-us 5" "--to-us"; do
+  opt=${bad%% *}
+  [ "$bad" = "--from-us 5 --to-us 5" ] && opt=--from-us
+  # shellcheck disable=SC2086  # $bad is an option and its value
+  check 2 "$opt" "$bin" track --calib a --events b --out c $bad
+  cp "$tmp/err" "$tmp/err.track"
+  # shellcheck disable=SC2086
+  check 2 "$opt" "$bin" recon --calib a --events b --out c $bad
+  if [ "$(sed 's/^eventlfm recon: //' "$tmp/err")" != "$(sed 's/^eventlfm track: //' "$tmp/err.track")" ]; then
+    echo "FAIL: recon and track say different things for $bad:"; cat "$tmp/err.track" "$tmp/err"
+    fail=$((fail+1))
+  fi
+done
 check 1 "$tmp/nope.json" "$bin" track --calib "$tmp/nope.json" --events "$tmp/e.raw" --out "$tmp/o" -q
 # a valid calibration, then broken event files
 "$bin" calib from-optics --out "$tmp/calib.json" >/dev/null 2>&1 || { echo "SKIP: calib from-optics failed"; exit 77; }

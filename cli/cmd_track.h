@@ -1,0 +1,97 @@
+/* cmd_track.h — what the files of `eventlfm track` share (private to it):
+ * the options (cmd_track.c parses them), the run's context, the per-volume
+ * work the recon driver calls back (cmd_track_volume.c) and the summary
+ * (cmd_track_summary.c). */
+#ifndef ELFM_CMD_TRACK_H
+#define ELFM_CMD_TRACK_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "cli.h"
+#include "elfm_tracker.h"
+
+enum { MOTION_AUTO = 0, MOTION_STAGE, MOTION_FREE };
+
+typedef struct track_opts {
+  const char *calib, *events, *out;
+  elfm_recon_options recon;
+  elfm_peaks_options peaks;
+  elfm_link_options link;
+  elfm_smooth_options smooth;
+  int motion;
+  int has_stage_v;
+  double stage_v[3];
+  int max_det;
+  int lag_correct;
+  int resolution;
+  int views_rule;  /* threshold x (N/n)^views_exponent where n of N views sample a voxel */
+  double views_exponent;
+  int quiet;
+  double max_outlier_frac;
+  double guided_low;  /* track-guided search: min value near a prediction (0 = off) */
+  double guided_radius_um;
+  int guided_min_points;
+  double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
+} track_opts;
+
+typedef struct fwhm_list {
+  size_t n, cap;
+  double *xy, *z, *speed;
+} fwhm_list;
+
+typedef struct track_ctx {
+  const track_opts *o;
+  const elfm_calib *calib;
+  /* Peak detection runs on the recon driver's worker threads (the worker
+   * hook): one detector workspace per thread, one detection buffer per
+   * batch slot, read back in frame order by the linking callback. */
+  int n_threads, n_slots;
+  elfm_peaks **pk;       /* [n_threads] */
+  elfm_detection *det;   /* [n_slots][max_det] */
+  int *det_n;            /* [n_slots] */
+  double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
+  int *det_rej;          /* [n_slots] peaks dropped by the view-support test */
+  double *pred;          /* [max_det][3] track predictions (guided search) */
+  int have_first;
+  elfm_track **fin;      /* finished tracks being smoothed (drain) */
+  elfm_status *fin_st;
+  elfm_error *fin_err;
+  size_t fin_cap;
+  elfm_linker *lk;
+  FILE *fdet, *ftr;
+  char p_det[1100], p_tr[1100];
+  elfm_track_store store;
+  int64_t n_support_rejected;
+  int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;
+  int64_t first_t_us, last_t_us;
+  double t_peaks, t_link, t_smooth;
+  elfm_fwhm *fw;
+  fwhm_list fl;
+  int vol_w, vol_h, vol_nz;
+  double um_per_px, z_min_um, z_step_um;
+} track_ctx;
+
+/* Detectors and buffers for the driver's layout (elfm_recon_layout of
+ * c->o->recon), before the run. */
+elfm_status track_peaks_setup(track_ctx *c, elfm_error *err);
+/* The recon driver's worker hook (elfm_volume_worker_fn; user: the
+ * track_ctx): peaks of the slot's volume, on the worker thread. */
+elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
+                                const elfm_refocus_plan *plan, int slot, int thread, void *user,
+                                elfm_error *err);
+/* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
+ * write them, smooth and write the tracks that ended. */
+elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
+/* Smooth, filter and write the tracks the linker has finished. */
+elfm_status track_drain(track_ctx *c, elfm_error *err);
+/* Close the context's files, free what it holds (for any state of setup). */
+void track_ctx_free(track_ctx *c);
+/* Write summary.json: inputs, counts, parameters, timing, the stage
+ * velocity, resolution figures and one entry per track. input_err: the
+ * error that stopped reading early (the counts are of what was read), or
+ * NULL. */
+elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
+                                const char *path, const elfm_error *input_err, elfm_error *err);
+
+#endif

@@ -1,0 +1,214 @@
+/* cmd_track_summary.c — eventlfm track's summary.json (see cmd_track.h). */
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cmd_track.h"
+
+/* Speed bins for the resolution figures (um/ms): static, slow, moderate, fast. */
+#define N_SPEED_BINS 5
+static const double speed_edges[N_SPEED_BINS] = {0, 0.05, 0.2, 0.5, 1e300};
+
+static cJSON *vec3(const double v[3])
+{
+  cJSON *a = cJSON_CreateArray();
+  for (int k = 0; k < 3; k++) cJSON_AddItemToArray(a, cJSON_CreateNumber(isfinite(v[k]) ? v[k] : 0));
+  return a;
+}
+
+static void add_num(cJSON *o, const char *k, double v)
+{
+  if (isfinite(v)) cJSON_AddNumberToObject(o, k, v);
+  else cJSON_AddNullToObject(o, k);
+}
+
+/* The median and spread of x (l->xy or l->z) over the beads whose track's
+ * speed lies in [lo, hi), or over all beads (those of unknown speed too)
+ * when `all`; tmp has room for l->n values. Returns the number of beads. */
+static size_t fwhm_median(const fwhm_list *l, const double *x, int all, double lo, double hi,
+                          double *tmp, double *med, double *spr)
+{
+  size_t m = 0;
+  for (size_t i = 0; i < l->n; i++)
+    if (all || (l->speed[i] >= lo && l->speed[i] < hi)) tmp[m++] = x[i];
+  elfm_analysis_median(tmp, m, med, spr);
+  return m;
+}
+
+static cJSON *fwhm_summary(const fwhm_list *l)
+{
+  cJSON *r = cJSON_CreateObject();
+  double *tmp = malloc((l->n ? l->n : 1) * sizeof *tmp);
+  if (!tmp) return r;
+  /* the same figures for the lateral and the axial FWHM */
+  const double *const x[2] = {l->xy, l->z};
+  static const char *const median_key[2] = {"fwhm_xy_um_median", "fwhm_z_um_median"};
+  static const char *const spread_key[2] = {"fwhm_xy_um_spread", "fwhm_z_um_spread"};
+  double med, spr;
+  cJSON_AddNumberToObject(r, "n_beads", (double)l->n);
+  for (int a = 0; a < 2; a++) {
+    fwhm_median(l, x[a], 1, 0, 0, tmp, &med, &spr);
+    add_num(r, median_key[a], med);
+    add_num(r, spread_key[a], spr);
+  }
+  cJSON *bins = cJSON_AddArrayToObject(r, "by_speed");
+  for (int b = 0; b + 1 < N_SPEED_BINS; b++) {
+    const double lo = speed_edges[b], hi = speed_edges[b + 1];
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "speed_min_um_per_ms", lo);
+    add_num(o, "speed_max_um_per_ms", b + 2 < N_SPEED_BINS ? hi : NAN);
+    for (int a = 0; a < 2; a++) {
+      size_t m = fwhm_median(l, x[a], 0, lo, hi, tmp, &med, &spr);
+      if (a == 0) cJSON_AddNumberToObject(o, "n_beads", (double)m);
+      add_num(o, median_key[a], med);
+    }
+    cJSON_AddItemToArray(bins, o);
+  }
+  free(tmp);
+  return r;
+}
+
+elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
+                                const char *path, const elfm_error *input_err, elfm_error *err)
+{
+  const track_opts *o = c->o;
+  cJSON *j = cJSON_CreateObject();
+  cJSON_AddStringToObject(j, "events", o->events);
+  cJSON_AddStringToObject(j, "calib", o->calib);
+  if (input_err) {
+    /* The run stopped at a bad input: the counts are of what was read. */
+    char msg[1200];
+    cJSON_AddStringToObject(j, "input_error", elfm_error_format(input_err, msg, sizeof msg));
+  }
+  cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
+  cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
+  cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
+  cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
+  cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
+  cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
+  cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
+  cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
+  cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
+  cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
+  int nm[5] = {0, 0, 0, 0, 0};
+  for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;
+  cJSON *models = cJSON_AddObjectToObject(cnt, "models");
+  for (int m = 1; m < 5; m++)
+    cJSON_AddNumberToObject(models, elfm_motion_model_name((elfm_motion_model)m), nm[m]);
+
+  cJSON *par = cJSON_AddObjectToObject(j, "parameters");
+  const elfm_framer_options *fo = &o->recon.framer;
+  cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
+  cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
+  cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
+  cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
+  cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
+  cJSON_AddNumberToObject(par, "median", o->recon.median);
+  cJSON_AddStringToObject(par, "path", cli_refocus_path_name(o->recon.refocus.path));
+  cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(o->recon.refocus.threshold));
+  cJSON_AddNumberToObject(par, "ghost_threshold_value", o->recon.refocus.threshold_value);
+  cJSON_AddNumberToObject(par, "ghost_agree_frac", o->recon.refocus.agree_frac);
+  cJSON_AddNumberToObject(par, "view_support", o->view_support);
+  cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
+  cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
+  cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);
+  cJSON_AddNumberToObject(par, "threshold_depth_um", o->peaks.depth_range_um);
+  cJSON_AddNumberToObject(par, "threshold_min", o->peaks.absolute_min);
+  cJSON_AddNumberToObject(par, "threshold_low", o->peaks.hysteresis_low);
+  cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
+  cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
+  cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
+  cJSON_AddNumberToObject(par, "stitch_points", o->link.stitch_points);
+  cJSON_AddNumberToObject(par, "stitch_gate_um", o->link.stitch_gate_um);
+  cJSON_AddNumberToObject(par, "stitch_history", o->link.stitch_history);
+  cJSON_AddNumberToObject(par, "swap_points", o->link.swap_points);
+  cJSON_AddNumberToObject(par, "swap_ratio", o->link.swap_ratio);
+  cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);
+  cJSON_AddNumberToObject(par, "guided_low", o->guided_low);
+  cJSON_AddNumberToObject(par, "guided_radius_um", o->guided_radius_um);
+  cJSON_AddNumberToObject(par, "guided_min_points", o->guided_min_points);
+  cJSON_AddNumberToObject(par, "lead_sigmas", o->link.lead_sigmas);
+  cJSON_AddNumberToObject(par, "link_kz", o->link.kz);
+  cJSON_AddNumberToObject(par, "radius_xy_um", o->peaks.radius_xy_um);
+  cJSON_AddNumberToObject(par, "radius_z_um", o->peaks.radius_z_um);
+  cJSON_AddNumberToObject(par, "min_separation_um", o->peaks.min_separation_um);
+  cJSON_AddNumberToObject(par, "gate_um", o->link.gate_um);
+  cJSON_AddNumberToObject(par, "max_gap_frames", o->link.max_gap_frames);
+  cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
+  cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
+  cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
+  cJSON_AddStringToObject(par, "motion", o->motion == MOTION_STAGE ? "stage"
+                                         : o->motion == MOTION_FREE ? "free" : "auto");
+  cJSON_AddStringToObject(par, "model", elfm_motion_model_name(o->smooth.model));
+  cJSON_AddStringToObject(par, "loss", o->smooth.loss == ELFM_LOSS_HUBER ? "huber"
+                                       : o->smooth.loss == ELFM_LOSS_CAUCHY ? "cauchy" : "none");
+  if (o->has_stage_v) cJSON_AddItemToObject(par, "stage_velocity_um_per_ms", vec3(o->stage_v));
+
+  cJSON *tim = cJSON_AddObjectToObject(j, "timing");
+  add_num(tim, "wall_s", wall_s);
+  add_num(tim, "span_s", rs->span_s);
+  add_num(tim, "events_per_s", rs->wall_s > 0 ? (double)rs->events / wall_s : NAN);
+  add_num(tim, "volumes_per_s", wall_s > 0 ? (double)c->n_frames / wall_s : NAN);
+  add_num(tim, "realtime_factor", wall_s > 0 ? rs->span_s / wall_s : NAN);
+  add_num(tim, "peak_rss_mb", cli_peak_rss_mb());
+  /* recon_s: the driver without the ordered callback (linking, writing,
+   * smoothing); it contains peak detection, which runs on the workers.
+   * peaks_s is that detection's time summed over the workers (CPU s). */
+  add_num(tim, "recon_s", rs->wall_s - rs->callback_s);
+  add_num(tim, "read_s", rs->read_s);
+  add_num(tim, "frame_s", rs->frame_s);
+  add_num(tim, "parallel_s", rs->refocus_s);
+  add_num(tim, "callback_s", rs->callback_s);
+  add_num(tim, "peaks_s", c->t_peaks);
+  add_num(tim, "link_s", c->t_link);
+  add_num(tim, "smooth_s", c->t_smooth);
+
+  if (c->store.n) {
+    elfm_stage_result sr;
+    if (elfm_analysis_stage(&c->store, o->has_stage_v ? o->stage_v : NULL, &sr, err) == ELFM_OK) {
+      cJSON *st = cJSON_AddObjectToObject(j, "stage");
+      cJSON_AddItemToObject(st, "velocity_um_per_ms", vec3(sr.v_um_per_ms));
+      cJSON_AddItemToObject(st, "velocity_sd_um_per_ms", vec3(sr.v_sd_um_per_ms));
+      add_num(st, "speed_um_per_ms", sr.speed_um_per_ms);
+      add_num(st, "speed_sd_um_per_ms", sr.speed_sd_um_per_ms);
+      add_num(st, "rel_error", sr.rel_error);
+      add_num(st, "speed_rel_error", sr.speed_rel_error);
+    }
+  }
+  if (o->resolution) cJSON_AddItemToObject(j, "resolution", fwhm_summary(&c->fl));
+
+  cJSON *tr = cJSON_AddArrayToObject(j, "tracks");
+  for (size_t i = 0; i < c->store.n; i++) {
+    const elfm_track *t = c->store.tracks[i];
+    cJSON *e = cJSON_CreateObject();
+    double v[3];
+    elfm_track_mean_velocity(t, v);
+    cJSON_AddNumberToObject(e, "id", (double)t->id);
+    cJSON_AddNumberToObject(e, "first_frame", (double)t->pts[0].frame);
+    cJSON_AddNumberToObject(e, "last_frame", (double)t->pts[t->n - 1].frame);
+    cJSON_AddNumberToObject(e, "points", (double)t->n);
+    cJSON_AddStringToObject(e, "model", elfm_motion_model_name(t->model));
+    if (t->model == ELFM_MODEL_SPLINE) cJSON_AddNumberToObject(e, "spline_weight_ms3", t->spline_weight_ms3);
+    add_num(e, "edf", t->edf);
+    cJSON_AddNumberToObject(e, "outliers", t->n_outliers);
+    cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(v));
+    cJSON_AddItemToArray(tr, e);
+  }
+  char *text = cJSON_Print(j);
+  cJSON_Delete(j);
+  if (!text) return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "cannot build summary.json");
+  FILE *f = fopen(path, "w");
+  elfm_status st = ELFM_OK;
+  if (!f) st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
+  else {
+    fputs(text, f);
+    fputc('\n', f);
+    if (ferror(f) | (fclose(f) != 0))
+      st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  }
+  free(text);
+  return st;
+}

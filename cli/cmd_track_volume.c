@@ -1,0 +1,296 @@
+/* cmd_track_volume.c — eventlfm track's per-volume work, called back by the
+ * recon driver: peak detection on the worker threads, then in frame order
+ * linking, writing detections, and smoothing, filtering and writing the
+ * tracks that ended (see cmd_track.h). */
+#include <math.h>
+#include <stdlib.h>
+
+#include "cmd_track.h"
+
+/* Filter a smoothed track (st: its smoothing's status) and write it. */
+static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elfm_error *err)
+{
+  /* A track whose points the robust fit mostly rejects is not one object
+   * (ghosts joined across gaps: on the stage scene such tracks ran against
+   * the stage and biased its velocity by 1 %). */
+  if (st == ELFM_OK && (double)t->n_outliers > c->o->max_outlier_frac * (double)t->n) {
+    c->n_rejected++;
+    elfm_track_free(t);
+    return ELFM_OK;
+  }
+  /* Rigid stage motion with a known velocity: a track moving otherwise
+   * (more than 25 % of the stage speed + 0.1 um/ms off) is not part of the
+   * sample (ghosts joined across gaps). */
+  if (st == ELFM_OK && c->o->motion == MOTION_STAGE && c->o->has_stage_v) {
+    double v[3], d2 = 0, s2 = 0;
+    elfm_track_mean_velocity(t, v);
+    for (int a = 0; a < 3; a++) {
+      d2 += (v[a] - c->o->stage_v[a]) * (v[a] - c->o->stage_v[a]);
+      s2 += c->o->stage_v[a] * c->o->stage_v[a];
+    }
+    if (sqrt(d2) > 0.25 * sqrt(s2) + 0.1) {
+      c->n_rejected_stage++;
+      elfm_track_free(t);
+      return ELFM_OK;
+    }
+  }
+  if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
+  if (st != ELFM_OK) {
+    elfm_track_free(t);
+    return st;
+  }
+  c->n_points_kept += (int64_t)t->n;
+  return elfm_track_store_add(&c->store, t, err);
+}
+
+/* Smooth, filter and write the tracks the linker has finished. Each track
+ * is its own single-threaded Ceres problem, so when several finish at once
+ * (most of them at the end of the recording) they are smoothed in parallel;
+ * filtering and writing stay in the linker's order, so the output does not
+ * depend on the thread count. */
+elfm_status track_drain(track_ctx *c, elfm_error *err)
+{
+  size_t n = 0;
+  elfm_track *t;
+  elfm_status st = ELFM_OK;
+  while ((t = elfm_link_pop_finished(c->lk))) {
+    if (n == c->fin_cap) {
+      size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
+      elfm_track **a = realloc(c->fin, cap * sizeof *a);
+      elfm_status *b = realloc(c->fin_st, cap * sizeof *b);
+      elfm_error *e = realloc(c->fin_err, cap * sizeof *e);
+      if (a) c->fin = a;
+      if (b) c->fin_st = b;
+      if (e) c->fin_err = e;
+      if (!a || !b || !e) {
+        elfm_track_free(t);
+        st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
+        break;
+      }
+      c->fin_cap = cap;
+    }
+    c->fin[n++] = t;
+  }
+  double t0 = cli_now_s();
+  const elfm_smooth_options *so = &c->o->smooth;
+  const int nt = n > 1 && c->n_threads > 1 ? c->n_threads : 1;
+#pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
+  for (size_t i = 0; i < n; i++) c->fin_st[i] = elfm_track_smooth(c->fin[i], so, &c->fin_err[i]);
+  c->t_smooth += cli_now_s() - t0;
+  for (size_t i = 0; i < n; i++) {
+    if (st == ELFM_OK) {
+      if (c->fin_st[i] != ELFM_OK && err) *err = c->fin_err[i];
+      st = finish_track(c, c->fin[i], c->fin_st[i], err);
+    } else {
+      elfm_track_free(c->fin[i]);
+    }
+  }
+  return st;
+}
+
+static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, elfm_error *err)
+{
+  if (l->n == l->cap) {
+    size_t cap = l->cap ? 2 * l->cap : 1024;
+    double *a = realloc(l->xy, cap * sizeof *a);
+    if (a) l->xy = a;
+    double *b = realloc(l->z, cap * sizeof *b);
+    if (b) l->z = b;
+    double *s = realloc(l->speed, cap * sizeof *s);
+    if (s) l->speed = s;
+    if (!a || !b || !s) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory");
+    l->cap = cap;
+  }
+  l->xy[l->n] = xy;
+  l->z[l->n] = z;
+  l->speed[l->n] = speed;
+  l->n++;
+  return ELFM_OK;
+}
+
+/* Detectors and buffers for the driver's layout, before the run: the
+ * volume geometry comes from a plan of the same calibration and options as
+ * the one refocusing. With the views rule, the views sampling each voxel
+ * (elfm_peaks_set_view_counts) are counted once and copied to each detector. */
+elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
+{
+  const track_opts *o = c->o;
+  elfm_status s = elfm_recon_layout(&o->recon, &c->n_threads, &c->n_slots, err);
+  if (s != ELFM_OK) return s;
+  c->pk = calloc((size_t)c->n_threads, sizeof *c->pk);
+  c->det = malloc((size_t)c->n_slots * (size_t)o->max_det * sizeof *c->det);
+  c->det_n = calloc((size_t)c->n_slots, sizeof *c->det_n);
+  c->det_s = calloc((size_t)c->n_slots, sizeof *c->det_s);
+  c->det_rej = calloc((size_t)c->n_slots, sizeof *c->det_rej);
+  c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
+  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->pred)
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
+  elfm_refocus_plan *plan = NULL;
+  s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
+  if (s != ELFM_OK) return s;
+  elfm_volume *v = elfm_refocus_volume_create(plan, err);
+  uint8_t *cnt = NULL;
+  if (!v) s = err ? err->code : ELFM_ERR_NOMEM;
+  if (s == ELFM_OK && o->views_rule) {
+    size_t nvox = (size_t)v->w * v->h * v->nz;
+    cnt = malloc(nvox);
+    if (!cnt) s = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
+    else
+      for (int k = 0; k < v->nz; k++)
+        for (int Y = 0; Y < v->h; Y++)
+          for (int X = 0; X < v->w; X++)
+            cnt[((size_t)k * v->h + Y) * v->w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
+  }
+  for (int t = 0; s == ELFM_OK && t < c->n_threads; t++) {
+    c->pk[t] = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
+    if (!c->pk[t]) s = err ? err->code : ELFM_ERR_INVALID;
+    else if (cnt)
+      s = elfm_peaks_set_view_counts(c->pk[t], cnt, c->calib->n_views, o->views_exponent, err);
+  }
+  free(cnt);
+  elfm_volume_free(v);
+  elfm_refocus_plan_free(plan);
+  return s;
+}
+
+/* Worker thread: detect the peaks of the slot's volume into its buffer,
+ * then drop the peaks too few views see (the view-support test). */
+elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
+                                const elfm_refocus_plan *plan, int slot, int thread, void *user,
+                                elfm_error *err)
+{
+  track_ctx *c = user;
+  double t0 = cli_now_s();
+  elfm_detection *det = c->det + (size_t)slot * c->o->max_det;
+  elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->o->max_det, &c->det_n[slot], err);
+  c->det_rej[slot] = 0;
+  if (st == ELFM_OK && c->o->view_support > 0) {
+    /* A bead at the peak puts signal in most of the views that sample
+     * its voxel; a ghost (other beads' images lining up) in a few. On the
+     * flow scene at threshold 20, 91 % of ghost peaks had signal in fewer
+     * than 30 % of their views, against 2.7 % of true peaks (13 % of
+     * those deeper than 50 um, whose sparse events miss some views):
+     * docs/tracker.md "View support". The voxel is the refined position's
+     * nearest. */
+    int kept = 0;
+    for (int i = 0; i < c->det_n[slot]; i++) {
+      const int X = (int)lround(elfm_volume_x_vox(v, det[i].x_um));
+      const int Y = (int)lround(elfm_volume_y_vox(v, det[i].y_um));
+      const int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
+      int ns = 0;
+      const int n = elfm_refocus_view_support(plan, frame, X, Y, K, &ns);
+      if ((double)n >= c->o->view_support * ns && n > 0) det[kept++] = det[i];
+    }
+    c->det_rej[slot] = c->det_n[slot] - kept;
+    c->det_n[slot] = kept;
+  }
+  c->det_s[slot] = cli_now_s() - t0;
+  return st;
+}
+
+/* Calling thread, frame order: link the slot's detections, write them. */
+elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  track_ctx *c = user;
+  const track_opts *o = c->o;
+  if (!c->have_first) {
+    c->have_first = 1;
+    c->vol_w = v->w;
+    c->vol_h = v->h;
+    c->vol_nz = v->nz;
+    c->um_per_px = v->um_per_px;
+    c->z_min_um = v->z_min_um;
+    c->z_step_um = v->z_step_um;
+    c->first_frame = v->frame;
+    c->first_t_us = v->t_us;
+  }
+  elfm_detection *det = c->det + (size_t)slot * o->max_det;
+  int n = c->det_n[slot];
+  c->t_peaks += c->det_s[slot];
+  c->n_support_rejected += c->det_rej[slot];
+  double t1 = cli_now_s();
+  if (o->guided_low > 0 && o->link.weak_gate_um > 0) {
+    /* Track-guided search: where an established track expects its bead
+     * and no peak lies within the weak gate, take the local maximum above
+     * guided_low there (weak: it can only continue that track). Deep beads
+     * fade below the global threshold (25-55 on the surface, docs). */
+    int np = 0;
+    elfm_status sp = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred, o->max_det, &np, err);
+    if (sp != ELFM_OK) return sp;
+    const double g = o->link.weak_gate_um, kz = o->link.kz, gs = o->guided_radius_um;
+    for (int k = 0; k < np && n < o->max_det; k++) {
+      const double *q = c->pred + 3 * (size_t)k;
+      int near = 0;
+      for (int j = 0; j < n && !near; j++) {
+        double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1], dz = (det[j].z_um - q[2]) / kz;
+        near = dx * dx + dy * dy + dz * dz < g * g;
+      }
+      if (near) continue;
+      int found = 0;
+      sp = elfm_peaks_find_near(c->pk[0], v, q, gs, gs * kz, o->guided_low, &det[n], &found, err);
+      if (sp != ELFM_OK) return sp;
+      n += found;
+    }
+  }
+  elfm_status st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
+  if (st != ELFM_OK) return st;
+  c->t_link += cli_now_s() - t1;
+  /* after linking: the lag correction (when on) has moved the detections,
+   * and trail peaks (id -2) and weak peaks that joined no track (-3) are
+   * left out */
+  int kept = 0;
+  for (int j = 0; j < n; j++) {
+    int64_t id = elfm_link_last_track_id(c->lk, j);
+    if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
+    st = elfm_detections_write(c->fdet, c->p_det, &det[j], 1, err);
+    if (st != ELFM_OK) return st;
+    kept++;
+  }
+  if (o->resolution && v->frame % 10 == 0 && n > 0) {
+    int m = 0;
+    /* isolation 3 x the paper's lateral FWHM of 3.9 um */
+    st = elfm_analysis_fwhm(v, det, n, 12.0, c->fw, o->max_det, &m, err);
+    if (st != ELFM_OK) return st;
+    for (int k = 0; k < m; k++) {
+      /* the speed of the track the bead belongs to: find its detection */
+      double speed = NAN;
+      for (int j = 0; j < n; j++)
+        if (det[j].x_um == c->fw[k].x_um && det[j].y_um == c->fw[k].y_um &&
+            det[j].z_um == c->fw[k].z_um) {
+          speed = elfm_link_last_speed(c->lk, j);
+          break;
+        }
+      if (c->fl.n < 1000000) {  /* a million samples is plenty for a median */
+        st = fwhm_push(&c->fl, c->fw[k].fwhm_xy_um, c->fw[k].fwhm_z_um, speed, err);
+        if (st != ELFM_OK) return st;
+      }
+    }
+  }
+  c->n_frames++;
+  c->n_det += kept;
+  c->last_frame = v->frame;
+  c->last_t_us = v->t_us;
+  return track_drain(c, err);
+}
+
+void track_ctx_free(track_ctx *c)
+{
+  if (c->fdet) fclose(c->fdet);
+  if (c->ftr) fclose(c->ftr);
+  elfm_link_free(c->lk);
+  for (int t = 0; c->pk && t < c->n_threads; t++) elfm_peaks_free(c->pk[t]);
+  free(c->pk);
+  free(c->det_n);
+  free(c->fin);
+  free(c->fin_st);
+  free(c->fin_err);
+  free(c->det_s);
+  free(c->det_rej);
+  free(c->pred);
+  elfm_track_store_clear(&c->store);
+  free(c->det);
+  free(c->fw);
+  free(c->fl.xy);
+  free(c->fl.z);
+  free(c->fl.speed);
+}
