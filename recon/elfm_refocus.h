@@ -93,6 +93,36 @@ const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
 int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                               int k, int *n_sampling);
 
+/* Localise a point from its images in the views of `frame` (the Fourier
+ * LFM triangulation; recon/localize.c): starting at volume position
+ * (x_vox, y_vox, z_vox) (voxel units, fractional), measure each view's
+ * image centre as the centroid of a (2 half_window_px + 1)^2 window
+ * (pixel weights value^power), re-centre, and fit (X, Y, z) to all of them
+ * by weighted least squares; views that miss the fit by more than
+ * outlier_px are dropped and the others weighted robustly. Returns 1 with
+ * *out filled, 0 when fewer than min_views views agree with the fit, the
+ * fit leaves the volume or the input is not usable (the caller keeps its
+ * own estimate). Read-only on plan and frame: any thread. */
+typedef struct elfm_localize_options {
+  int half_window_px;  /* window half-size (2: 5 x 5 px) */
+  int iterations;      /* plain re-centring passes before the robust ones (4) */
+  double outlier_px;   /* drop a view whose centroid misses the fit by more (1.5) */
+  int min_views;       /* fewer views agreeing: no result (6) */
+  int power;           /* pixel weight value^power: on a time surface the newest
+                          events count most (3) */
+} elfm_localize_options;
+
+typedef struct elfm_localize_result {
+  double x_vox, y_vox, z_vox; /* position, voxel units of the plan's volume */
+  int n_views;                /* views that agree with the fit (robust weight >= 1/2) */
+  double rms_px;              /* their weighted RMS miss, px */
+} elfm_localize_result;
+
+void elfm_localize_options_default(elfm_localize_options *o);
+int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                          double y_vox, double z_vox, const elfm_localize_options *o,
+                          elfm_localize_result *out);
+
 /* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
  * The workspace remembers which rows of the volume it last wrote on the
  * sparse path, so it clears only those next time: between two executes

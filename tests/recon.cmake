@@ -2,6 +2,7 @@
 elfm_add_test(test_frames test_frames.c)
 elfm_add_test(test_median test_median.c)
 elfm_add_test(test_refocus test_refocus.c)
+elfm_add_test(test_localize test_localize.c)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)
 target_link_libraries(test_recon_pipeline PRIVATE TIFF::TIFF)  # writes a mixed-depth stack
 elfm_add_test(test_recon_sim test_recon_sim.c)

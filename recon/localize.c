@@ -1,0 +1,224 @@
+/* localize.c — a point's 3D position from its 25 images (elfm_refocus_localize).
+ *
+ * The refocused volume is the mean of the views' bilinear samples; a peak in
+ * it is located by a parabola through three voxels per axis. That throws away
+ * most of what the views say: each view holds a whole image of the object,
+ * and in a Fourier LFM the image in view v sits at
+ *     u_v = X + cx_v - (W-1)/2 + z dx_v,   w_v = Y + cy_v - (H-1)/2 + z dy_v
+ * (the refocus geometry, elfm_refocus.h), linear in the unknowns (X, Y, z).
+ * So: measure each view's image centre (the centroid of the frame in a small
+ * window, re-centred as the fit moves) and solve the 2 x n_views linear
+ * equations for (X, Y, z) by weighted least squares. Lateral position comes
+ * from all views together, depth from how the images spread with the views'
+ * disparities dx_v, dy_v: the classical Fourier LFM localisation.
+ *
+ * Other objects' images share some views' windows (in a 5 x 5 array of
+ * views, 25 images per object crowd the sensor). So, after a few plain
+ * re-centring passes, views whose centroid misses the fit by more than
+ * outlier_px are dropped and the rest weighted by a Cauchy function of
+ * their miss; each view's weight (its mass) is capped at the median mass,
+ * as an unusually bright window most likely holds a second object. Windows
+ * clipped by the view's crop box are not used (their centroid is pulled
+ * inwards). tests/test_localize.c: 0.002 px and 0.005 um from the truth on
+ * noise-free in-focus images, 0.04 px and 0.08 um on images twice as wide.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "elfm_refocus.h"
+#include "refocus_internal.h"
+
+/* passes with outlier dropping and robust weights, after the re-centring */
+#define ROBUST_PASSES 3
+/* floor of the robust scale: noise-free synthetic images fit to 1e-3 px,
+ * and a scale that small would weight every view down */
+#define MIN_SCALE_PX 0.05
+
+void elfm_localize_options_default(elfm_localize_options *o)
+{
+  memset(o, 0, sizeof *o);
+  o->half_window_px = 2;
+  o->iterations = 4;
+  o->outlier_px = 1.5;
+  o->min_views = 6;
+  o->power = 3;
+}
+
+/* Centroid of the frame over the (2r+1)^2 window at the nearest pixel to
+ * (u, w), inside box b only. Returns the mass (0: nothing, -1: the window
+ * leaves the box). */
+static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, double u, double w,
+                              int r, int pw, double *cu, double *cw)
+{
+  if (!(fabs(u) < 1e7 && fabs(w) < 1e7)) return -1; /* lround's range; far off anyway */
+  const long iu = lround(u), iw = lround(w);
+  if (iu - r < b->x0 || iu + r >= b->x1 || iw - r < b->y0 || iw + r >= b->y1) return -1;
+  double m = 0, su = 0, sw = 0;
+  for (long y = iw - r; y <= iw + r; y++) {
+    const float *row = f->data + (size_t)y * (size_t)f->w;
+    double rm = 0, ru = 0;
+    for (long x = iu - r; x <= iu + r; x++) {
+      double v = row[x];
+      for (int k = 1; k < pw; k++) v *= row[x];
+      rm += v;
+      ru += v * (double)(x - iu);
+    }
+    m += rm;
+    su += ru;
+    sw += rm * (double)(y - iw);
+  }
+  if (!(m > 0)) return 0;
+  *cu = (double)iu + su / m;
+  *cw = (double)iw + sw / m;
+  return m;
+}
+
+/* Weighted least squares for (X, Y, z) from per-view centroids: rows
+ * cu - a_u = X + z du, cw - a_w = Y + z dw. Solves the 3 x 3 normal
+ * equations; 0 when singular (all disparities equal: no depth information). */
+static int solve_xyz(int n, const double *wt, const double *ru, const double *rw, const double *du,
+                     const double *dw, double out[3])
+{
+  double sw = 0, sdu = 0, sdw = 0, sdd = 0, bu = 0, bw = 0, bz = 0;
+  for (int i = 0; i < n; i++) {
+    const double w = wt[i];
+    if (!(w > 0)) continue;
+    sw += w;
+    sdu += w * du[i];
+    sdw += w * dw[i];
+    sdd += w * (du[i] * du[i] + dw[i] * dw[i]);
+    bu += w * ru[i];
+    bw += w * rw[i];
+    bz += w * (du[i] * ru[i] + dw[i] * rw[i]);
+  }
+  /* [sw 0 sdu; 0 sw sdw; sdu sdw sdd] (X Y z)' = (bu bw bz)'. Eliminating
+   * X and Y leaves D z = sw bz - sdu bu - sdw bw with D = sw^2 x the weighted
+   * variance of the disparities: 0 when they are all equal (no depth). */
+  if (!(sw > 0)) return 0;
+  const double D = sw * sdd - sdu * sdu - sdw * sdw;
+  if (!(D > 1e-9 * sw * sdd)) return 0;
+  const double z = (sw * bz - sdu * bu - sdw * bw) / D;
+  if (!isfinite(z)) return 0;
+  out[0] = (bu - sdu * z) / sw;
+  out[1] = (bw - sdw * z) / sw;
+  out[2] = z;
+  return 1;
+}
+
+int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                          double y_vox, double z_vox, const elfm_localize_options *o,
+                          elfm_localize_result *out)
+{
+  enum { MAXV = 256 };
+  const elfm_calib *c = &p->calib;
+  if (!frame || frame->w != p->sw || frame->h != p->sh || p->nv > MAXV || !o ||
+      o->half_window_px < 1 || o->half_window_px > 32 || !(o->outlier_px > 0) || o->min_views < 2 ||
+      o->power < 1 || o->power > 8 ||
+      !isfinite(x_vox) || !isfinite(y_vox) || !isfinite(z_vox))
+    return 0;
+  const double hw = 0.5 * (p->w - 1), hh = 0.5 * (p->h - 1);
+  double au[MAXV], aw[MAXV], du[MAXV], dw[MAXV], ru[MAXV], rw[MAXV], wt[MAXV];
+  int keep[MAXV];
+  for (int v = 0; v < p->nv; v++) {
+    au[v] = c->views[v].cx_px - hw;
+    aw[v] = c->views[v].cy_px - hh;
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+    keep[v] = 1;
+  }
+  /* unknowns: X, Y (volume voxels = sensor px), z (um) */
+  double q[3] = {x_vox, y_vox, c->z_min_um + z_vox * c->z_step_um};
+  const double zlo = c->z_min_um - c->z_step_um, zhi = c->z_min_um + p->nz * c->z_step_um;
+  const double out2 = o->outlier_px * o->outlier_px;
+  const int passes = o->iterations < 1 ? 1 : o->iterations;
+  double mass[MAXV], fac[MAXV], e2[MAXV];
+  for (int v = 0; v < p->nv; v++) fac[v] = 1;
+  for (int it = 0; it < passes + ROBUST_PASSES; it++) {
+    int n_used = 0;
+    for (int v = 0; v < p->nv; v++) {
+      mass[v] = 0;
+      if (!keep[v]) continue;
+      double cu, cw;
+      const double m = window_centroid(frame, &p->box[v], q[0] + au[v] + q[2] * du[v],
+                                       q[1] + aw[v] + q[2] * dw[v], o->half_window_px, o->power,
+                                       &cu, &cw);
+      if (m <= 0) continue;
+      mass[v] = m;
+      ru[v] = cu - au[v];
+      rw[v] = cw - aw[v];
+      const double eu = ru[v] - (q[0] + q[2] * du[v]), ew = rw[v] - (q[1] + q[2] * dw[v]);
+      e2[v] = eu * eu + ew * ew;
+    }
+    if (it >= passes) {
+      /* Robust passes: a view whose centroid misses by more than
+       * outlier_px holds another object (or only noise) and is dropped;
+       * the others are weighted by a Cauchy function of their miss over
+       * 2.5 x its robust scale (1.4826 x median), so that a view where a
+       * neighbour's image overlaps part of the window and pulls its
+       * centroid by a fraction of a pixel counts little. */
+      double sorted[MAXV];
+      int ns = 0;
+      for (int v = 0; v < p->nv; v++) {
+        if (!(mass[v] > 0)) continue;
+        if (e2[v] > out2) {
+          keep[v] = 0;
+          mass[v] = 0;
+          continue;
+        }
+        double e = sqrt(e2[v]);
+        int k = ns++;
+        while (k > 0 && sorted[k - 1] > e) {
+          sorted[k] = sorted[k - 1];
+          k--;
+        }
+        sorted[k] = e;
+      }
+      if (ns > 0) {
+        const double med = ns % 2 ? sorted[ns / 2] : 0.5 * (sorted[ns / 2 - 1] + sorted[ns / 2]);
+        const double scale = 2.5 * fmax(1.4826 * med, MIN_SCALE_PX);
+        for (int v = 0; v < p->nv; v++)
+          if (mass[v] > 0) fac[v] = 1.0 / (1.0 + e2[v] / (scale * scale));
+      }
+    }
+    /* Weight = the window's mass, capped at the median mass: a view with
+     * little signal has a noisy centroid, but one far brighter than the
+     * others most likely holds a second object as well (with values^3, an
+     * overlapping image 1.6 x brighter outweighed the bead's own 4 x). */
+    double ms[MAXV];
+    for (int v = 0; v < p->nv; v++)
+      if (mass[v] > 0) {
+        int k = n_used++;
+        while (k > 0 && ms[k - 1] > mass[v]) {
+          ms[k] = ms[k - 1];
+          k--;
+        }
+        ms[k] = mass[v];
+      }
+    const double mcap = n_used ? ms[n_used / 2] : 0;
+    for (int v = 0; v < p->nv; v++) wt[v] = fmin(mass[v], mcap) * fac[v];
+    if (n_used < o->min_views) return 0;
+    double nq[3];
+    if (!solve_xyz(p->nv, wt, ru, rw, du, dw, nq)) return 0;
+    if (!(nq[2] >= zlo && nq[2] <= zhi) || fabs(nq[0] - x_vox) > 2 * o->half_window_px ||
+        fabs(nq[1] - y_vox) > 2 * o->half_window_px)
+      return 0; /* walked off: not a point this fit can follow */
+    memcpy(q, nq, sizeof q);
+  }
+  /* the views that agree: kept, with signal, and weighted at least half */
+  int n_final = 0;
+  double ss = 0, sw = 0;
+  for (int v = 0; v < p->nv; v++) {
+    if (!(mass[v] > 0) || fac[v] < 0.5) continue;
+    const double eu = ru[v] - (q[0] + q[2] * du[v]), ew = rw[v] - (q[1] + q[2] * dw[v]);
+    ss += wt[v] * (eu * eu + ew * ew);
+    sw += wt[v];
+    n_final++;
+  }
+  if (n_final < o->min_views) return 0;
+  out->x_vox = q[0];
+  out->y_vox = q[1];
+  out->z_vox = (q[2] - c->z_min_um) / c->z_step_um;
+  out->n_views = n_final;
+  out->rms_px = sw > 0 ? sqrt(ss / sw) : 0;
+  return 1;
+}

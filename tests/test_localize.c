@@ -1,0 +1,216 @@
+/* test_localize.c — elfm_refocus_localize, the view fit (recon/localize.c),
+ * on synthetic Fourier LFM frames rendered with the SPEC §2 projection at
+ * the paper's geometry:
+ *  - a bead anywhere in +-80 um z and the field of view, started 1 voxel and
+ *    2 planes off: found to 0.05 px laterally and 0.25 um axially, with
+ *    images of in-focus width and of deep-bead width;
+ *  - another object's image, brighter, 2 px beside the bead's in 3 views:
+ *    those views are not counted as agreeing and the position holds;
+ *  - sparse noise alone (a time surface with no object) gives no fit at
+ *    the guided search's 8 views;
+ *  - too few views, an empty frame, NaN starts, bad options, a frame of the
+ *    wrong size: no fit (0), no crash. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+
+#define FIELD_STOP_PX 77.0
+
+/* A bead's images: a Gaussian of width sigma_px in each view (only_views
+ * views when > 0), each pixel's value added; offset_px moves the images of
+ * views v < n_offset (another object there). */
+static void render(elfm_frame *f, const elfm_calib *c, double x, double y, double z, double amp,
+                   double sigma_px, int only_views, int n_offset, double offset_px)
+{
+  for (int v = 0; v < c->n_views; v++) {
+    if (only_views > 0 && v >= only_views) break;
+    double u, w;
+    elfm_calib_project(c, v, x, y, z, &u, &w);
+    if (v < n_offset) u += offset_px;
+    if (fabs(u - c->views[v].cx_px) > FIELD_STOP_PX || fabs(w - c->views[v].cy_px) > FIELD_STOP_PX)
+      continue;
+    const int r = (int)ceil(4 * sigma_px);
+    for (int yy = (int)floor(w) - r; yy <= (int)floor(w) + r + 1; yy++)
+      for (int xx = (int)floor(u) - r; xx <= (int)floor(u) + r + 1; xx++) {
+        if (xx < 0 || yy < 0 || xx >= f->w || yy >= f->h) continue;
+        double d2 = (xx - u) * (xx - u) + (yy - w) * (yy - w);
+        float a = (float)(amp * exp(-0.5 * d2 / (sigma_px * sigma_px)));
+        if (a < 1.0f) continue;
+        uint32_t i = (uint32_t)(yy * f->w + xx);
+        elfm_frame_set(f, i, f->data[i] + a);
+      }
+  }
+}
+
+static double lcg(uint32_t *s)
+{
+  *s = *s * 1664525u + 1013904223u;
+  return (*s >> 8) % 100001 / 100000.0;
+}
+
+/* voxel coordinates of (x, y, z) um in the plan's volume */
+static void to_vox(const elfm_calib *c, const elfm_refocus_plan *p, double x, double y, double z,
+                   double q[3])
+{
+  int w, h, nz;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  q[0] = x / c->um_per_px + 0.5 * (w - 1);
+  q[1] = y / c->um_per_px + 0.5 * (h - 1);
+  q[2] = (z - c->z_min_um) / c->z_step_um;
+}
+
+static void test_positions(const elfm_calib *c, const elfm_refocus_plan *p, elfm_frame *f,
+                           double sigma_px)
+{
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  if (sigma_px > 2) o.half_window_px = 3;  /* a window for the wider image */
+  const double fov_um = 0.5 * (c->view_w_px - 1) * c->um_per_px;
+  uint32_t s = 11;
+  double worst_lat = 0, worst_z = 0;
+  int fitted = 0;
+  for (int trial = 0; trial < 40; trial++) {
+    double x = (2 * lcg(&s) - 1) * (fov_um - 30), y = (2 * lcg(&s) - 1) * (fov_um - 30);
+    double z = (2 * lcg(&s) - 1) * 80.0;
+    elfm_frame_clear(f);
+    render(f, c, x, y, z, 255.0, sigma_px, 0, 0, 0);
+    double q[3];
+    to_vox(c, p, x, y, z, q);
+    /* start off by up to 1 voxel laterally and 2 planes */
+    const double s0 = q[0] + (2 * lcg(&s) - 1), s1 = q[1] + (2 * lcg(&s) - 1),
+                 s2 = q[2] + 2 * (2 * lcg(&s) - 1);
+    elfm_localize_result r;
+    int ok = elfm_refocus_localize(p, f, s0, s1, s2, &o, &r);
+    CHECK_MSG(ok, "bead (%.1f, %.1f, %.1f) um, sigma %.1f px: no fit", x, y, z, sigma_px);
+    if (!ok) continue;
+    fitted++;
+    double lat = fmax(fabs(r.x_vox - q[0]), fabs(r.y_vox - q[1]));
+    double ez = fabs(r.z_vox - q[2]) * c->z_step_um;
+    if (lat > worst_lat) worst_lat = lat;
+    if (ez > worst_z) worst_z = ez;
+    CHECK_MSG(lat <= 0.05 && ez <= 0.25,
+              "bead (%.2f, %.2f, %.2f) um, sigma %.1f px: off by %.3f px, %.3f um in z (%d views)",
+              x, y, z, sigma_px, lat, ez, r.n_views);
+    CHECK_MSG(r.n_views >= 20, "only %d views used", r.n_views);
+  }
+  printf("sigma %.1f px: %d of 40 fitted, worst %.3f px laterally, %.3f um axially\n", sigma_px,
+         fitted, worst_lat, worst_z);
+}
+
+static void test_outlier_views(const elfm_calib *c, const elfm_refocus_plan *p, elfm_frame *f)
+{
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  double x = 12.3, y = -20.7, z = 31.4, q[3];
+  to_vox(c, p, x, y, z, q);
+  elfm_frame_clear(f);
+  render(f, c, x, y, z, 255.0, 1.3, 0, 0, 0);
+  /* another object's image 2 px beside the bead's in views 0-2, brighter */
+  render(f, c, x, y, z, 400.0, 1.3, 3, 3, 2.0);
+  elfm_localize_result r;
+  CHECK(elfm_refocus_localize(p, f, q[0] + 0.6, q[1] - 0.4, q[2] + 1.5, &o, &r));
+  CHECK_MSG(fabs(r.x_vox - q[0]) <= 0.05 && fabs(r.y_vox - q[1]) <= 0.05 &&
+                fabs(r.z_vox - q[2]) * c->z_step_um <= 0.25,
+            "with 3 corrupted views: (%.3f %.3f %.3f) vs (%.3f %.3f %.3f), %d views",
+            r.x_vox, r.y_vox, r.z_vox, q[0], q[1], q[2], r.n_views);
+  CHECK_MSG(r.n_views <= 22, "the corrupted views were kept (%d views)", r.n_views);
+}
+
+/* Noise at the density of the simulator's background on a 1 ms time
+ * surface (~0.5 % of pixels), no object: the guided search (min_views 8)
+ * must not fit noise. */
+static void test_noise_only(const elfm_refocus_plan *p, elfm_frame *f)
+{
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  o.min_views = 8;
+  uint32_t s = 5;
+  elfm_frame_clear(f);
+  const int n = f->w * f->h / 200;
+  for (int i = 0; i < n; i++) {
+    uint32_t pix = (uint32_t)(lcg(&s) * (f->w * f->h - 1));
+    elfm_frame_set(f, pix, (float)(60 + 195 * lcg(&s)));
+  }
+  int w, h, nz, fits = 0;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  for (int t = 0; t < 300; t++) {
+    elfm_localize_result r;
+    fits += elfm_refocus_localize(p, f, 10 + lcg(&s) * (w - 20), 10 + lcg(&s) * (h - 20),
+                                  5 + lcg(&s) * (nz - 10), &o, &r);
+  }
+  printf("noise only: %d of 300 starts fitted at 8 views\n", fits);
+  CHECK_MSG(fits <= 3, "%d of 300 noise starts fitted", fits);
+}
+
+static void test_no_fit(const elfm_calib *c, const elfm_refocus_plan *p, elfm_frame *f)
+{
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  elfm_localize_result r;
+  double q[3];
+  to_vox(c, p, 5, 5, 10, q);
+  elfm_frame_clear(f);
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r)); /* empty frame */
+  render(f, c, 5, 5, 10, 255.0, 1.3, 5, 0, 0);                     /* 5 views only */
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));
+  o.min_views = 5;
+  CHECK(elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));    /* enough at 5 */
+  elfm_localize_options_default(&o);
+  render(f, c, 5, 5, 10, 255.0, 1.3, 0, 0, 0);
+  CHECK(elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));
+  CHECK(!elfm_refocus_localize(p, f, NAN, q[1], q[2], &o, &r));
+  CHECK(!elfm_refocus_localize(p, f, q[0], INFINITY, q[2], &o, &r));
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], NAN, &o, &r));
+  CHECK(!elfm_refocus_localize(p, f, 1e300, -1e300, 1e300, &o, &r));
+  CHECK(!elfm_refocus_localize(p, NULL, q[0], q[1], q[2], &o, &r));
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], NULL, &r));
+  elfm_localize_options bad = o;
+  bad.half_window_px = 0;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  bad = o;
+  bad.power = 0;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  bad = o;
+  bad.min_views = 1;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  bad = o;
+  bad.outlier_px = NAN;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  elfm_error err;
+  elfm_frame *small = elfm_frame_create(640, 360, &err);
+  CHECK(small != NULL);
+  CHECK(!elfm_refocus_localize(p, small, q[0], q[1], q[2], &o, &r));
+  elfm_frame_free(small);
+  /* starts at the edges of the volume: any answer, no crash (ASan) */
+  int w, h, nz;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  const double xs[3] = {-3, 0, w + 2.0}, zs[3] = {-5, 0, nz + 4.0};
+  for (int a = 0; a < 3; a++)
+    for (int b = 0; b < 3; b++)
+      for (int k = 0; k < 3; k++) (void)elfm_refocus_localize(p, f, xs[a], xs[b] * h / w, zs[k], &o, &r);
+}
+
+int main(void)
+{
+  elfm_calib c;
+  elfm_optics op;
+  elfm_error err;
+  elfm_optics_default(&op);
+  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(&c, NULL, &p, &err), &err);
+  elfm_frame *f = elfm_frame_create(c.sensor_width_px, c.sensor_height_px, &err);
+  CHECK(p && f);
+  if (!p || !f) return check_report();
+  test_positions(&c, p, f, 1.3);
+  test_positions(&c, p, f, 2.6);
+  test_outlier_views(&c, p, f);
+  test_noise_only(p, f);
+  test_no_fit(&c, p, f);
+  elfm_frame_free(f);
+  elfm_refocus_plan_free(p);
+  return check_report();
+}
