@@ -33,6 +33,9 @@ typedef struct track_opts {
   double guided_radius_um;
   int guided_min_points;
   double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
+  int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
+  elfm_localize_options loc;
+  int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
 } track_opts;
 
 typedef struct fwhm_list {
@@ -52,6 +55,12 @@ typedef struct track_ctx {
   int *det_n;            /* [n_slots] */
   double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
   int *det_rej;          /* [n_slots] peaks dropped by the view-support test */
+  int *det_loc;          /* [n_slots] peaks placed by the view fit */
+  /* the frame each slot's volume came from and the plan, for the guided
+   * view fit in the ordered callback (the driver keeps a batch's frames
+   * until the callback of its last volume has returned) */
+  const elfm_frame **slot_frame; /* [n_slots] */
+  const elfm_refocus_plan *plan;
   double *pred;          /* [max_det][3] track predictions (guided search) */
   int have_first;
   elfm_track **fin;      /* finished tracks being smoothed (drain) */
@@ -62,7 +71,7 @@ typedef struct track_ctx {
   FILE *fdet, *ftr;
   char p_det[1100], p_tr[1100];
   elfm_track_store store;
-  int64_t n_support_rejected;
+  int64_t n_support_rejected, n_localized, n_guided_views;
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;
   int64_t first_t_us, last_t_us;
   double t_peaks, t_link, t_smooth;

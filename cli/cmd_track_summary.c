@@ -88,6 +88,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
   cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
+  cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
+  cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
@@ -112,6 +114,12 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "ghost_threshold_value", o->recon.refocus.threshold_value);
   cJSON_AddNumberToObject(par, "ghost_agree_frac", o->recon.refocus.agree_frac);
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
+  cJSON_AddStringToObject(par, "localize", o->localize_views ? "views" : "peak");
+  cJSON_AddNumberToObject(par, "localize_window_px", o->loc.half_window_px);
+  cJSON_AddNumberToObject(par, "localize_power", o->loc.power);
+  cJSON_AddNumberToObject(par, "localize_outlier_px", o->loc.outlier_px);
+  cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
+  cJSON_AddNumberToObject(par, "guided_views", o->guided_views);
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);
