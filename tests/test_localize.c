@@ -15,35 +15,8 @@
 #include <string.h>
 
 #include "check.h"
+#include "lfm_render.h"
 #include "elfm_recon.h"
-
-#define FIELD_STOP_PX 77.0
-
-/* A bead's images: a Gaussian of width sigma_px in each view (only_views
- * views when > 0), each pixel's value added; offset_px moves the images of
- * views v < n_offset (another object there). */
-static void render(elfm_frame *f, const elfm_calib *c, double x, double y, double z, double amp,
-                   double sigma_px, int only_views, int n_offset, double offset_px)
-{
-  for (int v = 0; v < c->n_views; v++) {
-    if (only_views > 0 && v >= only_views) break;
-    double u, w;
-    elfm_calib_project(c, v, x, y, z, &u, &w);
-    if (v < n_offset) u += offset_px;
-    if (fabs(u - c->views[v].cx_px) > FIELD_STOP_PX || fabs(w - c->views[v].cy_px) > FIELD_STOP_PX)
-      continue;
-    const int r = (int)ceil(4 * sigma_px);
-    for (int yy = (int)floor(w) - r; yy <= (int)floor(w) + r + 1; yy++)
-      for (int xx = (int)floor(u) - r; xx <= (int)floor(u) + r + 1; xx++) {
-        if (xx < 0 || yy < 0 || xx >= f->w || yy >= f->h) continue;
-        double d2 = (xx - u) * (xx - u) + (yy - w) * (yy - w);
-        float a = (float)(amp * exp(-0.5 * d2 / (sigma_px * sigma_px)));
-        if (a < 1.0f) continue;
-        uint32_t i = (uint32_t)(yy * f->w + xx);
-        elfm_frame_set(f, i, f->data[i] + a);
-      }
-  }
-}
 
 static double lcg(uint32_t *s)
 {
@@ -76,7 +49,7 @@ static void test_positions(const elfm_calib *c, const elfm_refocus_plan *p, elfm
     double x = (2 * lcg(&s) - 1) * (fov_um - 30), y = (2 * lcg(&s) - 1) * (fov_um - 30);
     double z = (2 * lcg(&s) - 1) * 80.0;
     elfm_frame_clear(f);
-    render(f, c, x, y, z, 255.0, sigma_px, 0, 0, 0);
+    render_views(f, c, x, y, z, 255.0, sigma_px, 0, 0, 0);
     double q[3];
     to_vox(c, p, x, y, z, q);
     /* start off by up to 1 voxel laterally and 2 planes */
@@ -107,9 +80,9 @@ static void test_outlier_views(const elfm_calib *c, const elfm_refocus_plan *p, 
   double x = 12.3, y = -20.7, z = 31.4, q[3];
   to_vox(c, p, x, y, z, q);
   elfm_frame_clear(f);
-  render(f, c, x, y, z, 255.0, 1.3, 0, 0, 0);
+  render_views(f, c, x, y, z, 255.0, 1.3, 0, 0, 0);
   /* another object's image 2 px beside the bead's in views 0-2, brighter */
-  render(f, c, x, y, z, 400.0, 1.3, 3, 3, 2.0);
+  render_views(f, c, x, y, z, 400.0, 1.3, 3, 3, 2.0);
   elfm_localize_result r;
   CHECK(elfm_refocus_localize(p, f, q[0] + 0.6, q[1] - 0.4, q[2] + 1.5, &o, &r));
   CHECK_MSG(fabs(r.x_vox - q[0]) <= 0.05 && fabs(r.y_vox - q[1]) <= 0.05 &&
@@ -154,12 +127,12 @@ static void test_no_fit(const elfm_calib *c, const elfm_refocus_plan *p, elfm_fr
   to_vox(c, p, 5, 5, 10, q);
   elfm_frame_clear(f);
   CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r)); /* empty frame */
-  render(f, c, 5, 5, 10, 255.0, 1.3, 5, 0, 0);                     /* 5 views only */
+  render_views(f, c, 5, 5, 10, 255.0, 1.3, 5, 0, 0);                     /* 5 views only */
   CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));
   o.min_views = 5;
   CHECK(elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));    /* enough at 5 */
   elfm_localize_options_default(&o);
-  render(f, c, 5, 5, 10, 255.0, 1.3, 0, 0, 0);
+  render_views(f, c, 5, 5, 10, 255.0, 1.3, 0, 0, 0);
   CHECK(elfm_refocus_localize(p, f, q[0], q[1], q[2], &o, &r));
   CHECK(!elfm_refocus_localize(p, f, NAN, q[1], q[2], &o, &r));
   CHECK(!elfm_refocus_localize(p, f, q[0], INFINITY, q[2], &o, &r));

@@ -14,32 +14,15 @@
 #include <string.h>
 
 #include "check.h"
+#include "lfm_render.h"
 #include "elfm_recon.h"
 #include "refocus_internal.h" /* the workspace's agree_portable switch */
 
-/* The lenslet field stop: a view's image ends half a view pitch (154 px,
- * SPEC §2) from its centre; nothing of it reaches the neighbours' crops. */
-#define FIELD_STOP_PX 77.0
-
+/* sigma 1.3 px: the 3.9 um lateral FWHM / 0.93 um/px / 2.355 */
 static void render_bead(elfm_frame *f, const elfm_calib *c, double x, double y, double z,
                         double amp)
 {
-  const double sigma = 1.3; /* px: the 3.9 um lateral FWHM / 0.93 um/px / 2.355 */
-  for (int v = 0; v < c->n_views; v++) {
-    double u, w;
-    elfm_calib_project(c, v, x, y, z, &u, &w);
-    if (fabs(u - c->views[v].cx_px) > FIELD_STOP_PX || fabs(w - c->views[v].cy_px) > FIELD_STOP_PX)
-      continue;
-    for (int yy = (int)floor(w) - 3; yy <= (int)floor(w) + 4; yy++)
-      for (int xx = (int)floor(u) - 3; xx <= (int)floor(u) + 4; xx++) {
-        if (xx < 0 || yy < 0 || xx >= f->w || yy >= f->h) continue;
-        double d2 = (xx - u) * (xx - u) + (yy - w) * (yy - w);
-        float a = (float)(amp * exp(-0.5 * d2 / (sigma * sigma)));
-        if (a < 1.0f) continue;
-        uint32_t i = (uint32_t)(yy * f->w + xx);
-        elfm_frame_set(f, i, f->data[i] + a);
-      }
-  }
+  render_views(f, c, x, y, z, amp, 1.3, 0, 0, 0);
 }
 
 /* n random pixels set to base + 0..199 (negative for half of them when
