@@ -66,10 +66,10 @@ static void track_defaults(track_opts *o)
    * docs/tracker.md "View fit". Window 5 x 5 px with weights value^3: the
    * time surface is 255 exp(-age / tau), so the cube weighs an event by
    * exp(-3 age / tau) and the centroid follows the newest events (where a
-   * moving object is now) more than its trail. Flow 100 ms, 8 seeds: 5 x 5
-   * and 7 x 7 windows, powers 2-4 within 0.005 of each other in mean
-   * linking-free alpha (0.768-0.772), 7 x 7 lower (0.748); 3 x 3 lost on
-   * stage and worm. */
+   * moving object is now) more than its trail. Flow 100 ms, 8 seeds, mean
+   * linking-free alpha (docs/tracker.md), measured before the robust
+   * passes: 5 x 5 windows with powers 2-4 0.769-0.772, 7 x 7 0.748; 3 x 3
+   * 0.769 but lost on stage and worm. */
   o->localize_views = 1;
   elfm_localize_options_default(&o->loc);
   o->guided_views = 8;

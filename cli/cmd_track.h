@@ -58,9 +58,10 @@ typedef struct track_ctx {
   int *det_loc;          /* [n_slots] peaks placed by the view fit */
   /* the frame each slot's volume came from and the plan, for the guided
    * view fit in the ordered callback (the driver keeps a batch's frames
-   * until the callback of its last volume has returned) */
-  const elfm_frame **slot_frame; /* [n_slots] */
-  const elfm_refocus_plan *plan;
+   * until the callback of its last volume has returned); per slot, as each
+   * slot is written by the one worker thread that refocused it */
+  const elfm_frame **slot_frame;        /* [n_slots] */
+  const elfm_refocus_plan **slot_plan;  /* [n_slots] */
   double *pred;          /* [max_det][3] track predictions (guided search) */
   int have_first;
   elfm_track **fin;      /* finished tracks being smoothed (drain) */

@@ -125,8 +125,9 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   c->det_rej = calloc((size_t)c->n_slots, sizeof *c->det_rej);
   c->det_loc = calloc((size_t)c->n_slots, sizeof *c->det_loc);
   c->slot_frame = calloc((size_t)c->n_slots, sizeof *c->slot_frame);
+  c->slot_plan = calloc((size_t)c->n_slots, sizeof *c->slot_plan);
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
-  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->det_loc || !c->slot_frame || !c->pred)
+  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->det_loc || !c->slot_frame || !c->slot_plan || !c->pred)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -170,7 +171,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   c->det_rej[slot] = 0;
   c->det_loc[slot] = 0;
   c->slot_frame[slot] = frame;
-  c->plan = plan;
+  c->slot_plan[slot] = plan;
   if (st == ELFM_OK && c->o->view_support > 0) {
     /* A bead at the peak puts signal in most of the views that sample
      * its voxel; a ghost (other beads' images lining up) in a few. On the
@@ -195,11 +196,11 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     /* The peak fit reads three voxels per axis of a volume that averages
      * the views; the view fit measures the object's image in each view
      * and solves for the one (x, y, z) they all imply (recon/localize.c).
-     * scripts/measure_scenes.sh scenes, with the guided view fit: lateral
-     * RMSE blink 0.58 -> 0.18 um (beads at rest), stage x 0.44 -> 0.33 um
-     * and speed error 0.71 % -> 0.30 %, flow 8 seeds 0.46 -> 0.43 um, axial
-     * 1.18 -> 1.08 um (docs/tracker.md "View fit"). Where the fit fails
-     * (too few views with signal), the peak fit stays. */
+     * With the guided view fit: lateral RMSE blink 0.58 -> 0.17 um (beads
+     * at rest), stage x 0.44 -> 0.29 um and speed error 0.71 % -> 0.50 %,
+     * flow (8 seeds) x 0.46 -> 0.41 um and z 1.18 -> 0.99 um, alpha 0.702
+     * -> 0.733 (docs/tracker.md "View fit"). Where the fit fails (too few
+     * views agree), the peak fit stays. */
     for (int i = 0; i < c->det_n[slot]; i++) {
       elfm_localize_result r;
       if (!elfm_refocus_localize(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
@@ -239,7 +240,8 @@ static elfm_status guided_view_fit(track_ctx *c, const elfm_volume *v, int slot,
 {
   const track_opts *o = c->o;
   const elfm_frame *frame = c->slot_frame[slot];
-  if (!frame || !c->plan) return ELFM_OK;
+  const elfm_refocus_plan *plan = c->slot_plan[slot];
+  if (!frame || !plan) return ELFM_OK;
   int np = 0, n = *n_io;
   elfm_status st = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred, o->max_det, &np, err);
   if (st != ELFM_OK) return st;
@@ -250,7 +252,7 @@ static elfm_status guided_view_fit(track_ctx *c, const elfm_volume *v, int slot,
     const double *q = c->pred + 3 * (size_t)k;
     if (any_near(det, n, q, g, kz)) continue;
     elfm_localize_result r;
-    if (!elfm_refocus_localize(c->plan, frame, elfm_volume_x_vox(v, q[0]), elfm_volume_y_vox(v, q[1]),
+    if (!elfm_refocus_localize(plan, frame, elfm_volume_x_vox(v, q[0]), elfm_volume_y_vox(v, q[1]),
                                elfm_volume_z_vox(v, q[2]), &lo, &r))
       continue;
     const int X = (int)lround(r.x_vox), Y = (int)lround(r.y_vox), K = (int)lround(r.z_vox);
@@ -372,6 +374,7 @@ void track_ctx_free(track_ctx *c)
   free(c->det_rej);
   free(c->det_loc);
   free(c->slot_frame);
+  free(c->slot_plan);
   free(c->pred);
   elfm_track_store_clear(&c->store);
   free(c->det);
