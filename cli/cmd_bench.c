@@ -42,6 +42,8 @@
 
 #define BENCH_MAX_ARGS 8
 #define BENCH_MAX_POINTS 64
+/* The most of a summary.json or a component's log that is read back. */
+#define BENCH_MAX_TEXT (1L << 26)
 
 struct bench_opts {
   int quick;
@@ -129,70 +131,7 @@ struct scene_info {
 };
 
 /* ---------------------------------------------------------------------- */
-/* Processes and files */
-
-static int mkdir_p(const char *path)
-{
-  char buf[PATH_MAX];
-  if (cli_path_fmt(buf, sizeof buf, "%s", path) >= (int)sizeof buf) return -1;
-  for (char *p = buf + 1; *p; p++) {
-    if (*p != '/') continue;
-    *p = '\0';
-    if (mkdir(buf, 0777) != 0 && errno != EEXIST) return -1;
-    *p = '/';
-  }
-  if (mkdir(buf, 0777) != 0 && errno != EEXIST) return -1;
-  return 0;
-}
-
-/* Run argv (argv[0] a path, or a name found on PATH when use_path), with
- * stdout+stderr into log_path; kill it after timeout_s. Returns the exit
- * code, 128+signal when killed by a signal, -1 when it could not start,
- * -2 on timeout. */
-static int run_child(char *const argv[], int use_path, const char *log_path, double timeout_s,
-                     double *wall_s, double *peak_rss_mb, double *cpu_s)
-{
-  double t0 = cli_now_s();
-  fflush(stdout);
-  fflush(stderr);
-  pid_t pid = fork();
-  if (pid < 0) return -1;
-  if (pid == 0) {
-    int fd = open(log_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (fd >= 0) {
-      dup2(fd, STDOUT_FILENO);
-      dup2(fd, STDERR_FILENO);
-      close(fd);
-    }
-    if (use_path) execvp(argv[0], argv);
-    else execv(argv[0], argv);
-    _exit(127);
-  }
-  int st = 0;
-  struct rusage ru;
-  memset(&ru, 0, sizeof ru);
-  int timed_out = 0;
-  for (;;) {
-    pid_t w = wait4(pid, &st, WNOHANG, &ru);
-    if (w == pid) break;
-    if (w < 0 && errno != EINTR) return -1;
-    if (timeout_s > 0 && cli_now_s() - t0 > timeout_s && !timed_out) {
-      kill(pid, SIGKILL); /* our own child, by its id */
-      timed_out = 1;
-    }
-    struct timespec ts = {0, 5000000}; /* 5 ms: polling cost is negligible */
-    nanosleep(&ts, NULL);
-  }
-  if (wall_s) *wall_s = cli_now_s() - t0;
-  if (peak_rss_mb) *peak_rss_mb = (double)ru.ru_maxrss / 1024.0; /* Linux: kB */
-  if (cpu_s)
-    *cpu_s = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
-             (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
-  if (timed_out) return -2;
-  if (WIFEXITED(st)) return WEXITSTATUS(st);
-  if (WIFSIGNALED(st)) return 128 + WTERMSIG(st);
-  return -1;
-}
+/* The run's files: this program's path, the tracker's summary, the truth */
 
 static int self_exe(char *buf, size_t size)
 {
@@ -200,21 +139,6 @@ static int self_exe(char *buf, size_t size)
   if (n <= 0) return -1;
   buf[n] = '\0';
   return 0;
-}
-
-static char *read_text(const char *path)
-{
-  FILE *f = fopen(path, "rb");
-  if (!f) return NULL;
-  if (fseek(f, 0, SEEK_END) != 0) { fclose(f); return NULL; }
-  long n = ftell(f);
-  if (n < 0 || n > (1L << 26)) { fclose(f); return NULL; }
-  rewind(f);
-  char *s = malloc((size_t)n + 1);
-  if (s && fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); s = NULL; }
-  if (s) s[n] = '\0';
-  fclose(f);
-  return s;
 }
 
 /* Depth-first search of a numeric key in a JSON tree. */
@@ -237,7 +161,7 @@ static void summary_read(const char *run_dir, double *volumes, double stage_s[4]
   for (int k = 0; k < 4; k++) stage_s[k] = NAN;
   char p[PATH_MAX];
   cli_path_fmt(p, sizeof p, "%s/summary.json", run_dir);
-  char *text = read_text(p);
+  char *text = cli_read_text(p, BENCH_MAX_TEXT);
   if (!text) return;
   cJSON *o = cJSON_Parse(text);
   free(text);
@@ -306,26 +230,6 @@ static elfm_status truth_stage_velocity(const char *truth_csv, double v[3], elfm
     return elfm_error_set(err, ELFM_ERR_FORMAT, truth_csv, -1, "no moving object in the truth");
   for (int a = 0; a < 3; a++) v[a] = sum[a] / n;
   return ELFM_OK;
-}
-
-/* Count the events of a recording (streaming; memory independent of size). */
-static elfm_status count_events(const char *path, struct scene_info *si, elfm_error *err)
-{
-  elfm_reader *r = NULL;
-  elfm_status s = elfm_reader_open(path, NULL, &r, err);
-  if (s != ELFM_OK) return s;
-  elfm_event_chunk *c = elfm_chunk_create(1 << 16, err);
-  if (!c) { elfm_reader_close(r); return ELFM_ERR_NOMEM; }
-  si->events = 0;
-  si->t_first_us = si->t_last_us = 0;
-  while ((s = elfm_reader_read(r, c, err)) == ELFM_OK && c->n > 0) {
-    if (si->events == 0) si->t_first_us = c->t_us[0];
-    si->t_last_us = c->t_us[c->n - 1];
-    si->events += (int64_t)c->n;
-  }
-  elfm_chunk_free(c);
-  elfm_reader_close(r);
-  return s;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -419,7 +323,7 @@ static void md_component(FILE *f, const char *dir, const char *name)
 {
   char p[PATH_MAX];
   cli_path_fmt(p, sizeof p, "%s/components/%s.txt", dir, name);
-  char *t = read_text(p);
+  char *t = cli_read_text(p, BENCH_MAX_TEXT);
   if (!t) return;
   fprintf(f, "\n### %s\n\n```\n%s%s```\n", name, t, (t[0] && t[strlen(t) - 1] != '\n') ? "\n" : "");
   free(t);
@@ -499,7 +403,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
 {
   char p[PATH_MAX];
   cli_path_fmt(p, sizeof p, "%s/plot", dir);
-  if (mkdir_p(p) != 0) return -1;
+  if (cli_mkdir_p(p) != 0) return -1;
   for (int s = 0; s < n_sc; s++) {
     for (int which = 0; which < 3; which++) {
       const char *suffix = which == 0 ? "" : which == 1 ? "_pf1" : "_palpha";
@@ -552,7 +456,7 @@ static int write_plot(const char *dir, const struct scene_info *sc, int n_sc,
   char logp[PATH_MAX], cwd[PATH_MAX];
   cli_path_fmt(logp, sizeof logp, "%s/plot/gnuplot.log", dir);
   if (!getcwd(cwd, sizeof cwd) || chdir(dir) != 0) return -1;
-  int rc = run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL);
+  int rc = cli_run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL);
   if (chdir(cwd) != 0) return -1;
   return rc == 0 ? 0 : -1;
 }
@@ -593,7 +497,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
     for (int k = 0; k < 3; k++) {
       char out[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], dt[32], from[32], to[32], logp[PATH_MAX];
       cli_path_fmt(out, sizeof out, "%s/fig_s4/%s_%dms", dir, reprs[r], dts_ms[k]);
-      if (mkdir_p(out) != 0) return -1;
+      if (cli_mkdir_p(out) != 0) return -1;
       cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       cli_path_fmt(dt, sizeof dt, "%d", dts_ms[k] * 1000);
@@ -606,7 +510,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
       char *argv[] = {(char *)self, "recon", "--calib", calib, "--events", ev, "--out", out,
                       "--repr", (char *)reprs[r], "--dt-us", dt, "--tau-us", dt, "--from-us",
                       from, "--to-us", to, "--save-mips", "--quiet", NULL};
-      int rc = run_child(argv, 0, logp, timeout_s, NULL, NULL, NULL);
+      int rc = cli_run_child(argv, 0, logp, timeout_s, NULL, NULL, NULL);
       if (rc != 0 || newest_png(out, pngs[r][k], PATH_MAX) != 0) {
         /* MIPs may sit in a sub-directory */
         char sub[PATH_MAX];
@@ -635,7 +539,7 @@ static int fig_s4(const char *self, const char *dir, const struct scene_info *si
   char logp[PATH_MAX];
   cli_path_fmt(logp, sizeof logp, "%s/fig_s4/gnuplot.log", dir);
   char *argv[] = {"gnuplot", p, NULL};
-  return run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL) == 0 ? 0 : -1;
+  return cli_run_child(argv, 1, logp, timeout_s, NULL, NULL, NULL) == 0 ? 0 : -1;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -702,7 +606,7 @@ static int run_components(const char *self, const char *dir, const char *scene_d
   if (slash) *slash = '\0';
   char cdir[PATH_MAX];
   cli_path_fmt(cdir, sizeof cdir, "%s/components", dir);
-  if (mkdir_p(cdir) != 0) return -1;
+  if (cli_mkdir_p(cdir) != 0) return -1;
   int n = 0;
   for (int i = 0; i < N_COMPONENTS; i++) {
     const struct component *cp = &COMPONENTS[i];
@@ -737,7 +641,7 @@ static int run_components(const char *self, const char *dir, const char *scene_d
     argv[na] = NULL;
     fprintf(stderr, "eventlfm bench: component %s%s (%s) ...\n", cp->name, shown, cp->what);
     double wall = 0;
-    int rc = run_child(argv, 0, logp, timeout_s, &wall, NULL, NULL);
+    int rc = cli_run_child(argv, 0, logp, timeout_s, &wall, NULL, NULL);
     FILE *f = fopen(logp, "a");
     if (f) {
       fprintf(f, "[eventlfm bench: `%s%s` (%s) exited %d after %.1f s%s]\n", cp->name, shown,
@@ -821,7 +725,7 @@ int cmd_bench(int argc, char **argv)
   if (self_exe(self, sizeof self) != 0)
     return cli_message("bench", CLI_FAIL, "cannot find this program's path (/proc/self/exe)");
   char dir[PATH_MAX];
-  if (mkdir_p(op.out) != 0 || !realpath(op.out, dir))
+  if (cli_mkdir_p(op.out) != 0 || !realpath(op.out, dir))
     return cli_message("bench", CLI_FAIL, "cannot create %s: %s", op.out, strerror(errno));
 
   /* Scenes: simulate each once. */
@@ -839,21 +743,22 @@ int cmd_bench(int argc, char **argv)
       char dur[32], seed[32], logp[PATH_MAX];
       cli_path_fmt(dur, sizeof dur, "%d", op.duration_ms);
       cli_path_fmt(seed, sizeof seed, "%lld", (long long)op.seed);
-      if (mkdir_p(si->dir) != 0)
+      if (cli_mkdir_p(si->dir) != 0)
         return cli_message("bench", CLI_FAIL, "cannot create %s", si->dir);
       cli_path_fmt(logp, sizeof logp, "%s/simulate.log", si->dir);
       fprintf(stderr, "eventlfm bench: simulating %s (%d ms) ...\n", tok, op.duration_ms);
       char *sargv[] = {self, "simulate", si->name, "--out", si->dir, "--seed", seed,
                        "--duration-ms", dur, NULL};
       double wall = 0;
-      int rc = run_child(sargv, 0, logp, op.timeout_s, &wall, NULL, NULL);
+      int rc = cli_run_child(sargv, 0, logp, op.timeout_s, &wall, NULL, NULL);
       if (rc != 0)
         return cli_message("bench", CLI_FAIL, "simulate %s failed (exit %d); see %s", tok, rc, logp);
       char ev[PATH_MAX];
       cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       elfm_error err;
       elfm_error_clear(&err);
-      if (count_events(ev, si, &err) != ELFM_OK) return cli_fail("bench", &err);
+      if (cli_count_events(ev, &si->events, &si->t_first_us, &si->t_last_us, &err) != ELFM_OK)
+        return cli_fail("bench", &err);
       fprintf(stderr, "eventlfm bench: %s: %lld events in %.1f s of simulation\n", tok,
               (long long)si->events, wall);
       /* calibrations with other plane spacings */
@@ -921,7 +826,7 @@ int cmd_bench(int argc, char **argv)
       for (int q = 0; q < 4; q++) p->stage_s[q] = NAN;
       char run[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX], logp[PATH_MAX];
       cli_path_fmt(run, sizeof run, "%s/runs/%s_%02d", dir, si->name, k);
-      if (mkdir_p(run) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot create %s", run); goto out; }
+      if (cli_mkdir_p(run) != 0) { rc_out = cli_message("bench", CLI_FAIL, "cannot create %s", run); goto out; }
       if (sp->z_step_um > 0) cli_path_fmt(calib, sizeof calib, "%s/calib_dz%g.json", si->dir, sp->z_step_um);
       else cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
@@ -938,7 +843,7 @@ int cmd_bench(int argc, char **argv)
       targv[na++] = run;
       for (int a = 0; sp->args[a]; a++) targv[na++] = (char *)sp->args[a];
       targv[na] = NULL;
-      int rc = run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb, &p->cpu_s);
+      int rc = cli_run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb, &p->cpu_s);
       if (rc != 0) p->peak_rss_mb = NAN; /* a rejected run's memory means nothing */
       if (rc == 2) p->status = "unsupported";
       else if (rc == -2) p->status = "timeout";
