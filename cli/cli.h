@@ -130,6 +130,29 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);
  * naming it; returns CLI_USAGE. */
 int cli_bad_option(const char *cmd, int c, char *const argv[]);
 
+/* Files and child processes (bench runs every sweep point as a child of
+ * this binary; demo draws its plot with gnuplot). */
+
+/* mkdir -p: path and its missing parents. 0, or -1 when one could not be
+ * made (errno from mkdir) or the path is too long. */
+int cli_mkdir_p(const char *path);
+/* The whole file as a NUL-terminated string (the caller frees it); NULL
+ * when it cannot be read or is longer than max_bytes (a caller's bound on
+ * what it is willing to parse). */
+char *cli_read_text(const char *path, long max_bytes);
+/* Run argv (argv[0] a path, or a name looked up on PATH when use_path) with
+ * its stdout and stderr into log_path, wait for it, and kill it (by its id)
+ * after timeout_s seconds (<= 0: no limit). Returns its exit code, 128 +
+ * signal when a signal ended it, -1 when it could not start, -2 on timeout.
+ * wall_s, peak_rss_mb (the child's peak resident memory) and cpu_s (its
+ * user + system time, all threads) may be NULL. */
+int cli_run_child(char *const argv[], int use_path, const char *log_path, double timeout_s,
+                  double *wall_s, double *peak_rss_mb, double *cpu_s);
+/* The number of events of a recording and its first and last time stamps
+ * (0 when empty), streaming: memory does not grow with the file. */
+elfm_status cli_count_events(const char *path, int64_t *n, int64_t *t_first_us,
+                             int64_t *t_last_us, elfm_error *err);
+
 /* Seconds of a monotonic clock (for timing figures). */
 double cli_now_s(void);
 /* Peak resident set size of this process in MB (0 when unknown). */

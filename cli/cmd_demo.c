@@ -15,7 +15,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -87,21 +86,8 @@ static int track_plot(const char *dir)
           dir, dir, dir, dir, dir);
   fclose(g);
   cli_path_fmt(logp, sizeof logp, "%s/tracks_gnuplot.log", dir);
-  fflush(stdout);
-  fflush(stderr);
-  pid_t pid = fork();
-  if (pid < 0) return -1;
-  if (pid == 0) {
-    FILE *lf = freopen(logp, "w", stderr);
-    (void)lf;
-    if (!freopen("/dev/null", "w", stdout)) _exit(127);
-    execlp("gnuplot", "gnuplot", script, (char *)NULL);
-    _exit(127);
-  }
-  int st = 0;
-  while (waitpid(pid, &st, 0) < 0)
-    if (errno != EINTR) return -1;
-  return WIFEXITED(st) && WEXITSTATUS(st) == 0 ? 0 : -1;
+  char *argv[] = {"gnuplot", script, NULL};
+  return cli_run_child(argv, 1, logp, 0, NULL, NULL, NULL) == 0 ? 0 : -1;
 }
 
 /* The tracker's volume count from its summary.json (counts.volumes), or 0:
@@ -111,13 +97,10 @@ static int64_t summary_volumes(const char *track_dir)
 {
   char p[PATH_MAX];
   if (cli_path_fmt(p, sizeof p, "%s/summary.json", track_dir) != 0) return 0;
-  FILE *f = fopen(p, "rb");
-  if (!f) return 0;
-  char *text = malloc(1 << 22);
-  size_t n = text ? fread(text, 1, (1 << 22) - 1, f) : 0;
-  fclose(f);
+  /* A summary longer than 4 MB (thousands of tracks) gives no hint: the
+   * scorer then counts from the files' rows alone. */
+  char *text = cli_read_text(p, (1 << 22) - 1);
   if (!text) return 0;
-  text[n] = '\0';
   cJSON *o = cJSON_Parse(text);
   free(text);
   const cJSON *c = cJSON_GetObjectItemCaseSensitive(o, "counts");
@@ -125,25 +108,6 @@ static int64_t summary_volumes(const char *track_dir)
   int64_t vol = cJSON_IsNumber(v) && v->valuedouble > 0 ? (int64_t)v->valuedouble : 0;
   cJSON_Delete(o);
   return vol;
-}
-
-static int count_events(const char *path, int64_t *n, int64_t *t0, int64_t *t1, elfm_error *err)
-{
-  elfm_reader *r = NULL;
-  if (elfm_reader_open(path, NULL, &r, err) != ELFM_OK) return -1;
-  elfm_event_chunk *c = elfm_chunk_create(1 << 16, err);
-  if (!c) { elfm_reader_close(r); return -1; }
-  elfm_status s;
-  *n = 0;
-  *t0 = *t1 = 0;
-  while ((s = elfm_reader_read(r, c, err)) == ELFM_OK && c->n > 0) {
-    if (*n == 0) *t0 = c->t_us[0];
-    *t1 = c->t_us[c->n - 1];
-    *n += (int64_t)c->n;
-  }
-  elfm_chunk_free(c);
-  elfm_reader_close(r);
-  return s == ELFM_OK ? 0 : -1;
 }
 
 int cmd_demo(int argc, char **argv)
@@ -210,7 +174,8 @@ int cmd_demo(int argc, char **argv)
   int64_t n_ev = 0, t_first = 0, t_last = 0;
   elfm_error err;
   elfm_error_clear(&err);
-  if (count_events(ev, &n_ev, &t_first, &t_last, &err) != 0) return cli_fail("demo", &err);
+  if (cli_count_events(ev, &n_ev, &t_first, &t_last, &err) != ELFM_OK)
+    return cli_fail("demo", &err);
   double span_s = (double)(t_last - t_first) * 1e-6;
 
   /* 2. track */
