@@ -63,13 +63,17 @@ static void track_defaults(track_opts *o)
   o->view_support = 0.3;
   /* View fit of every peak, and from the predictions of tracks with no
    * peak near (8 views must agree there): recon/localize.c and
-   * docs/tracker.md "View fit". Window 5 x 5 px with weights value^3: the
-   * time surface is 255 exp(-age / tau), so the cube weighs an event by
-   * exp(-3 age / tau) and the centroid follows the newest events (where a
-   * moving object is now) more than its trail. Flow 100 ms, 8 seeds, mean
-   * linking-free alpha (docs/tracker.md), measured before the robust
-   * passes: 5 x 5 windows with powers 2-4 0.769-0.772, 7 x 7 0.748; 3 x 3
-   * 0.769 but lost on stage and worm. */
+   * docs/tracker.md "View fit". Window 5 x 5 px with weights value^P: the
+   * time surface is 255 exp(-age / tau), so P weighs an event by
+   * exp(-P age / tau), and the centroid moves from the trail of the
+   * object's recent events (P = 1) towards their leading edge. Where the
+   * object really is depends on its contrast: along the motion, flow beads
+   * come out -0.36 / -0.14 / 0.00 um from the truth at P = 1 / 2 / 3, stage
+   * beads +0.37 / +0.57 / +0.71 um. P = 3 is best on flow, whose targets
+   * are the strictest (8 seeds: alpha 0.701 / 0.716 / 0.733, lateral RMSE
+   * 0.50 / 0.43 / 0.41 um); P = 1 on stage (alpha 0.71-0.79 -> 0.77-0.87)
+   * and worm (0.39 -> 0.44): docs/tracker.md. 7 x 7 windows were worse on
+   * flow, 3 x 3 on stage and worm. */
   o->localize_views = 1;
   elfm_localize_options_default(&o->loc);
   o->guided_views = 8;
@@ -122,7 +126,9 @@ static void usage(FILE *f)
     "                       in the views, fitted together; peak: the sub-voxel fit of\n"
     "                       the refocused peak only\n"
     "  --localize-window-px R  each view's window is (2R+1)^2 px (2)\n"
-    "  --localize-power P   pixel weight value^P: the newest events count most (3)\n"
+    "  --localize-power P   pixel weight value^P: higher P follows the newest events,\n"
+    "                       at the object's leading edge (3; 1 is better for bright\n"
+    "                       objects whose ON events lead them, e.g. beads on a stage)\n"
     "  --localize-outlier-px D  views missing the fit by more are dropped (1.5)\n"
     "  --localize-min-views N  fewer views with signal: keep the peak fit (6)\n"
     "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 15)\n"
