@@ -58,8 +58,12 @@ static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, do
     const float *row = f->data + (size_t)y * (size_t)f->w;
     double rm = 0, ru = 0;
     for (long x = iu - r; x <= iu + r; x++) {
-      double v = row[x];
-      for (int k = 1; k < pw; k++) v *= row[x];
+      /* positive values only: on a signed surface (ON - OFF) the OFF
+       * trail is not the object, and negative weights could put a
+       * centroid outside its window */
+      const double f0 = row[x] > 0 ? row[x] : 0;
+      double v = f0;
+      for (int k = 1; k < pw; k++) v *= f0;
       rm += v;
       ru += v * (double)(x - iu);
     }

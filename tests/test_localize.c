@@ -9,7 +9,8 @@
  *  - sparse noise alone (a time surface with no object) gives no fit at
  *    the guided search's 8 views;
  *  - too few views, an empty frame, NaN starts, bad options, a frame of the
- *    wrong size: no fit (0), no crash. */
+ *    wrong size: no fit (0), no crash;
+ *  - random frames and starts: every fit finite, inside the bounds it promises. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -166,6 +167,50 @@ static void test_no_fit(const elfm_calib *c, const elfm_refocus_plan *p, elfm_fr
       for (int k = 0; k < 3; k++) (void)elfm_refocus_localize(p, f, xs[a], xs[b] * h / w, zs[k], &o, &r);
 }
 
+/* Random frames (noise, beads, negative values as a signed surface would
+ * have) and random starts in and around the volume: every answer lies in
+ * the volume's z range and within the walk-off bound of its start, with
+ * finite numbers; nothing crashes (ASan/UBSan in CI). */
+static void test_random_inputs(const elfm_calib *c, const elfm_refocus_plan *p, elfm_frame *f)
+{
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  int w, h, nz, fits = 0, bad = 0;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  uint32_t s = 99;
+  for (int frame = 0; frame < 6; frame++) {
+    elfm_frame_clear(f);
+    for (int b = 0; b < 6; b++)
+      render_views(f, c, (2 * lcg(&s) - 1) * 60, (2 * lcg(&s) - 1) * 60, (2 * lcg(&s) - 1) * 95,
+                   50 + 400 * lcg(&s), 0.8 + 2.5 * lcg(&s), 0, 0, 0);
+    const int n = f->w * f->h / 100;
+    for (int i = 0; i < n; i++) {
+      uint32_t pix = (uint32_t)(lcg(&s) * (f->w * f->h - 1));
+      float val = (float)(255 * lcg(&s));
+      if (frame % 2 && lcg(&s) < 0.5) val = -val;
+      elfm_frame_set(f, pix, val);
+    }
+    for (int t = 0; t < 400; t++) {
+      const double x0 = -10 + lcg(&s) * (w + 20), y0 = -10 + lcg(&s) * (h + 20),
+                   z0 = -10 + lcg(&s) * (nz + 20);
+      elfm_localize_options oo = o;
+      oo.half_window_px = 1 + (int)(lcg(&s) * 4);
+      oo.power = 1 + (int)(lcg(&s) * 4);
+      oo.min_views = 2 + (int)(lcg(&s) * 10);
+      elfm_localize_result r;
+      if (!elfm_refocus_localize(p, f, x0, y0, z0, &oo, &r)) continue;
+      fits++;
+      const double lim = 2 * oo.half_window_px + 1e-9;
+      bad += !(isfinite(r.x_vox) && isfinite(r.y_vox) && isfinite(r.z_vox) && isfinite(r.rms_px)) ||
+             fabs(r.x_vox - x0) > lim || fabs(r.y_vox - y0) > lim || r.z_vox < -1.0 - 1e-9 ||
+             r.z_vox > nz + 1e-9 || r.n_views < oo.min_views;
+    }
+  }
+  printf("random inputs: %d fits of 2400 starts, %d out of bounds\n", fits, bad);
+  CHECK_EQ_INT(bad, 0);
+  CHECK(fits > 0);
+}
+
 int main(void)
 {
   elfm_calib c;
@@ -183,6 +228,7 @@ int main(void)
   test_outlier_views(&c, p, f);
   test_noise_only(p, f);
   test_no_fit(&c, p, f);
+  test_random_inputs(&c, p, f);
   elfm_frame_free(f);
   elfm_refocus_plan_free(p);
   return check_report();
