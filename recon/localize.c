@@ -77,6 +77,18 @@ static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, do
   return m;
 }
 
+/* Insert x into a[0 .. *n), kept ascending (for the medians of at most
+ * MAXV views: an insertion sort is all that is needed). */
+static void insert_sorted(double *a, int *n, double x)
+{
+  int k = (*n)++;
+  while (k > 0 && a[k - 1] > x) {
+    a[k] = a[k - 1];
+    k--;
+  }
+  a[k] = x;
+}
+
 /* Weighted least squares for (X, Y, z) from per-view centroids: rows
  * cu - a_u = X + z du, cw - a_w = Y + z dw. Solves the 3 x 3 normal
  * equations; 0 when singular (all disparities equal: no depth information). */
@@ -169,13 +181,7 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
           mass[v] = 0;
           continue;
         }
-        double e = sqrt(e2[v]);
-        int k = ns++;
-        while (k > 0 && sorted[k - 1] > e) {
-          sorted[k] = sorted[k - 1];
-          k--;
-        }
-        sorted[k] = e;
+        insert_sorted(sorted, &ns, sqrt(e2[v]));
       }
       if (ns > 0) {
         const double med = ns % 2 ? sorted[ns / 2] : 0.5 * (sorted[ns / 2 - 1] + sorted[ns / 2]);
@@ -190,14 +196,7 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
      * overlapping image 1.6 x brighter outweighed the bead's own 4 x). */
     double ms[MAXV];
     for (int v = 0; v < p->nv; v++)
-      if (mass[v] > 0) {
-        int k = n_used++;
-        while (k > 0 && ms[k - 1] > mass[v]) {
-          ms[k] = ms[k - 1];
-          k--;
-        }
-        ms[k] = mass[v];
-      }
+      if (mass[v] > 0) insert_sorted(ms, &n_used, mass[v]);
     const double mcap = n_used ? ms[n_used / 2] : 0;
     for (int v = 0; v < p->nv; v++) wt[v] = fmin(mass[v], mcap) * fac[v];
     if (n_used < o->min_views) return 0;
