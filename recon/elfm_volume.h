@@ -26,8 +26,16 @@ typedef struct elfm_volume {
   double um_per_px, z_min_um, z_step_um;
 } elfm_volume;
 
-/* Allocate a zeroed volume; NULL (err filled) when out of memory.
- * Free with elfm_volume_free (NULL is a no-op). */
+/* The largest volume EventLFM allocates: 2^27 voxels, 512 MiB of floats.
+ * The paper geometry is 144 x 144 x 101 (2.1 M voxels); a whole EVK4 view
+ * (256 x 256) over 1000 planes is 66 M. The cap exists because sizes come
+ * from files (an EXR data window, a calibration's view size): a header that
+ * claims 60000 x 60000 must be refused, not allocated (found by fuzz_exr). */
+#define ELFM_VOLUME_MAX_VOXELS ((size_t)1 << 27)
+
+/* Allocate a zeroed volume; NULL (err filled) when a side is not positive,
+ * w * h * nz exceeds ELFM_VOLUME_MAX_VOXELS (ELFM_ERR_RANGE), or memory
+ * runs out. Free with elfm_volume_free (NULL is a no-op). */
 elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
                                 double z_min_um, double z_step_um, elfm_error *err);
 void elfm_volume_free(elfm_volume *v);

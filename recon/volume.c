@@ -11,6 +11,12 @@ elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
                    "volume size %d x %d x %d is not positive or too large", w, h, nz);
     return NULL;
   }
+  if ((size_t)w * (size_t)h * (size_t)nz > ELFM_VOLUME_MAX_VOXELS) {
+    elfm_error_set(err, ELFM_ERR_RANGE, NULL, -1,
+                   "volume size %d x %d x %d exceeds the limit of %zu voxels", w, h, nz,
+                   ELFM_VOLUME_MAX_VOXELS);
+    return NULL;
+  }
   elfm_volume *v = calloc(1, sizeof *v);
   if (v) v->data = calloc((size_t)w * (size_t)h * (size_t)nz, sizeof *v->data);
   if (!v || !v->data) {

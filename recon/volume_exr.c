@@ -127,11 +127,27 @@ elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error
   EXR_TRY(exr_attr_get_double(ctxt, 0, "z_step_um", &z_step), "attribute z_step_um");
   const exr_attr_chlist_t *ch = NULL;
   EXR_TRY(exr_get_channels(ctxt, 0, &ch), "channels");
-  int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+  /* In 64 bits: a window from INT32_MIN to INT32_MAX would overflow int. */
+  int64_t w64 = (int64_t)dw.max.x - dw.min.x + 1, h64 = (int64_t)dw.max.y - dw.min.y + 1;
+  if (w64 > 65535 || h64 > 65535) {
+    st = elfm_error_set(err, ELFM_ERR_RANGE, path, -1,
+                        "data window %lld x %lld is larger than 65535 px on a side",
+                        (long long)w64, (long long)h64);
+    goto done;
+  }
+  int w = w64 > 0 ? (int)w64 : 0, h = h64 > 0 ? (int)h64 : 0;
   if (nz <= 0 || ch->num_channels != nz || w <= 0 || h <= 0) {
     st = elfm_error_set(err, ELFM_ERR_FORMAT, path, -1,
                         "not an EventLFM volume: %d channels for nz %d, %d x %d", ch->num_channels,
                         nz, w, h);
+    goto done;
+  }
+  /* The data window is a claim the file makes; ZIP can pack a huge zero
+   * volume into a few bytes, so the file's size does not bound it. */
+  if ((size_t)w * (size_t)h * (size_t)nz > ELFM_VOLUME_MAX_VOXELS) {
+    st = elfm_error_set(err, ELFM_ERR_RANGE, path, -1,
+                        "data window %d x %d with %d planes exceeds the limit of %zu voxels", w,
+                        h, nz, ELFM_VOLUME_MAX_VOXELS);
     goto done;
   }
   for (int c = 0; c < ch->num_channels; c++)

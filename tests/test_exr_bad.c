@@ -48,6 +48,41 @@ static void expect_rejected(const unsigned char *good, size_t n, const char *att
   free(buf);
 }
 
+/* Overwrite the dataWindow box (4 x int32) and read back: refused with
+ * ELFM_ERR_RANGE and the file named, no allocation of the claimed size. */
+static void expect_window_rejected(const unsigned char *good, size_t n, int32_t x0, int32_t y0,
+                                   int32_t x1, int32_t y1)
+{
+  static const char key[] = "dataWindow\0box2i"; /* name\0 type\0 size box */
+  unsigned char *buf = malloc(n);
+  memcpy(buf, good, n);
+  int found = 0;
+  for (size_t i = 0; i + sizeof key + 4 + 16 <= n && !found; i++)
+    if (memcmp(buf + i, key, sizeof key) == 0) {
+      int32_t box[4] = {x0, y0, x1, y1};
+      memcpy(buf + i + sizeof key + 4, box, sizeof box);
+      found = 1;
+    }
+  CHECK(found);
+  const char *path = "exr_bad_window.exr";
+  FILE *f = fopen(path, "wb");
+  CHECK(f != NULL);
+  if (f) {
+    fwrite(buf, 1, n, f);
+    fclose(f);
+  }
+  elfm_volume *v = NULL;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_status s = elfm_volume_read_exr(path, &v, &err);
+  CHECK_MSG(s == ELFM_ERR_RANGE && v == NULL, "window %d,%d..%d,%d: got %s (%s)", x0, y0, x1,
+            y1, elfm_status_str(s), err.message);
+  CHECK_MSG(strstr(err.file, "exr_bad_window.exr") != NULL, "error names '%s'", err.file);
+  elfm_volume_free(v);
+  remove(path);
+  free(buf);
+}
+
 int main(void)
 {
   elfm_error err;
@@ -80,6 +115,18 @@ int main(void)
   expect_rejected(good, n, "um_per_px", -0.5);
   expect_rejected(good, n, "z_step_um", 0.0);
   expect_rejected(good, n, "z_min_um", 1.0 / 0.0);
+
+  /* A data window that claims more voxels than a volume may have (found by
+   * fuzz_exr: 60000 x 60000 was passed to calloc, 14 GB). */
+  expect_window_rejected(good, n, 0, 0, 59999, 59999);
+  expect_window_rejected(good, n, 0, 0, 30000, 4999);  /* 150 M voxels x 2 planes */
+  expect_window_rejected(good, n, 0, 0, 99999, 1); /* a side over 65535 px */
+
+  /* The cap itself, on elfm_volume_create: one voxel over is refused with
+   * ELFM_ERR_RANGE, without allocating. */
+  elfm_error_clear(&err);
+  CHECK(elfm_volume_create(1 << 14, 1 << 13, 2, 1, 0, 1, &err) == NULL);
+  CHECK_EQ_INT(err.code, ELFM_ERR_RANGE);
   remove(path);
   return check_report();
 }
