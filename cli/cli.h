@@ -79,7 +79,7 @@ const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
  * it sets them in the elfm_recon_options before parsing.
  *
  *   static const struct option opts[] = {CLI_RECON_LONG_OPTIONS, {"out", ...}, ...};
- *   cli_recon_parse rp = {&ro, 0, 0};
+ *   cli_recon_parse rp = {.ro = &ro};
  *   while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
  *     int k = cli_parse_recon_option(cmd, c, optarg, &rp);
  *     if (k == 0) return CLI_USAGE;
@@ -113,14 +113,17 @@ typedef struct cli_recon_parse {
    * end (cli_check_recon_options). */
   int ghost_value_given;   /* by MODE:V or --ghost-value */
   int ghost_value_option;  /* by --ghost-value */
+  int tau_given, polarity_given; /* --repr integral has its own defaults for these */
 } cli_recon_parse;
 
 /* 1: `code` is a shared option and `arg` a good value (stored in p->ro);
  * 0: it is one and `arg` is bad (message naming the option printed: a usage
  * error); -1: `code` is not a shared option (the command's own). */
 int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon_parse *p);
-/* After the options: the checks between them (stride <= dt, from < to, a
- * ghost threshold's value). 1 when good; 0 after printing the message. */
+/* After the options: the defaults that depend on others (--repr integral:
+ * both polarities, ELFM_INTEGRAL_TAU_US, unless given), then the checks
+ * between them (stride <= dt, from < to, a ghost threshold's value).
+ * 1 when good; 0 after printing the message. */
 int cli_check_recon_options(const char *cmd, const cli_recon_parse *p);
 /* The shared options' help lines, with the command's defaults `d`. */
 void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);

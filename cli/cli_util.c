@@ -108,7 +108,8 @@ typedef struct {
 } name_value;
 
 static const name_value repr_names[] = {
-    {"exp", ELFM_REPR_EXP}, {"lin", ELFM_REPR_LIN}, {"count", ELFM_REPR_COUNT}};
+    {"exp", ELFM_REPR_EXP}, {"lin", ELFM_REPR_LIN}, {"count", ELFM_REPR_COUNT},
+    {"integral", ELFM_REPR_INTEGRAL}};
 static const name_value polarity_names[] = {
     {"both", ELFM_POL_BOTH}, {"on", ELFM_POL_ON}, {"off", ELFM_POL_OFF}, {"signed", ELFM_POL_SIGNED}};
 static const name_value path_names[] = {
@@ -305,9 +306,12 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     /* <= dt is checked at the end: --dt-us may come after */
     return int64_in(cmd, "--stride-us", arg, 0, DT_US_MAX, "0 (= dt) or 1..dt", &fo->stride_us);
   case CLI_RO_TAU:
+    p->tau_given = 1;
     return double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
-  case CLI_RO_POLARITY: return cli_parse_polarity(cmd, arg, &fo->polarity);
+  case CLI_RO_POLARITY:
+    p->polarity_given = 1;
+    return cli_parse_polarity(cmd, arg, &fo->polarity);
   case CLI_RO_MEDIAN: {
     int m;
     if (!cli_parse_int(cmd, "--median", arg, &m)) return 0;
@@ -340,6 +344,13 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
 
 int cli_check_recon_options(const char *cmd, const cli_recon_parse *p)
 {
+  elfm_framer_options *fw = &p->ro->framer;
+  if (fw->repr == ELFM_REPR_INTEGRAL) {
+    /* The commands' defaults (a 1 ms decay, ON events for track) are the
+     * time surface's; the integral needs both polarities and a long leak. */
+    if (!p->polarity_given) fw->polarity = ELFM_POL_SIGNED;
+    if (!p->tau_given) fw->tau_us = ELFM_INTEGRAL_TAU_US;
+  }
   const elfm_recon_options *ro = p->ro;
   const elfm_framer_options *fo = &ro->framer;
   const elfm_refocus_options *r = &ro->refocus;
@@ -400,8 +411,11 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
   fprintf(f,
           "  --dt-us N            window length, 50..10000000 us (default %" PRId64 ")\n"
           "  --stride-us N        window start to start, 1..dt us (default %s)\n"
-          "  --repr R             exp | lin | count (default %s; exp, lin: time surfaces)\n"
-          "  --tau-us T           time-surface decay, > 0 us (default %g)\n"
+          "  --repr R             exp | lin | count | integral (default %s; exp, lin: time\n"
+          "                       surfaces; integral: each pixel's leaky sum of ON minus\n"
+          "                       OFF events, its log brightness: no lead along the motion)\n"
+          "  --tau-us T           time-surface decay, > 0 us (default %g; integral: the\n"
+          "                       leak, default %g)\n"
           "  --polarity P         both | on | off | signed (default %s)\n"
           "  --median N           median filter 0 (off) | 3 | 5 (default %d)\n"
           "  --from-us T          first event time to use (windows start here)\n"
@@ -416,7 +430,8 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --threads N          worker threads, 0..1024 (default %s)\n"
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
           "                       (default %s)\n",
-          fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, cli_polarity_name(fo->polarity),
+          fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
+          cli_polarity_name(fo->polarity),
           d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
 }
 

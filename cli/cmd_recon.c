@@ -170,7 +170,7 @@ int cmd_recon(int argc, char **argv)
     {"save-mips", no_argument, 0, O_SAVE_M}, {"quiet", no_argument, 0, O_QUIET},
     {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   elfm_recon_options *r = &a.ro;
-  cli_recon_parse rp = {r, 0, 0};
+  cli_recon_parse rp = {.ro = r};
   optind = 1;
   opterr = 0;
   int c;

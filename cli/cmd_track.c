@@ -257,7 +257,7 @@ int cmd_track(int argc, char **argv)
       {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
       {"max-outlier-frac", required_argument, 0, O_MAXOUT},
       {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
-  cli_recon_parse rp = {&o.recon, 0, 0};
+  cli_recon_parse rp = {.ro = &o.recon};
   optind = 1;
   opterr = 0;
   int ch;

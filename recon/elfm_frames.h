@@ -17,6 +17,23 @@
  * OFF keep only those events; BOTH keeps all; SIGNED gives a time surface
  * the sign of the latest event (+ ON, - OFF) and counts ON minus OFF.
  *
+ * INTEGRAL is the one representation with memory across windows: each
+ * pixel integrates every event since the start, +1 per ON and -off_weight
+ * per OFF (off_weight = the OFF/ON contrast thresholds' ratio), with a leak
+ * exp(-age / tau_us) towards 0. An event marks a log-brightness step of one
+ * threshold, so the sum is the pixel's log brightness relative to where it
+ * started, in ON-threshold units: an image of the object where it is *now*,
+ * not of its leading edge (ON events crowd ahead of a moving blob, so an ON
+ * time surface leads the object along its motion). The leak forgets the
+ * thresholds' per-pixel mismatch and noise; it must be long against the
+ * time an object takes to cross its own width (tau_us x speed >> size),
+ * else the sum is again a temporal derivative that leads. The frame is
+ *   INTEGRAL  (255 / 8) * (L - 1) where L > 1, else 0    t_us = t1
+ * (one threshold's step subtracted: the +-1 residue a passing object leaves
+ * behind; 8 net ON events, a brightness ratio of ~5 at a 0.2 threshold,
+ * map to 255 as a fresh time-surface pixel does). Needs both polarities:
+ * polarity BOTH or SIGNED (the same here).
+ *
  * The framer is stateful across chunks: it keeps the events of the windows
  * still open (a FIFO whose size is bounded by the event rate x (dt + one
  * chunk)), so memory does not grow with the recording; nothing is allocated
@@ -38,7 +55,8 @@ extern "C" {
 typedef enum elfm_repr {
   ELFM_REPR_EXP = 0,  /* exponential time surface (the paper's) */
   ELFM_REPR_LIN,      /* linear time surface */
-  ELFM_REPR_COUNT     /* plain event count */
+  ELFM_REPR_COUNT,    /* plain event count */
+  ELFM_REPR_INTEGRAL  /* leaky integral of signed events: log brightness (see above) */
 } elfm_repr;
 
 typedef enum elfm_polarity {
@@ -77,6 +95,10 @@ void elfm_frame_set(elfm_frame *f, uint32_t i, float value);
 /* Copy src into dst (same size): dst is cleared first. O(nnz). */
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err);
 
+/* A leak for INTEGRAL: 300 ms. Worm neurons (0.1-0.34 um/ms, images
+ * ~8 um wide) cross their width in 25-80 ms. */
+#define ELFM_INTEGRAL_TAU_US 300000.0
+
 typedef struct elfm_framer_options {
   int64_t dt_us;        /* window length; >= 50 us. Default 1000 (1 kHz volumes, the paper) */
   int64_t stride_us;    /* window start to next start; 0 = dt; 1..dt */
@@ -84,8 +106,10 @@ typedef struct elfm_framer_options {
   int64_t start_us;     /* for ELFM_START_AT_TIME */
   elfm_repr repr;
   double tau_us;        /* time-surface decay; default 1000 (= dt, so the oldest event of
-                           a window still shows at 255/e) */
+                           a window still shows at 255/e). INTEGRAL: the leak time
+                           (ELFM_INTEGRAL_TAU_US is a good start) */
   elfm_polarity polarity;
+  double off_weight;    /* INTEGRAL: an OFF event's step over an ON event's; default 1 */
 } elfm_framer_options;
 
 void elfm_framer_options_default(elfm_framer_options *o);

@@ -1,5 +1,6 @@
 # recon: frames, median, refocusing, pipeline and outputs (issue 4).
 elfm_add_test(test_frames test_frames.c)
+elfm_add_test(test_frames_integral test_frames_integral.c)
 elfm_add_test(test_median test_median.c)
 elfm_add_test(test_refocus test_refocus.c)
 elfm_add_test(test_localize test_localize.c)
