@@ -396,7 +396,15 @@ int cmd_track(int argc, char **argv)
                        "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
   if (!thr_given) {
     if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
-    else {
+    else if (o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
+      /* The integral's scale is brightness (255 at 8 steps over the
+       * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means,
+       * threshold 10 / 15 / 20 / 30 / 40: F1 0.874 / 0.882 / 0.887 / 0.882 /
+       * 0.859, alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689. 20: the lower
+       * ones gain little alpha for the ghosts they let in. */
+      o.peaks.absolute = 20;
+      if (!low_given) o.peaks.hysteresis_low = 20;
+    } else {
       /* 45 with the view-support test (below), 50 without it: the test
        * removes the ghosts a lower threshold lets in (docs/tracker.md
        * "View support"). */

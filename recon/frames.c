@@ -6,9 +6,9 @@
  * been pushed (times never decrease), or at finish(). Building a frame walks
  * the FIFO entries of its window once, then evaluates each listed pixel once
  * (a table of the decay over integer ages replaces exp() per pixel).
- * INTEGRAL also keeps each pixel's running sum and its time, and a list of
- * the pixels whose sum is not yet negligible (the active list), so a frame
- * costs O(events + active pixels), not O(sensor).
+ * INTEGRAL also keeps each pixel's reference level, its time and latest
+ * polarity, and a list of the pixels above the floor, so a frame costs
+ * O(events + shown pixels), not O(sensor).
  */
 #include "elfm_frames.h"
 
@@ -35,9 +35,10 @@ struct elfm_framer {
   uint32_t cur_stamp;
   float *decay;              /* decay[age_us] for age 0..dt, or NULL */
   /* INTEGRAL */
-  float *sum;                /* per pixel: leaky sum, in ON steps, as of sum_t */
+  float *sum;                /* per pixel: reference level, in ON steps, as of sum_t */
   int64_t *sum_t;
-  uint8_t *active;           /* listed in act[] */
+  uint8_t *pol;              /* per pixel: latest event 1 ON, 2 OFF, 0 none */
+  uint8_t *shown;            /* listed in act[]: level above the floor */
   uint32_t *act;
   size_t n_act;
   int64_t t_integrated;      /* events before this time are in sum[] */
@@ -200,11 +201,12 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   if (integral) {
     f->sum = calloc(n, sizeof *f->sum);
     f->sum_t = calloc(n, sizeof *f->sum_t);
-    f->active = calloc(n, 1);
+    f->pol = calloc(n, 1);
+    f->shown = calloc(n, 1);
     f->act = malloc(n * sizeof *f->act);
   }
   if (!f->q_t || !f->q_pix || !f->stamp || !f->last_t || !f->last_p || (table && !f->decay) ||
-      (integral && (!f->sum || !f->sum_t || !f->active || !f->act))) {
+      (integral && (!f->sum || !f->sum_t || !f->pol || !f->shown || !f->act))) {
     elfm_framer_free(f);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (framer %d x %d)",
                           width, height);
@@ -236,7 +238,8 @@ void elfm_framer_free(elfm_framer *f)
   free(f->decay);
   free(f->sum);
   free(f->sum_t);
-  free(f->active);
+  free(f->pol);
+  free(f->shown);
   free(f->act);
   free(f);
 }
@@ -319,8 +322,8 @@ static float integral_leak(const elfm_framer *f, uint32_t pix, int64_t t)
 
 /* INTEGRAL: add the events before t1 not yet integrated (with stride < dt
  * a window's first events were integrated for the window before), then
- * write every active pixel's level at t1 and drop from the list the pixels
- * whose level has leaked away. Returns the number of events in [t0, t1).
+ * write the pixels whose level at t1 is above the floor. Returns the
+ * number of events in [t0, t1).
  *
  * sum[] is the pixel's reference level as of its latest event (sum_t[]),
  * and a pixel fires only when its brightness has moved a whole step past
@@ -328,19 +331,29 @@ static float integral_leak(const elfm_framer *f, uint32_t pix, int64_t t)
  * after an OFF event 0..1 below. The reference alone lags on both flanks
  * of a moving object (low on the rising front, high on the falling back),
  * which puts the object's image behind it (0.4 px on test_frames_integral's
- * blob). So the level shown is the reference plus the expected half step
- * in the direction of the latest event, h = +1/2 after ON, -off_weight/2
- * after OFF, leaked since that event. Frames only read the state: the
- * frame at t1 does not depend on which frames came before it. */
+ * blob). So the level is the reference plus the expected half step in the
+ * direction of the latest event, h = +1/2 after ON, -off_weight/2 after
+ * OFF, leaked since that event.
+ *
+ * Between its events a pixel's level only leaks towards 0, so a pixel
+ * below the floor stays there until its next event: only the pixels above
+ * it are listed (shown[]) and visited per frame, every other one is
+ * brought up to date lazily at its next event. A frame costs O(events +
+ * shown pixels), and sensor noise (a pixel's lone event every ~0.5 s)
+ * costs one update per event, not one per frame for the leak's duration.
+ * Frames only read the state: the frame at t1 does not depend on which
+ * frames came before it. */
 static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *out)
 {
   /* A pixel's reference is clamped: a hot pixel firing ON at 1 kHz would
-   * otherwise climb to rate x tau steps (300 at 300 ms), far above any
+   * otherwise climb to rate x tau steps (100 at 100 ms), far above any
    * object, and a stuck one without end. 64 steps of 0.2 is e^12.8.
-   * A level below 1/16 step is forgotten (the pixel leaves the list). */
-  const float clamp = 64.0f, forget = 1.0f / 16.0f, gain = 255.0f / 8.0f;
+   * The floor, 1.5 steps, is a lone ON event (a noise event, or one
+   * threshold of real change: the two look alike); the frame shows the
+   * level above it. */
+  const float clamp = 64.0f, floor = 1.5f, gain = 255.0f / 8.0f;
   const float off = (float)f->opt.off_weight;
-  /* half[state]: state 0 idle (not listed), 1 listed after ON, 2 after OFF */
+  /* half[pol]: pol 0 no event yet, 1 latest ON, 2 latest OFF */
   const float half[3] = {0.0f, 0.5f, -0.5f * off};
   size_t nev = 0;
   for (size_t i = 0; i < f->q_n; i++) {
@@ -354,24 +367,24 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
     float v = f->sum[pix] * integral_leak(f, pix, t) + (on ? 1.0f : -off);
     f->sum[pix] = v > clamp ? clamp : v < -clamp ? -clamp : v;
     f->sum_t[pix] = t;
-    if (!f->active[pix]) f->act[f->n_act++] = pix;
-    f->active[pix] = on ? 1 : 2;
+    f->pol[pix] = on ? 1 : 2;
+    if (!f->shown[pix] && f->sum[pix] + half[f->pol[pix]] > floor) {
+      f->shown[pix] = 1;
+      f->act[f->n_act++] = pix;
+    }
   }
   f->t_integrated = t1;
   size_t kept = 0;
   for (size_t i = 0; i < f->n_act; i++) {
     uint32_t pix = f->act[i];
-    float v = (f->sum[pix] + half[f->active[pix]]) * integral_leak(f, pix, t1);
-    if (fabsf(v) < forget) {
-      f->active[pix] = 0;
-      f->sum[pix] = 0.0f;
+    float v = (f->sum[pix] + half[f->pol[pix]]) * integral_leak(f, pix, t1);
+    if (!(v > floor)) {
+      f->shown[pix] = 0;
       continue;
     }
     f->act[kept++] = pix;
-    if (v > 1.0f) {
-      out->idx[out->nnz++] = pix;
-      out->data[pix] = gain * (v - 1.0f);
-    }
+    out->idx[out->nnz++] = pix;
+    out->data[pix] = gain * (v - floor);
   }
   f->n_act = kept;
   return nev;

@@ -139,9 +139,9 @@ static void test_moving_blob(void)
             e_wrong, e_right);
 }
 
-/* One pixel, five ON events at 0: the frame at t is gain (5.5 e^(-t/tau) - 1)
+/* One pixel, five ON events at 0: the frame at t is gain (5.5 e^(-t/tau) - 1.5)
  * (the half step after an ON event: the pixel's level is 0..1 step above
- * its reference). */
+ * its reference; the floor, 1.5, is one lone ON event). */
 static void test_leak_and_active_list(void)
 {
   elfm_error err;
@@ -167,11 +167,11 @@ static void test_leak_and_active_list(void)
     CHECK_EQ_INT(f->t_us, k * 1000); /* the state at the window's end */
     double expect = 5.5 * exp(-k * 1000.0 / o.tau_us);
     float v = f->data[6 * SW + 5];
-    if (expect > 1.0) {
-      CHECK_NEAR(v, gain * (expect - 1.0), 1e-3 * gain);
+    if (expect > 1.5) {
+      CHECK_NEAR(v, gain * (expect - 1.5), 1e-3 * gain);
       CHECK_EQ_INT(f->nnz, 1);
     } else {
-      /* below one step: not shown (listed while above 1/16 step) */
+      /* below the floor: not shown */
       CHECK(v == 0.0f);
       CHECK_EQ_INT(f->nnz, 0);
     }
@@ -241,6 +241,43 @@ out:
   elfm_framer_free(fb);
 }
 
+/* The floor: a lone ON event (sensor noise looks like this) is never
+ * shown; a second one on the same pixel is, at half a step over it. */
+static void test_floor(void)
+{
+  elfm_error err;
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_AT_TIME;
+  o.start_us = 0;
+  o.repr = ELFM_REPR_INTEGRAL;
+  o.tau_us = ELFM_INTEGRAL_TAU_US;
+  elfm_framer *fr = NULL;
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create(64, &err);
+  elfm_frame *f = elfm_frame_create(SW, SH, &err);
+  if (!fr || !c || !f) goto out;
+  for (int i = 0; i < 40; i++) /* lone ON events on 40 pixels */
+    c->t_us[c->n] = 100, c->x[c->n] = (uint16_t)(2 * i), c->y[c->n] = 3, c->p[c->n++] = 1;
+  c->t_us[c->n] = 1100, c->x[c->n] = 10, c->y[c->n] = 3, c->p[c->n++] = 1; /* pixel 10: a second */
+  c->t_us[c->n] = 5000, c->x[c->n] = 0, c->y[c->n] = 0, c->p[c->n++] = 0;
+  CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1); /* [0, 1000) */
+  CHECK_EQ_INT(f->nnz, 0);
+  CHECK_EQ_INT(f->n_events, 40);
+  CHECK_EQ_INT(elfm_framer_next(fr, f), 1); /* [1000, 2000) */
+  CHECK_EQ_INT(f->nnz, 1);
+  if (f->nnz == 1) CHECK_EQ_INT(f->idx[0], 3 * SW + 10);
+  /* the first step leaked 1000 us, then + 1 step + the half step, all
+   * leaked 900 us to the window's end, less the floor */
+  double level = (exp(-1000.0 / o.tau_us) + 1.0 + 0.5) * exp(-900.0 / o.tau_us);
+  CHECK_NEAR(f->data[3 * SW + 10], 255.0 / 8.0 * (level - 1.5), 1e-3);
+out:
+  elfm_frame_free(f);
+  elfm_chunk_free(c);
+  elfm_framer_free(fr);
+}
+
 /* A hot pixel firing ON at 100 kHz stays finite and bounded (64 steps and
  * the half step). */
 static void test_clamp(void)
@@ -261,7 +298,7 @@ static void test_clamp(void)
   float vmax = 0;
   while (elfm_framer_next(fr, f)) vmax = fmaxf(vmax, f->data[SW + 1]);
   CHECK(isfinite(vmax));
-  CHECK(vmax > 255.0f / 8.0f * 60.0f && vmax <= 255.0f / 8.0f * 63.5f + 1e-3f);
+  CHECK(vmax > 255.0f / 8.0f * 60.0f && vmax <= 255.0f / 8.0f * 63.0f + 1e-3f);
 out:
   elfm_frame_free(f);
   elfm_chunk_free(c);
@@ -298,6 +335,7 @@ int main(void)
   test_moving_blob();
   test_leak_and_active_list();
   test_stride_and_chunks();
+  test_floor();
   test_clamp();
   test_options();
   return check_report();
