@@ -4,8 +4,8 @@
 # run ahead of them, so the ON time surface (the default) places each
 # neuron 1.5-1.7 um along its motion; the integral of ON minus OFF events
 # shows each neuron where it is. Checked: lateral RMSE (x and y) at most
-# 0.6x the time surface's (measured 1.53 / 1.72 -> 0.36 / 0.44 um) and
-# ISBI alpha at least 0.15 higher (0.23 -> 0.52); with --polarity on the
+# 0.6x the time surface's (measured 1.53 / 1.72 -> 0.39 / 0.49 um) and
+# ISBI alpha at least 0.15 higher (0.23 -> 0.65); with --polarity on the
 # integral is a usage error naming the polarity.
 # Usage: track_integral.sh BINARY
 bin=$1
