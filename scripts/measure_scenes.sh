@@ -9,7 +9,7 @@ TIME="/usr/bin/time -v"; [ -x /usr/bin/time ] || TIME=""   # Debian package "tim
 for sc in "flow 100 1" "flow 100 2" "stage 200 1" "blink 200 1" "worm 200 1"; do
   set -- $sc; scene=$1; ms=$2; seed=$3; d=$M/${scene}_s${seed}
   "$B" simulate $scene --out $d --duration-ms $ms --seed $seed --quiet 2>$d.sim.txt
-  extra=""; [ $scene = worm ] && extra="--dt-us 2000"
+  extra=""; [ $scene = worm ] && extra="--dt-us 2000 --repr integral"
   [ $scene = stage ] && extra="--motion stage"
   $TIME "$B" track --calib $d/calib.json --events $d/events.raw --out $d/t $extra 2> $d.track.txt
   sv=""; [ $scene = stage ] && sv="--stage-velocity-um-per-ms 0,2.5,0"
