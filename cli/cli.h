@@ -92,7 +92,7 @@ const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
 enum {
   CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
   CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
-  CLI_RO_THREADS, CLI_RO_BATCH
+  CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT
 };
 #define CLI_RECON_LONG_OPTIONS                                                                 \
   {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
@@ -104,7 +104,8 @@ enum {
   {"ghost-value", required_argument, 0, CLI_RO_GHOST_VALUE},                                   \
   {"agree", required_argument, 0, CLI_RO_AGREE},                                               \
   {"threads", required_argument, 0, CLI_RO_THREADS},                                           \
-  {"batch", required_argument, 0, CLI_RO_BATCH}
+  {"batch", required_argument, 0, CLI_RO_BATCH},                                               \
+  {"off-weight", required_argument, 0, CLI_RO_OFF_WEIGHT}
 
 typedef struct cli_recon_parse {
   elfm_recon_options *ro;  /* the command's defaults, then the options given */

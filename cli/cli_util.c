@@ -309,6 +309,8 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     p->tau_given = 1;
     return double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
+  case CLI_RO_OFF_WEIGHT:
+    return double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
   case CLI_RO_POLARITY:
     p->polarity_given = 1;
     return cli_parse_polarity(cmd, arg, &fo->polarity);
@@ -417,6 +419,8 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --tau-us T           time-surface decay, > 0 us (default %g; integral: the\n"
           "                       leak, default %g)\n"
           "  --polarity P         both | on | off | signed (default %s)\n"
+          "  --off-weight W       integral: an OFF event's step over an ON event's, the\n"
+          "                       sensor's OFF/ON threshold ratio (default %g)\n"
           "  --median N           median filter 0 (off) | 3 | 5 (default %d)\n"
           "  --from-us T          first event time to use (windows start here)\n"
           "  --to-us T            stop before this event time\n"
@@ -431,7 +435,7 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
           "                       (default %s)\n",
           fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
-          cli_polarity_name(fo->polarity),
+          cli_polarity_name(fo->polarity), fo->off_weight,
           d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
 }
 

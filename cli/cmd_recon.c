@@ -107,6 +107,7 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON_AddStringToObject(p, "repr", cli_repr_name(r->framer.repr));
   cJSON_AddNumberToObject(p, "tau_us", r->framer.tau_us);
   cJSON_AddStringToObject(p, "polarity", cli_polarity_name(r->framer.polarity));
+  cJSON_AddNumberToObject(p, "off_weight", r->framer.off_weight);
   cJSON_AddStringToObject(p, "start", r->framer.start == ELFM_START_FIRST_TRIGGER ? "trigger" : "first");
   cJSON_AddNumberToObject(p, "median", r->median);
   cJSON_AddStringToObject(p, "path", cli_refocus_path_name(r->refocus.path));

@@ -108,6 +108,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
+  cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
   cJSON_AddNumberToObject(par, "median", o->recon.median);
   cJSON_AddStringToObject(par, "path", cli_refocus_path_name(o->recon.refocus.path));
   cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(o->recon.refocus.threshold));

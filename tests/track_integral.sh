@@ -6,12 +6,18 @@
 # shows each neuron where it is. Checked: lateral RMSE (x and y) at most
 # 0.6x the time surface's (measured 1.53 / 1.72 -> 0.39 / 0.49 um) and
 # ISBI alpha at least 0.15 higher (0.23 -> 0.65); with --polarity on the
-# integral is a usage error naming the polarity.
+# integral is an error naming the polarity, a bad --off-weight a usage
+# error; summary.json records the integral's defaults.
 # Usage: track_integral.sh BINARY
 bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
+for bad in "--off-weight 0" "--off-weight 101" "--off-weight nan"; do
+  "$bin" track --calib a --events b --out c --repr integral $bad >/dev/null 2>"$tmp/err"
+  rc=$?
+  [ $rc -eq 2 ] && grep -q -- "--off-weight" "$tmp/err" || { echo "FAIL: $bad not a usage error naming --off-weight"; fail=$((fail+1)); }
+done
 "$bin" simulate worm --out "$tmp/w" --duration-ms 150 --seed 5 --quiet >/dev/null 2>&1 ||
   { echo "SKIP: simulate failed"; exit 77; }
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/x" -q \
@@ -31,6 +37,12 @@ key() {  # file key -> number
 }
 run exp
 run int --repr integral
+# the integral's own defaults, recorded with the run
+for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
+          '"tau_us":[[:space:]]*100000' '"radius_xy_um":[[:space:]]*1.5' \
+          '"threshold_abs":[[:space:]]*20' '"off_weight":[[:space:]]*1'; do
+  grep -q "$kv" "$tmp/int/summary.json" || { echo "FAIL: summary.json lacks $kv"; fail=$((fail+1)); }
+done
 for a in x y; do
   e=$(key "$tmp/exp.json" rmse_${a}_um); i=$(key "$tmp/int.json" rmse_${a}_um)
   echo "worm: RMSE $a time surface $e um, integral $i um"
