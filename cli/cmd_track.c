@@ -112,7 +112,7 @@ static void usage(FILE *f)
     "                       a batch's volumes are searched for peaks in parallel too)\n"
     "detection:\n"
     "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (45 on time\n"
-    "                       surfaces, 20 on the integral), --threshold-rel F (0.35 of\n"
+    "                       surfaces, 15 on the integral), --threshold-rel F (0.35 of\n"
     "                       the maximum for counts)\n"
     "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all depths)\n"
     "  --threshold-min V    floor of that depth-scaled threshold\n"
@@ -411,12 +411,12 @@ int cmd_track(int argc, char **argv)
     if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
     else if (o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
       /* The integral's scale is brightness (255 at 8 steps over the
-       * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means,
-       * threshold 10 / 15 / 20 / 30 / 40: F1 0.874 / 0.882 / 0.887 / 0.882 /
-       * 0.859, alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689. 20: the lower
-       * ones gain little alpha for the ghosts they let in. */
-      o.peaks.absolute = 20;
-      if (!low_given) o.peaks.hysteresis_low = 20;
+       * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means, at
+       * the floor of 2 steps, threshold 10 / 15: F1 0.893 / 0.905, alpha
+       * 0.777 / 0.778 (at a floor of 1.5, threshold 10 / 15 / 20 / 30 /
+       * 40: alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689 with a 3 um box). */
+      o.peaks.absolute = 15;
+      if (!low_given) o.peaks.hysteresis_low = 15;
     } else {
       /* 45 with the view-support test (below), 50 without it: the test
        * removes the ghosts a lower threshold lets in (docs/tracker.md

@@ -31,10 +31,10 @@
  * plus the expected half step of the latest event (+1/2 after ON,
  * -off_weight/2 after OFF: a pixel fires only once a whole step is
  * crossed), the frame is
- *   INTEGRAL  (255 / 8) * (L - 1.5) where L > 1.5, else 0    t_us = t1
- * (the floor is a lone ON event: sensor noise, or the +-1 residue a
- * passing object leaves behind; 8 steps above it, a brightness ratio of
- * ~5 at a 0.2 threshold, map to 255 as a fresh time-surface pixel does).
+ *   INTEGRAL  (255 / 8) * (L - F) where L > F, else 0    t_us = t1
+ * with the floor F = ELFM_INTEGRAL_FLOOR (8 steps above it, a brightness
+ * ratio of ~5 at a 0.2 threshold, map to 255 as a fresh time-surface pixel
+ * does).
  * Needs both polarities: polarity BOTH or SIGNED (the same here).
  *
  * The framer is stateful across chunks: it keeps the events of the windows
@@ -104,6 +104,16 @@ elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *
  * leak of 50 / 100 / 200 ms: 0.683 / 0.719 / 0.721 (F1 0.889 / 0.890 /
  * 0.872). */
 #define ELFM_INTEGRAL_TAU_US 100000.0
+
+/* The integral's floor, in steps: a lone ON event (1.5 with its half
+ * step; sensor noise looks like this) and the +-1 step a passing object
+ * leaves behind are below it, two ON events (2.5) above. Pixels below it
+ * cost nothing per frame (recon/frames.c). Worm 200 ms seeds 1-4, means,
+ * floor 1.5 / 2 / 2.5 / 3 (each with its best threshold, 20 / 15 / 5 / 5):
+ * alpha 0.773 / 0.778 / 0.768 / 0.754, F1 0.912 / 0.905 / 0.907 / 0.904,
+ * `track` wall time on seed 1 0.69-0.78 / 0.56-0.60 / 0.42 / 0.43-0.44 s
+ * (the time surface's: 0.42-0.47 s). */
+#define ELFM_INTEGRAL_FLOOR 2.0
 
 typedef struct elfm_framer_options {
   int64_t dt_us;        /* window length; >= 50 us. Default 1000 (1 kHz volumes, the paper) */

@@ -348,10 +348,8 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
   /* A pixel's reference is clamped: a hot pixel firing ON at 1 kHz would
    * otherwise climb to rate x tau steps (100 at 100 ms), far above any
    * object, and a stuck one without end. 64 steps of 0.2 is e^12.8.
-   * The floor, 1.5 steps, is a lone ON event (a noise event, or one
-   * threshold of real change: the two look alike); the frame shows the
-   * level above it. */
-  const float clamp = 64.0f, floor = 1.5f, gain = 255.0f / 8.0f;
+   * The frame shows the level above the floor (elfm_frames.h). */
+  const float clamp = 64.0f, floor = (float)ELFM_INTEGRAL_FLOOR, gain = 255.0f / 8.0f;
   const float off = (float)f->opt.off_weight;
   /* half[pol]: pol 0 no event yet, 1 latest ON, 2 latest OFF */
   const float half[3] = {0.0f, 0.5f, -0.5f * off};

@@ -139,9 +139,9 @@ static void test_moving_blob(void)
             e_wrong, e_right);
 }
 
-/* One pixel, five ON events at 0: the frame at t is gain (5.5 e^(-t/tau) - 1.5)
+/* One pixel, five ON events at 0: the frame at t is gain (5.5 e^(-t/tau) - F)
  * (the half step after an ON event: the pixel's level is 0..1 step above
- * its reference; the floor, 1.5, is one lone ON event). */
+ * its reference; F = ELFM_INTEGRAL_FLOOR). */
 static void test_leak_and_active_list(void)
 {
   elfm_error err;
@@ -167,8 +167,8 @@ static void test_leak_and_active_list(void)
     CHECK_EQ_INT(f->t_us, k * 1000); /* the state at the window's end */
     double expect = 5.5 * exp(-k * 1000.0 / o.tau_us);
     float v = f->data[6 * SW + 5];
-    if (expect > 1.5) {
-      CHECK_NEAR(v, gain * (expect - 1.5), 1e-3 * gain);
+    if (expect > ELFM_INTEGRAL_FLOOR) {
+      CHECK_NEAR(v, gain * (expect - ELFM_INTEGRAL_FLOOR), 1e-3 * gain);
       CHECK_EQ_INT(f->nnz, 1);
     } else {
       /* below the floor: not shown */
@@ -242,7 +242,7 @@ out:
 }
 
 /* The floor: a lone ON event (sensor noise looks like this) is never
- * shown; a second one on the same pixel is, at half a step over it. */
+ * shown; a second one on the same pixel is. */
 static void test_floor(void)
 {
   elfm_error err;
@@ -271,7 +271,8 @@ static void test_floor(void)
   /* the first step leaked 1000 us, then + 1 step + the half step, all
    * leaked 900 us to the window's end, less the floor */
   double level = (exp(-1000.0 / o.tau_us) + 1.0 + 0.5) * exp(-900.0 / o.tau_us);
-  CHECK_NEAR(f->data[3 * SW + 10], 255.0 / 8.0 * (level - 1.5), 1e-3);
+  CHECK(level > ELFM_INTEGRAL_FLOOR && 1.5 < ELFM_INTEGRAL_FLOOR); /* the test's premise */
+  CHECK_NEAR(f->data[3 * SW + 10], 255.0 / 8.0 * (level - ELFM_INTEGRAL_FLOOR), 1e-3);
 out:
   elfm_frame_free(f);
   elfm_chunk_free(c);
@@ -279,7 +280,7 @@ out:
 }
 
 /* A hot pixel firing ON at 100 kHz stays finite and bounded (64 steps and
- * the half step). */
+ * the half step, less the floor). */
 static void test_clamp(void)
 {
   elfm_error err;
@@ -298,7 +299,8 @@ static void test_clamp(void)
   float vmax = 0;
   while (elfm_framer_next(fr, f)) vmax = fmaxf(vmax, f->data[SW + 1]);
   CHECK(isfinite(vmax));
-  CHECK(vmax > 255.0f / 8.0f * 60.0f && vmax <= 255.0f / 8.0f * 63.0f + 1e-3f);
+  CHECK(vmax > 255.0f / 8.0f * (float)(60.0 - ELFM_INTEGRAL_FLOOR) &&
+        vmax <= 255.0f / 8.0f * (float)(64.5 - ELFM_INTEGRAL_FLOOR) + 1e-3f);
 out:
   elfm_frame_free(f);
   elfm_chunk_free(c);

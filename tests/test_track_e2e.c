@@ -264,7 +264,7 @@ int main(int argc, char **argv)
 
     /* worm at 500 Hz (target: every visible neuron tracked, alpha >= 0.9),
      * with the integral (README: the setting for slowly moving cells;
-     * measured F1 0.919, alpha 0.795, lateral RMSE 0.30 / 0.40 um; the
+     * measured F1 0.917, alpha 0.800, lateral RMSE 0.29 / 0.38 um; the
      * ON time surface gave alpha 0.394, RMSE 1.27 / 1.53 um) */
     sub(dir, sizeof dir, "worm");
     fprintf(stderr, "worm (200 ms, 500 Hz):\n");
