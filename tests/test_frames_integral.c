@@ -101,23 +101,30 @@ static double mean_error_px(const blob_scene *s, const elfm_framer_options *o, i
   return n ? sum / n : NAN;
 }
 
+/* Framer options for the integral, windows from t = 0, leak tau_us. */
+static elfm_framer_options integral_options(double tau_us)
+{
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_AT_TIME;
+  o.start_us = 0;
+  o.repr = ELFM_REPR_INTEGRAL;
+  o.tau_us = tau_us;
+  return o;
+}
+
 static void test_moving_blob(void)
 {
   /* 3 px blob at 10x the background, 2 px/ms: enters from the left, so
    * the sensor's first image is the background alone (what came before
    * the recording is not in its events). */
   blob_scene s = {3.0, 10.0, -12.0, 0.002, 0.2, 0.2, 10, 50000};
-  elfm_framer_options o;
-  elfm_framer_options_default(&o);
-  o.start = ELFM_START_AT_TIME;
-  o.start_us = 0;
-  o.repr = ELFM_REPR_EXP;
-  o.polarity = ELFM_POL_ON;
+  elfm_framer_options o = integral_options(ELFM_INTEGRAL_TAU_US), on = o;
+  on.repr = ELFM_REPR_EXP;
+  on.tau_us = 1000;
+  on.polarity = ELFM_POL_ON;
   int n_exp = 0, n_int = 0;
-  double e_exp = mean_error_px(&s, &o, &n_exp);
-  o.repr = ELFM_REPR_INTEGRAL;
-  o.polarity = ELFM_POL_BOTH;
-  o.tau_us = ELFM_INTEGRAL_TAU_US;
+  double e_exp = mean_error_px(&s, &on, &n_exp);
   double e_int = mean_error_px(&s, &o, &n_int);
   CHECK(n_exp >= 2 && n_int >= 2);
   /* The ON surface leads by well over a pixel; the integral is within a
@@ -145,13 +152,7 @@ static void test_moving_blob(void)
 static void test_leak_and_active_list(void)
 {
   elfm_error err;
-  elfm_framer_options o;
-  elfm_framer_options_default(&o);
-  o.start = ELFM_START_AT_TIME;
-  o.start_us = 0;
-  o.repr = ELFM_REPR_INTEGRAL;
-  o.tau_us = 2000;
-  o.dt_us = 1000;
+  elfm_framer_options o = integral_options(2000);
   elfm_framer *fr = NULL;
   CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
   elfm_event_chunk *c = elfm_chunk_create(16, &err);
@@ -190,13 +191,8 @@ static void test_stride_and_chunks(void)
   blob_scene s = {2.0, 8.0, 10.0, 0.01, 0.2, 0.2, 20, 4000};
   elfm_event_chunk *all = blob_events(&s);
   elfm_error err;
-  elfm_framer_options a, b;
-  elfm_framer_options_default(&a);
-  a.start = ELFM_START_AT_TIME;
-  a.start_us = 0;
-  a.repr = ELFM_REPR_INTEGRAL;
+  elfm_framer_options a = integral_options(3000), b;
   a.polarity = ELFM_POL_SIGNED;
-  a.tau_us = 3000;
   a.dt_us = 500;
   b = a;
   b.dt_us = 1000; /* overlapping windows: t1 = 1000, 1500, ... */
@@ -246,12 +242,7 @@ out:
 static void test_floor(void)
 {
   elfm_error err;
-  elfm_framer_options o;
-  elfm_framer_options_default(&o);
-  o.start = ELFM_START_AT_TIME;
-  o.start_us = 0;
-  o.repr = ELFM_REPR_INTEGRAL;
-  o.tau_us = ELFM_INTEGRAL_TAU_US;
+  elfm_framer_options o = integral_options(ELFM_INTEGRAL_TAU_US);
   elfm_framer *fr = NULL;
   CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
   elfm_event_chunk *c = elfm_chunk_create(64, &err);
@@ -284,10 +275,7 @@ out:
 static void test_clamp(void)
 {
   elfm_error err;
-  elfm_framer_options o;
-  elfm_framer_options_default(&o);
-  o.repr = ELFM_REPR_INTEGRAL;
-  o.tau_us = ELFM_INTEGRAL_TAU_US;
+  elfm_framer_options o = integral_options(ELFM_INTEGRAL_TAU_US);
   elfm_framer *fr = NULL;
   CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
   elfm_event_chunk *c = elfm_chunk_create(20001, &err);
