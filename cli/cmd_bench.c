@@ -40,6 +40,7 @@ static const struct sweep_point SWEEP[] = {
     {"representation", "exp time surface", {"--repr", "exp", NULL}, 0, 0},
     {"representation", "lin time surface", {"--repr", "lin", NULL}, 0, 1},
     {"representation", "counts", {"--repr", "count", NULL}, 0, 1},
+    {"representation", "integral", {"--repr", "integral", NULL}, 0, 0},
     {"tau", "tau 250 us", {"--tau-us", "250", NULL}, 0, 1},
     {"tau", "tau 500 us", {"--tau-us", "500", NULL}, 0, 0},
     {"tau", "tau 1 ms", {"--tau-us", "1000", NULL}, 0, 0},
