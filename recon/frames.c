@@ -21,6 +21,14 @@
  * worth 4 MB: such frames are rare, so we fall back to exp(). */
 #define ELFM_DECAY_TABLE_MAX_US 1000000
 
+/* INTEGRAL: one pixel's state (16 bytes, so an event touches one line). */
+typedef struct integral_px {
+  int64_t t_us;              /* its latest event */
+  float sum;                 /* reference level, in ON steps, as of t_us */
+  uint8_t pol;               /* latest event 1 ON, 2 OFF, 0 none */
+  uint8_t shown;             /* listed in act[]: level above the floor */
+} integral_px;
+
 struct elfm_framer {
   elfm_framer_options opt;
   int w, h;
@@ -35,13 +43,10 @@ struct elfm_framer {
   uint32_t cur_stamp;
   float *decay;              /* decay[age_us] for age 0..dt, or NULL */
   /* INTEGRAL */
-  float *sum;                /* per pixel: reference level, in ON steps, as of sum_t */
-  int64_t *sum_t;
-  uint8_t *pol;              /* per pixel: latest event 1 ON, 2 OFF, 0 none */
-  uint8_t *shown;            /* listed in act[]: level above the floor */
+  integral_px *px;           /* per pixel, one cache line's quarter: read once per event */
   uint32_t *act;
   size_t n_act;
-  int64_t t_integrated;      /* events before this time are in sum[] */
+  int64_t t_integrated;      /* events before this time are in px[] */
   int64_t origin_us;         /* start of window 0, INT64_MIN until known */
   int64_t next_index;        /* window to emit next */
   int64_t t_seen;            /* latest event time pushed (any polarity), INT64_MIN */
@@ -199,14 +204,11 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   if (table) f->decay = malloc((size_t)(o->dt_us + 1) * sizeof *f->decay);
   int integral = o->repr == ELFM_REPR_INTEGRAL;
   if (integral) {
-    f->sum = calloc(n, sizeof *f->sum);
-    f->sum_t = calloc(n, sizeof *f->sum_t);
-    f->pol = calloc(n, 1);
-    f->shown = calloc(n, 1);
+    f->px = calloc(n, sizeof *f->px);
     f->act = malloc(n * sizeof *f->act);
   }
   if (!f->q_t || !f->q_pix || !f->stamp || !f->last_t || !f->last_p || (table && !f->decay) ||
-      (integral && (!f->sum || !f->sum_t || !f->pol || !f->shown || !f->act))) {
+      (integral && (!f->px || !f->act))) {
     elfm_framer_free(f);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (framer %d x %d)",
                           width, height);
@@ -236,10 +238,7 @@ void elfm_framer_free(elfm_framer *f)
   free(f->last_t);
   free(f->last_p);
   free(f->decay);
-  free(f->sum);
-  free(f->sum_t);
-  free(f->pol);
-  free(f->shown);
+  free(f->px);
   free(f->act);
   free(f);
 }
@@ -314,9 +313,9 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
 void elfm_framer_finish(elfm_framer *f) { f->finished = 1; }
 
 /* The leak over the time since the pixel's sum was last written. */
-static float integral_leak(const elfm_framer *f, uint32_t pix, int64_t t)
+static float integral_leak(const elfm_framer *f, const integral_px *p, int64_t t)
 {
-  int64_t age = t - f->sum_t[pix];
+  int64_t age = t - p->t_us;
   return age > 0 ? (float)exp(-(double)age / f->opt.tau_us) : 1.0f;
 }
 
@@ -325,7 +324,7 @@ static float integral_leak(const elfm_framer *f, uint32_t pix, int64_t t)
  * write the pixels whose level at t1 is above the floor. Returns the
  * number of events in [t0, t1).
  *
- * sum[] is the pixel's reference level as of its latest event (sum_t[]),
+ * A pixel's sum is its reference level as of its latest event,
  * and a pixel fires only when its brightness has moved a whole step past
  * it: after an ON event the true level is 0..1 step above the reference,
  * after an OFF event 0..1 below. The reference alone lags on both flanks
@@ -337,7 +336,7 @@ static float integral_leak(const elfm_framer *f, uint32_t pix, int64_t t)
  *
  * Between its events a pixel's level only leaks towards 0, so a pixel
  * below the floor stays there until its next event: only the pixels above
- * it are listed (shown[]) and visited per frame, every other one is
+ * it are listed (act[]) and visited per frame, every other one is
  * brought up to date lazily at its next event. A frame costs O(events +
  * shown pixels), and sensor noise (a pixel's lone event every ~0.5 s)
  * costs one update per event, not one per frame for the leak's duration.
@@ -362,12 +361,13 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
     if (t < f->t_integrated) continue;
     uint32_t pix = f->q_pix[k] & 0x7fffffffu;
     int on = (int)(f->q_pix[k] >> 31);
-    float v = f->sum[pix] * integral_leak(f, pix, t) + (on ? 1.0f : -off);
-    f->sum[pix] = v > clamp ? clamp : v < -clamp ? -clamp : v;
-    f->sum_t[pix] = t;
-    f->pol[pix] = on ? 1 : 2;
-    if (!f->shown[pix] && f->sum[pix] + half[f->pol[pix]] > floor) {
-      f->shown[pix] = 1;
+    integral_px *p = &f->px[pix];
+    float v = p->sum * integral_leak(f, p, t) + (on ? 1.0f : -off);
+    p->sum = v > clamp ? clamp : v < -clamp ? -clamp : v;
+    p->t_us = t;
+    p->pol = on ? 1 : 2;
+    if (!p->shown && p->sum + half[p->pol] > floor) {
+      p->shown = 1;
       f->act[f->n_act++] = pix;
     }
   }
@@ -375,9 +375,10 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
   size_t kept = 0;
   for (size_t i = 0; i < f->n_act; i++) {
     uint32_t pix = f->act[i];
-    float v = (f->sum[pix] + half[f->pol[pix]]) * integral_leak(f, pix, t1);
+    integral_px *p = &f->px[pix];
+    float v = (p->sum + half[p->pol]) * integral_leak(f, p, t1);
     if (!(v > floor)) {
-      f->shown[pix] = 0;
+      p->shown = 0;
       continue;
     }
     f->act[kept++] = pix;
