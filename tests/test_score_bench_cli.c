@@ -88,6 +88,9 @@ int main(void)
            sizeof out);
   CHECK_EQ_INT(rc, 0);
   if (rc != 0) show_err();
+  /* the summary names the most accurate point and the fastest near it */
+  CHECK_MSG(strstr(out, "flow: best alpha '") != NULL && strstr(out, "fastest within 0.02") != NULL,
+            "bench summary: %.300s", out);
   char *csv = slurp("b/bench.csv");
   CHECK(csv != NULL);
   if (csv) {
