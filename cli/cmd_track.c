@@ -543,6 +543,13 @@ int cmd_track(int argc, char **argv)
                     "(%" PRId64 " started) in %.2f s (%.0f volumes/s, realtime factor %.2f) -> %s\n",
             c.n_frames, c.n_det, c.store.n, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
+  if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL && o.recon.framer.polarity == ELFM_POL_ON) {
+    const double v = track_median_speed_um_per_ms(&c.store);
+    if (v >= TRACK_HINT_MIN_SPEED_UM_PER_MS && v <= TRACK_HINT_MAX_SPEED_UM_PER_MS)
+      fprintf(stderr, "eventlfm track: note: the tracks move slowly (median %.2f um/ms): ON events "
+                      "lead such objects along their motion; --repr integral places them where "
+                      "they are (README, docs/tracker.md)\n", v);
+  }
   rc = CLI_OK;
 done:
   if (fx) fclose(fx);

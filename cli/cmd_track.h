@@ -103,5 +103,14 @@ void track_ctx_free(track_ctx *c);
  * NULL. */
 elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
                                 const char *path, const elfm_error *input_err, elfm_error *err);
+/* The median over the store's smoothed tracks of each track's mean lateral
+ * speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */
+double track_median_speed_um_per_ms(const elfm_track_store *s);
+/* Objects this slow are placed ahead of themselves by the ON time surface
+ * and where they are by the integral (docs/tracker.md "Integral frames":
+ * worm neurons move 0.1-0.34 um/ms; flow and stage beads 2.5-4, where the
+ * integral loses them); static ones (blinking beads) gain nothing from it. */
+#define TRACK_HINT_MIN_SPEED_UM_PER_MS 0.03
+#define TRACK_HINT_MAX_SPEED_UM_PER_MS 1.0
 
 #endif

@@ -71,6 +71,33 @@ static cJSON *fwhm_summary(const fwhm_list *l)
   return r;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+  double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+double track_median_speed_um_per_ms(const elfm_track_store *s)
+{
+  double *v = s->n ? malloc(s->n * sizeof *v) : NULL;
+  size_t m = 0;
+  for (size_t i = 0; v && i < s->n; i++) {
+    const elfm_track *t = s->tracks[i];
+    if (!t->vel_um_per_ms || t->n_span == 0) continue;
+    double sum = 0;
+    for (size_t k = 0; k < t->n_span; k++)
+      sum += hypot(t->vel_um_per_ms[3 * k], t->vel_um_per_ms[3 * k + 1]);
+    if (isfinite(sum)) v[m++] = sum / (double)t->n_span;
+  }
+  double r = NAN;
+  if (m > 0) {
+    qsort(v, m, sizeof *v, cmp_double);
+    r = m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
+  }
+  free(v);
+  return r;
+}
+
 elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
                                 const char *path, const elfm_error *input_err, elfm_error *err)
 {
@@ -95,6 +122,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
+  add_num(cnt, "median_track_speed_um_per_ms", track_median_speed_um_per_ms(&c->store));
   int nm[5] = {0, 0, 0, 0, 0};
   for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;
   cJSON *models = cJSON_AddObjectToObject(cnt, "models");

@@ -7,7 +7,8 @@
 # 0.6x the time surface's (measured 1.53 / 1.72 -> 0.38 / 0.42 um) and
 # ISBI alpha at least 0.15 higher (0.23 -> 0.65); with --polarity on the
 # integral is an error naming the polarity, a bad --off-weight a usage
-# error; summary.json records the integral's defaults.
+# error; summary.json records the integral's defaults; the time-surface run
+# measures the slow motion (median track speed) and notes the integral.
 # Usage: track_integral.sh BINARY
 bin=$1
 tmp=$(mktemp -d)
@@ -48,6 +49,17 @@ for a in x y; do
   echo "worm: RMSE $a time surface $e um, integral $i um"
   awk -v e="$e" -v i="$i" 'BEGIN { exit !(i < 0.6 * e) }' || { echo "FAIL: RMSE $a $i vs $e"; fail=$((fail+1)); }
 done
+# the time-surface run's summary measures the slow motion, and the command
+# says that the integral is the setting for it (not with the integral on)
+v=$(key "$tmp/exp/summary.json" median_track_speed_um_per_ms)
+echo "worm: median track speed $v um/ms"
+awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 1.0) }' || { echo "FAIL: median speed $v"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/exp2" --dt-us 2000 \
+  2>"$tmp/exp2.err" >/dev/null
+grep -q "note: the tracks move slowly.*--repr integral" "$tmp/exp2.err" || { echo "FAIL: no --repr integral note"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/int2" --dt-us 2000 \
+  --repr integral 2>"$tmp/int2.err" >/dev/null
+grep -q "note: the tracks move slowly" "$tmp/int2.err" && { echo "FAIL: the note with --repr integral on"; fail=$((fail+1)); }
 e=$(key "$tmp/exp.json" alpha); i=$(key "$tmp/int.json" alpha)
 echo "worm: alpha time surface $e, integral $i"
 awk -v e="$e" -v i="$i" 'BEGIN { exit !(i >= e + 0.15) }' || { echo "FAIL: alpha $e -> $i"; fail=$((fail+1)); }
