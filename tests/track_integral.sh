@@ -11,6 +11,7 @@
 # measures the slow motion (median track speed) and notes the integral.
 # Usage: track_integral.sh BINARY
 bin=$1
+. "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -33,9 +34,6 @@ run() {  # tag track-options...
     --detections "$tmp/$tag/detections.csv" --calib "$tmp/w/calib.json" --json > "$tmp/$tag.json" ||
     { echo "FAIL: score $tag"; fail=$((fail+1)); }
 }
-key() {  # file key -> number
-  tr ',{}' '\n\n\n' < "$1" | sed -n "s/^[[:space:]]*\"$2\":[[:space:]]*//p" | head -1
-}
 run exp
 run int --repr integral
 # the integral's own defaults, recorded with the run
@@ -47,7 +45,7 @@ done
 for a in x y; do
   e=$(key "$tmp/exp.json" rmse_${a}_um); i=$(key "$tmp/int.json" rmse_${a}_um)
   echo "worm: RMSE $a time surface $e um, integral $i um"
-  awk -v e="$e" -v i="$i" 'BEGIN { exit !(i < 0.6 * e) }' || { echo "FAIL: RMSE $a $i vs $e"; fail=$((fail+1)); }
+  below "$i" 0.6 "$e" || { echo "FAIL: RMSE $a $i vs $e"; fail=$((fail+1)); }
 done
 # the time-surface run's summary measures the slow motion, and the command
 # says that the integral is the setting for it (not with the integral on)

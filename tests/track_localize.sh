@@ -10,6 +10,7 @@
 #  - bad values are usage errors.
 # Usage: track_localize.sh BINARY
 bin=$1
+. "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -30,15 +31,12 @@ run() {  # scene tag track-options...
   "$bin" score --truth "$tmp/$sc/truth.csv" --detections "$tmp/$sc-$tag/detections.csv" \
     --calib "$tmp/$sc/calib.json" --json > "$tmp/$sc-$tag.json" || { echo "FAIL: score $sc $tag"; fail=$((fail+1)); }
 }
-key() {  # file key -> number
-  tr ',{}' '\n\n\n' < "$1" | sed -n "s/^[[:space:]]*\"$2\":[[:space:]]*//p" | head -1
-}
 run blink peak --localize peak --guided-views 0
 run blink views --localize views --guided-views 0
 for a in x y; do
   p=$(key "$tmp/blink-peak.json" rmse_${a}_um); v=$(key "$tmp/blink-views.json" rmse_${a}_um)
   echo "blink: RMSE $a peak fit $p um, view fit $v um"
-  awk -v p="$p" -v v="$v" 'BEGIN { exit !(v < 0.6 * p) }' || { echo "FAIL: view fit RMSE $a $v vs $p"; fail=$((fail+1)); }
+  below "$v" 0.6 "$p" || { echo "FAIL: view fit RMSE $a $v vs $p"; fail=$((fail+1)); }
 done
 n=$(key "$tmp/blink-views/summary.json" peaks_placed_by_view_fit)
 awk -v n="$n" 'BEGIN { exit !(n > 0) }' || { echo "FAIL: no peak placed by the view fit"; fail=$((fail+1)); }

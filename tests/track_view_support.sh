@@ -5,6 +5,7 @@
 # the detection precision without costing more than a little recall; a
 # value outside 0..1 is a usage error. Usage: track_view_support.sh BINARY
 bin=$1
+. "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -16,9 +17,6 @@ run() {  # tag view-support
     --threshold-abs 25 --threshold-low 15 --view-support "$2" || { echo "FAIL: track ($1)"; fail=$((fail+1)); }
   "$bin" score --truth "$tmp/sim/truth.csv" --detections "$tmp/$1/detections.csv" \
     --calib "$tmp/sim/calib.json" --json > "$tmp/$1.json" || { echo "FAIL: score ($1)"; fail=$((fail+1)); }
-}
-key() {  # file key -> number
-  tr ',{}' '\n\n\n' < "$1" | sed -n "s/^[[:space:]]*\"$2\":[[:space:]]*//p" | head -1
 }
 run off 0
 run on 0.3
