@@ -8,7 +8,8 @@
 # ISBI alpha at least 0.15 higher (0.23 -> 0.65); with --polarity on the
 # integral is an error naming the polarity, a bad --off-weight a usage
 # error; summary.json records the integral's defaults; the time-surface run
-# measures the slow motion (median track speed) and notes the integral.
+# measures the slow motion (median track speed) and notes the integral;
+# `eventlfm recon --repr integral` runs with the same defaults.
 # Usage: track_integral.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -36,6 +37,16 @@ run() {  # tag track-options...
 }
 run exp
 run int --repr integral
+# `eventlfm recon` takes the same option with the same defaults (the first
+# 20 ms: 10 volumes at 500 Hz)
+t0=$(sed -n '2p' "$tmp/w/truth.csv" | cut -d, -f2)
+"$bin" recon --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/rec" \
+  --dt-us 2000 --repr integral --to-us $((t0 + 20000)) --quiet >/dev/null 2>"$tmp/rec.err" ||
+  { echo "FAIL: recon --repr integral: $(cat "$tmp/rec.err")"; fail=$((fail+1)); }
+for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
+          '"tau_us":[[:space:]]*100000' '"volumes":[[:space:]]*10,'; do
+  grep -q "$kv" "$tmp/rec/summary.json" || { echo "FAIL: recon summary.json lacks $kv"; fail=$((fail+1)); }
+done
 # the integral's own defaults, recorded with the run
 for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
           '"tau_us":[[:space:]]*100000' '"radius_xy_um":[[:space:]]*1.5' \
