@@ -128,6 +128,11 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
 int cli_check_recon_options(const char *cmd, const cli_recon_parse *p);
 /* The shared options' help lines, with the command's defaults `d`. */
 void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);
+/* The shared options' values into a summary.json "parameters" object (the
+ * framer, the median, the refocus path and ghost rule), for recon and track
+ * alike. */
+struct cJSON;
+void cli_recon_options_json(struct cJSON *par, const elfm_recon_options *ro);
 
 /* getopt_long's answer for an option that is not the command's (c '?') or
  * lacks its value (c ':', with ':' leading the optstring): the message

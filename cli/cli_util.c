@@ -1,6 +1,8 @@
 /* cli_util.c — helpers shared by the subcommands (see cli.h). */
 #include "cli.h"
 
+#include <cjson/cJSON.h>
+
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -396,6 +398,22 @@ static void ghost_text(const elfm_refocus_options *r, char *out, size_t n)
   if (r->agree_frac > 0 && k >= 0 && (size_t)k < n)
     snprintf(out + k, n - (size_t)k, "%sagree:%g", k ? "," : "", r->agree_frac);
   if (!out[0]) snprintf(out, n, "none");
+}
+
+void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
+{
+  const elfm_framer_options *fo = &ro->framer;
+  cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
+  cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
+  cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
+  cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
+  cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
+  cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
+  cJSON_AddNumberToObject(par, "median", ro->median);
+  cJSON_AddStringToObject(par, "path", cli_refocus_path_name(ro->refocus.path));
+  cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(ro->refocus.threshold));
+  cJSON_AddNumberToObject(par, "ghost_threshold_value", ro->refocus.threshold_value);
+  cJSON_AddNumberToObject(par, "ghost_agree_frac", ro->refocus.agree_frac);
 }
 
 void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)

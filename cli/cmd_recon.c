@@ -102,18 +102,8 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   }
   cJSON *p = cJSON_AddObjectToObject(root, "parameters");
   const elfm_recon_options *r = &a->ro;
-  cJSON_AddNumberToObject(p, "dt_us", (double)r->framer.dt_us);
-  cJSON_AddNumberToObject(p, "stride_us", (double)(r->framer.stride_us ? r->framer.stride_us : r->framer.dt_us));
-  cJSON_AddStringToObject(p, "repr", cli_repr_name(r->framer.repr));
-  cJSON_AddNumberToObject(p, "tau_us", r->framer.tau_us);
-  cJSON_AddStringToObject(p, "polarity", cli_polarity_name(r->framer.polarity));
-  cJSON_AddNumberToObject(p, "off_weight", r->framer.off_weight);
+  cli_recon_options_json(p, r);
   cJSON_AddStringToObject(p, "start", r->framer.start == ELFM_START_FIRST_TRIGGER ? "trigger" : "first");
-  cJSON_AddNumberToObject(p, "median", r->median);
-  cJSON_AddStringToObject(p, "path", cli_refocus_path_name(r->refocus.path));
-  cJSON_AddStringToObject(p, "ghost_threshold", cli_ghost_threshold_name(r->refocus.threshold));
-  cJSON_AddNumberToObject(p, "ghost_threshold_value", r->refocus.threshold_value);
-  cJSON_AddNumberToObject(p, "ghost_agree_frac", r->refocus.agree_frac);
   cJSON_AddNumberToObject(p, "crop_margin_px", r->refocus.crop_margin_px);
   cJSON_AddNumberToObject(p, "threads", r->threads);
   if (r->from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)r->from_us);

@@ -528,6 +528,7 @@ int cmd_track(int argc, char **argv)
     if (st == ELFM_OK) st = close_file(&fx, p_tm, &err);
   }
   double wall = cli_now_s() - t0;
+  c.median_speed_um_per_ms = track_median_speed_um_per_ms(&c.store);
   if (st == ELFM_OK) st = track_write_summary(&c, &rs, wall, p_sum, input_failed ? &input_err : NULL, &err);
   if (input_failed) {
     cli_fail(C, &input_err);
@@ -544,7 +545,7 @@ int cmd_track(int argc, char **argv)
             c.n_frames, c.n_det, c.store.n, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
   if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL && o.recon.framer.polarity == ELFM_POL_ON) {
-    const double v = track_median_speed_um_per_ms(&c.store);
+    const double v = c.median_speed_um_per_ms;
     if (v >= TRACK_HINT_MIN_SPEED_UM_PER_MS && v <= TRACK_HINT_MAX_SPEED_UM_PER_MS)
       fprintf(stderr, "eventlfm track: note: the tracks move slowly (median %.2f um/ms): ON events "
                       "lead such objects along their motion; --repr integral places them where "

@@ -80,6 +80,7 @@ typedef struct track_ctx {
   fwhm_list fl;
   int vol_w, vol_h, vol_nz;
   double um_per_px, z_min_um, z_step_um;
+  double median_speed_um_per_ms; /* of the finished tracks (summary.json, the note) */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of

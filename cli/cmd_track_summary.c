@@ -122,7 +122,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
-  add_num(cnt, "median_track_speed_um_per_ms", track_median_speed_um_per_ms(&c->store));
+  add_num(cnt, "median_track_speed_um_per_ms", c->median_speed_um_per_ms);
   int nm[5] = {0, 0, 0, 0, 0};
   for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;
   cJSON *models = cJSON_AddObjectToObject(cnt, "models");
@@ -130,18 +130,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     cJSON_AddNumberToObject(models, elfm_motion_model_name((elfm_motion_model)m), nm[m]);
 
   cJSON *par = cJSON_AddObjectToObject(j, "parameters");
-  const elfm_framer_options *fo = &o->recon.framer;
-  cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
-  cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
-  cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
-  cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
-  cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
-  cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
-  cJSON_AddNumberToObject(par, "median", o->recon.median);
-  cJSON_AddStringToObject(par, "path", cli_refocus_path_name(o->recon.refocus.path));
-  cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(o->recon.refocus.threshold));
-  cJSON_AddNumberToObject(par, "ghost_threshold_value", o->recon.refocus.threshold_value);
-  cJSON_AddNumberToObject(par, "ghost_agree_frac", o->recon.refocus.agree_frac);
+  cli_recon_options_json(par, &o->recon);
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
   cJSON_AddStringToObject(par, "localize", o->localize_views ? "views" : "peak");
   cJSON_AddNumberToObject(par, "localize_window_px", o->loc.half_window_px);
