@@ -78,6 +78,11 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   cJSON_AddNumberToObject(o, "n_detections", (double)r->n_detections);
   cJSON_AddNumberToObject(o, "n_true_positives", (double)r->n_true_positives);
   cJSON_AddBoolToObject(o, "detections_from_tracks", r->detections_from_tracks);
+  cJSON_AddNumberToObject(o, "n_motion_points", (double)r->n_motion_points);
+  json_num(o, "motion_lead_um", r->motion_lead_um);
+  json_num(o, "motion_delay_us", r->motion_delay_us);
+  json_num(o, "motion_along_mean_um", r->motion_along_mean_um);
+  json_num(o, "motion_speed_sd_um_per_ms", r->motion_speed_sd_um_per_ms);
   if (r->has_tracks) {
     cJSON_AddNumberToObject(o, "n_truth_tracks", r->n_truth_tracks);
     cJSON_AddNumberToObject(o, "n_candidate_tracks", r->n_candidate_tracks);
@@ -113,6 +118,18 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
   printf("  recall    %8.4f   precision %8.4f   F1 %8.4f\n", r->recall, r->precision, r->f1);
   printf("  RMSE x %8.4f um   y %8.4f um   z %8.4f um\n", r->rmse_x_um, r->rmse_y_um,
          r->rmse_z_um);
+  if (r->n_motion_points > 0) {
+    printf("  along the lateral motion (%lld matched detections moving >= 0.5 um/ms): mean "
+           "error %+.3f um\n", (long long)r->n_motion_points, r->motion_along_mean_um);
+    if (isfinite(r->motion_lead_um))
+      printf("    = lead %.3f um - delay %.0f us x speed: on recordings like this one, "
+             "track --motion-lead-um %.2f --motion-delay-us %.0f\n", r->motion_lead_um,
+             r->motion_delay_us, r->motion_lead_um, r->motion_delay_us);
+    else
+      printf("    (one speed, sd %.2f um/ms: lead and delay not separable; at this speed, "
+             "track --motion-lead-um %.2f --motion-delay-us 0)\n",
+             r->motion_speed_sd_um_per_ms, r->motion_along_mean_um);
+  }
   if (r->has_tracks) {
     printf("tracks (ISBI 2012)\n");
     printf("  truth %d   candidates %d   paired %d   missed %d   spurious %d\n",

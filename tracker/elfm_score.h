@@ -76,6 +76,16 @@
  *    outside its truth track's span as spurious; we count real points only.)
  *  - rmse_tracks_um: RMS of the anisotropic d over the matched frames.
  *
+ * MOTION BIAS (a calibration for `track --motion-lead-um/--motion-delay-us`,
+ * elfm_smooth.h). For every matched detection whose truth moves laterally
+ * at >= 0.5 um/ms (truth velocity: central difference of the object's
+ * neighbouring frames that count, or one-sided at its ends), the error along
+ * the lateral motion e = (detection - truth) . v / |v| is regressed on the
+ * lateral speed |v|: e = lead - delay x |v| (least squares). With the
+ * speeds' standard deviation below 0.25 um/ms (a stage at one speed) the two
+ * cannot be told apart: lead and delay are NaN and only the mean of e is
+ * given (pass it as the lead with delay 0 for that speed).
+ *
  * STAGE. With a stage velocity v_s (um/ms), the mean velocity vector v_m is
  * the mean of the vx/vy/vz_um_per_ms columns of tracks.csv over its real rows
  * (or, without those columns, of per-track displacement over time), and
@@ -172,6 +182,9 @@ typedef struct elfm_score_result {
       n_spurious_tracks;
   int64_t n_track_tp, n_track_fn, n_track_fp;
   double alpha, beta, jaccard_tracks, jaccard_detections, rmse_tracks_um;
+  /* motion bias of the detections (MOTION BIAS above); NaN without points */
+  int64_t n_motion_points;
+  double motion_lead_um, motion_delay_us, motion_along_mean_um, motion_speed_sd_um_per_ms;
   /* stage (valid when have_stage was set and tracks exist) */
   int has_stage;
   double mean_v_um_per_ms[3];

@@ -68,6 +68,18 @@ typedef struct elfm_smooth_options {
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
   double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
   int allow_spline;             /* AUTO may pick the spline (1); 0 for rigid stage motion */
+  /* Motion bias of the detections, corrected by elfm_track_smooth only
+   * (0 and 0 = off, the default). A detection made from ON events lies
+   * ahead of the object by a distance (the ON events crowd on its leading
+   * half) and shows where it was some time before the frame's t_us (sensor
+   * latency plus the mean age of the events the frame weights): along the
+   * lateral motion v it is off by lead - delay x |v|. elfm_track_smooth fits
+   * the track, moves each point by v x delay - lead x v / max(|v|, 0.5
+   * um/ms) laterally (the lead fades out below 0.5 um/ms, where the motion's
+   * direction is noise), and fits again with the model and spline weight of
+   * the first fit. The track's points (pts) keep the detections as measured. */
+  double motion_lead_um;
+  double motion_delay_us;
 } elfm_smooth_options;
 
 void elfm_smooth_options_default(elfm_smooth_options *o);
@@ -97,7 +109,8 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
 /* Smooth a finished track over its span (one state per frame first..last;
  * t_us of gap frames interpolated linearly between the neighbouring real
  * points) and store the result in the track (elfm_tracks.h), replacing
- * any earlier one. The track keeps ownership of the arrays. */
+ * any earlier one. The track keeps ownership of the arrays. With a motion
+ * bias in o (above), a track of 3 or more points is fitted twice. */
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err);
 
 #ifdef __cplusplus

@@ -56,6 +56,69 @@ elfm_status elfm_score_reserve_cost(double **cost, size_t *cap, size_t need, elf
 /* ---------------------------------------------------------------------- */
 /* (3) Detections per frame */
 
+/* Below this lateral speed the direction of motion is too uncertain for an
+ * error "along" it (elfm_score.h, MOTION BIAS; the same fade speed as the
+ * smoother's correction). */
+#define MOTION_MIN_SPEED_UM_PER_MS 0.5
+/* Speeds must spread at least this much to tell a lead from a delay. */
+#define MOTION_MIN_SPEED_SD_UM_PER_MS 0.25
+
+/* Truth velocity (um/ms) at truth point p from its neighbours in frame
+ * order (points [a, b) are its object's): central where both exist, else
+ * one-sided. Returns 0 where there is neither. */
+static int truth_velocity(const truth_t *tr, const frames_t *fr, int64_t a, int64_t b, int64_t p,
+                          double v[3])
+{
+  /* neighbours more than 2 frames away (the object was dark or outside the
+   * volume between) would average over an unseen stretch */
+  int64_t lo = p > a && tr->pt.frame[p] - tr->pt.frame[p - 1] <= 2 ? p - 1 : p;
+  int64_t hi = p + 1 < b && tr->pt.frame[p + 1] - tr->pt.frame[p] <= 2 ? p + 1 : p;
+  if (lo == hi) return 0;
+  double dt_ms = (fr->t_us[tr->pt.frame[hi]] - fr->t_us[tr->pt.frame[lo]]) * 1e-3;
+  if (!(dt_ms > 0)) return 0;
+  v[0] = (tr->pt.x[hi] - tr->pt.x[lo]) / dt_ms;
+  v[1] = (tr->pt.y[hi] - tr->pt.y[lo]) / dt_ms;
+  v[2] = (tr->pt.z[hi] - tr->pt.z[lo]) / dt_ms;
+  return 1;
+}
+
+/* Least-squares sums of the along-motion error e on the lateral speed s. */
+typedef struct {
+  int64_t n;
+  double s, ss, e, es;
+} motion_sums;
+
+static void motion_add(motion_sums *m, const truth_t *tr, const frames_t *fr, const int64_t *obj_a,
+                       const int64_t *obj_b, int64_t p, double dx, double dy)
+{
+  double v[3];
+  if (!truth_velocity(tr, fr, obj_a[p], obj_b[p], p, v)) return;
+  double sp = hypot(v[0], v[1]);
+  if (!(sp >= MOTION_MIN_SPEED_UM_PER_MS)) return;
+  double e = (dx * v[0] + dy * v[1]) / sp;
+  m->n++;
+  m->s += sp;
+  m->ss += sp * sp;
+  m->e += e;
+  m->es += e * sp;
+}
+
+static void motion_finish(const motion_sums *m, elfm_score_result *out)
+{
+  out->n_motion_points = m->n;
+  out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
+  out->motion_speed_sd_um_per_ms = NAN;
+  if (m->n == 0) return;
+  double n = (double)m->n, ms = m->s / n, me = m->e / n;
+  double var_s = fmax(m->ss / n - ms * ms, 0.0);
+  out->motion_along_mean_um = me;
+  out->motion_speed_sd_um_per_ms = sqrt(var_s);
+  if (m->n < 3 || sqrt(var_s) < MOTION_MIN_SPEED_SD_UM_PER_MS) return;
+  double slope = (m->es / n - ms * me) / var_s;   /* um per (um/ms) = ms */
+  out->motion_delay_us = -slope * 1000.0;
+  out->motion_lead_um = me - slope * ms;
+}
+
 /* elfm_score.h, DETECTIONS: per frame, the truth points and detections
  * joined by gated pairs (d < eps) form components, each solved with the
  * Hungarian solver; the counts, ratios and RMSEs go to out. */
@@ -80,10 +143,22 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   int *next = malloc(nn * sizeof *next);   /* next node in the same component, or -1 */
   int *rows = malloc(nn * sizeof *rows), *cols = malloc(nn * sizeof *cols);
   int *r2c = malloc(nn * sizeof *r2c);
+  /* each truth point's object as the range of its points (for velocities) */
+  int64_t *obj_a = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_a);
+  int64_t *obj_b = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_b);
+  motion_sums ms = {0, 0, 0, 0, 0};
   double *cost = NULL;
   size_t cost_cap = 0;
   elfm_assign_workspace *ws = NULL;
-  if (!parent || !head || !next || !rows || !cols || !r2c) { s = elfm_score_nomem(err); goto done; }
+  if (!parent || !head || !next || !rows || !cols || !r2c || !obj_a || !obj_b) {
+    s = elfm_score_nomem(err);
+    goto done;
+  }
+  for (int k = 0; k < tr->n_obj; k++)
+    for (int64_t p = tr->obj_off[k]; p < tr->obj_off[k + 1]; p++) {
+      obj_a[p] = tr->obj_off[k];
+      obj_b[p] = tr->obj_off[k + 1];
+    }
   if ((s = elfm_assign_workspace_create(0, 0, &ws, err)) != ELFM_OK) goto done;
 
   int64_t tp = 0;
@@ -145,6 +220,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p];
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
+        motion_add(&ms, tr, fr, obj_a, obj_b, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;
@@ -160,7 +236,10 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   out->rmse_x_um = tp ? sqrt(sx / (double)tp) : NAN;
   out->rmse_y_um = tp ? sqrt(sy / (double)tp) : NAN;
   out->rmse_z_um = tp ? sqrt(sz / (double)tp) : NAN;
+  motion_finish(&ms, out);
 done:
+  free(obj_a);
+  free(obj_b);
   elfm_assign_workspace_free(ws);
   free(cost);
   free(parent);
@@ -239,6 +318,8 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   out->rmse_x_um = out->rmse_y_um = out->rmse_z_um = NAN;
   out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = NAN;
   out->rmse_tracks_um = out->stage_rel_error = NAN;
+  out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
+  out->motion_speed_sd_um_per_ms = NAN;
   if (!truth || (!tracks && !detections) || !opt)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "scoring needs truth and tracks or detections");
