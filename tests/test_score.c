@@ -603,6 +603,54 @@ int main(void)
     elfm_table_free(pulsed);
   }
 
+  /* MOTION BIAS: four objects on straight lines at 1, 2, 3 and 4 um/ms in
+   * four directions; every detection lies lead - delay x speed ahead along
+   * its motion (0.9 um, 350 us). The regression gives both back. A fifth
+   * object moving only in z (0.3 um/ms laterally: below 0.5) is left out. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
+    const double dir[5][2] = {{1, 0}, {0, 1}, {-0.6, 0.8}, {0.8, -0.6}, {1, 0}};
+    const double sp[5] = {1, 2, 3, 4, 0.3};
+    for (int t = 0; t <= 25000; t += 100)
+      for (int k = 0; k < 5; k++)
+        bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,1\n", k, t, -30 + 15 * k + sp[k] * dir[k][0] * t * 1e-3,
+                -30 + 12 * k + sp[k] * dir[k][1] * t * 1e-3, k == 4 ? -20 + 2.0 * t * 1e-3 : 3.0 * k);
+    elfm_table *tm = parse(&b, "truth.csv");
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 0; f < NF; f++)
+      for (int k = 0; k < 5; k++) {
+        double t = frame_t(f), e = 0.9 - 0.35 * sp[k];
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, t,
+                -30 + 15 * k + sp[k] * dir[k][0] * t * 1e-3 + e * dir[k][0],
+                -30 + 12 * k + sp[k] * dir[k][1] * t * 1e-3 + e * dir[k][1],
+                k == 4 ? -20 + 2.0 * t * 1e-3 : 3.0 * k);
+      }
+    elfm_table *dm = parse(&b, "detections.csv");
+    elfm_score_result r = run(tm, NULL, dm, NULL);
+    CHECK_EQ_INT(r.n_true_positives, 5 * NF);
+    CHECK_EQ_INT(r.n_motion_points, 4 * NF);
+    CHECK_NEAR(r.motion_lead_um, 0.9, 1e-6);
+    CHECK_NEAR(r.motion_delay_us, 350, 1e-3);
+    CHECK_NEAR(r.motion_along_mean_um, 0.9 - 0.35 * 2.5, 1e-6);
+    elfm_table_free(dm);
+
+    /* One speed (every object at 2 um/ms): no regression, the mean only. */
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 0; f < NF; f++) {
+      double t = frame_t(f);
+      bprintf(&b, "%d,%.0f,%.17g,%.17g,3\n", f, t, -15.0 + 0.4, -18 + 2 * t * 1e-3 + 0.25);
+    }
+    elfm_table *d1 = parse(&b, "detections.csv");
+    r = run(tm, NULL, d1, NULL);
+    CHECK_EQ_INT(r.n_motion_points, NF);
+    CHECK_NEAR(r.motion_along_mean_um, 0.25, 1e-6);
+    CHECK(isnan(r.motion_lead_um) && isnan(r.motion_delay_us));
+    CHECK_NEAR(r.motion_speed_sd_um_per_ms, 0, 1e-6);
+    elfm_table_free(d1);
+    elfm_table_free(tm);
+  }
+
   elfm_table_free(truth);
   return check_report();
 }
