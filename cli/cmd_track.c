@@ -491,6 +491,19 @@ int cmd_track(int argc, char **argv)
   elfm_error_clear(&err);
   elfm_calib calib;
   if (elfm_calib_load(o.calib, &calib, &err) != ELFM_OK) return cli_fail(C, &err);
+  if (o.smooth.motion_lead_um != 0 || o.smooth.motion_delay_us != 0) {
+    /* The motion bias of a fit over the views (elfm_smooth.h): each view's
+     * image moves with the object's lateral motion plus its z motion times
+     * the view's disparity. Flow 100 ms, mean alpha over seeds 1-8: 0.7486
+     * with the lateral model, 0.7515 with the views' (held-out seeds 9-12
+     * +0.003 to +0.004 each); the z error of beads moving at 1-2 um/ms in z,
+     * -0.3 um x the sign of v_z, falls to -0.13 (docs/tracker.md). */
+    o.smooth.motion_n_views = calib.n_views;
+    for (int k = 0; k < calib.n_views; k++) {
+      o.smooth.motion_view_g[k][0] = calib.views[k].dx_px_per_um * calib.um_per_px;
+      o.smooth.motion_view_g[k][1] = calib.views[k].dy_px_per_um * calib.um_per_px;
+    }
+  }
   if (mkdir(o.out, 0777) != 0 && errno != EEXIST)
     return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));
 

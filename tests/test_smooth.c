@@ -416,6 +416,55 @@ int main(void)
     for (int f = 0; f < 50; f++) moved = fmax(moved, hypot(ts->pos_um[3 * f] - 3, ts->pos_um[3 * f + 1] + 2));
     CHECK(moved < 0.1);
     elfm_track_free(ts);
+
+    /* The views' model (elfm_motion_bias): a 3 x 3 array of disparities
+     * -0.3, 0, 0.3 um per um. Lateral motion alone: every image moves
+     * alike, so the bias equals the lateral model's and z gets none. */
+    elfm_smooth_options ov = ob, ol = ob;
+    ov.motion_lead_um = ol.motion_lead_um = 0.8;
+    ov.motion_delay_us = ol.motion_delay_us = 300;
+    ol.motion_n_views = 0;
+    ov.motion_n_views = 9;
+    for (int k = 0; k < 9; k++) {
+      ov.motion_view_g[k][0] = 0.3 * (k % 3 - 1);
+      ov.motion_view_g[k][1] = 0.3 * (k / 3 - 1);
+    }
+    double vl[3] = {2.0, -1.0, 0}, bv[3], bl[3];
+    elfm_motion_bias(&ov, vl, bv);
+    elfm_motion_bias(&ol, vl, bl);
+    double s5 = sqrt(5.0), f = 0.8 / s5 - 0.3;
+    CHECK_NEAR(bl[0], 2 * f, 1e-12);
+    CHECK_NEAR(bl[1], -f, 1e-12);
+    CHECK_NEAR(bl[2], 0, 1e-12);
+    for (int a = 0; a < 3; a++) CHECK_NEAR(bv[a], bl[a], 1e-12);
+    /* Motion along z alone at 3 um/ms: the 8 outer images move at 0.9 or
+     * 1.27 um/ms outwards, each led by 0.8 um along its own motion, which
+     * the fit reads as z: dz = (0.8 sum |g| - 0.3 x 3 sum |g|^2) / sum |g|^2,
+     * no lateral bias; the lateral model sees no lateral motion at all. */
+    double vz[3] = {0, 0, 3};
+    elfm_motion_bias(&ov, vz, bv);
+    elfm_motion_bias(&ol, vz, bl);
+    double sg = 4 * 0.3 + 4 * 0.3 * sqrt(2.0), sgg = 4 * 0.09 + 4 * 0.18;
+    CHECK_NEAR(bv[2], (0.8 * sg - 0.9 * sgg) / sgg, 1e-9);
+    CHECK_NEAR(bv[0], 0, 1e-12);
+    CHECK_NEAR(bv[1], 0, 1e-12);
+    CHECK(bl[0] == 0 && bl[1] == 0 && bl[2] == 0);
+    /* off: zeros whatever the views */
+    ov.motion_lead_um = ov.motion_delay_us = 0;
+    elfm_motion_bias(&ov, vz, bv);
+    CHECK(bv[0] == 0 && bv[1] == 0 && bv[2] == 0);
+    /* a bad disparity is an error */
+    ov.motion_lead_um = 0.8;
+    ov.motion_view_g[4][1] = NAN;
+    elfm_track *t1 = elfm_track_create(7, &err);
+    elfm_detection d1;
+    memset(&d1, 0, sizeof d1);
+    CHECK_OK(elfm_track_append(t1, &d1, &err), &err);
+    CHECK_EQ_INT(elfm_track_smooth(t1, &ov, &err), ELFM_ERR_INVALID);
+    ov.motion_view_g[4][1] = 0;
+    ov.motion_n_views = ELFM_MAX_VIEWS + 1;
+    CHECK_EQ_INT(elfm_track_smooth(t1, &ov, &err), ELFM_ERR_INVALID);
+    elfm_track_free(t1);
   }
   return check_report();
 }

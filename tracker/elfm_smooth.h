@@ -72,14 +72,25 @@ typedef struct elfm_smooth_options {
    * (0 and 0 = off, the default). A detection made from ON events lies
    * ahead of the object by a distance (the ON events crowd on its leading
    * half) and shows where it was some time before the frame's t_us (sensor
-   * latency plus the mean age of the events the frame weights): along the
-   * lateral motion v it is off by lead - delay x |v|. elfm_track_smooth fits
-   * the track, moves each point by v x delay - lead x v / max(|v|, 0.5
-   * um/ms) laterally (the lead fades out below 0.5 um/ms, where the motion's
-   * direction is noise), and fits again with the model and spline weight of
-   * the first fit. The track's points (pts) keep the detections as measured. */
+   * latency plus the mean age of the events the frame weights). The model
+   * (elfm_motion_bias): in an image moving at w the image centre is off by
+   * b(w) = lead x w / max(|w|, 0.5 um/ms) - delay x w (the lead fades out
+   * below 0.5 um/ms, where the direction of motion is noise).
+   *  - Without views (motion_n_views 0) that applies to the lateral
+   *    position, w = the lateral velocity; z is left alone.
+   *  - With the views' disparities g_v (lateral um of image shift per um of
+   *    z, motion_view_g) the detection is taken to be the equal-weight
+   *    least-squares fit of the 25 view images, as the view fit is: view v's
+   *    image moves at w_v = v_xy + v_z g_v, and the fit's bias is the mean
+   *    of b(w_v) laterally and sum b(w_v).g_v / sum |g_v|^2 in z. A bead
+   *    moving in z thus shows its lead in z too, and the delay as -delay x v_z.
+   * elfm_track_smooth fits the track, moves each point by -b of the fitted
+   * velocity there, and fits again with the first fit's model and spline
+   * weight. The track's points (pts) keep the detections as measured. */
   double motion_lead_um;
   double motion_delay_us;
+  int motion_n_views;                       /* 0: lateral model only */
+  double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
 } elfm_smooth_options;
 
 void elfm_smooth_options_default(elfm_smooth_options *o);
@@ -106,6 +117,9 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
                             double *pos_sd_um, double *vel_sd_um_per_ms, elfm_smooth_info *info,
                             elfm_error *err);
 
+/* The motion bias b (um, x y z) of a detection of an object moving at v
+ * (um/ms) under o's model (above). Zeros when the lead and delay are 0. */
+void elfm_motion_bias(const elfm_smooth_options *o, const double v_um_per_ms[3], double b_um[3]);
 /* Smooth a finished track over its span (one state per frame first..last;
  * t_us of gap frames interpolated linearly between the neighbouring real
  * points) and store the result in the track (elfm_tracks.h), replacing

@@ -9,6 +9,45 @@
  * lead (a distance along that direction) fades out in proportion. */
 #define MOTION_LEAD_FADE_UM_PER_MS 0.5
 
+/* b(w) of one image moving at (wx, wy) um/ms (elfm_smooth.h). */
+static double image_bias_factor(const elfm_smooth_options *o, double wx, double wy)
+{
+  return o->motion_lead_um / fmax(hypot(wx, wy), MOTION_LEAD_FADE_UM_PER_MS) -
+         o->motion_delay_us * 1e-3;
+}
+
+void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[3])
+{
+  b[0] = b[1] = b[2] = 0;
+  if (o->motion_lead_um == 0 && o->motion_delay_us == 0) return;
+  if (o->motion_n_views <= 0) {
+    double f = image_bias_factor(o, v[0], v[1]);
+    b[0] = f * v[0];
+    b[1] = f * v[1];
+    return;
+  }
+  /* The equal-weight least-squares fit of u_v = p + z g_v to images each
+   * off by b_v = b(w_v): dz = sum (b_v - mean b).(g_v - mean g) /
+   * sum |g_v - mean g|^2 and dp = mean b - dz mean g. */
+  const int n = o->motion_n_views;
+  double sb[2] = {0, 0}, sg[2] = {0, 0}, sbg = 0, sgg = 0;
+  for (int k = 0; k < n; k++) {
+    const double gx = o->motion_view_g[k][0], gy = o->motion_view_g[k][1];
+    const double wx = v[0] + v[2] * gx, wy = v[1] + v[2] * gy;
+    const double f = image_bias_factor(o, wx, wy);
+    sb[0] += f * wx;
+    sb[1] += f * wy;
+    sg[0] += gx;
+    sg[1] += gy;
+    sbg += f * (wx * gx + wy * gy);
+    sgg += gx * gx + gy * gy;
+  }
+  const double den = sgg - (sg[0] * sg[0] + sg[1] * sg[1]) / n;
+  b[2] = den > 1e-12 ? (sbg - (sb[0] * sg[0] + sb[1] * sg[1]) / n) / den : 0;
+  b[0] = (sb[0] - b[2] * sg[0]) / n;
+  b[1] = (sb[1] - b[2] * sg[1]) / n;
+}
+
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err)
 {
   if (!t || !o || t->n == 0)
@@ -17,6 +56,13 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: motion bias out of range (lead %g um, delay %g us; "
                           "at most 100 um and 1 s)", o->motion_lead_um, o->motion_delay_us);
+  if (o->motion_n_views < 0 || o->motion_n_views > ELFM_MAX_VIEWS)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "smooth: %d views for the motion bias",
+                          o->motion_n_views);
+  for (int k = 0; k < o->motion_n_views; k++)
+    if (!(fabs(o->motion_view_g[k][0]) <= 100) || !(fabs(o->motion_view_g[k][1]) <= 100))
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                            "smooth: view %d's disparity for the motion bias is out of range", k);
   const size_t n = t->n;
   const int64_t f0 = t->pts[0].frame, f1 = t->pts[n - 1].frame;
   if (f1 - f0 > 100000000)  /* 1e8 frames = a day at 1 kHz */
@@ -62,13 +108,10 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
      * model and the spline weight stay those of the first fit: the bias is
      * a smooth function of the motion, so it changes neither choice, and
      * a second GCV search would double the cost. */
-    const double delay_ms = o->motion_delay_us * 1e-3;
     for (size_t i = 0; i < n; i++) {
-      const double *v = vel + 3 * (size_t)(t->pts[i].frame - f0);
-      const double s = hypot(v[0], v[1]);
-      const double lead = o->motion_lead_um / fmax(s, MOTION_LEAD_FADE_UM_PER_MS);
-      xyz[3 * i] += v[0] * (delay_ms - lead);
-      xyz[3 * i + 1] += v[1] * (delay_ms - lead);
+      double b[3];
+      elfm_motion_bias(o, vel + 3 * (size_t)(t->pts[i].frame - f0), b);
+      for (int a = 0; a < 3; a++) xyz[3 * i + a] -= b[a];
     }
     elfm_smooth_options o2 = *o;
     o2.model = info.model;
