@@ -7,10 +7,13 @@
  * `eventlfm score` on the same scene is what detection and linking lose;
  * what is missing here the frames do not hold (docs/tracker.md "View fit").
  *
- * usage: bench_localize SCENE_DIR [min_views] [dt_us]
+ * usage: bench_localize SCENE_DIR [min_views] [dt_us] [frames]
  *   SCENE_DIR from `eventlfm simulate` (calib.json, events.raw, truth.csv);
  *   min_views 8 (the guided fit's), dt_us 1000; ON events, time surface
- *   tau = dt, as `eventlfm track` frames them. */
+ *   tau = dt, as `eventlfm track` frames them. frames K > 1: the fit sums
+ *   each view's windows over the last K frames, each placed where the bead
+ *   truly was (elfm_refocus_localize_frames with oracle offsets): the most
+ *   a motion-compensated fit over K frames could find. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -95,15 +98,17 @@ static int truth_at(const truth_table *T, int k, double t_us, double p[3])
 
 int main(int argc, char **argv)
 {
-  if (argc < 2 || argc > 4 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
-    fprintf(stderr, "usage: bench_localize SCENE_DIR [min_views (8)] [dt_us (1000)]\n");
+  if (argc < 2 || argc > 5 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
+    fprintf(stderr, "usage: bench_localize SCENE_DIR [min_views (8)] [dt_us (1000)] [frames (1)]\n");
     return argc < 2 ? 2 : 0;
   }
   const char *dir = argv[1];
   const int min_views = argc > 2 ? atoi(argv[2]) : 8;
   const long dt_us = argc > 3 ? atol(argv[3]) : 1000;
-  if (min_views < 2 || min_views > 255 || dt_us < 50 || dt_us > 10000000) {
-    fprintf(stderr, "bench_localize: min_views must be 2..255 and dt_us 50..1e7\n");
+  enum { MAXK = 16 };
+  const int nk = argc > 4 ? atoi(argv[4]) : 1;
+  if (min_views < 2 || min_views > 255 || dt_us < 50 || dt_us > 10000000 || nk < 1 || nk > MAXK) {
+    fprintf(stderr, "bench_localize: min_views must be 2..255, dt_us 50..1e7, frames 1..16\n");
     return 2;
   }
   char path[1200];
@@ -137,6 +142,11 @@ int main(int argc, char **argv)
   }
   elfm_event_chunk *ch = elfm_chunk_create(1 << 16, &err);
   elfm_frame *fm = elfm_frame_create(c.sensor_width_px, c.sensor_height_px, &err);
+  /* ring of the last nk frames (sparse copies), ring[head] the newest */
+  elfm_frame *ring[MAXK] = {NULL};
+  int n_ring = 0, head = 0;
+  for (int j = 0; j < nk; j++)
+    if (!(ring[j] = elfm_frame_create(c.sensor_width_px, c.sensor_height_px, &err))) fm = NULL;
   if (!ch || !fm) {
     fprintf(stderr, "bench_localize: out of memory\n");
     return 1;
@@ -170,6 +180,19 @@ int main(int argc, char **argv)
       }
       continue;
     }
+    {
+      /* copy fm into the ring's next slot: clear its listed pixels, copy fm's */
+      head = (head + 1) % nk;
+      elfm_frame *d = ring[head];
+      for (size_t i = 0; i < d->nnz; i++) d->data[d->idx[i]] = 0;
+      for (size_t i = 0; i < fm->nnz; i++) {
+        d->idx[i] = fm->idx[i];
+        d->data[fm->idx[i]] = fm->data[fm->idx[i]];
+      }
+      d->nnz = fm->nnz;
+      d->t_us = fm->t_us;
+      if (n_ring < nk) n_ring++;
+    }
     for (int k = 0; k < T.n_ids; k++) {
       double p[3];
       if (!truth_at(&T, k, (double)fm->t_us, p)) continue;
@@ -181,7 +204,22 @@ int main(int argc, char **argv)
                    K = (p[2] - c.z_min_um) / c.z_step_um;
       elfm_localize_result r;
       double t0 = bench_wall_s();
-      int ok = elfm_refocus_localize(plan, fm, X, Y, K, &lo, &r);
+      const elfm_frame *use[MAXK];
+      double off[MAXK][3];
+      int nu = 0;
+      for (int j = 0; j < n_ring; j++) {
+        const elfm_frame *g = ring[(head - j + nk) % nk];
+        double pj[3];
+        if (!truth_at(&T, k, (double)g->t_us, pj)) continue;
+        use[nu] = g;
+        off[nu][0] = (pj[0] - p[0]) / c.um_per_px;
+        off[nu][1] = (pj[1] - p[1]) / c.um_per_px;
+        off[nu][2] = pj[2] - p[2];
+        nu++;
+      }
+      int ok = nk == 1 ? elfm_refocus_localize(plan, fm, X, Y, K, &lo, &r)
+                       : nu > 0 && elfm_refocus_localize_frames(plan, use, (const double (*)[3])off,
+                                                                nu, X, Y, K, &lo, &r);
       fit_s += bench_wall_s() - t0;
       fits++;
       if (!ok) continue;
@@ -193,8 +231,8 @@ int main(int argc, char **argv)
       e_z2[b] += dz * dz;
     }
   }
-  printf("bench_localize: %s, view fit from the true position, min_views %d, dt %ld us\n", dir,
-         min_views, dt_us);
+  printf("bench_localize: %s, view fit from the true position, min_views %d, dt %ld us, "
+         "%d frame(s)\n", dir, min_views, dt_us, nk);
   printf("|z| um     truth  found   lateral RMSE/axis um  axial RMSE um\n");
   for (int b = 0; b < NB; b++) {
     if (!tot[b]) continue;
@@ -207,6 +245,7 @@ int main(int argc, char **argv)
   }
   printf("%ld fits, %.1f us each (wall, one thread)\n", fits, fits ? 1e6 * fit_s / fits : 0.0);
   elfm_frame_free(fm);
+  for (int j = 0; j < nk; j++) elfm_frame_free(ring[j]);
   elfm_chunk_free(ch);
   elfm_reader_close(rd);
   elfm_framer_free(fr);

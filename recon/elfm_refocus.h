@@ -115,6 +115,8 @@ typedef struct elfm_localize_options {
 typedef struct elfm_localize_result {
   double x_vox, y_vox, z_vox; /* position, voxel units of the plan's volume */
   int n_views;                /* views that agree with the fit (robust weight >= 1/2) */
+  int n_views_first;          /* of those, views whose window in the first (wanted) frame
+                                 alone agrees too (= n_views for one frame) */
   double rms_px;              /* their weighted RMS miss, px */
 } elfm_localize_result;
 
@@ -122,6 +124,16 @@ void elfm_localize_options_default(elfm_localize_options *o);
 int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
                           double y_vox, double z_vox, const elfm_localize_options *o,
                           elfm_localize_result *out);
+/* The same over n_frames (1..64) frames of one moving object: frames[0] is
+ * the frame the position is wanted for, off_vox[j] where the object was in
+ * frames[j] relative to frames[0] (X, Y in voxels, z in um; NULL = all
+ * zero). Each view's centroid sums the frames' windows, each placed where
+ * the object was and moved back by that image shift: a dim object's events
+ * from several windows add up at its position in frames[0]. */
+int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *const *frames,
+                                 const double (*off_vox)[3], int n_frames, double x_vox,
+                                 double y_vox, double z_vox, const elfm_localize_options *o,
+                                 elfm_localize_result *out);
 
 /* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
  * The workspace remembers which rows of the volume it last wrote on the

@@ -121,17 +121,64 @@ static int solve_xyz(int n, const double *wt, const double *ru, const double *rw
   return 1;
 }
 
+/* The centroid of one view's image over n frames: frame j's window sits
+ * where the object was then (q + off[j]), and its centroid is moved back by
+ * that offset's image shift (off[j][0] + off[j][2] du in u, the same in w),
+ * so that all frames' events add up at the object's position in frame 0.
+ * Frames whose window leaves the view's box are skipped. Returns the summed
+ * mass (0: nothing; -1: no frame's window fits). */
+static double view_centroid(const elfm_frame *const *frames, const double (*off)[3], int n_frames,
+                            const elfm_refocus_box *b, const double q[3], double au, double aw,
+                            double du, double dw, int r, int pw, double *cu, double *cw)
+{
+  if (n_frames == 1 && !off) /* the single-frame fit, exactly as it always was */
+    return window_centroid(frames[0], b, q[0] + au + q[2] * du, q[1] + aw + q[2] * dw, r, pw, cu, cw);
+  double m = 0, su = 0, sw = 0;
+  int any = 0;
+  for (int j = 0; j < n_frames; j++) {
+    const double ox = off ? off[j][0] : 0, oy = off ? off[j][1] : 0, oz = off ? off[j][2] : 0;
+    const double su0 = ox + oz * du, sw0 = oy + oz * dw;
+    double u, w;
+    const double mj = window_centroid(frames[j], b, q[0] + au + q[2] * du + su0,
+                                      q[1] + aw + q[2] * dw + sw0, r, pw, &u, &w);
+    if (mj < 0) continue;
+    any = 1;
+    if (mj == 0) continue;
+    m += mj;
+    su += mj * (u - su0);
+    sw += mj * (w - sw0);
+  }
+  if (!any) return -1;
+  if (!(m > 0)) return 0;
+  *cu = su / m;
+  *cw = sw / m;
+  return m;
+}
+
 int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
                           double y_vox, double z_vox, const elfm_localize_options *o,
                           elfm_localize_result *out)
 {
-  enum { MAXV = 256 };
+  return elfm_refocus_localize_frames(p, &frame, NULL, 1, x_vox, y_vox, z_vox, o, out);
+}
+
+int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *const *frames,
+                                 const double (*off_vox)[3], int n_frames, double x_vox,
+                                 double y_vox, double z_vox, const elfm_localize_options *o,
+                                 elfm_localize_result *out)
+{
+  enum { MAXV = 256, MAXF = 64 };
   const elfm_calib *c = &p->calib;
-  if (!frame || frame->w != p->sw || frame->h != p->sh || p->nv > MAXV || !o ||
+  if (!frames || n_frames < 1 || n_frames > MAXF || p->nv > MAXV || !o ||
       o->half_window_px < 1 || o->half_window_px > 32 || !(o->outlier_px > 0) || o->min_views < 2 ||
       o->power < 1 || o->power > 8 ||
       !isfinite(x_vox) || !isfinite(y_vox) || !isfinite(z_vox))
     return 0;
+  for (int j = 0; j < n_frames; j++) {
+    if (!frames[j] || frames[j]->w != p->sw || frames[j]->h != p->sh) return 0;
+    if (off_vox && !(isfinite(off_vox[j][0]) && isfinite(off_vox[j][1]) && isfinite(off_vox[j][2])))
+      return 0;
+  }
   const double hw = 0.5 * (p->w - 1), hh = 0.5 * (p->h - 1);
   double au[MAXV], aw[MAXV], du[MAXV], dw[MAXV], ru[MAXV], rw[MAXV], wt[MAXV];
   int keep[MAXV];
@@ -155,9 +202,8 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
       mass[v] = 0;
       if (!keep[v]) continue;
       double cu, cw;
-      const double m = window_centroid(frame, &p->box[v], q[0] + au[v] + q[2] * du[v],
-                                       q[1] + aw[v] + q[2] * dw[v], o->half_window_px, o->power,
-                                       &cu, &cw);
+      const double m = view_centroid(frames, off_vox, n_frames, &p->box[v], q, au[v], aw[v], du[v],
+                                     dw[v], o->half_window_px, o->power, &cu, &cw);
       if (m <= 0) continue;
       mass[v] = m;
       ru[v] = cu - au[v];
@@ -218,6 +264,24 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
     n_final++;
   }
   if (n_final < o->min_views) return 0;
+  /* of those, the views whose window in frames[0] alone has signal that
+   * agrees with the fit: with several frames, how much of the result the
+   * wanted frame itself supports */
+  int n_first = n_final;
+  if (n_frames > 1) {
+    n_first = 0;
+    for (int v = 0; v < p->nv; v++) {
+      if (!(mass[v] > 0) || fac[v] < 0.5) continue;
+      double cu, cw;
+      const double m = window_centroid(frames[0], &p->box[v], q[0] + au[v] + q[2] * du[v],
+                                       q[1] + aw[v] + q[2] * dw[v], o->half_window_px, o->power,
+                                       &cu, &cw);
+      if (m <= 0) continue;
+      const double eu = cu - au[v] - (q[0] + q[2] * du[v]), ew = cw - aw[v] - (q[1] + q[2] * dw[v]);
+      if (eu * eu + ew * ew <= out2) n_first++;
+    }
+  }
+  out->n_views_first = n_first;
   out->x_vox = q[0];
   out->y_vox = q[1];
   out->z_vox = (q[2] - c->z_min_um) / c->z_step_um;

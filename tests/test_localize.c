@@ -10,7 +10,8 @@
  *    the guided search's 8 views;
  *  - too few views, an empty frame, NaN starts, bad options, a frame of the
  *    wrong size: no fit (0), no crash;
- *  - random frames and starts: every fit finite, inside the bounds it promises. */
+ *  - random frames and starts: every fit finite, inside the bounds it promises;
+ *  - the fit over two frames of a moving bead (elfm_refocus_localize_frames). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -211,6 +212,62 @@ static void test_random_inputs(const elfm_calib *c, const elfm_refocus_plan *p, 
   CHECK(fits > 0);
 }
 
+/* elfm_refocus_localize_frames: a bead seen in 10 views of the wanted frame
+ * and in all 25 of the frame before, where it was (3, -2, 4) um away. At
+ * min_views 20 the wanted frame alone gives no fit; the two frames with the
+ * right offset find the bead where it is now; with no offset the fit is
+ * drawn to where it was (or fails), not to where it is. */
+static void test_frames(const elfm_calib *c, const elfm_refocus_plan *p, elfm_frame *f)
+{
+  elfm_error err;
+  elfm_frame *g = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  CHECK(g != NULL);
+  if (!g) return;
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  o.min_views = 20;
+  const double x = -8.2, y = 14.9, z = 22.5, d[3] = {3.0, -2.0, 4.0};
+  double q[3], q1[3];
+  to_vox(c, p, x, y, z, q);
+  to_vox(c, p, x + d[0], y + d[1], z + d[2], q1);
+  elfm_frame_clear(f);
+  elfm_frame_clear(g);
+  render_views(f, c, x, y, z, 255.0, 1.3, 10, 0, 0);
+  render_views(g, c, x + d[0], y + d[1], z + d[2], 255.0, 1.3, 0, 0, 0);
+  elfm_localize_result r;
+  CHECK(!elfm_refocus_localize(p, f, q[0] + 0.5, q[1] - 0.5, q[2] + 1, &o, &r));
+  const elfm_frame *fr[2] = {f, g};
+  const double off[2][3] = {{0, 0, 0}, {q1[0] - q[0], q1[1] - q[1], d[2]}};
+  int ok = elfm_refocus_localize_frames(p, fr, off, 2, q[0] + 0.5, q[1] - 0.5, q[2] + 1, &o, &r);
+  CHECK_MSG(ok, "two frames with the offset: no fit");
+  if (ok) {
+    CHECK_MSG(fabs(r.x_vox - q[0]) <= 0.05 && fabs(r.y_vox - q[1]) <= 0.05 &&
+                  fabs(r.z_vox - q[2]) * c->z_step_um <= 0.25,
+              "two frames: (%.3f %.3f %.3f) vs (%.3f %.3f %.3f)", r.x_vox, r.y_vox, r.z_vox, q[0],
+              q[1], q[2]);
+    CHECK_EQ_INT(r.n_views_first, 10);
+    CHECK(r.n_views >= 20);
+  }
+  const double zero[2][3] = {{0, 0, 0}, {0, 0, 0}};
+  ok = elfm_refocus_localize_frames(p, fr, zero, 2, q[0] + 0.5, q[1] - 0.5, q[2] + 1, &o, &r);
+  CHECK_MSG(!ok || hypot(r.x_vox - q[0], r.y_vox - q[1]) > 1.0,
+            "without the offset the fit should not find the bead where it is now");
+  /* one frame, no offsets: the single-frame fit exactly */
+  elfm_localize_result a, b;
+  o.min_views = 6;
+  CHECK(elfm_refocus_localize(p, g, q1[0] + 0.3, q1[1], q1[2], &o, &a));
+  const elfm_frame *one[1] = {g};
+  CHECK(elfm_refocus_localize_frames(p, one, NULL, 1, q1[0] + 0.3, q1[1], q1[2], &o, &b));
+  CHECK(a.x_vox == b.x_vox && a.y_vox == b.y_vox && a.z_vox == b.z_vox && a.n_views == b.n_views);
+  CHECK_EQ_INT(b.n_views_first, b.n_views);
+  /* bad input: no frames, too many, a NaN offset */
+  CHECK(!elfm_refocus_localize_frames(p, fr, off, 0, q[0], q[1], q[2], &o, &r));
+  CHECK(!elfm_refocus_localize_frames(p, fr, off, 65, q[0], q[1], q[2], &o, &r));
+  const double bad[2][3] = {{0, 0, 0}, {NAN, 0, 0}};
+  CHECK(!elfm_refocus_localize_frames(p, fr, bad, 2, q[0], q[1], q[2], &o, &r));
+  elfm_frame_free(g);
+}
+
 int main(void)
 {
   elfm_calib c;
@@ -229,6 +286,7 @@ int main(void)
   test_noise_only(p, f);
   test_no_fit(&c, p, f);
   test_random_inputs(&c, p, f);
+  test_frames(&c, p, f);
   elfm_frame_free(f);
   elfm_refocus_plan_free(p);
   return check_report();
