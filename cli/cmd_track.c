@@ -168,13 +168,15 @@ static void usage(FILE *f)
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
     "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
     "                       their points (default 1/3)\n"
-    "  --motion-lead-um A, --motion-delay-us D   detections lie A um ahead of the\n"
-    "                       object along its lateral motion and show where it was D us\n"
-    "                       before the frame: the smoother moves each point by\n"
-    "                       v x D - A along v and fits again (ON time surface with the\n"
-    "                       view fit: A 0.8, D the weighted events' mean age + 20 us,\n"
-    "                       301 us at tau 1 ms, measured on dim beads; else 0, 0 = off.\n"
-    "                       eventlfm score measures A and D on a simulated scene)\n"
+    "  --motion-lead-um A, --motion-delay-us D   each view's image of a moving object\n"
+    "                       lies A um ahead of it along the image's motion and shows\n"
+    "                       where it was D us before the frame: the smoother moves the\n"
+    "                       points back by the bias that gives the view fit (laterally\n"
+    "                       A - D x speed along the motion) and fits again. ON time\n"
+    "                       surface with the view fit: A 0.8, D the weighted events'\n"
+    "                       mean age + 20 us (301 us at tau 1 ms), measured on dim\n"
+    "                       beads; else 0, 0 = off. Brighter objects lead further:\n"
+    "                       eventlfm score measures A and D on a simulated scene\n"
     "analysis:\n"
     "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
     "  -q, --quiet          no progress\n"
@@ -480,7 +482,8 @@ int cmd_track(int argc, char **argv)
      * window (below) + 20 us. The lead belongs to the sample (brighter
      * beads lead further: stage_accel 2.2 um), so `eventlfm score` reports
      * it for a simulated scene like the user's. Alpha over the 8 seeds
-     * 0.7326 -> 0.7486 (docs/tracker.md "Motion bias"). */
+     * 0.7326 -> 0.7486 with the lateral model, 0.7515 with the views'
+     * (below; docs/tracker.md "Motion bias"). */
     const double k = o.loc.power / o.recon.framer.tau_us, w = (double)o.recon.framer.dt_us;
     const double age_us = 1.0 / k - w * exp(-k * w) / (1.0 - exp(-k * w));
     o.smooth.motion_lead_um = 0.8;

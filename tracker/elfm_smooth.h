@@ -81,9 +81,11 @@ typedef struct elfm_smooth_options {
    *  - With the views' disparities g_v (lateral um of image shift per um of
    *    z, motion_view_g) the detection is taken to be the equal-weight
    *    least-squares fit of the 25 view images, as the view fit is: view v's
-   *    image moves at w_v = v_xy + v_z g_v, and the fit's bias is the mean
-   *    of b(w_v) laterally and sum b(w_v).g_v / sum |g_v|^2 in z. A bead
-   *    moving in z thus shows its lead in z too, and the delay as -delay x v_z.
+   *    image moves at w_v = v_xy + v_z g_v, each image is off by b(w_v),
+   *    and the fit's bias is the least-squares solution of b(w_v) = dp +
+   *    dz g_v over the views (dz = sum (b_v - mean b).(g_v - mean g) /
+   *    sum |g_v - mean g|^2, dp = mean b - dz mean g). A bead moving in z
+   *    thus shows its lead in z too, and the delay as -delay x v_z.
    * elfm_track_smooth fits the track, moves each point by -b of the fitted
    * velocity there, and fits again with the first fit's model and spline
    * weight. The track's points (pts) keep the detections as measured. */
