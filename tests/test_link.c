@@ -360,6 +360,39 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5g'. Stitching a twin: a bead moves along +x at 3 um/ms and turns to +y
+   * at frame 30, where a second detection of it (2 um off, towards where it
+   * turns) starts a track that then takes the bead (its one-point gate is
+   * the wider). The first track goes dark in the frame the twin was born;
+   * stitching joins them (gap -1, the overlap frame keeping the first
+   * track's point): one track of 60 points; without stitching, 31 + 30. */
+  for (int stitch = 0; stitch < 2; stitch++) {
+    elfm_link_options os = o;
+    os.stitch_points = stitch ? 5 : 0;
+    elfm_linker *l = elfm_link_create(&os, &err);
+    CHECK(l != NULL);
+    for (int f = 0; f < 60; f++) {
+      elfm_detection d[2];
+      int n = 0;
+      d[n++] = f <= 30 ? mk(3.0 * f, 0, 5) : mk(90, 3.0 * (f - 30), 5);
+      if (f == 30) d[n++] = mk(90, 2, 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    size_t first_n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      if (n++ == 0) first_n = t->n;
+      for (size_t k = 1; k < t->n; k++) CHECK(t->pts[k].frame > t->pts[k - 1].frame);
+      if (stitch && t->n == 60) CHECK(t->pts[30].x_um == 90 && t->pts[30].y_um == 0);
+      elfm_track_free(t);
+    }
+    CHECK_MSG(stitch ? n == 1 && first_n == 60 : n == 2 && first_n == 31,
+              "twin, stitch %d: %d tracks, the first of %zu points", stitch, n, first_n);
+    elfm_link_free(l);
+  }
+
   /* 5h. Swap review: P moves along +x at 3 um/ms, Q at 20 degrees to it at
    * the same speed; they meet at frame 30, and while closer than 5 um the
    * detector sees one detection between them (frames 29-31). The linker
