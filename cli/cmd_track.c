@@ -85,12 +85,17 @@ static void track_defaults(track_opts *o)
    * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
    * gave the same to +-0.01. Off in --motion stage (below). */
   o->link.stitch_points = 5;
-  /* Swap review of gap closings that do not fit, after 6 points of the new
-   * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9: alpha 0.697,
-   * 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the other six
-   * unchanged; stage, blink, worm unchanged. 5-8 points and ratios 0.4-0.5
-   * gave the same; 0.7 swapped wrongly (4 seeds down by 0.01-0.04). */
-  o->link.swap_points = 6;
+  /* Swap review of gap closings that do not fit, after 8 points of the new
+   * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9 at 6 points:
+   * alpha 0.697, 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the
+   * other six unchanged; stage, blink, worm unchanged; 0.7 as the ratio
+   * swapped wrongly (4 seeds down by 0.01-0.04). Sixth session, 20 flow
+   * seeds, 4 / 6 / 8 / 9 / 10 / 12 points: mean alpha 0.7331 / 0.7355 /
+   * 0.7379 / 0.7379 / 0.7372 / 0.7367 (at 8: seed 1 0.700 -> 0.742, the
+   * crossing docs/tracker.md describes, seed 11 +0.013, three seeds down by
+   * <= 0.006); stage seed 3 0.688 -> 0.707; worm, blink, stage_accel the
+   * same. A longer tail shows which way each bead turned. */
+  o->link.swap_points = 8;
 }
 
 static void usage(FILE *f)
@@ -145,7 +150,7 @@ static void usage(FILE *f)
     "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
     "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
     "  --swap-points N      review a gap closing that does not fit when its new tail\n"
-    "                       has N points; exchange tails with a better fit (6; 0 off)\n"
+    "                       has N points; exchange tails with a better fit (8; 0 off)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
