@@ -479,6 +479,19 @@ int main(void)
       elfm_score_options_default(&def);
       CHECK(elfm_score_tables(truth, NULL, d_span, &def, &r, &err) == ELFM_ERR_RANGE);
       CHECK(strcmp(err.file, "detections.csv") == 0);
+      /* the cap on truth points (objects x frames where each counts) */
+      CHECK_OK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err), &err);
+      const int64_t npts = r.n_truth_points;
+      CHECK(npts > 2);
+      def.max_truth_points = npts - 1;
+      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_RANGE);
+      CHECK(strcmp(err.file, "truth.csv") == 0 && strstr(err.message, "object-frames") != NULL);
+      def.max_truth_points = npts;
+      CHECK_OK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err), &err);
+      CHECK(r.n_truth_points == npts);
+      def.max_truth_points = 0;
+      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
+      def.max_truth_points = 10000000;
       /* neither tracks nor detections */
       CHECK(elfm_score_tables(truth, NULL, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
       def.eps_um = 0;

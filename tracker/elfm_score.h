@@ -162,9 +162,13 @@ typedef struct elfm_score_options {
    * windows exactly one frame per pulse counts. Positions are still
    * interpolated at t_us. 0 (default): the literal SPEC §7 rule. */
   double window_us;
+  /* Most truth points (objects x frames where each counts) sampled before
+   * giving up with ELFM_ERR_RANGE: 10 M by default (~0.5 GB; 20 beads over
+   * 500,000 frames). The frame-index span is capped at 5 M frames. */
+  int64_t max_truth_points;
 } elfm_score_options;
 
-/* eps 4, kz 4, no bounds, no stage, no frame-count hint. */
+/* eps 4, kz 4, no bounds, no stage, no frame-count hint, 10 M truth points. */
 void elfm_score_options_default(elfm_score_options *o);
 /* Volume bounds from a calibration (SPEC §3 voxel grid). */
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c);

@@ -16,6 +16,7 @@ void elfm_score_options_default(elfm_score_options *o)
   o->eps_um = 4.0; /* SPEC §7 */
   o->kz = 4.0;     /* SPEC §7 */
   o->n_frames_hint = 0;
+  o->max_truth_points = 10000000; /* elfm_score.h */
 }
 
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c)
@@ -323,6 +324,8 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if (!truth || (!tracks && !detections) || !opt)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "scoring needs truth and tracks or detections");
+  if (opt->max_truth_points < 1)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "max_truth_points must be >= 1");
   if (!(opt->eps_um > 0) || !(opt->kz > 0) || !isfinite(opt->eps_um) || !isfinite(opt->kz))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "gate eps %g um and kz %g must be positive", opt->eps_um, opt->kz);

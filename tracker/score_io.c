@@ -10,9 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Largest frame-index span we accept: 50 M frames is 14 h at 1 kHz; beyond
- * that an index is surely corrupt, and we would allocate per frame. */
-#define SCORE_MAX_FRAME_SPAN 50000000LL
+/* Largest frame-index span we accept: 5 M frames is 83 min at 1 kHz, far
+ * beyond a simulated scene; beyond that an index is surely corrupt. The
+ * frame list and its indexes take ~100 bytes per frame (0.5 GB here: at
+ * the former 50 M, two rows of input reached 4.1 GB, fuzz_score). */
+#define SCORE_MAX_FRAME_SPAN 5000000LL
+
 /* Frame indices and ids must be integers well inside the double range. */
 #define SCORE_MAX_INDEX 1e15
 
@@ -356,6 +359,12 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
   size_t i = 0;
   int k = 0;
   s = ELFM_OK;
+  /* The frames with a time form one block [f_lo, f_hi] in increasing time
+   * (elfm_score_frames_build); outside it (a single known frame and a frame
+   * count hint) times are unknown and nothing counts. */
+  int f_lo = 0, f_hi = fr->n - 1;
+  while (f_lo < fr->n && isnan(fr->t_us[f_lo])) f_lo++;
+  while (f_hi >= f_lo && isnan(fr->t_us[f_hi])) f_hi--;
   while (i < n && s == ELFM_OK) {
     size_t j = i;
     while (j < n && ord[j].key == ord[i].key) j++;
@@ -365,9 +374,18 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
     double t_first = elfm_table_get(tt, ord[i].idx, c[1]);
     double t_last = elfm_table_get(tt, ord[j - 1].idx, c[1]);
     size_t cur = i, wcur = i;
-    for (int f = 0; f < fr->n && s == ELFM_OK; f++) {
+    /* the first frame at or after t_first (binary search: each object
+     * visits only the frames of its own time range, not all of them) */
+    int lo = f_lo, hi = f_hi + 1;
+    while (lo < hi) {
+      int mid = lo + (hi - lo) / 2;
+      if (fr->t_us[mid] < t_first) lo = mid + 1;
+      else hi = mid;
+    }
+    for (int f = lo; f <= f_hi && s == ELFM_OK; f++) {
       double t = fr->t_us[f];
-      if (!(t >= t_first && t <= t_last)) continue; /* also skips unknown (NaN) times */
+      if (t > t_last) break;
+      if (!(t >= t_first)) continue;
       while (cur + 1 < j && elfm_table_get(tt, ord[cur + 1].idx, c[1]) < t) cur++;
       /* Window rule (elfm_score.h, window_us): bright for at least half of
        * the samples in (t - window, t]; samples are dense (<= 100 us, SPEC
@@ -394,7 +412,19 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
       int lit = window_votes >= 0 ? window_votes : val[3] > 0.0;
       if (!lit || !inside(o, val[0], val[1], val[2])) continue;
       if (tr->pt.n == cap) {
+        /* A cap on the points (elfm_score_options.max_truth_points): a few
+         * thousand ids over a long frame span would otherwise ask for
+         * terabytes. */
+        const int64_t most = o->max_truth_points;
+        if (cap >= most) {
+          s = elfm_error_set(err, ELFM_ERR_RANGE, tt->path, -1,
+                             "the truth counts at more than %lld object-frames (%d objects, "
+                             "%d frames): score a shorter stretch",
+                             (long long)most, n_obj, fr->n);
+          break;
+        }
         cap = cap ? 2 * cap : 1024;
+        if (cap > most) cap = most;
         if ((s = points_reserve(&tr->pt, (size_t)cap, err)) != ELFM_OK) break;
       }
       tr->pt.frame[tr->pt.n] = f;
