@@ -211,9 +211,8 @@ static int int_in(const char *cmd, const char *opt, const char *s, int lo, int h
   return 1;
 }
 
-/* A number option in lo..hi (lo excluded when lo_open). */
-static int double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,
-                     double hi, const char *range, double *out)
+int cli_parse_double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,
+                        double hi, const char *range, double *out)
 {
   double v;
   if (!cli_parse_double(cmd, opt, s, &v)) return 0;
@@ -309,10 +308,10 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     return int64_in(cmd, "--stride-us", arg, 0, DT_US_MAX, "0 (= dt) or 1..dt", &fo->stride_us);
   case CLI_RO_TAU:
     p->tau_given = 1;
-    return double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
+    return cli_parse_double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
   case CLI_RO_OFF_WEIGHT:
-    return double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
+    return cli_parse_double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
   case CLI_RO_POLARITY:
     p->polarity_given = 1;
     return cli_parse_polarity(cmd, arg, &fo->polarity);
@@ -332,12 +331,12 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
   case CLI_RO_GHOST: return parse_ghost(cmd, arg, p);
   case CLI_RO_GHOST_VALUE:
     /* frac's <= 1 is checked at the end: the mode may come after */
-    if (!double_in(cmd, "--ghost-value", arg, 0, 0, HUGE_VAL, ">= 0", &ro->refocus.threshold_value))
+    if (!cli_parse_double_in(cmd, "--ghost-value", arg, 0, 0, HUGE_VAL, ">= 0", &ro->refocus.threshold_value))
       return 0;
     p->ghost_value_given = p->ghost_value_option = 1;
     return 1;
   case CLI_RO_AGREE:
-    return double_in(cmd, "--agree", arg, 0, 0, 1, "0..1", &ro->refocus.agree_frac);
+    return cli_parse_double_in(cmd, "--agree", arg, 0, 0, 1, "0..1", &ro->refocus.agree_frac);
   case CLI_RO_THREADS:
     return int_in(cmd, "--threads", arg, 0, THREADS_MAX, "0..1024 (0: all)", &ro->threads);
   case CLI_RO_BATCH:

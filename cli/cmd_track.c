@@ -401,15 +401,15 @@ int cmd_track(int argc, char **argv)
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_RES: o.resolution = 1; break;
     case O_MLEAD:
-      if (!cli_parse_double(C, "--motion-lead-um", a, &o.smooth.motion_lead_um)) return CLI_USAGE;
-      if (!(fabs(o.smooth.motion_lead_um) <= 100))
-        return cli_message(C, CLI_USAGE, "--motion-lead-um must be within +-100");
+      if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
+                               &o.smooth.motion_lead_um))
+        return CLI_USAGE;
       mbias_given = 1;
       break;
     case O_MDELAY:
-      if (!cli_parse_double(C, "--motion-delay-us", a, &o.smooth.motion_delay_us)) return CLI_USAGE;
-      if (!(fabs(o.smooth.motion_delay_us) <= 1e6))
-        return cli_message(C, CLI_USAGE, "--motion-delay-us must be within +-1e6");
+      if (!cli_parse_double_in(C, "--motion-delay-us", a, -1e6, 0, 1e6, "-1e6..1e6",
+                               &o.smooth.motion_delay_us))
+        return CLI_USAGE;
       mbias_given = 1;
       break;
     case O_MAXOUT:

@@ -29,11 +29,7 @@ rc=$?
 [ $rc -ne 0 ] && grep -q "polarit" "$tmp/err" || { echo "FAIL: --polarity on with integral: rc $rc, $(cat "$tmp/err")"; fail=$((fail+1)); }
 run() {  # tag track-options...
   tag=$1; shift
-  "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/$tag" -q \
-    --dt-us 2000 "$@" || { echo "FAIL: track $tag"; fail=$((fail+1)); }
-  "$bin" score --truth "$tmp/w/truth.csv" --tracks "$tmp/$tag/tracks.csv" \
-    --detections "$tmp/$tag/detections.csv" --calib "$tmp/w/calib.json" --json > "$tmp/$tag.json" ||
-    { echo "FAIL: score $tag"; fail=$((fail+1)); }
+  track_score "$tmp/w" "$tmp/$tag" "$tmp/$tag.json" --dt-us 2000 "$@"
 }
 run exp
 run int --repr integral

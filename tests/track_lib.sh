@@ -10,3 +10,16 @@ key() {
 below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'
 }
+
+# track_score SCENE OUT JSON [track options...]: `eventlfm track` on the
+# simulated scene in directory SCENE into OUT, then `eventlfm score --json`
+# of OUT's tracks and detections into JSON. Uses $bin; a failure is printed
+# and counted in $fail.
+track_score() {
+  ts_sc=$1; ts_out=$2; ts_json=$3; shift 3
+  "$bin" track --calib "$ts_sc/calib.json" --events "$ts_sc/events.raw" --out "$ts_out" -q "$@" ||
+    { echo "FAIL: track $ts_out"; fail=$((fail+1)); }
+  "$bin" score --truth "$ts_sc/truth.csv" --tracks "$ts_out/tracks.csv" \
+    --detections "$ts_out/detections.csv" --calib "$ts_sc/calib.json" --json > "$ts_json" ||
+    { echo "FAIL: score $ts_out"; fail=$((fail+1)); }
+}

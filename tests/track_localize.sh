@@ -26,10 +26,7 @@ done
   { echo "SKIP: simulate failed"; exit 77; }
 run() {  # scene tag track-options...
   sc=$1; tag=$2; shift 2
-  "$bin" track --calib "$tmp/$sc/calib.json" --events "$tmp/$sc/events.raw" --out "$tmp/$sc-$tag" -q "$@" ||
-    { echo "FAIL: track $sc $tag"; fail=$((fail+1)); }
-  "$bin" score --truth "$tmp/$sc/truth.csv" --detections "$tmp/$sc-$tag/detections.csv" \
-    --calib "$tmp/$sc/calib.json" --json > "$tmp/$sc-$tag.json" || { echo "FAIL: score $sc $tag"; fail=$((fail+1)); }
+  track_score "$tmp/$sc" "$tmp/$sc-$tag" "$tmp/$sc-$tag.json" "$@"
 }
 run blink peak --localize peak --guided-views 0
 run blink views --localize views --guided-views 0

@@ -27,11 +27,7 @@ sim() {  # dir scene ms seed
 }
 run() {  # scene-dir tag track-args...
   d=$1; tag=$2; shift 2
-  "$bin" track --calib "$tmp/$d/calib.json" --events "$tmp/$d/events.raw" --out "$tmp/$d/$tag" -q "$@" ||
-    { echo "FAIL: track $d $tag"; fail=$((fail+1)); }
-  "$bin" score --truth "$tmp/$d/truth.csv" --tracks "$tmp/$d/$tag/tracks.csv" \
-    --detections "$tmp/$d/$tag/detections.csv" --calib "$tmp/$d/calib.json" --json > "$tmp/$d/$tag.json" ||
-    { echo "FAIL: score $d $tag"; fail=$((fail+1)); }
+  track_score "$tmp/$d" "$tmp/$d/$tag" "$tmp/$d/$tag.json" "$@"
 }
 gain() {  # name a0 a1 min
   echo "$1: alpha $2 -> $3"

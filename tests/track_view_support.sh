@@ -13,10 +13,7 @@ fail=0
 [ $? -eq 2 ] && grep -q "view-support" "$tmp/err" || { echo "FAIL: --view-support 1.5 not a usage error"; fail=$((fail+1)); }
 "$bin" simulate flow --out "$tmp/sim" --duration-ms 40 --seed 3 --quiet >/dev/null 2>&1 || { echo "SKIP: simulate failed"; exit 77; }
 run() {  # tag view-support
-  "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/$1" -q \
-    --threshold-abs 25 --threshold-low 15 --view-support "$2" || { echo "FAIL: track ($1)"; fail=$((fail+1)); }
-  "$bin" score --truth "$tmp/sim/truth.csv" --detections "$tmp/$1/detections.csv" \
-    --calib "$tmp/sim/calib.json" --json > "$tmp/$1.json" || { echo "FAIL: score ($1)"; fail=$((fail+1)); }
+  track_score "$tmp/sim" "$tmp/$1" "$tmp/$1.json" --threshold-abs 25 --threshold-low 15 --view-support "$2"
 }
 run off 0
 run on 0.3
