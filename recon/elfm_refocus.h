@@ -93,6 +93,13 @@ const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
 int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                               int k, int *n_sampling);
 
+/* The refocused value of voxel (X, Y, k) from `frame`, as
+ * elfm_refocus_execute would write it there without ghost suppression (the
+ * mean of the sampling views' bilinear samples); 0 outside the volume.
+ * O(views): for a point found in a frame whose volume is gone. */
+double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
+                             int k);
+
 /* Localise a point from its images in the views of `frame` (the Fourier
  * LFM triangulation; recon/localize.c): starting at volume position
  * (x_vox, y_vox, z_vox) (voxel units, fractional), measure each view's

@@ -196,25 +196,49 @@ int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k)
 
 const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p) { return &p->calib; }
 
-int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
-                              int k, int *n_sampling)
+/* The views' bilinear samples at voxel (X, Y, k), as the dense path takes
+ * them: how many views sample it, how many of those are non-zero, and
+ * their sum. */
+static void voxel_samples(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y, int k,
+                          int *n_sampling, int *n_nonzero, double *sum)
 {
   int n = 0, ns = 0;
+  double s = 0;
   if (X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz)
     for (int v = 0; v < p->nv; v++) {
-      const elfm_refocus_shift *s = p->shift + (size_t)k * p->nv + v;
-      if (X < s->xlo || X >= s->xhi || Y < s->ylo || Y >= s->yhi) continue;
+      const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
+      if (X < sh->xlo || X >= sh->xhi || Y < sh->ylo || Y >= sh->yhi) continue;
       ns++;
-      /* the dense path's sample, weights and taps */
       float w[4];
-      elfm_refocus_shift_weights(s, w);
-      const float *r0 = frame->data + (size_t)(Y + s->iy) * (size_t)p->sw + (X + s->ix);
+      elfm_refocus_shift_weights(sh, w);
+      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
       const float *r1 = r0 + p->sw;
       const float a = w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
       n += a != 0.0f;
+      s += a;
     }
+  *n_sampling = ns;
+  *n_nonzero = n;
+  *sum = s;
+}
+
+int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
+                              int k, int *n_sampling)
+{
+  int n, ns;
+  double s;
+  voxel_samples(p, frame, X, Y, k, &ns, &n, &s);
   if (n_sampling) *n_sampling = ns;
   return n;
+}
+
+double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
+                             int k)
+{
+  int n, ns;
+  double s;
+  voxel_samples(p, frame, X, Y, k, &ns, &n, &s);
+  return ns > 0 ? s / ns : 0;
 }
 
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)

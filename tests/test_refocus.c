@@ -462,7 +462,7 @@ static void test_view_support(const elfm_calib *c)
   CHECK_MSG(ns >= 20 && n == ns, "bead voxel: %d of %d views", n, ns);
   /* every other non-zero voxel of the volume: a bead's neighbourhood or a
    * ghost; count those with support below half their views */
-  size_t low = 0, nz = 0, total = (size_t)v->w * v->h * v->nz;
+  size_t low = 0, nz = 0, total = (size_t)v->w * v->h * v->nz, n_value_off = 0;
   int max_low = 0;
   for (size_t j = 0; j < total; j++) {
     if (v->data[j] == 0.0f) continue;
@@ -470,12 +470,18 @@ static void test_view_support(const elfm_calib *c)
     int kk = (int)(j / ((size_t)v->w * v->h));
     int m = 0, a = elfm_refocus_view_support(p, f, x, y, kk, &m);
     CHECK(a >= 1 && a <= m);
+    /* the value a fill reads from a kept frame is the volume's (float
+     * sums there, double here) */
+    double val = elfm_refocus_value_at(p, f, x, y, kk);
+    if (!(fabs(val - v->data[j]) <= 1e-4 * fabs(v->data[j]) + 1e-4)) n_value_off++;
     nz++;
     if (2 * a < m) {
       low++;
       if (v->data[j] > (float)max_low) max_low = (int)v->data[j];
     }
   }
+  CHECK_MSG(n_value_off == 0, "%zu of %zu voxels' value_at differs from the volume", n_value_off, nz);
+  CHECK(elfm_refocus_value_at(p, f, -1, Y, k) == 0 && elfm_refocus_value_at(p, f, X, Y, v->nz) == 0);
   /* most non-zero voxels are seen by a few views only (ghosts, tails) */
   CHECK_MSG(low > nz / 2, "%zu of %zu non-zero voxels with low support", low, nz);
   /* zero voxels and voxels outside the volume have no support */

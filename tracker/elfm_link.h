@@ -137,6 +137,46 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
 elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us, int min_points,
                               double *xyz_um, int cap, int *n_out, elfm_error *err);
 
+/* ---- Gap filling (cmd_track's back-fill). A track that coasted through
+ * frames where its object left no peak has a gap; once the track has
+ * settle_points real points after the gap, the gap is settled (the swap
+ * review, at swap_points, has had its say). The caller, who still holds
+ * those frames, may then search them near where the two ends put the
+ * object and give the linker what it found. Only the track's past
+ * changes: its last settle_points points, and so its predictions, do not. */
+typedef struct elfm_link_gap {
+  int64_t track_id;
+  int open_start;               /* 1: the frames before the track's first point (frame1):
+                                   frame0 is only how far back to look, p0 v0 a0 are unset */
+  int64_t frame0, frame1;       /* the real points before and after (frame1 > frame0 + 1) */
+  int64_t t0_us, t1_us;
+  double p0_um[3], v0_um_per_ms[3], a0_um_per_ms2[3]; /* the head's fit at frame0 */
+  double p1_um[3], v1_um_per_ms[3], a1_um_per_ms2[3]; /* the tail's fit at frame1 */
+  double intensity;             /* mean intensity of up to 3 real points on each side */
+} elfm_link_gap;
+
+/* The gaps the last elfm_link_step settled: of each live track that got a
+ * point in that step, the gap before its settle_points-th last point, if
+ * any, and when that point is its first, the frames before it back to
+ * max_gap_frames (open_start: where the object was before the track began);
+ * so each gap is reported once. all != 0 (at the end of a recording,
+ * before elfm_link_finish): instead every gap of every live track with
+ * fewer than settle_points points after it, the ones never settled. At
+ * most cap into out (the rest are dropped); *n_out = count. */
+elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int all,
+                                   elfm_link_gap *out, int cap, int *n_out, elfm_error *err);
+
+/* Where the gap's object was at t_us: the head's and the tail's
+ * constant-rate turns (elfm_link_predict), forward from frame0 and
+ * backward from frame1, blended linearly in time (open_start: the tail's). */
+void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3]);
+
+/* Give live track `track_id` real points d[0 .. n) in frames with no point
+ * yet before its last point (its gaps, or before its first). ELFM_ERR_INVALID
+ * when the track is not live or a frame is taken or not before the last. */
+elfm_status elfm_link_fill(elfm_linker *l, int64_t track_id, const elfm_detection *d, int n,
+                           elfm_error *err);
+
 /* End every live track (end of the recording): they become finished. */
 elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err);
 

@@ -56,6 +56,9 @@ elfm_track *elfm_track_create(int64_t id, elfm_error *err);
 void elfm_track_free(elfm_track *t);
 /* Append a real point; its frame must exceed the last one's. */
 elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error *err);
+/* Insert a real point at its frame, which must not have one yet (a gap's
+ * frame, or one before the first / after the last). O(n). */
+elfm_status elfm_track_insert(elfm_track *t, const elfm_detection *d, elfm_error *err);
 /* Mean smoothed velocity over the span (um/ms); zeros when not smoothed. */
 void elfm_track_mean_velocity(const elfm_track *t, double v_um_per_ms[3]);
 

@@ -56,6 +56,31 @@ elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error
   return ELFM_OK;
 }
 
+elfm_status elfm_track_insert(elfm_track *t, const elfm_detection *d, elfm_error *err)
+{
+  /* first point at a later frame: binary search, the track is in frame order */
+  size_t lo = 0, hi = t->n;
+  while (lo < hi) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (t->pts[mid].frame < d->frame) lo = mid + 1;
+    else hi = mid;
+  }
+  if (lo < t->n && t->pts[lo].frame == d->frame)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "track %lld: frame %lld already has a point",
+                          (long long)t->id, (long long)d->frame);
+  if (lo == t->n) return elfm_track_append(t, d, err);
+  if (t->n == t->cap) {
+    elfm_detection *p = realloc(t->pts, 2 * t->cap * sizeof *p); /* cap >= 1 here: n >= 1 */
+    if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "track: out of memory");
+    t->pts = p;
+    t->cap *= 2;
+  }
+  memmove(&t->pts[lo + 1], &t->pts[lo], (t->n - lo) * sizeof *t->pts);
+  t->n++;
+  t->pts[lo] = *d;
+  return ELFM_OK;
+}
+
 void elfm_track_mean_velocity(const elfm_track *t, double v[3])
 {
   v[0] = v[1] = v[2] = 0;
