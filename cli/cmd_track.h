@@ -36,7 +36,27 @@ typedef struct track_opts {
   int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
   elfm_localize_options loc;
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
+  int fill_views;      /* gap filling: views that must agree (0 = off) */
+  double fill_gate_um; /* a fill lands within this of where the gap's ends put the object */
+  int fill_max_gap;    /* frames kept for it: gaps up to this long are filled */
+  double fill_min_ratio; /* a fill is at least this x the intensity at the gap's ends */
 } track_opts;
+
+/* The last frames' nonzero pixels, by frame % cap (gap filling). */
+typedef struct frame_ring {
+  int cap;
+  int64_t *frame;        /* [cap] the frame held, -1 none */
+  int64_t *t_us;
+  size_t *nnz, *nnz_cap;
+  uint32_t **idx;        /* [cap][nnz] pixel y*w + x */
+  float **val;
+  /* detections of the kept frames, written when the frame leaves the ring
+   * (so that fills join their frame and detections.csv stays in frame
+   * order) */
+  elfm_detection **det;  /* [cap][det_n] */
+  int *det_n, *det_cap;
+  int64_t *det_frame;    /* the frame det[k] holds, -1 none */
+} frame_ring;
 
 typedef struct fwhm_list {
   size_t n, cap;
@@ -81,6 +101,14 @@ typedef struct track_ctx {
   int vol_w, vol_h, vol_nz;
   double um_per_px, z_min_um, z_step_um;
   double median_speed_um_per_ms; /* of the finished tracks (summary.json, the note) */
+  /* gap filling (cmd_track_fill.c) */
+  frame_ring ring;
+  elfm_frame *scratch;   /* a kept frame, made whole for the view fit */
+  const elfm_refocus_plan *fill_plan;
+  elfm_link_gap *gaps;
+  int gaps_cap;
+  elfm_detection *fill_pts; /* [ring.cap] */
+  int64_t n_fill_tries, n_filled;
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -96,6 +124,22 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
 /* Smooth, filter and write the tracks the linker has finished. */
 elfm_status track_drain(track_ctx *c, elfm_error *err);
+/* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
+ * and buffers, before the run; keep the frame of each volume (linking
+ * callback, frame order); after each linking step (all = 0) and before
+ * elfm_link_finish (all = 1), fill the gaps the linker settled and write
+ * the points found to detections.csv; free. */
+elfm_status track_fill_setup(track_ctx *c, elfm_error *err);
+elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, const elfm_refocus_plan *plan,
+                            int64_t frame, elfm_error *err);
+elfm_status track_fill_gaps(track_ctx *c, int all, elfm_error *err);
+void track_fill_free(track_ctx *c);
+/* Write frame `frame`'s detection d to detections.csv: at once without gap
+ * filling; with it, held until track_det_flush_before writes the frames
+ * before a given one, oldest first (each linking callback: the frames no
+ * longer kept; at the end: INT64_MAX, all). */
+elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d, elfm_error *err);
+elfm_status track_det_flush_before(track_ctx *c, int64_t frame, elfm_error *err);
 /* Close the context's files, free what it holds (for any state of setup). */
 void track_ctx_free(track_ctx *c);
 /* Write summary.json: inputs, counts, parameters, timing, the stage

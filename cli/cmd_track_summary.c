@@ -117,6 +117,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
+  cJSON_AddNumberToObject(cnt, "gap_fill_tries", (double)c->n_fill_tries);
+  cJSON_AddNumberToObject(cnt, "gap_fills", (double)c->n_filled);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
@@ -138,6 +140,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "localize_outlier_px", o->loc.outlier_px);
   cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
   cJSON_AddNumberToObject(par, "guided_views", o->guided_views);
+  cJSON_AddNumberToObject(par, "fill_views", o->fill_views);
+  cJSON_AddNumberToObject(par, "fill_gate_um", o->fill_gate_um);
+  cJSON_AddNumberToObject(par, "fill_max_gap", o->fill_max_gap);
+  cJSON_AddNumberToObject(par, "fill_min_ratio", o->fill_min_ratio);
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);

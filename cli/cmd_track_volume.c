@@ -319,7 +319,13 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     }
   }
   if (guided_fit) guided_view_fit(c, v, slot, c->pred, np, det, &n);
-  elfm_status st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
+  elfm_status st = track_fill_keep(c, c->slot_frame[slot], c->slot_plan[slot], v->frame, err);
+  if (st != ELFM_OK) return st;
+  st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
+  if (st != ELFM_OK) return st;
+  st = track_fill_gaps(c, 0, err);
+  /* frames no longer kept take no more fills: write their detections */
+  if (st == ELFM_OK && c->ring.cap) st = track_det_flush_before(c, v->frame - c->ring.cap + 1, err);
   if (st != ELFM_OK) return st;
   c->t_link += cli_now_s() - t1;
   /* after linking: the lag correction (when on) has moved the detections,
@@ -329,7 +335,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
-    st = elfm_detections_write(c->fdet, c->p_det, &det[j], 1, err);
+    st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;
   }
@@ -383,4 +389,5 @@ void track_ctx_free(track_ctx *c)
   free(c->fl.xy);
   free(c->fl.z);
   free(c->fl.speed);
+  track_fill_free(c);
 }
