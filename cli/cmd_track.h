@@ -104,7 +104,7 @@ typedef struct track_ctx {
   /* gap filling (cmd_track_fill.c) */
   frame_ring ring;
   elfm_frame *scratch;   /* a kept frame, made whole for the view fit */
-  const elfm_refocus_plan *fill_plan;
+  elfm_refocus_plan *fill_plan; /* owned: outlives the driver's */
   elfm_link_gap *gaps;
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
@@ -130,8 +130,7 @@ elfm_status track_drain(track_ctx *c, elfm_error *err);
  * elfm_link_finish (all = 1), fill the gaps the linker settled and write
  * the points found to detections.csv; free. */
 elfm_status track_fill_setup(track_ctx *c, elfm_error *err);
-elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, const elfm_refocus_plan *plan,
-                            int64_t frame, elfm_error *err);
+elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, elfm_error *err);
 elfm_status track_fill_gaps(track_ctx *c, int all, elfm_error *err);
 void track_fill_free(track_ctx *c);
 /* Write frame `frame`'s detection d to detections.csv: at once without gap

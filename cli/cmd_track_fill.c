@@ -45,15 +45,15 @@ elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
       !r->det_n || !r->det_cap || !r->det_frame || !c->gaps || !c->fill_pts)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (gap filling)");
   for (int k = 0; k < r->cap; k++) r->frame[k] = r->det_frame[k] = -1;
-  return ELFM_OK;
+  /* our own plan (the same calibration and options as the driver's): the
+   * last gaps are filled after the driver has freed its own */
+  return elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->fill_plan, err);
 }
 
-elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, const elfm_refocus_plan *plan,
-                            int64_t frame, elfm_error *err)
+elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, elfm_error *err)
 {
   frame_ring *r = &c->ring;
-  if (!r->cap || !f || !plan) return ELFM_OK;
-  c->fill_plan = plan;
+  if (!r->cap || !f) return ELFM_OK;
   if (!c->scratch) {
     c->scratch = elfm_frame_create(f->w, f->h, err);
     if (!c->scratch) return err ? err->code : ELFM_ERR_NOMEM;
@@ -260,4 +260,5 @@ void track_fill_free(track_ctx *c)
   free(c->gaps);
   free(c->fill_pts);
   elfm_frame_free(c->scratch);
+  elfm_refocus_plan_free(c->fill_plan);
 }

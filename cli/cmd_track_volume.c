@@ -319,7 +319,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     }
   }
   if (guided_fit) guided_view_fit(c, v, slot, c->pred, np, det, &n);
-  elfm_status st = track_fill_keep(c, c->slot_frame[slot], c->slot_plan[slot], v->frame, err);
+  elfm_status st = track_fill_keep(c, c->slot_frame[slot], v->frame, err);
   if (st != ELFM_OK) return st;
   st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
   if (st != ELFM_OK) return st;
