@@ -32,6 +32,16 @@ static void circle(double t_ms, double p[3])
   p[2] = 0.5 * t_ms;
 }
 
+/* Finish the linker, drop its tracks, free it. */
+static void end_linker(elfm_linker *l)
+{
+  elfm_error err;
+  CHECK_OK(elfm_link_finish(l, &err), &err);
+  elfm_track *t;
+  while ((t = elfm_link_pop_finished(l))) elfm_track_free(t);
+  elfm_link_free(l);
+}
+
 int main(void)
 {
   elfm_error err;
@@ -128,10 +138,7 @@ int main(void)
      * 1 um (0.64 measured); extrapolating the head alone misses by 2.3 */
     CHECK_MSG(worst < 1.0, "worst %g head alone %g", worst, worst_head);
     CHECK(worst_head > 2 * worst);
-    CHECK_OK(elfm_link_finish(l, &err), &err);
-    elfm_track *t;
-    while ((t = elfm_link_pop_finished(l))) elfm_track_free(t);
-    elfm_link_free(l);
+    end_linker(l);
   }
 
   /* 3. A straight line: the prediction is exact in the gap, and before the
@@ -166,10 +173,7 @@ int main(void)
       elfm_link_gap_predict(&birth, T0 - 3000, q);
       CHECK(fabs(q[0] + 6) < 1e-6 && fabs(q[1] - 3) < 1e-6 && fabs(q[2] + 1.5) < 1e-6);
     }
-    CHECK_OK(elfm_link_finish(l, &err), &err);
-    elfm_track *t;
-    while ((t = elfm_link_pop_finished(l))) elfm_track_free(t);
-    elfm_link_free(l);
+    end_linker(l);
   }
 
   /* 4. Filling: points given back land in the gap (and before the first
