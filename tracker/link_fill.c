@@ -17,9 +17,9 @@
 
 #include "link_internal.h"
 
-/* The points' fit at pts[ref]: constant acceleration over up to 8 points
- * of [k0, k1) when they have 3 distinct times, else a constant velocity
- * through the first and last, else at rest. */
+/* The points' fit at pts[ref]: constant acceleration over [k0, k1) (the
+ * linker's short history) when they are 4 with 3 distinct times, else a
+ * constant velocity through the first and last, else at rest. */
 static void end_fit(const elfm_track *t, size_t k0, size_t k1, size_t ref, double pos[3],
                     double vel[3], double acc[3])
 {
@@ -50,8 +50,8 @@ static double ends_intensity(const elfm_track *t, size_t k)
   return n ? s / n : 0;
 }
 
-/* The gap between pts[k-1] and pts[k] of t. */
-static void make_gap(const elfm_track *t, size_t k, elfm_link_gap *g)
+/* The gap between pts[k-1] and pts[k] of t; h: points each end's fit uses. */
+static void make_gap(const elfm_track *t, size_t k, size_t h, elfm_link_gap *g)
 {
   memset(g, 0, sizeof *g);
   g->track_id = t->id;
@@ -59,7 +59,6 @@ static void make_gap(const elfm_track *t, size_t k, elfm_link_gap *g)
   g->frame1 = t->pts[k].frame;
   g->t0_us = t->pts[k - 1].t_us;
   g->t1_us = t->pts[k].t_us;
-  const size_t h = 8; /* the linker's short history */
   end_fit(t, k > h ? k - h : 0, k, k - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
   end_fit(t, k, t->n - k > h ? k + h : t->n, k, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
   g->intensity = ends_intensity(t, k);
@@ -72,12 +71,13 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: bad arguments to settled_gaps");
   int n = 0;
   const size_t s = (size_t)settle_points;
+  const size_t h = (size_t)l->o.short_history; /* >= 4, checked at create */
   for (size_t i = 0; i < l->n_live && n < cap; i++) {
     const elfm_track *t = l->live[i].t;
     if (!all) {
       if (l->live[i].last_frame != l->last_frame || t->n < s) continue;
       size_t k = t->n - s;
-      if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, &out[n++]);
+      if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
       else if (k == 0) {  /* the track's birth */
         elfm_link_gap *g = &out[n++];
         memset(g, 0, sizeof *g);
@@ -87,12 +87,12 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
         g->t1_us = t->pts[0].t_us;
         g->frame0 = g->frame1 - l->o.max_gap_frames - 1;
         g->t0_us = g->t1_us;
-        end_fit(t, 0, t->n > 8 ? 8 : t->n, 0, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
+        end_fit(t, 0, t->n > h ? h : t->n, 0, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
         g->intensity = ends_intensity(t, 0);
       }
     } else {
       for (size_t k = t->n > s ? t->n - s + 1 : 1; k < t->n && n < cap; k++)
-        if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, &out[n++]);
+        if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
     }
   }
   *n_out = n;
