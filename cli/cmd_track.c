@@ -661,6 +661,10 @@ int cmd_track(int argc, char **argv)
   }
   if (st != ELFM_OK) {
     cli_fail(C, &err);
+    /* what was found before the error is not lost: the detections gap
+     * filling still held (best effort; the file may be what failed) */
+    elfm_error e2;
+    if (c.fdet) track_det_flush_before(&c, INT64_MAX, &e2);
     goto done;
   }
   if (!o.quiet)
