@@ -100,8 +100,9 @@ static void track_defaults(track_opts *o)
    * again and followed it for swap_points frames, the view fit looks for it
    * in each kept frame of the gap, from both ends inwards, starting where
    * the two ends put it, and before the track's first point. Flow 100 ms,
-   * seeds 1-20, mean alpha 0.7379 -> 0.7655, F1 0.925 -> 0.943 (held-out
-   * seeds 21-24: alpha +0.026 to +0.040), at the cost of the detections'
+   * seeds 1-20, mean alpha 0.7379 -> 0.7655 (every seed up, by 0.004 to
+   * 0.046), F1 0.925 -> 0.943 (held-out seeds 21-24: alpha +0.026 to
+   * +0.040), at the cost of the detections'
    * lateral RMSE 0.41 -> 0.46 um (the deep beads it finds are placed to
    * ~1 um). 4 views agreeing, not 6: 0.7634 / 0.7599 (3: 0.7667, more
    * wrong fills); gate 5 um (the weak gate; 3 / 7 / 10 um: 0.7525 /
