@@ -58,7 +58,7 @@ elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error
 
 elfm_status elfm_track_insert(elfm_track *t, const elfm_detection *d, elfm_error *err)
 {
-  /* first point at a later frame: binary search, the track is in frame order */
+  /* the first point not before d's frame (binary search: the track is in frame order) */
   size_t lo = 0, hi = t->n;
   while (lo < hi) {
     size_t mid = lo + (hi - lo) / 2;
