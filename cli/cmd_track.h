@@ -42,20 +42,24 @@ typedef struct track_opts {
   double fill_min_ratio; /* a fill is at least this x the intensity at the gap's ends */
 } track_opts;
 
-/* The last frames' nonzero pixels, by frame % cap (gap filling). */
+/* One kept frame of the gap-filling ring (cmd_track_fill.c). */
+typedef struct ring_slot {
+  int64_t frame;         /* the frame held, -1 none */
+  int64_t t_us;
+  size_t nnz, nnz_cap;
+  uint32_t *idx;         /* [nnz] pixel y*w + x */
+  float *val;            /* [nnz] its value */
+  /* the frame's detections, written when it leaves the ring (so that fills
+   * join their frame and detections.csv stays in frame order) */
+  int64_t det_frame;     /* the frame det holds, -1 none */
+  elfm_detection *det;
+  int det_n, det_cap;
+} ring_slot;
+
+/* The last frames' nonzero pixels, frame f in slot[f % cap] (gap filling). */
 typedef struct frame_ring {
   int cap;
-  int64_t *frame;        /* [cap] the frame held, -1 none */
-  int64_t *t_us;
-  size_t *nnz, *nnz_cap;
-  uint32_t **idx;        /* [cap][nnz] pixel y*w + x */
-  float **val;
-  /* detections of the kept frames, written when the frame leaves the ring
-   * (so that fills join their frame and detections.csv stays in frame
-   * order) */
-  elfm_detection **det;  /* [cap][det_n] */
-  int *det_n, *det_cap;
-  int64_t *det_frame;    /* the frame det[k] holds, -1 none */
+  ring_slot *slot;       /* [cap] */
 } frame_ring;
 
 typedef struct fwhm_list {
@@ -98,8 +102,7 @@ typedef struct track_ctx {
   double t_peaks, t_link, t_smooth;
   elfm_fwhm *fw;
   fwhm_list fl;
-  int vol_w, vol_h, vol_nz;
-  double um_per_px, z_min_um, z_step_um;
+  elfm_volume geo;       /* the volumes' geometry (header only, data NULL) */
   double median_speed_um_per_ms; /* of the finished tracks (summary.json, the note) */
   /* gap filling (cmd_track_fill.c) */
   frame_ring ring;

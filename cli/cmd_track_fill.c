@@ -28,23 +28,13 @@ elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
   if (o->fill_views <= 0) return ELFM_OK;
   frame_ring *r = &c->ring;
   r->cap = o->fill_max_gap + settle_points(o) + 2;
-  r->frame = malloc((size_t)r->cap * sizeof *r->frame);
-  r->t_us = malloc((size_t)r->cap * sizeof *r->t_us);
-  r->nnz = calloc((size_t)r->cap, sizeof *r->nnz);
-  r->nnz_cap = calloc((size_t)r->cap, sizeof *r->nnz_cap);
-  r->idx = calloc((size_t)r->cap, sizeof *r->idx);
-  r->val = calloc((size_t)r->cap, sizeof *r->val);
-  r->det = calloc((size_t)r->cap, sizeof *r->det);
-  r->det_n = calloc((size_t)r->cap, sizeof *r->det_n);
-  r->det_cap = calloc((size_t)r->cap, sizeof *r->det_cap);
-  r->det_frame = malloc((size_t)r->cap * sizeof *r->det_frame);
+  r->slot = calloc((size_t)r->cap, sizeof *r->slot);
   c->gaps_cap = 1024;
   c->gaps = malloc((size_t)c->gaps_cap * sizeof *c->gaps);
   c->fill_pts = malloc((size_t)r->cap * sizeof *c->fill_pts);
-  if (!r->frame || !r->t_us || !r->nnz || !r->nnz_cap || !r->idx || !r->val || !r->det ||
-      !r->det_n || !r->det_cap || !r->det_frame || !c->gaps || !c->fill_pts)
+  if (!r->slot || !c->gaps || !c->fill_pts)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (gap filling)");
-  for (int k = 0; k < r->cap; k++) r->frame[k] = r->det_frame[k] = -1;
+  for (int k = 0; k < r->cap; k++) r->slot[k].frame = r->slot[k].det_frame = -1;
   /* our own plan (the same calibration and options as the driver's): the
    * last gaps are filled after the driver has freed its own */
   return elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->fill_plan, err);
@@ -58,44 +48,45 @@ elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, el
     c->scratch = elfm_frame_create(f->w, f->h, err);
     if (!c->scratch) return err ? err->code : ELFM_ERR_NOMEM;
   }
-  const int k = (int)(frame % r->cap);
-  if (f->nnz > r->nnz_cap[k]) {
-    uint32_t *a = realloc(r->idx[k], f->nnz * sizeof *a);
-    if (a) r->idx[k] = a;
-    float *b = realloc(r->val[k], f->nnz * sizeof *b);
-    if (b) r->val[k] = b;
+  ring_slot *sl = &r->slot[frame % r->cap];
+  if (f->nnz > sl->nnz_cap) {
+    uint32_t *a = realloc(sl->idx, f->nnz * sizeof *a);
+    if (a) sl->idx = a;
+    float *b = realloc(sl->val, f->nnz * sizeof *b);
+    if (b) sl->val = b;
     if (!a || !b) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (kept frames)");
-    r->nnz_cap[k] = f->nnz;
+    sl->nnz_cap = f->nnz;
   }
   for (size_t i = 0; i < f->nnz; i++) {
-    r->idx[k][i] = f->idx[i];
-    r->val[k][i] = f->data[f->idx[i]];
+    sl->idx[i] = f->idx[i];
+    sl->val[i] = f->data[f->idx[i]];
   }
-  r->nnz[k] = f->nnz;
-  r->frame[k] = frame;
-  r->t_us[k] = f->t_us;
+  sl->nnz = f->nnz;
+  sl->frame = frame;
+  sl->t_us = f->t_us;
   return ELFM_OK;
 }
 
-/* The view fit in kept frame slot k, started at q (um); 1 and *d filled
- * when at least fill_views views agree within fill_gate_um of q. */
-static int fill_one(track_ctx *c, const elfm_volume *geo, int k, const double q[3],
-                    double min_intensity, elfm_detection *d)
+/* The view fit in kept frame sl, started at q (um); 1 and *d filled when
+ * at least fill_views views agree within fill_gate_um of q and it has at
+ * least min_intensity. */
+static int fill_one(track_ctx *c, const ring_slot *sl, const double q[3], double min_intensity,
+                    elfm_detection *d)
 {
   const track_opts *o = c->o;
-  frame_ring *r = &c->ring;
+  const elfm_volume *geo = &c->geo;
   elfm_frame *s = c->scratch;
   elfm_localize_options lo = o->loc;
   lo.min_views = o->fill_views;
-  for (size_t i = 0; i < r->nnz[k]; i++) s->data[r->idx[k][i]] = r->val[k][i];
+  for (size_t i = 0; i < sl->nnz; i++) s->data[sl->idx[i]] = sl->val[i];
   elfm_localize_result res;
   int ok = elfm_refocus_localize(c->fill_plan, s, elfm_volume_x_vox(geo, q[0]),
                                  elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]), &lo, &res);
   if (ok) {
     const int X = (int)lround(res.x_vox), Y = (int)lround(res.y_vox), K = (int)lround(res.z_vox);
     memset(d, 0, sizeof *d);
-    d->frame = r->frame[k];
-    d->t_us = r->t_us[k];
+    d->frame = sl->frame;
+    d->t_us = sl->t_us;
     d->x_um = elfm_volume_x_um(geo, res.x_vox);
     d->y_um = elfm_volume_y_um(geo, res.y_vox);
     d->z_um = elfm_volume_z_um(geo, res.z_vox);
@@ -105,7 +96,7 @@ static int fill_one(track_ctx *c, const elfm_volume *geo, int k, const double q[
     if (ok) d->intensity = elfm_refocus_value_at(c->fill_plan, s, X, Y, K);
     ok = ok && d->intensity >= min_intensity;
   }
-  for (size_t i = 0; i < r->nnz[k]; i++) s->data[r->idx[k][i]] = 0;
+  for (size_t i = 0; i < sl->nnz; i++) s->data[sl->idx[i]] = 0;
   return ok;
 }
 
@@ -121,15 +112,7 @@ static int fill_one(track_ctx *c, const elfm_volume *geo, int k, const double q[
  * left ended. */
 static int walk_gap(track_ctx *c, const elfm_link_gap *g)
 {
-  frame_ring *r = &c->ring;
-  elfm_volume geo;
-  memset(&geo, 0, sizeof geo);
-  geo.w = c->vol_w;
-  geo.h = c->vol_h;
-  geo.nz = c->vol_nz;
-  geo.um_per_px = c->um_per_px;
-  geo.z_min_um = c->z_min_um;
-  geo.z_step_um = c->z_step_um;
+  const frame_ring *r = &c->ring;
   double off[2][3] = {{0, 0, 0}, {0, 0, 0}}; /* forward side, backward side */
   int m = 0, misses = 0;
   int64_t lo = g->frame0 + 1, hi = g->frame1 - 1;
@@ -137,17 +120,17 @@ static int walk_gap(track_ctx *c, const elfm_link_gap *g)
   const double min_i = c->o->fill_min_ratio * g->intensity;
   for (int side = open; lo <= hi; side = open ? 1 : side ^ 1) {
     const int64_t f = side ? hi-- : lo++;
-    const int k = f >= 0 ? (int)(f % r->cap) : 0;
-    if (f < 0 || r->frame[k] != f) {  /* before the first frame, or no longer kept */
+    const ring_slot *sl = f >= 0 ? &r->slot[f % r->cap] : NULL;
+    if (!sl || sl->frame != f) {  /* before the first frame, or no longer kept */
       if (open) break;
       continue;
     }
     c->n_fill_tries++;
     double p[3], q[3];
-    elfm_link_gap_predict(g, r->t_us[k], p);
+    elfm_link_gap_predict(g, sl->t_us, p);
     for (int a = 0; a < 3; a++) q[a] = p[a] + off[side][a];
     elfm_detection d;
-    if (!fill_one(c, &geo, k, q, min_i, &d)) {
+    if (!fill_one(c, sl, q, min_i, &d)) {
       if (open && ++misses >= 2) break;
       continue;
     }
@@ -189,14 +172,13 @@ elfm_status track_fill_gaps(track_ctx *c, int all, elfm_error *err)
   return st;
 }
 
-/* Write ring slot k's detections and empty it. */
-static elfm_status det_write_slot(track_ctx *c, int k, elfm_error *err)
+/* Write a slot's detections and empty it. */
+static elfm_status det_write_slot(track_ctx *c, ring_slot *sl, elfm_error *err)
 {
-  frame_ring *r = &c->ring;
   elfm_status st = ELFM_OK;
-  if (r->det_n[k] > 0) st = elfm_detections_write(c->fdet, c->p_det, r->det[k], r->det_n[k], err);
-  r->det_n[k] = 0;
-  r->det_frame[k] = -1;
+  if (sl->det_n > 0) st = elfm_detections_write(c->fdet, c->p_det, sl->det, sl->det_n, err);
+  sl->det_n = 0;
+  sl->det_frame = -1;
   return st;
 }
 
@@ -204,22 +186,22 @@ elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d,
 {
   frame_ring *r = &c->ring;
   if (!r->cap) return elfm_detections_write(c->fdet, c->p_det, d, 1, err);
-  const int k = (int)(frame % r->cap);
-  if (r->det_frame[k] != frame) {
-    if (r->det_frame[k] >= 0)  /* track_det_flush_before did not run: a bug */
+  ring_slot *sl = &r->slot[frame % r->cap];
+  if (sl->det_frame != frame) {
+    if (sl->det_frame >= 0)  /* track_det_flush_before did not run: a bug */
       return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                             "detections of frame %lld: frame %lld not yet written",
-                            (long long)frame, (long long)r->det_frame[k]);
-    r->det_frame[k] = frame;
+                            (long long)frame, (long long)sl->det_frame);
+    sl->det_frame = frame;
   }
-  if (r->det_n[k] == r->det_cap[k]) {
-    int cap = r->det_cap[k] ? 2 * r->det_cap[k] : 64;
-    elfm_detection *p = realloc(r->det[k], (size_t)cap * sizeof *p);
+  if (sl->det_n == sl->det_cap) {
+    int cap = sl->det_cap ? 2 * sl->det_cap : 64;
+    elfm_detection *p = realloc(sl->det, (size_t)cap * sizeof *p);
     if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
-    r->det[k] = p;
-    r->det_cap[k] = cap;
+    sl->det = p;
+    sl->det_cap = cap;
   }
-  r->det[k][r->det_n[k]++] = *d;
+  sl->det[sl->det_n++] = *d;
   return ELFM_OK;
 }
 
@@ -227,13 +209,14 @@ elfm_status track_det_flush_before(track_ctx *c, int64_t frame, elfm_error *err)
 {
   frame_ring *r = &c->ring;
   for (;;) {  /* oldest first; at most cap slots */
-    int k = -1;
-    for (int j = 0; j < r->cap; j++)
-      if (r->det_frame[j] >= 0 && r->det_frame[j] < frame &&
-          (k < 0 || r->det_frame[j] < r->det_frame[k]))
-        k = j;
-    if (k < 0) return ELFM_OK;
-    elfm_status st = det_write_slot(c, k, err);
+    ring_slot *old = NULL;
+    for (int j = 0; j < r->cap; j++) {
+      ring_slot *sl = &r->slot[j];
+      if (sl->det_frame >= 0 && sl->det_frame < frame && (!old || sl->det_frame < old->det_frame))
+        old = sl;
+    }
+    if (!old) return ELFM_OK;
+    elfm_status st = det_write_slot(c, old, err);
     if (st != ELFM_OK) return st;
   }
 }
@@ -241,21 +224,12 @@ elfm_status track_det_flush_before(track_ctx *c, int64_t frame, elfm_error *err)
 void track_fill_free(track_ctx *c)
 {
   frame_ring *r = &c->ring;
-  for (int k = 0; k < r->cap; k++) {
-    if (r->idx) free(r->idx[k]);
-    if (r->val) free(r->val[k]);
-    if (r->det) free(r->det[k]);
+  for (int k = 0; r->slot && k < r->cap; k++) {
+    free(r->slot[k].idx);
+    free(r->slot[k].val);
+    free(r->slot[k].det);
   }
-  free(r->det);
-  free(r->det_n);
-  free(r->det_cap);
-  free(r->det_frame);
-  free(r->idx);
-  free(r->val);
-  free(r->frame);
-  free(r->t_us);
-  free(r->nnz);
-  free(r->nnz_cap);
+  free(r->slot);
   memset(r, 0, sizeof *r);
   free(c->gaps);
   free(c->fill_pts);

@@ -279,12 +279,8 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   const track_opts *o = c->o;
   if (!c->have_first) {
     c->have_first = 1;
-    c->vol_w = v->w;
-    c->vol_h = v->h;
-    c->vol_nz = v->nz;
-    c->um_per_px = v->um_per_px;
-    c->z_min_um = v->z_min_um;
-    c->z_step_um = v->z_step_um;
+    c->geo = *v;
+    c->geo.data = NULL;
     c->first_frame = v->frame;
     c->first_t_us = v->t_us;
   }
