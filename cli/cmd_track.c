@@ -231,6 +231,18 @@ static int parse_vec3(const char *s, double v[3])
   return *end == 0;
 }
 
+/* A view-count option, 0 (off) or 2..255 (--guided-views, --fill-views):
+ * 1, or 0 after a usage message. */
+static int parse_views_or_off(const char *cmd, const char *opt, const char *a, int *out)
+{
+  if (!cli_parse_int(cmd, opt, a, out)) return 0;
+  if (*out != 0 && (*out < 2 || *out > 255)) {
+    cli_message(cmd, CLI_USAGE, "%s must be 0 or 2..255, not '%s'", opt, a);
+    return 0;
+  }
+  return 1;
+}
+
 static void progress(const elfm_recon_stats *s, void *user)
 {
   const track_ctx *c = user;
@@ -364,9 +376,7 @@ int cmd_track(int argc, char **argv)
       break;
     case O_FILLV:
       fillv_given = 1;
-      if (!cli_parse_int(C, "--fill-views", a, &o.fill_views)) return CLI_USAGE;
-      if (o.fill_views != 0 && (o.fill_views < 2 || o.fill_views > 255))
-        return cli_message(C, CLI_USAGE, "--fill-views must be 0 or 2..255, not '%s'", a);
+      if (!parse_views_or_off(C, "--fill-views", a, &o.fill_views)) return CLI_USAGE;
       break;
     case O_FILLG:
       if (!cli_parse_double_in(C, "--fill-gate-um", a, 0, 1, 100, "> 0 and <= 100", &o.fill_gate_um)) return CLI_USAGE;
@@ -380,9 +390,7 @@ int cmd_track(int argc, char **argv)
         return cli_message(C, CLI_USAGE, "--fill-max-gap must be 1..1000, not '%s'", a);
       break;
     case O_GVIEWS:
-      if (!cli_parse_int(C, "--guided-views", a, &o.guided_views)) return CLI_USAGE;
-      if (o.guided_views != 0 && (o.guided_views < 2 || o.guided_views > 255))
-        return cli_message(C, CLI_USAGE, "--guided-views must be 0 or 2..255, not '%s'", a);
+      if (!parse_views_or_off(C, "--guided-views", a, &o.guided_views)) return CLI_USAGE;
       break;
     case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
     case O_WEAKGATE: if (!cli_parse_double(C, "--weak-gate-um", a, &o.link.weak_gate_um)) return CLI_USAGE; break;
