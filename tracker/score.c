@@ -64,12 +64,12 @@ elfm_status elfm_score_reserve_cost(double **cost, size_t *cap, size_t need, elf
 /* Speeds must spread at least this much to tell a lead from a delay. */
 #define MOTION_MIN_SPEED_SD_UM_PER_MS 0.25
 
-/* Truth velocity (um/ms) at truth point p from its neighbours in frame
- * order (points [a, b) are its object's): central where both exist, else
- * one-sided. Returns 0 where there is neither. */
-static int truth_velocity(const truth_t *tr, const frames_t *fr, int64_t a, int64_t b, int64_t p,
-                          double v[3])
+/* Truth velocity (um/ms) at truth point p of object k from its
+ * neighbours in frame order: central where both exist, else one-sided.
+ * Returns 0 where there is neither. */
+static int truth_velocity(const truth_t *tr, const frames_t *fr, int k, int64_t p, double v[3])
 {
+  const int64_t a = tr->obj_off[k], b = tr->obj_off[k + 1];
   /* neighbours more than 2 frames away (the object was dark or outside the
    * volume between) would average over an unseen stretch */
   int64_t lo = p > a && tr->pt.frame[p] - tr->pt.frame[p - 1] <= 2 ? p - 1 : p;
@@ -89,11 +89,11 @@ typedef struct {
   double s, ss, e, es;
 } motion_sums;
 
-static void motion_add(motion_sums *m, const truth_t *tr, const frames_t *fr, const int64_t *obj_a,
-                       const int64_t *obj_b, int64_t p, double dx, double dy)
+static void motion_add(motion_sums *m, const truth_t *tr, const frames_t *fr, const int *obj_of,
+                       int64_t p, double dx, double dy)
 {
   double v[3];
-  if (!truth_velocity(tr, fr, obj_a[p], obj_b[p], p, v)) return;
+  if (!truth_velocity(tr, fr, obj_of[p], p, v)) return;
   double sp = hypot(v[0], v[1]);
   if (!(sp >= MOTION_MIN_SPEED_UM_PER_MS)) return;
   double e = (dx * v[0] + dy * v[1]) / sp;
@@ -144,22 +144,18 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   int *next = malloc(nn * sizeof *next);   /* next node in the same component, or -1 */
   int *rows = malloc(nn * sizeof *rows), *cols = malloc(nn * sizeof *cols);
   int *r2c = malloc(nn * sizeof *r2c);
-  /* each truth point's object as the range of its points (for velocities) */
-  int64_t *obj_a = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_a);
-  int64_t *obj_b = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_b);
+  /* each truth point's object (for its velocity) */
+  int *obj_of = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_of);
   motion_sums ms = {0, 0, 0, 0, 0};
   double *cost = NULL;
   size_t cost_cap = 0;
   elfm_assign_workspace *ws = NULL;
-  if (!parent || !head || !next || !rows || !cols || !r2c || !obj_a || !obj_b) {
+  if (!parent || !head || !next || !rows || !cols || !r2c || !obj_of) {
     s = elfm_score_nomem(err);
     goto done;
   }
   for (int k = 0; k < tr->n_obj; k++)
-    for (int64_t p = tr->obj_off[k]; p < tr->obj_off[k + 1]; p++) {
-      obj_a[p] = tr->obj_off[k];
-      obj_b[p] = tr->obj_off[k + 1];
-    }
+    for (int64_t p = tr->obj_off[k]; p < tr->obj_off[k + 1]; p++) obj_of[p] = k;
   if ((s = elfm_assign_workspace_create(0, 0, &ws, err)) != ELFM_OK) goto done;
 
   int64_t tp = 0;
@@ -221,7 +217,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p];
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
-        motion_add(&ms, tr, fr, obj_a, obj_b, p, dx, dy);
+        motion_add(&ms, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;
@@ -239,8 +235,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   out->rmse_z_um = tp ? sqrt(sz / (double)tp) : NAN;
   motion_finish(&ms, out);
 done:
-  free(obj_a);
-  free(obj_b);
+  free(obj_of);
   elfm_assign_workspace_free(ws);
   free(cost);
   free(parent);
