@@ -180,19 +180,9 @@ int main(int argc, char **argv)
       }
       continue;
     }
-    {
-      /* copy fm into the ring's next slot: clear its listed pixels, copy fm's */
-      head = (head + 1) % nk;
-      elfm_frame *d = ring[head];
-      for (size_t i = 0; i < d->nnz; i++) d->data[d->idx[i]] = 0;
-      for (size_t i = 0; i < fm->nnz; i++) {
-        d->idx[i] = fm->idx[i];
-        d->data[fm->idx[i]] = fm->data[fm->idx[i]];
-      }
-      d->nnz = fm->nnz;
-      d->t_us = fm->t_us;
-      if (n_ring < nk) n_ring++;
-    }
+    head = (head + 1) % nk; /* fm into the ring's next slot (same size: cannot fail) */
+    elfm_frame_copy(ring[head], fm, &err);
+    if (n_ring < nk) n_ring++;
     for (int k = 0; k < T.n_ids; k++) {
       double p[3];
       if (!truth_at(&T, k, (double)fm->t_us, p)) continue;
