@@ -31,7 +31,9 @@ static void score_usage(FILE *f)
           "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
           "t_us and counts only while bright and (with --calib) inside the volume.\n"
           "  detections: recall, precision, F1, RMSE x/y/z (um) from per-frame Hungarian matching\n"
-          "              (without --detections, the tracks' raw points are the detections)\n"
+          "              (without --detections, the tracks' raw points are the detections);\n"
+          "              alpha_detections: the ISBI alpha if every matched detection were on\n"
+          "              its own object's track (what the detections allow a linker)\n"
           "  tracks:     ISBI 2012 alpha, beta, track and detection Jaccard (Chenouard 2014)\n"
           "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
           "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
@@ -72,6 +74,7 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   json_num(o, "rmse_x_um", r->rmse_x_um);
   json_num(o, "rmse_y_um", r->rmse_y_um);
   json_num(o, "rmse_z_um", r->rmse_z_um);
+  json_num(o, "alpha_detections", r->alpha_detections);
   json_num(o, "rmse_tracks_um", r->has_tracks ? r->rmse_tracks_um : NAN);
   cJSON_AddNumberToObject(o, "n_frames", r->n_frames);
   cJSON_AddNumberToObject(o, "n_truth_points", (double)r->n_truth_points);
@@ -118,6 +121,8 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
   printf("  recall    %8.4f   precision %8.4f   F1 %8.4f\n", r->recall, r->precision, r->f1);
   printf("  RMSE x %8.4f um   y %8.4f um   z %8.4f um\n", r->rmse_x_um, r->rmse_y_um,
          r->rmse_z_um);
+  printf("  alpha if linked perfectly %8.4f (each matched detection on its own object's "
+         "track)\n", r->alpha_detections);
   if (r->n_motion_points > 0) {
     printf("  along the lateral motion (%lld matched detections moving >= 0.5 um/ms): mean "
            "error %+.3f um\n", (long long)r->n_motion_points, r->motion_along_mean_um);

@@ -169,6 +169,7 @@ int main(void)
     CHECK_NEAR(r.jaccard_detections, 1.0, TOL);
     CHECK_NEAR(r.rmse_x_um, 0.0, 1e-9);
     CHECK_NEAR(r.rmse_z_um, 0.0, 1e-9);
+    CHECK_NEAR(r.alpha_detections, 1.0, TOL);
     CHECK_EQ_INT(r.detections_from_tracks, 0);
     CHECK_EQ_INT(r.n_paired_tracks, 2);
     /* detections only (no tracks): detection measures, no track measures */
@@ -191,6 +192,7 @@ int main(void)
     CHECK_NEAR(r.recall, 36.0 / 40.0, TOL);
     CHECK_NEAR(r.precision, 1.0, TOL);
     CHECK_NEAR(r.f1, 2.0 * 36.0 / (40.0 + 36.0), TOL);
+    CHECK_NEAR(r.alpha_detections, 36.0 / 40.0, TOL); /* 4 misses at eps each */
     elfm_table_free(de2);
     /* nothing detected in the first 3 and the last 2 frames: without the
      * run's frame count those frames are unknown (16 of 20 scored); with
@@ -238,6 +240,8 @@ int main(void)
     CHECK_NEAR(r.f1, 1.0, TOL);
     CHECK_NEAR(r.rmse_x_um, 1.0, 1e-9);
     CHECK_NEAR(r.rmse_y_um, 0.0, 1e-9);
+    /* the detections themselves are 1 um off: the same 0.75 */
+    CHECK_NEAR(r.alpha_detections, 0.75, TOL);
     elfm_table_free(tr);
   }
 
@@ -320,6 +324,8 @@ int main(void)
     CHECK_NEAR(r.beta, 0.6, TOL);
     CHECK_NEAR(r.jaccard_tracks, 2.0 / 3.0, TOL);
     CHECK_NEAR(r.f1, 1.0, TOL); /* detection-wise nothing is wrong */
+    /* the split is the linker's loss, not the detector's */
+    CHECK_NEAR(r.alpha_detections, 1.0, TOL);
     elfm_table_free(tr);
   }
 
@@ -570,6 +576,7 @@ int main(void)
     CHECK_NEAR(r.recall, 0.0, TOL);
     CHECK_NEAR(r.alpha, 0.0, TOL);
     CHECK_NEAR(r.beta, 0.0, TOL);
+    CHECK_NEAR(r.alpha_detections, 0.0, TOL);
     CHECK_EQ_INT(r.n_missed_tracks, 2);
     CHECK(isnan(r.precision));
     elfm_table_free(tk);

@@ -159,7 +159,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   if ((s = elfm_assign_workspace_create(0, 0, &ws, err)) != ELFM_OK) goto done;
 
   int64_t tp = 0;
-  double sx = 0, sy = 0, sz = 0;
+  double sx = 0, sy = 0, sz = 0, sd = 0;
   for (int f = 0; f < fr->n; f++) {
     int64_t ta = tr->fr_off[f];
     int nt = (int)(tr->fr_off[f + 1] - ta);
@@ -217,6 +217,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p];
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
+        sd += dist_aniso(g, dx, dy, dz);
         motion_add(&ms, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
@@ -233,6 +234,9 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   out->rmse_x_um = tp ? sqrt(sx / (double)tp) : NAN;
   out->rmse_y_um = tp ? sqrt(sy / (double)tp) : NAN;
   out->rmse_z_um = tp ? sqrt(sz / (double)tp) : NAN;
+  out->alpha_detections =
+      tr->pt.n ? 1.0 - (sd + g->eps * (double)(tr->pt.n - tp)) / (g->eps * (double)tr->pt.n)
+               : NAN;
   motion_finish(&ms, out);
 done:
   free(obj_of);
@@ -312,6 +316,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   memset(out, 0, sizeof *out);
   out->recall = out->precision = out->f1 = NAN;
   out->rmse_x_um = out->rmse_y_um = out->rmse_z_um = NAN;
+  out->alpha_detections = NAN;
   out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = NAN;
   out->rmse_tracks_um = out->stage_rel_error = NAN;
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
@@ -364,7 +369,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
     int seen = 0;
     if ((s = elfm_score_truth_ids_seen(truth, opt, &seen, err)) != ELFM_OK) goto done;
     if (seen > 0) {
-      out->recall = out->f1 = 0.0;
+      out->recall = out->f1 = out->alpha_detections = 0.0;
       if (tracks) {
         out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = 0.0;
         out->n_truth_tracks = out->n_missed_tracks = seen;
