@@ -199,6 +199,8 @@ static void usage(FILE *f)
     "                       free: smoothing spline for all\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
+    "  --view-fit-sigma F   points placed by the view fit (gap filling, guided\n"
+    "                       search) count as F x noisier than the track's peaks (1.5)\n"
     "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
     "                       their points (default 1/3)\n"
     "  --motion-lead-um A, --motion-delay-us D   each view's image of a moving object\n"
@@ -266,7 +268,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG
 };
 
 int cmd_track(int argc, char **argv)
@@ -299,6 +301,7 @@ int cmd_track(int argc, char **argv)
       {"guided-views", required_argument, 0, O_GVIEWS},
       {"fill-views", required_argument, 0, O_FILLV},
       {"fill-gate-um", required_argument, 0, O_FILLG},
+      {"view-fit-sigma", required_argument, 0, O_VFSIG},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
@@ -380,6 +383,11 @@ int cmd_track(int argc, char **argv)
       break;
     case O_FILLG:
       if (!cli_parse_double_in(C, "--fill-gate-um", a, 0, 1, 100, "> 0 and <= 100", &o.fill_gate_um)) return CLI_USAGE;
+      break;
+    case O_VFSIG:
+      if (!cli_parse_double_in(C, "--view-fit-sigma", a, 0, 1, 1000, "> 0 and <= 1000",
+                               &o.smooth.view_fit_sigma_factor))
+        return CLI_USAGE;
       break;
     case O_FILLR:
       if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;

@@ -87,6 +87,7 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const double q[3], double
     memset(d, 0, sizeof *d);
     d->frame = sl->frame;
     d->t_us = sl->t_us;
+    d->view_fit = 1;
     d->x_um = elfm_volume_x_um(geo, res.x_vox);
     d->y_um = elfm_volume_y_um(geo, res.y_vox);
     d->z_um = elfm_volume_z_um(geo, res.z_vox);

@@ -266,6 +266,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     if (!any_near(&d, 1, q, g, kz)) continue;
     d.intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
     d.weak = 1;
+    d.view_fit = 1;
     det[n++] = d;
     c->n_guided_views++;
   }

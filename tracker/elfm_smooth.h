@@ -68,6 +68,11 @@ typedef struct elfm_smooth_options {
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
   double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
   int allow_spline;             /* AUTO may pick the spline (1); 0 for rigid stage motion */
+  /* elfm_track_smooth only: a point placed by the view fit
+   * (elfm_detection.view_fit) counts as this many times noisier than the
+   * track's estimated noise, which its peaks keep (1.5; 1 = all points
+   * alike). */
+  double view_fit_sigma_factor;
   /* Motion bias of the detections, corrected by elfm_track_smooth only
    * (0 and 0 = off, the default). A detection made from ON events lies
    * ahead of the object by a distance (the ON events crowd on its leading
@@ -118,6 +123,12 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
                             const int64_t *q_t_us, double *pos_um, double *vel_um_per_ms,
                             double *pos_sd_um, double *vel_sd_um_per_ms, elfm_smooth_info *info,
                             elfm_error *err);
+
+/* The noise per axis elfm_smooth_fit estimates when given no sigmas
+ * (NOISE above), for a caller that weights some points differently. */
+elfm_status elfm_smooth_estimate_noise(const elfm_smooth_options *o, size_t n,
+                                       const int64_t *t_us, const double *xyz_um,
+                                       double sigma_um[3], elfm_error *err);
 
 /* The motion bias b (um, x y z) of a detection of an object moving at v
  * (um/ms) under o's model (above). Zeros when the lead and delay are 0. */

@@ -315,6 +315,7 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   refine_axis(d, ic, (size_t)w, y, h, o->fit_half_xy, o->refine, &oy, &sy, &vy);
   refine_axis(d, ic, (size_t)w * h, z, nz, o->fit_half_z, o->refine, &oz, &sz, &vz);
   det->weak = weak;
+  det->view_fit = 0;
   det->frame = v->frame;
   det->t_us = v->t_us;
   det->x_um = elfm_volume_x_um(v, x + ox);

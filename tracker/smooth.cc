@@ -702,6 +702,7 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   o->min_sigma_xy_um = 0.02;
   o->min_sigma_z_um = 0.08;
   o->allow_spline = 1;
+  o->view_fit_sigma_factor = 1.5;  // view fits vs peaks at equal depth (elfm_smooth.h)
 }
 
 elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
@@ -717,6 +718,20 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
     return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
   } catch (...) {
     return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1, "smooth: solver failed");
+  }
+}
+
+elfm_status elfm_smooth_estimate_noise(const elfm_smooth_options *o, size_t n,
+                                       const int64_t *t_us, const double *xyz_um,
+                                       double sigma_um[3], elfm_error *err)
+{
+  if (!o || (n > 0 && (!t_us || !xyz_um)) || !sigma_um)
+    return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: no points");
+  try {
+    estimate_sigma(o, n, t_us, xyz_um, sigma_um);
+    return ELFM_OK;
+  } catch (const std::bad_alloc &) {
+    return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
   }
 }
 
