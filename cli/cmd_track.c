@@ -115,6 +115,12 @@ static void track_defaults(track_opts *o)
   o->fill_gate_um = 5;
   o->fill_max_gap = 50;
   o->fill_min_ratio = 0.15;
+  /* The same floor as gap filling's, for the same reason: a bead that has
+   * just gone dark (blinking) still leaves faint ON light in some views,
+   * which the view fit finds. blink_moving seeds 1-4: alpha 0.304 / 0.224 /
+   * 0.426 / 0.236 -> 0.404 / 0.317 / 0.496 / 0.361; flow seeds 1-20 0.7681 ->
+   * 0.7687, flat from 0.15 to 0.4 (docs/tracker.md). */
+  o->guided_min_ratio = 0.15;
 }
 
 static void usage(FILE *f)
@@ -179,8 +185,9 @@ static void usage(FILE *f)
     "  --guided-views N     where a track of >= --guided-min-points points predicts\n"
     "                       its bead and no peak lies within the weak gate, fit the\n"
     "                       views from the prediction; a fit with >= N views agreeing\n"
-    "                       becomes a weak peak (default 8; 0 = off: better for\n"
-    "                       blinking objects, whose last ON events it would take)\n"
+    "                       and at least --guided-min-ratio F (0.15) x the track's\n"
+    "                       last intensity becomes a weak peak (default 8; 0 = off;\n"
+    "                       the floor keeps it off a blinking bead's faint last light)\n"
     "  --fill-views N       gap filling: once a track has found its object again\n"
     "                       (8 points on), fit the views in each kept frame of the\n"
     "                       gap, and before the track began, from where the gap's\n"
@@ -268,7 +275,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO
 };
 
 int cmd_track(int argc, char **argv)
@@ -302,6 +309,7 @@ int cmd_track(int argc, char **argv)
       {"fill-views", required_argument, 0, O_FILLV},
       {"fill-gate-um", required_argument, 0, O_FILLG},
       {"view-fit-sigma", required_argument, 0, O_VFSIG},
+      {"guided-min-ratio", required_argument, 0, O_GRATIO},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
@@ -388,6 +396,9 @@ int cmd_track(int argc, char **argv)
       if (!cli_parse_double_in(C, "--view-fit-sigma", a, 0, 1, 1000, "> 0 and <= 1000",
                                &o.smooth.view_fit_sigma_factor))
         return CLI_USAGE;
+      break;
+    case O_GRATIO:
+      if (!cli_parse_double_in(C, "--guided-min-ratio", a, 0, 0, 1, "0..1", &o.guided_min_ratio)) return CLI_USAGE;
       break;
     case O_FILLR:
       if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;

@@ -36,6 +36,7 @@ typedef struct track_opts {
   int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
   elfm_localize_options loc;
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
+  double guided_min_ratio; /* and its find at least this x the track's last intensity */
   int fill_views;      /* gap filling: views that must agree (0 = off) */
   double fill_gate_um; /* a fill lands within this of where the gap's ends put the object */
   int fill_max_gap;    /* frames kept for it: gaps up to this long are filled */
@@ -87,6 +88,7 @@ typedef struct track_ctx {
   const elfm_frame **slot_frame;        /* [n_slots] */
   const elfm_refocus_plan **slot_plan;  /* [n_slots] */
   double *pred;          /* [max_det][3] track predictions (guided search) */
+  double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
   elfm_track **fin;      /* finished tracks being smoothed (drain) */
   elfm_status *fin_st;

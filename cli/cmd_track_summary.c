@@ -140,6 +140,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "localize_outlier_px", o->loc.outlier_px);
   cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
   cJSON_AddNumberToObject(par, "guided_views", o->guided_views);
+  cJSON_AddNumberToObject(par, "guided_min_ratio", o->guided_min_ratio);
   cJSON_AddNumberToObject(par, "fill_views", o->fill_views);
   cJSON_AddNumberToObject(par, "fill_gate_um", o->fill_gate_um);
   cJSON_AddNumberToObject(par, "fill_max_gap", o->fill_max_gap);

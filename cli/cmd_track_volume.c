@@ -127,7 +127,8 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   c->slot_frame = calloc((size_t)c->n_slots, sizeof *c->slot_frame);
   c->slot_plan = calloc((size_t)c->n_slots, sizeof *c->slot_plan);
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
-  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->det_loc || !c->slot_frame || !c->slot_plan || !c->pred)
+  c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
+  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->det_loc || !c->slot_frame || !c->slot_plan || !c->pred || !c->pred_intensity)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -265,6 +266,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     d.z_um = elfm_volume_z_um(v, r.z_vox);
     if (!any_near(&d, 1, q, g, kz)) continue;
     d.intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
+    if (d.intensity < o->guided_min_ratio * c->pred_intensity[k]) continue;
     d.weak = 1;
     d.view_fit = 1;
     det[n++] = d;
@@ -297,7 +299,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   int np = 0;
   if (guided_peak || guided_fit) {
     elfm_status sp = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred,
-                                       o->max_det, &np, err);
+                                       c->pred_intensity, o->max_det, &np, err);
     if (sp != ELFM_OK) return sp;
   }
   if (guided_peak) {
@@ -380,6 +382,7 @@ void track_ctx_free(track_ctx *c)
   free(c->slot_frame);
   free(c->slot_plan);
   free(c->pred);
+  free(c->pred_intensity);
   elfm_track_store_clear(&c->store);
   free(c->det);
   free(c->fw);

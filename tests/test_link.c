@@ -505,26 +505,30 @@ int main(void)
 
   /* 5f. Predictions for the guided search: a track moving 1 um per frame
    * along x is expected at x = 10 in frame 10 (and 12 after two misses);
-   * tracks shorter than min_points are left out; nothing changes. */
+   * tracks shorter than min_points are left out; nothing changes. With
+   * the intensities: the mean of the last 3 points' (7, 8, 9 -> 8). */
   {
     elfm_linker *l = elfm_link_create(&o, &err);
     for (int f = 0; f < 10; f++) {
       elfm_detection d = mk(1.0 * f, 2.0, -3.0);
+      d.intensity = f;
       CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
     }
-    double xyz[6];
+    double xyz[6], inten[2] = {-1, -1};
     int np = -1;
-    CHECK_OK(elfm_link_predict(l, 10, T0 + 10 * 1000, 3, xyz, 2, &np, &err), &err);
+    CHECK_OK(elfm_link_predict(l, 10, T0 + 10 * 1000, 3, xyz, inten, 2, &np, &err), &err);
     CHECK_EQ_INT(np, 1);
+    CHECK_NEAR(inten[0], 8.0, 1e-12);
+    CHECK_NEAR(inten[1], -1.0, 0);
     CHECK_NEAR(xyz[0], 10.0, 1e-6);
     CHECK_NEAR(xyz[1], 2.0, 1e-6);
     CHECK_NEAR(xyz[2], -3.0, 1e-6);
-    CHECK_OK(elfm_link_predict(l, 12, T0 + 12 * 1000, 3, xyz, 2, &np, &err), &err);
+    CHECK_OK(elfm_link_predict(l, 12, T0 + 12 * 1000, 3, xyz, NULL, 2, &np, &err), &err);
     CHECK_EQ_INT(np, 1);
     CHECK_NEAR(xyz[0], 12.0, 1e-6);
-    CHECK_OK(elfm_link_predict(l, 10, T0 + 10 * 1000, 11, xyz, 2, &np, &err), &err);
+    CHECK_OK(elfm_link_predict(l, 10, T0 + 10 * 1000, 11, xyz, NULL, 2, &np, &err), &err);
     CHECK_EQ_INT(np, 0);
-    CHECK_EQ_INT(elfm_link_predict(l, 10, T0 + 10 * 1000, 3, NULL, 2, &np, &err), ELFM_ERR_INVALID);
+    CHECK_EQ_INT(elfm_link_predict(l, 10, T0 + 10 * 1000, 3, NULL, NULL, 2, &np, &err), ELFM_ERR_INVALID);
     /* the step uses the same prediction: a weak detection at it joins */
     elfm_detection d = mk(10.0, 2.0, -3.0);
     d.weak = 1;

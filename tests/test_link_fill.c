@@ -193,12 +193,12 @@ int main(void)
     }
     double before[3], after[3];
     int np = 0;
-    CHECK_OK(elfm_link_predict(l, 30, T0 + 30000, 1, before, 1, &np, &err), &err);
+    CHECK_OK(elfm_link_predict(l, 30, T0 + 30000, 1, before, NULL, 1, &np, &err), &err);
     CHECK(np == 1);
     elfm_detection fill[3] = {mk(12, T0 + 12000, 12.1, 0, 0), mk(11, T0 + 11000, 11.1, 0, 0),
                               mk(3, T0 + 3000, 3.1, 0, 0)};
     CHECK_OK(elfm_link_fill(l, id, fill, 3, &err), &err);
-    CHECK_OK(elfm_link_predict(l, 30, T0 + 30000, 1, after, 1, &np, &err), &err);
+    CHECK_OK(elfm_link_predict(l, 30, T0 + 30000, 1, after, NULL, 1, &np, &err), &err);
     CHECK(np == 1 && before[0] == after[0] && before[1] == after[1] && before[2] == after[2]);
     /* taken frame, at / after the last point, unknown track, NaN */
     elfm_detection bad = mk(12, T0 + 12000, 0, 0, 0);

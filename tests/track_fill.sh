@@ -8,7 +8,8 @@
 #  - without --fill-views the integral fills with 8 views (summary.json);
 #  - the smoother weights the fills 1.5x noisier than the peaks by default
 #    (--view-fit-sigma): alpha above --view-fit-sigma 1 (seeds 1-20: every
-#    seed up, mean 0.7655 -> 0.7681; seed 21 0.762 -> 0.764), the
+#    seed up, mean 0.7655 -> 0.7681; seed 21 0.764 -> 0.767 with the guided
+#    search's intensity floor, 0.762 -> 0.764 before it), the
 #    detections the same;
 #  - out-of-range values are usage errors.
 # Usage: track_fill.sh BINARY

@@ -132,10 +132,12 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
 
 /* Where the live tracks of at least min_points real points expect their
  * object in the frame at t_us (the predictions elfm_link_step will use),
- * xyz_um[3 k .. 3 k + 2] for k < *n_out <= cap, in the linker's order.
- * Changes nothing. For track-guided detection (cmd_track). */
+ * xyz_um[3 k .. 3 k + 2] for k < *n_out <= cap, in the linker's order, and
+ * (intensity, may be NULL) the mean intensity of each one's last 3 real
+ * points. Changes nothing. For track-guided detection (cmd_track). */
 elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us, int min_points,
-                              double *xyz_um, int cap, int *n_out, elfm_error *err);
+                              double *xyz_um, double *intensity, int cap, int *n_out,
+                              elfm_error *err);
 
 /* ---- Gap filling (cmd_track's back-fill). A track that coasted through
  * frames where its object left no peak has a gap; once the track has

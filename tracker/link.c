@@ -700,7 +700,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
 }
 
 elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us, int min_points,
-                              double *xyz_um, int cap, int *n_out, elfm_error *err)
+                              double *xyz_um, double *intensity, int cap, int *n_out,
+                              elfm_error *err)
 {
   if (!l || !n_out || cap < 0 || (cap > 0 && !xyz_um))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: bad arguments to predict");
@@ -711,6 +712,13 @@ elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us,
     if (lt.missed < 0 || lt.missed > l->o.max_gap_frames || (int)lt.t->n < min_points) continue;
     predict_track(&l->o, &lt, t_us);
     memcpy(xyz_um + 3 * (size_t)n, lt.pred, sizeof lt.pred);
+    if (intensity) {
+      const elfm_track *t = lt.t;
+      const size_t k0 = t->n > 3 ? t->n - 3 : 0;
+      double sum = 0;
+      for (size_t k = k0; k < t->n; k++) sum += t->pts[k].intensity;
+      intensity[n] = t->n > k0 ? sum / (double)(t->n - k0) : 0;
+    }
     n++;
   }
   *n_out = n;
