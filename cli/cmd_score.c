@@ -77,6 +77,7 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   json_num(o, "alpha_detections", r->alpha_detections);
   json_num(o, "rmse_tracks_um", r->has_tracks ? r->rmse_tracks_um : NAN);
   cJSON_AddNumberToObject(o, "n_frames", r->n_frames);
+  cJSON_AddNumberToObject(o, "n_frames_unscored", r->n_frames_unscored);
   cJSON_AddNumberToObject(o, "n_truth_points", (double)r->n_truth_points);
   cJSON_AddNumberToObject(o, "n_detections", (double)r->n_detections);
   cJSON_AddNumberToObject(o, "n_true_positives", (double)r->n_true_positives);
@@ -114,6 +115,8 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
   printf("scoring (eps %.3g um, kz %.3g, %d frames%s, window %.0f us%s)\n", op->so.eps_um,
          op->so.kz, r->n_frames, op->so.have_bounds ? ", truth inside the volume only" : "",
          op->so.window_us, op->window_source ? op->window_source : "");
+  if (r->n_frames_unscored > 0)
+    printf("  %d frame(s) outside the truth's time range not scored\n", r->n_frames_unscored);
   printf("detections%s\n", r->detections_from_tracks ? " (raw points of the tracks)" : "");
   printf("  truth points %10lld   detections %10lld   matched %10lld\n",
          (long long)r->n_truth_points, (long long)r->n_detections,

@@ -224,6 +224,56 @@ int main(void)
     elfm_table_free(de);
   }
 
+  /* 1b. Frames beyond the truth's last sample (25 ms) are not scored: tracks
+   * and detections run on to frame 29 (t 30 ms), where the truth says
+   * nothing. Frames 25..29 are left out (5), and the run is perfect; scored,
+   * their 10 detections and 10 track points would have been false. The
+   * same with a frame count hint. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, 29, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, 29, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
+    for (int f = 0; f < 30; f++)
+      for (int o = 0; o < 2; o++) {
+        double x, y, z;
+        pos(o, frame_t(f), &x, &y, &z);
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
+      }
+    elfm_table *de = parse(&b, "detections.csv");
+    elfm_score_result r = run(truth, tr, de, NULL);
+    CHECK_EQ_INT(r.n_frames, 25);
+    CHECK_EQ_INT(r.n_frames_unscored, 5);
+    CHECK_EQ_INT(r.n_truth_points, 50);
+    CHECK_EQ_INT(r.n_detections, 50);
+    CHECK_NEAR(r.precision, 1.0, TOL);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    CHECK_NEAR(r.beta, 1.0, TOL);
+    CHECK_NEAR(r.jaccard_detections, 1.0, TOL);
+    elfm_score_options oh;
+    elfm_score_options_default(&oh);
+    oh.n_frames_hint = 40;
+    r = run(truth, tr, de, &oh);
+    CHECK_EQ_INT(r.n_frames_unscored, 15);
+    CHECK_NEAR(r.f1, 1.0, TOL);
+    CHECK_NEAR(r.alpha, 1.0, TOL);
+    /* a track whose real points all lie beyond the truth is no candidate */
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 3, 1, 26, 29, 30, 0, 0, -1, -1);
+    elfm_table *tr2 = parse(&b, "tracks.csv");
+    r = run(truth, tr2, NULL, NULL);
+    CHECK_EQ_INT(r.n_candidate_tracks, 2);
+    CHECK_EQ_INT(r.n_spurious_tracks, 0);
+    elfm_table_free(tr2);
+    elfm_table_free(tr);
+    elfm_table_free(de);
+  }
+
   /* 2. Constant 1 um offset in x: d = 1 on every frame -> alpha = 1 - 1/4. */
   {
     buf_t b = {0};

@@ -23,6 +23,17 @@
  * between their known neighbours, so that truth there still counts as missed.
  * Frames before the first or after the last row are unknown unless the
  * caller gives the run's frame count (n_frames_hint below).
+ * Only frames whose t_us lies within the truth's time range (its first to
+ * its last sample, over all ids) are scored; the detections and track points
+ * of the others count neither way (n_frames_unscored). Why: the truth is the
+ * scored sequence, as an ISBI ground truth's frames are; beyond its end it
+ * says nothing, not "nothing is there". A simulated 100 ms flow run has a
+ * frame at 100001 us (window ends follow the first event at 1 us) and one
+ * more of the pixels' latency stragglers, whose beads are there: counted,
+ * they were ~20 false detections and as many extra track points per run
+ * (seed 1: 20 and 20). Before the eighth session they were counted: the same runs
+ * of flow seeds 1-20 score F1 0.9433 -> 0.9461 and alpha 0.7687 -> 0.7741
+ * with this rule alone (docs/bench.md).
  * A run with no row at all has no frame list: if the truth shows any object
  * (bright, inside the volume) it scores recall = F1 = alpha = beta = Jaccard
  * = 0, with n_truth_points = 0 (unknown) and precision undefined (NaN).
@@ -184,6 +195,7 @@ void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c);
 
 typedef struct elfm_score_result {
   int n_frames;                 /* frames scored (known + interpolated) */
+  int n_frames_unscored;        /* frames outside the truth's time range (FRAMES) */
   /* detections */
   int detections_from_tracks;   /* 1: no detections table, raw track points used */
   int64_t n_truth_points, n_detections, n_true_positives;

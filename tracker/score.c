@@ -346,7 +346,8 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
 
   s = elfm_score_frames_build(&fr, detections, cd, tracks, ct, opt->n_frames_hint, err);
   if (s != ELFM_OK) goto done;
-  out->n_frames = fr.n;
+  if ((s = elfm_score_frames_trim(&fr, truth, &out->n_frames_unscored, err)) != ELFM_OK) goto done;
+  out->n_frames = fr.n - out->n_frames_unscored;
   if ((s = elfm_score_truth_build(&tr, truth, &fr, opt, err)) != ELFM_OK) goto done;
 
   if (detections && (s = elfm_score_detections_load(&dp, detections, cd, &fr, err)) != ELFM_OK)

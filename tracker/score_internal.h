@@ -126,6 +126,13 @@ elfm_status elfm_score_columns(const elfm_table *dets, int *cd, const elfm_table
 elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const int *cd,
                                     const elfm_table *trk, const int *ct, int64_t n_frames_hint,
                                     elfm_error *err);
+/* Frames whose t_us lies outside the truth's time range (its first to its
+ * last sample over all ids) are not scored (elfm_score.h, FRAMES): their
+ * t_us becomes NaN, so no truth, detection or track point there counts;
+ * *n_unscored (may be NULL) gets how many. A truth without rows trims
+ * nothing. */
+elfm_status elfm_score_frames_trim(frames_t *fr, const elfm_table *tt, int *n_unscored,
+                                   elfm_error *err);
 /* Truth at the frames (elfm_score.h, TRUTH). Free with elfm_score_truth_free. */
 elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const frames_t *fr,
                                    const elfm_score_options *o, elfm_error *err);

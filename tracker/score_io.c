@@ -233,6 +233,32 @@ elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const 
   return s;
 }
 
+elfm_status elfm_score_frames_trim(frames_t *fr, const elfm_table *tt, int *n_unscored,
+                                   elfm_error *err)
+{
+  int c[6];
+  elfm_status s = elfm_table_require(tt, truth_cols, 6, c, err);
+  if (s != ELFM_OK) return s;
+  int n = 0;
+  if (tt->n_rows > 0) {
+    double t_lo = INFINITY, t_hi = -INFINITY;
+    for (size_t r = 0; r < tt->n_rows; r++) {
+      double t = elfm_table_get(tt, r, c[1]);
+      if (t < t_lo) t_lo = t;
+      if (t > t_hi) t_hi = t;
+    }
+    /* NaN times (checked as errors later, in the truth) compare false and
+     * trim nothing here. */
+    for (int i = 0; i < fr->n; i++)
+      if (fr->t_us[i] < t_lo || fr->t_us[i] > t_hi) {
+        fr->t_us[i] = NAN;
+        n++;
+      }
+  }
+  if (n_unscored) *n_unscored = n;
+  return ELFM_OK;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Points */
 
@@ -294,7 +320,9 @@ elfm_status elfm_score_detections_load(points_t *dp, const elfm_table *t, const 
     double v[3] = {0, 0, 0};
     for (int a = 0; a < 3; a++)
       if ((s = get_req(t, r, c[2 + a], det_cols[2 + a], &v[a], err)) != ELFM_OK) return s;
-    dp->frame[dp->n] = (int)((int64_t)elfm_table_get(t, r, c[0]) - fr->f_min);
+    const int f = (int)((int64_t)elfm_table_get(t, r, c[0]) - fr->f_min);
+    if (isnan(fr->t_us[f])) continue; /* outside the truth's time range */
+    dp->frame[dp->n] = f;
     dp->x[dp->n] = v[0];
     dp->y[dp->n] = v[1];
     dp->z[dp->n] = v[2];
@@ -480,6 +508,13 @@ void elfm_score_cands_free(cands_t *c)
 }
 
 /* Columns: 0 track_id 1 frame 2 t_us 3 x 4 y 5 z 6 raw_x 7 raw_y 8 raw_z */
+/* A real point of a track (raw values present) at a scored frame. */
+static int row_real(const elfm_table *t, size_t r, const int *c, const frames_t *fr)
+{
+  return isfinite(elfm_table_get(t, r, c[6])) &&
+         !isnan(fr->t_us[(int64_t)elfm_table_get(t, r, c[1]) - fr->f_min]);
+}
+
 elfm_status elfm_score_cands_build(cands_t *cd, points_t *raw, const elfm_table *t,
                                    const int *c, const frames_t *fr, elfm_error *err)
 {
@@ -513,7 +548,7 @@ elfm_status elfm_score_cands_build(cands_t *cd, points_t *raw, const elfm_table 
   for (size_t i = 0; i < n;) {
     size_t j = i;
     int real = 0;
-    while (j < n && ord[j].key == ord[i].key) real |= isfinite(elfm_table_get(t, ord[j++].idx, c[6]));
+    while (j < n && ord[j].key == ord[i].key) real |= row_real(t, ord[j++].idx, c, fr);
     n_tracks += real;
     i = j;
   }
@@ -528,7 +563,7 @@ elfm_status elfm_score_cands_build(cands_t *cd, points_t *raw, const elfm_table 
     int start = np;
     while (j < n && ord[j].key == ord[i].key) {
       size_t r = ord[j++].idx;
-      if (!isfinite(elfm_table_get(t, r, c[6]))) continue;
+      if (!row_real(t, r, c, fr)) continue;
       int f = (int)((int64_t)elfm_table_get(t, r, c[1]) - fr->f_min);
       cd->pt.frame[np] = f;
       cd->pt.x[np] = elfm_table_get(t, r, c[3]);
