@@ -61,24 +61,27 @@ static elfm_status group_by_id(const elfm_table *t, int col, keyed_t *ord, elfm_
 
 /* Rows of t grouped by the id in column c_id (group_by_id) into *ord
  * (n_rows entries; the caller frees it). Within an id the value in column
- * c_seq must increase (truth times, a track's frames): *bad receives the
- * first position in *ord whose value does not exceed its predecessor's,
- * or n_rows when there is none; the caller words the error. */
-static elfm_status group_rows(const elfm_table *t, int c_id, int c_seq, keyed_t **ord,
-                              size_t *bad, elfm_error *err)
+ * c_seq must increase (truth times, a track's frames); where it does not,
+ * the error is ELFM_ERR_FORMAT at the offending row's line, worded by
+ * unsorted_fmt, a format that takes the id, the value, the value before it
+ * (all %.0f) and that row's line (%lld). One check for both tables. */
+static elfm_status group_rows(const elfm_table *t, int c_id, int c_seq, const char *unsorted_fmt,
+                              keyed_t **ord, elfm_error *err)
 {
   size_t n = t->n_rows;
   keyed_t *o = malloc((n ? n : 1) * sizeof *o);
   if (!o) return elfm_score_nomem(err);
   elfm_status s = group_by_id(t, c_id, o, err);
   if (s != ELFM_OK) { free(o); return s; }
-  *bad = n;
-  for (size_t i = 1; i < n; i++)
-    if (o[i].key == o[i - 1].key &&
-        !(elfm_table_get(t, o[i].idx, c_seq) > elfm_table_get(t, o[i - 1].idx, c_seq))) {
-      *bad = i;
-      break;
+  for (size_t i = 1; i < n; i++) {
+    double v0 = elfm_table_get(t, o[i - 1].idx, c_seq), v1 = elfm_table_get(t, o[i].idx, c_seq);
+    if (o[i].key == o[i - 1].key && !(v1 > v0)) {
+      elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[o[i].idx], unsorted_fmt,
+                          o[i].key, v1, v0, (long long)t->line[o[i - 1].idx]);
+      free(o);
+      return ELFM_ERR_FORMAT;
     }
+  }
   *ord = o;
   return ELFM_OK;
 }
@@ -366,18 +369,10 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
   }
   /* Group rows per id (stable: file order within an id), times increasing. */
   keyed_t *ord;
-  size_t bad;
-  if ((s = group_rows(tt, c[0], c[1], &ord, &bad, err)) != ELFM_OK) return s;
-  if (bad < n) {
-    double t0 = elfm_table_get(tt, ord[bad - 1].idx, c[1]);
-    double t1 = elfm_table_get(tt, ord[bad].idx, c[1]);
-    elfm_error_set_line(err, ELFM_ERR_FORMAT, tt->path, tt->line[ord[bad].idx],
-                        "truth for id %.0f is not sorted by time: t_us %.0f follows %.0f "
-                        "(line %lld)",
-                        ord[bad].key, t1, t0, (long long)tt->line[ord[bad - 1].idx]);
-    free(ord);
-    return ELFM_ERR_FORMAT;
-  }
+  s = group_rows(tt, c[0], c[1],
+                 "truth for id %.0f is not sorted by time: t_us %.0f follows %.0f (line %lld)",
+                 &ord, err);
+  if (s != ELFM_OK) return s;
   int n_obj = 0;
   for (size_t i = 0; i < n; i++) n_obj += (i == 0 || ord[i].key != ord[i - 1].key);
   tr->n_obj = n_obj;
@@ -531,18 +526,11 @@ elfm_status elfm_score_cands_build(cands_t *cd, points_t *raw, const elfm_table 
                                  "or all empty (a gap-closing fill)");
   }
   keyed_t *ord;
-  size_t bad;
-  if ((s = group_rows(t, c[0], c[1], &ord, &bad, err)) != ELFM_OK) return s;
-  if (bad < n) {
-    double f0 = elfm_table_get(t, ord[bad - 1].idx, c[1]);
-    double f1 = elfm_table_get(t, ord[bad].idx, c[1]);
-    elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[ord[bad].idx],
-                        "track %.0f: frame %.0f follows frame %.0f (line %lld); a track's "
-                        "rows must be in increasing frame order, one per frame",
-                        ord[bad].key, f1, f0, (long long)t->line[ord[bad - 1].idx]);
-    free(ord);
-    return ELFM_ERR_FORMAT;
-  }
+  s = group_rows(t, c[0], c[1],
+                 "track %.0f: frame %.0f follows frame %.0f (line %lld); a track's rows must "
+                 "be in increasing frame order, one per frame",
+                 &ord, err);
+  if (s != ELFM_OK) return s;
   int n_tracks = 0;
   /* Count tracks with at least one real point. */
   for (size_t i = 0; i < n;) {
