@@ -65,7 +65,10 @@ typedef struct frame_ring {
 
 typedef struct fwhm_list {
   size_t n, cap;
-  double *xy, *z, *speed;
+  struct fwhm_bead {
+    double fwhm_um[2];   /* lateral, axial */
+    double speed;        /* its track's lateral speed, um/ms (NaN: unknown) */
+  } *b;
 } fwhm_list;
 
 typedef struct track_ctx {
@@ -90,9 +93,11 @@ typedef struct track_ctx {
   double *pred;          /* [max_det][3] track predictions (guided search) */
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
-  elfm_track **fin;      /* finished tracks being smoothed (drain) */
-  elfm_status *fin_st;
-  elfm_error *fin_err;
+  struct fin_track {     /* a finished track being smoothed (drain), */
+    elfm_track *t;
+    elfm_status st;      /* and how its smoothing went */
+    elfm_error err;
+  } *fin;
   size_t fin_cap;
   elfm_linker *lk;
   FILE *fdet, *ftr;

@@ -25,15 +25,16 @@ static void add_num(cJSON *o, const char *k, double v)
   else cJSON_AddNullToObject(o, k);
 }
 
-/* The median and spread of x (l->xy or l->z) over the beads whose track's
- * speed lies in [lo, hi), or over all beads (those of unknown speed too)
- * when `all`; tmp has room for l->n values. Returns the number of beads. */
-static size_t fwhm_median(const fwhm_list *l, const double *x, int all, double lo, double hi,
+/* The median and spread of FWHM a (0 lateral, 1 axial) over the beads
+ * whose track's speed lies in [lo, hi), or over all beads (those of unknown
+ * speed too) when `all`; tmp has room for l->n values. Returns the number
+ * of beads. */
+static size_t fwhm_median(const fwhm_list *l, int a, int all, double lo, double hi,
                           double *tmp, double *med, double *spr)
 {
   size_t m = 0;
   for (size_t i = 0; i < l->n; i++)
-    if (all || (l->speed[i] >= lo && l->speed[i] < hi)) tmp[m++] = x[i];
+    if (all || (l->b[i].speed >= lo && l->b[i].speed < hi)) tmp[m++] = l->b[i].fwhm_um[a];
   elfm_analysis_median(tmp, m, med, spr);
   return m;
 }
@@ -44,13 +45,12 @@ static cJSON *fwhm_summary(const fwhm_list *l)
   double *tmp = malloc((l->n ? l->n : 1) * sizeof *tmp);
   if (!tmp) return r;
   /* the same figures for the lateral and the axial FWHM */
-  const double *const x[2] = {l->xy, l->z};
   static const char *const median_key[2] = {"fwhm_xy_um_median", "fwhm_z_um_median"};
   static const char *const spread_key[2] = {"fwhm_xy_um_spread", "fwhm_z_um_spread"};
   double med, spr;
   cJSON_AddNumberToObject(r, "n_beads", (double)l->n);
   for (int a = 0; a < 2; a++) {
-    fwhm_median(l, x[a], 1, 0, 0, tmp, &med, &spr);
+    fwhm_median(l, a, 1, 0, 0, tmp, &med, &spr);
     add_num(r, median_key[a], med);
     add_num(r, spread_key[a], spr);
   }
@@ -61,7 +61,7 @@ static cJSON *fwhm_summary(const fwhm_list *l)
     cJSON_AddNumberToObject(o, "speed_min_um_per_ms", lo);
     add_num(o, "speed_max_um_per_ms", b + 2 < N_SPEED_BINS ? hi : NAN);
     for (int a = 0; a < 2; a++) {
-      size_t m = fwhm_median(l, x[a], 0, lo, hi, tmp, &med, &spr);
+      size_t m = fwhm_median(l, a, 0, lo, hi, tmp, &med, &spr);
       if (a == 0) cJSON_AddNumberToObject(o, "n_beads", (double)m);
       add_num(o, median_key[a], med);
     }

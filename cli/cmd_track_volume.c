@@ -57,33 +57,30 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
   while ((t = elfm_link_pop_finished(c->lk))) {
     if (n == c->fin_cap) {
       size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
-      elfm_track **a = realloc(c->fin, cap * sizeof *a);
-      elfm_status *b = realloc(c->fin_st, cap * sizeof *b);
-      elfm_error *e = realloc(c->fin_err, cap * sizeof *e);
-      if (a) c->fin = a;
-      if (b) c->fin_st = b;
-      if (e) c->fin_err = e;
-      if (!a || !b || !e) {
+      struct fin_track *a = realloc(c->fin, cap * sizeof *a);
+      if (!a) {
         elfm_track_free(t);
         st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
         break;
       }
+      c->fin = a;
       c->fin_cap = cap;
     }
-    c->fin[n++] = t;
+    c->fin[n++].t = t;
   }
   double t0 = cli_now_s();
   const elfm_smooth_options *so = &c->o->smooth;
   const int nt = n > 1 && c->n_threads > 1 ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
-  for (size_t i = 0; i < n; i++) c->fin_st[i] = elfm_track_smooth(c->fin[i], so, &c->fin_err[i]);
+  for (size_t i = 0; i < n; i++) c->fin[i].st = elfm_track_smooth(c->fin[i].t, so, &c->fin[i].err);
   c->t_smooth += cli_now_s() - t0;
   for (size_t i = 0; i < n; i++) {
+    struct fin_track *f = &c->fin[i];
     if (st == ELFM_OK) {
-      if (c->fin_st[i] != ELFM_OK && err) *err = c->fin_err[i];
-      st = finish_track(c, c->fin[i], c->fin_st[i], err);
+      if (f->st != ELFM_OK && err) *err = f->err;
+      st = finish_track(c, f->t, f->st, err);
     } else {
-      elfm_track_free(c->fin[i]);
+      elfm_track_free(f->t);
     }
   }
   return st;
@@ -93,19 +90,12 @@ static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, el
 {
   if (l->n == l->cap) {
     size_t cap = l->cap ? 2 * l->cap : 1024;
-    double *a = realloc(l->xy, cap * sizeof *a);
-    if (a) l->xy = a;
-    double *b = realloc(l->z, cap * sizeof *b);
-    if (b) l->z = b;
-    double *s = realloc(l->speed, cap * sizeof *s);
-    if (s) l->speed = s;
-    if (!a || !b || !s) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory");
+    struct fwhm_bead *b = realloc(l->b, cap * sizeof *b);
+    if (!b) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory");
+    l->b = b;
     l->cap = cap;
   }
-  l->xy[l->n] = xy;
-  l->z[l->n] = z;
-  l->speed[l->n] = speed;
-  l->n++;
+  l->b[l->n++] = (struct fwhm_bead){{xy, z}, speed};
   return ELFM_OK;
 }
 
@@ -374,8 +364,6 @@ void track_ctx_free(track_ctx *c)
   free(c->pk);
   free(c->det_n);
   free(c->fin);
-  free(c->fin_st);
-  free(c->fin_err);
   free(c->det_s);
   free(c->det_rej);
   free(c->det_loc);
@@ -386,8 +374,6 @@ void track_ctx_free(track_ctx *c)
   elfm_track_store_clear(&c->store);
   free(c->det);
   free(c->fw);
-  free(c->fl.xy);
-  free(c->fl.z);
-  free(c->fl.speed);
+  free(c->fl.b);
   track_fill_free(c);
 }
