@@ -36,9 +36,11 @@ typedef struct elfm_detection {
   double intensity;          /* refined peak value, volume units */
   double sigma_x_um, sigma_y_um, sigma_z_um;
   int weak;                  /* 1: above the low (hysteresis) threshold only */
-  int view_fit;              /* 1: placed by the view fit (elfm_refocus_localize: the
-                                guided search, gap filling), not by a peak fit; its
-                                sigmas are 0 */
+  int view_fit;              /* 1: found by the view fit alone where no peak stood
+                                out (elfm_refocus_localize from a track's prediction:
+                                the guided search, gap filling); its sigmas are 0.
+                                0: a peak above the threshold (placed by the peak fit
+                                or, with `track --localize views`, the view fit) */
 } elfm_detection;
 
 typedef enum elfm_refine_mode {

@@ -68,8 +68,8 @@ typedef struct elfm_smooth_options {
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
   double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
   int allow_spline;             /* AUTO may pick the spline (1); 0 for rigid stage motion */
-  /* elfm_track_smooth only: a point placed by the view fit
-   * (elfm_detection.view_fit) counts as this many times noisier than the
+  /* elfm_track_smooth only: a point the view fit found where no peak
+   * stood out (elfm_detection.view_fit) counts as this many times noisier than the
    * track's estimated noise, which its peaks keep (1.5; 1 = all points
    * alike). */
   double view_fit_sigma_factor;
