@@ -360,6 +360,47 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5g''. A bead re-entering on the line another has left (a stage phantom):
+   * bead A runs straight along +y at 2.5 um/ms for 20 frames and leaves;
+   * 30 frames later bead B enters on the same line 42.5 um behind A's end
+   * and runs the same way. B lies on A's path and is within reach (8 +
+   * 1.5 x 2.5 x 31 um), so the path test alone stitches them, the track
+   * jumping back; A ran straight, so B cannot be A coming back
+   * (stitch_straight_frac): two tracks. A circling bead (5g) is still
+   * stitched at the default. */
+  for (int straight = 0; straight < 2; straight++) {
+    elfm_link_options os = o;
+    os.stitch_points = 5;
+    os.stitch_straight_frac = straight ? 0.1 : 0;
+    elfm_linker *l = elfm_link_create(&os, &err);
+    CHECK(l != NULL);
+    for (int f = 0; f < 60; f++) {
+      elfm_detection d;
+      int n = 0;
+      if (f < 20) d = mk(0.1 * (urand() - 0.5), 2.5 * f, 5), n = 1;
+      else if (f >= 50) d = mk(0.1 * (urand() - 0.5), 5 + 2.5 * (f - 50), 5), n = 1;
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, n ? &d : NULL, n, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      for (size_t k = 1; k < t->n; k++)  /* never a jump back */
+        if (straight) CHECK(t->pts[k].y_um > t->pts[k - 1].y_um - 1);
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == (straight ? 2 : 1), "straight rule %d: %d tracks", straight, n);
+    elfm_link_free(l);
+  }
+  {
+    elfm_link_options bad = o;
+    bad.stitch_straight_frac = -0.1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad.stitch_straight_frac = NAN;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+  }
+
   /* 5g'. Stitching a twin: a bead moves along +x at 3 um/ms and turns to +y
    * at frame 30, where a second detection of it (2 um off, towards where it
    * turns) starts a track that then takes the bead (its one-point gate is

@@ -4,11 +4,12 @@
 # scored with the window rule (`--window-us run`, docs/bench.md):
 #  - the guided view fit's intensity floor (--guided-min-ratio, default
 #    0.15) keeps it off the faint light a bead leaves just after its pulse:
-#    precision and alpha above --guided-min-ratio 0 (measured: alpha 0.236
-#    -> 0.361, precision 0.583 -> 0.652);
-#  - the README's setting for moving blinking objects on a stage,
-#    --repr lin --motion stage, reaches alpha > 0.6 and precision > 0.95
-#    (measured 0.697 and 0.975; 0.488 and 0.788 without the floor);
+#    precision and alpha above --guided-min-ratio 0 (measured: alpha 0.309
+#    -> 0.447, precision 0.600 -> 0.662);
+#  - the README's setting for moving blinking objects, --repr lin, reaches
+#    alpha > 0.6 and precision > 0.95 (measured 0.706 and 0.993; it needs
+#    the floor and stitching's straight-line rule, which keeps the bead that
+#    enters on the line another has left off that one's track);
 #  - a bad value is a usage error.
 # Usage: track_blink.sh BINARY
 bin=$1
@@ -35,13 +36,13 @@ blink_score() {
 }
 blink_score off --guided-min-ratio 0
 blink_score def
-blink_score lin --repr lin --motion stage
+blink_score lin --repr lin
 a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/def.json" alpha); a2=$(key "$tmp/lin.json" alpha)
 p0=$(key "$tmp/off.json" precision); p1=$(key "$tmp/def.json" precision); p2=$(key "$tmp/lin.json" precision)
-echo "blink_moving seed 4: alpha $a0 -> $a1 (floor), $a2 (--repr lin --motion stage); precision $p0 -> $p1, $p2"
+echo "blink_moving seed 4: alpha $a0 -> $a1 (floor), $a2 (--repr lin); precision $p0 -> $p1, $p2"
 awk -v a="$a0" -v b="$a1" 'BEGIN { exit !(b > a + 0.05) }' || { echo "FAIL: the floor gains < 0.05 alpha"; fail=$((fail+1)); }
 awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 0.03) }' || { echo "FAIL: the floor gains < 0.03 precision"; fail=$((fail+1)); }
-awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.6 && p > 0.95) }' || { echo "FAIL: --repr lin --motion stage"; fail=$((fail+1)); }
+awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.6 && p > 0.95) }' || { echo "FAIL: --repr lin"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" guided_min_ratio)" = 0.15 ] || { echo "FAIL: guided_min_ratio not 0.15"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_blink: all passed" || echo "track_blink: $fail failed"
 [ $fail -eq 0 ]

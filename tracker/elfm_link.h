@@ -104,6 +104,13 @@ typedef struct elfm_link_options {
   int stitch_points;
   double stitch_gate_um;  /* default 8 um */
   int stitch_history;     /* default 100 points */
+  /* Not when the dormant track ran straight over that history (its points
+   * within stitch_straight_frac x its chord of the chord; >= 10 frames and
+   * a chord of >= 10 um) and the young one starts behind its end along the
+   * chord by more than stitch_gate_um: an object moving straight does not
+   * come back behind itself, but the next bead on the same line of a stage
+   * phantom does. Default 0.1; 0 = off. */
+  double stitch_straight_frac;
   /* Swap review (step 6): a gap closing whose junction does not fit (the
    * track's head and new tail, extrapolated to the middle of the gap, more
    * than gate_um apart) is revisited once the tail has swap_points real

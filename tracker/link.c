@@ -36,6 +36,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->stitch_points = 0;
   o->stitch_gate_um = 8.0;
   o->stitch_history = 100;
+  o->stitch_straight_frac = 0.1;
   o->swap_points = 0;
   o->swap_ratio = 0.5;
 }
@@ -51,13 +52,14 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
       !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) || o->stitch_points < 0 ||
       (o->stitch_points > 0 && o->stitch_points < 4) || !(o->stitch_gate_um >= 0) ||
-      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 || o->swap_points < 0 ||
+      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 ||
+      !(o->stitch_straight_frac >= 0) || !isfinite(o->stitch_straight_frac) || o->swap_points < 0 ||
       (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate >= 0, 0 < swap ratio <= 1)");
+                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
