@@ -88,6 +88,21 @@ static void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double
   }
 }
 
+/* detections.csv with both objects exactly where they are in frames
+ * f0..f1, except frames skip_a and skip_b (-1: none). */
+static elfm_table *exact_detections(buf_t *b, int f0, int f1, int skip_a, int skip_b)
+{
+  bprintf(b, "frame,t_us,x_um,y_um,z_um\n");
+  for (int f = f0; f <= f1; f++)
+    for (int o = 0; o < 2; o++) {
+      if (f == skip_a || f == skip_b) continue;
+      double x, y, z;
+      pos(o, frame_t(f), &x, &y, &z);
+      bprintf(b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
+    }
+  return parse(b, "detections.csv");
+}
+
 /* Truth where B is lit only during two 980 us pulses, [3010, 3990) and
  * [12010, 12990) us: each lights most of the window of frame 3 (t 4000)
  * or frame 12 (t 13000) but has ended by the frame's t_us, as a 1 ms LED
@@ -178,15 +193,7 @@ int main(void)
     CHECK_EQ_INT(r.has_tracks, 0);
     /* a detection missing at frame 5 and at frame 6 (no track rows either):
      * truth there still counts (frame times interpolated), recall 38/40 */
-    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
-    for (int f = 0; f < NF; f++)
-      for (int o = 0; o < 2; o++) {
-        if (f == 5 || f == 6) continue;
-        double x, y, z;
-        pos(o, frame_t(f), &x, &y, &z);
-        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
-      }
-    elfm_table *de2 = parse(&b, "detections.csv");
+    elfm_table *de2 = exact_detections(&b, 0, NF - 1, 5, 6);
     r = run(truth, NULL, de2, NULL);
     CHECK_EQ_INT(r.n_truth_points, 2 * NF);
     CHECK_NEAR(r.recall, 36.0 / 40.0, TOL);
@@ -197,14 +204,7 @@ int main(void)
     /* nothing detected in the first 3 and the last 2 frames: without the
      * run's frame count those frames are unknown (16 of 20 scored); with
      * n_frames_hint = 20 they count as missed, times extrapolated */
-    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
-    for (int f = 3; f < NF - 2; f++)
-      for (int o = 0; o < 2; o++) {
-        double x, y, z;
-        pos(o, frame_t(f), &x, &y, &z);
-        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
-      }
-    elfm_table *de3 = parse(&b, "detections.csv");
+    elfm_table *de3 = exact_detections(&b, 3, NF - 3, -1, -1);
     r = run(truth, NULL, de3, NULL);
     CHECK_EQ_INT(r.n_frames, 15);
     CHECK_NEAR(r.recall, 1.0, TOL);
@@ -235,14 +235,7 @@ int main(void)
     add_track(&b, 1, 0, 0, 29, 0, 0, 0, -1, -1);
     add_track(&b, 2, 1, 0, 29, 0, 0, 0, -1, -1);
     elfm_table *tr = parse(&b, "tracks.csv");
-    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
-    for (int f = 0; f < 30; f++)
-      for (int o = 0; o < 2; o++) {
-        double x, y, z;
-        pos(o, frame_t(f), &x, &y, &z);
-        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g\n", f, frame_t(f), x, y, z);
-      }
-    elfm_table *de = parse(&b, "detections.csv");
+    elfm_table *de = exact_detections(&b, 0, 29, -1, -1);
     elfm_score_result r = run(truth, tr, de, NULL);
     CHECK_EQ_INT(r.n_frames, 25);
     CHECK_EQ_INT(r.n_frames_unscored, 5);
