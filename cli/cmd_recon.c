@@ -117,6 +117,7 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON_AddNumberToObject(g, "z_step_um", cal->z_step_um);
   cJSON *c = cJSON_AddObjectToObject(root, "counts");
   cJSON_AddNumberToObject(c, "events", (double)s->events);
+  cJSON_AddNumberToObject(c, "triggers", (double)s->triggers);
   cJSON_AddNumberToObject(c, "volumes", (double)s->frames);
   cJSON_AddNumberToObject(c, "volumes_sparse", (double)s->frames_sparse);
   cJSON_AddNumberToObject(c, "volumes_dense", (double)s->frames_dense);

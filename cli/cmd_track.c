@@ -708,6 +708,13 @@ int cmd_track(int argc, char **argv)
                       "lead such objects along their motion; --repr integral places them where "
                       "they are (README, docs/tracker.md)\n", v);
   }
+  if (!o.quiet && rs.triggers >= 4 && o.recon.framer.repr == ELFM_REPR_EXP &&
+      c.median_speed_um_per_ms >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
+    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges (pulsed "
+                    "light?) and its objects move (median %.2f um/ms): on the exponential "
+                    "surface a pulse that ends late in a window shows again in the next frame; "
+                    "--repr lin keeps each pulse in its own (README, blinking objects)\n",
+            rs.triggers, c.median_speed_um_per_ms);
   rc = CLI_OK;
 done:
   if (fx) fclose(fx);

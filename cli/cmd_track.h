@@ -166,5 +166,9 @@ double track_median_speed_um_per_ms(const elfm_track_store *s);
  * integral loses them); static ones (blinking beads) gain nothing from it. */
 #define TRACK_HINT_MIN_SPEED_UM_PER_MS 0.03
 #define TRACK_HINT_MAX_SPEED_UM_PER_MS 1.0
+/* The note for pulsed light (trigger edges in the file) on the exponential
+ * surface: only when the tracks move, as blink_moving's at 2.5 um/ms; beads
+ * at rest (blink) do better with the default (README). */
+#define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
 
 #endif

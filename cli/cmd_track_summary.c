@@ -112,6 +112,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   }
   cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
   cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
+  cJSON_AddNumberToObject(cnt, "triggers", (double)rs->triggers);
   cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
   cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);

@@ -180,6 +180,8 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
       memmove(c->p, c->p + lo, (hi - lo) * sizeof *c->p);
     }
     c->n = hi - lo;
+    for (size_t k = 0; k < c->n_trig; k++)
+      r->st.triggers += c->trig[k].t_us >= s->from_us && c->trig[k].t_us < s->to_us;
     if (c->n > 0) {
       if (c->t_us[0] < r->st.t_first_us) r->st.t_first_us = c->t_us[0];
       r->st.t_last_us = c->t_us[c->n - 1];

@@ -10,6 +10,9 @@
 #    alpha > 0.6 and precision > 0.95 (measured 0.706 and 0.993; it needs
 #    the floor and stitching's straight-line rule, which keeps the bead that
 #    enters on the line another has left off that one's track);
+#  - summary.json counts the file's trigger edges, and without -q `track`
+#    notes that --repr lin suits pulsed light on moving objects (not with
+#    --repr lin itself);
 #  - a bad value is a usage error.
 # Usage: track_blink.sh BINARY
 bin=$1
@@ -43,6 +46,14 @@ echo "blink_moving seed 4: alpha $a0 -> $a1 (floor), $a2 (--repr lin); precision
 awk -v a="$a0" -v b="$a1" 'BEGIN { exit !(b > a + 0.05) }' || { echo "FAIL: the floor gains < 0.05 alpha"; fail=$((fail+1)); }
 awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 0.03) }' || { echo "FAIL: the floor gains < 0.03 precision"; fail=$((fail+1)); }
 awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.6 && p > 0.95) }' || { echo "FAIL: --repr lin"; fail=$((fail+1)); }
+tr=$(key "$tmp/def/summary.json" triggers)
+[ "${tr:-0}" -ge 60 ] || { echo "FAIL: triggers '$tr' (67 edges in 100 ms)"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/note" \
+  --to-us 30000 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note)"; fail=$((fail+1)); }
+grep -q "trigger edges.*--repr lin" "$tmp/note.err" || { echo "FAIL: no pulsed-light note"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/note" \
+  --to-us 30000 --repr lin 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note, lin)"; fail=$((fail+1)); }
+grep -q "trigger edges" "$tmp/note.err" && { echo "FAIL: the note with --repr lin"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" guided_min_ratio)" = 0.15 ] || { echo "FAIL: guided_min_ratio not 0.15"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_blink: all passed" || echo "track_blink: $fail failed"
 [ $fail -eq 0 ]
