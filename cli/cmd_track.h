@@ -37,6 +37,8 @@ typedef struct track_opts {
   elfm_localize_options loc;
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
   double guided_min_ratio; /* and its find at least this x the track's last intensity */
+  int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
+                           view fit from it has this many views agreeing (0 = no test) */
   int fill_views;      /* gap filling: views that must agree (0 = off) */
   double fill_gate_um; /* a fill lands within this of where the gap's ends put the object */
   int fill_max_gap;    /* frames kept for it: gaps up to this long are filled */
@@ -80,10 +82,13 @@ typedef struct track_ctx {
   int n_threads, n_slots;
   elfm_peaks **pk;       /* [n_threads] */
   elfm_detection *det;   /* [n_slots][max_det] */
-  int *det_n;            /* [n_slots] */
-  double *det_s;         /* [n_slots] peak detection CPU time of the slot's volume */
-  int *det_rej;          /* [n_slots] peaks dropped by the view-support test */
-  int *det_loc;          /* [n_slots] peaks placed by the view fit */
+  struct slot_peaks {    /* [n_slots] what the worker found in the slot's volume: */
+    int n;               /* detections in det */
+    double s;            /* peak detection CPU time */
+    int rej;             /* peaks dropped by the view-support test */
+    int loc;             /* peaks placed by the view fit */
+    int deep_dropped;    /* deep-only peaks too few views agreed on (deep_peak_views) */
+  } *sp;
   /* the frame each slot's volume came from and the plan, for the guided
    * view fit in the ordered callback (the driver keeps a batch's frames
    * until the callback of its last volume has returned); per slot, as each
@@ -103,7 +108,7 @@ typedef struct track_ctx {
   FILE *fdet, *ftr;
   char p_det[1100], p_tr[1100];
   elfm_track_store store;
-  int64_t n_support_rejected, n_localized, n_guided_views;
+  int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;
   int64_t first_t_us, last_t_us;
   double t_peaks, t_link, t_smooth;

@@ -117,6 +117,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
+  cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
   cJSON_AddNumberToObject(cnt, "gap_fill_tries", (double)c->n_fill_tries);
   cJSON_AddNumberToObject(cnt, "gap_fills", (double)c->n_filled);
@@ -151,6 +152,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);
   cJSON_AddNumberToObject(par, "threshold_depth_um", o->peaks.depth_range_um);
   cJSON_AddNumberToObject(par, "threshold_min", o->peaks.absolute_min);
+  cJSON_AddNumberToObject(par, "deep_peak_views", o->deep_peak_views);
   cJSON_AddNumberToObject(par, "threshold_low", o->peaks.hysteresis_low);
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);

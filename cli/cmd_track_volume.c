@@ -110,15 +110,12 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   if (s != ELFM_OK) return s;
   c->pk = calloc((size_t)c->n_threads, sizeof *c->pk);
   c->det = malloc((size_t)c->n_slots * (size_t)o->max_det * sizeof *c->det);
-  c->det_n = calloc((size_t)c->n_slots, sizeof *c->det_n);
-  c->det_s = calloc((size_t)c->n_slots, sizeof *c->det_s);
-  c->det_rej = calloc((size_t)c->n_slots, sizeof *c->det_rej);
-  c->det_loc = calloc((size_t)c->n_slots, sizeof *c->det_loc);
+  c->sp = calloc((size_t)c->n_slots, sizeof *c->sp);
   c->slot_frame = calloc((size_t)c->n_slots, sizeof *c->slot_frame);
   c->slot_plan = calloc((size_t)c->n_slots, sizeof *c->slot_plan);
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
   c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
-  if (!c->pk || !c->det || !c->det_n || !c->det_s || !c->det_rej || !c->det_loc || !c->slot_frame || !c->slot_plan || !c->pred || !c->pred_intensity)
+  if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan || !c->pred || !c->pred_intensity)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -158,9 +155,10 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   track_ctx *c = user;
   double t0 = cli_now_s();
   elfm_detection *det = c->det + (size_t)slot * c->o->max_det;
-  elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->o->max_det, &c->det_n[slot], err);
-  c->det_rej[slot] = 0;
-  c->det_loc[slot] = 0;
+  elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->o->max_det, &c->sp[slot].n, err);
+  c->sp[slot].rej = 0;
+  c->sp[slot].loc = 0;
+  c->sp[slot].deep_dropped = 0;
   c->slot_frame[slot] = frame;
   c->slot_plan[slot] = plan;
   if (st == ELFM_OK && c->o->view_support > 0) {
@@ -172,7 +170,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
      * docs/tracker.md "View support". The voxel is the refined position's
      * nearest. */
     int kept = 0;
-    for (int i = 0; i < c->det_n[slot]; i++) {
+    for (int i = 0; i < c->sp[slot].n; i++) {
       const int X = (int)lround(elfm_volume_x_vox(v, det[i].x_um));
       const int Y = (int)lround(elfm_volume_y_vox(v, det[i].y_um));
       const int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
@@ -180,8 +178,8 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       const int n = elfm_refocus_view_support(plan, frame, X, Y, K, &ns);
       if ((double)n >= c->o->view_support * ns && n > 0) det[kept++] = det[i];
     }
-    c->det_rej[slot] = c->det_n[slot] - kept;
-    c->det_n[slot] = kept;
+    c->sp[slot].rej = c->sp[slot].n - kept;
+    c->sp[slot].n = kept;
   }
   if (st == ELFM_OK && c->o->localize_views) {
     /* The peak fit reads three voxels per axis of a volume that averages
@@ -191,20 +189,35 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
      * at rest), stage x 0.44 -> 0.29 um and speed error 0.71 % -> 0.50 %,
      * flow (8 seeds) x 0.46 -> 0.41 um and z 1.18 -> 0.99 um, alpha 0.702
      * -> 0.733 (docs/tracker.md "View fit"). Where the fit fails (too few
-     * views agree), the peak fit stays. */
-    for (int i = 0; i < c->det_n[slot]; i++) {
+     * views agree), the peak fit stays; but a peak only the depth-scaled
+     * threshold let in needs deep_peak_views views agreeing or goes: the
+     * ghosts of deep beads' overlapping images sit at that level too, and
+     * few views agree on them (docs/tracker.md "Deep peaks"). */
+    elfm_localize_options deep = c->o->loc;
+    const int deep_test = c->o->deep_peak_views > 0;
+    if (deep_test) deep.min_views = c->o->deep_peak_views;
+    int n = 0;
+    for (int i = 0; i < c->sp[slot].n; i++) {
       elfm_localize_result r;
+      const int is_deep = deep_test && det[i].deep_only;
       if (!elfm_refocus_localize(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
                                  elfm_volume_y_vox(v, det[i].y_um),
-                                 elfm_volume_z_vox(v, det[i].z_um), &c->o->loc, &r))
+                                 elfm_volume_z_vox(v, det[i].z_um), is_deep ? &deep : &c->o->loc,
+                                 &r)) {
+        if (is_deep) c->sp[slot].deep_dropped++;
+        else det[n++] = det[i];
         continue;
-      det[i].x_um = elfm_volume_x_um(v, r.x_vox);
-      det[i].y_um = elfm_volume_y_um(v, r.y_vox);
-      det[i].z_um = elfm_volume_z_um(v, r.z_vox);
-      c->det_loc[slot]++;
+      }
+      det[n] = det[i];
+      det[n].x_um = elfm_volume_x_um(v, r.x_vox);
+      det[n].y_um = elfm_volume_y_um(v, r.y_vox);
+      det[n].z_um = elfm_volume_z_um(v, r.z_vox);
+      n++;
+      c->sp[slot].loc++;
     }
+    c->sp[slot].n = n;
   }
-  c->det_s[slot] = cli_now_s() - t0;
+  c->sp[slot].s = cli_now_s() - t0;
   return st;
 }
 
@@ -278,10 +291,11 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     c->first_t_us = v->t_us;
   }
   elfm_detection *det = c->det + (size_t)slot * o->max_det;
-  int n = c->det_n[slot];
-  c->t_peaks += c->det_s[slot];
-  c->n_support_rejected += c->det_rej[slot];
-  c->n_localized += c->det_loc[slot];
+  int n = c->sp[slot].n;
+  c->t_peaks += c->sp[slot].s;
+  c->n_support_rejected += c->sp[slot].rej;
+  c->n_localized += c->sp[slot].loc;
+  c->n_deep_dropped += c->sp[slot].deep_dropped;
   double t1 = cli_now_s();
   /* the linker's predictions, once, for both track-guided searches */
   const int guided_peak = o->guided_low > 0 && o->link.weak_gate_um > 0;
@@ -362,11 +376,8 @@ void track_ctx_free(track_ctx *c)
   elfm_link_free(c->lk);
   for (int t = 0; c->pk && t < c->n_threads; t++) elfm_peaks_free(c->pk[t]);
   free(c->pk);
-  free(c->det_n);
+  free(c->sp);
   free(c->fin);
-  free(c->det_s);
-  free(c->det_rej);
-  free(c->det_loc);
   free(c->slot_frame);
   free(c->slot_plan);
   free(c->pred);

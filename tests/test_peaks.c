@@ -192,6 +192,15 @@ int main(void)
     CHECK_OK(elfm_peaks_detect(pd, v, det, 16, &n, &err), &err);
     CHECK_EQ_INT(n, 1);
     if (n == 1) CHECK_NEAR(det[0].z_um, 40, 0.5);
+    /* it is in only by the depth scaling: deep_only (track's view test) */
+    if (n == 1) CHECK_EQ_INT(det[0].deep_only, 1);
+    /* a blob the plain threshold lets in is not deep_only, at any depth */
+    add_blob(v, -20, 15, 30, 80, SXY, SZ);
+    CHECK_OK(elfm_peaks_detect(pd, v, det, 16, &n, &err), &err);
+    CHECK_EQ_INT(n, 2);
+    for (int i = 0; i < n; i++)
+      CHECK_EQ_INT(det[i].deep_only, det[i].z_um > 35 && det[i].x_um > 0);
+    add_blob(v, -20, 15, 30, -80, SXY, SZ);
     /* floor above the scaled value: z = 40 needs 26 > 25 */
     elfm_peaks_free(pd);
     od.absolute_min = 31;

@@ -5,9 +5,9 @@
 #  - the guided view fit's intensity floor (--guided-min-ratio, default
 #    0.15) keeps it off the faint light a bead leaves just after its pulse:
 #    precision and alpha above --guided-min-ratio 0 (measured: alpha 0.309
-#    -> 0.447, precision 0.600 -> 0.662);
+#    -> 0.447, precision 0.611 -> 0.675);
 #  - the README's setting for moving blinking objects, --repr lin, reaches
-#    alpha > 0.6 and precision > 0.95 (measured 0.706 and 0.993; it needs
+#    alpha > 0.6 and precision > 0.95 (measured 0.707 and 0.993; it needs
 #    the floor and stitching's straight-line rule, which keeps the bead that
 #    enters on the line another has left off that one's track);
 #  - summary.json counts the file's trigger edges, and without -q `track`

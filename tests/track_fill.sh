@@ -3,13 +3,15 @@
 # flow seed 21 (held out: seeds 1-20 chose the settings):
 #  - the default (fill with 4 views agreeing) raises alpha and recall over
 #    --fill-views 0 (seeds 21-24, 100 ms: alpha +0.026 to +0.040, recall
-#    +0.04 to +0.06), and says how many points it found in summary.json;
+#    +0.04 to +0.06 when it came; seed 21 with the eighth session's deep
+#    peaks: 0.795 -> 0.832, 0.910 -> 0.950), and says how many points it
+#    found in summary.json;
 #  - detections.csv stays in frame order (fills are written with their frame);
 #  - without --fill-views the integral fills with 8 views (summary.json);
 #  - the smoother weights the fills 1.5x noisier than the peaks by default
 #    (--view-fit-sigma): alpha above --view-fit-sigma 1 (seeds 1-20: every
-#    seed up, mean 0.7655 -> 0.7681; seed 21 0.764 -> 0.767 with the guided
-#    search's intensity floor, 0.762 -> 0.764 before it), the
+#    seed up, mean 0.7655 -> 0.7681; seed 21 at the final defaults 0.830
+#    -> 0.832, 0.762 -> 0.764 when it was chosen), the
 #    detections the same;
 #  - out-of-range values are usage errors.
 # Usage: track_fill.sh BINARY

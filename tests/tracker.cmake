@@ -19,6 +19,8 @@ add_test(NAME track_motion_bias COMMAND ${CMAKE_SOURCE_DIR}/tests/track_motion_b
 set_tests_properties(track_motion_bias PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)
 add_test(NAME track_fill COMMAND ${CMAKE_SOURCE_DIR}/tests/track_fill.sh ${CMAKE_BINARY_DIR}/eventlfm)
 set_tests_properties(track_fill PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)
+add_test(NAME track_deep COMMAND ${CMAKE_SOURCE_DIR}/tests/track_deep.sh ${CMAKE_BINARY_DIR}/eventlfm)
+set_tests_properties(track_deep PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)
 add_test(NAME track_blink COMMAND ${CMAKE_SOURCE_DIR}/tests/track_blink.sh ${CMAKE_BINARY_DIR}/eventlfm)
 set_tests_properties(track_blink PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)
 add_test(NAME track_integral COMMAND ${CMAKE_SOURCE_DIR}/tests/track_integral.sh ${CMAKE_BINARY_DIR}/eventlfm)

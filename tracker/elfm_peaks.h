@@ -36,6 +36,8 @@ typedef struct elfm_detection {
   double intensity;          /* refined peak value, volume units */
   double sigma_x_um, sigma_y_um, sigma_z_um;
   int weak;                  /* 1: above the low (hysteresis) threshold only */
+  int deep_only;             /* 1: above the depth-scaled threshold (depth_range_um)
+                                but not the plain absolute one */
   int view_fit;              /* 1: found by the view fit alone where no peak stood
                                 out (elfm_refocus_localize from a track's prediction:
                                 the guided search, gap filling); its sigmas are 0.

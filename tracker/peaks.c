@@ -18,6 +18,7 @@ typedef struct peak_cand {
   float value;
   int32_t x, y, z;
   int32_t weak;   /* above the low (hysteresis) threshold only */
+  int32_t deep;   /* above the depth-scaled threshold only (elfm_detection.deep_only) */
 } peak_cand;
 
 struct elfm_peaks {
@@ -316,6 +317,7 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   refine_axis(d, ic, (size_t)w * h, z, nz, o->fit_half_z, o->refine, &oz, &sz, &vz);
   det->weak = weak;
   det->view_fit = 0;
+  det->deep_only = 0;
   det->frame = v->frame;
   det->t_us = v->t_us;
   det->x_um = elfm_volume_x_um(v, x + ox);
@@ -501,13 +503,17 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
         int weak = !((double)c > thr_hi);
+        double f = 1;
         if (p->views) {
           /* threshold x (N / n)^e where n views sample the voxel (elfm_peaks.h) */
-          double f = p->view_scale[p->views[((size_t)z * h + y) * w + x]];
+          f = p->view_scale[p->views[((size_t)z * h + y) * w + x]];
           if (!((double)c > thr * f)) continue;
           weak = !((double)c > thr_hi * f);
         }
-        if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z, weak};
+        /* would the plain absolute rule (no depth scaling) have let it in? */
+        int deep = o->depth_range_um > 0 && o->absolute > 0 && !weak &&
+                   !((double)c > (o->absolute > thr0 ? o->absolute : thr0) * f);
+        if (nc < p->cand_cap) p->cand[nc++] = (peak_cand){c, x, y, z, weak, deep};
       }
     }
   }
@@ -528,7 +534,8 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
       if (dx * dx + dy * dy + dz * dz < sep2) keep = 0;
     }
     if (!keep) continue;
-    fill_detection(o, v, pc->x, pc->y, pc->z, pc->weak, &out[n++]);
+    fill_detection(o, v, pc->x, pc->y, pc->z, pc->weak, &out[n]);
+    out[n++].deep_only = pc->deep;
   }
   *n_out = n;
   return ELFM_OK;
