@@ -559,13 +559,14 @@ int cmd_track(int argc, char **argv)
        * falls with depth to 30 - and a peak only that lowered threshold
        * lets in must have deep_peak_views views agree on it (the view fit,
        * below), which the ghosts at that level rarely have. Flow 100 ms
-       * seeds 1-20: F1 0.9461 -> 0.9515, alpha 0.7741 -> 0.7817, recall
-       * 0.914 -> 0.925, lateral RMSE 0.456 -> 0.460 um; held-out seeds
-       * 21-24 alpha +0.047 / +0.007 / +0.053 / -0.021. Not on a stage:
+       * seeds 1-20: F1 0.9461 -> 0.9525, alpha 0.7741 -> 0.7846, recall
+       * 0.914 -> 0.926, lateral RMSE 0.456 -> 0.463 um; held-out seeds
+       * 21-24 alpha +0.063 / +0.008 / +0.015 / +0.027. Not on a stage:
        * there the deep tracks' noise reached the velocity (speed error
        * 0.41 / 0.18 / 0.06 % -> 0.44 / 0.27 / 0.58 %, seeds 1-3). Without
-       * the view test: F1 0.9445, precision 0.982 -> 0.963
-       * (docs/tracker.md "Deep peaks"). */
+       * the view test: F1 0.9445, precision 0.982 -> 0.963; 8 / 12 views:
+       * F1 0.9511 / 0.9501, alpha 0.7863 / 0.7762 (docs/tracker.md "Deep
+       * peaks"). */
       if (!depth_given && o.motion != MOTION_STAGE) {
         o.peaks.depth_range_um = 60;
         if (!min_given) o.peaks.absolute_min = 30;
