@@ -202,6 +202,14 @@ static int uf_find(int *uf, int a)
   return a;
 }
 
+/* Shared with link_fill.c (link_internal.h). */
+double elfm_link_mean_intensity(const elfm_track *t, size_t a, size_t b)
+{
+  double s = 0;
+  for (size_t k = a; k < b; k++) s += t->pts[k].intensity;
+  return b > a ? s / (double)(b - a) : 0;
+}
+
 /* Shared with link_repair.c (link_internal.h). */
 int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
                        double pos[3], double vel[3], double acc[3])
@@ -714,13 +722,7 @@ elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us,
     if (lt.missed < 0 || lt.missed > l->o.max_gap_frames || (int)lt.t->n < min_points) continue;
     predict_track(&l->o, &lt, t_us);
     memcpy(xyz_um + 3 * (size_t)n, lt.pred, sizeof lt.pred);
-    if (intensity) {
-      const elfm_track *t = lt.t;
-      const size_t k0 = t->n > 3 ? t->n - 3 : 0;
-      double sum = 0;
-      for (size_t k = k0; k < t->n; k++) sum += t->pts[k].intensity;
-      intensity[n] = t->n > k0 ? sum / (double)(t->n - k0) : 0;
-    }
+    if (intensity) intensity[n] = elfm_link_mean_intensity(lt.t, lt.t->n > 3 ? lt.t->n - 3 : 0, lt.t->n);
     n++;
   }
   *n_out = n;

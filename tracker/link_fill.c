@@ -43,11 +43,7 @@ static void end_fit(const elfm_track *t, size_t k0, size_t k1, size_t ref, doubl
  * (k = 0: after only). */
 static double ends_intensity(const elfm_track *t, size_t k)
 {
-  double s = 0;
-  int n = 0;
-  for (size_t j = k >= 3 ? k - 3 : 0; j < k; j++, n++) s += t->pts[j].intensity;
-  for (size_t j = k; j < t->n && j < k + 3; j++, n++) s += t->pts[j].intensity;
-  return n ? s / n : 0;
+  return elfm_link_mean_intensity(t, k >= 3 ? k - 3 : 0, t->n - k > 3 ? k + 3 : t->n);
 }
 
 /* The gap between pts[k-1] and pts[k] of t; h: points each end's fit uses. */

@@ -81,6 +81,9 @@ elfm_status elfm_link_reserve_cost(elfm_linker *l, size_t need, elfm_error *err)
 
 /* link.c: fits and prediction. */
 
+/* Mean intensity of t's points a .. b-1 (0 when the range is empty). */
+double elfm_link_mean_intensity(const elfm_track *t, size_t a, size_t b);
+
 /* Least-squares p = c0 + c1 t + c2 t^2 over pts[k0 .. k1) (t in ms from
  * tr): position, velocity and acceleration at tr. 0 when fewer than 3
  * distinct times (outputs untouched). */
