@@ -20,11 +20,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-for bad in "--guided-min-ratio -0.1" "--guided-min-ratio 2"; do
-  # shellcheck disable=SC2086
-  "$bin" track --calib a --events b --out c $bad >/dev/null 2>"$tmp/err"
-  [ $? -eq 2 ] && grep -q -e "${bad%% *}" "$tmp/err" || { echo "FAIL: $bad not a usage error"; fail=$((fail+1)); }
-done
+expect_usage_errors "--guided-min-ratio -0.1" "--guided-min-ratio 2"
 
 "$bin" simulate blink_moving --out "$tmp/bm" --duration-ms 100 --seed 4 --quiet >/dev/null 2>&1 ||
   { echo "SKIP: simulate blink_moving failed"; exit 77; }

@@ -17,11 +17,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-for bad in "--deep-peak-views 1" "--deep-peak-views 300"; do
-  # shellcheck disable=SC2086
-  "$bin" track --calib a --events b --out c $bad >/dev/null 2>"$tmp/err"
-  [ $? -eq 2 ] && grep -q -e "${bad%% *}" "$tmp/err" || { echo "FAIL: $bad not a usage error"; fail=$((fail+1)); }
-done
+expect_usage_errors "--deep-peak-views 1" "--deep-peak-views 300"
 
 "$bin" simulate flow --out "$tmp/flow" --duration-ms 100 --seed 21 --quiet >/dev/null 2>&1 ||
   { echo "SKIP: simulate flow failed"; exit 77; }

@@ -20,12 +20,8 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-for bad in "--fill-views 1" "--fill-views 300" "--fill-gate-um 0" "--fill-min-ratio 1.5" \
-           "--fill-max-gap 0" "--fill-max-gap 2000" "--view-fit-sigma 0" "--view-fit-sigma 2000"; do
-  # shellcheck disable=SC2086
-  "$bin" track --calib a --events b --out c $bad >/dev/null 2>"$tmp/err"
-  [ $? -eq 2 ] && grep -q -e "${bad%% *}" "$tmp/err" || { echo "FAIL: $bad not a usage error"; fail=$((fail+1)); }
-done
+expect_usage_errors "--fill-views 1" "--fill-views 300" "--fill-gate-um 0" "--fill-min-ratio 1.5" \
+           "--fill-max-gap 0" "--fill-max-gap 2000" "--view-fit-sigma 0" "--view-fit-sigma 2000"
 
 "$bin" simulate flow --out "$tmp/flow" --duration-ms 100 --seed 21 --quiet >/dev/null 2>&1 ||
   { echo "SKIP: simulate flow failed"; exit 77; }

@@ -23,3 +23,15 @@ track_score() {
     --detections "$ts_out/detections.csv" --calib "$ts_sc/calib.json" --json > "$ts_json" ||
     { echo "FAIL: score $ts_out"; fail=$((fail+1)); }
 }
+
+# expect_usage_errors OPTION_VALUE...: each "--option value" given alone to
+# `eventlfm track` exits 2 with a message naming the option. Uses $bin and
+# $tmp; a failure is printed and counted in $fail.
+expect_usage_errors() {
+  for eu_bad in "$@"; do
+    # shellcheck disable=SC2086
+    "$bin" track --calib a --events b --out c $eu_bad >/dev/null 2>"$tmp/err"
+    [ $? -eq 2 ] && grep -q -e "${eu_bad%% *}" "$tmp/err" ||
+      { echo "FAIL: $eu_bad not a usage error"; fail=$((fail+1)); }
+  done
+}
