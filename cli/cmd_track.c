@@ -96,6 +96,12 @@ static void track_defaults(track_opts *o)
    * <= 0.006); stage seed 3 0.688 -> 0.707; worm, blink, stage_accel the
    * same. A longer tail shows which way each bead turned. */
   o->link.swap_points = 8;
+  /* Established tracks (8 points, the short fit's history) are assigned
+   * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
+   * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
+   * beads (9 runs) 0.605 -> 0.623 (docs/tracker.md "Established tracks
+   * first"). */
+  o->link.priority_points = 8;
   /* Gap filling (cmd_track_fill.c): once a track has found its object
    * again and followed it for swap_points frames, the view fit looks for it
    * in each kept frame of the gap, from both ends inwards, starting where
@@ -181,6 +187,8 @@ static void usage(FILE *f)
     "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
     "  --swap-points N      review a gap closing that does not fit when its new tail\n"
     "                       has N points; exchange tails with a better fit (8; 0 off)\n"
+    "  --priority-points N  tracks of >= N points choose their detections before\n"
+    "                       younger ones (8; 0 = one assignment for all)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
@@ -281,7 +289,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO
 };
 
 int cmd_track(int argc, char **argv)
@@ -317,6 +325,7 @@ int cmd_track(int argc, char **argv)
       {"view-fit-sigma", required_argument, 0, O_VFSIG},
       {"guided-min-ratio", required_argument, 0, O_GRATIO},
       {"deep-peak-views", required_argument, 0, O_DEEPV},
+      {"priority-points", required_argument, 0, O_PRIO},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
@@ -406,6 +415,13 @@ int cmd_track(int argc, char **argv)
       break;
     case O_DEEPV:
       if (!parse_views_or_off(C, "--deep-peak-views", a, &o.deep_peak_views)) return CLI_USAGE;
+      break;
+    case O_PRIO:
+      if (!cli_parse_int(C, "--priority-points", a, &o.link.priority_points)) return CLI_USAGE;
+      if (o.link.priority_points < 0) {
+        cli_message(C, CLI_USAGE, "--priority-points must be >= 0, not '%s'", a);
+        return CLI_USAGE;
+      }
       break;
     case O_GRATIO:
       if (!cli_parse_double_in(C, "--guided-min-ratio", a, 0, 0, 1, "0..1", &o.guided_min_ratio)) return CLI_USAGE;

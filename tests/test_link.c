@@ -100,6 +100,36 @@ int main(void)
     elfm_link_free(l);  /* frees live tracks (ASan checks) */
   }
 
+  /* 2b. Established tracks first: track T has moved 1 um per frame along
+   * x for 10 frames and expects its bead at (10, 0); a one-point track Y
+   * was born at (10.6, -7) a frame before, its gate widened to 11 um for
+   * its unknown speed. Detections A = (10.3, 0) (T's bead, 7 um from Y)
+   * and B = (11, 5) (inside T's 6 um gate, 12 um from Y). "Most pairs
+   * first" gives T -> B and Y -> A; with priority_points T takes A and Y
+   * nothing (B starts a track). */
+  for (int prio = 0; prio <= 1; prio++) {
+    elfm_link_options op = o;
+    op.priority_points = prio ? 8 : 0;
+    elfm_linker *l = elfm_link_create(&op, &err);
+    for (int f = 0; f < 10; f++) {
+      elfm_detection d[2] = {mk(f, 0, 0), mk(10.6, -7, 0)};
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, f == 9 ? 2 : 1, &err), &err);
+    }
+    CHECK_EQ_INT((int)elfm_link_last_track_id(l, 1), 1);  /* Y was born */
+    elfm_detection d[2] = {mk(10.3, 0, 0), mk(11, 5, 0)};
+    CHECK_OK(elfm_link_step(l, 10, T0 + 10000, d, 2, &err), &err);
+    if (prio) {
+      CHECK_MSG(elfm_link_last_track_id(l, 0) == 0, "priority: A went to track %lld",
+                (long long)elfm_link_last_track_id(l, 0));
+      CHECK_MSG(elfm_link_last_track_id(l, 1) == 2, "priority: B went to track %lld",
+                (long long)elfm_link_last_track_id(l, 1));
+    } else {  /* the case the option is for: the one-point track takes T's bead */
+      CHECK_EQ_INT((int)elfm_link_last_track_id(l, 0), 1);
+      CHECK_EQ_INT((int)elfm_link_last_track_id(l, 1), 0);
+    }
+    elfm_link_free(l);
+  }
+
   /* 3. Gap closing: a bead moving at 0.05 um/ms goes dark for 50 frames
    * (joined) and, later, for 51 frames (a new track). Also a 2-point blip
    * far away is dropped (min_points 5), and finished tracks come out while
@@ -603,6 +633,9 @@ int main(void)
     bad = o;
     bad.swap_points = 6;
     bad.swap_ratio = 1.5;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.priority_points = -1;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
     bad.history = 1;

@@ -18,6 +18,8 @@ check 2 "motion" "$bin" track --calib a --events b --out c --motion sideways
 check 2 "stage-velocity" "$bin" track --calib a --events b --out c --stage-velocity-um-per-ms 1,2
 check 2 "batch" "$bin" track --calib a --events b --out c --batch -1
 check 2 "max-outlier-frac" "$bin" track --calib a --events b --out c --max-outlier-frac 2
+check 2 "priority-points" "$bin" track --calib a --events b --out c --priority-points -1
+check 2 "priority-points" "$bin" track --calib a --events b --out c --priority-points x
 # The recon options track shares with recon (cli_parse_recon_option): each
 # bad value is a usage error naming the option, with the same message from
 # both commands.

@@ -19,7 +19,9 @@
  *     groups; each group is solved optimally (the Hungarian solver of
  *     elfm_score.h: most pairs, then least total cost; cost = squared
  *     anisotropic distance over the squared gate, plus gap_cost per missed
- *     frame so a continuing track beats one coming back from a gap);
+ *     frame so a continuing track beats one coming back from a gap); with
+ *     priority_points, the group's tracks of that many points first, the
+ *     younger ones then among the detections left;
  *  3b. a rescue round for established tracks left unmatched (rescue_gate_factor);
  *  4. unmatched detections start tracks (weak ones do not); a track that has missed more
  *     than max_gap_frames consecutive frames ends. Ended tracks with at
@@ -119,6 +121,14 @@ typedef struct elfm_link_options {
    * 0 < swap_ratio <= 1), they are exchanged. 0 = off (default; track: 6). */
   int swap_points;
   double swap_ratio;      /* default 0.5 */
+  /* Established tracks first (step 3): within a group, the tracks of at
+   * least priority_points real points are assigned first and the younger
+   * ones then among the detections left. Why: "most pairs first" let a
+   * one-point track, whose gate is widened for its unknown speed, take an
+   * established track's bead whenever that gave one more pair (the
+   * established track then took a neighbour's detection, or none, and the
+   * two tracks swapped beads). 0 = off: one assignment (default; track: 8). */
+  int priority_points;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);
