@@ -102,6 +102,14 @@ static void track_defaults(track_opts *o)
    * beads (9 runs) 0.605 -> 0.623 (docs/tracker.md "Established tracks
    * first"). */
   o->link.priority_points = 8;
+  /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
+   * detections' errors are correlated from frame to frame (flow: lag-1
+   * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
+   * takes for motion. Flow 100 ms seeds 1-20: alpha 0.7897 -> 0.7950,
+   * every seed up or the same (1.2 / 1.6 / 2: 0.7945 / 0.7938 / 0.7867);
+   * held-out 21-24 +0.003 to +0.007; worm (integral) seeds 1-4 +0.001 to
+   * +0.004; blink, blink_moving up; stage (no spline) the same. */
+  o->smooth.gcv_gamma = 1.4;
   /* Gap filling (cmd_track_fill.c): once a track has found its object
    * again and followed it for swap_points frames, the view fit looks for it
    * in each kept frame of the gap, from both ends inwards, starting where
@@ -219,6 +227,8 @@ static void usage(FILE *f)
     "                       free: smoothing spline for all\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
+    "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
     "                       filling, guided search) count as F x noisier than the\n"
     "                       track's peaks (1.5)\n"
@@ -289,7 +299,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG
 };
 
 int cmd_track(int argc, char **argv)
@@ -326,6 +336,7 @@ int cmd_track(int argc, char **argv)
       {"guided-min-ratio", required_argument, 0, O_GRATIO},
       {"deep-peak-views", required_argument, 0, O_DEEPV},
       {"priority-points", required_argument, 0, O_PRIO},
+      {"gcv-gamma", required_argument, 0, O_GCVG},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
@@ -502,6 +513,9 @@ int cmd_track(int argc, char **argv)
       else return cli_message(C, CLI_USAGE, "--loss must be huber, cauchy or none, not '%s'", a);
       break;
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
+    case O_GCVG:
+      if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
+      break;
     case O_RES: o.resolution = 1; break;
     case O_MLEAD:
       if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",

@@ -63,6 +63,15 @@ typedef struct elfm_smooth_options {
   elfm_robust_loss loss;        /* HUBER */
   double loss_scale;            /* 3 (sigma units of the 3D residual norm) */
   double spline_weight_ms3;     /* lambda; <= 0: chosen by GCV */
+  /* GCV's price per effective parameter: lambda minimises
+   * n RSS / (n - gcv_gamma x edf)^2, >= 1. 1 (default) is the classical
+   * GCV, right for independent errors; it undersmooths when the errors
+   * are correlated from frame to frame, as an event camera's detections
+   * are (a time surface shares events between frames: on flow their lag-1
+   * autocorrelation is 0.54-0.58 laterally). 1.4 (`eventlfm track`) is the
+   * modified GCV of Cummins, Filloon & Nychka (2001) and Kim & Gu (2004).
+   * test_smooth 9b; docs/tracker.md "Smoother". */
+  double gcv_gamma;
   elfm_smooth_solver solver;
   int max_iterations;           /* Ceres iterations, 50 */
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */

@@ -341,8 +341,9 @@ bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<doubl
 }
 
 // GCV over the grid 10^-4 .. 10^8 ms^3 (half decades): the span from "follows
-// every frame" to "straight line" for 1 kHz frames and sub-um noise.
-double gcv_lambda(const Data &d, const SplineSetup &ss, const std::vector<double> &w)
+// every frame" to "straight line" for 1 kHz frames and sub-um noise. gamma:
+// the price per effective parameter (elfm_smooth_options.gcv_gamma).
+double gcv_lambda(const Data &d, const SplineSetup &ss, const std::vector<double> &w, double gamma)
 {
   Banded bd;
   double best = 1.0, best_g = std::numeric_limits<double>::infinity();
@@ -350,8 +351,9 @@ double gcv_lambda(const Data &d, const SplineSetup &ss, const std::vector<double
   for (int e = -8; e <= 16; e++) {
     double lam = std::pow(10.0, 0.5 * e), rss, edf;
     if (!spline_linear(d, ss, w, lam, bd, &rss, &edf, nullptr)) continue;
-    if (edf >= nobs - 0.5) continue;
-    double g = nobs * rss / ((nobs - edf) * (nobs - edf));
+    const double dof = nobs - gamma * edf;
+    if (dof < 0.5) continue;
+    double g = nobs * rss / (dof * dof);
     if (g < best_g * (1 - 1e-9)) {
       best_g = g;
       best = lam;
@@ -420,11 +422,11 @@ void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
 }
 
 bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double lambda_given,
-                bool sparse, int max_iter, SplineFit *f)
+                double gcv_gamma, bool sparse, int max_iter, SplineFit *f)
 {
   const size_t K = ss.ts.size();
   std::vector<double> w(d.n, 1.0);
-  double lam = lambda_given > 0 ? lambda_given : gcv_lambda(d, ss, w);
+  double lam = lambda_given > 0 ? lambda_given : gcv_lambda(d, ss, w, gcv_gamma);
   // Beyond these the banded factorisation loses its digits (condition
   // ~ lambda / (sigma^2 h^3)); the ends are already "interpolate" and "line".
   lam = std::min(std::max(lam, 1e-9), 1e9);
@@ -435,7 +437,7 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
     if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
     if (lambda_given <= 0) {  // outliers can bias the GCV choice: choose again without them
-      double lam2 = std::min(std::max(gcv_lambda(d, ss, w), 1e-9), 1e9);
+      double lam2 = std::min(std::max(gcv_lambda(d, ss, w, gcv_gamma), 1e-9), 1e9);
       if (lam2 != lam) {
         lam = lam2;
         std::vector<double> w1(d.n, 1.0);
@@ -531,6 +533,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: no data or NULL argument");
   if (!(o->loss_scale > 0) || !std::isfinite(o->loss_scale) || o->max_iterations < 1 ||
       !(o->min_sigma_xy_um > 0) || !(o->min_sigma_z_um > 0) || !std::isfinite(o->spline_weight_ms3) ||
+      !(o->gcv_gamma >= 1) || !std::isfinite(o->gcv_gamma) ||
       o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC)
     return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: options out of range");
   for (size_t i = 0; i < n; i++) {
@@ -652,7 +655,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     }
     bool sparse = o->solver == ELFM_SOLVER_SPARSE ||
                   (o->solver == ELFM_SOLVER_AUTO && ss.ts.size() > 30);
-    if (spline_fit(d, ss, loss, o->spline_weight_ms3, sparse, o->max_iterations, &sp) && sp.ok)
+    if (spline_fit(d, ss, loss, o->spline_weight_ms3, o->gcv_gamma, sparse, o->max_iterations, &sp) &&
+        sp.ok)
       inf.bic[ELFM_MODEL_SPLINE] = sp.chi2 + sp.edf * lnobs;
   }
   // ---- choose: lowest BIC, ties (within 1e-9 relative) to the simpler
@@ -697,6 +701,7 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   o->loss = ELFM_LOSS_HUBER;
   o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
   o->spline_weight_ms3 = 0;
+  o->gcv_gamma = 1;      // classical GCV; track: 1.4 (elfm_smooth.h)
   o->solver = ELFM_SOLVER_AUTO;
   o->max_iterations = 50;
   o->min_sigma_xy_um = 0.02;
