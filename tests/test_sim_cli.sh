@@ -34,6 +34,27 @@ grep -q "sensor.nosuch" "$dir.err" || { echo "FAIL: bad --param key not named"; 
 printf '{"name": "x"}' >"$dir/bad.json"
 check bad-scene 1 "$bin" simulate "$dir/bad.json" --out "$dir/x"
 grep -q "bad.json" "$dir.err" && grep -q "description" "$dir.err" || { echo "FAIL: bad scene file/key not named"; cat "$dir.err"; fail=$((fail+1)); }
+# The pixel model's threshold-mismatch ratchet (docs/simulator.md, "A dim
+# object fades"): one deep (z 80 um), dim bead at rest, a 1 ms pulse every
+# 3 ms, no noise. Its images change a pixel by a little more than one
+# threshold; each ON/OFF pair moves the reference by (ON - OFF threshold),
+# so with per-pixel mismatch (sigma 0.03) the pixels fall silent one by
+# one (ON events in the second 30 ms against the first, measured: 232 / 790),
+# and without it every pulse fires alike (2300 / 2070).
+for sg in 0.03 0; do
+  check "ratchet-$sg" 0 "$bin" simulate blink --out "$dir/r$sg" --duration-ms 60 --seed 1 --quiet \
+    --param objects.count=1 --param 'objects.flux_hz=[30000,30000]' --param motion.z_min_um=80 \
+    --param motion.z_max_um=80 --param motion.place_radius_um=5 \
+    --param 'illumination={"type":"periodic","pulse_us":1000,"period_us":3000}' \
+    --param sensor.threshold_sigma=$sg --param sensor.shot_noise_hz=0 --param sensor.leak_hz=0 \
+    --param sensor.hot_pixels=0
+  check "ratchet-csv-$sg" 0 "$bin" convert "$dir/r$sg/events.raw" "$dir/r$sg/ev.csv"
+done
+r=$(awk -F, 'NR > 1 && $4 == 1 { if ($1 < 30000) a++; else b++ } END { printf "%.3f", b / (a ? a : 1) }' "$dir/r0.03/ev.csv")
+r0=$(awk -F, 'NR > 1 && $4 == 1 { if ($1 < 30000) a++; else b++ } END { printf "%.3f", b / (a ? a : 1) }' "$dir/r0/ev.csv")
+echo "ratchet: ON events second / first 30 ms: $r (threshold sigma 0.03), $r0 (sigma 0)"
+awk -v r="$r" -v r0="$r0" 'BEGIN { exit !(r < 0.5 && r0 > 0.9) }' ||
+  { echo "FAIL: ratchet ratios $r, $r0"; fail=$((fail+1)); }
 check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
 check show 0 "$bin" calib show "$dir/c.json"
 grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
