@@ -34,7 +34,10 @@ static void score_usage(FILE *f)
           "              (without --detections, the tracks' raw points are the detections);\n"
           "              alpha_detections: the ISBI alpha if every matched detection were on\n"
           "              its own object's track (what the detections allow a linker)\n"
-          "  tracks:     ISBI 2012 alpha, beta, track and detection Jaccard (Chenouard 2014)\n"
+          "  tracks:     ISBI 2012 alpha, beta, track and detection Jaccard (Chenouard 2014);\n"
+          "              alpha_identities: the alpha with every track point on its own\n"
+          "              object's track (what the linking costs), and the shares of truth\n"
+          "              points in fragments and in other objects' tracks\n"
           "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
           "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
           "before the first or after the last row of the files count too.\n"
@@ -76,6 +79,9 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   json_num(o, "rmse_z_um", r->rmse_z_um);
   json_num(o, "alpha_detections", r->alpha_detections);
   json_num(o, "rmse_tracks_um", r->has_tracks ? r->rmse_tracks_um : NAN);
+  json_num(o, "alpha_identities", r->has_tracks ? r->alpha_identities : NAN);
+  json_num(o, "identity_fragments", r->has_tracks ? r->identity_fragments : NAN);
+  json_num(o, "identity_other_tracks", r->has_tracks ? r->identity_other_tracks : NAN);
   cJSON_AddNumberToObject(o, "n_frames", r->n_frames);
   cJSON_AddNumberToObject(o, "n_frames_unscored", r->n_frames_unscored);
   cJSON_AddNumberToObject(o, "n_truth_points", (double)r->n_truth_points);
@@ -146,6 +152,9 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
     printf("  alpha %8.4f   beta %8.4f   Jaccard tracks %8.4f   Jaccard detections %8.4f\n",
            r->alpha, r->beta, r->jaccard_tracks, r->jaccard_detections);
     printf("  RMSE (anisotropic d, matched points) %8.4f um\n", r->rmse_tracks_um);
+    printf("  alpha with identities mended %8.4f (every point on its own object's track); of "
+           "the truth points\n  %.4f in fragments, %.4f in tracks of other objects\n",
+           r->alpha_identities, r->identity_fragments, r->identity_other_tracks);
   }
   if (r->has_stage)
     printf("stage: mean velocity (%.4f, %.4f, %.4f) um/ms, relative error %.4f\n",

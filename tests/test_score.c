@@ -185,6 +185,9 @@ int main(void)
     CHECK_NEAR(r.rmse_x_um, 0.0, 1e-9);
     CHECK_NEAR(r.rmse_z_um, 0.0, 1e-9);
     CHECK_NEAR(r.alpha_detections, 1.0, TOL);
+    CHECK_NEAR(r.alpha_identities, 1.0, TOL);
+    CHECK_NEAR(r.identity_fragments, 0.0, TOL);
+    CHECK_NEAR(r.identity_other_tracks, 0.0, TOL);
     CHECK_EQ_INT(r.detections_from_tracks, 0);
     CHECK_EQ_INT(r.n_paired_tracks, 2);
     /* detections only (no tracks): detection measures, no track measures */
@@ -369,6 +372,35 @@ int main(void)
     CHECK_NEAR(r.f1, 1.0, TOL); /* detection-wise nothing is wrong */
     /* the split is the linker's loss, not the detector's */
     CHECK_NEAR(r.alpha_detections, 1.0, TOL);
+    /* with identities mended the halves are one track again; A's second
+     * half (10 of the 40 truth points) was a fragment */
+    CHECK_NEAR(r.alpha_identities, 1.0, TOL);
+    CHECK_NEAR(r.identity_fragments, 10.0 / 40.0, TOL);
+    CHECK_NEAR(r.identity_other_tracks, 0.0, TOL);
+    elfm_table_free(tr);
+  }
+
+  /* 6b. Swapped tracks: track 1 follows A for frames 0-11 and then B, track
+   * 2 the other way round. A pairs with track 1: d = 8 x 4 (frames 12-19,
+   * where track 1 is on B, 40 um away: min(d, eps) = eps) = 32, likewise B
+   * with track 2: alpha = 1 - 64/160 = 0.6. Every point is on an
+   * object, exactly: mended, alpha 1; each object has 8 of its 20 points in
+   * the track that mostly follows the other (16 of 40). The identity
+   * diagnostics do not change the ISBI measures. */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    add_track(&b, 1, 0, 0, 11, 0, 0, 0, -1, -1);
+    add_track(&b, 1, 1, 12, NF - 1, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 1, 0, 11, 0, 0, 0, -1, -1);
+    add_track(&b, 2, 0, 12, NF - 1, 0, 0, 0, -1, -1);
+    elfm_table *tr = parse(&b, "tracks.csv");
+    elfm_score_result r = run(truth, tr, NULL, NULL);
+    CHECK_NEAR(r.alpha, 0.6, TOL);
+    CHECK_EQ_INT(r.n_paired_tracks, 2);
+    CHECK_NEAR(r.alpha_identities, 1.0, TOL);
+    CHECK_NEAR(r.identity_fragments, 0.0, TOL);
+    CHECK_NEAR(r.identity_other_tracks, 16.0 / 40.0, TOL);
     elfm_table_free(tr);
   }
 

@@ -101,6 +101,10 @@ int main(void)
     CHECK_NEAR(jnum(o, "rmse_z_um"), 0.0, 1e-9);
     /* 20 detections 1 um off, 20 truth points missed: 1 - (20 + 80) / 160 */
     CHECK_NEAR(jnum(o, "alpha_detections"), 0.375, 1e-9);
+    /* one track, already on its object: mending identities changes nothing */
+    CHECK_NEAR(jnum(o, "alpha_identities"), 0.375, 1e-9);
+    CHECK_NEAR(jnum(o, "identity_fragments"), 0.0, 1e-12);
+    CHECK_NEAR(jnum(o, "identity_other_tracks"), 0.0, 1e-12);
     CHECK_NEAR(jnum(o, "stage_velocity_rel_error"), 0.5, 1e-12);
     cJSON_Delete(o);
   }

@@ -319,6 +319,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   out->alpha_detections = NAN;
   out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = NAN;
   out->rmse_tracks_um = out->stage_rel_error = NAN;
+  out->alpha_identities = out->identity_fragments = out->identity_other_tracks = NAN;
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
   out->motion_speed_sd_um_per_ms = NAN;
   if (!truth || (!tracks && !detections) || !opt)
@@ -360,6 +361,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, out, err)) != ELFM_OK) goto done;
   if (tracks) {
     if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
+    if ((s = elfm_score_identities(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
     if (opt->have_stage) score_stage(tracks, ct, opt, out);
   }
   if (fr.n == 0) {
@@ -373,6 +375,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
       out->recall = out->f1 = out->alpha_detections = 0.0;
       if (tracks) {
         out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = 0.0;
+        out->alpha_identities = 0.0;
         out->n_truth_tracks = out->n_missed_tracks = seen;
       }
     }

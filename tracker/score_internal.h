@@ -164,5 +164,9 @@ elfm_status elfm_score_index_by_frame(const points_t *p, int n_frames, int64_t *
  * out's track fields. */
 elfm_status elfm_score_isbi_tracks(const truth_t *tr, const cands_t *cd, const gate_t *g,
                                    elfm_score_result *out, elfm_error *err);
+/* (4b) The identity diagnostics (elfm_score.h, IDENTITIES) into out's
+ * alpha_identities, identity_fragments and identity_other_tracks. */
+elfm_status elfm_score_identities(const truth_t *tr, const cands_t *cd, const gate_t *g,
+                                  elfm_score_result *out, elfm_error *err);
 
 #endif

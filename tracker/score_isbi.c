@@ -241,3 +241,151 @@ done:
   free(r2c);
   return s;
 }
+
+/* ---------------------------------------------------------------------- */
+/* (4b) Identities: what the tracks' own points would give with every point
+ * on its own object's track (elfm_score.h, IDENTITIES). */
+
+typedef struct {
+  int obj, frame, cand;
+  int64_t q;     /* candidate point */
+  double d;
+} owned_t;
+
+static int owned_by_obj_frame_d(const void *a, const void *b)
+{
+  const owned_t *u = a, *v = b;
+  if (u->obj != v->obj) return u->obj < v->obj ? -1 : 1;
+  if (u->frame != v->frame) return u->frame < v->frame ? -1 : 1;
+  if (u->d != v->d) return u->d < v->d ? -1 : 1;
+  return u->q < v->q ? -1 : u->q > v->q;
+}
+
+static int owned_by_cand_obj(const void *a, const void *b)
+{
+  const owned_t *u = a, *v = b;
+  if (u->cand != v->cand) return u->cand < v->cand ? -1 : 1;
+  if (u->obj != v->obj) return u->obj < v->obj ? -1 : 1;
+  return u->q < v->q ? -1 : u->q > v->q;
+}
+
+elfm_status elfm_score_identities(const truth_t *tr, const cands_t *cd, const gate_t *g,
+                                  elfm_score_result *out, elfm_error *err)
+{
+  elfm_status s = ELFM_OK;
+  const int n_obj = tr->n_obj, n_c = cd->n_tracks;
+  const int64_t n_pt = cd->off[n_c];
+  owned_t *own = malloc(((size_t)n_pt + 1) * sizeof *own);
+  int64_t *owner = malloc(((size_t)n_pt + 1) * sizeof *owner);  /* object or -1 */
+  int *maj = malloc(((size_t)n_c + 1) * sizeof *maj);            /* majority object, -1 none */
+  int64_t *best = calloc((size_t)n_obj + 1, sizeof *best);       /* points in its best track */
+  cands_t rl;
+  memset(&rl, 0, sizeof rl);
+  elfm_score_result tmp;
+  memset(&tmp, 0, sizeof tmp);
+  if (!own || !owner || !maj || !best) { s = elfm_score_nomem(err); goto done; }
+
+  /* Each real point's object: the nearest counted truth point of its frame
+   * within the gate. */
+  int64_t n_own = 0;
+  for (int ci = 0; ci < n_c; ci++)
+    for (int64_t q = cd->off[ci]; q < cd->off[ci + 1]; q++) {
+      int f = cd->pt.frame[q], k_best = -1;
+      double d_best = g->eps;
+      int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
+      for (int64_t m = lower_x(tr->fr_pt, fa, fb, cd->pt.x[q] - g->eps);
+           m < fb && tr->fr_pt[m].key < cd->pt.x[q] + g->eps; m++) {
+        int64_t p = (int64_t)tr->fr_pt[m].idx;
+        double d = dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p],
+                              cd->pt.z[q] - tr->pt.z[p]);
+        if (d < d_best) {
+          d_best = d;
+          k_best = truth_obj_of(tr, p);
+        }
+      }
+      owner[q] = k_best;
+      if (k_best >= 0) own[n_own++] = (owned_t){k_best, f, ci, q, d_best};
+    }
+
+  /* Where each object's points are: its best track (the one with most of
+   * them), fragments (other tracks whose points are mostly its own), and
+   * tracks that mostly follow another object. */
+  qsort(own, (size_t)n_own, sizeof *own, owned_by_cand_obj);
+  for (int ci = 0; ci < n_c; ci++) maj[ci] = -1;
+  for (int pass = 0; pass < 2; pass++) {
+    int64_t n_frag = 0, n_other = 0, top = 0;
+    for (int64_t i = 0; i < n_own;) {  /* runs of equal (cand, obj) */
+      int64_t j = i;
+      while (j < n_own && own[j].cand == own[i].cand && own[j].obj == own[i].obj) j++;
+      const int ci = own[i].cand, k = own[i].obj;
+      if (pass == 0) {  /* majorities and best counts */
+        if (i == 0 || own[i - 1].cand != ci) top = 0;
+        if (j - i > top) {
+          top = j - i;
+          maj[ci] = k;
+        }
+        if (j - i > best[k]) best[k] = j - i;
+      } else if (best[k] == j - i) {
+        best[k] = -1;  /* this run is the object's best track: counted once */
+      } else if (maj[ci] == k) {
+        n_frag += j - i;
+      } else {
+        n_other += j - i;
+      }
+      i = j;
+    }
+    if (pass == 1 && tr->pt.n > 0) {
+      out->identity_fragments = (double)n_frag / (double)tr->pt.n;
+      out->identity_other_tracks = (double)n_other / (double)tr->pt.n;
+    }
+  }
+
+  /* The tracks with identities mended: per object its points, the nearest
+   * one per frame; the points of no object stay on their own tracks. */
+  qsort(own, (size_t)n_own, sizeof *own, owned_by_obj_frame_d);
+  rl.off = malloc(((size_t)n_obj + (size_t)n_c + 1) * sizeof *rl.off);
+  rl.pt.frame = malloc(((size_t)n_pt + 1) * sizeof *rl.pt.frame);
+  rl.pt.x = malloc(((size_t)n_pt + 1) * sizeof *rl.pt.x);
+  rl.pt.y = malloc(((size_t)n_pt + 1) * sizeof *rl.pt.y);
+  rl.pt.z = malloc(((size_t)n_pt + 1) * sizeof *rl.pt.z);
+  if (!rl.off || !rl.pt.frame || !rl.pt.x || !rl.pt.y || !rl.pt.z) { s = elfm_score_nomem(err); goto done; }
+  int64_t w = 0;
+  int nt = 0;
+  for (int64_t i = 0; i < n_own;) {
+    rl.off[nt++] = (int)w;
+    const int k = own[i].obj;
+    for (; i < n_own && own[i].obj == k; i++) {
+      if (i > 0 && own[i - 1].obj == k && own[i - 1].frame == own[i].frame) continue;
+      const int64_t q = own[i].q;
+      rl.pt.frame[w] = cd->pt.frame[q];
+      rl.pt.x[w] = cd->pt.x[q];
+      rl.pt.y[w] = cd->pt.y[q];
+      rl.pt.z[w] = cd->pt.z[q];
+      w++;
+    }
+  }
+  for (int ci = 0; ci < n_c; ci++) {
+    int64_t w0 = w;
+    for (int64_t q = cd->off[ci]; q < cd->off[ci + 1]; q++) {
+      if (owner[q] >= 0) continue;
+      rl.pt.frame[w] = cd->pt.frame[q];
+      rl.pt.x[w] = cd->pt.x[q];
+      rl.pt.y[w] = cd->pt.y[q];
+      rl.pt.z[w] = cd->pt.z[q];
+      w++;
+    }
+    if (w > w0) rl.off[nt++] = (int)w0;
+  }
+  rl.off[nt] = (int)w;
+  rl.n_tracks = nt;
+  rl.pt.n = w;
+  if ((s = elfm_score_isbi_tracks(tr, &rl, g, &tmp, err)) != ELFM_OK) goto done;
+  out->alpha_identities = tmp.alpha;
+done:
+  free(own);
+  free(owner);
+  free(maj);
+  free(best);
+  elfm_score_cands_free(&rl);
+  return s;
+}
