@@ -110,6 +110,14 @@ static void track_defaults(track_opts *o)
    * held-out 21-24 +0.003 to +0.007; worm (integral) seeds 1-4 +0.001 to
    * +0.004; blink, blink_moving up; stage (no spline) the same. */
   o->smooth.gcv_gamma = 1.4;
+  /* The spline penalises the jerk, not the acceleration (elfm_smooth.h
+   * spline_order): a flow bead turns at ~0.3 rad/ms, a constant
+   * acceleration the acceleration penalty pulls toward a line. Flow 100 ms
+   * seeds 1-20: alpha 0.7950 -> 0.7964 (14 up, 5 the same, 1 down), lateral
+   * velocity RMSE 0.273 / 0.252 -> 0.264 / 0.236 um/ms; held-out 21-24 +0 to
+   * +0.003; 40/60 beads +0.002; blink, blink_moving the same. Not on the
+   * integral (below). */
+  o->smooth.spline_order = 3;
   /* Gap filling (cmd_track_fill.c): once a track has found its object
    * again and followed it for swap_points frames, the view fit looks for it
    * in each kept frame of the gap, from both ends inwards, starting where
@@ -228,7 +236,8 @@ static void usage(FILE *f)
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
-    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"    "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
+    "                       which leaves turns at constant speed alone (3; integral: 2)\n"
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
     "                       filling, guided search) count as F x noisier than the\n"
     "                       track's peaks (1.5)\n"
@@ -299,7 +308,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD
 };
 
 int cmd_track(int argc, char **argv)
@@ -307,7 +316,7 @@ int cmd_track(int argc, char **argv)
   static const char *const C = "track";
   track_opts o;
   track_defaults(&o);
-  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0;
+  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, spord_given = 0;
   static const struct option lo[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -337,6 +346,7 @@ int cmd_track(int argc, char **argv)
       {"deep-peak-views", required_argument, 0, O_DEEPV},
       {"priority-points", required_argument, 0, O_PRIO},
       {"gcv-gamma", required_argument, 0, O_GCVG},
+      {"spline-order", required_argument, 0, O_SPORD},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
@@ -516,6 +526,14 @@ int cmd_track(int argc, char **argv)
     case O_GCVG:
       if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
       break;
+    case O_SPORD:
+      if (!cli_parse_int(C, "--spline-order", a, &o.smooth.spline_order)) return CLI_USAGE;
+      if (o.smooth.spline_order != 2 && o.smooth.spline_order != 3) {
+        cli_message(C, CLI_USAGE, "--spline-order must be 2 or 3, not '%s'", a);
+        return CLI_USAGE;
+      }
+      spord_given = 1;
+      break;
     case O_RES: o.resolution = 1; break;
     case O_MLEAD:
       if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
@@ -548,6 +566,13 @@ int cmd_track(int argc, char **argv)
      * 0.887 / 0.911 / 0.912, alpha 0.724 / 0.744 / 0.773. (On flow's time
      * surface 1.5 um loses: alpha 0.733 -> 0.705 over 8 seeds.) */
     o.peaks.radius_xy_um = 1.5;
+  }
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spord_given) {
+    /* Slowly crawling cells: at 0.1-0.34 um/ms a neuron's acceleration is
+     * far below its placement noise, and the jerk penalty's freer fit
+     * (a constant acceleration costs nothing) lost: worm 200 ms seeds 1-4,
+     * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
+    o.smooth.spline_order = 2;
   }
   if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fillv_given) {
     /* Neurons come in pairs 6 um apart on the integral, and 4 views let a

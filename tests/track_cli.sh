@@ -21,6 +21,7 @@ check 2 "max-outlier-frac" "$bin" track --calib a --events b --out c --max-outli
 check 2 "priority-points" "$bin" track --calib a --events b --out c --priority-points -1
 check 2 "priority-points" "$bin" track --calib a --events b --out c --priority-points x
 check 2 "gcv-gamma" "$bin" track --calib a --events b --out c --gcv-gamma 0.5
+check 2 "spline-order" "$bin" track --calib a --events b --out c --spline-order 4
 # The recon options track shares with recon (cli_parse_recon_option): each
 # bad value is a usage error naming the option, with the same message from
 # both commands.

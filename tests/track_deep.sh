@@ -4,7 +4,8 @@
 #  - on time surfaces the threshold falls with depth by default (45 / (1 +
 #    (z / 60)^2), at least 30): recall and alpha above --threshold-depth-um 0
 #    (measured: recall 0.9425 -> 0.9500, alpha 0.769 -> 0.832; ninth session,
-#    with --priority-points 8 and --gcv-gamma 1.4: 0.945 -> 0.950, 0.816 -> 0.847);
+#    with --priority-points 8, --gcv-gamma 1.4 and --spline-order 3: 0.945 ->
+#    0.950, 0.818 -> 0.850);
 #  - a peak only the lowered threshold lets in stays only when 10 views
 #    agree on it in the view fit (--deep-peak-views): precision above
 #    --deep-peak-views 0 (measured 0.944 -> 0.967; ninth session 0.936 ->
@@ -38,6 +39,7 @@ awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 0.01) }' || { echo "FAIL: prec
 # the ninth session's defaults, recorded with the run
 [ "$(key "$tmp/def/summary.json" priority_points)" = 8 ] || { echo "FAIL: priority_points not 8"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" gcv_gamma)" = 1.4 ] || { echo "FAIL: gcv_gamma not 1.4"; fail=$((fail+1)); }
+[ "$(key "$tmp/def/summary.json" spline_order)" = 3 ] || { echo "FAIL: spline_order not 3"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/stage" -q \
   --motion stage --to-us 10000 || { echo "FAIL: track --motion stage"; fail=$((fail+1)); }
 [ "$(key "$tmp/stage/summary.json" threshold_depth_um)" = 0 ] || { echo "FAIL: stage depth not 0"; fail=$((fail+1)); }

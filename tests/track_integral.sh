@@ -46,7 +46,8 @@ done
 # the integral's own defaults, recorded with the run
 for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
           '"tau_us":[[:space:]]*100000' '"radius_xy_um":[[:space:]]*1.5' \
-          '"threshold_abs":[[:space:]]*15' '"off_weight":[[:space:]]*1'; do
+          '"threshold_abs":[[:space:]]*15' '"off_weight":[[:space:]]*1' \
+          '"spline_order":[[:space:]]*2'; do
   grep -q "$kv" "$tmp/int/summary.json" || { echo "FAIL: summary.json lacks $kv"; fail=$((fail+1)); }
 done
 for a in x y; do

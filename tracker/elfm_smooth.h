@@ -72,6 +72,12 @@ typedef struct elfm_smooth_options {
    * modified GCV of Cummins, Filloon & Nychka (2001) and Kim & Gu (2004).
    * test_smooth 9b; docs/tracker.md "Smoother". */
   double gcv_gamma;
+  /* What the smoothing spline's prior penalises: 2 (default) the
+   * acceleration, integral |a|^2 dt, whose stiff limit is a straight line;
+   * 3 the jerk, integral |da/dt|^2 dt, whose stiff limit is a constant
+   * acceleration, so an object turning at constant speed is not pulled
+   * inside its curve. */
+  int spline_order;
   elfm_smooth_solver solver;
   int max_iterations;           /* Ceres iterations, 50 */
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */

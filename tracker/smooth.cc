@@ -90,6 +90,17 @@ struct AccelResidual {
   }
 };
 
+// sqrt(lambda hbar) * (third derivative from a third divided difference) / sigma_ref
+struct JerkResidual {
+  double c[4], scale[3];
+  template <typename T>
+  bool operator()(const T *p0, const T *p1, const T *p2, const T *p3, T *r) const {
+    for (int a = 0; a < 3; a++)
+      r[a] = (c[0] * p0[a] + c[1] * p1[a] + c[2] * p2[a] + c[3] * p3[a]) * scale[a];
+    return true;
+  }
+};
+
 void solver_options(ceres::Solver::Options *so, bool sparse, int max_iter)
 {
   so->logging_type = ceres::SILENT;
@@ -236,65 +247,106 @@ void accel_coef(const std::vector<double> &ts, size_t k, double c[3])
   c[2] = s / h1;
 }
 
+// Third divided difference coefficients over states k .. k+3, times 6 (the
+// third derivative of the cubic through them) and scaled by sqrt(hbar),
+// hbar = (t_{k+3} - t_k) / 3: for frames h apart, (-1, 3, -3, 1) / h^3 x
+// sqrt(h), the analogue of accel_coef one order up.
+void jerk_coef(const std::vector<double> &ts, size_t k, double c[4])
+{
+  const double hb = (ts[k + 3] - ts[k]) / 3, s = 6 * std::sqrt(hb);
+  for (int i = 0; i < 4; i++) {
+    double den = 1;
+    for (int j = 0; j < 4; j++)
+      if (j != i) den *= ts[k + i] - ts[k + j];
+    c[i] = s / den;
+  }
+}
+
+// A = diag(W) + mu x the prior's rows: order 2 (accel_coef over 3 states)
+// is pentadiagonal, order 3 (jerk_coef over 4) heptadiagonal. LDL^T and the
+// selected inverse are written for bandwidth b = order; diagonal d of A, L
+// and A^-1 are a[d], l[d] (l[d][k] = L(k+d, k)) and z[d] (z[d][k] =
+// A^-1(k, k+d)).
 struct Banded {
   size_t K = 0;
-  std::vector<double> a0, a1, a2, D, l1, l2, z0, z1, z2;
+  int b = 2;
+  std::vector<double> a[4], l[4], z[4], D;
   void resize(size_t k) {
     K = k;
-    for (auto *v : {&a0, &a1, &a2, &D, &l1, &l2, &z0, &z1, &z2}) v->assign(k + 2, 0.0);
-  }
-  // A = diag(W) + mu * sum_k c_k c_k^T (rows over states k-1, k, k+1)
-  void build(const std::vector<double> &W, const std::vector<double> &ts, double mu) {
-    for (size_t k = 0; k < K; k++) {
-      a0[k] = W[k];
-      a1[k] = a2[k] = 0;
+    for (int d = 0; d < 4; d++) {
+      a[d].assign(k + 3, 0.0);
+      l[d].assign(k + 3, 0.0);
+      z[d].assign(k + 3, 0.0);
     }
-    for (size_t k = 1; k + 1 < K; k++) {
-      double c[3];
-      accel_coef(ts, k, c);
-      for (int i = 0; i < 3; i++) {
-        a0[k - 1 + i] += mu * c[i] * c[i];
-        if (i < 2) a1[k - 1 + i] += mu * c[i] * c[i + 1];
-      }
-      a2[k - 1] += mu * c[0] * c[2];
+    D.assign(k + 3, 0.0);
+  }
+  void build(const std::vector<double> &W, const std::vector<double> &ts, double mu, int order) {
+    b = order;
+    for (size_t k = 0; k < K; k++) {
+      a[0][k] = W[k];
+      for (int d = 1; d < 4; d++) a[d][k] = 0;
+    }
+    const size_t m = (size_t)order + 1;
+    for (size_t k = 0; k + m <= K; k++) {  // rows over states k .. k + order
+      double c[4];
+      if (order == 3) jerk_coef(ts, k, c);
+      else accel_coef(ts, k + 1, c);
+      for (size_t i = 0; i < m; i++)
+        for (size_t d = 0; i + d < m; d++) a[d][k + i] += mu * c[i] * c[i + d];
     }
   }
   bool factor() {
     for (size_t k = 0; k < K; k++) {
-      double d = a0[k];
-      if (k >= 1) d -= l1[k - 1] * l1[k - 1] * D[k - 1];
-      if (k >= 2) d -= l2[k - 2] * l2[k - 2] * D[k - 2];
+      double d = a[0][k];
+      for (int i = 1; i <= b && (size_t)i <= k; i++) d -= l[i][k - i] * l[i][k - i] * D[k - i];
       if (!(d > 0) || !std::isfinite(d)) return false;
       D[k] = d;
-      double b1 = a1[k];
-      if (k >= 1) b1 -= l2[k - 1] * l1[k - 1] * D[k - 1];
-      l1[k] = k + 1 < K ? b1 / d : 0;
-      l2[k] = k + 2 < K ? a2[k] / d : 0;
+      for (int j = 1; j <= b; j++) {
+        if (k + (size_t)j >= K) {
+          l[j][k] = 0;
+          continue;
+        }
+        double e = a[j][k];
+        // L(k+j, m) L(k, m) D(m) over m = k-1 down to k+j-b
+        for (int i = 1; i + j <= b && (size_t)i <= k; i++)
+          e -= l[i + j][k - i] * l[i][k - i] * D[k - i];
+        l[j][k] = e / d;
+      }
     }
     return true;
   }
-  void solve(const std::vector<double> &b, std::vector<double> &x) const {
+  void solve(const std::vector<double> &rhs, std::vector<double> &x) const {
     x.assign(K, 0.0);
     for (size_t k = 0; k < K; k++) {
-      double y = b[k];
-      if (k >= 1) y -= l1[k - 1] * x[k - 1];
-      if (k >= 2) y -= l2[k - 2] * x[k - 2];
+      double y = rhs[k];
+      for (int i = 1; i <= b && (size_t)i <= k; i++) y -= l[i][k - i] * x[k - i];
       x[k] = y;
     }
     for (size_t k = 0; k < K; k++) x[k] /= D[k];
-    for (size_t k = K; k-- > 0;) {
-      if (k + 1 < K) x[k] -= l1[k] * x[k + 1];
-      if (k + 2 < K) x[k] -= l2[k] * x[k + 2];
-    }
+    for (size_t k = K; k-- > 0;)
+      for (int i = 1; i <= b; i++)
+        if (k + (size_t)i < K) x[k] -= l[i][k] * x[k + i];
   }
-  // Selected inverse (Takahashi): z0 = diag, z1 = (k,k+1), z2 = (k,k+2) of A^-1.
+  // A^-1(p, q) from the band already computed (p, q >= k + 1): |p - q| < b.
+  double zat(size_t p, size_t q) const {
+    if (p >= K || q >= K) return 0;
+    return p <= q ? z[q - p][p] : z[p - q][q];
+  }
+  // Selected inverse (Takahashi): A^-1 on the band, from the last row up.
   void inverse_band() {
     for (size_t k = K; k-- > 0;) {
-      double zk1k1 = k + 1 < K ? z0[k + 1] : 0, zk2k2 = k + 2 < K ? z0[k + 2] : 0;
-      double zk1k2 = k + 2 < K ? z1[k + 1] : 0;
-      z1[k] = k + 1 < K ? -(l1[k] * zk1k1 + l2[k] * zk1k2) : 0;
-      z2[k] = k + 2 < K ? -(l1[k] * zk1k2 + l2[k] * zk2k2) : 0;
-      z0[k] = 1 / D[k] - l1[k] * z1[k] - l2[k] * z2[k];
+      for (int j = 1; j <= b; j++) {
+        if (k + (size_t)j >= K) {
+          z[j][k] = 0;
+          continue;
+        }
+        double s = 0;
+        for (int i = 1; i <= b; i++) s += l[i][k] * zat(k + i, k + j);
+        z[j][k] = -s;
+      }
+      double z00 = 1 / D[k];
+      for (int i = 1; i <= b; i++) z00 -= l[i][k] * z[i][k];
+      z[0][k] = z00;
     }
   }
 };
@@ -304,6 +356,7 @@ struct SplineSetup {
   std::vector<int64_t> ts_abs;      // state times (us, absolute)
   std::vector<size_t> state_of;     // data i -> state
   double sig_ref[3] = {1, 1, 1};
+  int order = 2;                    // penalised derivative: 2 acceleration, 3 jerk
 };
 
 // Per-axis weighted fit at lambda; returns RSS (whitened, weighted) and
@@ -325,7 +378,7 @@ bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<doubl
       W[ss.state_of[i]] += wi;
       b[ss.state_of[i]] += wi * d.x[3 * i + a];
     }
-    bd.build(W, ss.ts, lambda / (ss.sig_ref[a] * ss.sig_ref[a]));
+    bd.build(W, ss.ts, lambda / (ss.sig_ref[a] * ss.sig_ref[a]), ss.order);
     if (!bd.factor()) return false;
     bd.solve(b, x);
     bd.inverse_band();
@@ -333,7 +386,7 @@ bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<doubl
       double r = (x[ss.state_of[i]] - d.x[3 * i + a]) / d.sig[3 * i + a];
       *rss += w[i] * r * r;
     }
-    for (size_t k = 0; k < K; k++) *edf += bd.z0[k] * W[k];
+    for (size_t k = 0; k < K; k++) *edf += bd.z[0][k] * W[k];
     if (p)
       for (size_t k = 0; k < K; k++) (*p)[3 * k + a] = x[k];
   }
@@ -388,13 +441,20 @@ bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double
                           &p[3 * ss.state_of[i]]);
   }
   const double sl = std::sqrt(lambda);
-  for (size_t k = 1; k + 1 < K; k++) {
+  for (size_t k = 1; ss.order == 2 && k + 1 < K; k++) {
     double c[3];
     accel_coef(ss.ts, k, c);
     auto *r = new AccelResidual{c[0], c[1], c[2],
                                 {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]}};
     prob.AddResidualBlock(new ceres::AutoDiffCostFunction<AccelResidual, 3, 3, 3, 3>(r), nullptr,
                           &p[3 * (k - 1)], &p[3 * k], &p[3 * (k + 1)]);
+  }
+  for (size_t k = 0; ss.order == 3 && k + 3 < K; k++) {
+    auto *r = new JerkResidual;
+    jerk_coef(ss.ts, k, r->c);
+    for (int a = 0; a < 3; a++) r->scale[a] = sl / ss.sig_ref[a];
+    prob.AddResidualBlock(new ceres::AutoDiffCostFunction<JerkResidual, 3, 3, 3, 3, 3>(r), nullptr,
+                          &p[3 * k], &p[3 * (k + 1)], &p[3 * (k + 2)], &p[3 * (k + 3)]);
   }
   ceres::Solver::Options so;
   solver_options(&so, sparse, max_iter);
@@ -458,13 +518,13 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
     for (size_t i = 0; i < d.n; i++)
       W[ss.state_of[i]] += w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
     bd.resize(K);
-    bd.build(W, ss.ts, lam / (ss.sig_ref[a] * ss.sig_ref[a]));
+    bd.build(W, ss.ts, lam / (ss.sig_ref[a] * ss.sig_ref[a]), ss.order);
     if (!bd.factor()) return false;
     bd.inverse_band();
-    f->z0[a] = bd.z0;
-    f->z1[a] = bd.z1;
-    f->z2[a] = bd.z2;
-    for (size_t k = 0; k < K; k++) f->edf += bd.z0[k] * W[k];
+    f->z0[a] = bd.z[0];
+    f->z1[a] = bd.z[1];
+    f->z2[a] = bd.z[2];
+    for (size_t k = 0; k < K; k++) f->edf += bd.z[0][k] * W[k];
   }
   f->ok = true;
   return true;
@@ -534,6 +594,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   if (!(o->loss_scale > 0) || !std::isfinite(o->loss_scale) || o->max_iterations < 1 ||
       !(o->min_sigma_xy_um > 0) || !(o->min_sigma_z_um > 0) || !std::isfinite(o->spline_weight_ms3) ||
       !(o->gcv_gamma >= 1) || !std::isfinite(o->gcv_gamma) ||
+      (o->spline_order != 2 && o->spline_order != 3) ||
       o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC)
     return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: options out of range");
   for (size_t i = 0; i < n; i++) {
@@ -620,8 +681,9 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   elfm_motion_model want = o->model;
   bool try_cv = want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_VELOCITY;
   bool try_ca = (want == ELFM_MODEL_AUTO || want == ELFM_MODEL_CONST_ACCEL) && distinct >= 3;
+  // the spline needs more distinct times than its stiff limit has parameters
   bool try_sp = ((want == ELFM_MODEL_AUTO && o->allow_spline) || want == ELFM_MODEL_SPLINE) &&
-                distinct >= 4;
+                distinct >= (size_t)o->spline_order + 2;
   if (!try_ca && !try_sp) try_cv = true;  // what the data allow
   PolyFit cv, ca;
   SplineFit sp;
@@ -641,6 +703,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     std::sort(all.begin(), all.end());
     all.erase(std::unique(all.begin(), all.end()), all.end());
     ss.ts_abs = all;
+    ss.order = o->spline_order;
     ss.ts.resize(all.size());
     for (size_t k = 0; k < all.size(); k++) ss.ts[k] = d.tau_of(all[k]);
     ss.state_of.resize(n);
@@ -702,6 +765,7 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
   o->spline_weight_ms3 = 0;
   o->gcv_gamma = 1;      // classical GCV; track: 1.4 (elfm_smooth.h)
+  o->spline_order = 2;   // acceleration penalty
   o->solver = ELFM_SOLVER_AUTO;
   o->max_iterations = 50;
   o->min_sigma_xy_um = 0.02;
