@@ -36,6 +36,23 @@ static int truth_has(const truth_t *tr, int k, int f)
   return lo < tr->obj_off[k + 1] && tr->pt.frame[lo] == f;
 }
 
+/* The truth points of frame slot f that can lie within the gate of a point
+ * at x: fr_pt[*m0 .. *m1) (|dx| < eps; the x-sorted list). */
+static void gate_range(const truth_t *tr, int f, double x, double eps, int64_t *m0, int64_t *m1)
+{
+  const int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
+  *m0 = lower_x(tr->fr_pt, fa, fb, x - eps);
+  *m1 = lower_x(tr->fr_pt, *m0, fb, x + eps);
+}
+
+/* Distance from candidate point q to truth point p. */
+static double cand_truth_d(const gate_t *g, const cands_t *cd, int64_t q, const truth_t *tr,
+                           int64_t p)
+{
+  return dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p],
+                    cd->pt.z[q] - tr->pt.z[p]);
+}
+
 typedef struct {
   int obj, cand;
   int64_t matched;
@@ -77,13 +94,11 @@ elfm_status elfm_score_isbi_tracks(const truth_t *tr, const cands_t *cd, const g
     int n_touched = 0;
     int a = cd->off[ci], b = cd->off[ci + 1];
     for (int q = a; q < b; q++) {
-      int f = cd->pt.frame[q];
-      int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
-      for (int64_t m = lower_x(tr->fr_pt, fa, fb, cd->pt.x[q] - g->eps);
-           m < fb && tr->fr_pt[m].key < cd->pt.x[q] + g->eps; m++) {
+      int64_t m0, m1;
+      gate_range(tr, cd->pt.frame[q], cd->pt.x[q], g->eps, &m0, &m1);
+      for (int64_t m = m0; m < m1; m++) {
         int64_t p = (int64_t)tr->fr_pt[m].idx;
-        double d = dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p],
-                              cd->pt.z[q] - tr->pt.z[p]);
+        double d = cand_truth_d(g, cd, q, tr, p);
         if (!(d < g->eps)) continue;
         int k = truth_obj_of(tr, p);
         if (acc_m[k] == 0) touched[n_touched++] = k;
@@ -292,12 +307,11 @@ elfm_status elfm_score_identities(const truth_t *tr, const cands_t *cd, const ga
     for (int64_t q = cd->off[ci]; q < cd->off[ci + 1]; q++) {
       int f = cd->pt.frame[q], k_best = -1;
       double d_best = g->eps;
-      int64_t fa = tr->fr_off[f], fb = tr->fr_off[f + 1];
-      for (int64_t m = lower_x(tr->fr_pt, fa, fb, cd->pt.x[q] - g->eps);
-           m < fb && tr->fr_pt[m].key < cd->pt.x[q] + g->eps; m++) {
+      int64_t m0, m1;
+      gate_range(tr, f, cd->pt.x[q], g->eps, &m0, &m1);
+      for (int64_t m = m0; m < m1; m++) {
         int64_t p = (int64_t)tr->fr_pt[m].idx;
-        double d = dist_aniso(g, cd->pt.x[q] - tr->pt.x[p], cd->pt.y[q] - tr->pt.y[p],
-                              cd->pt.z[q] - tr->pt.z[p]);
+        double d = cand_truth_d(g, cd, q, tr, p);
         if (d < d_best) {
           d_best = d;
           k_best = truth_obj_of(tr, p);
