@@ -21,8 +21,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--deep-peak-views 1" "--deep-peak-views 300"
 
-"$bin" simulate flow --out "$tmp/flow" --duration-ms 100 --seed 21 --quiet >/dev/null 2>&1 ||
-  { echo "SKIP: simulate flow failed"; exit 77; }
+simulate_or_skip "$tmp/flow" flow 100 21
 track_score "$tmp/flow" "$tmp/def" "$tmp/def.json"
 track_score "$tmp/flow" "$tmp/flat" "$tmp/flat.json" --threshold-depth-um 0
 track_score "$tmp/flow" "$tmp/any" "$tmp/any.json" --deep-peak-views 0

@@ -21,8 +21,7 @@ for bad in "--off-weight 0" "--off-weight 101" "--off-weight nan"; do
   rc=$?
   [ $rc -eq 2 ] && grep -q -- "--off-weight" "$tmp/err" || { echo "FAIL: $bad not a usage error naming --off-weight"; fail=$((fail+1)); }
 done
-"$bin" simulate worm --out "$tmp/w" --duration-ms 150 --seed 5 --quiet >/dev/null 2>&1 ||
-  { echo "SKIP: simulate failed"; exit 77; }
+simulate_or_skip "$tmp/w" worm 150 5
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/x" -q \
   --dt-us 2000 --repr integral --polarity on >/dev/null 2>"$tmp/err"
 rc=$?

@@ -11,17 +11,26 @@ below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'
 }
 
+# simulate_or_skip DIR SCENE MS SEED: `eventlfm simulate SCENE` for MS ms
+# into DIR; the test is skipped (exit 77) when that fails. Uses $bin.
+simulate_or_skip() {
+  "$bin" simulate "$2" --out "$1" --duration-ms "$3" --seed "$4" --quiet >/dev/null 2>&1 ||
+    { echo "SKIP: simulate $2 failed"; exit 77; }
+}
+
 # track_score SCENE OUT JSON [track options...]: `eventlfm track` on the
 # simulated scene in directory SCENE into OUT, then `eventlfm score --json`
-# of OUT's tracks and detections into JSON. Uses $bin; a failure is printed
-# and counted in $fail.
+# of OUT's tracks and detections into JSON, with the score options in
+# $score_args when set (e.g. the window rule for blinking objects). Uses
+# $bin; a failure is printed and counted in $fail.
 track_score() {
   ts_sc=$1; ts_out=$2; ts_json=$3; shift 3
   "$bin" track --calib "$ts_sc/calib.json" --events "$ts_sc/events.raw" --out "$ts_out" -q "$@" ||
     { echo "FAIL: track $ts_out"; fail=$((fail+1)); }
+  # shellcheck disable=SC2086
   "$bin" score --truth "$ts_sc/truth.csv" --tracks "$ts_out/tracks.csv" \
-    --detections "$ts_out/detections.csv" --calib "$ts_sc/calib.json" --json > "$ts_json" ||
-    { echo "FAIL: score $ts_out"; fail=$((fail+1)); }
+    --detections "$ts_out/detections.csv" --calib "$ts_sc/calib.json" ${score_args:-} --json \
+    > "$ts_json" || { echo "FAIL: score $ts_out"; fail=$((fail+1)); }
 }
 
 # expect_usage_errors OPTION_VALUE...: each "--option value" given alone to

@@ -15,16 +15,10 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-for bad in "--localize volume" "--localize-window-px 0" "--localize-power 9" \
-           "--localize-outlier-px -1" "--localize-min-views 1" "--guided-views 1"; do
-  "$bin" track --calib a --events b --out c $bad >/dev/null 2>"$tmp/err"
-  rc=$?
-  opt=${bad%% *}
-  [ $rc -eq 2 ] && grep -q -- "$opt" "$tmp/err" || { echo "FAIL: $bad not a usage error naming $opt"; fail=$((fail+1)); }
-done
-"$bin" simulate blink --out "$tmp/blink" --duration-ms 100 --seed 1 --quiet >/dev/null 2>&1 &&
-"$bin" simulate flow --out "$tmp/flow" --duration-ms 40 --seed 3 --quiet >/dev/null 2>&1 ||
-  { echo "SKIP: simulate failed"; exit 77; }
+expect_usage_errors "--localize volume" "--localize-window-px 0" "--localize-power 9" \
+                    "--localize-outlier-px -1" "--localize-min-views 1" "--guided-views 1"
+simulate_or_skip "$tmp/blink" blink 100 1
+simulate_or_skip "$tmp/flow" flow 40 3
 run() {  # scene tag track-options...
   sc=$1; tag=$2; shift 2
   track_score "$tmp/$sc" "$tmp/$sc-$tag" "$tmp/$sc-$tag.json" "$@"

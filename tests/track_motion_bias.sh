@@ -21,10 +21,6 @@ fail=0
 "$bin" track --calib a --events b --out c --motion-delay-us nan >/dev/null 2>"$tmp/err"
 [ $? -eq 2 ] || { echo "FAIL: --motion-delay-us nan not a usage error"; fail=$((fail+1)); }
 
-sim() {  # dir scene ms seed
-  "$bin" simulate "$2" --out "$tmp/$1" --duration-ms "$3" --seed "$4" --quiet >/dev/null 2>&1 ||
-    { echo "SKIP: simulate $2 failed"; exit 77; }
-}
 run() {  # scene-dir tag track-args...
   d=$1; tag=$2; shift 2
   track_score "$tmp/$d" "$tmp/$d/$tag" "$tmp/$d/$tag.json" "$@"
@@ -34,7 +30,7 @@ gain() {  # name a0 a1 min
   awk -v a="$2" -v b="$3" -v m="$4" 'BEGIN { exit !(b > a + m) }' || { echo "FAIL: $1 alpha $2 -> $3 (gain < $4)"; fail=$((fail+1)); }
 }
 
-sim flow flow 100 13
+simulate_or_skip "$tmp/flow" flow 100 13
 run flow off --motion-lead-um 0 --motion-delay-us 0
 run flow def
 lead=$(key "$tmp/flow/def/summary.json" motion_lead_um); delay=$(key "$tmp/flow/def/summary.json" motion_delay_us)
@@ -49,8 +45,8 @@ awk -v a="$ml" -v d="$md" 'BEGIN { exit !(a > 0.5 && a < 1.2 && d > 150 && d < 5
 # the detections are written as measured: the same with or without correction
 cmp -s "$tmp/flow/off/detections.csv" "$tmp/flow/def/detections.csv" || { echo "FAIL: detections.csv changed"; fail=$((fail+1)); }
 
-sim st1 stage 100 5
-sim st2 stage 100 6
+simulate_or_skip "$tmp/st1" stage 100 5
+simulate_or_skip "$tmp/st2" stage 100 6
 run st1 def --motion stage
 m=$(key "$tmp/st1/def.json" motion_along_mean_um)
 isnan=$(key "$tmp/st1/def.json" motion_lead_um)

@@ -9,9 +9,8 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-"$bin" track --calib a --events b --out c --view-support 1.5 >/dev/null 2>"$tmp/err"
-[ $? -eq 2 ] && grep -q "view-support" "$tmp/err" || { echo "FAIL: --view-support 1.5 not a usage error"; fail=$((fail+1)); }
-"$bin" simulate flow --out "$tmp/sim" --duration-ms 40 --seed 3 --quiet >/dev/null 2>&1 || { echo "SKIP: simulate failed"; exit 77; }
+expect_usage_errors "--view-support 1.5"
+simulate_or_skip "$tmp/sim" flow 40 3
 run() {  # tag view-support
   track_score "$tmp/sim" "$tmp/$1" "$tmp/$1.json" --threshold-abs 25 --threshold-low 15 --view-support "$2"
 }
