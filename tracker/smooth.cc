@@ -262,6 +262,15 @@ void jerk_coef(const std::vector<double> &ts, size_t k, double c[4])
   }
 }
 
+// The prior's row over states k .. k + order (order 2: accel_coef's three,
+// centred on k + 1; order 3: jerk_coef's four), for the banded system and
+// the robust fit alike.
+void prior_coef(const std::vector<double> &ts, int order, size_t k, double c[4])
+{
+  if (order == 3) jerk_coef(ts, k, c);
+  else accel_coef(ts, k + 1, c);
+}
+
 // A = diag(W) + mu x the prior's rows: order 2 (accel_coef over 3 states)
 // is pentadiagonal, order 3 (jerk_coef over 4) heptadiagonal. LDL^T and the
 // selected inverse are written for bandwidth b = order; diagonal d of A, L
@@ -289,8 +298,7 @@ struct Banded {
     const size_t m = (size_t)order + 1;
     for (size_t k = 0; k + m <= K; k++) {  // rows over states k .. k + order
       double c[4];
-      if (order == 3) jerk_coef(ts, k, c);
-      else accel_coef(ts, k + 1, c);
+      prior_coef(ts, order, k, c);
       for (size_t i = 0; i < m; i++)
         for (size_t d = 0; i + d < m; d++) a[d][k + i] += mu * c[i] * c[i + d];
     }
@@ -441,20 +449,18 @@ bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double
                           &p[3 * ss.state_of[i]]);
   }
   const double sl = std::sqrt(lambda);
-  for (size_t k = 1; ss.order == 2 && k + 1 < K; k++) {
-    double c[3];
-    accel_coef(ss.ts, k, c);
-    auto *r = new AccelResidual{c[0], c[1], c[2],
-                                {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]}};
-    prob.AddResidualBlock(new ceres::AutoDiffCostFunction<AccelResidual, 3, 3, 3, 3>(r), nullptr,
-                          &p[3 * (k - 1)], &p[3 * k], &p[3 * (k + 1)]);
-  }
-  for (size_t k = 0; ss.order == 3 && k + 3 < K; k++) {
-    auto *r = new JerkResidual;
-    jerk_coef(ss.ts, k, r->c);
-    for (int a = 0; a < 3; a++) r->scale[a] = sl / ss.sig_ref[a];
-    prob.AddResidualBlock(new ceres::AutoDiffCostFunction<JerkResidual, 3, 3, 3, 3, 3>(r), nullptr,
-                          &p[3 * k], &p[3 * (k + 1)], &p[3 * (k + 2)], &p[3 * (k + 3)]);
+  const double scale[3] = {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]};
+  for (size_t k = 0; k + (size_t)ss.order < K; k++) {  // states k .. k + order
+    double c[4];
+    prior_coef(ss.ts, ss.order, k, c);
+    if (ss.order == 3)
+      prob.AddResidualBlock(new ceres::AutoDiffCostFunction<JerkResidual, 3, 3, 3, 3, 3>(
+                                new JerkResidual{{c[0], c[1], c[2], c[3]}, {scale[0], scale[1], scale[2]}}),
+                            nullptr, &p[3 * k], &p[3 * (k + 1)], &p[3 * (k + 2)], &p[3 * (k + 3)]);
+    else
+      prob.AddResidualBlock(new ceres::AutoDiffCostFunction<AccelResidual, 3, 3, 3, 3>(
+                                new AccelResidual{c[0], c[1], c[2], {scale[0], scale[1], scale[2]}}),
+                            nullptr, &p[3 * k], &p[3 * (k + 1)], &p[3 * (k + 2)]);
   }
   ceres::Solver::Options so;
   solver_options(&so, sparse, max_iter);
