@@ -45,6 +45,12 @@ typedef struct track_opts {
   double fill_min_ratio; /* a fill is at least this x the intensity at the gap's ends */
 } track_opts;
 
+/* The options (cmd_track_opts.c): track's defaults, then argv. CLI_OK: run
+ * with *o; TRACK_PARSE_HELP: --help was printed (exit 0); otherwise the
+ * CLI_USAGE already shown on stderr. */
+#define TRACK_PARSE_HELP (-1)
+int track_opts_parse(int argc, char **argv, track_opts *o);
+
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
   int64_t frame;         /* the frame held, -1 none */

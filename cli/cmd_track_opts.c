@@ -1,0 +1,650 @@
+/* cmd_track_opts.c — eventlfm track's options: its defaults (where they
+ * differ from the libraries', and why: each measured on the simulator),
+ * --help, and the parsing, with the defaults that depend on other options
+ * (the representation, the motion). The run is in cmd_track.c. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cmd_track.h"
+
+/* track's defaults: where they differ from the libraries', why. */
+static void track_defaults(track_opts *o)
+{
+  memset(o, 0, sizeof *o);
+  elfm_recon_options_default(&o->recon);
+  elfm_peaks_options_default(&o->peaks);
+  elfm_link_options_default(&o->link);
+  elfm_smooth_options_default(&o->smooth);
+  o->max_det = 10000;
+  o->max_outlier_frac = 1.0 / 3;
+  /* Tracking defaults differ from `recon`'s, measured on the simulated flow
+   * scene (docs/tracker.md): ON events only (a moving bead's OFF events form
+   * a second peak ~5 um behind it: F1 0.79 -> 0.95), no median (recall
+   * 0.86 -> 0.92 at equal precision), and an absolute threshold of 50 on the
+   * 0..255 time surface (F1 0.88 at 45, 0.86 at 55, 0.65 at 30; the k-sigma
+   * rule alone let ghosts through: precision 0.29). */
+  o->recon.framer.polarity = ELFM_POL_ON;
+  o->recon.median = 0;
+  /* No view-agreement ghost rule (recon's default 0.3): on ON-only frames
+   * it removed most deep beads (flow recall 0.79 -> 0.36, F1 0.87 -> 0.53);
+   * the detector's threshold and the linker reject the ghosts instead. */
+  o->recon.refocus.agree_frac = 0;
+  o->views_rule = 1;
+  o->views_exponent = 0.5;
+  /* Linker distance with z / 1.5, not the scoring's z / 4: the detector
+   * localises z ~2.5x worse than x/y (RMSE 1.1 vs 0.44 um on flow), so z/4
+   * let tracks jump between beads passing 10-20 um apart in z. Flow 100 ms,
+   * seeds 1 / 2: alpha 0.562 -> 0.577 / 0.466 -> 0.544; stage 200 ms 0.626
+   * -> 0.625; worm 200 ms 0.325 -> 0.332 (docs/tracker.md). */
+  o->link.kz = 1.5;
+  /* Weak peaks join a track only within 5 um of its prediction (with the
+   * hysteresis threshold 30 below). Flow 100 ms seeds 1 / 2, against 45
+   * with the track's own gates: F1 0.886 -> 0.891 / 0.907 -> 0.922, alpha
+   * 0.667 -> 0.676 / 0.612 -> 0.635, lateral RMSE <= 0.50 um; stage F1
+   * 0.914 -> 0.929; blink unchanged. At 6 um the RMSE passed 0.5 um, at
+   * 3-4 um tracks broke (docs/tracker.md "Weak gate"). */
+  o->link.weak_gate_um = 5;
+  /* guided search (off by default; docs/tracker.md "Track-guided search") */
+  o->guided_radius_um = 1.5;
+  o->guided_min_points = 10;
+  /* View support 0.3 with the absolute threshold 45 (instead of no test at
+   * 50): scripts/measure_scenes.sh scenes, F1 flow seeds 1 / 2 0.891 ->
+   * 0.897 / 0.922 -> 0.925, stage 0.930 -> 0.945, worm 0.800 -> 0.825;
+   * alpha 0.676 -> 0.677 / 0.634 -> 0.646, 0.669 -> 0.716, 0.290 -> 0.327;
+   * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
+   * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
+  o->view_support = 0.3;
+  /* View fit of every peak, and from the predictions of tracks with no
+   * peak near (8 views must agree there): recon/localize.c and
+   * docs/tracker.md "View fit". Window 5 x 5 px with weights value^P: the
+   * time surface is 255 exp(-age / tau), so P weighs an event by
+   * exp(-P age / tau), and the centroid moves from the trail of the
+   * object's recent events (P = 1) towards their leading edge. Where the
+   * object really is depends on its contrast: along the motion, flow beads
+   * come out -0.36 / -0.14 / 0.00 um from the truth at P = 1 / 2 / 3, stage
+   * beads +0.37 / +0.57 / +0.71 um. P = 3 is best on flow, whose targets
+   * are the strictest (8 seeds: alpha 0.701 / 0.716 / 0.733, lateral RMSE
+   * 0.50 / 0.43 / 0.41 um); P = 1 on stage (alpha 0.71-0.79 -> 0.77-0.87)
+   * and worm (0.39 -> 0.44): docs/tracker.md. 7 x 7 windows were worse on
+   * flow, 3 x 3 on stage and worm. */
+  o->localize_views = 1;
+  elfm_localize_options_default(&o->loc);
+  o->guided_views = 8;
+  /* Stitching a new track of 5 points onto a dark track whose recent path
+   * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
+   * circle and come back onto their own path after gaps no extrapolation
+   * bridges. Flow 100 ms seeds 1 / 2: alpha 0.677 -> 0.697 / 0.646 ->
+   * 0.691, 7 -> 3 / 6 -> 1 spurious tracks; blink unchanged; worm 0.327 ->
+   * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
+   * gave the same to +-0.01. Off in --motion stage (below). */
+  o->link.stitch_points = 5;
+  /* Swap review of gap closings that do not fit, after 8 points of the new
+   * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9 at 6 points:
+   * alpha 0.697, 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the
+   * other six unchanged; stage, blink, worm unchanged; 0.7 as the ratio
+   * swapped wrongly (4 seeds down by 0.01-0.04). Sixth session, 20 flow
+   * seeds, 4 / 6 / 8 / 9 / 10 / 12 points: mean alpha 0.7331 / 0.7355 /
+   * 0.7379 / 0.7379 / 0.7372 / 0.7367 (at 8: seed 1 0.700 -> 0.742, the
+   * crossing docs/tracker.md describes, seed 11 +0.013, three seeds down by
+   * <= 0.006); stage seed 3 0.688 -> 0.707; worm, blink, stage_accel the
+   * same. A longer tail shows which way each bead turned. */
+  o->link.swap_points = 8;
+  /* Established tracks (8 points, the short fit's history) are assigned
+   * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
+   * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
+   * beads (9 runs) 0.605 -> 0.623 (docs/tracker.md "Established tracks
+   * first"). */
+  o->link.priority_points = 8;
+  /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
+   * detections' errors are correlated from frame to frame (flow: lag-1
+   * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
+   * takes for motion. Flow 100 ms seeds 1-20: alpha 0.7897 -> 0.7950,
+   * every seed up or the same (1.2 / 1.6 / 2: 0.7945 / 0.7938 / 0.7867);
+   * held-out 21-24 +0.003 to +0.007; worm (integral) seeds 1-4 +0.001 to
+   * +0.004; blink, blink_moving up; stage (no spline) the same. */
+  o->smooth.gcv_gamma = 1.4;
+  /* The spline penalises the jerk, not the acceleration (elfm_smooth.h
+   * spline_order): a flow bead turns at ~0.3 rad/ms, a constant
+   * acceleration the acceleration penalty pulls toward a line. Flow 100 ms
+   * seeds 1-20: alpha 0.7950 -> 0.7964 (14 up, 5 the same, 1 down), lateral
+   * velocity RMSE 0.273 / 0.252 -> 0.264 / 0.236 um/ms; held-out 21-24 +0 to
+   * +0.003; 40/60 beads +0.002; blink, blink_moving the same. Not on the
+   * integral (below). */
+  o->smooth.spline_order = 3;
+  /* Gap filling (cmd_track_fill.c): once a track has found its object
+   * again and followed it for swap_points frames, the view fit looks for it
+   * in each kept frame of the gap, from both ends inwards, starting where
+   * the two ends put it, and before the track's first point. Flow 100 ms,
+   * seeds 1-20, mean alpha 0.7379 -> 0.7655 (every seed up, by 0.004 to
+   * 0.046), F1 0.925 -> 0.943 (held-out seeds 21-24: alpha +0.026 to
+   * +0.040), at the cost of the detections'
+   * lateral RMSE 0.41 -> 0.46 um (the deep beads it finds are placed to
+   * ~1 um). 4 views agreeing, not 6: 0.7634 / 0.7599 (3: 0.7667, more
+   * wrong fills); gate 5 um (the weak gate; 3 / 7 / 10 um: 0.7525 /
+   * 0.7678 / 0.7684). A fill must reach 0.15 x the intensity at the
+   * gap's ends: a blinking bead that is off still shows faintly when it
+   * moves (blink_moving's fills had 0.01-0.14 x, flow's 5th percentile
+   * 0.17-0.23); without the floor blink_moving's alpha fell 0.317 ->
+   * 0.137 (docs/tracker.md "Gap filling"). */
+  o->fill_views = 4;
+  o->fill_gate_um = 5;
+  o->fill_max_gap = 50;
+  o->fill_min_ratio = 0.15;
+  /* The same floor as gap filling's, for the same reason: a bead that has
+   * just gone dark (blinking) still leaves faint ON light in some views,
+   * which the view fit finds. blink_moving seeds 1-4: alpha 0.304 / 0.224 /
+   * 0.426 / 0.236 -> 0.404 / 0.317 / 0.496 / 0.361; flow seeds 1-20 0.7681 ->
+   * 0.7687, flat from 0.15 to 0.4 (docs/tracker.md). */
+  o->guided_min_ratio = 0.15;
+  o->deep_peak_views = 10;
+}
+
+static void usage(FILE *f)
+{
+  track_opts d;
+  track_defaults(&d);
+  fprintf(f,
+    "usage: eventlfm track --calib calib.json --events FILE --out DIR [options]\n"
+    "\n"
+    "Events -> refocused volumes -> 3D peaks -> linked tracks -> Ceres-smoothed tracks.\n"
+    "Writes DIR/detections.csv, tracks.csv (smoothed + raw), tracks_isbi.xml (ISBI 2012),\n"
+    "tracks_trackmate.xml (TrackMate) and summary.json. Progress on stderr.\n"
+    "\n"
+    "recon (the same options as eventlfm recon's):\n");
+  cli_recon_options_usage(f, &d.recon);
+  fprintf(f,
+    "                       (polarity on: OFF events trail moving beads; median 0\n"
+    "                       and ghost none: the detector and linker reject ghosts;\n"
+    "                       a batch's volumes are searched for peaks in parallel too)\n"
+    "detection:\n"
+    "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (45 on time\n"
+    "                       surfaces, 15 on the integral), --threshold-rel F (0.35 of\n"
+    "                       the maximum for counts)\n"
+    "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all\n"
+    "                       depths; default 60 on time surfaces, 0 with --motion stage)\n"
+    "  --threshold-min V    floor of that depth-scaled threshold (default 30)\n"
+    "  --deep-peak-views N  a peak above the depth-scaled threshold only is kept when\n"
+    "                       the view fit from it has >= N views agreeing (10; 0 = no\n"
+    "                       test; needs --localize views, the default)\n"
+    "  --threshold-low V    hysteresis: peaks above V but below the threshold may\n"
+    "                       continue a track, never start one (30 with the default\n"
+    "                       threshold, 0 = off)\n"
+    "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
+    "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
+    "  --view-support F     a peak needs signal in >= F of the views sampling its voxel\n"
+    "                       (ghosts: a few views; default 0.3, 0 = off)\n"
+    "  --localize views|peak  views (default): each peak's position from its images\n"
+    "                       in the views, fitted together; peak: the sub-voxel fit of\n"
+    "                       the refocused peak only\n"
+    "  --localize-window-px R  each view's window is (2R+1)^2 px (2)\n"
+    "  --localize-power P   pixel weight value^P: higher P follows the newest events,\n"
+    "                       at the object's leading edge (3; 1 is better for bright\n"
+    "                       objects whose ON events lead them, e.g. beads on a stage)\n"
+    "  --localize-outlier-px D  views missing the fit by more are dropped (1.5)\n"
+    "  --localize-min-views N  fewer views with signal: keep the peak fit (6)\n"
+    "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 1.5 with --repr integral;\n"
+    "                       15)\n"
+    "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
+    "linking:\n"
+    "  --gate-um G (6), --max-gap N frames (50), --min-points N (5)\n"
+    "  --lead-sigmas K      with --lag-correct: ON events lead a moving object by ~K x\n"
+    "                       its width along the motion; move detections back by that\n"
+    "  --link-kz K          axial scale of the linker's distance sqrt(dx2+dy2+(dz/K)2) (1.5)\n"
+    "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5; 0 off)\n"
+    "  --stitch-points N    a new track of N points continues a dark one when its points\n"
+    "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
+    "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
+    "  --swap-points N      review a gap closing that does not fit when its new tail\n"
+    "                       has N points; exchange tails with a better fit (8; 0 off)\n"
+    "  --priority-points N  tracks of >= N points choose their detections before\n"
+    "                       younger ones (8; 0 = one assignment for all)\n"
+    "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
+    "                       prediction (default 5; 0 = the track's gate)\n"
+    "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
+    "                       predicts its bead and no peak lies within the weak gate,\n"
+    "                       take the local maximum above V within --guided-radius-um\n"
+    "                       R (1.5, z x link-kz) as a weak peak (default 0 = off)\n"
+    "  --guided-views N     where a track of >= --guided-min-points points predicts\n"
+    "                       its bead and no peak lies within the weak gate, fit the\n"
+    "                       views from the prediction; a fit with >= N views agreeing\n"
+    "                       and at least --guided-min-ratio F (0.15) x the track's\n"
+    "                       last intensity becomes a weak peak (default 8; 0 = off;\n"
+    "                       the floor keeps it off a blinking bead's faint last light)\n"
+    "  --fill-views N       gap filling: once a track has found its object again\n"
+    "                       (8 points on), fit the views in each kept frame of the\n"
+    "                       gap, and before the track began, from where the gap's\n"
+    "                       two ends put the object; a fit with >= N views agreeing,\n"
+    "                       within --fill-gate-um G (5) of that and at least\n"
+    "                       --fill-min-ratio F (0.15) x the ends' intensity becomes\n"
+    "                       a detection of that track (default 4, with --repr\n"
+    "                       integral 8; 0 = off: better for blinking objects)\n"
+    "  --fill-max-gap N     frames kept for it: gaps up to N are filled (50)\n"
+    "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
+    "smoothing:\n"
+    "  --motion auto|stage|free   auto: model chosen per track (BIC) among constant\n"
+    "                       velocity, constant acceleration and spline; stage: rigid\n"
+    "                       motion (no spline; with a stage velocity, new tracks\n"
+    "                       predict with it and tracks far from it are dropped);\n"
+    "                       free: smoothing spline for all\n"
+    "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
+    "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
+    "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"
+    "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
+    "                       which leaves turns at constant speed alone (3; integral: 2)\n"
+    "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
+    "                       filling, guided search) count as F x noisier than the\n"
+    "                       track's peaks (1.5)\n"
+    "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
+    "                       their points (default 1/3)\n"
+    "  --motion-lead-um A, --motion-delay-us D   each view's image of a moving object\n"
+    "                       lies A um ahead of it along the image's motion and shows\n"
+    "                       where it was D us before the frame: the smoother moves the\n"
+    "                       points back by the bias that gives the view fit (laterally\n"
+    "                       A - D x speed along the motion) and fits again. ON time\n"
+    "                       surface with the view fit: A 0.8, D the weighted events'\n"
+    "                       mean age + 20 us (301 us at tau 1 ms), measured on dim\n"
+    "                       beads; else 0, 0 = off. Brighter objects lead further:\n"
+    "                       eventlfm score measures A and D on a simulated scene\n"
+    "analysis:\n"
+    "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
+    "  -q, --quiet          no progress\n"
+    "  -h, --help           this text\n");
+}
+
+static int parse_vec3(const char *s, double v[3])
+{
+  char *end;
+  for (int a = 0; a < 3; a++) {
+    errno = 0;
+    v[a] = strtod(s, &end);
+    if (end == s || errno || !isfinite(v[a])) return 0;
+    if (a < 2) {
+      if (*end != ',') return 0;
+      s = end + 1;
+    }
+  }
+  return *end == 0;
+}
+
+/* A view-count option, 0 (off) or 2..255 (--guided-views, --fill-views):
+ * 1, or 0 after a usage message. */
+static int parse_views_or_off(const char *cmd, const char *opt, const char *a, int *out)
+{
+  if (!cli_parse_int(cmd, opt, a, out)) return 0;
+  if (*out != 0 && (*out < 2 || *out > 255)) {
+    cli_message(cmd, CLI_USAGE, "%s must be 0 or 2..255, not '%s'", opt, a);
+    return 0;
+  }
+  return 1;
+}
+
+enum {
+  O_CALIB = 1000, O_EVENTS, O_OUT, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE, O_MAXDET,
+  O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT,
+  O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
+  O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
+  O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD
+};
+
+/* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
+ * --help was printed; otherwise the usage error already shown. */
+int track_opts_parse(int argc, char **argv, track_opts *out)
+{
+  static const char *const C = "track";
+  track_opts o;
+  track_defaults(&o);
+  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, spord_given = 0;
+  static const struct option lo[] = {
+      CLI_RECON_LONG_OPTIONS,
+      {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
+      {"out", required_argument, 0, O_OUT},
+      {"threshold-k", required_argument, 0, O_THK}, {"threshold-abs", required_argument, 0, O_THA},
+      {"threshold-rel", required_argument, 0, O_THR},
+      {"threshold-depth-um", required_argument, 0, O_THDEPTH},
+      {"threshold-min", required_argument, 0, O_THMIN},
+      {"views-rule", required_argument, 0, O_VIEWSRULE},
+      {"rescue-factor", required_argument, 0, O_RESCUE},
+      {"stitch-points", required_argument, 0, O_STITCHN},
+      {"stitch-gate-um", required_argument, 0, O_STITCHG},
+      {"swap-points", required_argument, 0, O_SWAPN},
+      {"weak-gate-um", required_argument, 0, O_WEAKGATE},
+      {"guided-low", required_argument, 0, O_GUIDED},
+      {"view-support", required_argument, 0, O_VSUP},
+      {"localize", required_argument, 0, O_LOC},
+      {"localize-window-px", required_argument, 0, O_LOCWIN},
+      {"localize-power", required_argument, 0, O_LOCPOW},
+      {"localize-outlier-px", required_argument, 0, O_LOCOUT},
+      {"localize-min-views", required_argument, 0, O_LOCMIN},
+      {"guided-views", required_argument, 0, O_GVIEWS},
+      {"fill-views", required_argument, 0, O_FILLV},
+      {"fill-gate-um", required_argument, 0, O_FILLG},
+      {"view-fit-sigma", required_argument, 0, O_VFSIG},
+      {"guided-min-ratio", required_argument, 0, O_GRATIO},
+      {"deep-peak-views", required_argument, 0, O_DEEPV},
+      {"priority-points", required_argument, 0, O_PRIO},
+      {"gcv-gamma", required_argument, 0, O_GCVG},
+      {"spline-order", required_argument, 0, O_SPORD},
+      {"fill-max-gap", required_argument, 0, O_FILLN},
+      {"fill-min-ratio", required_argument, 0, O_FILLR},
+      {"guided-radius-um", required_argument, 0, O_GUIDEDR},
+      {"guided-min-points", required_argument, 0, O_GUIDEDM},
+      {"lead-sigmas", required_argument, 0, O_LEAD},
+      {"link-kz", required_argument, 0, O_LINKKZ},
+      {"views-exponent", required_argument, 0, O_VEXP},
+      {"threshold-low", required_argument, 0, O_HYST},
+      {"radius-xy-um", required_argument, 0, O_RXY},
+      {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
+      {"refine", required_argument, 0, O_REFINE}, {"max-detections", required_argument, 0, O_MAXDET},
+      {"gate-um", required_argument, 0, O_GATE}, {"max-gap", required_argument, 0, O_MAXGAP},
+      {"min-points", required_argument, 0, O_MINPTS}, {"lag-correct", required_argument, 0, O_LAG},
+      {"motion", required_argument, 0, O_MOTION},
+      {"stage-velocity-um-per-ms", required_argument, 0, O_STAGEV},
+      {"model", required_argument, 0, O_MODEL}, {"loss", required_argument, 0, O_LOSS},
+      {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
+      {"max-outlier-frac", required_argument, 0, O_MAXOUT},
+      {"motion-lead-um", required_argument, 0, O_MLEAD},
+      {"motion-delay-us", required_argument, 0, O_MDELAY},
+      {"quiet", no_argument, 0, 'q'}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  cli_recon_parse rp = {.ro = &o.recon};
+  optind = 1;
+  opterr = 0;
+  int ch;
+  while ((ch = getopt_long(argc, argv, ":hq", lo, NULL)) != -1) {
+    const char *a = optarg;
+    const int k = cli_parse_recon_option(C, ch, a, &rp);
+    if (k == 0) return CLI_USAGE;
+    if (k > 0) continue;
+    switch (ch) {
+    case 'h': usage(stdout); return TRACK_PARSE_HELP;
+    case 'q': o.quiet = 1; break;
+    case O_CALIB: o.calib = a; break;
+    case O_EVENTS: o.events = a; break;
+    case O_OUT: o.out = a; break;
+    case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
+    case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
+    case O_THDEPTH: depth_given = 1; if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_HYST: low_given = 1; if (!cli_parse_double(C, "--threshold-low", a, &o.peaks.hysteresis_low)) return CLI_USAGE; break;
+    case O_VEXP: if (!cli_parse_double(C, "--views-exponent", a, &o.views_exponent)) return CLI_USAGE; break;
+    case O_LINKKZ: if (!cli_parse_double(C, "--link-kz", a, &o.link.kz)) return CLI_USAGE; break;
+    case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
+    case O_GUIDEDR: if (!cli_parse_double(C, "--guided-radius-um", a, &o.guided_radius_um)) return CLI_USAGE; break;
+    case O_GUIDEDM: if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
+    case O_VSUP:
+      if (!cli_parse_double(C, "--view-support", a, &o.view_support)) return CLI_USAGE;
+      if (!(o.view_support >= 0 && o.view_support <= 1))
+        return cli_message(C, CLI_USAGE, "--view-support must be in 0..1");
+      break;
+    case O_LOC:
+      if (!strcmp(a, "views")) o.localize_views = 1;
+      else if (!strcmp(a, "peak")) o.localize_views = 0;
+      else return cli_message(C, CLI_USAGE, "--localize must be views or peak, not '%s'", a);
+      break;
+    case O_LOCWIN:
+      if (!cli_parse_int(C, "--localize-window-px", a, &o.loc.half_window_px)) return CLI_USAGE;
+      if (o.loc.half_window_px < 1 || o.loc.half_window_px > 32)
+        return cli_message(C, CLI_USAGE, "--localize-window-px must be 1..32, not '%s'", a);
+      break;
+    case O_LOCPOW:
+      if (!cli_parse_int(C, "--localize-power", a, &o.loc.power)) return CLI_USAGE;
+      if (o.loc.power < 1 || o.loc.power > 8)
+        return cli_message(C, CLI_USAGE, "--localize-power must be 1..8, not '%s'", a);
+      break;
+    case O_LOCOUT:
+      if (!cli_parse_double(C, "--localize-outlier-px", a, &o.loc.outlier_px)) return CLI_USAGE;
+      if (!(o.loc.outlier_px > 0 && o.loc.outlier_px <= 1000))
+        return cli_message(C, CLI_USAGE, "--localize-outlier-px must be > 0, not '%s'", a);
+      break;
+    case O_LOCMIN:
+      if (!cli_parse_int(C, "--localize-min-views", a, &o.loc.min_views)) return CLI_USAGE;
+      if (o.loc.min_views < 2 || o.loc.min_views > 255)
+        return cli_message(C, CLI_USAGE, "--localize-min-views must be 2..255, not '%s'", a);
+      break;
+    case O_FILLV:
+      fillv_given = 1;
+      if (!parse_views_or_off(C, "--fill-views", a, &o.fill_views)) return CLI_USAGE;
+      break;
+    case O_FILLG:
+      if (!cli_parse_double_in(C, "--fill-gate-um", a, 0, 1, 100, "> 0 and <= 100", &o.fill_gate_um)) return CLI_USAGE;
+      break;
+    case O_VFSIG:
+      if (!cli_parse_double_in(C, "--view-fit-sigma", a, 0, 1, 1000, "> 0 and <= 1000",
+                               &o.smooth.view_fit_sigma_factor))
+        return CLI_USAGE;
+      break;
+    case O_DEEPV:
+      if (!parse_views_or_off(C, "--deep-peak-views", a, &o.deep_peak_views)) return CLI_USAGE;
+      break;
+    case O_PRIO:
+      if (!cli_parse_int(C, "--priority-points", a, &o.link.priority_points)) return CLI_USAGE;
+      if (o.link.priority_points < 0) {
+        cli_message(C, CLI_USAGE, "--priority-points must be >= 0, not '%s'", a);
+        return CLI_USAGE;
+      }
+      break;
+    case O_GRATIO:
+      if (!cli_parse_double_in(C, "--guided-min-ratio", a, 0, 0, 1, "0..1", &o.guided_min_ratio)) return CLI_USAGE;
+      break;
+    case O_FILLR:
+      if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;
+      break;
+    case O_FILLN:
+      if (!cli_parse_int(C, "--fill-max-gap", a, &o.fill_max_gap)) return CLI_USAGE;
+      if (o.fill_max_gap < 1 || o.fill_max_gap > 1000)
+        return cli_message(C, CLI_USAGE, "--fill-max-gap must be 1..1000, not '%s'", a);
+      break;
+    case O_GVIEWS:
+      if (!parse_views_or_off(C, "--guided-views", a, &o.guided_views)) return CLI_USAGE;
+      break;
+    case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
+    case O_WEAKGATE: if (!cli_parse_double(C, "--weak-gate-um", a, &o.link.weak_gate_um)) return CLI_USAGE; break;
+    case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
+    case O_STITCHN:
+      if (!cli_parse_int(C, "--stitch-points", a, &o.link.stitch_points)) return CLI_USAGE;
+      stitch_given = 1;
+      break;
+    case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
+    case O_STITCHG: if (!cli_parse_double(C, "--stitch-gate-um", a, &o.link.stitch_gate_um)) return CLI_USAGE; break;
+    case O_VIEWSRULE:
+      if (!strcmp(a, "on")) o.views_rule = 1;
+      else if (!strcmp(a, "off")) o.views_rule = 0;
+      else return cli_message(C, CLI_USAGE, "--views-rule must be on or off, not '%s'", a);
+      break;
+    case O_THMIN: min_given = 1; if (!cli_parse_double(C, "--threshold-min", a, &o.peaks.absolute_min)) return CLI_USAGE; break;
+    case O_THR: thr_given = 1; if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
+    case O_RXY:
+      if (!cli_parse_double(C, "--radius-xy-um", a, &o.peaks.radius_xy_um)) return CLI_USAGE;
+      rxy_given = 1;
+      break;
+    case O_RZ: if (!cli_parse_double(C, "--radius-z-um", a, &o.peaks.radius_z_um)) return CLI_USAGE; break;
+    case O_SEP: if (!cli_parse_double(C, "--min-separation-um", a, &o.peaks.min_separation_um)) return CLI_USAGE; break;
+    case O_REFINE:
+      if (!strcmp(a, "gauss")) o.peaks.refine = ELFM_REFINE_GAUSSIAN;
+      else if (!strcmp(a, "quad")) o.peaks.refine = ELFM_REFINE_QUADRATIC;
+      else if (!strcmp(a, "none")) o.peaks.refine = ELFM_REFINE_NONE;
+      else return cli_message(C, CLI_USAGE, "--refine must be gauss, quad or none, not '%s'", a);
+      break;
+    case O_MAXDET:
+      if (!cli_parse_int(C, "--max-detections", a, &o.max_det)) return CLI_USAGE;
+      if (o.max_det < 1 || o.max_det > 10000000) return cli_message(C, CLI_USAGE, "--max-detections must be 1..1e7");
+      break;
+    case O_GATE: if (!cli_parse_double(C, "--gate-um", a, &o.link.gate_um)) return CLI_USAGE; break;
+    case O_MAXGAP: if (!cli_parse_int(C, "--max-gap", a, &o.link.max_gap_frames)) return CLI_USAGE; break;
+    case O_MINPTS: if (!cli_parse_int(C, "--min-points", a, &o.link.min_points)) return CLI_USAGE; break;
+    case O_LAG:
+      if (!strcmp(a, "on")) o.lag_correct = 1;
+      else if (!strcmp(a, "off")) o.lag_correct = 0;
+      else return cli_message(C, CLI_USAGE, "--lag-correct must be on or off, not '%s'", a);
+      break;
+    case O_MOTION:
+      if (!strcmp(a, "auto")) o.motion = MOTION_AUTO;
+      else if (!strcmp(a, "stage")) o.motion = MOTION_STAGE;
+      else if (!strcmp(a, "free")) o.motion = MOTION_FREE;
+      else return cli_message(C, CLI_USAGE, "--motion must be auto, stage or free, not '%s'", a);
+      break;
+    case O_STAGEV:
+      if (!parse_vec3(a, o.stage_v))
+        return cli_message(C, CLI_USAGE, "--stage-velocity-um-per-ms wants vx,vy,vz, not '%s'", a);
+      o.has_stage_v = 1;
+      break;
+    case O_MODEL:
+      if (!strcmp(a, "auto")) o.smooth.model = ELFM_MODEL_AUTO;
+      else if (!strcmp(a, "cv")) o.smooth.model = ELFM_MODEL_CONST_VELOCITY;
+      else if (!strcmp(a, "ca")) o.smooth.model = ELFM_MODEL_CONST_ACCEL;
+      else if (!strcmp(a, "spline")) o.smooth.model = ELFM_MODEL_SPLINE;
+      else return cli_message(C, CLI_USAGE, "--model must be auto, cv, ca or spline, not '%s'", a);
+      break;
+    case O_LOSS:
+      if (!strcmp(a, "huber")) o.smooth.loss = ELFM_LOSS_HUBER;
+      else if (!strcmp(a, "cauchy")) o.smooth.loss = ELFM_LOSS_CAUCHY;
+      else if (!strcmp(a, "none")) o.smooth.loss = ELFM_LOSS_NONE;
+      else return cli_message(C, CLI_USAGE, "--loss must be huber, cauchy or none, not '%s'", a);
+      break;
+    case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
+    case O_GCVG:
+      if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
+      break;
+    case O_SPORD:
+      if (!cli_parse_int(C, "--spline-order", a, &o.smooth.spline_order)) return CLI_USAGE;
+      if (o.smooth.spline_order != 2 && o.smooth.spline_order != 3) {
+        cli_message(C, CLI_USAGE, "--spline-order must be 2 or 3, not '%s'", a);
+        return CLI_USAGE;
+      }
+      spord_given = 1;
+      break;
+    case O_RES: o.resolution = 1; break;
+    case O_MLEAD:
+      if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
+                               &o.smooth.motion_lead_um))
+        return CLI_USAGE;
+      mbias_given = 1;
+      break;
+    case O_MDELAY:
+      if (!cli_parse_double_in(C, "--motion-delay-us", a, -1e6, 0, 1e6, "-1e6..1e6",
+                               &o.smooth.motion_delay_us))
+        return CLI_USAGE;
+      mbias_given = 1;
+      break;
+    case O_MAXOUT:
+      if (!cli_parse_double(C, "--max-outlier-frac", a, &o.max_outlier_frac)) return CLI_USAGE;
+      if (!(o.max_outlier_frac >= 0 && o.max_outlier_frac <= 1))
+        return cli_message(C, CLI_USAGE, "--max-outlier-frac must be in 0..1");
+      break;
+    default: return cli_bad_option(C, ch, argv);
+    }
+  }
+  if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
+  if (!o.calib || !o.events || !o.out)
+    return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !rxy_given) {
+    /* The integral has no trail to make side maxima, so a one-voxel box
+     * separates neighbours a 3 um box merges: worm neurons come in pairs
+     * 6 um apart. Worm 200 ms seeds 1-4, means, box 3 / 2 / 1.5 um: F1
+     * 0.887 / 0.911 / 0.912, alpha 0.724 / 0.744 / 0.773. (On flow's time
+     * surface 1.5 um loses: alpha 0.733 -> 0.705 over 8 seeds.) */
+    o.peaks.radius_xy_um = 1.5;
+  }
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spord_given) {
+    /* Slowly crawling cells: at 0.1-0.34 um/ms a neuron's acceleration is
+     * far below its placement noise, and the jerk penalty's freer fit
+     * (a constant acceleration costs nothing) lost: worm 200 ms seeds 1-4,
+     * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
+    o.smooth.spline_order = 2;
+  }
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fillv_given) {
+    /* Neurons come in pairs 6 um apart on the integral, and 4 views let a
+     * fill land on the partner or on another track's neuron: worm 200 ms
+     * seeds 1-4, fills within the scoring gate 64-78 % at 4 views, 95-100 %
+     * at 8; F1 0.913 / 0.867 / 0.868 / 0.914 at 4, 0.930 / 0.876 / 0.873 /
+     * 0.926 at 8 (0.917 / 0.884 / 0.894 / 0.926 without filling), alpha
+     * 0.813 / 0.771 / 0.737 / 0.816 at 8 (0.800 / 0.762 / 0.735 / 0.814). */
+    o.fill_views = 8;
+  }
+  if (!(o.guided_low >= 0) || !(o.guided_radius_um > 0) || o.guided_min_points < 1)
+    return cli_message(C, CLI_USAGE,
+                       "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
+  if (!thr_given) {
+    if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
+    else if (o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
+      /* The integral's scale is brightness (255 at 8 steps over the
+       * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means, at
+       * the floor of 2 steps, threshold 10 / 15: F1 0.893 / 0.905, alpha
+       * 0.777 / 0.778 (at a floor of 1.5, threshold 10 / 15 / 20 / 30 /
+       * 40: alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689 with a 3 um box). */
+      o.peaks.absolute = 15;
+      if (!low_given) o.peaks.hysteresis_low = 15;
+    } else {
+      /* 45 with the view-support test (below), 50 without it: the test
+       * removes the ghosts a lower threshold lets in (docs/tracker.md
+       * "View support"). */
+      o.peaks.absolute = o.view_support > 0 ? 45 : 50;
+      /* Hysteresis 45: a bead dimmed by defocus keeps its track without
+       * letting the ghosts of that brightness start tracks. Flow 100 ms
+       * seeds 1 / 2: F1 0.874 -> 0.886 / 0.889 -> 0.907, alpha 0.627 -> 0.667 /
+       * 0.566 -> 0.612, lateral RMSE 0.43-0.47 -> 0.44-0.49 um; stage F1 0.898
+       * -> 0.914; at 40 the RMSE passed 0.5 um (docs/tracker.md). Now 30:
+       * with the 5 um weak gate (above) ghosts of that brightness rarely
+       * sit where a track expects its bead; below ~30 the robust-noise
+       * rule (median + 6 sigma) sets the floor (25 gave the same peaks). */
+      if (!low_given) o.peaks.hysteresis_low = 30;
+      /* Deep beads' peaks fall below 45 (their images are 5-10x dimmer
+       * and wider: recall 0.44 at |z| 60-80 um on flow), so the threshold
+       * falls with depth to 30 - and a peak only that lowered threshold
+       * lets in must have deep_peak_views views agree on it (the view fit,
+       * below), which the ghosts at that level rarely have. Flow 100 ms
+       * seeds 1-20: F1 0.9461 -> 0.9525, alpha 0.7741 -> 0.7846, recall
+       * 0.914 -> 0.926, lateral RMSE 0.456 -> 0.463 um; held-out seeds
+       * 21-24 alpha +0.063 / +0.008 / +0.015 / +0.027. Not on a stage:
+       * there the deep tracks' noise reached the velocity (speed error
+       * 0.41 / 0.18 / 0.06 % -> 0.44 / 0.27 / 0.58 %, seeds 1-3). Without
+       * the view test: F1 0.9445, precision 0.982 -> 0.963; 8 / 12 views:
+       * F1 0.9511 / 0.9501, alpha 0.7863 / 0.7762 (docs/tracker.md "Deep
+       * peaks"). */
+      if (!depth_given && o.motion != MOTION_STAGE) {
+        o.peaks.depth_range_um = 60;
+        if (!min_given) o.peaks.absolute_min = 30;
+      }
+    }
+  }
+  if (o.motion == MOTION_STAGE) {
+    o.smooth.allow_spline = 0;
+    if (o.has_stage_v) memcpy(o.link.prior_velocity_um_per_ms, o.stage_v, sizeof o.stage_v);
+    /* Everything translates with the stage, so no object comes back onto a
+     * path, while a bead trailing another on the same line (or re-entering
+     * the field on it) lies on that path: stitching joined two such
+     * beads, the track was rejected for outliers (stage 200 ms alpha 0.717
+     * -> 0.677). */
+    if (!stitch_given) o.link.stitch_points = 0;
+  } else if (o.motion == MOTION_FREE && o.smooth.model == ELFM_MODEL_AUTO) {
+    o.smooth.model = ELFM_MODEL_SPLINE;
+  }
+  if (o.lag_correct) o.link.lag_tau_us = o.recon.framer.tau_us;
+  if (!mbias_given && !o.lag_correct && o.localize_views &&
+      o.recon.framer.repr == ELFM_REPR_EXP && o.recon.framer.polarity == ELFM_POL_ON) {
+    /* The view fit of an ON time surface places a moving object ahead of
+     * where it is (ON events fire on its leading half) and where it was a
+     * little earlier (the weights value^P favour the newest events, not the
+     * frame's end): along its lateral motion v the error is lead - delay x
+     * |v|. Flow 100 ms, 8 seeds, regression of the detections' error on the
+     * speed: lead 0.80-0.86 um at every depth to 60 um, delay 296-308 us;
+     * at tau 500 / 1000 / 2000 us the delay was 190-245 / 285-340 /
+     * 375-450 us, close to the mean age of the weighted events in the
+     * window (below) + 20 us. The lead belongs to the sample (brighter
+     * beads lead further: stage_accel 2.2 um), so `eventlfm score` reports
+     * it for a simulated scene like the user's. Alpha over the 8 seeds
+     * 0.7326 -> 0.7486 with the lateral model, 0.7515 with the views'
+     * (below; docs/tracker.md "Motion bias"). */
+    const double k = o.loc.power / o.recon.framer.tau_us, w = (double)o.recon.framer.dt_us;
+    const double age_us = 1.0 / k - w * exp(-k * w) / (1.0 - exp(-k * w));
+    o.smooth.motion_lead_um = 0.8;
+    o.smooth.motion_delay_us = age_us + 20.0;
+  }
+  *out = o;
+  return CLI_OK;
+}
