@@ -43,7 +43,10 @@ typedef struct track_opts {
   double fill_gate_um; /* a fill lands within this of where the gap's ends put the object */
   int fill_max_gap;    /* frames kept for it: gaps up to this long are filled */
   double fill_min_ratio; /* a fill is at least this x the intensity at the gap's ends */
+  int fill_frames;     /* where the one-frame fit fails, fit this many frames centred on
+                          the gap's frame (odd, 1..TRACK_FILL_MAX_FRAMES; 1 = off) */
 } track_opts;
+#define TRACK_FILL_MAX_FRAMES 9
 
 /* The options (cmd_track_opts.c): track's defaults, then argv. CLI_OK: run
  * with *o; TRACK_PARSE_HELP: --help was printed (exit 0); otherwise the
@@ -125,11 +128,14 @@ typedef struct track_ctx {
   /* gap filling (cmd_track_fill.c) */
   frame_ring ring;
   elfm_frame *scratch;   /* a kept frame, made whole for the view fit */
+  elfm_frame *scratch_nbr[TRACK_FILL_MAX_FRAMES - 1]; /* its neighbours (fill_frames > 1) */
   elfm_refocus_plan *fill_plan; /* owned: outlives the driver's */
   elfm_link_gap *gaps;
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
   int64_t n_fill_tries, n_filled;
+  int64_t n_filled_multi, n_multi_refused; /* fills of the multi-frame fit; ones the
+                                              neighbourhood test refused */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of

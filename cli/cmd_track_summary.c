@@ -121,6 +121,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
   cJSON_AddNumberToObject(cnt, "gap_fill_tries", (double)c->n_fill_tries);
   cJSON_AddNumberToObject(cnt, "gap_fills", (double)c->n_filled);
+  cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame", (double)c->n_filled_multi);
+  cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame_refused", (double)c->n_multi_refused);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
@@ -147,6 +149,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "fill_gate_um", o->fill_gate_um);
   cJSON_AddNumberToObject(par, "fill_max_gap", o->fill_max_gap);
   cJSON_AddNumberToObject(par, "fill_min_ratio", o->fill_min_ratio);
+  cJSON_AddNumberToObject(par, "fill_frames", o->fill_frames);
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);

@@ -11,11 +11,13 @@ below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'
 }
 
-# simulate_or_skip DIR SCENE MS SEED: `eventlfm simulate SCENE` for MS ms
-# into DIR; the test is skipped (exit 77) when that fails. Uses $bin.
+# simulate_or_skip DIR SCENE MS SEED [simulate options...]: `eventlfm
+# simulate SCENE` for MS ms into DIR; the test is skipped (exit 77) when
+# that fails. Uses $bin.
 simulate_or_skip() {
-  "$bin" simulate "$2" --out "$1" --duration-ms "$3" --seed "$4" --quiet >/dev/null 2>&1 ||
-    { echo "SKIP: simulate $2 failed"; exit 77; }
+  sos_dir=$1; sos_scene=$2; sos_ms=$3; sos_seed=$4; shift 4
+  "$bin" simulate "$sos_scene" --out "$sos_dir" --duration-ms "$sos_ms" --seed "$sos_seed" --quiet "$@" >/dev/null 2>&1 ||
+    { echo "SKIP: simulate $sos_scene failed"; exit 77; }
 }
 
 # track_score SCENE OUT JSON [track options...]: `eventlfm track` on the
