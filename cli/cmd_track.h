@@ -45,6 +45,7 @@ typedef struct track_opts {
   double fill_min_ratio; /* a fill is at least this x the intensity at the gap's ends */
   int fill_frames;     /* where the one-frame fit fails, fit this many frames centred on
                           the gap's frame (odd, 1..TRACK_FILL_MAX_FRAMES; 1 = off) */
+  int fill_ends;       /* follow a finished track on past its last point the same way */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 
@@ -134,6 +135,7 @@ typedef struct track_ctx {
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
   int64_t n_fill_tries, n_filled;
+  int64_t n_filled_end;  /* of n_filled, after a finished track's end */
   int64_t n_filled_multi, n_multi_refused; /* fills of the multi-frame fit; ones the
                                               neighbourhood test refused */
 } track_ctx;
@@ -159,6 +161,9 @@ elfm_status track_drain(track_ctx *c, elfm_error *err);
 elfm_status track_fill_setup(track_ctx *c, elfm_error *err);
 elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, elfm_error *err);
 elfm_status track_fill_gaps(track_ctx *c, int all, elfm_error *err);
+/* Follow finished track t (popped, not yet smoothed) past its last point:
+ * what is found goes into t and detections.csv (o->fill_ends). */
+elfm_status track_fill_end(track_ctx *c, elfm_track *t, elfm_error *err);
 void track_fill_free(track_ctx *c);
 /* Write frame `frame`'s detection d to detections.csv: at once without gap
  * filling; with it, held until track_det_flush_before writes the frames

@@ -67,6 +67,7 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
       c->fin_cap = cap;
     }
     c->fin[n++].t = t;
+    if (st == ELFM_OK) st = track_fill_end(c, t, err);
   }
   double t0 = cli_now_s();
   const elfm_smooth_options *so = &c->o->smooth;

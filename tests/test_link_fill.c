@@ -1,6 +1,7 @@
 /* test_link_fill.c — gap filling's parts (elfm_link.h "Gap filling",
  * elfm_track_insert): which gaps are settled and when, each reported once;
- * where a gap's object is predicted on lines and circles; points given back
+ * where a gap's object is predicted on lines and circles (and past a
+ * finished track's end); points given back
  * land in the track's past without changing what the linker predicts next;
  * bad fills are errors. */
 #include <math.h>
@@ -174,6 +175,52 @@ int main(void)
       CHECK(fabs(q[0] + 6) < 1e-6 && fabs(q[1] - 3) < 1e-6 && fabs(q[2] + 1.5) < 1e-6);
     }
     end_linker(l);
+  }
+
+  /* 3b. A finished track's open end (elfm_link_track_end): on a line the
+   * head's fit is exact past the last point; on the circle of case 2 the
+   * head's constant-rate turn stays within 1 um for 5 frames (0.25 rad). */
+  {
+    elfm_track *t = elfm_track_create(9, &err);
+    CHECK(t != NULL);
+    for (int f = 0; f < 20 && t; f++) {
+      elfm_detection d = mk(f, T0 + 1000 * f, 2.0 * f, -1.0 * f, 0.5 * f);
+      d.intensity = f < 17 ? 1 : 4;
+      CHECK_OK(elfm_track_append(t, &d, &err), &err);
+    }
+    elfm_link_gap g;
+    elfm_link_track_end(t, 8, 50, &g);
+    CHECK(g.open_end && !g.open_start && g.track_id == 9);
+    CHECK(g.frame0 == 19 && g.frame1 == 70 && g.t0_us == T0 + 19000);
+    CHECK(fabs(g.intensity - 4) < 1e-12); /* the last 3 points' */
+    double q[3];
+    elfm_link_gap_predict(&g, T0 + 25000, q);
+    CHECK_MSG(fabs(q[0] - 50) < 1e-6 && fabs(q[1] + 25) < 1e-6 && fabs(q[2] - 12.5) < 1e-6,
+              "line end %g %g %g", q[0], q[1], q[2]);
+    elfm_track_free(t);
+
+    t = elfm_track_create(10, &err);
+    CHECK(t != NULL);
+    for (int f = 0; f < 20 && t; f++) {
+      double p[3];
+      circle(f, p);
+      elfm_detection d = mk(f, T0 + 1000 * f, p[0], p[1], p[2]);
+      CHECK_OK(elfm_track_append(t, &d, &err), &err);
+    }
+    elfm_link_track_end(t, 8, 50, &g);
+    double worst = 0;
+    for (int f = 20; f <= 24; f++) {
+      double p[3];
+      circle(f, p);
+      elfm_link_gap_predict(&g, T0 + 1000 * f, q);
+      double e = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                      (p[2] - q[2]) * (p[2] - q[2]));
+      if (e > worst) worst = e;
+    }
+    CHECK_MSG(worst < 1.0, "circle end worst %g um", worst);
+    elfm_track_free(t);
+    elfm_link_track_end(NULL, 8, 50, &g); /* no track: an empty gap, no crash */
+    CHECK(!g.open_end && g.track_id == 0);
   }
 
   /* 4. Filling: points given back land in the gap (and before the first

@@ -19,6 +19,10 @@
 #    seed 21 (0.850 -> 0.854, 0.950 -> 0.955 when it came; seeds 1-20 every
 #    seed up or the same), and summary.json counts its fills; the integral
 #    defaults to 1;
+#  - a finished track is followed on past its end the same way
+#    (--fill-ends, default on): alpha above --fill-ends off on seed 21
+#    (0.854 -> 0.857 when it came), summary.json counts its points; off on
+#    the integral;
 #  - on a dense sample (60 beads, seed 21) the neighbourhood test keeps the
 #    multi-frame fit's clutter out: precision within 0.01 of --fill-frames 1
 #    (0.741 -> 0.738 when it came; 0.701 without the test) and the test
@@ -32,7 +36,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--fill-views 1" "--fill-views 300" "--fill-gate-um 0" "--fill-min-ratio 1.5" \
            "--fill-max-gap 0" "--fill-max-gap 2000" "--view-fit-sigma 0" "--view-fit-sigma 2000" \
-           "--fill-frames 0" "--fill-frames 2" "--fill-frames 11" "--fill-frames x"
+           "--fill-frames 0" "--fill-frames 2" "--fill-frames 11" "--fill-frames x" "--fill-ends yes"
 
 simulate_or_skip "$tmp/flow" flow 100 21
 track_score "$tmp/flow" "$tmp/off" "$tmp/off.json" --fill-views 0
@@ -52,6 +56,13 @@ awk -v a="$ak" -v b="$a1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: multi-frame
 awk -v a="$rk" -v b="$r1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: multi-frame fills gain no recall"; fail=$((fail+1)); }
 [ "$mk" = 0 ] && [ "${m1:-0}" -gt 0 ] || { echo "FAIL: gap_fills_multi_frame $mk / $m1"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" fill_frames)" = 3 ] || { echo "FAIL: default fill_frames not 3"; fail=$((fail+1)); }
+
+track_score "$tmp/flow" "$tmp/e0" "$tmp/e0.json" --fill-ends off
+ae=$(key "$tmp/e0.json" alpha)
+ne0=$(key "$tmp/e0/summary.json" end_fills); ne1=$(key "$tmp/def/summary.json" end_fills)
+echo "finished tracks not followed: alpha $ae (default $a1); end fills $ne0 -> $ne1"
+awk -v a="$ae" -v b="$a1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: following finished tracks gains no alpha"; fail=$((fail+1)); }
+[ "$ne0" = 0 ] && [ "${ne1:-0}" -gt 0 ] || { echo "FAIL: end_fills $ne0 / $ne1"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/dense" flow 100 21 --param objects.count=60
 track_score "$tmp/dense" "$tmp/dk1" "$tmp/dk1.json" --fill-frames 1
@@ -75,6 +86,7 @@ awk -F, 'NR > 2 && $1 < prev { bad = 1 } NR > 1 { prev = $1 } END { exit bad }' 
   --repr integral --to-us 20000 || { echo "FAIL: track --repr integral"; fail=$((fail+1)); }
 [ "$(key "$tmp/int/summary.json" fill_views)" = 8 ] || { echo "FAIL: integral fill_views not 8"; fail=$((fail+1)); }
 [ "$(key "$tmp/int/summary.json" fill_frames)" = 1 ] || { echo "FAIL: integral fill_frames not 1"; fail=$((fail+1)); }
+[ "$(key "$tmp/int/summary.json" fill_ends)" = false ] || { echo "FAIL: integral fill_ends not off"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" fill_views)" = 4 ] || { echo "FAIL: default fill_views not 4"; fail=$((fail+1)); }
 
 [ $fail -eq 0 ] && echo "track_fill: all passed" || echo "track_fill: $fail failed"

@@ -167,6 +167,9 @@ typedef struct elfm_link_gap {
   int64_t track_id;
   int open_start;               /* 1: the frames before the track's first point (frame1):
                                    frame0 is only how far back to look, p0 v0 a0 are unset */
+  int open_end;                 /* 1: the frames after a finished track's last point
+                                   (frame0): frame1 is only how far on to look, p1 v1 a1
+                                   are unset (elfm_link_track_end) */
   int64_t frame0, frame1;       /* the real points before and after (frame1 > frame0 + 1) */
   int64_t t0_us, t1_us;
   double p0_um[3], v0_um_per_ms[3], a0_um_per_ms2[3]; /* the head's fit at frame0 */
@@ -187,8 +190,15 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
 
 /* Where the gap's object was at t_us: the head's and the tail's
  * constant-rate turns (elfm_link_predict), forward from frame0 and
- * backward from frame1, blended linearly in time (open_start: the tail's). */
+ * backward from frame1, blended linearly in time (open_start: the tail's;
+ * open_end: the head's). */
 void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3]);
+
+/* The open gap after finished track t's last point (open_end), up to
+ * max_gap_frames on, its head fit over the last short_history points: where
+ * the object went after the track lost it. */
+void elfm_link_track_end(const elfm_track *t, int short_history, int max_gap_frames,
+                         elfm_link_gap *g);
 
 /* Give live track `track_id` real points d[0 .. n) in frames with no point
  * yet before its last point (its gaps, or before its first). ELFM_ERR_INVALID

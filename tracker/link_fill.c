@@ -104,12 +104,28 @@ void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3
    * way under the same normal acceleration */
   for (int a = 0; a < 3; a++) vb[a] = -g->v1_um_per_ms[a];
   elfm_link_predict_turn(g->p1_um, vb, g->a1_um_per_ms2, d1, b);
-  if (g->open_start) {
-    memcpy(xyz_um, b, sizeof b);
+  if (g->open_start || g->open_end) {
+    memcpy(xyz_um, g->open_start ? b : f, sizeof b);
     return;
   }
   const double span = d0 + d1, w = span > 0 ? d0 / span : 0.5;
   for (int a = 0; a < 3; a++) xyz_um[a] = (1 - w) * f[a] + w * b[a];
+}
+
+void elfm_link_track_end(const elfm_track *t, int short_history, int max_gap_frames,
+                         elfm_link_gap *g)
+{
+  memset(g, 0, sizeof *g);
+  if (!t || t->n == 0) return;
+  const size_t h = short_history > 1 ? (size_t)short_history : 1, k = t->n;
+  g->track_id = t->id;
+  g->open_end = 1;
+  g->frame0 = t->pts[k - 1].frame;
+  g->t0_us = t->pts[k - 1].t_us;
+  g->frame1 = g->frame0 + (max_gap_frames > 0 ? max_gap_frames : 0) + 1;
+  g->t1_us = g->t0_us;
+  end_fit(t, k > h ? k - h : 0, k, k - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
+  g->intensity = elfm_link_mean_intensity(t, k > 3 ? k - 3 : 0, k);
 }
 
 elfm_status elfm_link_fill(elfm_linker *l, int64_t track_id, const elfm_detection *d, int n,
