@@ -36,8 +36,8 @@ blink_score lin --repr lin
 a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/def.json" alpha); a2=$(key "$tmp/lin.json" alpha)
 p0=$(key "$tmp/off.json" precision); p1=$(key "$tmp/def.json" precision); p2=$(key "$tmp/lin.json" precision)
 echo "blink_moving seed 4: alpha $a0 -> $a1 (floor), $a2 (--repr lin); precision $p0 -> $p1, $p2"
-awk -v a="$a0" -v b="$a1" 'BEGIN { exit !(b > a + 0.05) }' || { echo "FAIL: the floor gains < 0.05 alpha"; fail=$((fail+1)); }
-awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 0.03) }' || { echo "FAIL: the floor gains < 0.03 precision"; fail=$((fail+1)); }
+expect_gain "$a0" "$a1" 0.05 "the floor gains < 0.05 alpha"
+expect_gain "$p0" "$p1" 0.03 "the floor gains < 0.03 precision"
 awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.6 && p > 0.95) }' || { echo "FAIL: --repr lin"; fail=$((fail+1)); }
 tr=$(key "$tmp/def/summary.json" triggers)
 [ "${tr:-0}" -ge 60 ] || { echo "FAIL: triggers '$tr' (67 edges in 100 ms)"; fail=$((fail+1)); }

@@ -30,9 +30,9 @@ r0=$(key "$tmp/flat.json" recall); r1=$(key "$tmp/def.json" recall)
 p0=$(key "$tmp/any.json" precision); p1=$(key "$tmp/def.json" precision)
 nd=$(key "$tmp/def/summary.json" deep_peaks_dropped)
 echo "flow seed 21: alpha $a0 -> $a1, recall $r0 -> $r1 (depth rule); precision $p0 -> $p1 (view test, $nd dropped)"
-awk -v a="$a0" -v b="$a1" 'BEGIN { exit !(b > a + 0.02) }' || { echo "FAIL: alpha gain < 0.02"; fail=$((fail+1)); }
-awk -v a="$r0" -v b="$r1" 'BEGIN { exit !(b > a + 0.004) }' || { echo "FAIL: recall gain < 0.004"; fail=$((fail+1)); }
-awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a + 0.01) }' || { echo "FAIL: precision gain < 0.01"; fail=$((fail+1)); }
+expect_gain "$a0" "$a1" 0.02 "alpha gain < 0.02"
+expect_gain "$r0" "$r1" 0.004 "recall gain < 0.004"
+expect_gain "$p0" "$p1" 0.01 "precision gain < 0.01"
 [ "${nd:-0}" -gt 0 ] || { echo "FAIL: deep_peaks_dropped '$nd'"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" threshold_depth_um)" = 60 ] || { echo "FAIL: default depth not 60"; fail=$((fail+1)); }
 # the ninth session's defaults, recorded with the run

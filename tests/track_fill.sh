@@ -45,15 +45,15 @@ a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/def.json" alpha)
 r0=$(key "$tmp/off.json" recall); r1=$(key "$tmp/def.json" recall)
 n0=$(key "$tmp/off/summary.json" gap_fills); n1=$(key "$tmp/def/summary.json" gap_fills)
 echo "flow seed 21: alpha $a0 -> $a1, recall $r0 -> $r1, gap fills $n0 -> $n1"
-awk -v a="$a0" -v b="$a1" 'BEGIN { exit !(b > a + 0.01) }' || { echo "FAIL: alpha gain < 0.01"; fail=$((fail+1)); }
-awk -v a="$r0" -v b="$r1" 'BEGIN { exit !(b > a + 0.02) }' || { echo "FAIL: recall gain < 0.02"; fail=$((fail+1)); }
+expect_gain "$a0" "$a1" 0.01 "alpha gain < 0.01"
+expect_gain "$r0" "$r1" 0.02 "recall gain < 0.02"
 [ "$n0" = 0 ] && [ "${n1:-0}" -gt 20 ] || { echo "FAIL: gap_fills $n0 / $n1"; fail=$((fail+1)); }
 track_score "$tmp/flow" "$tmp/k1" "$tmp/k1.json" --fill-frames 1
 ak=$(key "$tmp/k1.json" alpha); rk=$(key "$tmp/k1.json" recall)
 m1=$(key "$tmp/def/summary.json" gap_fills_multi_frame); mk=$(key "$tmp/k1/summary.json" gap_fills_multi_frame)
 echo "one frame per fill: alpha $ak, recall $rk (default $a1, $r1); multi-frame fills $mk -> $m1"
-awk -v a="$ak" -v b="$a1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: multi-frame fills gain no alpha"; fail=$((fail+1)); }
-awk -v a="$rk" -v b="$r1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: multi-frame fills gain no recall"; fail=$((fail+1)); }
+expect_gain "$ak" "$a1" 0 "multi-frame fills gain no alpha"
+expect_gain "$rk" "$r1" 0 "multi-frame fills gain no recall"
 [ "$mk" = 0 ] && [ "${m1:-0}" -gt 0 ] || { echo "FAIL: gap_fills_multi_frame $mk / $m1"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" fill_frames)" = 3 ] || { echo "FAIL: default fill_frames not 3"; fail=$((fail+1)); }
 
@@ -61,7 +61,7 @@ track_score "$tmp/flow" "$tmp/e0" "$tmp/e0.json" --fill-ends off
 ae=$(key "$tmp/e0.json" alpha)
 ne0=$(key "$tmp/e0/summary.json" end_fills); ne1=$(key "$tmp/def/summary.json" end_fills)
 echo "finished tracks not followed: alpha $ae (default $a1); end fills $ne0 -> $ne1"
-awk -v a="$ae" -v b="$a1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: following finished tracks gains no alpha"; fail=$((fail+1)); }
+expect_gain "$ae" "$a1" 0 "following finished tracks gains no alpha"
 [ "$ne0" = 0 ] && [ "${ne1:-0}" -gt 0 ] || { echo "FAIL: end_fills $ne0 / $ne1"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/dense" flow 100 21 --param objects.count=60
@@ -70,13 +70,13 @@ track_score "$tmp/dense" "$tmp/dk3" "$tmp/dk3.json"
 p1=$(key "$tmp/dk1.json" precision); p3=$(key "$tmp/dk3.json" precision)
 nr=$(key "$tmp/dk3/summary.json" gap_fills_multi_frame_refused)
 echo "60 beads: precision $p1 -> $p3 with 3 frames, $nr multi-frame fits refused"
-awk -v a="$p1" -v b="$p3" 'BEGIN { exit !(b > a - 0.01) }' || { echo "FAIL: dense precision fell by 0.01 or more"; fail=$((fail+1)); }
+expect_gain "$p1" "$p3" -0.01 "dense precision fell by 0.01 or more"
 [ "${nr:-0}" -gt 0 ] || { echo "FAIL: the neighbourhood test refused nothing"; fail=$((fail+1)); }
 
 track_score "$tmp/flow" "$tmp/w1" "$tmp/w1.json" --view-fit-sigma 1
 aw=$(key "$tmp/w1.json" alpha)
 echo "view-fit points weighted alike: alpha $aw (default $a1)"
-awk -v a="$aw" -v b="$a1" 'BEGIN { exit !(b > a) }' || { echo "FAIL: view-fit weighting gains nothing"; fail=$((fail+1)); }
+expect_gain "$aw" "$a1" 0 "view-fit weighting gains nothing"
 [ "$(key "$tmp/w1.json" f1)" = "$(key "$tmp/def.json" f1)" ] || { echo "FAIL: the weighting changed the detections"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" view_fit_sigma_factor)" = 1.5 ] || { echo "FAIL: view_fit_sigma_factor not 1.5"; fail=$((fail+1)); }
 awk -F, 'NR > 2 && $1 < prev { bad = 1 } NR > 1 { prev = $1 } END { exit bad }' "$tmp/def/detections.csv" ||

@@ -6,6 +6,13 @@ key() {
   tr ',{}' '\n\n\n' < "$1" | sed -n "s/^[[:space:]]*\"$2\":[[:space:]]*//p" | head -1
 }
 
+# expect_gain A B M MESSAGE: B > A + M (floating point, by awk; a negative
+# M: B may fall below A by less than -M); otherwise print "FAIL: MESSAGE"
+# and count it in $fail.
+expect_gain() {
+  awk -v a="$1" -v b="$2" -v m="$3" 'BEGIN { exit !(b > a + m) }' || { echo "FAIL: $4"; fail=$((fail+1)); }
+}
+
 # below A F B: true when A < F x B (floating point, by awk).
 below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'

@@ -44,6 +44,6 @@ echo "flow: guided view fit off: recall $r0 precision $p0 ($g0 fits); on: recall
 v=$(key "$tmp/flow-on/summary.json" median_track_speed_um_per_ms)
 awk -v v="$v" 'BEGIN { exit !(v > 1.0) }' || { echo "FAIL: flow median track speed $v"; fail=$((fail+1)); }
 awk -v a="$r0" -v b="$r1" 'BEGIN { exit !(b >= a + 0.01) }' || { echo "FAIL: recall $r0 -> $r1"; fail=$((fail+1)); }
-awk -v a="$p0" -v b="$p1" 'BEGIN { exit !(b > a - 0.03) }' || { echo "FAIL: precision $p0 -> $p1"; fail=$((fail+1)); }
+expect_gain "$p0" "$p1" -0.03 "precision $p0 -> $p1"
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail

@@ -27,7 +27,7 @@ run() {  # scene-dir tag track-args...
 }
 gain() {  # name a0 a1 min
   echo "$1: alpha $2 -> $3"
-  awk -v a="$2" -v b="$3" -v m="$4" 'BEGIN { exit !(b > a + m) }' || { echo "FAIL: $1 alpha $2 -> $3 (gain < $4)"; fail=$((fail+1)); }
+  expect_gain "$2" "$3" "$4" "$1 alpha $2 -> $3 (gain < $4)"
 }
 
 simulate_or_skip "$tmp/flow" flow 100 13
