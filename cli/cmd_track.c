@@ -164,6 +164,17 @@ int cmd_track(int argc, char **argv)
                       "lead such objects along their motion; --repr integral places them where "
                       "they are (README, docs/tracker.md)\n", v);
   }
+  const double frame_ms =
+      1e-3 * (double)(o.recon.framer.stride_us ? o.recon.framer.stride_us : o.recon.framer.dt_us);
+  if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL &&
+      c.median_speed_um_per_ms * frame_ms >= TRACK_HINT_MAX_STEP_UM) {
+    const int64_t half_us = o.recon.framer.dt_us / 2;
+    fprintf(stderr, "eventlfm track: note: the tracks move fast (median %.2f um/ms, %.1f um per "
+                    "frame): beyond ~%.1f um per frame the linker loses objects between frames; "
+                    "shorter windows follow them (--dt-us %" PRId64 "; README)\n",
+            c.median_speed_um_per_ms, c.median_speed_um_per_ms * frame_ms, TRACK_HINT_MAX_STEP_UM,
+            half_us);
+  }
   if (!o.quiet && rs.triggers >= 4 && o.recon.framer.repr == ELFM_REPR_EXP &&
       c.median_speed_um_per_ms >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
     fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges (pulsed "

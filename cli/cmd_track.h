@@ -192,5 +192,13 @@ double track_median_speed_um_per_ms(const elfm_track_store *s);
  * surface: only when the tracks move, as blink_moving's at 2.5 um/ms; beads
  * at rest (blink) do better with the default (README). */
 #define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
+/* Objects moving further than this between frames (median track speed x
+ * frame interval) are tracked better with shorter windows. Flow at 2.5-8
+ * mm/s (seeds 1-4 and 31-33), --dt-us 500 against 1000, by the median track
+ * speed at 1 ms frames: at 2.6-2.8 um per frame alpha -0.084..+0.001 (mean
+ * -0.052); at 3.03 / 3.18 / 3.38 -0.027 / -0.049 / +0.018; at 3.65 / 3.77 /
+ * 3.93 +0.037 / +0.163 / +0.017; at 4.96 / 5.10 / 5.27 +0.296 / +0.398 /
+ * +0.205 (0.364 / 0.286 / 0.323 -> 0.660 / 0.684 / 0.528). */
+#define TRACK_HINT_MAX_STEP_UM 3.5
 
 #endif
