@@ -195,10 +195,11 @@ double track_median_speed_um_per_ms(const elfm_track_store *s);
 /* Objects moving further than this between frames (median track speed x
  * frame interval) are tracked better with shorter windows. Flow at 2.5-8
  * mm/s (seeds 1-4 and 31-33), --dt-us 500 against 1000, by the median track
- * speed at 1 ms frames: at 2.6-2.8 um per frame alpha -0.084..+0.001 (mean
- * -0.052); at 3.03 / 3.18 / 3.38 -0.027 / -0.049 / +0.018; at 3.65 / 3.77 /
- * 3.93 +0.037 / +0.163 / +0.017; at 4.96 / 5.10 / 5.27 +0.296 / +0.398 /
- * +0.205 (0.364 / 0.286 / 0.323 -> 0.660 / 0.684 / 0.528). */
+ * speed at 1 ms frames (with the 20 um path cap, short_path_um): at
+ * 2.4-2.7 um per frame alpha -0.073..-0.011 (mean -0.054); at 3.11 / 3.21 /
+ * 3.26 -0.049 / +0.021 / -0.049; at 3.49 / 3.59 / 3.72 +0.046 / +0.017 /
+ * +0.012; at 4.48 / 4.69 / 4.98 +0.039 / +0.069 / +0.033. (Before the path
+ * cap, at 5.0-5.3 um per frame: +0.21 to +0.40.) */
 #define TRACK_HINT_MAX_STEP_UM 3.5
 
 #endif

@@ -99,6 +99,16 @@ static void track_defaults(track_opts *o)
    * beads (9 runs) 0.605 -> 0.623 (docs/tracker.md "Established tracks
    * first"). */
   o->link.priority_points = 8;
+  /* The linker's acceleration fit spans at most 20 um of path (elfm_link.h
+   * short_path_um): fewer of the 8 points for fast beads, whose 8 frames
+   * cover more than a radian of a tight turn. Flow 100 ms seeds 1-20 alpha
+   * 0.8021 -> 0.8033 (15 / 25 / 30 um: 0.7893 / 0.8027 / 0.8005), held-out
+   * 21-24 0.7955 -> 0.8020, 40/60 beads (9 scenes) 0.6273 -> 0.6534;
+   * faster beads (4-8 mm/s, seeds 31-33) 0.4755 -> 0.6390; noise, dim,
+   * haze variants (seeds 31, 32) +0.017 to +0.051 each (docs/tracker.md
+   * "Fast beads"). Off with --motion stage and on the integral
+   * (below). */
+  o->link.short_path_um = 20;
   /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
    * detections' errors are correlated from frame to frame (flow: lag-1
    * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
@@ -217,6 +227,9 @@ static void usage(FILE *f)
     "                       has N points; exchange tails with a better fit (8; 0 off)\n"
     "  --priority-points N  tracks of >= N points choose their detections before\n"
     "                       younger ones (8; 0 = one assignment for all)\n"
+    "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
+    "                       when they span more than L um of path, as fast objects'\n"
+    "                       do (20; 0 = always 8; --motion stage, --repr integral: 0)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10) points\n"
@@ -311,7 +324,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -321,7 +334,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   static const char *const C = "track";
   track_opts o;
   track_defaults(&o);
-  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spord_given = 0;
+  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0;
   static const struct option lo[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -355,6 +368,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
+      {"short-path-um", required_argument, 0, O_SPATH},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
       {"guided-min-points", required_argument, 0, O_GUIDEDM},
@@ -469,6 +483,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!strcmp(a, "on")) o.fill_ends = 1;
       else if (!strcmp(a, "off")) o.fill_ends = 0;
       else return cli_message(C, CLI_USAGE, "--fill-ends must be on or off, not '%s'", a);
+      break;
+    case O_SPATH:
+      spath_given = 1;
+      if (!cli_parse_double_in(C, "--short-path-um", a, 0, 0, 1000, "0..1000", &o.link.short_path_um))
+        return CLI_USAGE;
       break;
     case O_FILLN:
       if (!cli_parse_int(C, "--fill-max-gap", a, &o.fill_max_gap)) return CLI_USAGE;
@@ -610,6 +629,13 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * 0.896 / 0.892 / 0.941 -> 0.926 / 0.846 / 0.886 / 0.939. */
     o.fill_frames = 1;
   }
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spath_given) {
+    /* Crawling neurons cover a few um in 8 frames: the cap binds only
+     * where noisy points inflate the path, and fewer points predict worse
+     * there (worm 200 ms seeds 1-4 with it: alpha the same, precision
+     * 0.933 / 0.896 / 0.892 / 0.941 -> 0.924 / 0.884 / 0.890 / 0.941). */
+    o.link.short_path_um = 0;
+  }
   if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fille_given) {
     /* Past a neuron's track's end the fit finds its partner: worm 200 ms
      * seeds 1-4, precision 0.933 / 0.896 / 0.892 / 0.941 -> 0.933 / 0.887 /
@@ -671,6 +697,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * beads, the track was rejected for outliers (stage 200 ms alpha 0.717
      * -> 0.677). */
     if (!stitch_given) o.link.stitch_points = 0;
+    /* A stage translates everything straight: no turn for the path cap to
+     * follow, and the longer fit averages more noise (stage seeds 1-3 with
+     * it: alpha 0.741 / 0.807 / 0.723 -> 0.736 / 0.806 / 0.715, speed
+     * error 0.41 / 0.19 / 0.07 % -> 0.30 / 0.24 / 0.11 %). */
+    if (!spath_given) o.link.short_path_um = 0;
   } else if (o.motion == MOTION_FREE && o.smooth.model == ELFM_MODEL_AUTO) {
     o.smooth.model = ELFM_MODEL_SPLINE;
   }

@@ -168,6 +168,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "swap_points", o->link.swap_points);
   cJSON_AddNumberToObject(par, "swap_ratio", o->link.swap_ratio);
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);
+  cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);
   cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);
   cJSON_AddNumberToObject(par, "guided_low", o->guided_low);
   cJSON_AddNumberToObject(par, "guided_radius_um", o->guided_radius_um);

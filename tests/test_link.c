@@ -608,6 +608,49 @@ int main(void)
     elfm_link_free(l);
   }
 
+  /* 5g. The short fit's path (short_path_um): a fast bead on a tight
+   * circle (radius 10 um, 6 um per frame: 0.6 rad) is predicted from its
+   * last 8 points (4.2 rad of the circle) 12.1 um off, from the last 4
+   * (the last 20 um of path) 3.5 um off; on a slow line the 8 points span 7 um and
+   * both predict the same. A negative or NaN path is an error. */
+  {
+    double err_pred[2], line_pred[2];
+    for (int c = 0; c < 2; c++) {
+      elfm_link_options oc = o;
+      oc.short_path_um = c ? 20 : 0;
+      elfm_linker *l = elfm_link_create(&oc, &err);
+      CHECK(l != NULL);
+      for (int f = 0; f < 12 && l; f++) {
+        elfm_detection d = mk(10 * cos(0.6 * f), 10 * sin(0.6 * f), 0.5 * f);
+        CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+      }
+      double xyz[3] = {0, 0, 0};
+      int np = 0;
+      if (l) CHECK_OK(elfm_link_predict(l, 12, T0 + 12 * 1000, 3, xyz, NULL, 1, &np, &err), &err);
+      CHECK_EQ_INT(np, 1);
+      err_pred[c] = hypot(xyz[0] - 10 * cos(7.2), xyz[1] - 10 * sin(7.2));
+      elfm_link_free(l);
+      l = elfm_link_create(&oc, &err);
+      for (int f = 0; f < 12 && l; f++) {
+        elfm_detection d = mk(1.0 * f, 0.3 * f, 0);
+        CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+      }
+      if (l) CHECK_OK(elfm_link_predict(l, 12, T0 + 12 * 1000, 3, xyz, NULL, 1, &np, &err), &err);
+      line_pred[c] = xyz[0];
+      elfm_link_free(l);
+    }
+    CHECK_MSG(err_pred[1] < 4 && err_pred[1] < 0.5 * err_pred[0],
+              "circle, 6 um per frame: prediction off by %g um from 8 points, %g from 20 um of path",
+              err_pred[0], err_pred[1]);
+    CHECK_NEAR(line_pred[1], line_pred[0], 1e-9);
+    CHECK_NEAR(line_pred[0], 12.0, 1e-6);
+    elfm_link_options ob = o;
+    ob.short_path_um = -1;
+    CHECK(elfm_link_create(&ob, &err) == NULL && err.code == ELFM_ERR_INVALID);
+    ob.short_path_um = NAN;
+    CHECK(elfm_link_create(&ob, &err) == NULL);
+  }
+
   /* 6. Bad input. */
   {
     elfm_linker *l = elfm_link_create(&o, &err);

@@ -87,6 +87,7 @@ awk -F, 'NR > 2 && $1 < prev { bad = 1 } NR > 1 { prev = $1 } END { exit bad }' 
 [ "$(key "$tmp/int/summary.json" fill_views)" = 8 ] || { echo "FAIL: integral fill_views not 8"; fail=$((fail+1)); }
 [ "$(key "$tmp/int/summary.json" fill_frames)" = 1 ] || { echo "FAIL: integral fill_frames not 1"; fail=$((fail+1)); }
 [ "$(key "$tmp/int/summary.json" fill_ends)" = false ] || { echo "FAIL: integral fill_ends not off"; fail=$((fail+1)); }
+[ "$(key "$tmp/int/summary.json" short_path_um)" = 0 ] || { echo "FAIL: integral short_path_um not 0"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" fill_views)" = 4 ] || { echo "FAIL: default fill_views not 4"; fail=$((fail+1)); }
 
 [ $fail -eq 0 ] && echo "track_fill: all passed" || echo "track_fill: $fail failed"

@@ -55,12 +55,13 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !isfinite(o->stitch_gate_um) || o->stitch_history < 1 ||
       !(o->stitch_straight_frac >= 0) || !isfinite(o->stitch_straight_frac) || o->swap_points < 0 ||
       (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
-      o->priority_points < 0 ||
+      o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, priority points >= 0)");
+                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, priority points and short path "
+                   ">= 0)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
@@ -250,9 +251,10 @@ int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
 }
 
 /* Shared with link_repair.c (link_internal.h). */
-void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
-                            const double prior[3])
+void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
 {
+  const int history = o->history, short_history = o->short_history;
+  const double *prior = o->prior_velocity_um_per_ms;
   const elfm_track *t = lt->t;
   size_t n = t->n;
   const int64_t tr = t->pts[n - 1].t_us;
@@ -278,6 +280,26 @@ void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
   }
   k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
   if (n - k0 < 4) return;
+  if (o->short_path_um > 0) {
+    /* At most short_path_um of path (the anisotropic steps between the
+     * points, z / kz), and at least 4 points: a parabola through a turn is
+     * a good prediction only over a fraction of it, and what limits the
+     * fraction is the arc travelled, not the number of frames. A flow bead
+     * at 2.5-4 um/ms on a helix of radius 8-20 um covers 20 um in the 8
+     * points the fit keeps; at 5-8 um/ms, 8 points span 40-55 um, more
+     * than a radian of its turn, and the linker lost it between frames
+     * (docs/tracker.md "Fast beads"). */
+    double path = 0;
+    size_t k = n - 1;
+    while (k > k0) {
+      const elfm_detection *a = &t->pts[k - 1], *b = &t->pts[k];
+      const double dx = b->x_um - a->x_um, dy = b->y_um - a->y_um, dz = (b->z_um - a->z_um) / o->kz;
+      path += sqrt(dx * dx + dy * dy + dz * dz);
+      if (path > o->short_path_um && n - k >= 4) break;
+      k--;
+    }
+    k0 = k;
+  }
   lt->has_short = elfm_link_fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
 }
 
@@ -349,7 +371,7 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
   lt->last[0] = d->x_um;
   lt->last[1] = d->y_um;
   lt->last[2] = d->z_um;
-  elfm_link_fit_velocity(lt, l->o.history, l->o.short_history, l->o.prior_velocity_um_per_ms);
+  elfm_link_fit_velocity(lt, &l->o);
   if (l->o.lag_tau_us > 0 && lt->t->n == 2) {
     /* the first velocity: correct the two points it came from alike, so
      * later fits do not mix corrected and uncorrected points */

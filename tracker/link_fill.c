@@ -153,6 +153,6 @@ elfm_status elfm_link_fill(elfm_linker *l, int64_t track_id, const elfm_detectio
     if (d[j].frame < tail_frame) lt->tail0++; /* the gap closing under review keeps its point */
   }
   /* the fits over the last points: the long one may now include some */
-  elfm_link_fit_velocity(lt, l->o.history, l->o.short_history, l->o.prior_velocity_um_per_ms);
+  elfm_link_fit_velocity(lt, &l->o);
   return ELFM_OK;
 }

@@ -92,12 +92,13 @@ int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
 
 /* Least-squares fits over the recent real points of lt->t (at least one),
  * times relative to the last point in ms (never float absolute times): a
- * constant velocity over `history` points into lt->vel_um_per_ms (prior
- * when fewer than 2 distinct times) and a constant acceleration over
- * `short_history` into lt->fit_pos/fit_vel/fit_acc (lt->has_short says
- * whether it exists: >= 4 points, 3 distinct times). */
-void elfm_link_fit_velocity(live_track *lt, int history, int short_history,
-                            const double prior[3]);
+ * constant velocity over o->history points into lt->vel_um_per_ms
+ * (o->prior_velocity_um_per_ms when fewer than 2 distinct times) and a
+ * constant acceleration over o->short_history points, fewer when
+ * o->short_path_um > 0 and they span more path than that (at least 4),
+ * into lt->fit_pos/fit_vel/fit_acc (lt->has_short says whether it exists:
+ * >= 4 points, 3 distinct times). */
+void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o);
 
 /* Position after dt_ms of a constant-rate turn (the coordinated-turn
  * model): the velocity v keeps its length and rotates at omega = v x a /

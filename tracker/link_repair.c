@@ -235,7 +235,7 @@ static void refresh_state(const elfm_link_options *o, live_track *lt)
   lt->last[0] = p->x_um;
   lt->last[1] = p->y_um;
   lt->last[2] = p->z_um;
-  elfm_link_fit_velocity(lt, o->history, o->short_history, o->prior_velocity_um_per_ms);
+  elfm_link_fit_velocity(lt, o);
 }
 
 /* 6. Swap review, a deferred decision at close passes. Two flow beads
