@@ -20,8 +20,9 @@
 #    seed up or the same), and summary.json counts its fills; the integral
 #    defaults to 1;
 #  - a finished track is followed on past its end the same way
-#    (--fill-ends, default on): alpha above --fill-ends off on seed 21
-#    (0.854 -> 0.857 when it came), summary.json counts its points; off on
+#    (--fill-ends, default on): recall and alpha above --fill-ends off on
+#    seed 21 (alpha 0.854 -> 0.857 when it came, 0.849 -> 0.850 with the
+#    path cap of --short-path-um), summary.json counts its points; off on
 #    the integral;
 #  - on a dense sample (60 beads, seed 21) the neighbourhood test keeps the
 #    multi-frame fit's clutter out: precision within 0.01 of --fill-frames 1
@@ -58,9 +59,10 @@ expect_gain "$rk" "$r1" 0 "multi-frame fills gain no recall"
 [ "$(key "$tmp/def/summary.json" fill_frames)" = 3 ] || { echo "FAIL: default fill_frames not 3"; fail=$((fail+1)); }
 
 track_score "$tmp/flow" "$tmp/e0" "$tmp/e0.json" --fill-ends off
-ae=$(key "$tmp/e0.json" alpha)
+ae=$(key "$tmp/e0.json" alpha); re=$(key "$tmp/e0.json" recall)
 ne0=$(key "$tmp/e0/summary.json" end_fills); ne1=$(key "$tmp/def/summary.json" end_fills)
-echo "finished tracks not followed: alpha $ae (default $a1); end fills $ne0 -> $ne1"
+echo "finished tracks not followed: alpha $ae, recall $re (default $a1, $r1); end fills $ne0 -> $ne1"
+expect_gain "$re" "$r1" 0 "following finished tracks gains no recall"
 expect_gain "$ae" "$a1" 0 "following finished tracks gains no alpha"
 [ "$ne0" = 0 ] && [ "${ne1:-0}" -gt 0 ] || { echo "FAIL: end_fills $ne0 / $ne1"; fail=$((fail+1)); }
 
