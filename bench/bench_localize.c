@@ -207,6 +207,8 @@ int main(int argc, char **argv)
       double off[MAXK][3];
       int nu = 0;
       for (int j0 = 0; j0 < n_ring; j0++) {
+        /* ring age j (0 = newest); centred: the scored frame (age nk/2)
+         * first, then the newer ones, then the older */
         int j = centred ? (j0 == 0 ? nk / 2 : (j0 <= nk / 2 ? j0 - 1 : j0)) : j0;
         const elfm_frame *g = ring[(head - j + nk) % nk];
         double pj[3];

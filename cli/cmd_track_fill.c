@@ -217,9 +217,9 @@ static int walk_gap(track_ctx *c, const elfm_link_gap *g)
   int m = 0, misses = 0;
   int64_t lo = g->frame0 + 1, hi = g->frame1 - 1;
   const int open = g->open_start || g->open_end;
+  const int only = g->open_start ? 1 : 0; /* an open gap's one side; a closed one alternates */
   const double min_i = c->o->fill_min_ratio * g->intensity;
-  for (int side = g->open_end ? 0 : g->open_start; lo <= hi;
-       side = g->open_end ? 0 : g->open_start ? 1 : side ^ 1) {
+  for (int side = only; lo <= hi; side = open ? only : side ^ 1) {
     const int64_t f = side ? hi-- : lo++;
     const ring_slot *sl = f >= 0 ? &r->slot[f % r->cap] : NULL;
     if (!sl || sl->frame != f) {  /* before the first frame, or no longer kept */

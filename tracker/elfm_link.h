@@ -59,7 +59,8 @@ typedef struct elfm_link_options {
   int history;                     /* default 20 points for the long velocity fit */
   int short_history;               /* default 8 points for the short acceleration fit */
   double short_path_um;            /* and over at most this much path (fewer points, >= 4);
-                                      0 = off (default; track: 20 um, off with --motion stage) */
+                                      0 = off (default; track: 20 um, off with --motion stage
+                                      and --repr integral) */
   int short_gap;                   /* default 6: missed frames the gate widens for turns */
   double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
   int max_candidates;              /* per track, default 8 */

@@ -60,6 +60,32 @@ static void make_gap(const elfm_track *t, size_t k, size_t h, elfm_link_gap *g)
   g->intensity = ends_intensity(t, k);
 }
 
+/* The open gap at one end of t (t->n >= 1): before its first point
+ * (open_start, the tail's fit over its first h points) or after its last
+ * (open_end, the head's fit over its last h points), up to max_gap frames
+ * away. */
+static void open_gap(const elfm_track *t, int at_end, size_t h, int max_gap, elfm_link_gap *g)
+{
+  const size_t n = t->n;
+  memset(g, 0, sizeof *g);
+  g->track_id = t->id;
+  if (at_end) {
+    g->open_end = 1;
+    g->frame0 = t->pts[n - 1].frame;
+    g->t0_us = g->t1_us = t->pts[n - 1].t_us;
+    g->frame1 = g->frame0 + max_gap + 1;
+    end_fit(t, n > h ? n - h : 0, n, n - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
+    g->intensity = ends_intensity(t, n);
+  } else {
+    g->open_start = 1;
+    g->frame1 = t->pts[0].frame;
+    g->t0_us = g->t1_us = t->pts[0].t_us;
+    g->frame0 = g->frame1 - max_gap - 1;
+    end_fit(t, 0, n > h ? h : n, 0, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
+    g->intensity = ends_intensity(t, 0);
+  }
+}
+
 elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int all,
                                    elfm_link_gap *out, int cap, int *n_out, elfm_error *err)
 {
@@ -74,18 +100,8 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
       if (l->live[i].last_frame != l->last_frame || t->n < s) continue;
       size_t k = t->n - s;
       if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
-      else if (k == 0) {  /* the track's birth */
-        elfm_link_gap *g = &out[n++];
-        memset(g, 0, sizeof *g);
-        g->track_id = t->id;
-        g->open_start = 1;
-        g->frame1 = t->pts[0].frame;
-        g->t1_us = t->pts[0].t_us;
-        g->frame0 = g->frame1 - l->o.max_gap_frames - 1;
-        g->t0_us = g->t1_us;
-        end_fit(t, 0, t->n > h ? h : t->n, 0, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
-        g->intensity = ends_intensity(t, 0);
-      }
+      else if (k == 0)  /* the track's birth */
+        open_gap(t, 0, h, l->o.max_gap_frames, &out[n++]);
     } else {
       for (size_t k = t->n > s ? t->n - s + 1 : 1; k < t->n && n < cap; k++)
         if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
@@ -117,15 +133,8 @@ void elfm_link_track_end(const elfm_track *t, int short_history, int max_gap_fra
 {
   memset(g, 0, sizeof *g);
   if (!t || t->n == 0) return;
-  const size_t h = short_history > 1 ? (size_t)short_history : 1, k = t->n;
-  g->track_id = t->id;
-  g->open_end = 1;
-  g->frame0 = t->pts[k - 1].frame;
-  g->t0_us = t->pts[k - 1].t_us;
-  g->frame1 = g->frame0 + (max_gap_frames > 0 ? max_gap_frames : 0) + 1;
-  g->t1_us = g->t0_us;
-  end_fit(t, k > h ? k - h : 0, k, k - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
-  g->intensity = elfm_link_mean_intensity(t, k > 3 ? k - 3 : 0, k);
+  open_gap(t, 1, short_history > 1 ? (size_t)short_history : 1,
+           max_gap_frames > 0 ? max_gap_frames : 0, g);
 }
 
 elfm_status elfm_link_fill(elfm_linker *l, int64_t track_id, const elfm_detection *d, int n,
