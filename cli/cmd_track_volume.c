@@ -69,11 +69,13 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
     c->fin[n++].t = t;
     if (st == ELFM_OK) st = track_fill_end(c, t, err);
   }
+  /* after an error the popped tracks are only freed: no smoothing */
+  const size_t ns = st == ELFM_OK ? n : 0;
   double t0 = cli_now_s();
   const elfm_smooth_options *so = &c->o->smooth;
-  const int nt = n > 1 && c->n_threads > 1 ? c->n_threads : 1;
+  const int nt = ns > 1 && c->n_threads > 1 ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
-  for (size_t i = 0; i < n; i++) c->fin[i].st = elfm_track_smooth(c->fin[i].t, so, &c->fin[i].err);
+  for (size_t i = 0; i < ns; i++) c->fin[i].st = elfm_track_smooth(c->fin[i].t, so, &c->fin[i].err);
   c->t_smooth += cli_now_s() - t0;
   for (size_t i = 0; i < n; i++) {
     struct fin_track *f = &c->fin[i];
