@@ -136,9 +136,12 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
     printf("  along the lateral motion (%lld matched detections moving >= 0.5 um/ms): mean "
            "error %+.3f um\n", (long long)r->n_motion_points, r->motion_along_mean_um);
     if (isfinite(r->motion_lead_um))
-      printf("    = lead %.3f um - delay %.0f us x speed: on recordings like this one, "
-             "track --motion-lead-um %.2f --motion-delay-us %.0f\n", r->motion_lead_um,
-             r->motion_delay_us, r->motion_lead_um, r->motion_delay_us);
+      printf("    lead %.3f um, delay %.0f us (fitted on the %s): on recordings like this "
+             "one, track --motion-lead-um %.2f --motion-delay-us %.0f\n", r->motion_lead_um,
+             r->motion_delay_us,
+             op->so.motion_n_views > 0 ? "views' model of the bias"
+                                      : "lateral speed; --calib fits the views' model",
+             r->motion_lead_um, r->motion_delay_us);
     else
       printf("    (one speed, sd %.2f um/ms: lead and delay not separable; at this speed, "
              "track --motion-lead-um %.2f --motion-delay-us 0)\n",

@@ -49,11 +49,7 @@ int cmd_track(int argc, char **argv)
      * with the lateral model, 0.7515 with the views' (held-out seeds 9-12
      * +0.003 to +0.004 each); the z error of beads moving at 1-2 um/ms in z,
      * -0.3 um x the sign of v_z, falls to -0.13 (docs/tracker.md). */
-    o.smooth.motion_n_views = calib.n_views;
-    for (int k = 0; k < calib.n_views; k++) {
-      o.smooth.motion_view_g[k][0] = calib.views[k].dx_px_per_um * calib.um_per_px;
-      o.smooth.motion_view_g[k][1] = calib.views[k].dy_px_per_um * calib.um_per_px;
-    }
+    elfm_smooth_options_set_views(&o.smooth, &calib);
   }
   if (mkdir(o.out, 0777) != 0 && errno != EEXIST)
     return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));

@@ -112,13 +112,24 @@
  *
  * MOTION BIAS (a calibration for `track --motion-lead-um/--motion-delay-us`,
  * elfm_smooth.h). For every matched detection whose truth moves laterally
- * at >= 0.5 um/ms (truth velocity: central difference of the object's
- * neighbouring frames that count, or one-sided at its ends), the error along
- * the lateral motion e = (detection - truth) . v / |v| is regressed on the
- * lateral speed |v|: e = lead - delay x |v| (least squares). With the
- * speeds' standard deviation below 0.25 um/ms (a stage at one speed) the two
- * cannot be told apart: lead and delay are NaN and only the mean of e is
- * given (pass it as the lead with delay 0 for that speed).
+ * at >= 0.5 um/ms (truth velocity v: central difference of the object's
+ * neighbouring frames that count, or one-sided at its ends), the lateral
+ * error e = (detection - truth)_xy is fitted by least squares as
+ * lead x L(v) - delay x M(v), where lead x L - delay x M is the lateral part
+ * of the bias that elfm_motion_bias gives the smoother for v (linear in
+ * lead and delay): with the views' disparities (motion_n_views > 0, from a
+ * calibration) the views' model, without them the lateral model, where L =
+ * v_xy / max(|v_xy|, 0.5) and M = v_xy, which is the regression of the error
+ * along the motion on the lateral speed. Why the views' model: a bead
+ * moving steeply in z has images moving every way in the views, whose
+ * leads cancel in the lateral fit, and pooling such beads with the others
+ * in the lateral model's regression biased both figures low (flow seeds
+ * 1-8: lead 0.83 um and delay 311 us pooled, against 1.23 / 436 for the
+ * beads with |v_z| < 0.3 |v_xy| alone; docs/tracker.md). motion_along_mean_um
+ * is the mean of e . v / |v|. With the lateral speeds' standard deviation
+ * below 0.25 um/ms (a stage at one speed) lead and delay cannot be told
+ * apart: they are NaN and only that mean is given (pass it as the lead with
+ * delay 0 for that speed).
  *
  * STAGE. With a stage velocity v_s (um/ms), the mean velocity vector v_m is
  * the mean of the vx/vy/vz_um_per_ms columns of tracks.csv over its real rows
@@ -200,6 +211,11 @@ typedef struct elfm_score_options {
    * giving up with ELFM_ERR_RANGE: 10 M by default (~0.5 GB; 20 beads over
    * 500,000 frames). The frame-index span is capped at 5 M frames. */
   int64_t max_truth_points;
+  /* The views' disparities (um of image shift per um of z), set by
+   * elfm_score_options_set_calib: the motion bias is then regressed on the
+   * views' model (MOTION BIAS). 0 views: the lateral model. */
+  int motion_n_views;
+  double motion_view_g[ELFM_MAX_VIEWS][2];
 } elfm_score_options;
 
 /* eps 4, kz 4, no bounds, no stage, no frame-count hint, 10 M truth points. */

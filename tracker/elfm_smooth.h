@@ -116,6 +116,9 @@ typedef struct elfm_smooth_options {
 } elfm_smooth_options;
 
 void elfm_smooth_options_default(elfm_smooth_options *o);
+/* The views' disparities of calibration c into o->motion_view_g (the views'
+ * model of the motion bias above): g_v = (dx, dy)_px_per_um x um_per_px. */
+void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c);
 
 typedef struct elfm_smooth_info {
   elfm_motion_model model;      /* model used */

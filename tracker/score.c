@@ -6,6 +6,8 @@
  */
 #include "score_internal.h"
 
+#include "elfm_smooth.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +29,12 @@ void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c)
   o->y_half_um = 0.5 * (double)(c->view_h_px - 1) * c->um_per_px;
   o->z_min_um = c->z_min_um;
   o->z_max_um = c->z_max_um;
+  /* the views' disparities, as `track` gives them to its smoother */
+  elfm_smooth_options v;
+  elfm_smooth_options_default(&v);
+  elfm_smooth_options_set_views(&v, c);
+  o->motion_n_views = v.motion_n_views;
+  memcpy(o->motion_view_g, v.motion_view_g, sizeof o->motion_view_g);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -83,25 +91,51 @@ static int truth_velocity(const truth_t *tr, const frames_t *fr, int k, int64_t 
   return 1;
 }
 
-/* Least-squares sums of the along-motion error e on the lateral speed s. */
+/* Least-squares sums for the motion bias (elfm_score.h, MOTION BIAS): the
+ * lateral error e against the model's lead and delay terms L and M (2D
+ * dot products), and the along-motion error and speed for their means. */
 typedef struct {
   int64_t n;
-  double s, ss, e, es;
+  double s, ss, e;            /* speed, speed^2, error along the motion */
+  double ll, lm, mm, el, em;  /* L.L, L.M, M.M, e.L, e.M */
 } motion_sums;
 
-static void motion_add(motion_sums *m, const truth_t *tr, const frames_t *fr, const int *obj_of,
-                       int64_t p, double dx, double dy)
+/* L and M of velocity v under the model mb (elfm_motion_bias is linear in
+ * the lead and the delay: L is its bias at lead 1 um and delay 0, M minus
+ * its bias at delay 1 ms and lead 0). */
+static void motion_terms(const elfm_smooth_options *mb, const double v[3], double L[2], double M[2])
 {
-  double v[3];
+  elfm_smooth_options o = *mb;
+  double b[3];
+  o.motion_lead_um = 1.0;
+  o.motion_delay_us = 0.0;
+  elfm_motion_bias(&o, v, b);
+  L[0] = b[0];
+  L[1] = b[1];
+  o.motion_lead_um = 0.0;
+  o.motion_delay_us = 1000.0;
+  elfm_motion_bias(&o, v, b);
+  M[0] = -b[0];
+  M[1] = -b[1];
+}
+
+static void motion_add(motion_sums *m, const elfm_smooth_options *mb, const truth_t *tr,
+                       const frames_t *fr, const int *obj_of, int64_t p, double dx, double dy)
+{
+  double v[3], L[2], M[2];
   if (!truth_velocity(tr, fr, obj_of[p], p, v)) return;
   double sp = hypot(v[0], v[1]);
   if (!(sp >= MOTION_MIN_SPEED_UM_PER_MS)) return;
-  double e = (dx * v[0] + dy * v[1]) / sp;
+  motion_terms(mb, v, L, M);
   m->n++;
   m->s += sp;
   m->ss += sp * sp;
-  m->e += e;
-  m->es += e * sp;
+  m->e += (dx * v[0] + dy * v[1]) / sp;
+  m->ll += L[0] * L[0] + L[1] * L[1];
+  m->lm += L[0] * M[0] + L[1] * M[1];
+  m->mm += M[0] * M[0] + M[1] * M[1];
+  m->el += dx * L[0] + dy * L[1];
+  m->em += dx * M[0] + dy * M[1];
 }
 
 static void motion_finish(const motion_sums *m, elfm_score_result *out)
@@ -110,21 +144,24 @@ static void motion_finish(const motion_sums *m, elfm_score_result *out)
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
   out->motion_speed_sd_um_per_ms = NAN;
   if (m->n == 0) return;
-  double n = (double)m->n, ms = m->s / n, me = m->e / n;
+  double n = (double)m->n, ms = m->s / n;
   double var_s = fmax(m->ss / n - ms * ms, 0.0);
-  out->motion_along_mean_um = me;
+  out->motion_along_mean_um = m->e / n;
   out->motion_speed_sd_um_per_ms = sqrt(var_s);
   if (m->n < 3 || sqrt(var_s) < MOTION_MIN_SPEED_SD_UM_PER_MS) return;
-  double slope = (m->es / n - ms * me) / var_s;   /* um per (um/ms) = ms */
-  out->motion_delay_us = -slope * 1000.0;
-  out->motion_lead_um = me - slope * ms;
+  /* e = lead L - delay_ms M: lead ll - delay lm = el, lead lm - delay mm = em */
+  const double det = m->lm * m->lm - m->ll * m->mm;
+  if (!(fabs(det) > 1e-12 * m->ll * m->mm)) return;
+  out->motion_lead_um = (m->lm * m->em - m->mm * m->el) / det;
+  out->motion_delay_us = 1000.0 * (m->ll * m->em - m->lm * m->el) / det;
 }
 
 /* elfm_score.h, DETECTIONS: per frame, the truth points and detections
  * joined by gated pairs (d < eps) form components, each solved with the
  * Hungarian solver; the counts, ratios and RMSEs go to out. */
 static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const points_t *dp,
-                                    const gate_t *g, elfm_score_result *out, elfm_error *err)
+                                    const gate_t *g, const elfm_smooth_options *mb,
+                                    elfm_score_result *out, elfm_error *err)
 {
   /* Group detections per frame, sorted by x. */
   int64_t *off;
@@ -146,7 +183,8 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   int *r2c = malloc(nn * sizeof *r2c);
   /* each truth point's object (for its velocity) */
   int *obj_of = malloc(((size_t)tr->pt.n + 1) * sizeof *obj_of);
-  motion_sums ms = {0, 0, 0, 0, 0};
+  motion_sums ms;
+  memset(&ms, 0, sizeof ms);
   double *cost = NULL;
   size_t cost_cap = 0;
   elfm_assign_workspace *ws = NULL;
@@ -218,7 +256,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
         sd += dist_aniso(g, dx, dy, dz);
-        motion_add(&ms, tr, fr, obj_of, p, dx, dy);
+        motion_add(&ms, mb, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;
@@ -358,7 +396,12 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
     if (s != ELFM_OK) goto done;
   }
   out->detections_from_tracks = detections ? 0 : 1;
-  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, out, err)) != ELFM_OK) goto done;
+  /* the motion bias's model: the views' when a calibration gave them */
+  elfm_smooth_options mb;
+  elfm_smooth_options_default(&mb);
+  mb.motion_n_views = opt->motion_n_views > 0 && opt->motion_n_views <= ELFM_MAX_VIEWS ? opt->motion_n_views : 0;
+  memcpy(mb.motion_view_g, opt->motion_view_g, sizeof mb.motion_view_g);
+  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mb, out, err)) != ELFM_OK) goto done;
   if (tracks) {
     if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
     if ((s = elfm_score_identities(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;

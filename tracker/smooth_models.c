@@ -16,6 +16,15 @@ static double image_bias_factor(const elfm_smooth_options *o, double wx, double 
          o->motion_delay_us * 1e-3;
 }
 
+void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
+{
+  o->motion_n_views = c->n_views;
+  for (int k = 0; k < c->n_views; k++) {
+    o->motion_view_g[k][0] = c->views[k].dx_px_per_um * c->um_per_px;
+    o->motion_view_g[k][1] = c->views[k].dy_px_per_um * c->um_per_px;
+  }
+}
+
 void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[3])
 {
   b[0] = b[1] = b[2] = 0;
