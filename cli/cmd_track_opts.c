@@ -125,6 +125,13 @@ static void track_defaults(track_opts *o)
    * +0.003; 40/60 beads +0.002; blink, blink_moving the same. Not on the
    * integral (below). */
   o->smooth.spline_order = 3;
+  /* Each point's own view-fit scatter in its sigma (elfm_smooth.h,
+   * fit_sd_power): flow 100 ms seeds 1-20 alpha 0.8043 -> 0.8058 (every
+   * seed up or the same; power 0.5 / 1.5 / 2: 0.8054 / 0.8057 / 0.8051),
+   * held-out seeds 21-24 0.8037 -> 0.8054, stage seeds 1-3 0.769 / 0.837 /
+   * 0.750 -> 0.788 / 0.837 / 0.750 (speed error 0.42 / 0.20 / 0.08 % ->
+   * 0.38 / 0.15 / 0.06 %), blink and blink_moving up or the same. */
+  o->smooth.fit_sd_power = 1;
   /* Gap filling (cmd_track_fill.c): once a track has found its object
    * again and followed it for swap_points frames, the view fit looks for it
    * in each kept frame of the gap, from both ends inwards, starting where
@@ -274,6 +281,9 @@ static void usage(FILE *f)
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
     "                       filling, guided search) count as F x noisier than the\n"
     "                       track's peaks (1.5)\n"
+    "  --fit-sd-power P     each point's sigma also x (its view fit's scatter / the\n"
+    "                       track's median)^P: points whose views agreed less count\n"
+    "                       less (1; integral: 0; 0 = off)\n"
     "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
     "                       their points (default 1/3)\n"
     "  --motion-lead-um A, --motion-delay-us D   each view's image of a moving object\n"
@@ -324,7 +334,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -334,7 +344,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   static const char *const C = "track";
   track_opts o;
   track_defaults(&o);
-  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0;
+  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0, fsdp_given = 0;
   static const struct option lo[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -365,6 +375,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"priority-points", required_argument, 0, O_PRIO},
       {"gcv-gamma", required_argument, 0, O_GCVG},
       {"spline-order", required_argument, 0, O_SPORD},
+      {"fit-sd-power", required_argument, 0, O_FSDP},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
@@ -573,6 +584,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       }
       spord_given = 1;
       break;
+    case O_FSDP:
+      if (!cli_parse_double_in(C, "--fit-sd-power", a, 0, 0, 4, "0..4", &o.smooth.fit_sd_power))
+        return CLI_USAGE;
+      fsdp_given = 1;
+      break;
     case O_RES: o.resolution = 1; break;
     case O_MLEAD:
       if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
@@ -612,6 +628,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * (a constant acceleration costs nothing) lost: worm 200 ms seeds 1-4,
      * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
     o.smooth.spline_order = 2;
+  }
+  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fsdp_given) {
+    /* Worm 200 ms seeds 1-4 with it: alpha 0.830 / 0.785 / 0.754 / 0.826
+     * -> 0.825 / 0.785 / 0.754 / 0.826. */
+    o.smooth.fit_sd_power = 0;
   }
   if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fillv_given) {
     /* Neurons come in pairs 6 um apart on the integral, and 4 views let a

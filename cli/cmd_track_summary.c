@@ -186,6 +186,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "motion_lead_um", o->smooth.motion_lead_um);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);
+  cJSON_AddNumberToObject(par, "fit_sd_power", o->smooth.fit_sd_power);
   cJSON_AddNumberToObject(par, "gcv_gamma", o->smooth.gcv_gamma);
   cJSON_AddNumberToObject(par, "spline_order", o->smooth.spline_order);
   cJSON_AddNumberToObject(par, "spline_weight_ms3", o->smooth.spline_weight_ms3);

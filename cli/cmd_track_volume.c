@@ -215,6 +215,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       det[n].x_um = elfm_volume_x_um(v, r.x_vox);
       det[n].y_um = elfm_volume_y_um(v, r.y_vox);
       det[n].z_um = elfm_volume_z_um(v, r.z_vox);
+      det[n].fit_sd_px = r.rms_px / sqrt((double)r.n_views);
       n++;
       c->sp[slot].loc++;
     }
@@ -270,6 +271,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     d.x_um = elfm_volume_x_um(v, r.x_vox);
     d.y_um = elfm_volume_y_um(v, r.y_vox);
     d.z_um = elfm_volume_z_um(v, r.z_vox);
+    d.fit_sd_px = r.rms_px / sqrt((double)r.n_views);
     if (!any_near(&d, 1, q, g, kz)) continue;
     d.intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
     if (d.intensity < o->guided_min_ratio * c->pred_intensity[k]) continue;

@@ -542,6 +542,61 @@ int main(void)
     for (int c = 0; c < 2; c++) elfm_track_free(tv[c]);
   }
 
+  /* 11c. Each point's own view-fit scatter (elfm_detection.fit_sd_px,
+   * fit_sd_power). The same circle; every point's noise is 0.1 um x its
+   * fit_sd_px, which runs from 0.5 to 4 (a point whose views agreed less
+   * lies further off). With power 1 the smoothed track is nearer the truth
+   * than with all points alike (RMSE per axis 0.096 against 0.128 um);
+   * points without a scatter (0) keep factor 1,
+   * so a track with none is smoothed as before; a power out of [0, 4] is an
+   * error. */
+  {
+    const double R = 12;
+    double truth[3 * 90];
+    elfm_track *tw[2];
+    for (int c = 0; c < 2; c++) {
+      tw[c] = elfm_track_create(20 + c, &err);
+      rng = 0x1234567ULL;
+      for (int f = 0; f < 90; f++) {
+        double th = 2.0 * f / R;
+        truth[3 * f] = R * cos(th);
+        truth[3 * f + 1] = R * sin(th);
+        truth[3 * f + 2] = 30;
+        elfm_detection d;
+        memset(&d, 0, sizeof d);
+        d.frame = f;
+        d.t_us = T0 + 1000 * f;
+        d.fit_sd_px = 0.5 + 3.5 * urand();
+        const double sd = 0.1 * d.fit_sd_px;
+        d.x_um = truth[3 * f] + sd * gauss();
+        d.y_um = truth[3 * f + 1] + sd * gauss();
+        d.z_um = truth[3 * f + 2] + 4 * sd * gauss();
+        CHECK_OK(elfm_track_append(tw[c], &d, &err), &err);
+      }
+    }
+    elfm_smooth_options p0 = o, p1 = o;
+    p0.fit_sd_power = 0;
+    p1.fit_sd_power = 1;
+    CHECK_OK(elfm_track_smooth(tw[0], &p0, &err), &err);
+    CHECK_OK(elfm_track_smooth(tw[1], &p1, &err), &err);
+    double e0 = rmse_xy(tw[0]->pos_um, truth, 90), e1 = rmse_xy(tw[1]->pos_um, truth, 90);
+    printf("11c: scatter-weighted %.4f um, alike %.4f um\n", e1, e0);
+    CHECK_MSG(e1 < 0.85 * e0, "weighted by scatter %.4f um, alike %.4f um", e1, e0);
+    /* no scatter on any point: the same as off */
+    for (int f = 0; f < 90; f++) tw[0]->pts[f].fit_sd_px = tw[1]->pts[f].fit_sd_px = 0;
+    CHECK_OK(elfm_track_smooth(tw[0], &p0, &err), &err);
+    CHECK_OK(elfm_track_smooth(tw[1], &p1, &err), &err);
+    int same = 1;
+    for (int i = 0; i < 3 * 90; i++) same &= tw[0]->pos_um[i] == tw[1]->pos_um[i];
+    CHECK(same);
+    p1.fit_sd_power = 5;
+    CHECK_EQ_INT(elfm_track_smooth(tw[1], &p1, &err), ELFM_ERR_INVALID);
+    CHECK(strstr(err.message, "fit_sd_power") != NULL);
+    p1.fit_sd_power = NAN;
+    CHECK_EQ_INT(elfm_track_smooth(tw[1], &p1, &err), ELFM_ERR_INVALID);
+    for (int c = 0; c < 2; c++) elfm_track_free(tw[c]);
+  }
+
   /* 12. Motion bias (elfm_smooth_options.motion_lead_um / motion_delay_us):
    * a bead on a circle of 12 um whose speed rises from 1 to 4 um/ms,
    * detected lead - delay x speed along its motion (0.8 um and 300 us, the

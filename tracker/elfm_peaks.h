@@ -43,6 +43,8 @@ typedef struct elfm_detection {
                                 the guided search, gap filling); its sigmas are 0.
                                 0: a peak above the threshold (placed by the peak fit
                                 or, with `track --localize views`, the view fit) */
+  double fit_sd_px;          /* the view fit's scatter: the views' residual RMS over
+                                sqrt(views agreeing), px; 0 when not placed by it */
 } elfm_detection;
 
 typedef enum elfm_refine_mode {

@@ -88,6 +88,17 @@ typedef struct elfm_smooth_options {
    * track's estimated noise, which its peaks keep (1.5; 1 = all points
    * alike). */
   double view_fit_sigma_factor;
+  /* elfm_track_smooth only: each point's sigma is also scaled by (its
+   * fit_sd_px / the median over the track's points that have one)^power,
+   * within [0.5, 3] (a guard: a fit of a few views can have a residual of
+   * ~0), so that the points whose views agreed less count less. fit_sd_px is
+   * the view fit's residual RMS over sqrt(views agreeing) (elfm_detection);
+   * points without one, and tracks with fewer than 3 such points, keep
+   * factor 1. Why: on flow, within |z| 30-60 um, the raw points' RMSE by
+   * quartile of fit_sd_px is 0.44 / 0.54 / 0.63 / 0.80 um laterally and 0.62
+   * / 0.83 / 0.99 / 1.55 um in z (seeds 1-4). 0 = off (default; track: 1,
+   * 0 with --repr integral; docs/tracker.md "Smoother"). */
+  double fit_sd_power;
   /* Motion bias of the detections, corrected by elfm_track_smooth only
    * (0 and 0 = off, the default). A detection made from ON events lies
    * ahead of the object by a distance (the ON events crowd on its leading

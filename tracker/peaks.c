@@ -318,6 +318,7 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   det->weak = weak;
   det->view_fit = 0;
   det->deep_only = 0;
+  det->fit_sd_px = 0;
   det->frame = v->frame;
   det->t_us = v->t_us;
   det->x_um = elfm_volume_x_um(v, x + ox);

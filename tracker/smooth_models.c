@@ -57,6 +57,24 @@ void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[
   b[1] = (sb[1] - b[2] * sg[1]) / n;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The median fit_sd_px over t's points that have one (> 0); 0 when fewer
+ * than 3 have. scratch: n doubles. */
+static double fit_sd_median(const elfm_track *t, double *scratch)
+{
+  size_t m = 0;
+  for (size_t i = 0; i < t->n; i++)
+    if (t->pts[i].fit_sd_px > 0 && isfinite(t->pts[i].fit_sd_px)) scratch[m++] = t->pts[i].fit_sd_px;
+  if (m < 3) return 0;
+  qsort(scratch, m, sizeof *scratch, cmp_double);
+  return m % 2 ? scratch[m / 2] : 0.5 * (scratch[m / 2 - 1] + scratch[m / 2]);
+}
+
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err)
 {
   if (!t || !o || t->n == 0)
@@ -65,6 +83,9 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: motion bias out of range (lead %g um, delay %g us; "
                           "at most 100 um and 1 s)", o->motion_lead_um, o->motion_delay_us);
+  if (!(o->fit_sd_power >= 0 && o->fit_sd_power <= 4))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "smooth: fit_sd_power %g is not in [0, 4]", o->fit_sd_power);
   if (o->motion_n_views < 0 || o->motion_n_views > ELFM_MAX_VIEWS)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "smooth: %d views for the motion bias",
                           o->motion_n_views);
@@ -116,7 +137,16 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
    * "Smoother"). */
   size_t n_view_fit = 0;
   for (size_t i = 0; i < n; i++) n_view_fit += t->pts[i].view_fit != 0;
-  if (n_view_fit > 0 && o->view_fit_sigma_factor != 1.0) {
+  /* and each point by its own view fit's scatter (fit_sd_power) */
+  double sd_med = 0;
+  if (o->fit_sd_power > 0) {
+    if (!(sig = malloc(3 * n * sizeof *sig))) {
+      st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "smooth: out of memory");
+      goto fail;
+    }
+    sd_med = fit_sd_median(t, sig);
+  }
+  if ((n_view_fit > 0 && o->view_fit_sigma_factor != 1.0) || sd_med > 0) {
     if (!(o->view_fit_sigma_factor > 0) || !(o->view_fit_sigma_factor <= 1e3)) {
       st = elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: view-fit sigma factor %g is not in (0, 1000]",
@@ -125,13 +155,19 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     }
     double s0[3];
     if ((st = elfm_smooth_estimate_noise(o, n, td, xyz, s0, err)) != ELFM_OK) goto fail;
-    if (!(sig = malloc(3 * n * sizeof *sig))) {
+    if (!sig && !(sig = malloc(3 * n * sizeof *sig))) {
       st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "smooth: out of memory");
       goto fail;
     }
-    for (size_t i = 0; i < n; i++)
-      for (int a = 0; a < 3; a++)
-        sig[3 * i + a] = s0[a] * (t->pts[i].view_fit ? o->view_fit_sigma_factor : 1.0);
+    for (size_t i = 0; i < n; i++) {
+      const double q = t->pts[i].fit_sd_px;
+      double f = t->pts[i].view_fit ? o->view_fit_sigma_factor : 1.0;
+      if (sd_med > 0 && q > 0 && isfinite(q)) f *= fmin(fmax(pow(q / sd_med, o->fit_sd_power), 0.5), 3.0);
+      for (int a = 0; a < 3; a++) sig[3 * i + a] = s0[a] * f;
+    }
+  } else {
+    free(sig); /* nothing to scale: the fit estimates the noise itself */
+    sig = NULL;
   }
   elfm_smooth_info info;
   st = elfm_smooth_fit(o, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
