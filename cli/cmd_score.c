@@ -25,7 +25,8 @@ static void score_usage(FILE *f)
           "usage: eventlfm score --truth truth.csv (--tracks tracks.csv | --detections detections.csv)\n"
           "                      [--tracks tracks.csv] [--detections detections.csv]\n"
           "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
-          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--window-us W|run] [--json]\n"
+          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--window-us W|run]\n"
+          "                      [--motion-fade-um-per-ms F] [--json]\n"
           "\n"
           "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
           "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
@@ -39,6 +40,11 @@ static void score_usage(FILE *f)
           "              object's track (what the linking costs), and the shares of truth\n"
           "              points in fragments and in other objects' tracks\n"
           "  stage:      relative error of the mean velocity against --stage-velocity-um-per-ms\n"
+          "  motion:     the detections' lead and delay along the motion, for track's\n"
+          "              --motion-lead-um / --motion-delay-us (with --calib: fitted on the\n"
+          "              views' model of that bias, as track's smoother corrects it)\n"
+          "--motion-fade-um-per-ms F: the motion's fade speed, as track's (0.5; 0.05 for\n"
+          "slow samples with --repr integral); slower points are left out.\n"
           "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
           "before the first or after the last row of the files count too.\n"
           "--window-us W: a frame stands for the events of (t_us - W, t_us]; an object counts\n"
@@ -133,8 +139,9 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
   printf("  alpha if linked perfectly %8.4f (each matched detection on its own object's "
          "track)\n", r->alpha_detections);
   if (r->n_motion_points > 0) {
-    printf("  along the lateral motion (%lld matched detections moving >= 0.5 um/ms): mean "
-           "error %+.3f um\n", (long long)r->n_motion_points, r->motion_along_mean_um);
+    printf("  along the lateral motion (%lld matched detections moving >= %g um/ms): mean "
+           "error %+.3f um\n", (long long)r->n_motion_points, op->so.motion_lead_fade_um_per_ms,
+           r->motion_along_mean_um);
     if (isfinite(r->motion_lead_um))
       printf("    lead %.3f um, delay %.0f us (fitted on the %s): on recordings like this "
              "one, track --motion-lead-um %.2f --motion-delay-us %.0f\n", r->motion_lead_um,
@@ -200,7 +207,7 @@ static int window_from_summary(struct score_opts *op)
 int cmd_score(int argc, char **argv)
 {
   enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
-         OPT_NFRAMES, OPT_WINDOW };
+         OPT_NFRAMES, OPT_WINDOW, OPT_FADE };
   static const struct option longopts[] = {
       {"truth", required_argument, NULL, OPT_TRUTH},
       {"tracks", required_argument, NULL, OPT_TRACKS},
@@ -212,6 +219,7 @@ int cmd_score(int argc, char **argv)
       {"json", no_argument, NULL, OPT_JSON},
       {"n-frames", required_argument, NULL, OPT_NFRAMES},
       {"window-us", required_argument, NULL, OPT_WINDOW},
+      {"motion-fade-um-per-ms", required_argument, NULL, OPT_FADE},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
   struct score_opts op;
@@ -233,6 +241,11 @@ int cmd_score(int argc, char **argv)
                            "--stage-velocity-um-per-ms expects vx,vy,vz (three numbers), got '%s'",
                            optarg);
       op.so.have_stage = 1;
+      break;
+    case OPT_FADE:
+      if (!cli_parse_double_in("score", "--motion-fade-um-per-ms", optarg, 0, 1, 100, "> 0 and <= 100",
+                               &op.so.motion_lead_fade_um_per_ms))
+        return CLI_USAGE;
       break;
     case OPT_EPS:
       if (!cli_parse_double("score", "--eps-um", optarg, &op.so.eps_um)) return CLI_USAGE;

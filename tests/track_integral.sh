@@ -4,12 +4,16 @@
 # run ahead of them, so the ON time surface (the default) places each
 # neuron 1.5-1.7 um along its motion; the integral of ON minus OFF events
 # shows each neuron where it is. Checked: lateral RMSE (x and y) at most
-# 0.6x the time surface's (measured 1.53 / 1.72 -> 0.38 / 0.42 um) and
-# ISBI alpha at least 0.15 higher (0.23 -> 0.65); with --polarity on the
+# 0.6x the time surface's (measured 1.41 / 1.65 -> 0.44 / 0.54 um) and
+# ISBI alpha at least 0.15 higher (0.35 -> 0.71); with --polarity on the
 # integral is an error naming the polarity, a bad --off-weight a usage
 # error; summary.json records the integral's defaults; the time-surface run
 # measures the slow motion (median track speed) and notes the integral;
-# `eventlfm recon --repr integral` runs with the same defaults.
+# `eventlfm recon --repr integral` runs with the same defaults. The
+# integral's motion bias (lead 0.2 um, fade 0.05 um/ms): score measures the
+# uncorrected detections' lead along the motion (0.1-0.35 um; seeds 1-4:
+# 0.17-0.26) and the default's alpha is at least 0.003 above no correction;
+# a fade speed of 0 is a usage error of track and of score.
 # Usage: track_integral.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -65,6 +69,21 @@ grep -q "note: the tracks move slowly.*--repr integral" "$tmp/exp2.err" || { ech
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/int2" --dt-us 2000 \
   --repr integral 2>"$tmp/int2.err" >/dev/null
 grep -q "note: the tracks move slowly" "$tmp/int2.err" && { echo "FAIL: the note with --repr integral on"; fail=$((fail+1)); }
+for cmd in track score; do
+  "$bin" $cmd --motion-fade-um-per-ms 0 >/dev/null 2>"$tmp/err"
+  [ $? -eq 2 ] && grep -q -- "--motion-fade-um-per-ms" "$tmp/err" ||
+    { echo "FAIL: $cmd --motion-fade-um-per-ms 0 not a usage error"; fail=$((fail+1)); }
+done
+for kv in '"motion_lead_um":[[:space:]]*0.2,' '"motion_lead_fade_um_per_ms":[[:space:]]*0.05'; do
+  grep -q "$kv" "$tmp/int/summary.json" || { echo "FAIL: summary.json lacks $kv"; fail=$((fail+1)); }
+done
+score_args="--motion-fade-um-per-ms 0.05" run intoff --repr integral --motion-lead-um 0 --motion-delay-us 0
+m=$(key "$tmp/intoff.json" motion_along_mean_um)
+echo "worm: the integral's detections lie $m um ahead along the motion"
+awk -v m="$m" 'BEGIN { exit !(m >= 0.1 && m <= 0.35) }' || { echo "FAIL: lead $m"; fail=$((fail+1)); }
+expect_gain "$(key "$tmp/intoff.json" alpha)" "$(key "$tmp/int.json" alpha)" 0.003 \
+  "the integral's lead: alpha $(key "$tmp/intoff.json" alpha) -> $(key "$tmp/int.json" alpha) (gain < 0.003)"
+echo "worm: integral alpha without / with the lead $(key "$tmp/intoff.json" alpha) / $(key "$tmp/int.json" alpha)"
 e=$(key "$tmp/exp.json" alpha); i=$(key "$tmp/int.json" alpha)
 echo "worm: alpha time surface $e, integral $i"
 awk -v e="$e" -v i="$i" 'BEGIN { exit !(i >= e + 0.15) }' || { echo "FAIL: alpha $e -> $i"; fail=$((fail+1)); }

@@ -112,12 +112,12 @@
  *
  * MOTION BIAS (a calibration for `track --motion-lead-um/--motion-delay-us`,
  * elfm_smooth.h). For every matched detection whose truth moves laterally
- * at >= 0.5 um/ms (truth velocity v: central difference of the object's
+ * at >= motion_lead_fade_um_per_ms (0.5 um/ms by default; truth velocity v: central difference of the object's
  * neighbouring frames that count, or one-sided at its ends), the lateral
  * error e = (detection - truth)_xy is fitted by least squares as
  * lead x L(v) - delay x M(v), where lead x L - delay x M is the lateral part
  * of the bias that elfm_motion_bias gives the smoother for v (linear in
- * lead and delay): with the views' disparities (motion_n_views > 0, from a
+ * lead and delay; the same fade speed): with the views' disparities (motion_n_views > 0, from a
  * calibration) the views' model, without them the lateral model, where L =
  * v_xy / max(|v_xy|, 0.5) and M = v_xy, which is the regression of the error
  * along the motion on the lateral speed. Why the views' model: a bead
@@ -216,6 +216,10 @@ typedef struct elfm_score_options {
    * views' model (MOTION BIAS). 0 views: the lateral model. */
   int motion_n_views;
   double motion_view_g[ELFM_MAX_VIEWS][2];
+  /* The model's fade speed (elfm_smooth.h motion_lead_fade_um_per_ms) and
+   * the lateral speed below which a point is left out of the regression:
+   * 0.5 um/ms by default; lower for slow samples (worm neurons: 0.05). */
+  double motion_lead_fade_um_per_ms;
 } elfm_score_options;
 
 /* eps 4, kz 4, no bounds, no stage, no frame-count hint, 10 M truth points. */

@@ -122,6 +122,11 @@ typedef struct elfm_smooth_options {
    * weight. The track's points (pts) keep the detections as measured. */
   double motion_lead_um;
   double motion_delay_us;
+  /* Below this image speed (um/ms) the lead fades out in proportion (the
+   * direction of motion is noise there): 0.5 by default; slow samples
+   * whose smoothed velocity still has a direction lower it (`track --repr
+   * integral`: 0.05, worm neurons at 0.05-0.3 um/ms). */
+  double motion_lead_fade_um_per_ms;
   int motion_n_views;                       /* 0: lateral model only */
   double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
 } elfm_smooth_options;

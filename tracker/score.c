@@ -19,6 +19,7 @@ void elfm_score_options_default(elfm_score_options *o)
   o->kz = 4.0;     /* SPEC §7 */
   o->n_frames_hint = 0;
   o->max_truth_points = 10000000; /* elfm_score.h */
+  o->motion_lead_fade_um_per_ms = 0.5; /* the smoother's default */
 }
 
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c)
@@ -65,10 +66,6 @@ elfm_status elfm_score_reserve_cost(double **cost, size_t *cap, size_t need, elf
 /* ---------------------------------------------------------------------- */
 /* (3) Detections per frame */
 
-/* Below this lateral speed the direction of motion is too uncertain for an
- * error "along" it (elfm_score.h, MOTION BIAS; the same fade speed as the
- * smoother's correction). */
-#define MOTION_MIN_SPEED_UM_PER_MS 0.5
 /* Speeds must spread at least this much to tell a lead from a delay. */
 #define MOTION_MIN_SPEED_SD_UM_PER_MS 0.25
 
@@ -125,7 +122,9 @@ static void motion_add(motion_sums *m, const elfm_smooth_options *mb, const trut
   double v[3], L[2], M[2];
   if (!truth_velocity(tr, fr, obj_of[p], p, v)) return;
   double sp = hypot(v[0], v[1]);
-  if (!(sp >= MOTION_MIN_SPEED_UM_PER_MS)) return;
+  /* below the fade speed the direction of motion is too uncertain for an
+   * error "along" it (elfm_score.h, MOTION BIAS) */
+  if (!(sp >= mb->motion_lead_fade_um_per_ms)) return;
   motion_terms(mb, v, L, M);
   m->n++;
   m->s += sp;
@@ -365,6 +364,10 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
                           "scoring needs truth and tracks or detections");
   if (opt->max_truth_points < 1)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "max_truth_points must be >= 1");
+  if (!(opt->motion_lead_fade_um_per_ms > 0 && opt->motion_lead_fade_um_per_ms <= 100))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "motion fade speed %g um/ms must be in (0, 100]",
+                          opt->motion_lead_fade_um_per_ms);
   if (!(opt->eps_um > 0) || !(opt->kz > 0) || !isfinite(opt->eps_um) || !isfinite(opt->kz))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "gate eps %g um and kz %g must be positive", opt->eps_um, opt->kz);
@@ -401,6 +404,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   elfm_smooth_options_default(&mb);
   mb.motion_n_views = opt->motion_n_views > 0 && opt->motion_n_views <= ELFM_MAX_VIEWS ? opt->motion_n_views : 0;
   memcpy(mb.motion_view_g, opt->motion_view_g, sizeof mb.motion_view_g);
+  mb.motion_lead_fade_um_per_ms = opt->motion_lead_fade_um_per_ms;
   if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mb, out, err)) != ELFM_OK) goto done;
   if (tracks) {
     if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;

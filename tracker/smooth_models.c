@@ -5,14 +5,10 @@
 #include <math.h>
 #include <stdlib.h>
 
-/* Below this lateral speed the motion's direction is mostly noise, so the
- * lead (a distance along that direction) fades out in proportion. */
-#define MOTION_LEAD_FADE_UM_PER_MS 0.5
-
 /* b(w) of one image moving at (wx, wy) um/ms (elfm_smooth.h). */
 static double image_bias_factor(const elfm_smooth_options *o, double wx, double wy)
 {
-  return o->motion_lead_um / fmax(hypot(wx, wy), MOTION_LEAD_FADE_UM_PER_MS) -
+  return o->motion_lead_um / fmax(hypot(wx, wy), o->motion_lead_fade_um_per_ms) -
          o->motion_delay_us * 1e-3;
 }
 
@@ -83,6 +79,10 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: motion bias out of range (lead %g um, delay %g us; "
                           "at most 100 um and 1 s)", o->motion_lead_um, o->motion_delay_us);
+  if (!(o->motion_lead_fade_um_per_ms > 0 && o->motion_lead_fade_um_per_ms <= 100))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "smooth: motion lead fade speed %g um/ms is not in (0, 100]",
+                          o->motion_lead_fade_um_per_ms);
   if (!(o->fit_sd_power >= 0 && o->fit_sd_power <= 4))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: fit_sd_power %g is not in [0, 4]", o->fit_sd_power);
