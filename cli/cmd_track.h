@@ -46,8 +46,17 @@ typedef struct track_opts {
   int fill_frames;     /* where the one-frame fit fails, fit this many frames centred on
                           the gap's frame (odd, 1..TRACK_FILL_MAX_FRAMES; 1 = off) */
   int fill_ends;       /* follow a finished track on past its last point the same way */
+  int motion_lead_auto; /* 1: the lead from the in-focus peaks' widths (track_motion_lead_um) */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
+/* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
+ * within TRACK_WIDTH_FOCUS_UM of focus, binned up to 10 um; at least
+ * TRACK_WIDTH_MIN_PEAKS of them, else the fixed default. */
+#define TRACK_WIDTH_BIN_UM 0.01
+#define TRACK_WIDTH_BINS 1000
+#define TRACK_WIDTH_FOCUS_UM 20.0
+#define TRACK_WIDTH_MIN_PEAKS 50
+#define TRACK_LEAD_PER_WIDTH 1.52
 
 /* The options (cmd_track_opts.c): track's defaults, then argv. CLI_OK: run
  * with *o; TRACK_PARSE_HELP: --help was printed (exit 0); otherwise the
@@ -138,6 +147,11 @@ typedef struct track_ctx {
   int64_t n_filled_end;  /* of n_filled, after a finished track's end */
   int64_t n_filled_multi, n_multi_refused; /* fills of the multi-frame fit; ones the
                                               neighbourhood test refused */
+  /* the in-focus peaks' widths (elfm_detection.width_um), in bins of
+   * TRACK_WIDTH_BIN_UM, for the lead (motion_lead_auto) */
+  int64_t width_hist[TRACK_WIDTH_BINS];
+  int64_t n_width;
+  double lead_used_um;   /* the lead of the last tracks smoothed */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -179,6 +193,12 @@ void track_ctx_free(track_ctx *c);
  * NULL. */
 elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
                                 const char *path, const elfm_error *input_err, elfm_error *err);
+/* Count peak d's width into c's histogram when it is a strong in-focus peak
+ * (not weak, not a view-fit point, |z| < TRACK_WIDTH_FOCUS_UM). */
+void track_width_add(track_ctx *c, const elfm_detection *d);
+/* The lead to smooth with: with motion_lead_auto and enough widths,
+ * TRACK_LEAD_PER_WIDTH x their median; else the options' lead. */
+double track_motion_lead_um(const track_ctx *c);
 /* The median over the store's smoothed tracks of each track's mean lateral
  * speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */
 double track_median_speed_um_per_ms(const elfm_track_store *s);

@@ -291,11 +291,12 @@ static void usage(FILE *f)
     "                       where it was D us before the frame: the smoother moves the\n"
     "                       points back by the bias that gives the view fit (laterally\n"
     "                       A - D x speed along the motion) and fits again. ON time\n"
-    "                       surface with the view fit: A 1.25, D the weighted events'\n"
-    "                       mean age + 150 us (431 us at tau 1 ms), measured on dim\n"
-    "                       beads; integral: A 0.2, D 0 (worm neurons); else 0, 0 =\n"
-    "                       off. Brighter objects lead further: eventlfm score\n"
-    "                       --calib measures A and D on a simulated scene\n"
+    "                       surface with the view fit: A 1.52 x the median width of\n"
+    "                       the in-focus peaks (brighter beads lead further; 1.25\n"
+    "                       until 50 peaks), D the weighted events' mean age + 150 us\n"
+    "                       (431 us at tau 1 ms); integral: A 0.2, D 0 (worm\n"
+    "                       neurons); else 0, 0 = off. eventlfm score --calib\n"
+    "                       measures A and D on a simulated scene\n"
     "  --motion-fade-um-per-ms F  below this speed the lead fades out (the direction\n"
     "                       of motion is noise): 0.5; integral 0.05\n"
     "analysis:\n"
@@ -761,6 +762,14 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     const double age_us = 1.0 / k - w * exp(-k * w) / (1.0 - exp(-k * w));
     o.smooth.motion_lead_um = 1.25;
     o.smooth.motion_delay_us = age_us + 150.0;
+    /* Brighter beads lead further, and their in-focus peaks are wider
+     * (the arc of ON events reaches further out): flow 100 ms at 0.5 / 1 /
+     * 2 / 4 x the beads' flux, lead (score --calib) against the median
+     * width of the peaks within 20 um of focus (elfm_detection.width_um),
+     * 14 recordings: lead = 1.52 x width, RMS 0.067 um without the dimmest
+     * (an affine fit's intercept is 0.03 um). So the lead follows the
+     * recording's peaks (track_motion_lead_um); 1.25 um until 50 peaks. */
+    o.motion_lead_auto = 1;
   } else if (!mbias_given && !o.lag_correct && o.localize_views &&
              o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
     /* The integral places a crawling neuron ahead of itself too, by a

@@ -183,7 +183,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
   cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
   cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
-  cJSON_AddNumberToObject(par, "motion_lead_um", o->smooth.motion_lead_um);
+  cJSON_AddNumberToObject(par, "motion_lead_um", o->motion_lead_auto && c->lead_used_um > 0
+                                                     ? c->lead_used_um : o->smooth.motion_lead_um);
+  cJSON_AddBoolToObject(par, "motion_lead_auto", o->motion_lead_auto);
+  cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);

@@ -44,6 +44,23 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elf
   return elfm_track_store_add(&c->store, t, err);
 }
 
+void track_width_add(track_ctx *c, const elfm_detection *d)
+{
+  if (d->weak || d->view_fit || !(d->width_um > 0) || !(fabs(d->z_um) < TRACK_WIDTH_FOCUS_UM)) return;
+  long b = lround(d->width_um / TRACK_WIDTH_BIN_UM);
+  c->width_hist[b < TRACK_WIDTH_BINS ? b : TRACK_WIDTH_BINS - 1]++;
+  c->n_width++;
+}
+
+double track_motion_lead_um(const track_ctx *c)
+{
+  if (!c->o->motion_lead_auto || c->n_width < TRACK_WIDTH_MIN_PEAKS) return c->o->smooth.motion_lead_um;
+  int64_t half = (c->n_width + 1) / 2, acc = 0;
+  int b = 0;
+  while (b < TRACK_WIDTH_BINS - 1 && (acc += c->width_hist[b]) < half) b++;
+  return TRACK_LEAD_PER_WIDTH * b * TRACK_WIDTH_BIN_UM;
+}
+
 /* Smooth, filter and write the tracks the linker has finished. Each track
  * is its own single-threaded Ceres problem, so when several finish at once
  * (most of them at the end of the recording) they are smoothed in parallel;
@@ -72,7 +89,9 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
   /* after an error the popped tracks are only freed: no smoothing */
   const size_t ns = st == ELFM_OK ? n : 0;
   double t0 = cli_now_s();
-  const elfm_smooth_options *so = &c->o->smooth;
+  elfm_smooth_options so_run = c->o->smooth;
+  if (ns > 0) so_run.motion_lead_um = c->lead_used_um = track_motion_lead_um(c);
+  const elfm_smooth_options *so = &so_run;
   const int nt = ns > 1 && c->n_threads > 1 ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
   for (size_t i = 0; i < ns; i++) c->fin[i].st = elfm_track_smooth(c->fin[i].t, so, &c->fin[i].err);
@@ -343,6 +362,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
+    track_width_add(c, &det[j]);
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;

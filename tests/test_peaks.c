@@ -432,6 +432,55 @@ int main(void)
   CHECK(lg >= 0 && lg < 50);
   CHECK(elfm_peaks_trail_lag_um(NAN, 1.0) == 0);
 
+  /* The peak's width along its widest lateral axis (elfm_detection.width_um):
+   * an elongated blob (sigma 3 um along its long axis, 1.5 um across) at
+   * 0 / 30 / 60 / 90 degrees reads the same width whatever the angle (the
+   * per-axis fits do not: at 0 degrees sigma_x is the long axis, at 90 the
+   * short one), and a round blob of sigma 2 um reads 2/3 of it (the width is
+   * a second moment over the values above half the peak: proportional to
+   * sigma). A view-fit point has none. */
+  {
+    double w_deg[4], sx_deg[4];
+    const double ang[4] = {0, 30, 60, 90};
+    elfm_peaks_options ow;
+    elfm_peaks_options_default(&ow);
+    ow.absolute = 10;
+    for (int r = 0; r < 5; r++) {
+      elfm_volume *vw = elfm_volume_create(48, 48, 11, 0.926, -10, 2, &err);
+      CHECK(vw != NULL);
+      if (!vw) break;
+      const double th = r < 4 ? ang[r] * 3.14159265358979 / 180 : 0;
+      const double sa = r < 4 ? 3.0 : 2.0, sb = r < 4 ? 1.5 : 2.0;
+      for (int k = 0; k < vw->nz; k++)
+        for (int j = 0; j < vw->h; j++)
+          for (int i = 0; i < vw->w; i++) {
+            double dx = elfm_volume_x_um(vw, i) - 0.2, dy = elfm_volume_y_um(vw, j) + 0.3,
+                   dz = elfm_volume_z_um(vw, k);
+            double a = dx * cos(th) + dy * sin(th), b = -dx * sin(th) + dy * cos(th);
+            double e = a * a / (2 * sa * sa) + b * b / (2 * sb * sb) + dz * dz / (2 * 64.0);
+            vw->data[((size_t)k * vw->h + j) * vw->w + i] = (float)(200 * exp(-e));
+          }
+      elfm_peaks *pw = elfm_peaks_create(&ow, vw->w, vw->h, vw->nz, &err);
+      elfm_detection dw[4];
+      int nw = 0;
+      CHECK_OK(elfm_peaks_detect(pw, vw, dw, 4, &nw, &err), &err);
+      CHECK_EQ_INT(nw, 1);
+      if (nw >= 1 && r < 4) {
+        w_deg[r] = dw[0].width_um;
+        sx_deg[r] = dw[0].sigma_x_um;
+      }
+      if (nw >= 1 && r == 4) {
+        fprintf(stderr, "width: elongated %.3f %.3f %.3f %.3f um, round %.3f um\n", w_deg[0],
+                w_deg[1], w_deg[2], w_deg[3], dw[0].width_um);
+        for (int q = 0; q < 4; q++) CHECK_NEAR(w_deg[q] / w_deg[0], 1.0, 0.03);
+        CHECK_NEAR(dw[0].width_um / w_deg[0], 2.0 / 3.0, 0.03);
+        CHECK(sx_deg[0] > 1.5 * sx_deg[3]);
+      }
+      elfm_peaks_free(pw);
+      elfm_volume_free(vw);
+    }
+  }
+
   elfm_peaks_free(pk);
   elfm_volume_free(v);
   return check_report();

@@ -45,6 +45,10 @@ typedef struct elfm_detection {
                                 or, with `track --localize views`, the view fit) */
   double fit_sd_px;          /* the view fit's scatter: the views' residual RMS over
                                 sqrt(views agreeing), px; 0 when not placed by it */
+  double width_um;           /* the peak's lateral width along its widest axis: the
+                                second moment, in the peak's plane, of the values
+                                above half the peak's (a window of +-6 voxels); 0
+                                when not measured (view-fit points) */
 } elfm_detection;
 
 typedef enum elfm_refine_mode {

@@ -304,6 +304,43 @@ static void scan_rows(const float *restrict d, int w, size_t nrows, int32_t *res
   *nonzero_out = nonzero;
 }
 
+/* The blob's lateral width along its widest axis at voxel (x, y, z) of v
+ * (elfm_detection.width_um), in voxels: the larger eigenvalue's square root
+ * of the second moments, in the peak's plane, of the values above half the
+ * peak's, within +-WIDTH_HALF_VOX. Why the widest axis and not the per-axis
+ * fits: a moving bead's events form an arc across its motion, and the arc's
+ * length (how far the image's tail reaches above the sensor's threshold:
+ * the beads' brightness) shows on the x or y fit only when the motion lies
+ * along the other axis (docs/tracker.md "Motion bias"). */
+#define WIDTH_HALF_VOX 6
+static double blob_width_vox(const elfm_volume *v, int x, int y, int z, double f0)
+{
+  const float *pl = v->data + (size_t)z * v->h * v->w;
+  double m = 0, mx = 0, my = 0, mxx = 0, myy = 0, mxy = 0;
+  for (int yy = y - WIDTH_HALF_VOX; yy <= y + WIDTH_HALF_VOX; yy++) {
+    if (yy < 0 || yy >= v->h) continue;
+    for (int xx = x - WIDTH_HALF_VOX; xx <= x + WIDTH_HALF_VOX; xx++) {
+      if (xx < 0 || xx >= v->w) continue;
+      const double f = pl[(size_t)yy * v->w + xx] - 0.5 * f0;
+      if (!(f > 0)) continue;
+      const double dx = xx - x, dy = yy - y;
+      m += f;
+      mx += f * dx;
+      my += f * dy;
+      mxx += f * dx * dx;
+      myy += f * dy * dy;
+      mxy += f * dx * dy;
+    }
+  }
+  if (!(m > 0)) return 0;
+  mx /= m;
+  my /= m;
+  const double cxx = mxx / m - mx * mx, cyy = myy / m - my * my, cxy = mxy / m - mx * my;
+  const double half_tr = 0.5 * (cxx + cyy);
+  const double r = sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
+  return sqrt(fmax(half_tr + r, 0.0));
+}
+
 /* Refine the peak at voxel (x, y, z) of v and fill det (elfm_peaks_detect). */
 static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, int x, int y, int z,
                            int weak, elfm_detection *det)
@@ -332,6 +369,7 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   det->sigma_x_um = sx * v->um_per_px;
   det->sigma_y_um = sy * v->um_per_px;
   det->sigma_z_um = sz * v->z_step_um;
+  det->width_um = f0 > 0 ? blob_width_vox(v, x, y, z, f0) * v->um_per_px : 0;
 }
 
 elfm_status elfm_peaks_find_near(const elfm_peaks *p, const elfm_volume *v, const double xyz_um[3],
