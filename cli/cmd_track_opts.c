@@ -759,8 +759,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * 0.8 um and age + 20 us came from a regression on the lateral speed
      * alone, which beads climbing steeply in z bias low; docs/tracker.md
      * "Motion bias".) The lead belongs to the sample (brighter beads lead
-     * further: stage_accel 2.2 um), so `eventlfm score` reports it for a
-     * simulated scene like the user's. Flow seeds 1-20 alpha 0.8032 ->
+     * further: below), and `eventlfm score` reports it for a simulated
+     * scene like the user's. Flow seeds 1-20 alpha 0.8032 ->
      * 0.8043 (0.8 um, age + 20 us against these), held-out seeds 21-24
      * 0.8022 -> 0.8037, stage seeds 1-3 0.741 / 0.807 / 0.723 -> 0.769 /
      * 0.837 / 0.750. */
@@ -784,8 +784,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * speed: lead and delay not separable), mean error along the motion
      * +0.168 / +0.215 / +0.261 / +0.170 um. At these speeds the default
      * fade (0.5 um/ms) would keep a quarter of the lead, so the fade is
-     * lowered to 0.05 um/ms: the smoothed velocity of a 100-frame track
-     * still has a direction there. Worm seeds 1-4 alpha 0.830 / 0.785 /
+     * lowered to 0.05 um/ms. Worm seeds 1-4 alpha 0.830 / 0.785 /
      * 0.754 / 0.826 -> 0.833 / 0.791 / 0.760 / 0.830 (lead 0.15 / 0.25:
      * means 0.8043 / 0.8010 against 0.8035 at 0.2; fade 0.5: 0.8018). */
     o.smooth.motion_lead_um = 0.2;

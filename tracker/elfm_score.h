@@ -112,13 +112,14 @@
  *
  * MOTION BIAS (a calibration for `track --motion-lead-um/--motion-delay-us`,
  * elfm_smooth.h). For every matched detection whose truth moves laterally
- * at >= motion_lead_fade_um_per_ms (0.5 um/ms by default; truth velocity v: central difference of the object's
- * neighbouring frames that count, or one-sided at its ends), the lateral
- * error e = (detection - truth)_xy is fitted by least squares as
- * lead x L(v) - delay x M(v), where lead x L - delay x M is the lateral part
- * of the bias that elfm_motion_bias gives the smoother for v (linear in
- * lead and delay; the same fade speed): with the views' disparities (motion_n_views > 0, from a
- * calibration) the views' model, without them the lateral model, where L =
+ * at >= motion_lead_fade_um_per_ms (0.5 um/ms by default; truth velocity
+ * v: central difference of the object's neighbouring frames that count, or
+ * one-sided at its ends), the lateral error e = (detection - truth)_xy is
+ * fitted by least squares as lead x L(v) - delay x M(v), where lead x L -
+ * delay x M is the lateral part of the bias that elfm_motion_bias gives the
+ * smoother for v (linear in lead and delay; the same fade speed): with the
+ * views' disparities (motion_n_views > 0, from a calibration) the views'
+ * model, without them the lateral model, where L =
  * v_xy / max(|v_xy|, 0.5) and M = v_xy, which is the regression of the error
  * along the motion on the lateral speed. Why the views' model: a bead
  * moving steeply in z has images moving every way in the views, whose
