@@ -67,6 +67,42 @@ static double rmse_xy(const double *a, const double *b, int n)
   return sqrt(s / (2.0 * n));
 }
 
+/* A bead on a circle of 12 um at 2 um/ms, 90 frames (truth: 3 x 90), with
+ * noisy points (random stream from seed). noise 0: every third point a view
+ * fit with 0.3 um, the others 0.1 um; 1: each point's noise 0.1 um x its
+ * fit_sd_px, drawn from 0.5-4 (tests 11b and 11c). Times from t0. */
+static elfm_track *circle_track(int64_t id, int64_t t0, uint64_t seed, int noise, double *truth,
+                                elfm_error *err)
+{
+  const double R = 12;
+  elfm_track *t = elfm_track_create(id, err);
+  if (!t) return NULL;
+  rng = seed;
+  for (int f = 0; f < 90; f++) {
+    double th = 2.0 * f / R;
+    truth[3 * f] = R * cos(th);
+    truth[3 * f + 1] = R * sin(th);
+    truth[3 * f + 2] = 30;
+    elfm_detection d;
+    memset(&d, 0, sizeof d);
+    d.frame = f;
+    d.t_us = t0 + 1000 * f;
+    double sd;
+    if (noise == 0) {
+      d.view_fit = f % 3 == 1;
+      sd = d.view_fit ? 0.3 : 0.1;
+    } else {
+      d.fit_sd_px = 0.5 + 3.5 * urand();
+      sd = 0.1 * d.fit_sd_px;
+    }
+    d.x_um = truth[3 * f] + sd * gauss();
+    d.y_um = truth[3 * f + 1] + sd * gauss();
+    d.z_um = truth[3 * f + 2] + 4 * sd * gauss();
+    CHECK_OK(elfm_track_append(t, &d, err), err);
+  }
+  return t;
+}
+
 int main(void)
 {
   elfm_error err;
@@ -482,29 +518,9 @@ int main(void)
    * with all points alike (RMSE per axis 0.080 against 0.099 um); the noise estimate is the one the fit makes
    * itself; a factor out of range is an error. */
   {
-    const double R = 12;
     double truth[3 * 90];
     elfm_track *tv[2];
-    for (int c = 0; c < 2; c++) {
-      tv[c] = elfm_track_create(8 + c, &err);
-      rng = 0x7654321ULL;
-      for (int f = 0; f < 90; f++) {
-        double th = 2.0 * f / R;
-        truth[3 * f] = R * cos(th);
-        truth[3 * f + 1] = R * sin(th);
-        truth[3 * f + 2] = 30;
-        elfm_detection d;
-        memset(&d, 0, sizeof d);
-        d.frame = f;
-        d.t_us = T0 + 1000 * f;
-        d.view_fit = f % 3 == 1;
-        double sd = d.view_fit ? 0.3 : 0.1;
-        d.x_um = truth[3 * f] + sd * gauss();
-        d.y_um = truth[3 * f + 1] + sd * gauss();
-        d.z_um = truth[3 * f + 2] + 4 * sd * gauss();
-        CHECK_OK(elfm_track_append(tv[c], &d, &err), &err);
-      }
-    }
+    for (int c = 0; c < 2; c++) tv[c] = circle_track(8 + c, T0, 0x7654321ULL, 0, truth, &err);
     elfm_smooth_options o1 = o, o15 = o;
     o1.view_fit_sigma_factor = 1;
     o15.view_fit_sigma_factor = 1.5;
@@ -551,29 +567,9 @@ int main(void)
    * so a track with none is smoothed as before; a power out of [0, 4] is an
    * error. */
   {
-    const double R = 12;
     double truth[3 * 90];
     elfm_track *tw[2];
-    for (int c = 0; c < 2; c++) {
-      tw[c] = elfm_track_create(20 + c, &err);
-      rng = 0x1234567ULL;
-      for (int f = 0; f < 90; f++) {
-        double th = 2.0 * f / R;
-        truth[3 * f] = R * cos(th);
-        truth[3 * f + 1] = R * sin(th);
-        truth[3 * f + 2] = 30;
-        elfm_detection d;
-        memset(&d, 0, sizeof d);
-        d.frame = f;
-        d.t_us = T0 + 1000 * f;
-        d.fit_sd_px = 0.5 + 3.5 * urand();
-        const double sd = 0.1 * d.fit_sd_px;
-        d.x_um = truth[3 * f] + sd * gauss();
-        d.y_um = truth[3 * f + 1] + sd * gauss();
-        d.z_um = truth[3 * f + 2] + 4 * sd * gauss();
-        CHECK_OK(elfm_track_append(tw[c], &d, &err), &err);
-      }
-    }
+    for (int c = 0; c < 2; c++) tw[c] = circle_track(20 + c, T0, 0x1234567ULL, 1, truth, &err);
     elfm_smooth_options p0 = o, p1 = o;
     p0.fit_sd_power = 0;
     p1.fit_sd_power = 1;
