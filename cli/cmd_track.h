@@ -151,7 +151,6 @@ typedef struct track_ctx {
    * TRACK_WIDTH_BIN_UM, for the lead (motion_lead_auto) */
   int64_t width_hist[TRACK_WIDTH_BINS];
   int64_t n_width;
-  double lead_used_um;   /* the lead of the last tracks smoothed */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of

@@ -191,7 +191,7 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
     d->x_um = elfm_volume_x_um(geo, res.x_vox);
     d->y_um = elfm_volume_y_um(geo, res.y_vox);
     d->z_um = elfm_volume_z_um(geo, res.z_vox);
-    d->fit_sd_px = res.rms_px / sqrt((double)res.n_views);
+    d->fit_sd_px = res.sd_px;
     const double dx = d->x_um - q[0], dy = d->y_um - q[1], dz = (d->z_um - q[2]) / o->link.kz;
     ok = X >= 0 && Y >= 0 && K >= 0 && X < geo->w && Y < geo->h && K < geo->nz &&
          dx * dx + dy * dy + dz * dz < o->fill_gate_um * o->fill_gate_um;

@@ -183,8 +183,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
   cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
   cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
-  cJSON_AddNumberToObject(par, "motion_lead_um", o->motion_lead_auto && c->lead_used_um > 0
-                                                     ? c->lead_used_um : o->smooth.motion_lead_um);
+  /* the lead the last tracks were smoothed with (all widths are in by then) */
+  cJSON_AddNumberToObject(par, "motion_lead_um", track_motion_lead_um(c));
   cJSON_AddBoolToObject(par, "motion_lead_auto", o->motion_lead_auto);
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);

@@ -90,7 +90,7 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
   const size_t ns = st == ELFM_OK ? n : 0;
   double t0 = cli_now_s();
   elfm_smooth_options so_run = c->o->smooth;
-  if (ns > 0) so_run.motion_lead_um = c->lead_used_um = track_motion_lead_um(c);
+  so_run.motion_lead_um = track_motion_lead_um(c);
   const elfm_smooth_options *so = &so_run;
   const int nt = ns > 1 && c->n_threads > 1 ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
@@ -234,7 +234,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       det[n].x_um = elfm_volume_x_um(v, r.x_vox);
       det[n].y_um = elfm_volume_y_um(v, r.y_vox);
       det[n].z_um = elfm_volume_z_um(v, r.z_vox);
-      det[n].fit_sd_px = r.rms_px / sqrt((double)r.n_views);
+      det[n].fit_sd_px = r.sd_px;
       n++;
       c->sp[slot].loc++;
     }
@@ -290,7 +290,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     d.x_um = elfm_volume_x_um(v, r.x_vox);
     d.y_um = elfm_volume_y_um(v, r.y_vox);
     d.z_um = elfm_volume_z_um(v, r.z_vox);
-    d.fit_sd_px = r.rms_px / sqrt((double)r.n_views);
+    d.fit_sd_px = r.sd_px;
     if (!any_near(&d, 1, q, g, kz)) continue;
     d.intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
     if (d.intensity < o->guided_min_ratio * c->pred_intensity[k]) continue;

@@ -125,6 +125,7 @@ typedef struct elfm_localize_result {
   int n_views_first;          /* of those, views whose window in the first (wanted) frame
                                  alone agrees too (= n_views for one frame) */
   double rms_px;              /* their weighted RMS miss, px */
+  double sd_px;               /* rms_px / sqrt(n_views): the fit's scatter, px */
 } elfm_localize_result;
 
 void elfm_localize_options_default(elfm_localize_options *o);

@@ -287,5 +287,6 @@ int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *c
   out->z_vox = (q[2] - c->z_min_um) / c->z_step_um;
   out->n_views = n_final;
   out->rms_px = sw > 0 ? sqrt(ss / sw) : 0;
+  out->sd_px = out->rms_px / sqrt((double)n_final);
   return 1;
 }

@@ -43,8 +43,9 @@ typedef struct elfm_detection {
                                 the guided search, gap filling); its sigmas are 0.
                                 0: a peak above the threshold (placed by the peak fit
                                 or, with `track --localize views`, the view fit) */
-  double fit_sd_px;          /* the view fit's scatter: the views' residual RMS over
-                                sqrt(views agreeing), px; 0 when not placed by it */
+  double fit_sd_px;          /* the view fit's scatter (elfm_localize_result.sd_px: the
+                                views' residual RMS over sqrt(views agreeing)), px; 0
+                                when not placed by it */
   double width_um;           /* the peak's lateral width along its widest axis: the
                                 second moment, in the peak's plane, of the values
                                 above half the peak's (a window of +-6 voxels); 0

@@ -97,35 +97,27 @@ typedef struct {
   double ll, lm, mm, el, em;  /* L.L, L.M, M.M, e.L, e.M */
 } motion_sums;
 
-/* L and M of velocity v under the model mb (elfm_motion_bias is linear in
- * the lead and the delay: L is its bias at lead 1 um and delay 0, M minus
- * its bias at delay 1 ms and lead 0). */
-static void motion_terms(const elfm_smooth_options *mb, const double v[3], double L[2], double M[2])
-{
-  elfm_smooth_options o = *mb;
-  double b[3];
-  o.motion_lead_um = 1.0;
-  o.motion_delay_us = 0.0;
-  elfm_motion_bias(&o, v, b);
-  L[0] = b[0];
-  L[1] = b[1];
-  o.motion_lead_um = 0.0;
-  o.motion_delay_us = 1000.0;
-  elfm_motion_bias(&o, v, b);
-  M[0] = -b[0];
-  M[1] = -b[1];
-}
+/* The motion bias's model, split in its two terms: elfm_motion_bias is
+ * linear in the lead and the delay, so L(v) is its bias at lead 1 um and
+ * delay 0 (lead_only), M(v) minus its bias at delay 1 ms and lead 0
+ * (delay_only). Built once per scoring. */
+typedef struct {
+  elfm_smooth_options lead_only, delay_only;
+} motion_model;
 
-static void motion_add(motion_sums *m, const elfm_smooth_options *mb, const truth_t *tr,
+static void motion_add(motion_sums *m, const motion_model *mm, const truth_t *tr,
                        const frames_t *fr, const int *obj_of, int64_t p, double dx, double dy)
 {
-  double v[3], L[2], M[2];
+  double v[3], L[3], M[3];
   if (!truth_velocity(tr, fr, obj_of[p], p, v)) return;
   double sp = hypot(v[0], v[1]);
   /* below the fade speed the direction of motion is too uncertain for an
    * error "along" it (elfm_score.h, MOTION BIAS) */
-  if (!(sp >= mb->motion_lead_fade_um_per_ms)) return;
-  motion_terms(mb, v, L, M);
+  if (!(sp >= mm->lead_only.motion_lead_fade_um_per_ms)) return;
+  elfm_motion_bias(&mm->lead_only, v, L);
+  elfm_motion_bias(&mm->delay_only, v, M);
+  M[0] = -M[0];
+  M[1] = -M[1];
   m->n++;
   m->s += sp;
   m->ss += sp * sp;
@@ -159,7 +151,7 @@ static void motion_finish(const motion_sums *m, elfm_score_result *out)
  * joined by gated pairs (d < eps) form components, each solved with the
  * Hungarian solver; the counts, ratios and RMSEs go to out. */
 static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const points_t *dp,
-                                    const gate_t *g, const elfm_smooth_options *mb,
+                                    const gate_t *g, const motion_model *mm,
                                     elfm_score_result *out, elfm_error *err)
 {
   /* Group detections per frame, sorted by x. */
@@ -255,7 +247,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
         sd += dist_aniso(g, dx, dy, dz);
-        motion_add(&ms, mb, tr, fr, obj_of, p, dx, dy);
+        motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;
@@ -400,12 +392,18 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   }
   out->detections_from_tracks = detections ? 0 : 1;
   /* the motion bias's model: the views' when a calibration gave them */
-  elfm_smooth_options mb;
-  elfm_smooth_options_default(&mb);
-  mb.motion_n_views = opt->motion_n_views > 0 && opt->motion_n_views <= ELFM_MAX_VIEWS ? opt->motion_n_views : 0;
-  memcpy(mb.motion_view_g, opt->motion_view_g, sizeof mb.motion_view_g);
-  mb.motion_lead_fade_um_per_ms = opt->motion_lead_fade_um_per_ms;
-  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mb, out, err)) != ELFM_OK) goto done;
+  motion_model mm;
+  elfm_smooth_options_default(&mm.lead_only);
+  mm.lead_only.motion_n_views =
+      opt->motion_n_views > 0 && opt->motion_n_views <= ELFM_MAX_VIEWS ? opt->motion_n_views : 0;
+  memcpy(mm.lead_only.motion_view_g, opt->motion_view_g, sizeof mm.lead_only.motion_view_g);
+  mm.lead_only.motion_lead_fade_um_per_ms = opt->motion_lead_fade_um_per_ms;
+  mm.delay_only = mm.lead_only;
+  mm.lead_only.motion_lead_um = 1.0;
+  mm.lead_only.motion_delay_us = 0.0;
+  mm.delay_only.motion_lead_um = 0.0;
+  mm.delay_only.motion_delay_us = 1000.0;
+  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mm, out, err)) != ELFM_OK) goto done;
   if (tracks) {
     if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
     if ((s = elfm_score_identities(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;

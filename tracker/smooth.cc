@@ -778,8 +778,8 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   o->min_sigma_z_um = 0.08;
   o->allow_spline = 1;
   o->view_fit_sigma_factor = 1.5;  // view fits vs peaks at equal depth (elfm_smooth.h)
-  o->fit_sd_power = 0;
-  o->motion_lead_fade_um_per_ms = 0.5;  // the lead's fade speed (elfm_smooth.h)             // each point's own view-fit scatter: off (elfm_smooth.h)
+  o->fit_sd_power = 0;             // each point's own view-fit scatter: off (elfm_smooth.h)
+  o->motion_lead_fade_um_per_ms = 0.5;  // the lead's fade speed (elfm_smooth.h)
 }
 
 elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
