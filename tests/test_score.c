@@ -796,6 +796,15 @@ int main(void)
     o.motion_n_views = 0;
     r = run(tm, NULL, dm, &o);
     CHECK(r.motion_lead_um < 1.1 && r.motion_delay_us < 400);
+    /* out-of-range views and fade speeds are errors, not silently ignored */
+    elfm_error e2;
+    elfm_error_clear(&e2);
+    o.motion_n_views = ELFM_MAX_VIEWS + 1;
+    CHECK(elfm_score_tables(tm, NULL, dm, &o, &r, &e2) == ELFM_ERR_INVALID);
+    CHECK(strstr(e2.message, "views") != NULL);
+    o.motion_n_views = 0;
+    o.motion_lead_fade_um_per_ms = 0;
+    CHECK(elfm_score_tables(tm, NULL, dm, &o, &r, &e2) == ELFM_ERR_INVALID);
     elfm_table_free(dm);
     elfm_table_free(tm);
   }

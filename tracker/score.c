@@ -360,6 +360,9 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "motion fade speed %g um/ms must be in (0, 100]",
                           opt->motion_lead_fade_um_per_ms);
+  if (opt->motion_n_views < 0 || opt->motion_n_views > ELFM_MAX_VIEWS)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "%d views for the motion bias (0-%d)",
+                          opt->motion_n_views, ELFM_MAX_VIEWS);
   if (!(opt->eps_um > 0) || !(opt->kz > 0) || !isfinite(opt->eps_um) || !isfinite(opt->kz))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "gate eps %g um and kz %g must be positive", opt->eps_um, opt->kz);
@@ -394,8 +397,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   /* the motion bias's model: the views' when a calibration gave them */
   motion_model mm;
   elfm_smooth_options_default(&mm.lead_only);
-  mm.lead_only.motion_n_views =
-      opt->motion_n_views > 0 && opt->motion_n_views <= ELFM_MAX_VIEWS ? opt->motion_n_views : 0;
+  mm.lead_only.motion_n_views = opt->motion_n_views;
   memcpy(mm.lead_only.motion_view_g, opt->motion_view_g, sizeof mm.lead_only.motion_view_g);
   mm.lead_only.motion_lead_fade_um_per_ms = opt->motion_lead_fade_um_per_ms;
   mm.delay_only = mm.lead_only;
