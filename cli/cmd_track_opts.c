@@ -93,6 +93,15 @@ static void track_defaults(track_opts *o)
    * <= 0.006); stage seed 3 0.688 -> 0.707; worm, blink, stage_accel the
    * same. A longer tail shows which way each bead turned. */
   o->link.swap_points = 8;
+  /* Encounter review (elfm_link.h step 7): tracks that came within 5 um
+   * (the linker's metric, z / 1.5) are revisited like a gap closing.
+   * Twelfth session, flow 100 ms seeds 1-20: alpha 0.8061 -> 0.8136 (seeds
+   * 2, 7, 12, 16 up by 0.018-0.045, none down); 3 / 4 / 6 / 8 um (before
+   * the 2 x gate cap on the exchange's joins): 0.8084 / 0.8120 / 0.8129 /
+   * 0.8129. Held-out seeds 21-24 the same; flow 500 ms seed 1 0.744 ->
+   * 0.767; stage, worm, blink, blink_moving the same (docs/tracker.md
+   * "Encounter review"). */
+  o->link.encounter_um = 5;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
    * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
@@ -232,6 +241,10 @@ static void usage(FILE *f)
     "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
     "  --swap-points N      review a gap closing that does not fit when its new tail\n"
     "                       has N points; exchange tails with a better fit (8; 0 off)\n"
+    "  --encounter-um D     two tracks that came within D (linker metric) are reviewed\n"
+    "                       the same way once both have N points after it (5; 0 off)\n"
+    "  --encounter-pad N    frames before the encounter left out of the heads (1)\n"
+    "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
     "  --priority-points N  tracks of >= N points choose their detections before\n"
     "                       younger ones (8; 0 = one assignment for all)\n"
     "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
@@ -338,7 +351,8 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
+  O_ENCUM, O_ENCPAD, O_ENCR
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -362,6 +376,9 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"stitch-points", required_argument, 0, O_STITCHN},
       {"stitch-gate-um", required_argument, 0, O_STITCHG},
       {"swap-points", required_argument, 0, O_SWAPN},
+      {"encounter-um", required_argument, 0, O_ENCUM},
+      {"encounter-pad", required_argument, 0, O_ENCPAD},
+      {"encounter-ratio", required_argument, 0, O_ENCR},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
       {"view-support", required_argument, 0, O_VSUP},
@@ -521,6 +538,20 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       stitch_given = 1;
       break;
     case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
+    case O_ENCUM:
+      if (!cli_parse_double_in(C, "--encounter-um", a, 0, 0, 1e6, ">= 0", &o.link.encounter_um)) return CLI_USAGE;
+      break;
+    case O_ENCR:
+      if (!cli_parse_double_in(C, "--encounter-ratio", a, 0, 1, 1, "0 < R <= 1", &o.link.encounter_ratio))
+        return CLI_USAGE;
+      break;
+    case O_ENCPAD:
+      if (!cli_parse_int(C, "--encounter-pad", a, &o.link.encounter_pad)) return CLI_USAGE;
+      if (o.link.encounter_pad < 0) {
+        cli_message(C, CLI_USAGE, "--encounter-pad must be >= 0, not '%s'", a);
+        return CLI_USAGE;
+      }
+      break;
     case O_STITCHG: if (!cli_parse_double(C, "--stitch-gate-um", a, &o.link.stitch_gate_um)) return CLI_USAGE; break;
     case O_VIEWSRULE:
       if (!strcmp(a, "on")) o.views_rule = 1;

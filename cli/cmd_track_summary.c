@@ -167,6 +167,9 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "stitch_history", o->link.stitch_history);
   cJSON_AddNumberToObject(par, "swap_points", o->link.swap_points);
   cJSON_AddNumberToObject(par, "swap_ratio", o->link.swap_ratio);
+  cJSON_AddNumberToObject(par, "encounter_um", o->link.encounter_um);
+  cJSON_AddNumberToObject(par, "encounter_pad", o->link.encounter_pad);
+  cJSON_AddNumberToObject(par, "encounter_ratio", o->link.encounter_ratio);
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);
   cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);
   cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);

@@ -30,7 +30,9 @@
  *  5. stitching (optional): a track reaching stitch_points points continues a
  *     dark live track whose recent path it follows;
  *  6. swap review (optional): a gap closing that does not fit is revisited
- *     a few frames later and the tails of two tracks exchanged when that fits.
+ *     a few frames later and the tails of two tracks exchanged when that fits;
+ *  7. encounter review (optional, with 6): two tracks that came within
+ *     encounter_um of each other are revisited the same way.
  * Memory: live tracks plus finished tracks not yet popped; per-frame
  * scratch is reused (it grows only when a frame has more objects than any
  * earlier one).
@@ -124,6 +126,18 @@ typedef struct elfm_link_options {
    * 0 < swap_ratio <= 1), they are exchanged. 0 = off (default; track: 6). */
   int swap_points;
   double swap_ratio;      /* default 0.5 */
+  /* Encounter review (step 7, with swap_points > 0): two tracks whose
+   * points in one frame lie within encounter_um (anisotropic) have met;
+   * the frames they stay that close, and encounter_pad frames before, are
+   * the encounter. Once both have swap_points points after it, their heads
+   * (before it) and tails (after it) are joined the other way round when
+   * that fits swap_ratio times better, as in step 6. Why: two beads
+   * passing within the axial blur give one or two detections at one spot
+   * for a frame or two, both tracks take them without a gap, and each may
+   * leave on the other's bead. 0 = off (default). */
+  double encounter_um;
+  int encounter_pad;      /* default 1 frame */
+  double encounter_ratio; /* like swap_ratio, for encounters (default 0.5) */
   /* Established tracks first (step 3): within a group, the tracks of at
    * least priority_points real points are assigned first and the younger
    * ones then among the detections left. Why: "most pairs first" let a

@@ -3,7 +3,7 @@
  * track's fits, FLANN k-d tree candidates, optimal assignment per connected
  * group, gap closing, births. Also the scratch and track fits that
  * link_repair.c shares (link_internal.h); that file holds the repair steps
- * 5-6 (stitching, swap review) run at the end of each step. */
+ * 5-7 (stitching, swap and encounter review) run at the end of each step. */
 #include "elfm_link.h"
 
 #include <flann/flann.h>
@@ -39,6 +39,9 @@ void elfm_link_options_default(elfm_link_options *o)
   o->stitch_straight_frac = 0.1;
   o->swap_points = 0;
   o->swap_ratio = 0.5;
+  o->encounter_um = 0;
+  o->encounter_pad = 1;
+  o->encounter_ratio = 0.5;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
@@ -55,13 +58,15 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !isfinite(o->stitch_gate_um) || o->stitch_history < 1 ||
       !(o->stitch_straight_frac >= 0) || !isfinite(o->stitch_straight_frac) || o->swap_points < 0 ||
       (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
+      !(o->encounter_um >= 0) || !isfinite(o->encounter_um) || o->encounter_pad < 0 ||
+      !(o->encounter_ratio > 0) || !(o->encounter_ratio <= 1) ||
       o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, priority points and short path "
-                   ">= 0)");
+                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance and pad "
+                   ">= 0, 0 < encounter ratio <= 1, priority points and short path >= 0)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
@@ -88,6 +93,7 @@ void elfm_link_free(elfm_linker *l)
   for (size_t i = 0; i < l->fin_n; i++) elfm_track_free(l->fin[l->fin_head + i]);
   free(l->live);
   free(l->fin);
+  free(l->enc);
   free(l->pts);
   free(l->nn_idx);
   free(l->nn_dist);
@@ -717,6 +723,10 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     const double *v = elfm_link_current_velocity(&l->live[i]);
     l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
   }
+  if (o->swap_points > 0 && o->encounter_um > 0) {
+    st = elfm_link_mark_encounters(l, frame, nt, err);
+    if (st != ELFM_OK) return st;
+  }
   const size_t nt_before_births = nt;
   for (size_t j = 0; j < nd; j++) {
     if (l->det_track[j] >= 0) continue;
@@ -742,7 +752,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     st = elfm_link_stitch(l, frame, nd, err);
     if (st != ELFM_OK) return st;
   }
-  if (o->swap_points > 0) return elfm_link_review_swaps(l, nd, err);
+  if (o->swap_points > 0) {
+    st = elfm_link_review_swaps(l, nd, err);
+    if (st != ELFM_OK || o->encounter_um <= 0) return st;
+    return elfm_link_review_encounters(l, frame, nd, err);
+  }
   return ELFM_OK;
 }
 

@@ -1,7 +1,7 @@
 /* link_internal.h — private to tracker/: the linker's state and the helpers
  * shared by link.c (life cycle and the per-frame linking, steps 1-4 of
  * elfm_link_step, see elfm_link.h) and link_repair.c (the repair steps 5
- * and 6 that step runs last: stitching and swap review). Not public:
+ * to 7 that step runs last: stitching, swap and encounter review). Not public:
  * callers use elfm_link.h. */
 #ifndef ELFM_LINK_INTERNAL_H
 #define ELFM_LINK_INTERNAL_H
@@ -33,6 +33,13 @@ typedef struct link_cand {
   double cost;
 } link_cand;
 
+/* Two tracks that met (step 7): the frames they were within
+ * encounter_um, still to be reviewed. */
+typedef struct link_encounter {
+  int64_t a_id, b_id;
+  int64_t first, last;
+} link_encounter;
+
 /* The linker (opaque in elfm_link.h). */
 struct elfm_linker {
   elfm_link_options o;
@@ -40,6 +47,8 @@ struct elfm_linker {
   size_t n_live, cap_live;
   elfm_track **fin;          /* FIFO of finished tracks: fin[fin_head .. fin_head+fin_n) */
   size_t fin_head, fin_n, fin_cap;
+  link_encounter *enc;       /* step 7's pending encounters, in the order they began */
+  size_t n_enc, cap_enc;
   int64_t next_id, last_frame, last_t_us;
   int started;
   /* per-frame scratch, grown on demand */
@@ -124,5 +133,16 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
  * reviewed whose tail has swap_points points is revisited once; the tails
  * of two live tracks are exchanged when that fits better. */
 elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err);
+
+/* Step 7, encounters (o.swap_points > 0, o.encounter_um > 0): of the
+ * first nt live tracks (those before this frame's births), two within
+ * encounter_um of each other in `frame` (the detection each took, or the
+ * prediction of one that lost its object this frame) have met: the
+ * encounter is recorded, or extended when they met in the frame before. */
+elfm_status elfm_link_mark_encounters(elfm_linker *l, int64_t frame, size_t nt, elfm_error *err);
+
+/* ... and once both have swap_points points after the encounter, their
+ * tails are exchanged when that fits swap_ratio times better. */
+elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err);
 
 #endif
