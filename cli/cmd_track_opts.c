@@ -245,6 +245,8 @@ static void usage(FILE *f)
     "                       the same way once both have N points after it (5; 0 off)\n"
     "  --encounter-pad N    frames before the encounter left out of the heads (1)\n"
     "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
+    "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
+    "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
     "  --priority-points N  tracks of >= N points choose their detections before\n"
     "                       younger ones (8; 0 = one assignment for all)\n"
     "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
@@ -352,7 +354,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCR
+  O_ENCUM, O_ENCPAD, O_ENCR, O_RJOIN
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -379,6 +381,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"encounter-um", required_argument, 0, O_ENCUM},
       {"encounter-pad", required_argument, 0, O_ENCPAD},
       {"encounter-ratio", required_argument, 0, O_ENCR},
+      {"review-join-factor", required_argument, 0, O_RJOIN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
       {"view-support", required_argument, 0, O_VSUP},
@@ -543,6 +546,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_ENCR:
       if (!cli_parse_double_in(C, "--encounter-ratio", a, 0, 1, 1, "0 < R <= 1", &o.link.encounter_ratio))
+        return CLI_USAGE;
+      break;
+    case O_RJOIN:
+      if (!cli_parse_double_in(C, "--review-join-factor", a, 0, 0, 1e6, ">= 0", &o.link.review_join_factor))
         return CLI_USAGE;
       break;
     case O_ENCPAD:

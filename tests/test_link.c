@@ -745,6 +745,9 @@ int main(void)
     bad.encounter_ratio = 1.5;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
+    bad.review_join_factor = -0.5;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
     bad.priority_points = -1;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;

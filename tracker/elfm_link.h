@@ -138,6 +138,10 @@ typedef struct elfm_link_options {
   double encounter_um;
   int encounter_pad;      /* default 1 frame */
   double encounter_ratio; /* like swap_ratio, for encounters (default 0.5) */
+  /* Steps 6 and 7 exchange tails only when both new joins lie within
+   * review_join_factor x gate_um (root mean square): past that neither
+   * extrapolation is known. Default 2; 0 = no limit. */
+  double review_join_factor;
   /* Established tracks first (step 3): within a group, the tracks of at
    * least priority_points real points are assigned first and the younger
    * ones then among the detections left. Why: "most pairs first" let a

@@ -204,6 +204,23 @@ static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_det
   return dx * dx + dy * dy + dz * dz;
 }
 
+/* The exchange's two joins (alt: their summed squared distances) are
+ * within review_join_factor x gate_um, root mean square. Why: around a
+ * sharp turn, or after a long gap, neither head's extrapolation says where
+ * its bead went, and the ratio of two bad joins decides nothing. Twelfth
+ * session, the exchanges steps 6 and 7 made on 57 simulated recordings
+ * (flow, dense, brighter, faster, noisier), judged against the truth: the
+ * 17 that joined the beads back had joins of 1.1-12.0 um, the 11 that
+ * parted them 7.3-38 um (9 of them above 12). Flow 100 ms seeds 1-20, step 6 capped at 2 x gate: alpha
+ * 0.8136 -> 0.8184 (five seeds up, none down); held-out seeds 21-24
+ * 0.8061 -> 0.8100; 1.5 x the same, 3 x 0.8167 (docs/tracker.md
+ * "Encounter review"). */
+static int joins_known(const elfm_link_options *o, double alt)
+{
+  const double g = o->review_join_factor * o->gate_um;
+  return o->review_join_factor <= 0 || alt <= 2 * g * g;
+}
+
 /* Replace track a's points from a_t0 on by b's from b_t0 on and vice versa. */
 static elfm_status exchange_tails(elfm_track *a, size_t a_t0, elfm_track *b, size_t b_t0,
                                   elfm_error *err)
@@ -282,7 +299,8 @@ elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
         double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, kz);
         double alt = junction_cost2(bp, bt, ap + s, an - s, sh, kz) +
                      junction_cost2(ap, s, bp + bt, bn - bt, sh, kz);
-        if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur) {
+        if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur &&
+            joins_known(o, alt)) {
           best_ratio = alt / cur;
           best_a = a;
           best_s = s;
@@ -436,13 +454,7 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
                  junction_cost2(ap, ah, ap + at, A->t->n - at, sh, kz);
     double alt = junction_cost2(bp, bh, ap + at, A->t->n - at, sh, kz) +
                  junction_cost2(ap, ah, bp + bt, B->t->n - bt, sh, kz);
-    /* Nor when the exchange joins heads and tails no better than twice the
-     * gate apart (root mean square): around a sharp turn neither join is
-     * known, and the fits' ratio says little. The exchanges that joined
-     * the truth's beads back (flow, dense, flux and speed variants: 8)
-     * had 1.6-8.4 um; the two that parted them, 14 and 25 um. */
-    const double g = 2 * o->gate_um;
-    if (!(isfinite(cur) && alt < r2 * cur && alt <= 2 * g * g)) continue;
+    if (!(isfinite(cur) && alt < r2 * cur && joins_known(o, alt))) continue;
     /* a gap closing still to be reviewed in a tail moves with it */
     size_t a_tail0 = A->tail0, b_tail0 = B->tail0;
     int a_rev = A->review && a_tail0 >= at, b_rev = B->review && b_tail0 >= bt;
