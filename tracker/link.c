@@ -114,6 +114,7 @@ void elfm_link_free(elfm_linker *l)
   free(l->cost);
   free(l->row_to_col);
   free(l->rows);
+  free(l->xkeys);
   free(l->cols);
   elfm_assign_workspace_free(l->aws);
   free(l);
@@ -189,6 +190,7 @@ elfm_status elfm_link_reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_e
         !grow((void **)&l->n_cand, c, sizeof(int)) ||
         !grow((void **)&l->track_det, c, sizeof(int)) ||
         !grow((void **)&l->rows, c, sizeof(int)) ||
+        !grow((void **)&l->xkeys, c, sizeof(link_xkey)) ||
         !grow((void **)&l->row_to_col, c, sizeof(int)))
       return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
     l->cap_trk = c;

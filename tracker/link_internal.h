@@ -40,6 +40,12 @@ typedef struct link_encounter {
   int64_t first, last;
 } link_encounter;
 
+/* A track's x for step 7's sweep over the tracks sorted by it. */
+typedef struct link_xkey {
+  double x_um;
+  int track;
+} link_xkey;
+
 /* The linker (opaque in elfm_link.h). */
 struct elfm_linker {
   elfm_link_options o;
@@ -67,6 +73,7 @@ struct elfm_linker {
   double *cost;
   int *row_to_col;
   int *rows, *cols;
+  link_xkey *xkeys;          /* n_trk: step 7's sweep */
   elfm_assign_workspace *aws;
 };
 

@@ -327,28 +327,50 @@ elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
   return ELFM_OK;
 }
 
+static int cmp_xkey(const void *a, const void *b)
+{
+  double xa = ((const link_xkey *)a)->x_um, xb = ((const link_xkey *)b)->x_um;
+  return (xa > xb) - (xa < xb);
+}
+
+/* Where track i is in this frame for step 7: the detection it took, or,
+ * when it lost its object this frame (seen the frame before), its
+ * prediction; NULL otherwise (dark before this frame too: its prediction
+ * drifts). */
+static const double *encounter_position(const elfm_linker *l, size_t i)
+{
+  const live_track *t = &l->live[i];
+  if (l->track_det[i] >= 0) return t->last;
+  return t->missed > 0 ? NULL : t->pred;
+}
+
 elfm_status elfm_link_mark_encounters(elfm_linker *l, int64_t frame, size_t nt, elfm_error *err)
 {
-  const double e2 = l->o.encounter_um * l->o.encounter_um, kz = l->o.kz;
+  const double e = l->o.encounter_um, e2 = e * e, kz = l->o.kz;
+  /* A sweep over the tracks sorted by x: only pairs within e in x are
+   * compared, so a field of many tracks costs n log n, not n^2. */
+  size_t n = 0;
   for (size_t i = 0; i < nt; i++) {
-    const live_track *A = &l->live[i];
-    int ai = l->track_det[i] >= 0;
-    if (!ai && A->missed > 0) continue;  /* dark before this frame too: its prediction drifts */
-    const double *pa = ai ? A->last : A->pred;
-    for (size_t k = i + 1; k < nt; k++) {
-      const live_track *B = &l->live[k];
-      int bk = l->track_det[k] >= 0;
-      if ((!bk && B->missed > 0) || (!ai && !bk)) continue;
-      const double *pb = bk ? B->last : B->pred;
+    const double *p = encounter_position(l, i);
+    if (p) l->xkeys[n++] = (link_xkey){p[0], (int)i};
+  }
+  qsort(l->xkeys, n, sizeof *l->xkeys, cmp_xkey);
+  for (size_t u = 0; u < n; u++) {
+    const size_t i = (size_t)l->xkeys[u].track;
+    const double *pa = encounter_position(l, i);
+    for (size_t v = u + 1; v < n && l->xkeys[v].x_um - l->xkeys[u].x_um < e; v++) {
+      const size_t k = (size_t)l->xkeys[v].track;
+      if (l->track_det[i] < 0 && l->track_det[k] < 0) continue;  /* neither was seen */
+      const double *pb = encounter_position(l, k);
       double dx = pa[0] - pb[0], dy = pa[1] - pb[1], dz = (pa[2] - pb[2]) / kz;
       if (dx * dx + dy * dy + dz * dz >= e2) continue;
-      int64_t ia = A->t->id < B->t->id ? A->t->id : B->t->id,
-              ib = A->t->id < B->t->id ? B->t->id : A->t->id;
-      size_t e = 0;
-      while (e < l->n_enc && !(l->enc[e].a_id == ia && l->enc[e].b_id == ib && l->enc[e].last >= frame - 1))
-        e++;
-      if (e < l->n_enc) {
-        l->enc[e].last = frame;
+      const int64_t ida = l->live[i].t->id, idb = l->live[k].t->id;
+      const int64_t ia = ida < idb ? ida : idb, ib = ida < idb ? idb : ida;
+      size_t m = 0;
+      while (m < l->n_enc && !(l->enc[m].a_id == ia && l->enc[m].b_id == ib && l->enc[m].last >= frame - 1))
+        m++;
+      if (m < l->n_enc) {
+        l->enc[m].last = frame;
         continue;
       }
       if (l->n_enc == l->cap_enc) {
