@@ -312,6 +312,21 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
   case CLI_RO_OFF_WEIGHT:
     return cli_parse_double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
+  case CLI_RO_ISTART: {
+    double ms;
+    if (!cli_parse_double_in(cmd, "--integral-start-ms", arg, 0, 0, 1e7, "0..10000000", &ms)) return 0;
+    ro->integral_start_us = (int64_t)llround(ms * 1000);
+    p->istart_given = 1;
+    return 1;
+  }
+  case CLI_RO_ISTART_AGE: {
+    double ms;
+    if (!cli_parse_double_in(cmd, "--integral-start-age-ms", arg, 0, 0, 1e7, "0..10000000", &ms))
+      return 0;
+    ro->integral_start_age_us = (int64_t)llround(ms * 1000);
+    p->istart_age_given = 1;
+    return 1;
+  }
   case CLI_RO_POLARITY:
     p->polarity_given = 1;
     return cli_parse_polarity(cmd, arg, &fo->polarity);
@@ -353,6 +368,14 @@ int cli_check_recon_options(const char *cmd, const cli_recon_parse *p)
      * time surface's; the integral needs both polarities and a long leak. */
     if (!p->polarity_given) fw->polarity = ELFM_POL_SIGNED;
     if (!p->tau_given) fw->tau_us = ELFM_INTEGRAL_TAU_US;
+    /* and starts from the levels the recording's first 2 x leak give
+     * (elfm_frames.h; why 2 x and 20 ms: docs/recon.md "The integral's
+     * start") */
+    if (!p->istart_given) p->ro->integral_start_us = (int64_t)llround(2 * fw->tau_us);
+    if (!p->istart_age_given) p->ro->integral_start_age_us = ELFM_INTEGRAL_START_AGE_US;
+  } else if (p->istart_given || p->istart_age_given) {
+    cli_message(cmd, CLI_USAGE, "--integral-start-ms and --integral-start-age-ms need --repr integral");
+    return 0;
   }
   const elfm_recon_options *ro = p->ro;
   const elfm_framer_options *fo = &ro->framer;
@@ -408,6 +431,8 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
+  cJSON_AddNumberToObject(par, "integral_start_ms", (double)ro->integral_start_us * 1e-3);
+  cJSON_AddNumberToObject(par, "integral_start_age_ms", (double)ro->integral_start_age_us * 1e-3);
   cJSON_AddNumberToObject(par, "median", ro->median);
   cJSON_AddStringToObject(par, "path", cli_refocus_path_name(ro->refocus.path));
   cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(ro->refocus.threshold));
@@ -438,6 +463,12 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --polarity P         both | on | off | signed (default %s)\n"
           "  --off-weight W       integral: an OFF event's step over an ON event's, the\n"
           "                       sensor's OFF/ON threshold ratio (default %g)\n"
+          "  --integral-start-ms T  integral: read the first T ms twice and start each\n"
+          "                       pixel from the brightness its later OFF events show it\n"
+          "                       had (objects in view from the start are seen whole, not\n"
+          "                       only where they move to); default 2 x the leak; 0 off\n"
+          "  --integral-start-age-ms A  ... as if those levels were set A ms before the\n"
+          "                       first event, leaked since (default %g)\n"
           "  --median N           median filter 0 (off) | 3 | 5 (default %d)\n"
           "  --from-us T          first event time to use (windows start here)\n"
           "  --to-us T            stop before this event time\n"
@@ -452,7 +483,7 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
           "                       (default %s)\n",
           fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
-          cli_polarity_name(fo->polarity), fo->off_weight,
+          cli_polarity_name(fo->polarity), fo->off_weight, ELFM_INTEGRAL_START_AGE_US * 1e-3,
           d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
 }
 

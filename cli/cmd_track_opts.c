@@ -309,7 +309,7 @@ static void usage(FILE *f)
     "                       surface with the view fit: A 1.52 x the median width of\n"
     "                       the in-focus peaks (brighter beads lead further; 1.25\n"
     "                       until 50 peaks), D the weighted events' mean age + 150 us\n"
-    "                       (431 us at tau 1 ms); integral: A 0.2, D 0 (worm\n"
+    "                       (431 us at tau 1 ms); integral: A 0.1, D 0 (worm\n"
     "                       neurons); else 0, 0 = off. eventlfm score --calib\n"
     "                       measures A and D on a simulated scene\n"
     "  --motion-fade-um-per-ms F  below this speed the lead fades out (the direction\n"
@@ -824,8 +824,14 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * fade (0.5 um/ms) would keep a quarter of the lead, so the fade is
      * lowered to 0.05 um/ms. Worm seeds 1-4 alpha 0.830 / 0.785 /
      * 0.754 / 0.826 -> 0.833 / 0.791 / 0.760 / 0.830 (lead 0.15 / 0.25:
-     * means 0.8043 / 0.8010 against 0.8035 at 0.2; fade 0.5: 0.8018). */
-    o.smooth.motion_lead_um = 0.2;
+     * means 0.8043 / 0.8010 against 0.8035 at 0.2; fade 0.5: 0.8018).
+     * Twelfth session: most of that lead was the first frames', where an
+     * integral started from 0 showed only where each neuron had moved to.
+     * Started from its levels (--integral-start-ms) the detections lie
+     * +0.068 / +0.105 / +0.122 / +0.052 um ahead (seeds 1-4; 0.10-0.16 on
+     * 5-7), and alpha at lead 0 / 0.1 / 0.2 is 0.8690 / 0.8708 / 0.8688
+     * (held-out seeds 5-7: 0.858 / 0.860 / 0.860): 0.1. */
+    o.smooth.motion_lead_um = 0.1;
     o.smooth.motion_delay_us = 0;
     if (!fade_given) o.smooth.motion_lead_fade_um_per_ms = 0.05;
   }

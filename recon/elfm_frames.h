@@ -155,6 +155,52 @@ int elfm_framer_next(elfm_framer *f, elfm_frame *out);
 /* Start of the first window, or INT64_MIN while still unknown. */
 int64_t elfm_framer_origin_us(const elfm_framer *f);
 
+/* ---- INTEGRAL: the start levels ----
+ * The integral starts at 0 everywhere: a pixel's sum is its log brightness
+ * relative to where it was at the first event. An object that is already
+ * in view then shows only where it has moved on to, its leading part; the
+ * part still over where it started cancels against its own start (worm
+ * neurons, 0.1 um/ms: 1-2 um ahead along their motion for the first
+ * 20 ms, docs/tracker.md "The integral's start"). Those start levels can
+ * be read back from the events themselves: when the object leaves a pixel,
+ * the pixel's sum falls to minus what it was brighter than the background
+ * at the start. elfm_levels accumulates, over the first events of a
+ * recording, each pixel's sum (ON +1, OFF -off_weight, no leak) and its
+ * lowest value; the start level is that depth plus half a step (what an
+ * OFF event leaves on average), 0 where the sum never went below 0. Set
+ * on a framer before its first event, the integral then starts from them
+ * at t_us and leaks from there as it does from any event.
+ * Memory: two floats per pixel. */
+typedef struct elfm_levels {
+  int w, h;
+  float *sum;          /* running sum; after elfm_levels_result, the levels */
+  float *min;          /* lowest sum so far (0 at the start) */
+  int64_t t_first_us;  /* first event added, INT64_MIN before */
+} elfm_levels;
+
+/* The age to give the start levels (elfm_recon_options.integral_start_age_us):
+ * 20 ms. An object moving through the leaky integral shows, on average,
+ * what it added since it arrived at each pixel, leaked over the half of
+ * its crossing time that has passed (worm neurons: 4-6 um at ~0.12 um/ms,
+ * 20-25 ms); levels as fresh as 0 ms make the first frames brighter than
+ * any later one, and their ghosts rise above the detector's threshold.
+ * Worm 200 ms seeds 1-4, levels from the first 200 ms, age 0 / 20 / 35 ms:
+ * alpha 0.878 / 0.869 / 0.853, F1 0.861 / 0.912 / 0.917 (docs/recon.md). */
+#define ELFM_INTEGRAL_START_AGE_US 20000
+
+elfm_status elfm_levels_create(int width, int height, elfm_levels *out, elfm_error *err);
+void elfm_levels_free(elfm_levels *l);
+/* Add c's events before t_end_us (pixels outside are skipped); returns how
+ * many of c's events were before t_end_us (c->n when all). */
+size_t elfm_levels_add(elfm_levels *l, const elfm_event_chunk *c, double off_weight, int64_t t_end_us);
+/* Turn the sums into start levels (in l->sum), in ON steps. */
+void elfm_levels_result(elfm_levels *l, double off_weight);
+/* Start an INTEGRAL framer from level_steps (w x h, ON steps; <= 0: none)
+ * as of t_us. ELFM_ERR_INVALID for another representation or once events
+ * were pushed. */
+elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int64_t t_us,
+                                   elfm_error *err);
+
 /* ---- median filter ---- */
 typedef struct elfm_median elfm_median;
 

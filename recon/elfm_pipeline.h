@@ -80,6 +80,13 @@ typedef struct elfm_recon_options {
   size_t chunk_events;          /* events per read; default 65536 */
   elfm_reader_options reader;   /* geometry for DAT files without one */
   int64_t tiff_frame_us;        /* TIFF stacks: time between pages; 0 = dt_us */
+  /* INTEGRAL only: read the first integral_start_us of events once more
+   * before the run and start the integral from the levels they give
+   * (elfm_levels in elfm_frames.h), as if set integral_start_age_us
+   * before the first event (leaked by exp(-age / tau) by then); 0 = start
+   * from 0 (default). */
+  int64_t integral_start_us;
+  int64_t integral_start_age_us;
   elfm_recon_progress_fn progress;
   void *progress_user;
   /* Optional (NULL: off). With on_volume_slot set it is called in frame

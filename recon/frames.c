@@ -245,6 +245,85 @@ void elfm_framer_free(elfm_framer *f)
 
 int64_t elfm_framer_origin_us(const elfm_framer *f) { return f->origin_us; }
 
+elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int64_t t_us,
+                                   elfm_error *err)
+{
+  if (!f || !level_steps || f->opt.repr != ELFM_REPR_INTEGRAL)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "framer: starting levels need the integral representation");
+  if (f->t_integrated != INT64_MIN || f->have_events)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "framer: starting levels must be set before the first event");
+  const float clamp = 64.0f, floor = (float)ELFM_INTEGRAL_FLOOR;
+  const size_t n = (size_t)f->w * (size_t)f->h;
+  f->n_act = 0;
+  for (size_t i = 0; i < n; i++) {
+    integral_px *p = &f->px[i];
+    const float v = level_steps[i];
+    if (!(v > 0)) continue; /* also NaN */
+    p->sum = v > clamp ? clamp : v;
+    p->t_us = t_us;
+    p->pol = 0;
+    p->shown = p->sum > floor;
+    if (p->shown) f->act[f->n_act++] = (uint32_t)i;
+  }
+  return ELFM_OK;
+}
+
+elfm_status elfm_levels_create(int width, int height, elfm_levels *out, elfm_error *err)
+{
+  memset(out, 0, sizeof *out);
+  if (width <= 0 || height <= 0 || (int64_t)width * height > (int64_t)1 << 31)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "levels: size %d x %d is invalid", width,
+                          height);
+  const size_t n = (size_t)width * (size_t)height;
+  out->sum = calloc(n, sizeof *out->sum);
+  out->min = calloc(n, sizeof *out->min);
+  if (!out->sum || !out->min) {
+    elfm_levels_free(out);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (levels %d x %d)", width,
+                          height);
+  }
+  out->w = width;
+  out->h = height;
+  out->t_first_us = INT64_MIN;
+  return ELFM_OK;
+}
+
+void elfm_levels_free(elfm_levels *l)
+{
+  if (!l) return;
+  free(l->sum);
+  free(l->min);
+  l->sum = l->min = NULL;
+}
+
+size_t elfm_levels_add(elfm_levels *l, const elfm_event_chunk *c, double off_weight, int64_t t_end_us)
+{
+  const float off = (float)off_weight;
+  size_t k = 0;
+  for (; k < c->n; k++) {
+    const int64_t t = c->t_us[k];
+    if (t >= t_end_us) break;
+    if (c->x[k] >= l->w || c->y[k] >= l->h) continue; /* the framer reports these */
+    if (l->t_first_us == INT64_MIN) l->t_first_us = t;
+    const size_t i = (size_t)c->y[k] * (size_t)l->w + c->x[k];
+    float v = l->sum[i] + (c->p[k] ? 1.0f : -off);
+    l->sum[i] = v;
+    if (v < l->min[i]) l->min[i] = v;
+  }
+  return k;
+}
+
+void elfm_levels_result(elfm_levels *l, double off_weight)
+{
+  /* after an OFF event the pixel is 0..1 step below its reference, half a
+   * step on average: the start level is the deepest reference plus that */
+  const size_t n = (size_t)l->w * (size_t)l->h;
+  const float half = 0.5f * (float)off_weight;
+  for (size_t i = 0; i < n; i++) l->sum[i] = l->min[i] < 0 ? -l->min[i] + half : 0.0f;
+}
+
 static int framer_grow(elfm_framer *f)
 {
   size_t cap = f->q_cap * 2;

@@ -109,6 +109,10 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   if (opt->from_us >= opt->to_us)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "from_us %lld is not before to_us %lld",
                           (long long)opt->from_us, (long long)opt->to_us);
+  if (opt->integral_start_us < 0 || opt->integral_start_age_us < 0)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "integral_start_us %lld and integral_start_age_us %lld must be >= 0",
+                          (long long)opt->integral_start_us, (long long)opt->integral_start_age_us);
   elfm_status st = elfm_framer_options_check(&opt->framer, err);
   if (st) return st;
   st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan, err);
@@ -308,6 +312,56 @@ static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)
   if (out) *out = r->st;
 }
 
+/* The integral's start levels: a second pass over the first
+ * integral_start_us of events (from from_us), set on the framer before
+ * the run reads anything. Memory: two floats per pixel, freed here. */
+static elfm_status integral_start_levels(const char *events_path, const elfm_recon_options *opt,
+                                         int w, int h, elfm_framer *framer, elfm_error *err)
+{
+  elfm_levels lv;
+  elfm_status st = elfm_levels_create(w, h, &lv, err);
+  if (st) return st;
+  elfm_reader *rd = NULL;
+  elfm_event_chunk *c = NULL;
+  st = elfm_reader_open(events_path, &opt->reader, &rd, err);
+  if (!st) {
+    c = elfm_chunk_create(opt->chunk_events ? opt->chunk_events : 65536, err);
+    if (!c) st = err ? err->code : ELFM_ERR_NOMEM;
+  }
+  /* A read error here (a truncated or corrupt file) ends this pass with the
+   * levels read so far: the run's own pass meets the same error after
+   * delivering every volume before it, and reports it then. */
+  int stop = 0;
+  if (!st && opt->from_us != INT64_MIN) stop = elfm_reader_seek_us(rd, opt->from_us, NULL) != ELFM_OK;
+  int64_t t_end = INT64_MAX;
+  while (!st && !stop) {
+    if (elfm_reader_read(rd, c, NULL) != ELFM_OK || c->n == 0) break;
+    elfm_event_chunk v = *c; /* the events at or after from_us, before to_us */
+    size_t lo = 0;
+    while (lo < v.n && v.t_us[lo] < opt->from_us) lo++;
+    v.t_us += lo;
+    v.x += lo;
+    v.y += lo;
+    v.p += lo;
+    v.n -= lo;
+    if (v.n == 0) continue;
+    if (t_end == INT64_MAX) {
+      t_end = opt->integral_start_us > INT64_MAX - v.t_us[0] ? INT64_MAX
+                                                              : v.t_us[0] + opt->integral_start_us;
+      if (opt->to_us < t_end) t_end = opt->to_us;
+    }
+    if (elfm_levels_add(&lv, &v, opt->framer.off_weight, t_end) < v.n) break;
+  }
+  if (!st && lv.t_first_us != INT64_MIN) {
+    elfm_levels_result(&lv, opt->framer.off_weight);
+    st = elfm_framer_set_levels(framer, lv.sum, lv.t_first_us - opt->integral_start_age_us, err);
+  }
+  elfm_chunk_free(c);
+  elfm_reader_close(rd);
+  elfm_levels_free(&lv);
+  return st;
+}
+
 elfm_status elfm_recon_run(const char *events_path, const elfm_calib *calib,
                            const elfm_recon_options *opt, elfm_volume_fn on_volume, void *user,
                            elfm_recon_stats *stats, elfm_error *err)
@@ -345,6 +399,9 @@ elfm_status elfm_recon_run(const char *events_path, const elfm_calib *calib,
   }
   r.src.from_us = opt->from_us;
   r.src.to_us = opt->to_us;
+  if (!st && opt->integral_start_us > 0 && opt->framer.repr == ELFM_REPR_INTEGRAL)
+    st = integral_start_levels(events_path, opt, calib->sensor_width_px, calib->sensor_height_px,
+                               r.src.framer, err);
   if (!st && opt->from_us != INT64_MIN) st = elfm_reader_seek_us(r.src.reader, opt->from_us, err);
   if (!st) st = run_loop(&r, use_median, ELFM_PATH_AUTO, on_volume, user, err);
   run_finish_stats(&r, now_s() - t_start, stats);
