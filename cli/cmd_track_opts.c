@@ -203,7 +203,7 @@ static void usage(FILE *f)
     "                       a batch's volumes are searched for peaks in parallel too)\n"
     "detection:\n"
     "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (45 on time\n"
-    "                       surfaces, 15 on the integral), --threshold-rel F (0.35 of\n"
+    "                       surfaces, 20 on the integral), --threshold-rel F (0.35 of\n"
     "                       the maximum for counts)\n"
     "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all\n"
     "                       depths; default 60 on time surfaces, 0 with --motion stage)\n"
@@ -213,7 +213,7 @@ static void usage(FILE *f)
     "                       test; needs --localize views, the default)\n"
     "  --threshold-low V    hysteresis: peaks above V but below the threshold may\n"
     "                       continue a track, never start one (30 with the default\n"
-    "                       threshold, 0 = off)\n"
+    "                       threshold, 0 = off; off on the integral)\n"
     "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
     "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
     "  --view-support F     a peak needs signal in >= F of the views sampling its voxel\n"
@@ -722,9 +722,15 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
        * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means, at
        * the floor of 2 steps, threshold 10 / 15: F1 0.893 / 0.905, alpha
        * 0.777 / 0.778 (at a floor of 1.5, threshold 10 / 15 / 20 / 30 /
-       * 40: alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689 with a 3 um box). */
-      o.peaks.absolute = 15;
-      if (!low_given) o.peaks.hysteresis_low = 15;
+       * 40: alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689 with a 3 um box).
+       * Twelfth session, with the integral's start levels (brighter first
+       * frames, whose ghosts reach 10-30): threshold / hysteresis 15 / 15,
+       * 20 / 0, 20 / 15, 25 / 0, 30 / 0: seeds 1-4 F1 0.912 / 0.946 /
+       * 0.941 / 0.958 / 0.956, alpha 0.871 / 0.871 / 0.873 / 0.877 /
+       * 0.874; held-out seeds 5-7 F1 0.918 / 0.941 / 0.933 / 0.943 / 0.946,
+       * alpha 0.862 / 0.866 / 0.856 / 0.845 / 0.826. */
+      o.peaks.absolute = 20;
+      if (!low_given) o.peaks.hysteresis_low = 0;
     } else {
       /* 45 with the view-support test (below), 50 without it: the test
        * removes the ghosts a lower threshold lets in (docs/tracker.md
