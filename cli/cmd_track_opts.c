@@ -99,8 +99,10 @@ static void track_defaults(track_opts *o)
    * 2, 7, 12, 16 up by 0.018-0.045, none down); 3 / 4 / 6 / 8 um (before
    * the 2 x gate cap on the exchange's joins): 0.8084 / 0.8120 / 0.8129 /
    * 0.8129. Held-out seeds 21-24 the same; flow 500 ms seed 1 0.744 ->
-   * 0.767; stage, worm, blink, blink_moving the same (docs/tracker.md
-   * "Encounter review"). */
+   * 0.767; stage, worm, blink, blink_moving the same. With the reviews'
+   * join limit (elfm_link_options.review_join_factor, 2 x the gate, on
+   * step 6 too): 0.8184, held-out 0.8100 (docs/tracker.md "Encounter
+   * review"). */
   o->link.encounter_um = 5;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,

@@ -161,7 +161,7 @@ int64_t elfm_framer_origin_us(const elfm_framer *f);
  * in view then shows only where it has moved on to, its leading part; the
  * part still over where it started cancels against its own start (worm
  * neurons, 0.1 um/ms: 1-2 um ahead along their motion for the first
- * 20 ms, docs/tracker.md "The integral's start"). Those start levels can
+ * 20 ms, docs/recon.md "The integral's start"). Those start levels can
  * be read back from the events themselves: when the object leaves a pixel,
  * the pixel's sum falls to minus what it was brighter than the background
  * at the start. elfm_levels accumulates, over the first events of a

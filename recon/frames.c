@@ -260,7 +260,10 @@ elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int
   for (size_t i = 0; i < n; i++) {
     integral_px *p = &f->px[i];
     const float v = level_steps[i];
-    if (!(v > 0)) continue; /* also NaN */
+    if (!(v > 0)) { /* also NaN */
+      memset(p, 0, sizeof *p);
+      continue;
+    }
     p->sum = v > clamp ? clamp : v;
     p->t_us = t_us;
     p->pol = 0;

@@ -335,7 +335,7 @@ static elfm_status integral_start_levels(const char *events_path, const elfm_rec
   if (!st && opt->from_us != INT64_MIN) stop = elfm_reader_seek_us(rd, opt->from_us, NULL) != ELFM_OK;
   int64_t t_end = INT64_MAX;
   while (!st && !stop) {
-    if (elfm_reader_read(rd, c, NULL) != ELFM_OK || c->n == 0) break;
+    if (elfm_reader_read(rd, c, NULL) != ELFM_OK || (c->n == 0 && c->n_trig == 0)) break;
     elfm_event_chunk v = *c; /* the events at or after from_us, before to_us */
     size_t lo = 0;
     while (lo < v.n && v.t_us[lo] < opt->from_us) lo++;
@@ -354,7 +354,8 @@ static elfm_status integral_start_levels(const char *events_path, const elfm_rec
   }
   if (!st && lv.t_first_us != INT64_MIN) {
     elfm_levels_result(&lv, opt->framer.off_weight);
-    st = elfm_framer_set_levels(framer, lv.sum, lv.t_first_us - opt->integral_start_age_us, err);
+    const int64_t age = opt->integral_start_age_us, t1 = lv.t_first_us;
+    st = elfm_framer_set_levels(framer, lv.sum, t1 < INT64_MIN / 2 + age ? t1 : t1 - age, err);
   }
   elfm_chunk_free(c);
   elfm_reader_close(rd);

@@ -131,7 +131,7 @@ typedef struct elfm_link_options {
    * the frames they stay that close, and encounter_pad frames before, are
    * the encounter. Once both have swap_points points after it, their heads
    * (before it) and tails (after it) are joined the other way round when
-   * that fits swap_ratio times better, as in step 6. Why: two beads
+   * that fits encounter_ratio times better, as in step 6. Why: two beads
    * passing within the axial blur give one or two detections at one spot
    * for a frame or two, both tracks take them without a gap, and each may
    * leave on the other's bead. 0 = off (default). */

@@ -67,8 +67,9 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance and pad "
-                   ">= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and short path >= 0)");
+                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance and "
+                   "pad >= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and "
+                   "short path >= 0)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);

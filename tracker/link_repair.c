@@ -211,10 +211,10 @@ static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_det
  * session, the exchanges steps 6 and 7 made on 57 simulated recordings
  * (flow, dense, brighter, faster, noisier), judged against the truth: the
  * 17 that joined the beads back had joins of 1.1-12.0 um, the 11 that
- * parted them 7.3-38 um (9 of them above 12). Flow 100 ms seeds 1-20, step 6 capped at 2 x gate: alpha
- * 0.8136 -> 0.8184 (five seeds up, none down); held-out seeds 21-24
- * 0.8061 -> 0.8100; 1.5 x the same, 3 x 0.8167 (docs/tracker.md
- * "Encounter review"). */
+ * parted them 7.3-38 um (9 of them above 12). Flow 100 ms seeds 1-20,
+ * step 6 capped at 2 x gate too: alpha 0.8136 -> 0.8184 (five seeds up,
+ * none down); held-out seeds 21-24 0.8061 -> 0.8100; 1.5 x the same, 3 x
+ * 0.8167 (docs/tracker.md "Encounter review"). */
 static int joins_known(const elfm_link_options *o, double alt)
 {
   const double g = o->review_join_factor * o->gate_um;
@@ -432,7 +432,8 @@ static int apart_at(const elfm_track *a, const elfm_track *b, int64_t frame, dou
  * encounter_pad frames before, whose points the merging already pulls)
  * are left out; each head is joined to each tail at the encounter's
  * middle as in step 6, and the tails are exchanged when that fits
- * swap_ratio times better than the tracks as they are. */
+ * encounter_ratio times better than the tracks as they are (and within
+ * joins_known). */
 elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err)
 {
   const elfm_link_options *o = &l->o;
