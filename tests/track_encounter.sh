@@ -21,21 +21,21 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--encounter-um -1" "--encounter-um x" "--encounter-ratio 0" \
   "--encounter-ratio 1.5" "--encounter-pad -1" "--review-join-factor -1"
-simulate_or_skip "$tmp/flow" flow 100 7
-track_score "$tmp/flow" "$tmp/off" "$tmp/off.json" --encounter-um 0
-track_score "$tmp/flow" "$tmp/on" "$tmp/on.json"
-a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/on.json" alpha)
-echo "flow seed 7: alpha $a0 without the encounter review, $a1 with it"
-expect_gain "$a0" "$a1" 0.03 "the encounter review gains < 0.03 alpha ($a0 -> $a1)"
-[ "$(key "$tmp/on/summary.json" encounter_um)" = 5 ] ||
-  { echo "FAIL: encounter_um not 5 in summary.json"; fail=$((fail+1)); }
-simulate_or_skip "$tmp/f23" flow 100 23
-track_score "$tmp/f23" "$tmp/j0" "$tmp/j0.json" --review-join-factor 0
-track_score "$tmp/f23" "$tmp/j2" "$tmp/j2.json"
-b0=$(key "$tmp/j0.json" alpha); b1=$(key "$tmp/j2.json" alpha)
-echo "flow seed 23: alpha $b0 without the join limit, $b1 with it"
-expect_gain "$b0" "$b1" 0.01 "the join limit gains < 0.01 alpha ($b0 -> $b1)"
-[ "$(key "$tmp/j2/summary.json" review_join_factor)" = 2 ] ||
-  { echo "FAIL: review_join_factor not 2 in summary.json"; fail=$((fail+1)); }
+# compare SEED OFF_OPTIONS MIN WHAT KEY VALUE: flow 100 ms seed SEED tracked
+# with OFF_OPTIONS and with the defaults; the defaults must gain more than
+# MIN alpha, and summary.json must record KEY = VALUE.
+compare() {
+  simulate_or_skip "$tmp/f$1" flow 100 "$1"
+  # shellcheck disable=SC2086
+  track_score "$tmp/f$1" "$tmp/off$1" "$tmp/off$1.json" $2
+  track_score "$tmp/f$1" "$tmp/on$1" "$tmp/on$1.json"
+  c0=$(key "$tmp/off$1.json" alpha); c1=$(key "$tmp/on$1.json" alpha)
+  echo "flow seed $1: alpha $c0 without $4, $c1 with it"
+  expect_gain "$c0" "$c1" "$3" "$4 gains < $3 alpha ($c0 -> $c1)"
+  [ "$(key "$tmp/on$1/summary.json" "$5")" = "$6" ] ||
+    { echo "FAIL: $5 not $6 in summary.json"; fail=$((fail+1)); }
+}
+compare 7 "--encounter-um 0" 0.03 "the encounter review" encounter_um 5
+compare 23 "--review-join-factor 0" 0.01 "the join limit" review_join_factor 2
 [ $fail -eq 0 ] && echo "track_encounter: all passed" || echo "track_encounter: $fail failed"
 [ $fail -eq 0 ]
