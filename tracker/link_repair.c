@@ -354,6 +354,7 @@ elfm_status elfm_link_mark_encounters(elfm_linker *l, int64_t frame, size_t nt, 
     const double *p = encounter_position(l, i);
     if (p) l->xkeys[n++] = (link_xkey){p[0], (int)i};
   }
+  if (n < 2) return ELFM_OK; /* no pair (and with no track yet, no xkeys array) */
   qsort(l->xkeys, n, sizeof *l->xkeys, cmp_xkey);
   for (size_t u = 0; u < n; u++) {
     const size_t i = (size_t)l->xkeys[u].track;
