@@ -293,8 +293,7 @@ static void usage(FILE *f)
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
-    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral:\n"
-    "                       3; 1 classical)\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"
     "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
     "                       which leaves turns at constant speed alone (3; integral: 2)\n"
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
@@ -368,7 +367,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   static const char *const C = "track";
   track_opts o;
   track_defaults(&o);
-  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0, fsdp_given = 0, fade_given = 0, locpow_given = 0, gcvg_given = 0;
+  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0, fsdp_given = 0, fade_given = 0, locpow_given = 0;
   static const struct option lo[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -622,7 +621,6 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_GCVG:
-      gcvg_given = 1;
       if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
       break;
     case O_SPORD:
@@ -715,18 +713,6 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * 0.866 / 0.857 / 0.868 (0.825 / 0.930 / 0.842 -> 0.844 / 0.932 /
      * 0.828); lateral RMSE 0.25 -> 0.27 um. */
     o.loc.power = 1;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !gcvg_given) {
-    /* The integral's errors are more alike from frame to frame than a time
-     * surface's (a leaky sum shares nearly every event with the frame
-     * before), so GCV's weight, which takes them for independent, needs
-     * the larger correction. Twelfth session, worm 200 ms, alpha over
-     * seeds 1-4 / held-out 5-7 at gamma 1.4 / 2 / 3 / 4 / 5 / 6: 0.882 /
-     * 0.884 / 0.885 / 0.886 / 0.873 / 0.861 and 0.868 / 0.871 / 0.874 /
-     * 0.877 / 0.877 / 0.857; at 3 every seed up or the same (0.909 / 0.830
-     * / 0.851 / 0.939 / 0.844 / 0.932 / 0.828 -> 0.915 / 0.832 / 0.851 /
-     * 0.942 / 0.853 / 0.938 / 0.832), away from the fall past 4. */
-    o.smooth.gcv_gamma = 3;
   }
   if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spath_given) {
     /* Crawling neurons cover a few um in 8 frames: the cap binds only

@@ -394,8 +394,9 @@ static void test_start_levels(void)
   CHECK_OK(elfm_framer_push(fr, d, &err), &err);
   CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, 0, &err), ELFM_ERR_INVALID);
   elfm_framer_free(fr);
-  CHECK_EQ_INT(elfm_levels_create(0, 1, &lv, &err), ELFM_ERR_INVALID);
   elfm_levels_free(&lv);
+  CHECK_EQ_INT(elfm_levels_create(0, 1, &lv, &err), ELFM_ERR_INVALID);
+  CHECK(lv.sum == NULL && lv.min == NULL);
   elfm_chunk_free(d);
 }
 

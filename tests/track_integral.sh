@@ -59,8 +59,7 @@ for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
           '"tau_us":[[:space:]]*100000' '"radius_xy_um":[[:space:]]*1.5' \
           '"threshold_abs":[[:space:]]*20' '"off_weight":[[:space:]]*1' \
           '"spline_order":[[:space:]]*2' '"integral_start_ms":[[:space:]]*200' \
-          '"integral_start_age_ms":[[:space:]]*20' '"localize_power":[[:space:]]*1' \
-          '"gcv_gamma":[[:space:]]*3'; do
+          '"integral_start_age_ms":[[:space:]]*20' '"localize_power":[[:space:]]*1'; do
   grep -q "$kv" "$tmp/int/summary.json" || { echo "FAIL: summary.json lacks $kv"; fail=$((fail+1)); }
 done
 for a in x y; do
