@@ -19,7 +19,8 @@
 # a usage error. The integral's motion bias (lead 0.1 um, fade 0.05 um/ms):
 # score measures the uncorrected detections' lead along the motion (0.03-
 # 0.25 um; seeds 1-7 0.05-0.16); a fade speed of 0 is a usage error of
-# track and of score.
+# track and of score. A file cut inside the start levels' first pass: exit 1
+# naming the byte, and the tracks before the cut written.
 # Usage: track_integral.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -97,5 +98,18 @@ expect_gain "$a0" "$a1" 0.03 "the start levels: alpha $a0 -> $a1 (gain < 0.03)"
 e=$(key "$tmp/exp.json" alpha); i=$(key "$tmp/int.json" alpha)
 echo "worm: alpha time surface $e, integral $i"
 awk -v e="$e" -v i="$i" 'BEGIN { exit !(i >= e + 0.15) }' || { echo "FAIL: alpha $e -> $i"; fail=$((fail+1)); }
+# A file cut inside the start levels' first pass (a third of the way in):
+# that pass ends quietly at the cut, the run's own pass reports it (exit 1,
+# naming the file and the byte) after writing what came before it.
+sz=$(wc -c < "$tmp/w/events.raw")
+head -c $((sz / 3)) "$tmp/w/events.raw" > "$tmp/cut.raw"
+printf '\377\377\377' >> "$tmp/cut.raw"
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/cut.raw" --out "$tmp/cut" -q --dt-us 2000 \
+  --repr integral >/dev/null 2>"$tmp/cut.err"
+rc=$?
+rows=$(wc -l < "$tmp/cut/tracks.csv" 2>/dev/null || echo 0)
+echo "worm cut at a third: exit $rc, $rows lines of tracks.csv, $(cat "$tmp/cut.err")"
+[ $rc -eq 1 ] && grep -q "cut.raw: byte [0-9]" "$tmp/cut.err" && [ "$rows" -gt 10 ] ||
+  { echo "FAIL: a cut file with the start levels"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
