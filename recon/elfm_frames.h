@@ -168,8 +168,12 @@ int64_t elfm_framer_origin_us(const elfm_framer *f);
  * recording, each pixel's sum (ON +1, OFF -off_weight, no leak) and its
  * lowest value; the start level is that depth plus half a step (what an
  * OFF event leaves on average), 0 where the sum never went below 0. Set
- * on a framer before its first event, the integral then starts from them
- * at t_us and leaks from there as it does from any event.
+ * on a framer before its first event, the integral starts from them, and
+ * each is held, not leaked, until that pixel's first event: the object is
+ * there until it leaves. (Leaked from the start instead, a level is
+ * smaller than the OFF steps that later undo it, and the dark residue hides
+ * whatever arrives there next, such as the trailing neuron of a pair:
+ * docs/recon.md.) From its first event on the pixel leaks as any other.
  * Memory: two floats per pixel. */
 typedef struct elfm_levels {
   int w, h;
@@ -179,13 +183,15 @@ typedef struct elfm_levels {
 } elfm_levels;
 
 /* The age to give the start levels (elfm_recon_options.integral_start_age_us):
- * 20 ms. An object moving through the leaky integral shows, on average,
- * what it added since it arrived at each pixel, leaked over the half of
- * its crossing time that has passed (worm neurons: 4-6 um at ~0.12 um/ms,
- * 20-25 ms); levels as fresh as 0 ms make the first frames brighter than
- * any later one, and their ghosts rise above the detector's threshold.
- * Worm 200 ms seeds 1-4, levels from the first 200 ms, age 0 / 20 / 35 ms:
- * alpha 0.878 / 0.869 / 0.853, F1 0.861 / 0.912 / 0.917 (docs/recon.md). */
+ * 20 ms, i.e. they are scaled by exp(-20 ms / tau). An object moving
+ * through the leaky integral shows, on average, what it added since it
+ * arrived at each pixel, leaked over the half of its crossing time that has
+ * passed (worm neurons: 4-6 um at ~0.12 um/ms, 20-25 ms); levels as fresh
+ * as 0 ms make the first frames brighter than any later one, and their
+ * ghosts rise above the detector's threshold. Worm 200 ms seeds 1-4, levels
+ * from the first 200 ms (leaked, before they were held), age 0 / 20 / 35 ms:
+ * alpha 0.878 / 0.869 / 0.853, F1 0.861 / 0.912 / 0.917; held at the final
+ * defaults, 10 / 20 / 30 ms: docs/recon.md. */
 #define ELFM_INTEGRAL_START_AGE_US 20000
 
 elfm_status elfm_levels_create(int width, int height, elfm_levels *out, elfm_error *err);
@@ -195,9 +201,9 @@ void elfm_levels_free(elfm_levels *l);
 size_t elfm_levels_add(elfm_levels *l, const elfm_event_chunk *c, double off_weight, int64_t t_end_us);
 /* Turn the sums into start levels (in l->sum), in ON steps. */
 void elfm_levels_result(elfm_levels *l, double off_weight);
-/* Start an INTEGRAL framer from level_steps (w x h, ON steps; <= 0: none)
- * as of t_us. ELFM_ERR_INVALID for another representation or once events
- * were pushed. */
+/* Start an INTEGRAL framer from level_steps (w x h, ON steps; <= 0: none),
+ * each held until its pixel's first event; t_us is when they were set.
+ * ELFM_ERR_INVALID for another representation or once events were pushed. */
 elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int64_t t_us,
                                    elfm_error *err);
 

@@ -82,9 +82,9 @@ typedef struct elfm_recon_options {
   int64_t tiff_frame_us;        /* TIFF stacks: time between pages; 0 = dt_us */
   /* INTEGRAL only: read the first integral_start_us of events once more
    * before the run and start the integral from the levels they give
-   * (elfm_levels in elfm_frames.h), as if set integral_start_age_us
-   * before the first event (leaked by exp(-age / tau) by then); 0 = start
-   * from 0 (default). */
+   * (elfm_levels in elfm_frames.h), scaled by exp(-integral_start_age_us
+   * / tau) and held until each pixel's first event; 0 = start from 0
+   * (default). */
   int64_t integral_start_us;
   int64_t integral_start_age_us;
   elfm_recon_progress_fn progress;

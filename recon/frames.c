@@ -25,7 +25,8 @@
 typedef struct integral_px {
   int64_t t_us;              /* its latest event */
   float sum;                 /* reference level, in ON steps, as of t_us */
-  uint8_t pol;               /* latest event 1 ON, 2 OFF, 0 none */
+  uint8_t pol;               /* latest event 1 ON, 2 OFF, 0 none; 3 none yet, and sum is
+                                a start level, held (no leak) until the first event */
   uint8_t shown;             /* listed in act[]: level above the floor */
 } integral_px;
 
@@ -266,7 +267,7 @@ elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int
     }
     p->sum = v > clamp ? clamp : v;
     p->t_us = t_us;
-    p->pol = 0;
+    p->pol = 3;
     p->shown = p->sum > floor;
     if (p->shown) f->act[f->n_act++] = (uint32_t)i;
   }
@@ -397,6 +398,7 @@ void elfm_framer_finish(elfm_framer *f) { f->finished = 1; }
 /* The leak over the time since the pixel's sum was last written. */
 static float integral_leak(const elfm_framer *f, const integral_px *p, int64_t t)
 {
+  if (p->pol == 3) return 1.0f; /* a start level: the object is there until it leaves */
   int64_t age = t - p->t_us;
   return age > 0 ? (float)exp(-(double)age / f->opt.tau_us) : 1.0f;
 }
@@ -432,8 +434,8 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
    * The frame shows the level above the floor (elfm_frames.h). */
   const float clamp = 64.0f, floor = (float)ELFM_INTEGRAL_FLOOR, gain = 255.0f / 8.0f;
   const float off = (float)f->opt.off_weight;
-  /* half[pol]: pol 0 no event yet, 1 latest ON, 2 latest OFF */
-  const float half[3] = {0.0f, 0.5f, -0.5f * off};
+  /* half[pol]: pol 0 no event yet, 1 latest ON, 2 latest OFF, 3 a held start level */
+  const float half[4] = {0.0f, 0.5f, -0.5f * off, 0.0f};
   size_t nev = 0;
   for (size_t i = 0; i < f->q_n; i++) {
     size_t k = (f->q_head + i) & (f->q_cap - 1);

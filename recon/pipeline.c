@@ -354,8 +354,10 @@ static elfm_status integral_start_levels(const char *events_path, const elfm_rec
   }
   if (!st && lv.t_first_us != INT64_MIN) {
     elfm_levels_result(&lv, opt->framer.off_weight);
-    const int64_t age = opt->integral_start_age_us, t1 = lv.t_first_us;
-    st = elfm_framer_set_levels(framer, lv.sum, t1 < INT64_MIN / 2 + age ? t1 : t1 - age, err);
+    /* leaked as if set integral_start_age_us before the first event */
+    const float k = (float)exp(-(double)opt->integral_start_age_us / opt->framer.tau_us);
+    for (size_t i = 0; i < (size_t)w * (size_t)h; i++) lv.sum[i] *= k;
+    st = elfm_framer_set_levels(framer, lv.sum, lv.t_first_us, err);
   }
   elfm_chunk_free(c);
   elfm_reader_close(rd);

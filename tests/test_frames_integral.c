@@ -395,6 +395,41 @@ static void test_start_levels(void)
   CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, 0, &err), ELFM_ERR_INVALID);
   elfm_framer_free(fr);
   elfm_levels_free(&lv);
+  /* A start level is held, not leaked, until the pixel's first event (the
+   * object is there until it leaves): 5 steps show as 3 above the floor
+   * in every frame up to an OFF event at 95 ms, and from there the pixel
+   * leaks as any other (5 - 1 - 1/2 steps, then e^(-age/tau)). */
+  {
+    float lv2[4] = {5, 0, 0, 0};
+    const float gain = 255.0f / 8.0f, fl = (float)ELFM_INTEGRAL_FLOOR;
+    elfm_framer *h = NULL;
+    elfm_event_chunk *e = elfm_chunk_create(4, &err);
+    elfm_frame *fr1 = elfm_frame_create(4, 1, &err);
+    CHECK_OK(elfm_framer_create(&o, 4, 1, &h, &err), &err);
+    CHECK_OK(elfm_framer_set_levels(h, lv2, 0, &err), &err);
+    e->t_us[0] = 95000, e->x[0] = 0, e->y[0] = 0, e->p[0] = 0;
+    e->t_us[1] = 99500, e->x[1] = 3, e->y[1] = 0, e->p[1] = 1;
+    e->n = 2;
+    CHECK_OK(elfm_framer_push(h, e, &err), &err);
+    elfm_framer_finish(h);
+    int held = 0, after = 0, bad = 0;
+    while (elfm_framer_next(h, fr1)) {
+      const float v = fr1->data[0];
+      if (fr1->t_us <= 95000) {
+        held++;
+        bad += fabsf(v - gain * (5 - fl)) > 1e-3f;
+      } else if (fr1->t_us == 96000) {
+        after++;
+        const float want = gain * (3.5f * expf(-1000.0f / (float)o.tau_us) - fl);
+        bad += fabsf(v - want) > 1e-2f;
+      }
+    }
+    CHECK_MSG(held == 95 && after == 1 && bad == 0, "held start level: %d held frames, %d after, %d wrong",
+              held, after, bad);
+    elfm_frame_free(fr1);
+    elfm_chunk_free(e);
+    elfm_framer_free(h);
+  }
   CHECK_EQ_INT(elfm_levels_create(0, 1, &lv, &err), ELFM_ERR_INVALID);
   CHECK(lv.sum == NULL && lv.min == NULL);
   elfm_chunk_free(d);
