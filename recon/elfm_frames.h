@@ -202,10 +202,9 @@ size_t elfm_levels_add(elfm_levels *l, const elfm_event_chunk *c, double off_wei
 /* Turn the sums into start levels (in l->sum), in ON steps. */
 void elfm_levels_result(elfm_levels *l, double off_weight);
 /* Start an INTEGRAL framer from level_steps (w x h, ON steps; <= 0: none),
- * each held until its pixel's first event; t_us is when they were set.
- * ELFM_ERR_INVALID for another representation or once events were pushed. */
-elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int64_t t_us,
-                                   elfm_error *err);
+ * each held until its pixel's first event. ELFM_ERR_INVALID for another
+ * representation or once events were pushed. */
+elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, elfm_error *err);
 
 /* ---- median filter ---- */
 typedef struct elfm_median elfm_median;

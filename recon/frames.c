@@ -246,8 +246,7 @@ void elfm_framer_free(elfm_framer *f)
 
 int64_t elfm_framer_origin_us(const elfm_framer *f) { return f->origin_us; }
 
-elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int64_t t_us,
-                                   elfm_error *err)
+elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, elfm_error *err)
 {
   if (!f || !level_steps || f->opt.repr != ELFM_REPR_INTEGRAL)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
@@ -266,7 +265,7 @@ elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, int
       continue;
     }
     p->sum = v > clamp ? clamp : v;
-    p->t_us = t_us;
+    p->t_us = 0; /* unused while held (pol 3): the first event sets it */
     p->pol = 3;
     p->shown = p->sum > floor;
     if (p->shown) f->act[f->n_act++] = (uint32_t)i;

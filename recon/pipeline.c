@@ -357,7 +357,7 @@ static elfm_status integral_start_levels(const char *events_path, const elfm_rec
     /* leaked as if set integral_start_age_us before the first event */
     const float k = (float)exp(-(double)opt->integral_start_age_us / opt->framer.tau_us);
     for (size_t i = 0; i < (size_t)w * (size_t)h; i++) lv.sum[i] *= k;
-    st = elfm_framer_set_levels(framer, lv.sum, lv.t_first_us, err);
+    st = elfm_framer_set_levels(framer, lv.sum, err);
   }
   elfm_chunk_free(c);
   elfm_reader_close(rd);

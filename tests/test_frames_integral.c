@@ -75,7 +75,7 @@ static double centroid_x(const elfm_frame *f, double x_true, int r)
 /* Mean signed error (frame centroid - true centre, along the motion) over
  * the frames whose blob lies well inside the sensor and, with t_max_us >
  * 0, that stand for times before t_max_us. With levels (w x h, steps),
- * the framer starts from them at t = 0. strict: every such frame must
+ * the framer starts from them. strict: every such frame must
  * show the blob. */
 static double mean_error_levels(const blob_scene *s, const elfm_framer_options *o,
                                 const float *levels, int64_t t_max_us, int strict, int *n_frames)
@@ -87,7 +87,7 @@ static double mean_error_levels(const blob_scene *s, const elfm_framer_options *
   elfm_frame *f = elfm_frame_create(SW, SH, &err);
   double sum = 0;
   int n = 0;
-  if (fr && levels) CHECK_OK(elfm_framer_set_levels(fr, levels, 0, &err), &err);
+  if (fr && levels) CHECK_OK(elfm_framer_set_levels(fr, levels, &err), &err);
   if (fr && c && f) {
     CHECK_OK(elfm_framer_push(fr, c, &err), &err);
     elfm_framer_finish(fr);
@@ -388,11 +388,11 @@ static void test_start_levels(void)
   exp.polarity = ELFM_POL_BOTH;
   exp.tau_us = 1000;
   CHECK_OK(elfm_framer_create(&exp, 4, 1, &fr, &err), &err);
-  CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, 0, &err), ELFM_ERR_INVALID);
+  CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, &err), ELFM_ERR_INVALID);
   elfm_framer_free(fr);
   CHECK_OK(elfm_framer_create(&o, 4, 1, &fr, &err), &err);
   CHECK_OK(elfm_framer_push(fr, d, &err), &err);
-  CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, 0, &err), ELFM_ERR_INVALID);
+  CHECK_EQ_INT(elfm_framer_set_levels(fr, lv.sum, &err), ELFM_ERR_INVALID);
   elfm_framer_free(fr);
   elfm_levels_free(&lv);
   /* A start level is held, not leaked, until the pixel's first event (the
@@ -406,7 +406,7 @@ static void test_start_levels(void)
     elfm_event_chunk *e = elfm_chunk_create(4, &err);
     elfm_frame *fr1 = elfm_frame_create(4, 1, &err);
     CHECK_OK(elfm_framer_create(&o, 4, 1, &h, &err), &err);
-    CHECK_OK(elfm_framer_set_levels(h, lv2, 0, &err), &err);
+    CHECK_OK(elfm_framer_set_levels(h, lv2, &err), &err);
     e->t_us[0] = 95000, e->x[0] = 0, e->y[0] = 0, e->p[0] = 0;
     e->t_us[1] = 99500, e->x[1] = 3, e->y[1] = 0, e->p[1] = 1;
     e->n = 2;

@@ -387,15 +387,7 @@ elfm_status elfm_link_mark_encounters(elfm_linker *l, int64_t frame, size_t nt, 
   return ELFM_OK;
 }
 
-/* Index of t's first point after `frame` (t->n when none). */
-static size_t first_after(const elfm_track *t, int64_t frame)
-{
-  size_t s = t->n;
-  while (s > 0 && t->pts[s - 1].frame > frame) s--;
-  return s;
-}
-
-/* Index of t's first point at or after `frame`. */
+/* Index of t's first point at or after `frame` (t->n when none). */
 static size_t first_from(const elfm_track *t, int64_t frame)
 {
   size_t s = t->n;
@@ -467,7 +459,7 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
       if (r == 0) f0 = f;
     }
     f0 -= o->encounter_pad;
-    const size_t bt = first_after(B->t, f1), at = first_after(A->t, f1);
+    const size_t bt = first_from(B->t, f1 + 1), at = first_from(A->t, f1 + 1);
     if (f1 >= frame || B->t->n - bt < K || A->t->n - at < K) {  /* not yet */
       l->enc[w++] = E;
       continue;
