@@ -35,6 +35,8 @@ typedef struct track_opts {
   double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
   int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
   elfm_localize_options loc;
+  double localize_near_um; /* the view fit takes out the light of other objects of the
+                              frame within this lateral distance (0 = off) */
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
   double guided_min_ratio; /* and its find at least this x the track's last intensity */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
@@ -114,6 +116,9 @@ typedef struct track_ctx {
    * slot is written by the one worker thread that refocused it */
   const elfm_frame **slot_frame;        /* [n_slots] */
   const elfm_refocus_plan **slot_plan;  /* [n_slots] */
+  unsigned char *fitok;  /* [n_slots][max_det] 1: the view fit placed that detection */
+  double *near_pos;      /* [n_slots][max_det][3] (localize_near_um > 0): the view fit's
+                            first positions, voxels */
   double *pred;          /* [max_det][3] track predictions (guided search) */
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;

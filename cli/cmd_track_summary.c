@@ -142,6 +142,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddStringToObject(par, "localize", o->localize_views ? "views" : "peak");
   cJSON_AddNumberToObject(par, "localize_window_px", o->loc.half_window_px);
   cJSON_AddNumberToObject(par, "localize_power", o->loc.power);
+  cJSON_AddNumberToObject(par, "localize_near_um", o->localize_near_um);
   cJSON_AddNumberToObject(par, "localize_outlier_px", o->loc.outlier_px);
   cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
   cJSON_AddNumberToObject(par, "guided_views", o->guided_views);

@@ -135,9 +135,13 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   c->sp = calloc((size_t)c->n_slots, sizeof *c->sp);
   c->slot_frame = calloc((size_t)c->n_slots, sizeof *c->slot_frame);
   c->slot_plan = calloc((size_t)c->n_slots, sizeof *c->slot_plan);
+  c->fitok = calloc((size_t)c->n_slots * (size_t)o->max_det, 1);
+  if (o->localize_near_um > 0)
+    c->near_pos = malloc((size_t)c->n_slots * (size_t)o->max_det * 3 * sizeof *c->near_pos);
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
   c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
-  if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan || !c->pred || !c->pred_intensity)
+  if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan || !c->fitok ||
+      (o->localize_near_um > 0 && !c->near_pos) || !c->pred || !c->pred_intensity)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -165,6 +169,57 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   elfm_volume_free(v);
   elfm_refocus_plan_free(plan);
   return s;
+}
+
+/* At most this many neighbours per fit: a view's window meets a few images. */
+#define NEAR_MAX 16
+
+/* The frame's other objects within localize_near_um laterally of (x_um,
+ * y_um), at pos (voxels), into nb; skip = the object itself (-1: none). */
+static int near_list(const elfm_detection *det, const double (*pos)[3], int n, int skip,
+                     double x_um, double y_um, double near_um, double nb[NEAR_MAX][3])
+{
+  int k = 0;
+  for (int j = 0; j < n && k < NEAR_MAX; j++) {
+    if (j == skip) continue;
+    const double dx = det[j].x_um - x_um, dy = det[j].y_um - y_um;
+    if (dx * dx + dy * dy < near_um * near_um) memcpy(nb[k++], pos[j], sizeof nb[0]);
+  }
+  return k;
+}
+
+/* The view fit again for each peak it placed that has neighbours within
+ * localize_near_um, with their light taken out (elfm_refocus_localize_near),
+ * all from the first fits' positions, so that the order does not matter.
+ * Where the second fit fails, the first stays. */
+static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det, int n,
+                       const elfm_localize_options *deep, int deep_test)
+{
+  const elfm_frame *frame = c->slot_frame[slot];
+  const elfm_refocus_plan *plan = c->slot_plan[slot];
+  const unsigned char *ok = c->fitok + (size_t)slot * c->o->max_det;
+  double(*pos)[3] = (double(*)[3])(c->near_pos + (size_t)slot * c->o->max_det * 3);
+  for (int i = 0; i < n; i++) {
+    pos[i][0] = elfm_volume_x_vox(v, det[i].x_um);
+    pos[i][1] = elfm_volume_y_vox(v, det[i].y_um);
+    pos[i][2] = elfm_volume_z_vox(v, det[i].z_um);
+  }
+  for (int i = 0; i < n; i++) {
+    if (!ok[i]) continue;
+    double nb[NEAR_MAX][3];
+    const int k = near_list(det, (const double(*)[3])pos, n, i, det[i].x_um, det[i].y_um,
+                            c->o->localize_near_um, nb);
+    if (!k) continue;
+    elfm_localize_result r;
+    if (!elfm_refocus_localize_near(plan, frame, pos[i][0], pos[i][1], pos[i][2],
+                                    (const double(*)[3])nb, k,
+                                    deep_test && det[i].deep_only ? deep : &c->o->loc, &r))
+      continue;
+    det[i].x_um = elfm_volume_x_um(v, r.x_vox);
+    det[i].y_um = elfm_volume_y_um(v, r.y_vox);
+    det[i].z_um = elfm_volume_z_um(v, r.z_vox);
+    det[i].fit_sd_px = r.sd_px;
+  }
 }
 
 /* Worker thread: detect the peaks of the slot's volume into its buffer,
@@ -219,6 +274,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     const int deep_test = c->o->deep_peak_views > 0;
     if (deep_test) deep.min_views = c->o->deep_peak_views;
     int n = 0;
+    memset(c->fitok + (size_t)slot * c->o->max_det, 0, (size_t)c->o->max_det);
     for (int i = 0; i < c->sp[slot].n; i++) {
       elfm_localize_result r;
       const int is_deep = deep_test && det[i].deep_only;
@@ -235,10 +291,12 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       det[n].y_um = elfm_volume_y_um(v, r.y_vox);
       det[n].z_um = elfm_volume_z_um(v, r.z_vox);
       det[n].fit_sd_px = r.sd_px;
+      c->fitok[(size_t)slot * c->o->max_det + n] = 1;
       n++;
       c->sp[slot].loc++;
     }
     c->sp[slot].n = n;
+    if (c->o->localize_near_um > 0) near_refit(c, v, slot, det, n, &deep, deep_test);
   }
   c->sp[slot].s = cli_now_s() - t0;
   return st;
@@ -278,8 +336,33 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     const double *q = pred + 3 * (size_t)k;
     if (any_near(det, n, q, g, kz)) continue;
     elfm_localize_result r;
-    if (!elfm_refocus_localize(plan, frame, elfm_volume_x_vox(v, q[0]), elfm_volume_y_vox(v, q[1]),
-                               elfm_volume_z_vox(v, q[2]), &lo, &r))
+    /* the frame's objects near the prediction: its peaks, and where no
+     * peak stands, the other tracks' predictions (localize_near_um) */
+    double nb[NEAR_MAX][3];
+    int k_nb = 0;
+    if (o->localize_near_um > 0) {
+      const double r2 = o->localize_near_um * o->localize_near_um;
+      for (int j = 0; j < n && k_nb < NEAR_MAX; j++) {
+        const double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1];
+        if (dx * dx + dy * dy >= r2) continue;
+        nb[k_nb][0] = elfm_volume_x_vox(v, det[j].x_um);
+        nb[k_nb][1] = elfm_volume_y_vox(v, det[j].y_um);
+        nb[k_nb][2] = elfm_volume_z_vox(v, det[j].z_um);
+        k_nb++;
+      }
+      for (int j = 0; j < np && k_nb < NEAR_MAX; j++) {
+        const double *qj = pred + 3 * (size_t)j;
+        const double dx = qj[0] - q[0], dy = qj[1] - q[1];
+        if (j == k || dx * dx + dy * dy >= r2 || any_near(det, n, qj, g, kz)) continue;
+        nb[k_nb][0] = elfm_volume_x_vox(v, qj[0]);
+        nb[k_nb][1] = elfm_volume_y_vox(v, qj[1]);
+        nb[k_nb][2] = elfm_volume_z_vox(v, qj[2]);
+        k_nb++;
+      }
+    }
+    if (!elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, q[0]),
+                                    elfm_volume_y_vox(v, q[1]), elfm_volume_z_vox(v, q[2]),
+                                    (const double(*)[3])nb, k_nb, &lo, &r))
       continue;
     const int X = (int)lround(r.x_vox), Y = (int)lround(r.y_vox), K = (int)lround(r.z_vox);
     if (X < 0 || Y < 0 || K < 0 || X >= v->w || Y >= v->h || K >= v->nz) continue;
@@ -404,6 +487,8 @@ void track_ctx_free(track_ctx *c)
   free(c->sp);
   free(c->fin);
   free(c->slot_frame);
+  free(c->fitok);
+  free(c->near_pos);
   free(c->slot_plan);
   free(c->pred);
   free(c->pred_intensity);

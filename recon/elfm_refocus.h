@@ -143,6 +143,18 @@ int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *c
                                  double y_vox, double z_vox, const elfm_localize_options *o,
                                  elfm_localize_result *out);
 
+/* The single-frame fit of a point with other objects nearby: near_vox[0 ..
+ * n_near) are their positions (voxel units, as x_vox ...). In each view, a
+ * neighbour whose image lies within a few windows of the point's takes its
+ * light out of the point's window before the centroid: an image is taken
+ * to be symmetric about its centre, so the neighbour's light at pixel x is
+ * read at x mirrored through the neighbour's centre, on its far side, and
+ * subtracted (recon/localize.c). Two C. elegans neurons 6 um apart, whose
+ * blurred images overlap, pull each other's centroids otherwise. */
+int elfm_refocus_localize_near(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                               double y_vox, double z_vox, const double (*near_vox)[3], int n_near,
+                               const elfm_localize_options *o, elfm_localize_result *out);
+
 /* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
  * The workspace remembers which rows of the volume it last wrote on the
  * sparse path, so it clears only those next time: between two executes

@@ -33,6 +33,8 @@
 /* floor of the robust scale: noise-free synthetic images fit to 1e-3 px,
  * and a scale that small would weight every view down */
 #define MIN_SCALE_PX 0.05
+/* a neighbour's image closer than this to the object's is not taken out */
+#define NEAR_MIN_PX 2.0
 
 void elfm_localize_options_default(elfm_localize_options *o)
 {
@@ -62,6 +64,57 @@ static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, do
        * trail is not the object, and negative weights could put a
        * centroid outside its window */
       const double f0 = row[x] > 0 ? row[x] : 0;
+      double v = f0;
+      for (int k = 1; k < pw; k++) v *= f0;
+      rm += v;
+      ru += v * (double)(x - iu);
+    }
+    m += rm;
+    su += ru;
+    sw += rm * (double)(y - iw);
+  }
+  if (!(m > 0)) return 0;
+  *cu = (double)iu + su / m;
+  *cw = (double)iw + sw / m;
+  return m;
+}
+
+/* The frame's value at (x, y) by bilinear interpolation, positive part
+ * only, 0 outside box b (another view's light is not this one's). */
+static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, double x, double y)
+{
+  if (!(x >= b->x0 && y >= b->y0 && x <= b->x1 - 1 && y <= b->y1 - 1)) return 0;
+  long ix = (long)floor(x), iy = (long)floor(y);
+  if (ix > b->x1 - 2) ix = b->x1 - 2;
+  if (iy > b->y1 - 2) iy = b->y1 - 2;
+  const double fx = x - (double)ix, fy = y - (double)iy;
+  const float *r0 = f->data + (size_t)iy * (size_t)f->w + ix, *r1 = r0 + f->w;
+  const double v00 = r0[0] > 0 ? r0[0] : 0, v01 = r0[1] > 0 ? r0[1] : 0;
+  const double v10 = r1[0] > 0 ? r1[0] : 0, v11 = r1[1] > 0 ? r1[1] : 0;
+  return (1 - fy) * ((1 - fx) * v00 + fx * v01) + fy * ((1 - fx) * v10 + fx * v11);
+}
+
+/* window_centroid with the light of neighbours' images taken out: nb[2k],
+ * nb[2k+1] is neighbour k's image centre in this view. Its light at pixel
+ * x is estimated as the value at x mirrored through that centre (2 nb - x),
+ * as if its image were symmetric: the far side of a neighbour holds its own
+ * light and not this object's. */
+static double window_centroid_nb(const elfm_frame *f, const elfm_refocus_box *b, double u, double w,
+                                 int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
+{
+  if (n_nb == 0) return window_centroid(f, b, u, w, r, pw, cu, cw);
+  if (!(fabs(u) < 1e7 && fabs(w) < 1e7)) return -1;
+  const long iu = lround(u), iw = lround(w);
+  if (iu - r < b->x0 || iu + r >= b->x1 || iw - r < b->y0 || iw + r >= b->y1) return -1;
+  double m = 0, su = 0, sw = 0;
+  for (long y = iw - r; y <= iw + r; y++) {
+    const float *row = f->data + (size_t)y * (size_t)f->w;
+    double rm = 0, ru = 0;
+    for (long x = iu - r; x <= iu + r; x++) {
+      double f0 = row[x] > 0 ? row[x] : 0;
+      for (int k = 0; k < n_nb && f0 > 0; k++)
+        f0 -= sample_box(f, b, 2 * nb[2 * k] - (double)x, 2 * nb[2 * k + 1] - (double)y);
+      if (!(f0 > 0)) continue;
       double v = f0;
       for (int k = 1; k < pw; k++) v *= f0;
       rm += v;
@@ -162,18 +215,50 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
   return elfm_refocus_localize_frames(p, &frame, NULL, 1, x_vox, y_vox, z_vox, o, out);
 }
 
+static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
+                    const double (*off_vox)[3], int n_frames, double x_vox, double y_vox,
+                    double z_vox, const double (*near_vox)[3], int n_near,
+                    const elfm_localize_options *o, elfm_localize_result *out);
+
 int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *const *frames,
                                  const double (*off_vox)[3], int n_frames, double x_vox,
                                  double y_vox, double z_vox, const elfm_localize_options *o,
                                  elfm_localize_result *out)
 {
-  enum { MAXV = 256, MAXF = 64 };
+  return localize(p, frames, off_vox, n_frames, x_vox, y_vox, z_vox, NULL, 0, o, out);
+}
+
+int elfm_refocus_localize_near(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                               double y_vox, double z_vox, const double (*near_vox)[3], int n_near,
+                               const elfm_localize_options *o, elfm_localize_result *out)
+{
+  if (n_near < 0 || (n_near > 0 && !near_vox)) return 0;
+  return localize(p, &frame, NULL, 1, x_vox, y_vox, z_vox, near_vox, n_near, o, out);
+}
+
+static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
+                    const double (*off_vox)[3], int n_frames, double x_vox, double y_vox,
+                    double z_vox, const double (*near_vox)[3], int n_near,
+                    const elfm_localize_options *o, elfm_localize_result *out)
+{
+  enum { MAXV = 256, MAXF = 64, MAXN = 16 };
   const elfm_calib *c = &p->calib;
   if (!frames || n_frames < 1 || n_frames > MAXF || p->nv > MAXV || !o ||
       o->half_window_px < 1 || o->half_window_px > 32 || !(o->outlier_px > 0) || o->min_views < 2 ||
       o->power < 1 || o->power > 8 ||
       !isfinite(x_vox) || !isfinite(y_vox) || !isfinite(z_vox))
     return 0;
+  /* neighbours: the nearest MAXN are plenty (a window meets a few images) */
+  double nq[MAXN][3];
+  int nn = 0;
+  for (int k = 0; k < n_near && nn < MAXN; k++) {
+    if (!(isfinite(near_vox[k][0]) && isfinite(near_vox[k][1]) && isfinite(near_vox[k][2])))
+      return 0;
+    nq[nn][0] = near_vox[k][0];
+    nq[nn][1] = near_vox[k][1];
+    nq[nn][2] = p->calib.z_min_um + near_vox[k][2] * p->calib.z_step_um;
+    nn++;
+  }
   for (int j = 0; j < n_frames; j++) {
     if (!frames[j] || frames[j]->w != p->sw || frames[j]->h != p->sh) return 0;
     if (off_vox && !(isfinite(off_vox[j][0]) && isfinite(off_vox[j][1]) && isfinite(off_vox[j][2])))
@@ -201,9 +286,32 @@ int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *c
     for (int v = 0; v < p->nv; v++) {
       mass[v] = 0;
       if (!keep[v]) continue;
-      double cu, cw;
-      const double m = view_centroid(frames, off_vox, n_frames, &p->box[v], q, au[v], aw[v], du[v],
-                                     dw[v], o->half_window_px, o->power, &cu, &cw);
+      double cu, cw, m;
+      if (nn > 0) {
+        /* the neighbours whose images lie close enough to reach the
+         * window, but not on top of it (mirrored, an image on top would
+         * take out the object's own light: the robust passes judge that
+         * view) */
+        const double pu = q[0] + au[v] + q[2] * du[v], pw = q[1] + aw[v] + q[2] * dw[v];
+        const double reach = 3.0 * (2 * o->half_window_px + 1);
+        double nb[2 * MAXN];
+        int n_nb = 0;
+        for (int k = 0; k < nn; k++) {
+          const double bu = nq[k][0] + au[v] + nq[k][2] * du[v];
+          const double bw = nq[k][1] + aw[v] + nq[k][2] * dw[v];
+          const double d2 = (bu - pu) * (bu - pu) + (bw - pw) * (bw - pw);
+          if (d2 < reach * reach && d2 > NEAR_MIN_PX * NEAR_MIN_PX) {
+            nb[2 * n_nb] = bu;
+            nb[2 * n_nb + 1] = bw;
+            n_nb++;
+          }
+        }
+        m = window_centroid_nb(frames[0], &p->box[v], pu, pw, o->half_window_px, o->power, nb, n_nb,
+                               &cu, &cw);
+      } else {
+        m = view_centroid(frames, off_vox, n_frames, &p->box[v], q, au[v], aw[v], du[v], dw[v],
+                          o->half_window_px, o->power, &cu, &cw);
+      }
       if (m <= 0) continue;
       mass[v] = m;
       ru[v] = cu - au[v];
