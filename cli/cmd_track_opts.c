@@ -225,7 +225,7 @@ static void usage(FILE *f)
     "                       the refocused peak only\n"
     "  --localize-window-px R  each view's window is (2R+1)^2 px (2)\n"
     "  --localize-power P   pixel weight value^P: higher P follows the newest events,\n"
-    "                       at the object's leading edge (3; 1 with --repr integral;\n"
+    "                       at the object's leading edge (3; 2 with --repr integral;\n"
     "                       1 is better for bright objects whose ON events lead\n"
     "                       them, e.g. beads on a stage)\n"
     "  --localize-outlier-px D  views missing the fit by more are dropped (1.5)\n"
@@ -739,8 +739,16 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * 1-4 alpha 0.871 / 0.877 / 0.882 (per seed at 1: 0.885 / 0.828 /
      * 0.841 / 0.929 -> 0.909 / 0.830 / 0.851 / 0.939), held-out seeds 5-7
      * 0.866 / 0.857 / 0.868 (0.825 / 0.930 / 0.842 -> 0.844 / 0.932 /
-     * 0.828); lateral RMSE 0.25 -> 0.27 um. */
-    o.loc.power = 1;
+     * 0.828); lateral RMSE 0.25 -> 0.27 um. Thirteenth session: with
+     * the partner's light taken out (localize_near_um), power 2 places
+     * better than 1 on every worm set, mean alpha_detections / alpha (200 ms
+     * seeds 1-4, 5-7, 8-12, 150 ms, 500 ms): power 1 0.902 / 0.900 / 0.903
+     * / 0.887 / 0.895 and 0.900 / 0.878 / 0.911 / 0.881 / 0.845; power 2
+     * 0.911 / 0.901 / 0.910 / 0.900 / 0.901 and 0.911 / 0.871 / 0.911 /
+     * 0.875 / 0.864; power 3 0.907 / 0.902 / 0.910 / 0.899 / 0.893 and
+     * 0.892 / 0.887 / 0.909 / 0.903 / 0.844. Without the partner taken out,
+     * its far tail counted for less at power 1. */
+    o.loc.power = 2;
   }
   if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spath_given) {
     /* Crawling neurons cover a few um in 8 frames: the cap binds only
