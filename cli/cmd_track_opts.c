@@ -104,6 +104,13 @@ static void track_defaults(track_opts *o)
    * step 6 too): 0.8184, held-out 0.8100 (docs/tracker.md "Encounter
    * review"). */
   o->link.encounter_um = 5;
+  /* Worm seed 5 (200 ms): neurons 4 and 5 at z -57 um, whose images merge,
+   * met at frames 9-11, parted for two frames and crossed at 14-17; the
+   * review of frames 9-11 alone kept the swap, and so did the other two
+   * pairs' reviews: alpha 0.786 -> 0.828 with 4 (3 or more frames change
+   * nothing else measured: worm 200 ms seeds 1-4, 6-12, 150 and 500 ms,
+   * flow seeds 1-24, dense flow and stage the same to the last digit). */
+  o->link.encounter_apart = 4;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
    * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
@@ -251,6 +258,8 @@ static void usage(FILE *f)
     "  --encounter-um D     two tracks that came within D (linker metric) are reviewed\n"
     "                       the same way once both have N points after it (5; 0 off)\n"
     "  --encounter-pad N    frames before the encounter left out of the heads (1)\n"
+    "  --encounter-apart N  up to N frames apart, then together again, are one\n"
+    "                       encounter (4)\n"
     "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
     "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
     "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
@@ -361,7 +370,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCR, O_RJOIN
+  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_RJOIN
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -387,6 +396,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"swap-points", required_argument, 0, O_SWAPN},
       {"encounter-um", required_argument, 0, O_ENCUM},
       {"encounter-pad", required_argument, 0, O_ENCPAD},
+      {"encounter-apart", required_argument, 0, O_ENCAPART},
       {"encounter-ratio", required_argument, 0, O_ENCR},
       {"review-join-factor", required_argument, 0, O_RJOIN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
@@ -566,6 +576,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_RJOIN:
       if (!cli_parse_double_in(C, "--review-join-factor", a, 0, 0, 1e6, ">= 0", &o.link.review_join_factor))
         return CLI_USAGE;
+      break;
+    case O_ENCAPART:
+      if (!cli_parse_int(C, "--encounter-apart", a, &o.link.encounter_apart)) return CLI_USAGE;
+      if (o.link.encounter_apart < 0)
+        return cli_message(C, CLI_USAGE, "--encounter-apart must be >= 0, not '%s'", a);
       break;
     case O_ENCPAD:
       if (!cli_parse_int(C, "--encounter-pad", a, &o.link.encounter_pad)) return CLI_USAGE;

@@ -739,6 +739,9 @@ int main(void)
     bad.encounter_pad = -1;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;
+    bad.encounter_apart = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
     bad.encounter_ratio = 0;
     CHECK(elfm_link_create(&bad, &err) == NULL);
     bad = o;

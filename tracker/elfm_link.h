@@ -137,6 +137,14 @@ typedef struct elfm_link_options {
    * leave on the other's bead. 0 = off (default). */
   double encounter_um;
   int encounter_pad;      /* default 1 frame */
+  /* Frames apart that do not end an encounter: up to this many in a row
+   * with the two tracks apart, and then together again, are one encounter
+   * (default 0; track: 4). Why: a deep pair whose images merge gives two
+   * fits that flicker apart and together for a few frames; the tracks
+   * cross in the second spell, which a review of the first alone never
+   * sees (worm seed 5: neurons 4 and 5 at z -57 um, frames 9-11 and
+   * 14-17). */
+  int encounter_apart;
   double encounter_ratio; /* like swap_ratio, for encounters (default 0.5) */
   /* Steps 6 and 7 exchange tails only when both new joins lie within
    * review_join_factor x gate_um (root mean square): past that neither

@@ -41,6 +41,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->swap_ratio = 0.5;
   o->encounter_um = 0;
   o->encounter_pad = 1;
+  o->encounter_apart = 0;
   o->encounter_ratio = 0.5;
   o->review_join_factor = 2;
 }
@@ -60,6 +61,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !(o->stitch_straight_frac >= 0) || !isfinite(o->stitch_straight_frac) || o->swap_points < 0 ||
       (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
       !(o->encounter_um >= 0) || !isfinite(o->encounter_um) || o->encounter_pad < 0 ||
+      o->encounter_apart < 0 ||
       !(o->encounter_ratio > 0) || !(o->encounter_ratio <= 1) ||
       !(o->review_join_factor >= 0) || !isfinite(o->review_join_factor) ||
       o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
@@ -67,8 +69,8 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance and "
-                   "pad >= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and "
+                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance, "
+                   "pad and apart frames >= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and "
                    "short path >= 0)");
     return NULL;
   }

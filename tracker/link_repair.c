@@ -448,10 +448,14 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
      * missing, up to the last frame they were together. */
     const double e2 = o->encounter_um * o->encounter_um;
     int64_t f1 = E.last, f0 = E.first;
+    int apart_run = 0; /* up to encounter_apart frames apart in a row */
     for (int64_t f = E.last + 1; f < frame; f++) {
-      int r = apart_at(A->t, B->t, f, e2, kz);
-      if (r == 1) break;
-      if (r == 0) f1 = f;
+      const int r = apart_at(A->t, B->t, f, e2, kz);
+      if (r == 1 && ++apart_run > o->encounter_apart) break;
+      if (r == 0) {
+        f1 = f;
+        apart_run = 0;
+      }
     }
     for (int64_t f = E.first - 1; f >= E.first - 2 * (int64_t)K; f--) {
       int r = apart_at(A->t, B->t, f, e2, kz);
