@@ -36,7 +36,8 @@ typedef struct track_opts {
   int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
   elfm_localize_options loc;
   double localize_near_um; /* the view fit takes out the light of other objects of the
-                              frame within this lateral distance (0 = off) */
+                              frame within this lateral distance (0 = off), at most
+                              TRACK_NEAR_MAX of them */
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
   double guided_min_ratio; /* and its find at least this x the track's last intensity */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
@@ -67,6 +68,10 @@ typedef struct track_opts {
 int track_opts_parse(int argc, char **argv, track_opts *o);
 
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
+/* Neighbours per view fit (localize_near_um): a view's window meets a few
+ * images. */
+#define TRACK_NEAR_MAX 16
+
 typedef struct ring_slot {
   int64_t frame;         /* the frame held, -1 none */
   int64_t t_us;
@@ -169,6 +174,11 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, smooth and write the tracks that ended. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
+/* Append to nb[k ..] the detections of det[0 .. n) within near_um laterally
+ * of (x_um, y_um), in geo's voxels (the view fit's neighbours,
+ * localize_near_um); returns the new count, at most TRACK_NEAR_MAX. */
+int track_near_add(const elfm_detection *det, int n, double x_um, double y_um, double near_um,
+                   const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
 /* Smooth, filter and write the tracks the linker has finished. */
 elfm_status track_drain(track_ctx *c, elfm_error *err);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring

@@ -181,24 +181,16 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
   int multi = 0;
   /* the frame's detections near q have their light taken out of the fit's
    * windows (localize_near_um, as the peaks' fits in cmd_track_volume.c):
-   * a gap in one neuron of a pair is most often the other's light holding
-   * it. Worm, mean alpha_detections over 200 ms seeds 1-4 / 5-7 / 8-12,
+   * a worm neuron in a gap most often lies beside its partner, whose light
+   * pulls the fit. Worm, mean alpha_detections over 200 ms seeds 1-4 / 5-7 / 8-12,
    * 150 and 500 ms: 0.900 / 0.888 / 0.898 / 0.882 / 0.887 -> 0.902 /
    * 0.900 / 0.903 / 0.887 / 0.895, alpha 0.899 / 0.874 / 0.908 / 0.879 /
    * 0.844 -> 0.900 / 0.878 / 0.911 / 0.881 / 0.845. */
-  double nb[16][3];
+  double nb[TRACK_NEAR_MAX][3];
   int k_nb = 0;
   const double rn = o->localize_near_um;
   if (rn > 0 && sl->det_frame == sl->frame)
-    for (int j = 0; j < sl->det_n && k_nb < 16; j++) {
-      const elfm_detection *e = &sl->det[j];
-      const double dx = e->x_um - q[0], dy = e->y_um - q[1];
-      if (dx * dx + dy * dy >= rn * rn) continue;
-      nb[k_nb][0] = elfm_volume_x_vox(geo, e->x_um);
-      nb[k_nb][1] = elfm_volume_y_vox(geo, e->y_um);
-      nb[k_nb][2] = elfm_volume_z_vox(geo, e->z_um);
-      k_nb++;
-    }
+    k_nb = track_near_add(sl->det, sl->det_n, q[0], q[1], rn, geo, nb, 0);
   int ok = elfm_refocus_localize_near(c->fill_plan, s, elfm_volume_x_vox(geo, q[0]),
                                       elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]),
                                       (const double(*)[3])nb, k_nb, &lo, &res);

@@ -171,16 +171,28 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   return s;
 }
 
-/* At most this many neighbours per fit: a view's window meets a few images. */
-#define NEAR_MAX 16
+/* cmd_track.h: the guided fit's and the gap fills' neighbours */
+int track_near_add(const elfm_detection *det, int n, double x_um, double y_um, double near_um,
+                   const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k)
+{
+  for (int j = 0; j < n && k < TRACK_NEAR_MAX; j++) {
+    const double dx = det[j].x_um - x_um, dy = det[j].y_um - y_um;
+    if (dx * dx + dy * dy >= near_um * near_um) continue;
+    nb[k][0] = elfm_volume_x_vox(geo, det[j].x_um);
+    nb[k][1] = elfm_volume_y_vox(geo, det[j].y_um);
+    nb[k][2] = elfm_volume_z_vox(geo, det[j].z_um);
+    k++;
+  }
+  return k;
+}
 
 /* The frame's other objects within localize_near_um laterally of (x_um,
  * y_um), at pos (voxels), into nb; skip = the object itself (-1: none). */
 static int near_list(const elfm_detection *det, const double (*pos)[3], int n, int skip,
-                     double x_um, double y_um, double near_um, double nb[NEAR_MAX][3])
+                     double x_um, double y_um, double near_um, double nb[TRACK_NEAR_MAX][3])
 {
   int k = 0;
-  for (int j = 0; j < n && k < NEAR_MAX; j++) {
+  for (int j = 0; j < n && k < TRACK_NEAR_MAX; j++) {
     if (j == skip) continue;
     const double dx = det[j].x_um - x_um, dy = det[j].y_um - y_um;
     if (dx * dx + dy * dy < near_um * near_um) memcpy(nb[k++], pos[j], sizeof nb[0]);
@@ -206,7 +218,7 @@ static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detect
   }
   for (int i = 0; i < n; i++) {
     if (!ok[i]) continue;
-    double nb[NEAR_MAX][3];
+    double nb[TRACK_NEAR_MAX][3];
     const int k = near_list(det, (const double(*)[3])pos, n, i, det[i].x_um, det[i].y_um,
                             c->o->localize_near_um, nb);
     if (!k) continue;
@@ -338,19 +350,12 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     elfm_localize_result r;
     /* the frame's objects near the prediction: its peaks, and where no
      * peak stands, the other tracks' predictions (localize_near_um) */
-    double nb[NEAR_MAX][3];
+    double nb[TRACK_NEAR_MAX][3];
     int k_nb = 0;
     if (o->localize_near_um > 0) {
       const double r2 = o->localize_near_um * o->localize_near_um;
-      for (int j = 0; j < n && k_nb < NEAR_MAX; j++) {
-        const double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1];
-        if (dx * dx + dy * dy >= r2) continue;
-        nb[k_nb][0] = elfm_volume_x_vox(v, det[j].x_um);
-        nb[k_nb][1] = elfm_volume_y_vox(v, det[j].y_um);
-        nb[k_nb][2] = elfm_volume_z_vox(v, det[j].z_um);
-        k_nb++;
-      }
-      for (int j = 0; j < np && k_nb < NEAR_MAX; j++) {
+      k_nb = track_near_add(det, n, q[0], q[1], o->localize_near_um, v, nb, 0);
+      for (int j = 0; j < np && k_nb < TRACK_NEAR_MAX; j++) {
         const double *qj = pred + 3 * (size_t)j;
         const double dx = qj[0] - q[0], dy = qj[1] - q[1];
         if (j == k || dx * dx + dy * dy >= r2 || any_near(det, n, qj, g, kz)) continue;

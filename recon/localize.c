@@ -248,7 +248,8 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
       o->power < 1 || o->power > 8 ||
       !isfinite(x_vox) || !isfinite(y_vox) || !isfinite(z_vox))
     return 0;
-  /* neighbours: the nearest MAXN are plenty (a window meets a few images) */
+  /* neighbours: the first MAXN given (the caller lists the near ones; a
+   * window meets a few images) */
   double nq[MAXN][3];
   int nn = 0;
   for (int k = 0; k < n_near && nn < MAXN; k++) {
