@@ -96,7 +96,8 @@ const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
 enum {
   CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
   CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
-  CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT, CLI_RO_ISTART, CLI_RO_ISTART_AGE
+  CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT, CLI_RO_ISTART, CLI_RO_ISTART_AGE,
+  CLI_RO_TAU_BRIGHT
 };
 #define CLI_RECON_LONG_OPTIONS                                                                 \
   {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
@@ -111,7 +112,8 @@ enum {
   {"batch", required_argument, 0, CLI_RO_BATCH},                                               \
   {"off-weight", required_argument, 0, CLI_RO_OFF_WEIGHT},                                     \
   {"integral-start-ms", required_argument, 0, CLI_RO_ISTART},                                  \
-  {"integral-start-age-ms", required_argument, 0, CLI_RO_ISTART_AGE}
+  {"integral-start-age-ms", required_argument, 0, CLI_RO_ISTART_AGE},                          \
+  {"tau-bright-us", required_argument, 0, CLI_RO_TAU_BRIGHT}
 
 typedef struct cli_recon_parse {
   elfm_recon_options *ro;  /* the command's defaults, then the options given */
@@ -121,6 +123,7 @@ typedef struct cli_recon_parse {
   int ghost_value_given;   /* by MODE:V or --ghost-value */
   int ghost_value_option;  /* by --ghost-value */
   int tau_given, polarity_given; /* --repr integral has its own defaults for these */
+  int tau_bright_given;          /* --tau-bright-us */
   int istart_given, istart_age_given; /* --integral-start-ms, --integral-start-age-ms */
 } cli_recon_parse;
 

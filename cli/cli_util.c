@@ -309,6 +309,10 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
   case CLI_RO_TAU:
     p->tau_given = 1;
     return cli_parse_double_in(cmd, "--tau-us", arg, 0, 1, HUGE_VAL, "> 0", &fo->tau_us);
+  case CLI_RO_TAU_BRIGHT:
+    p->tau_bright_given = 1;
+    return cli_parse_double_in(cmd, "--tau-bright-us", arg, 0, 1, HUGE_VAL, "> 0",
+                               &fo->tau_bright_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
   case CLI_RO_OFF_WEIGHT:
     return cli_parse_double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
@@ -368,13 +372,16 @@ int cli_check_recon_options(const char *cmd, const cli_recon_parse *p)
      * time surface's; the integral needs both polarities and a long leak. */
     if (!p->polarity_given) fw->polarity = ELFM_POL_SIGNED;
     if (!p->tau_given) fw->tau_us = ELFM_INTEGRAL_TAU_US;
+    /* a level above 0 (an object there) leaks more slowly (elfm_frames.h) */
+    if (!p->tau_bright_given) fw->tau_bright_us = ELFM_INTEGRAL_TAU_BRIGHT_FACTOR * fw->tau_us;
     /* and starts from the levels the recording's first 2 x leak give
      * (elfm_frames.h; why 2 x and 20 ms: docs/recon.md "The integral's
      * start") */
     if (!p->istart_given) p->ro->integral_start_us = (int64_t)llround(2 * fw->tau_us);
     if (!p->istart_age_given) p->ro->integral_start_age_us = ELFM_INTEGRAL_START_AGE_US;
-  } else if (p->istart_given || p->istart_age_given) {
-    cli_message(cmd, CLI_USAGE, "--integral-start-ms and --integral-start-age-ms need --repr integral");
+  } else if (p->istart_given || p->istart_age_given || p->tau_bright_given) {
+    cli_message(cmd, CLI_USAGE,
+                "--integral-start-ms, --integral-start-age-ms and --tau-bright-us need --repr integral");
     return 0;
   }
   const elfm_recon_options *ro = p->ro;
@@ -431,6 +438,7 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
+  cJSON_AddNumberToObject(par, "tau_bright_us", fo->tau_bright_us > 0 ? fo->tau_bright_us : fo->tau_us);
   cJSON_AddNumberToObject(par, "integral_start_ms", (double)ro->integral_start_us * 1e-3);
   cJSON_AddNumberToObject(par, "integral_start_age_ms", (double)ro->integral_start_age_us * 1e-3);
   cJSON_AddNumberToObject(par, "median", ro->median);
@@ -460,6 +468,8 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "                       OFF events, its log brightness: no lead along the motion)\n"
           "  --tau-us T           time-surface decay, > 0 us (default %g; integral: the\n"
           "                       leak, default %g)\n"
+          "  --tau-bright-us T    integral: the leak of a level above 0, an object there\n"
+          "                       (default %g x the leak)\n"
           "  --polarity P         both | on | off | signed (default %s)\n"
           "  --off-weight W       integral: an OFF event's step over an ON event's, the\n"
           "                       sensor's OFF/ON threshold ratio (default %g)\n"
@@ -484,7 +494,7 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
           "                       (default %s)\n",
           fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
-          cli_polarity_name(fo->polarity), fo->off_weight, ELFM_INTEGRAL_START_AGE_US * 1e-3,
+          ELFM_INTEGRAL_TAU_BRIGHT_FACTOR, cli_polarity_name(fo->polarity), fo->off_weight, ELFM_INTEGRAL_START_AGE_US * 1e-3,
           d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
 }
 

@@ -27,7 +27,12 @@
  * time surface leads the object along its motion). The leak forgets the
  * thresholds' per-pixel mismatch and noise; it must be long against the
  * time an object takes to cross its own width (tau_us x speed >> size),
- * else the sum is again a temporal derivative that leads. With L the sum
+ * else the sum is again a temporal derivative that leads. A level above 0
+ * (an object there) may leak more slowly, with tau_bright_us: when an
+ * object leaves a pixel, its OFF events undo the level it had built, not
+ * the level it leaked to, and leave a dark residue that a second object
+ * arriving there soon after fills first (a C. elegans neuron following
+ * its partner along the body, 6 um and ~60 ms behind). With L the sum
  * plus the expected half step of the latest event (+1/2 after ON,
  * -off_weight/2 after OFF: a pixel fires only once a whole step is
  * crossed), the frame is
@@ -104,6 +109,13 @@ elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *
  * leak of 50 / 100 / 200 ms: 0.683 / 0.719 / 0.721 (F1 0.889 / 0.890 /
  * 0.872). */
 #define ELFM_INTEGRAL_TAU_US 100000.0
+/* A level above 0 leaks this many times more slowly (tau_bright_us): worm
+ * 200 ms seeds 1-4 / 5-7 / 8-12, 150 ms, 500 ms, mean alpha at 1 / 1.5 /
+ * 2 / 3 x (threshold 20): 0.911 / 0.886 / 0.911 / 0.875 / 0.864, 0.904 /
+ * 0.911 / 0.922 / 0.914 / 0.899, 0.923 / 0.898 / 0.924 / 0.915 / 0.895,
+ * 0.918 / 0.898 / 0.904 / 0.889 / 0.895 (docs/recon.md "A brighter level
+ * leaks more slowly"). */
+#define ELFM_INTEGRAL_TAU_BRIGHT_FACTOR 2.0
 
 /* The integral's floor, in steps: a lone ON event (1.5 with its half
  * step; sensor noise looks like this) and the +-1 step a passing object
@@ -126,6 +138,8 @@ typedef struct elfm_framer_options {
                            (ELFM_INTEGRAL_TAU_US is a good start) */
   elfm_polarity polarity;
   double off_weight;    /* INTEGRAL: an OFF event's step over an ON event's; default 1 */
+  double tau_bright_us; /* INTEGRAL: the leak of a level above 0; default 0 = tau_us
+                           (ELFM_INTEGRAL_TAU_BRIGHT_FACTOR x tau_us is a good start) */
 } elfm_framer_options;
 
 void elfm_framer_options_default(elfm_framer_options *o);

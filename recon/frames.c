@@ -135,6 +135,7 @@ void elfm_framer_options_default(elfm_framer_options *o)
   o->tau_us = 1000.0;
   o->polarity = ELFM_POL_BOTH;
   o->off_weight = 1.0;
+  o->tau_bright_us = 0.0;
 }
 
 elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *err)
@@ -154,6 +155,9 @@ elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *
   if (o->repr == ELFM_REPR_INTEGRAL) {
     if (!isfinite(o->tau_us) || o->tau_us <= 0.0)
       return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "tau_us (the integral's leak) must be > 0");
+    if (!isfinite(o->tau_bright_us) || o->tau_bright_us < 0.0)
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                            "tau_bright_us (the integral's leak above 0) must be >= 0");
     if (!(o->off_weight > 0.0 && o->off_weight <= 100.0))
       return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                             "off_weight %g is outside (0, 100]", o->off_weight);
@@ -394,12 +398,17 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
 
 void elfm_framer_finish(elfm_framer *f) { f->finished = 1; }
 
-/* The leak over the time since the pixel's sum was last written. */
+/* The leak over the time since the pixel's sum was last written: towards
+ * 0 from either side, so a pixel below the floor stays below it until its
+ * next event. */
 static float integral_leak(const elfm_framer *f, const integral_px *p, int64_t t)
 {
   if (p->pol == 3) return 1.0f; /* a start level: the object is there until it leaves */
   int64_t age = t - p->t_us;
-  return age > 0 ? (float)exp(-(double)age / f->opt.tau_us) : 1.0f;
+  /* above 0, an object is there: its level fades with tau_bright_us
+   * (elfm_frames.h); a residue below 0 goes with tau_us */
+  const double tau = p->sum > 0 && f->opt.tau_bright_us > 0 ? f->opt.tau_bright_us : f->opt.tau_us;
+  return age > 0 ? (float)exp(-(double)age / tau) : 1.0f;
 }
 
 /* INTEGRAL: add the events before t1 not yet integrated (with stride < dt
