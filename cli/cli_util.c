@@ -438,7 +438,8 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
-  cJSON_AddNumberToObject(par, "tau_bright_us", fo->tau_bright_us > 0 ? fo->tau_bright_us : fo->tau_us);
+  cJSON_AddNumberToObject(par, "tau_bright_us",
+                          fo->tau_bright_us > 0 ? fo->tau_bright_us : fo->tau_us);
   cJSON_AddNumberToObject(par, "integral_start_ms", (double)ro->integral_start_us * 1e-3);
   cJSON_AddNumberToObject(par, "integral_start_age_ms", (double)ro->integral_start_age_us * 1e-3);
   cJSON_AddNumberToObject(par, "median", ro->median);
@@ -494,7 +495,8 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
           "                       (default %s)\n",
           fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
-          ELFM_INTEGRAL_TAU_BRIGHT_FACTOR, cli_polarity_name(fo->polarity), fo->off_weight, ELFM_INTEGRAL_START_AGE_US * 1e-3,
+          ELFM_INTEGRAL_TAU_BRIGHT_FACTOR, cli_polarity_name(fo->polarity), fo->off_weight,
+          ELFM_INTEGRAL_START_AGE_US * 1e-3,
           d->median, cli_refocus_path_name(d->refocus.path), ghost, threads, batch);
 }
 
