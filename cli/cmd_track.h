@@ -67,11 +67,11 @@ typedef struct track_opts {
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
 
-/* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 /* Neighbours per view fit (localize_near_um): a view's window meets a few
  * images. */
 #define TRACK_NEAR_MAX 16
 
+/* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
   int64_t frame;         /* the frame held, -1 none */
   int64_t t_us;
@@ -121,9 +121,10 @@ typedef struct track_ctx {
    * slot is written by the one worker thread that refocused it */
   const elfm_frame **slot_frame;        /* [n_slots] */
   const elfm_refocus_plan **slot_plan;  /* [n_slots] */
-  unsigned char *fitok;  /* [n_slots][max_det] 1: the view fit placed that detection */
-  double *near_pos;      /* [n_slots][max_det][3] (localize_near_um > 0): the view fit's
-                            first positions, voxels */
+  /* localize_near_um > 0 only (else NULL): per slot, which detections the
+   * view fit placed, and their second fits (x, y, z um, sd px; x NaN: none) */
+  unsigned char *fitok;  /* [n_slots][max_det] */
+  double *near_fit;      /* [n_slots][max_det][4] */
   double *pred;          /* [max_det][3] track predictions (guided search) */
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
@@ -174,11 +175,12 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, smooth and write the tracks that ended. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
-/* Append to nb[k ..] the detections of det[0 .. n) within near_um laterally
- * of (x_um, y_um), in geo's voxels (the view fit's neighbours,
- * localize_near_um); returns the new count, at most TRACK_NEAR_MAX. */
-int track_near_add(const elfm_detection *det, int n, double x_um, double y_um, double near_um,
-                   const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
+/* Append to nb[k ..] the detections of det[0 .. n) but det[skip] (-1: none)
+ * within near_um laterally of (x_um, y_um), in geo's voxels (the view fit's
+ * neighbours, localize_near_um); returns the new count, at most
+ * TRACK_NEAR_MAX. */
+int track_near_add(const elfm_detection *det, int n, int skip, double x_um, double y_um,
+                   double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
 /* Smooth, filter and write the tracks the linker has finished. */
 elfm_status track_drain(track_ctx *c, elfm_error *err);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring

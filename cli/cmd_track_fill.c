@@ -190,7 +190,7 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
   int k_nb = 0;
   const double rn = o->localize_near_um;
   if (rn > 0 && sl->det_frame == sl->frame)
-    k_nb = track_near_add(sl->det, sl->det_n, q[0], q[1], rn, geo, nb, 0);
+    k_nb = track_near_add(sl->det, sl->det_n, -1, q[0], q[1], rn, geo, nb, 0);
   int ok = elfm_refocus_localize_near(c->fill_plan, s, elfm_volume_x_vox(geo, q[0]),
                                       elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]),
                                       (const double(*)[3])nb, k_nb, &lo, &res);

@@ -135,13 +135,14 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   c->sp = calloc((size_t)c->n_slots, sizeof *c->sp);
   c->slot_frame = calloc((size_t)c->n_slots, sizeof *c->slot_frame);
   c->slot_plan = calloc((size_t)c->n_slots, sizeof *c->slot_plan);
-  c->fitok = calloc((size_t)c->n_slots * (size_t)o->max_det, 1);
-  if (o->localize_near_um > 0)
-    c->near_pos = malloc((size_t)c->n_slots * (size_t)o->max_det * 3 * sizeof *c->near_pos);
+  if (o->localize_near_um > 0) {
+    c->fitok = calloc((size_t)c->n_slots * (size_t)o->max_det, 1);
+    c->near_fit = malloc((size_t)c->n_slots * (size_t)o->max_det * 4 * sizeof *c->near_fit);
+  }
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
   c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
-  if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan || !c->fitok ||
-      (o->localize_near_um > 0 && !c->near_pos) || !c->pred || !c->pred_intensity)
+  if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan ||
+      (o->localize_near_um > 0 && (!c->fitok || !c->near_fit)) || !c->pred || !c->pred_intensity)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   elfm_refocus_plan *plan = NULL;
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
@@ -171,13 +172,14 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   return s;
 }
 
-/* cmd_track.h: the guided fit's and the gap fills' neighbours */
-int track_near_add(const elfm_detection *det, int n, double x_um, double y_um, double near_um,
-                   const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k)
+/* cmd_track.h: the neighbours of the peaks', the guided fit's and the gap
+ * fills' view fits */
+int track_near_add(const elfm_detection *det, int n, int skip, double x_um, double y_um,
+                   double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k)
 {
   for (int j = 0; j < n && k < TRACK_NEAR_MAX; j++) {
     const double dx = det[j].x_um - x_um, dy = det[j].y_um - y_um;
-    if (dx * dx + dy * dy >= near_um * near_um) continue;
+    if (j == skip || dx * dx + dy * dy >= near_um * near_um) continue;
     nb[k][0] = elfm_volume_x_vox(geo, det[j].x_um);
     nb[k][1] = elfm_volume_y_vox(geo, det[j].y_um);
     nb[k][2] = elfm_volume_z_vox(geo, det[j].z_um);
@@ -186,51 +188,42 @@ int track_near_add(const elfm_detection *det, int n, double x_um, double y_um, d
   return k;
 }
 
-/* The frame's other objects within localize_near_um laterally of (x_um,
- * y_um), at pos (voxels), into nb; skip = the object itself (-1: none). */
-static int near_list(const elfm_detection *det, const double (*pos)[3], int n, int skip,
-                     double x_um, double y_um, double near_um, double nb[TRACK_NEAR_MAX][3])
-{
-  int k = 0;
-  for (int j = 0; j < n && k < TRACK_NEAR_MAX; j++) {
-    if (j == skip) continue;
-    const double dx = det[j].x_um - x_um, dy = det[j].y_um - y_um;
-    if (dx * dx + dy * dy < near_um * near_um) memcpy(nb[k++], pos[j], sizeof nb[0]);
-  }
-  return k;
-}
-
 /* The view fit again for each peak it placed that has neighbours within
- * localize_near_um, with their light taken out (elfm_refocus_localize_near),
- * all from the first fits' positions, so that the order does not matter.
- * Where the second fit fails, the first stays. */
+ * localize_near_um, with their light taken out (elfm_refocus_localize_near).
+ * Every second fit starts from, and reads its neighbours at, the first fits'
+ * positions (the results are kept aside until all are done), so that the
+ * order does not matter. Where the second fit fails, the first stays. */
 static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det, int n,
                        const elfm_localize_options *deep, int deep_test)
 {
   const elfm_frame *frame = c->slot_frame[slot];
   const elfm_refocus_plan *plan = c->slot_plan[slot];
   const unsigned char *ok = c->fitok + (size_t)slot * c->o->max_det;
-  double(*pos)[3] = (double(*)[3])(c->near_pos + (size_t)slot * c->o->max_det * 3);
+  double(*fit)[4] = (double(*)[4])(c->near_fit + (size_t)slot * c->o->max_det * 4);
   for (int i = 0; i < n; i++) {
-    pos[i][0] = elfm_volume_x_vox(v, det[i].x_um);
-    pos[i][1] = elfm_volume_y_vox(v, det[i].y_um);
-    pos[i][2] = elfm_volume_z_vox(v, det[i].z_um);
-  }
-  for (int i = 0; i < n; i++) {
+    fit[i][0] = NAN;
     if (!ok[i]) continue;
     double nb[TRACK_NEAR_MAX][3];
-    const int k = near_list(det, (const double(*)[3])pos, n, i, det[i].x_um, det[i].y_um,
-                            c->o->localize_near_um, nb);
-    if (!k) continue;
+    const int k = track_near_add(det, n, i, det[i].x_um, det[i].y_um, c->o->localize_near_um, v,
+                                 nb, 0);
     elfm_localize_result r;
-    if (!elfm_refocus_localize_near(plan, frame, pos[i][0], pos[i][1], pos[i][2],
-                                    (const double(*)[3])nb, k,
-                                    deep_test && det[i].deep_only ? deep : &c->o->loc, &r))
+    if (!k || !elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
+                                          elfm_volume_y_vox(v, det[i].y_um),
+                                          elfm_volume_z_vox(v, det[i].z_um),
+                                          (const double(*)[3])nb, k,
+                                          deep_test && det[i].deep_only ? deep : &c->o->loc, &r))
       continue;
-    det[i].x_um = elfm_volume_x_um(v, r.x_vox);
-    det[i].y_um = elfm_volume_y_um(v, r.y_vox);
-    det[i].z_um = elfm_volume_z_um(v, r.z_vox);
-    det[i].fit_sd_px = r.sd_px;
+    fit[i][0] = elfm_volume_x_um(v, r.x_vox);
+    fit[i][1] = elfm_volume_y_um(v, r.y_vox);
+    fit[i][2] = elfm_volume_z_um(v, r.z_vox);
+    fit[i][3] = r.sd_px;
+  }
+  for (int i = 0; i < n; i++) {
+    if (isnan(fit[i][0])) continue;
+    det[i].x_um = fit[i][0];
+    det[i].y_um = fit[i][1];
+    det[i].z_um = fit[i][2];
+    det[i].fit_sd_px = fit[i][3];
   }
 }
 
@@ -286,7 +279,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     const int deep_test = c->o->deep_peak_views > 0;
     if (deep_test) deep.min_views = c->o->deep_peak_views;
     int n = 0;
-    memset(c->fitok + (size_t)slot * c->o->max_det, 0, (size_t)c->o->max_det);
+    unsigned char *fitok = c->fitok ? c->fitok + (size_t)slot * c->o->max_det : NULL;
     for (int i = 0; i < c->sp[slot].n; i++) {
       elfm_localize_result r;
       const int is_deep = deep_test && det[i].deep_only;
@@ -294,8 +287,12 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
                                  elfm_volume_y_vox(v, det[i].y_um),
                                  elfm_volume_z_vox(v, det[i].z_um), is_deep ? &deep : &c->o->loc,
                                  &r)) {
-        if (is_deep) c->sp[slot].deep_dropped++;
-        else det[n++] = det[i];
+        if (is_deep) {
+          c->sp[slot].deep_dropped++;
+        } else {
+          if (fitok) fitok[n] = 0; /* kept at its peak fit */
+          det[n++] = det[i];
+        }
         continue;
       }
       det[n] = det[i];
@@ -303,7 +300,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       det[n].y_um = elfm_volume_y_um(v, r.y_vox);
       det[n].z_um = elfm_volume_z_um(v, r.z_vox);
       det[n].fit_sd_px = r.sd_px;
-      c->fitok[(size_t)slot * c->o->max_det + n] = 1;
+      if (fitok) fitok[n] = 1;
       n++;
       c->sp[slot].loc++;
     }
@@ -354,7 +351,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
     int k_nb = 0;
     if (o->localize_near_um > 0) {
       const double r2 = o->localize_near_um * o->localize_near_um;
-      k_nb = track_near_add(det, n, q[0], q[1], o->localize_near_um, v, nb, 0);
+      k_nb = track_near_add(det, n, -1, q[0], q[1], o->localize_near_um, v, nb, 0);
       for (int j = 0; j < np && k_nb < TRACK_NEAR_MAX; j++) {
         const double *qj = pred + 3 * (size_t)j;
         const double dx = qj[0] - q[0], dy = qj[1] - q[1];
@@ -493,7 +490,7 @@ void track_ctx_free(track_ctx *c)
   free(c->fin);
   free(c->slot_frame);
   free(c->fitok);
-  free(c->near_pos);
+  free(c->near_fit);
   free(c->slot_plan);
   free(c->pred);
   free(c->pred_intensity);
