@@ -21,6 +21,12 @@
  * worth 4 MB: such frames are rare, so we fall back to exp(). */
 #define ELFM_DECAY_TABLE_MAX_US 1000000
 
+/* INTEGRAL: a pixel's reference is clamped to +-this many steps (start
+ * levels too): a hot pixel firing ON at 1 kHz would otherwise climb to rate x
+ * tau steps (100 at 100 ms), far above any object, and a stuck one without
+ * end. 64 steps of 0.2 is e^12.8. */
+#define INTEGRAL_CLAMP_STEPS 64.0f
+
 /* INTEGRAL: one pixel's state (16 bytes, so an event touches one line). */
 typedef struct integral_px {
   int64_t t_us;              /* its latest event */
@@ -258,7 +264,7 @@ elfm_status elfm_framer_set_levels(elfm_framer *f, const float *level_steps, elf
   if (f->t_integrated != INT64_MIN || f->have_events)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "framer: starting levels must be set before the first event");
-  const float clamp = 64.0f, floor = (float)ELFM_INTEGRAL_FLOOR;
+  const float clamp = INTEGRAL_CLAMP_STEPS, floor = (float)ELFM_INTEGRAL_FLOOR;
   const size_t n = (size_t)f->w * (size_t)f->h;
   f->n_act = 0;
   for (size_t i = 0; i < n; i++) {
@@ -436,11 +442,9 @@ static float integral_leak(const elfm_framer *f, const integral_px *p, int64_t t
  * frames came before it. */
 static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *out)
 {
-  /* A pixel's reference is clamped: a hot pixel firing ON at 1 kHz would
-   * otherwise climb to rate x tau steps (100 at 100 ms), far above any
-   * object, and a stuck one without end. 64 steps of 0.2 is e^12.8.
-   * The frame shows the level above the floor (elfm_frames.h). */
-  const float clamp = 64.0f, floor = (float)ELFM_INTEGRAL_FLOOR, gain = 255.0f / 8.0f;
+  /* The frame shows the level above the floor (elfm_frames.h). */
+  const float clamp = INTEGRAL_CLAMP_STEPS, floor = (float)ELFM_INTEGRAL_FLOOR,
+              gain = 255.0f / 8.0f;
   const float off = (float)f->opt.off_weight;
   /* half[pol]: pol 0 no event yet, 1 latest ON, 2 latest OFF, 3 a held start level */
   const float half[4] = {0.0f, 0.5f, -0.5f * off, 0.0f};
