@@ -11,6 +11,13 @@
 #    their wider peaks (1.5-1.95 um) and raises alpha over the fixed 1.25 um
 #    by at least 0.04, as much as score's measurement on another recording
 #    (seed 5) passed back as the lead does;
+#  - blink_moving (the stage phantom under 1 ms pulses) with --repr lin, the
+#    linear time surface that keeps each pulse in its own frame: the same
+#    lead and a delay from the linear weights' mean age (tau / (P + 2) +
+#    150 us = 350 us at the defaults; 323.3 us with a 500 us window) raise
+#    alpha over no correction by at least 0.05 (before the fourteenth
+#    session, lin had no correction: blink_moving seeds 1-9 gained
+#    0.076-0.159);
 #  - out-of-range values are usage errors.
 # Usage: track_motion_bias.sh BINARY
 bin=$1
@@ -64,5 +71,19 @@ echo "stage seed 6: the default lead $sl um"
 awk -v a="$sl" 'BEGIN { exit !(a > 1.5 && a < 1.95) }' || { echo "FAIL: stage lead $sl"; fail=$((fail+1)); }
 gain "stage seed 6, the default against a fixed 1.25 um" "$(key "$tmp/st2/fix.json" alpha)" "$(key "$tmp/st2/def.json" alpha)" 0.04
 gain "stage seed 6, calibrated on seed 5 against a fixed 1.25 um" "$(key "$tmp/st2/fix.json" alpha)" "$(key "$tmp/st2/cal.json" alpha)" 0.04
+simulate_or_skip "$tmp/bm" blink_moving 100 9
+score_args="--window-us run"
+run bm off --repr lin --motion-lead-um 0 --motion-delay-us 0
+run bm def --repr lin
+bd=$(key "$tmp/bm/def/summary.json" motion_delay_us)
+echo "blink_moving seed 9, --repr lin: the default lead $(key "$tmp/bm/def/summary.json" motion_lead_um) um, delay $bd us"
+awk -v d="$bd" 'BEGIN { exit !(d > 349.99 && d < 350.01) }' || { echo "FAIL: lin delay $bd (350)"; fail=$((fail+1)); }
+gain "blink_moving seed 9, --repr lin, default against no correction" "$(key "$tmp/bm/off.json" alpha)" "$(key "$tmp/bm/def.json" alpha)" 0.05
+"$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/bm/d500" -q \
+  --repr lin --dt-us 500 --to-us 10000 || { echo "FAIL: track --dt-us 500"; fail=$((fail+1)); }
+bd=$(key "$tmp/bm/d500/summary.json" motion_delay_us)
+awk -v d="$bd" 'BEGIN { exit !(d > 323.32 && d < 323.35) }' || { echo "FAIL: lin delay at 500 us $bd (323.33)"; fail=$((fail+1)); }
+cmp -s "$tmp/bm/off/detections.csv" "$tmp/bm/def/detections.csv" || { echo "FAIL: lin detections.csv changed"; fail=$((fail+1)); }
+
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
