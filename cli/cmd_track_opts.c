@@ -263,6 +263,11 @@ static void usage(FILE *f)
     "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
     "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
     "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
+    "  --rest-speed-um-per-ms V  while most tracks of >= 4 points move slower than V,\n"
+    "                       a track of 2-3 points dark for over 6 frames is looked\n"
+    "                       for where it was too, not only where its few points'\n"
+    "                       velocity (their noise, for blinking beads at rest)\n"
+    "                       carries it (0.5; 0 off)\n"
     "  --priority-points N  tracks of >= N points choose their detections before\n"
     "                       younger ones (8; 0 = one assignment for all)\n"
     "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
@@ -392,7 +397,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_RJOIN
+  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_RJOIN, O_RESTV
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -419,6 +424,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"encounter-um", required_argument, 0, O_ENCUM},
       {"encounter-pad", required_argument, 0, O_ENCPAD},
       {"encounter-apart", required_argument, 0, O_ENCAPART},
+      {"rest-speed-um-per-ms", required_argument, 0, O_RESTV},
       {"encounter-ratio", required_argument, 0, O_ENCR},
       {"review-join-factor", required_argument, 0, O_RJOIN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
@@ -597,6 +603,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_RJOIN:
       if (!cli_parse_double_in(C, "--review-join-factor", a, 0, 0, 1e6, ">= 0", &o.link.review_join_factor))
+        return CLI_USAGE;
+      break;
+    case O_RESTV:
+      if (!cli_parse_double_in(C, "--rest-speed-um-per-ms", a, 0, 0, 1e6, ">= 0",
+                               &o.link.rest_speed_um_per_ms))
         return CLI_USAGE;
       break;
     case O_ENCAPART:

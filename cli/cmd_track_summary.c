@@ -171,6 +171,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "encounter_um", o->link.encounter_um);
   cJSON_AddNumberToObject(par, "encounter_pad", o->link.encounter_pad);
   cJSON_AddNumberToObject(par, "encounter_apart", o->link.encounter_apart);
+  cJSON_AddNumberToObject(par, "rest_speed_um_per_ms", o->link.rest_speed_um_per_ms);
   cJSON_AddNumberToObject(par, "encounter_ratio", o->link.encounter_ratio);
   cJSON_AddNumberToObject(par, "review_join_factor", o->link.review_join_factor);
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);

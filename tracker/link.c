@@ -44,6 +44,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->encounter_apart = 0;
   o->encounter_ratio = 0.5;
   o->review_join_factor = 2;
+  o->rest_speed_um_per_ms = 0.5;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
@@ -65,13 +66,14 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !(o->encounter_ratio > 0) || !(o->encounter_ratio <= 1) ||
       !(o->review_join_factor >= 0) || !isfinite(o->review_join_factor) ||
       o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
-      !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us)) {
+      !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us) ||
+      !(o->rest_speed_um_per_ms >= 0) || !isfinite(o->rest_speed_um_per_ms)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
                    "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance, "
                    "pad and apart frames >= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and "
-                   "short path >= 0)");
+                   "short path >= 0, rest speed >= 0)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
@@ -425,6 +427,8 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
+static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2);
+
 /* Fill lt->pred and lt->gate_um for a frame at t_us (lt->missed set). */
 static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us)
 {
@@ -453,6 +457,89 @@ static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_
   lt->gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
                turn_frames * o->speed_gate_frac * speed * frame_ms;
   if (lt->t->n == 1) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
+}
+
+/* Are the recording's objects at rest, as far as the live tracks tell?
+ * Most of those with a short fit (>= 4 points) move slower than
+ * rest_speed_um_per_ms, or none has one yet (a blinking recording's first
+ * pulses). */
+static int objects_at_rest(const elfm_linker *l)
+{
+  const double v2max = l->o.rest_speed_um_per_ms * l->o.rest_speed_um_per_ms;
+  size_t n_fit = 0, n_slow = 0;
+  for (size_t i = 0; i < l->n_live; i++) {
+    const live_track *lt = &l->live[i];
+    if (!lt->has_short) continue;
+    const double *v = lt->fit_vel;
+    n_fit++;
+    n_slow += v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < v2max;
+  }
+  return n_fit == 0 || 2 * n_slow >= n_fit;
+}
+
+/* Set lt->has_rest, rest and rest_gate_um for a frame at t_us (after
+ * predict_track). A track of 2-3 points knows its velocity least: fitted
+ * to points a frame or two apart, it can be their localisation noise over
+ * ~1 ms (0.5-1.5 um/ms for a static blinking bead), and carried over a
+ * dark gap of tens of frames it puts the object 13-39 um from where it
+ * still is (blink seed 2: every bead found in the first two 1 ms pulses,
+ * 26 frames apart; the next pulse started new tracks, the first pulses'
+ * points were dropped with their short tracks, and two beads were never
+ * tracked). Past short_gap frames such a track may also have stayed where
+ * it was: it is looked for there too, moving with the prior velocity,
+ * within the gate less its own speed's term (u-track's undetermined
+ * motion, Jaqaman et al. 2008, searches under both hypotheses). Only
+ * where the objects are at rest (objects_at_rest): in flow, a dark short
+ * track is mostly a ghost's or a deep bead's fragment, and at its old
+ * place it took passing beads (flow seeds 1-20 alpha 0.8184 -> 0.8132). */
+static void predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest)
+{
+  lt->has_rest = at_rest && lt->t->n >= 2 && !lt->has_short && lt->missed > o->short_gap;
+  if (!lt->has_rest) return;
+  const double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3, frame_ms = dt_ms / (lt->missed + 1);
+  const double *pv = o->prior_velocity_um_per_ms;
+  for (int a = 0; a < 3; a++) lt->rest[a] = lt->last[a] + pv[a] * dt_ms;
+  const double pspeed = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
+  lt->rest_gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
+                     o->short_gap * o->speed_gate_frac * pspeed * frame_ms;
+}
+
+/* Add detection j at cost to a track's candidates lc[0 .. *c), kept
+ * sorted by cost, at most max of them, each detection once (its lower
+ * cost): a detection can be found under both of a track's hypotheses. */
+static void cand_add(link_cand *lc, int *c, int max, int j, double cost)
+{
+  int k = 0;
+  while (k < *c && lc[k].det != j) k++;
+  if (k < *c) {
+    if (cost >= lc[k].cost) return;
+  } else if (*c < max) {
+    k = (*c)++;
+  } else if (cost < lc[*c - 1].cost) {
+    k = *c - 1;
+  } else {
+    return;
+  }
+  while (k > 0 && lc[k - 1].cost > cost) {
+    lc[k] = lc[k - 1];
+    k--;
+  }
+  lc[k] = (link_cand){j, cost};
+}
+
+/* The rest hypothesis's candidates of track lt among det[0 .. nd) (brute
+ * force: such tracks are few). */
+static void rest_candidates(const elfm_link_options *o, const live_track *lt,
+                            const elfm_detection *det, size_t nd, link_cand *lc, int *c)
+{
+  const double g2 = lt->rest_gate_um * lt->rest_gate_um;
+  for (size_t j = 0; j < nd; j++) {
+    const double dx = det[j].x_um - lt->rest[0], dy = det[j].y_um - lt->rest[1],
+                 dz = (det[j].z_um - lt->rest[2]) / o->kz;
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
+    cand_add(lc, c, o->max_candidates, (int)j, d2 / g2 + o->gap_cost * lt->missed);
+  }
 }
 
 /* Is d a weak detection too far (squared anisotropic distance d2) from a
@@ -509,6 +596,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   /* 1. End tracks dark for too long (stable compaction keeps the order
    * deterministic); predict the others. */
   size_t w = 0;
+  const int at_rest = o->rest_speed_um_per_ms > 0 && objects_at_rest(l);
   for (size_t i = 0; i < l->n_live; i++) {
     live_track lt = l->live[i];
     lt.missed = (int)(frame - lt.last_frame - 1);
@@ -518,6 +606,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       continue;
     }
     predict_track(o, &lt, t_us);
+    predict_rest(o, &lt, t_us, at_rest);
     l->live[w++] = lt;
   }
   l->n_live = w;
@@ -548,15 +637,9 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
                dz = (det[j].z_um - lt->pred[2]) / kz;
         double d2 = dx * dx + dy * dy + dz * dz;
         if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
-        double cost = d2 / g2 + o->gap_cost * lt->missed;
-        if (c == o->max_candidates && cost >= lc[c - 1].cost) continue;
-        int k = c < o->max_candidates ? c++ : c - 1;
-        while (k > 0 && lc[k - 1].cost > cost) {
-          lc[k] = lc[k - 1];
-          k--;
-        }
-        lc[k] = (link_cand){(int)j, cost};
+        cand_add(lc, &c, o->max_candidates, (int)j, d2 / g2 + o->gap_cost * lt->missed);
       }
+      if (lt->has_rest) rest_candidates(o, lt, det, nd, lc, &c);
       l->n_cand[i] = c;
     }
   } else if (nt > 0 && nd > 0) {
@@ -600,6 +683,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
             (link_cand){j, d2 / g2 + o->gap_cost * lt->missed};
       }
+      if (lt->has_rest)
+        rest_candidates(o, lt, det, nd, &l->cand[i * (size_t)o->max_candidates], &c);
       l->n_cand[i] = c;
     }
     flann_free_index_float(idx, &fp);
