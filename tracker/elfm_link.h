@@ -81,12 +81,13 @@ typedef struct elfm_link_options {
    * birth_speed_um_per_ms x the time since that point (default 5 um/ms, a
    * little above the fastest flow scene's 4 mm/s). */
   double birth_speed_um_per_ms;
-  /* While most live tracks with >= 4 points move slower than this (or
-   * none has 4 points yet), a track of 2-3 points dark for more than
-   * short_gap frames is looked for where it was, too, not only where its
-   * few points' velocity carries it: that velocity can be their noise
-   * (static blinking beads, 1 ms pulses tens of frames apart). Default
-   * 0.5 um/ms (below it the motion bias fades, elfm_smooth.h); 0 = off. */
+  /* While most live tracks with >= 4 points move slower than this (their
+   * straight-line fit; or none has 4 points yet), a track of >= 2 points
+   * dark for more than short_gap frames is looked for where it was, too,
+   * not only where its velocity carries it: fitted to a few pulses of a
+   * blinking object, that velocity can be their noise (static beads, 1 ms
+   * pulses tens of frames apart). Default 0.5 um/ms (below it the motion
+   * bias fades, elfm_smooth.h); 0 = off. */
   double rest_speed_um_per_ms;
   /* Trail suppression: a moving object's time surface leaves a second,
    * weaker peak behind it. An unmatched detection lying behind a matched one

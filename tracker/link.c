@@ -460,17 +460,21 @@ static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_
 }
 
 /* Are the recording's objects at rest, as far as the live tracks tell?
- * Most of those with a short fit (>= 4 points) move slower than
- * rest_speed_um_per_ms, or none has one yet (a blinking recording's first
- * pulses). */
+ * Most of those with >= 4 points move slower than rest_speed_um_per_ms by
+ * their straight-line fit over up to `history` points, or none has 4 points
+ * yet (a blinking recording's first pulses). Not by the short fit: through
+ * a static bead's pulses, tight clusters tens of frames apart, its slope at
+ * the last point is the clusters' noise (blink seed 8: 0.3-1.4 um/ms, the
+ * straight line 0.01-0.03); flow's beads read 2.0 um/ms on the straight
+ * line (median; 9.8 % of their track frames below 0.5, seed 1). */
 static int objects_at_rest(const elfm_linker *l)
 {
   const double v2max = l->o.rest_speed_um_per_ms * l->o.rest_speed_um_per_ms;
   size_t n_fit = 0, n_slow = 0;
   for (size_t i = 0; i < l->n_live; i++) {
     const live_track *lt = &l->live[i];
-    if (!lt->has_short) continue;
-    const double *v = lt->fit_vel;
+    if (lt->t->n < 4) continue;
+    const double *v = lt->vel_um_per_ms;
     n_fit++;
     n_slow += v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < v2max;
   }
@@ -478,23 +482,25 @@ static int objects_at_rest(const elfm_linker *l)
 }
 
 /* Set lt->has_rest, rest and rest_gate_um for a frame at t_us (after
- * predict_track). A track of 2-3 points knows its velocity least: fitted
- * to points a frame or two apart, it can be their localisation noise over
- * ~1 ms (0.5-1.5 um/ms for a static blinking bead), and carried over a
- * dark gap of tens of frames it puts the object 13-39 um from where it
- * still is (blink seed 2: every bead found in the first two 1 ms pulses,
- * 26 frames apart; the next pulse started new tracks, the first pulses'
- * points were dropped with their short tracks, and two beads were never
- * tracked). Past short_gap frames such a track may also have stayed where
- * it was: it is looked for there too, moving with the prior velocity,
- * within the gate less its own speed's term (u-track's undetermined
- * motion, Jaqaman et al. 2008, searches under both hypotheses). Only
- * where the objects are at rest (objects_at_rest): in flow, a dark short
- * track is mostly a ghost's or a deep bead's fragment, and at its old
- * place it took passing beads (flow seeds 1-20 alpha 0.8184 -> 0.8132). */
+ * predict_track). A blinking object's velocity comes from its pulses: a
+ * track of 2-3 points has one fitted to points a frame apart, their
+ * localisation noise over ~1 ms (0.5-1.5 um/ms for a static bead), and
+ * with 4-8 points the short fit's slope and curvature come from tight
+ * clusters of points tens of frames apart. Carried over a dark gap of tens
+ * of frames either puts the object 13-70 um from where it still is (blink
+ * seed 2: the next pulse started new tracks, the first pulses' points were
+ * dropped with their short tracks, and two beads were never tracked; seed
+ * 8: 10 of 15 beads). Past short_gap frames a track may also have stayed
+ * where it was: it is looked for there too, moving with the prior
+ * velocity, within the gate less its own speed's term (u-track's
+ * undetermined motion, Jaqaman et al. 2008, searches under both
+ * hypotheses). Only where the objects are at rest (objects_at_rest): in
+ * flow, a dark short track is mostly a ghost's or a deep bead's fragment,
+ * and at its old place it took passing beads (flow seeds 1-20 alpha
+ * 0.8184 -> 0.8132). */
 static void predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest)
 {
-  lt->has_rest = at_rest && lt->t->n >= 2 && !lt->has_short && lt->missed > o->short_gap;
+  lt->has_rest = at_rest && lt->t->n >= 2 && lt->missed > o->short_gap;
   if (!lt->has_rest) return;
   const double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3, frame_ms = dt_ms / (lt->missed + 1);
   const double *pv = o->prior_velocity_um_per_ms;

@@ -22,9 +22,10 @@ typedef struct live_track {
   int has_short;            /* the short fit exists (>= 4 points) */
   double pred[3];           /* prediction for the current frame */
   double gate_um;           /* gate for the current frame */
-  /* A track of 2-3 points dark for more than short_gap frames may also
-   * have stayed where it was (moving with the prior velocity): detections
-   * within rest_gate_um of rest[] are its candidates too (predict_track) */
+  /* In a recording at rest, a track dark for more than short_gap frames
+   * may also have stayed where it was (moving with the prior velocity):
+   * detections within rest_gate_um of rest[] are its candidates too
+   * (predict_rest in link.c) */
   int has_rest;
   double rest[3], rest_gate_um;
   int missed;               /* frames missed before the current frame */
