@@ -7,7 +7,8 @@
 #    precision and alpha above --guided-min-ratio 0 (measured: alpha 0.309
 #    -> 0.447, precision 0.611 -> 0.675);
 #  - the README's setting for moving blinking objects, --repr lin, reaches
-#    alpha > 0.6 and precision > 0.95 (measured 0.707 and 0.993; ninth
+#    alpha > 0.75 and precision > 0.95 (measured 0.803 and 0.993 with its
+#    motion-bias correction, fourteenth session; 0.714 without; ninth
 #    session's defaults 0.715 and 0.993; it needs
 #    the floor and stitching's straight-line rule, which keeps the bead that
 #    enters on the line another has left off that one's track);
@@ -38,7 +39,7 @@ p0=$(key "$tmp/off.json" precision); p1=$(key "$tmp/def.json" precision); p2=$(k
 echo "blink_moving seed 4: alpha $a0 -> $a1 (floor), $a2 (--repr lin); precision $p0 -> $p1, $p2"
 expect_gain "$a0" "$a1" 0.05 "the floor gains < 0.05 alpha"
 expect_gain "$p0" "$p1" 0.03 "the floor gains < 0.03 precision"
-awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.6 && p > 0.95) }' || { echo "FAIL: --repr lin"; fail=$((fail+1)); }
+awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.75 && p > 0.95) }' || { echo "FAIL: --repr lin"; fail=$((fail+1)); }
 tr=$(key "$tmp/def/summary.json" triggers)
 [ "${tr:-0}" -ge 60 ] || { echo "FAIL: triggers '$tr' (67 edges in 100 ms)"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/note" \
