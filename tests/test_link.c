@@ -193,20 +193,30 @@ int main(void)
    * where they were as well, each is one track from frame 7 (7 points);
    * without that (0) the first pulse's points are lost with their 2-point
    * tracks; and while most established tracks move (a fast bead seen
-   * every frame) the rest hypothesis is off, as it is in flow. */
-  {
-    static const int pulse[] = {7, 8, 34, 75, 93, 100, 127};
+   * every frame) the rest hypothesis is off, as it is in flow.
+   * Then blink seed 8's pulses, each over two frames with such errors
+   * (-1, +1 in each pair, halved in the later pairs), so that the short
+   * fit of a track's 4-8 points, tight pairs tens of frames apart, has a
+   * slope and curvature of noise: the straight-line fit tells the beads
+   * are at rest, and each is one track of 8 points. */
+  for (int sched = 0; sched < 2; sched++) {
+    static const int pulses[2][8] = {{7, 8, 34, 75, 93, 100, 127, -1},
+                                     {38, 39, 64, 65, 110, 111, 147, 181}};
+    static const double errs[2][8] = {{1, -1, 0, 0, 0, 0, 0, 0},
+                                      {-1, 1, 0.5, -0.5, -0.5, 0.5, 0, 0}};
+    const int *pulse = pulses[sched];
+    const int np = sched ? 8 : 7, last = pulse[np - 1];
     static const double bead[3][3] = {{0, 0, 0}, {30, -20, 40}, {-25, 35, -60}};
     for (int mode = 0; mode < 3; mode++) {  /* 0 default, 1 off, 2 default + a fast bead */
       elfm_link_options ob = o;
       if (mode == 1) ob.rest_speed_um_per_ms = 0;
       elfm_linker *l = elfm_link_create(&ob, &err);
       int k = 0;
-      for (int f = 0; f < 130; f++) {
+      for (int f = 0; f < 190; f++) {
         elfm_detection d[4];
         int n = 0;
-        if (k < 7 && pulse[k] == f) {
-          const double e = f == 7 ? 1 : f == 8 ? -1 : 0; /* the first pulse's errors */
+        if (k < np && pulse[k] == f) {
+          const double e = errs[sched][k];
           for (int b = 0; b < 3; b++)
             d[n++] = mk(bead[b][0] + 0.6 * e, bead[b][1] - 0.5 * e, bead[b][2] + 1.5 * e);
           k++;
@@ -218,13 +228,14 @@ int main(void)
       elfm_track_store st;
       elfm_track_store_init(&st);
       drain(l, &st);
-      /* whole: a track of all 7 pulses of one bead (every point within 2 um
-       * of its first); without the rest hypothesis bead 0's noise velocity
-       * carries it onto bead 2 (a track from frame 7 on the wrong bead) */
+      /* whole: a track of all the pulses of one bead (every point within 2
+       * um of its first); without the rest hypothesis bead 0's noise
+       * velocity carries it onto bead 2 (a track from frame 7 on the wrong
+       * bead) */
       int whole = 0;
       for (size_t i = 0; i < st.n; i++) {
         const elfm_track *t = st.tracks[i];
-        int same = t->n == 7 && t->pts[0].frame == 7 && t->pts[6].frame == 127;
+        int same = (int)t->n == np && t->pts[0].frame == pulse[0] && t->pts[np - 1].frame == last;
         for (size_t j = 1; same && j < t->n; j++)
           same = fabs(t->pts[j].x_um - t->pts[0].x_um) < 2 && fabs(t->pts[j].y_um - t->pts[0].y_um) < 2;
         whole += same;
