@@ -207,9 +207,11 @@ int main(void)
     const int *pulse = pulses[sched];
     const int np = sched ? 8 : 7, last = pulse[np - 1];
     static const double bead[3][3] = {{0, 0, 0}, {30, -20, 40}, {-25, 35, -60}};
-    for (int mode = 0; mode < 3; mode++) {  /* 0 default, 1 off, 2 default + a fast bead */
+    /* 0 default, 1 off, 2 default + a fast bead, 3 default by brute force */
+    for (int mode = 0; mode < 4; mode++) {
       elfm_link_options ob = o;
       if (mode == 1) ob.rest_speed_um_per_ms = 0;
+      if (mode == 3) ob.brute_force = 1;
       elfm_linker *l = elfm_link_create(&ob, &err);
       int k = 0;
       for (int f = 0; f < 190; f++) {
@@ -240,7 +242,7 @@ int main(void)
           same = fabs(t->pts[j].x_um - t->pts[0].x_um) < 2 && fabs(t->pts[j].y_um - t->pts[0].y_um) < 2;
         whole += same;
       }
-      CHECK_EQ_INT(whole, mode == 0 ? 3 : 0);
+      CHECK_EQ_INT(whole, mode == 0 || mode == 3 ? 3 : 0);
       elfm_track_store_clear(&st);
       elfm_link_free(l);
     }

@@ -533,19 +533,17 @@ static void cand_add(link_cand *lc, int *c, int max, int j, double cost)
   lc[k] = (link_cand){j, cost};
 }
 
-/* The rest hypothesis's candidates of track lt among det[0 .. nd) (brute
- * force: such tracks are few). */
-static void rest_candidates(const elfm_link_options *o, const live_track *lt,
-                            const elfm_detection *det, size_t nd, link_cand *lc, int *c)
+/* Detection d (index j) as a candidate of track lt under the rest
+ * hypothesis, when within its rest gate: its cost from the rest position. */
+static void rest_candidate(const elfm_link_options *o, const live_track *lt,
+                           const elfm_detection *d, int j, link_cand *lc, int *c)
 {
   const double g2 = lt->rest_gate_um * lt->rest_gate_um;
-  for (size_t j = 0; j < nd; j++) {
-    const double dx = det[j].x_um - lt->rest[0], dy = det[j].y_um - lt->rest[1],
-                 dz = (det[j].z_um - lt->rest[2]) / o->kz;
-    const double d2 = dx * dx + dy * dy + dz * dz;
-    if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
-    cand_add(lc, c, o->max_candidates, (int)j, d2 / g2 + o->gap_cost * lt->missed);
-  }
+  const double dx = d->x_um - lt->rest[0], dy = d->y_um - lt->rest[1],
+               dz = (d->z_um - lt->rest[2]) / o->kz;
+  const double d2 = dx * dx + dy * dy + dz * dz;
+  if (d2 >= g2 || weak_out(o, d, d2)) return;
+  cand_add(lc, c, o->max_candidates, j, d2 / g2 + o->gap_cost * lt->missed);
 }
 
 /* Is d a weak detection too far (squared anisotropic distance d2) from a
@@ -645,7 +643,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         if (d2 >= g2 || weak_out(o, &det[j], d2)) continue;
         cand_add(lc, &c, o->max_candidates, (int)j, d2 / g2 + o->gap_cost * lt->missed);
       }
-      if (lt->has_rest) rest_candidates(o, lt, det, nd, lc, &c);
+      if (lt->has_rest)
+        for (size_t j = 0; j < nd; j++) rest_candidate(o, lt, &det[j], (int)j, lc, &c);
       l->n_cand[i] = c;
     }
   } else if (nt > 0 && nd > 0) {
@@ -689,8 +688,22 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
         l->cand[i * (size_t)o->max_candidates + (size_t)c++] =
             (link_cand){j, d2 / g2 + o->gap_cost * lt->missed};
       }
-      if (lt->has_rest)
-        rest_candidates(o, lt, det, nd, &l->cand[i * (size_t)o->max_candidates], &c);
+      if (lt->has_rest) {  /* the same search around where it was */
+        float qr[3] = {(float)lt->rest[0], (float)lt->rest[1], (float)(lt->rest[2] / kz)};
+        const double r2 = lt->rest_gate_um * lt->rest_gate_um;
+        k = flann_radius_search_float(idx, qr, l->nn_idx, l->nn_dist, o->max_candidates,
+                                      (float)r2, &fp);
+        if (k < 0) {
+          flann_free_index_float(idx, &fp);
+          return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: FLANN radius search failed");
+        }
+        if (k > o->max_candidates) k = o->max_candidates;
+        for (int m = 0; m < k; m++) {
+          int j = l->nn_idx[m];
+          if (j < 0 || (size_t)j >= nd) continue;
+          rest_candidate(o, lt, &det[j], j, &l->cand[i * (size_t)o->max_candidates], &c);
+        }
+      }
       l->n_cand[i] = c;
     }
     flann_free_index_float(idx, &fp);
