@@ -9,12 +9,15 @@
  *     normal acceleration gives, at constant speed: it stays on the circle
  *     where an extrapolated acceleration diverges); tracks of 2-3
  *     points use a constant velocity fitted to their last `history` points,
- *     a track with one point prior_velocity_um_per_ms;
+ *     a track with one point prior_velocity_um_per_ms; while the recording's
+ *     objects are at rest (rest_speed_um_per_ms), a track dark for more
+ *     than short_gap frames is also looked for where it was;
  *  2. the frame's detections go into a FLANN exact k-d tree
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:
  *     gate_um + missed x gate_growth_um_per_frame + min(missed, short_gap)
- *     x speed_gate_frac x speed x frame interval;
+ *     x speed_gate_frac x speed x frame interval (and, at rest, within
+ *     that gate of where it was, each detection at its lower cost);
  *  3. tracks and detections joined by a candidate pair form connected
  *     groups; each group is solved optimally (the Hungarian solver of
  *     elfm_score.h: most pairs, then least total cost; cost = squared

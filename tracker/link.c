@@ -427,8 +427,6 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
-static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2);
-
 /* Fill lt->pred and lt->gate_um for a frame at t_us (lt->missed set). */
 static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us)
 {
@@ -496,8 +494,8 @@ static int objects_at_rest(const elfm_linker *l)
  * undetermined motion, Jaqaman et al. 2008, searches under both
  * hypotheses). Only where the objects are at rest (objects_at_rest): in
  * flow, a dark short track is mostly a ghost's or a deep bead's fragment,
- * and at its old place it took passing beads (flow seeds 1-20 alpha
- * 0.8184 -> 0.8132). */
+ * and at its old place it took passing beads (ungated, for tracks of 2-3
+ * points: flow seeds 1-20 alpha 0.8184 -> 0.8132). */
 static void predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest)
 {
   lt->has_rest = at_rest && lt->t->n >= 2 && lt->missed > o->short_gap;
@@ -508,6 +506,13 @@ static void predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_u
   const double pspeed = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
   lt->rest_gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
                      o->short_gap * o->speed_gate_frac * pspeed * frame_ms;
+}
+
+/* Is d a weak detection too far (squared anisotropic distance d2) from a
+ * track's prediction to join it? */
+static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
+{
+  return d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um;
 }
 
 /* Add detection j at cost to a track's candidates lc[0 .. *c), kept
@@ -544,13 +549,6 @@ static void rest_candidate(const elfm_link_options *o, const live_track *lt,
   const double d2 = dx * dx + dy * dy + dz * dz;
   if (d2 >= g2 || weak_out(o, d, d2)) return;
   cand_add(lc, c, o->max_candidates, j, d2 / g2 + o->gap_cost * lt->missed);
-}
-
-/* Is d a weak detection too far (squared anisotropic distance d2) from a
- * track's prediction to join it? */
-static int weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
-{
-  return d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um;
 }
 
 /* Is d in the trail of a detection just matched to a moving track? */
