@@ -1,6 +1,7 @@
 /* test_tracks.c — track store and writers: tracks.csv (smoothed + raw,
  * empty raw on gap frames) read back with elfm_table, detections.csv, ISBI
  * 2012 XML (real detections only), TrackMate XML structure, write errors. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -118,6 +119,34 @@ int main(void)
     CHECK_NEAR(elfm_table_get(tb, 0, elfm_table_col(tb, "x_um")), 36, 1e-9);
   }
   elfm_table_free(tb);
+  /* the detector's own figures after SPEC's columns: a peak's width and
+   * view-fit scatter, empty when not measured (0 in the struct), and the
+   * view-fit and weak flags */
+  {
+    elfm_detection dd[2];
+    memset(dd, 0, sizeof dd);
+    dd[0].frame = 3; dd[0].t_us = 4000; dd[0].x_um = 1; dd[0].intensity = 80;
+    dd[0].width_um = 2.5; dd[0].fit_sd_px = 0.125; dd[0].weak = 1;
+    dd[1] = dd[0];
+    dd[1].width_um = 0; dd[1].fit_sd_px = 0; dd[1].weak = 0; dd[1].view_fit = 1;
+    f = fopen(p_det, "w");
+    CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
+    CHECK_OK(elfm_detections_write(f, p_det, dd, 2, &err), &err);
+    fclose(f);
+    tb = NULL;
+    CHECK_OK(elfm_table_load_csv(p_det, &tb, &err), &err);
+    if (tb) {
+      const int cw = elfm_table_col(tb, "width_um"), cs = elfm_table_col(tb, "fit_sd_px"),
+                cv = elfm_table_col(tb, "view_fit"), ck = elfm_table_col(tb, "weak");
+      CHECK(cw == 9 && cs == 10 && cv == 11 && ck == 12);
+      CHECK_NEAR(elfm_table_get(tb, 0, cw), 2.5, 1e-9);
+      CHECK_NEAR(elfm_table_get(tb, 0, cs), 0.125, 1e-9);
+      CHECK(elfm_table_get(tb, 0, cv) == 0 && elfm_table_get(tb, 0, ck) == 1);
+      CHECK(isnan(elfm_table_get(tb, 1, cw)) && isnan(elfm_table_get(tb, 1, cs)));
+      CHECK(elfm_table_get(tb, 1, cv) == 1 && elfm_table_get(tb, 1, ck) == 0);
+    }
+    elfm_table_free(tb);
+  }
 
   /* ISBI: one particle per track, one detection per REAL point */
   f = fopen(p_isbi, "w");

@@ -25,7 +25,8 @@ static void put_num(FILE *f, double v, const char *fmt)
 
 elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err)
 {
-  fputs("frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um\n", f);
+  fputs("frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um,"
+        "width_um,fit_sd_px,view_fit,weak\n", f);
   return io_check(f, path, err);
 }
 
@@ -41,7 +42,10 @@ elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detectio
     put_num(f, d[i].sigma_x_um, "%.4f");
     put_num(f, d[i].sigma_y_um, "%.4f");
     put_num(f, d[i].sigma_z_um, "%.4f");
-    fputc('\n', f);
+    /* 0 in the struct means "not measured": written empty */
+    put_num(f, d[i].width_um > 0 ? d[i].width_um : NAN, "%.4f");
+    put_num(f, d[i].fit_sd_px > 0 ? d[i].fit_sd_px : NAN, "%.4f");
+    fprintf(f, ",%d,%d\n", d[i].view_fit ? 1 : 0, d[i].weak ? 1 : 0);
   }
   return io_check(f, path, err);
 }
