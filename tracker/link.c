@@ -427,6 +427,21 @@ static elfm_status start_track(elfm_linker *l, elfm_detection *d, int64_t *id_ou
   return ELFM_OK;
 }
 
+/* The gate of a track dark for `missed` frames whose object moves at
+ * speed_um_per_ms, frames frame_ms apart. It widens with each missed frame,
+ * more for fast objects: an unseen turn moves the object off the
+ * extrapolated line by ~ speed x turn angle (speed_gate_frac = 0.3: ~17
+ * degrees per frame, flow scene), for at most short_gap frames: beyond, the
+ * gate would swallow ghosts (a 50-frame gap at 2.5 um/ms gave a 46 um gate
+ * on the stage scene). */
+static double track_gate_um(const elfm_link_options *o, int missed, double speed_um_per_ms,
+                            double frame_ms)
+{
+  const int turn_frames = missed < o->short_gap ? missed : o->short_gap;
+  return o->gate_um + missed * o->gate_growth_um_per_frame +
+         turn_frames * o->speed_gate_frac * speed_um_per_ms * frame_ms;
+}
+
 /* Fill lt->pred and lt->gate_um for a frame at t_us (lt->missed set). */
 static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us)
 {
@@ -443,17 +458,9 @@ static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_
     elfm_link_predict_turn(lt->fit_pos, lt->fit_vel, lt->fit_acc, dt_ms, lt->pred);
   else
     for (int a = 0; a < 3; a++) lt->pred[a] = lt->last[a] + lt->vel_um_per_ms[a] * dt_ms;
-  /* The gate widens with each missed frame, more for fast objects: an
-   * unseen turn moves the object off the extrapolated line by ~ speed x
-   * turn angle (speed_gate_frac = 0.3: ~17 degrees per frame, flow scene),
-   * for at most short_gap frames: beyond, the gate would swallow ghosts
-   * (a 50-frame gap at 2.5 um/ms gave a 46 um gate on the stage scene). */
   const double *cv = lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
-  double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
-  double frame_ms = dt_ms / (lt->missed + 1);
-  int turn_frames = lt->missed < o->short_gap ? lt->missed : o->short_gap;
-  lt->gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
-               turn_frames * o->speed_gate_frac * speed * frame_ms;
+  const double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
+  lt->gate_um = track_gate_um(o, lt->missed, speed, dt_ms / (lt->missed + 1));
   if (lt->t->n == 1) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
 }
 
@@ -500,12 +507,11 @@ static void predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_u
 {
   lt->has_rest = at_rest && lt->t->n >= 2 && lt->missed > o->short_gap;
   if (!lt->has_rest) return;
-  const double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3, frame_ms = dt_ms / (lt->missed + 1);
+  const double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3;
   const double *pv = o->prior_velocity_um_per_ms;
   for (int a = 0; a < 3; a++) lt->rest[a] = lt->last[a] + pv[a] * dt_ms;
   const double pspeed = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
-  lt->rest_gate_um = o->gate_um + lt->missed * o->gate_growth_um_per_frame +
-                     o->short_gap * o->speed_gate_frac * pspeed * frame_ms;
+  lt->rest_gate_um = track_gate_um(o, lt->missed, pspeed, dt_ms / (lt->missed + 1));
 }
 
 /* Is d a weak detection too far (squared anisotropic distance d2) from a
