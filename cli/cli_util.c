@@ -170,6 +170,16 @@ int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *ou
   return 1;
 }
 
+const char *cli_start_name(elfm_frame_start v)
+{
+  switch (v) {
+  case ELFM_START_FIRST_EVENT: return "first";
+  case ELFM_START_AT_TIME: return "at-time";
+  case ELFM_START_FIRST_TRIGGER: return "trigger";
+  case ELFM_START_EACH_TRIGGER: return "each-trigger";
+  }
+  return "?";
+}
 const char *cli_repr_name(elfm_repr v) { return name_of(repr_names, N_OF(repr_names), (int)v); }
 const char *cli_polarity_name(elfm_polarity v)
 { return name_of(polarity_names, N_OF(polarity_names), (int)v); }
@@ -314,6 +324,15 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     return cli_parse_double_in(cmd, "--tau-bright-us", arg, 0, 1, HUGE_VAL, "> 0",
                                &fo->tau_bright_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
+  case CLI_RO_START:
+    if (!strcmp(arg, "first")) fo->start = ELFM_START_FIRST_EVENT;
+    else if (!strcmp(arg, "trigger")) fo->start = ELFM_START_FIRST_TRIGGER;
+    else if (!strcmp(arg, "each-trigger")) fo->start = ELFM_START_EACH_TRIGGER;
+    else {
+      cli_message(cmd, CLI_USAGE, "--start: '%s' is not first, trigger or each-trigger", arg);
+      return 0;
+    }
+    return 1;
   case CLI_RO_OFF_WEIGHT:
     return cli_parse_double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
   case CLI_RO_ISTART: {
@@ -435,6 +454,7 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "dt_us", (double)fo->dt_us);
   cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
   cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
+  cJSON_AddStringToObject(par, "start", cli_start_name(fo->start));
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
@@ -464,6 +484,11 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
   fprintf(f,
           "  --dt-us N            window length, 50..10000000 us (default %" PRId64 ")\n"
           "  --stride-us N        window start to start, 1..dt us (default %s)\n"
+          "  --start S            where windows start: first (the first event, default) |\n"
+          "                       trigger (the first rising trigger edge) | each-trigger\n"
+          "                       (the first, and every rising edge ends the window it\n"
+          "                       falls in and opens the next: one window per light\n"
+          "                       pulse, whatever its phase; blinking objects)\n"
           "  --repr R             exp | lin | count | integral (default %s; exp, lin: time\n"
           "                       surfaces; integral: each pixel's leaky sum of ON minus\n"
           "                       OFF events, its log brightness: no lead along the motion)\n"

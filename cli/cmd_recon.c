@@ -17,7 +17,6 @@ typedef struct recon_args {
   const char *calib, *events, *tiff, *out;
   elfm_recon_options ro;
   int save_volumes, save_mips, quiet;
-  const char *start_s;
 } recon_args;
 
 typedef struct recon_out {
@@ -43,7 +42,6 @@ static void usage(FILE *f)
   fprintf(f,
           "                       (median 3: the paper's; ghost agree:0.3: the measured\n"
           "                       best, docs/recon.md)\n"
-          "  --start S            first (first event, default) | trigger (first trigger edge)\n"
           "  --crop-margin-px N   widen each view's crop box (default 0)\n"
           "  --tiff-frame-us N    TIFF: time between pages (default dt)\n"
           "output:\n"
@@ -103,7 +101,6 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON *p = cJSON_AddObjectToObject(root, "parameters");
   const elfm_recon_options *r = &a->ro;
   cli_recon_options_json(p, r);
-  cJSON_AddStringToObject(p, "start", r->framer.start == ELFM_START_FIRST_TRIGGER ? "trigger" : "first");
   cJSON_AddNumberToObject(p, "crop_margin_px", r->refocus.crop_margin_px);
   cJSON_AddNumberToObject(p, "threads", r->threads);
   if (r->from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)r->from_us);
@@ -151,13 +148,13 @@ int cmd_recon(int argc, char **argv)
   recon_args a;
   memset(&a, 0, sizeof a);
   elfm_recon_options_default(&a.ro);
-  enum { O_CALIB = 256, O_EVENTS, O_TIFF, O_OUT, O_START, O_MARGIN, O_TIFF_US, O_SAVE_V,
+  enum { O_CALIB = 256, O_EVENTS, O_TIFF, O_OUT, O_MARGIN, O_TIFF_US, O_SAVE_V,
          O_SAVE_M, O_QUIET };
   static const struct option opts[] = {
     CLI_RECON_LONG_OPTIONS,
     {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
     {"tiff", required_argument, 0, O_TIFF}, {"out", required_argument, 0, O_OUT},
-    {"start", required_argument, 0, O_START}, {"crop-margin-px", required_argument, 0, O_MARGIN},
+    {"crop-margin-px", required_argument, 0, O_MARGIN},
     {"tiff-frame-us", required_argument, 0, O_TIFF_US}, {"save-volumes", no_argument, 0, O_SAVE_V},
     {"save-mips", no_argument, 0, O_SAVE_M}, {"quiet", no_argument, 0, O_QUIET},
     {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
@@ -179,7 +176,6 @@ int cmd_recon(int argc, char **argv)
     case O_OUT: a.out = optarg; break;
     case O_MARGIN: ok = cli_parse_int("recon", "--crop-margin-px", optarg, &r->refocus.crop_margin_px); break;
     case O_TIFF_US: ok = cli_parse_int64("recon", "--tiff-frame-us", optarg, &r->tiff_frame_us); break;
-    case O_START: a.start_s = optarg; break;
     case O_SAVE_V: a.save_volumes = 1; break;
     case O_SAVE_M: a.save_mips = 1; break;
     case O_QUIET: a.quiet = 1; break;
@@ -191,11 +187,6 @@ int cmd_recon(int argc, char **argv)
   if (!a.calib || !a.out || (!a.events == !a.tiff)) {
     usage(stderr);
     return cli_message("recon", CLI_USAGE, "--calib, --out and one of --events / --tiff are required");
-  }
-  if (a.start_s) {
-    if (!strcmp(a.start_s, "first")) r->framer.start = ELFM_START_FIRST_EVENT;
-    else if (!strcmp(a.start_s, "trigger")) r->framer.start = ELFM_START_FIRST_TRIGGER;
-    else return cli_message("recon", CLI_USAGE, "--start: '%s' is not first or trigger", a.start_s);
   }
   if (!cli_check_recon_options("recon", &rp)) return CLI_USAGE;
   elfm_error err;
@@ -227,6 +218,10 @@ int cmd_recon(int argc, char **argv)
   if (!a.quiet) fputc('\n', stderr);
   if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL)) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
+  if (!a.tiff && s.triggers == 0 && (r->framer.start == ELFM_START_FIRST_TRIGGER ||
+                                     r->framer.start == ELFM_START_EACH_TRIGGER))
+    return cli_message("recon", CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
+                       cli_start_name(r->framer.start), a.events);
   if (!a.quiet)
     fprintf(stderr, "recon: %lld events -> %lld volumes (%lld sparse) in %.2f s: %.0f volumes/s, "
             "%.2f Mev/s, %.2fx real time; %s/summary.json\n",

@@ -8,6 +8,12 @@
  * idx[0..nnz); each index is listed at most once; nnz <= w*h.
  *
  * Windows (SPEC §5): window n covers [start + n*stride, start + n*stride + dt).
+ * With ELFM_START_EACH_TRIGGER every rising trigger edge (an LED driver's
+ * "on") also restarts that grid: the window the edge falls in ends at the
+ * edge, and the next window starts there. Each light pulse then opens a
+ * window of its own, whatever its phase against the grid; without it a
+ * 1 ms pulse at a random phase spreads over two 1 ms windows (blinking
+ * beads, docs/tracker.md "Windows opened by the LED").
  * Representations, evaluated at the window's end t1 from the events inside
  * the window (events before the window do not contribute):
  *   EXP   255 * exp(-(t1 - t_last) / tau)       t_us = t1 (window end)
@@ -77,7 +83,8 @@ typedef enum elfm_polarity {
 typedef enum elfm_frame_start {
   ELFM_START_FIRST_EVENT = 0, /* first window starts at the first event */
   ELFM_START_AT_TIME,         /* ... at options.start_us */
-  ELFM_START_FIRST_TRIGGER    /* ... at the first trigger edge (stimulus onset) */
+  ELFM_START_FIRST_TRIGGER,   /* ... at the first trigger edge (stimulus onset) */
+  ELFM_START_EACH_TRIGGER     /* ... at the first, and every rising edge restarts the grid */
 } elfm_frame_start;
 
 typedef struct elfm_frame {

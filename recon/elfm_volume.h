@@ -23,6 +23,11 @@ typedef struct elfm_volume {
   float *data;
   int64_t t_us;       /* the time this volume stands for (SPEC §5) */
   int64_t frame;      /* index of the frame it was built from */
+  /* the frame's window [t_start_us, t_end_us) and its events (elfm_frame);
+   * a volume read back from a file has t_start_us = t_end_us = t_us and
+   * n_events 0 (not stored) */
+  int64_t t_start_us, t_end_us;
+  size_t n_events;
   double um_per_px, z_min_um, z_step_um;
 } elfm_volume;
 

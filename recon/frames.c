@@ -56,6 +56,12 @@ struct elfm_framer {
   int64_t t_integrated;      /* events before this time are in px[] */
   int64_t origin_us;         /* start of window 0, INT64_MIN until known */
   int64_t next_index;        /* window to emit next */
+  int64_t next_t0;           /* its start (valid once origin_us is known) */
+  /* ELFM_START_EACH_TRIGGER: rising edges after the windows emitted so far,
+   * in time order (a ring; bounded by the edges of one chunk plus the open
+   * windows'). */
+  int64_t *trig_t;
+  size_t trig_head, trig_n, trig_cap; /* trig_cap a power of two, or 0 */
   int64_t t_seen;            /* latest event time pushed (any polarity), INT64_MIN */
   int64_t t_last_kept;       /* latest event time kept in the FIFO */
   int have_events, finished;
@@ -175,7 +181,7 @@ elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown representation %d", (int)o->repr);
   if ((unsigned)o->polarity > ELFM_POL_SIGNED)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown polarity %d", (int)o->polarity);
-  if ((unsigned)o->start > ELFM_START_FIRST_TRIGGER)
+  if ((unsigned)o->start > ELFM_START_EACH_TRIGGER)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown start mode %d", (int)o->start);
   return ELFM_OK;
 }
@@ -235,7 +241,7 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   f->t_seen = INT64_MIN;
   f->t_last_kept = INT64_MIN;
   f->t_integrated = INT64_MIN;
-  if (o->start == ELFM_START_AT_TIME) f->origin_us = o->start_us;
+  if (o->start == ELFM_START_AT_TIME) f->origin_us = f->next_t0 = o->start_us;
   *out = f;
   return ELFM_OK;
 }
@@ -251,6 +257,7 @@ void elfm_framer_free(elfm_framer *f)
   free(f->decay);
   free(f->px);
   free(f->act);
+  free(f->trig_t);
   free(f);
 }
 
@@ -361,14 +368,43 @@ static int framer_grow(elfm_framer *f)
   return 1;
 }
 
+static int framer_grow_trig(elfm_framer *f)
+{
+  size_t cap = f->trig_cap ? 2 * f->trig_cap : 64;
+  int64_t *t = malloc(cap * sizeof *t);
+  if (!t) return 0;
+  for (size_t i = 0; i < f->trig_n; i++) t[i] = f->trig_t[(f->trig_head + i) & (f->trig_cap - 1)];
+  free(f->trig_t);
+  f->trig_t = t;
+  f->trig_cap = cap;
+  f->trig_head = 0;
+  return 1;
+}
+
 elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err)
 {
-  if (f->origin_us == INT64_MIN && f->opt.start == ELFM_START_FIRST_TRIGGER) {
+  const int each = f->opt.start == ELFM_START_EACH_TRIGGER;
+  if (f->origin_us == INT64_MIN && (f->opt.start == ELFM_START_FIRST_TRIGGER || each)) {
     for (size_t i = 0; i < c->n_trig; i++)
       if (c->trig[i].value == 1) {
-        f->origin_us = c->trig[i].t_us;
+        f->origin_us = f->next_t0 = c->trig[i].t_us;
         break;
       }
+  }
+  if (each && f->origin_us != INT64_MIN) {
+    for (size_t i = 0; i < c->n_trig; i++) {
+      const int64_t t = c->trig[i].t_us;
+      /* the edge that set the origin opens window 0 already; edges must
+       * come in time order, as the events do */
+      if (c->trig[i].value != 1 || t <= f->origin_us) continue;
+      if (f->trig_n > 0 && t < f->trig_t[(f->trig_head + f->trig_n - 1) & (f->trig_cap - 1)])
+        return elfm_error_set(err, ELFM_ERR_FORMAT, NULL, -1,
+                              "trigger edge at %lld us is before the previous edge", (long long)t);
+      if (f->trig_n == f->trig_cap && !framer_grow_trig(f))
+        return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory holding trigger edges");
+      f->trig_t[(f->trig_head + f->trig_n) & (f->trig_cap - 1)] = t;
+      f->trig_n++;
+    }
   }
   for (size_t i = 0; i < c->n; i++) {
     int64_t t = c->t_us[i];
@@ -386,7 +422,7 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
       continue;
     if (f->origin_us == INT64_MIN) {
       if (f->opt.start != ELFM_START_FIRST_EVENT) continue; /* waiting for the trigger */
-      f->origin_us = t;
+      f->origin_us = f->next_t0 = t;
     }
     if (t < f->origin_us) continue;
     if (f->q_n == f->q_cap && !framer_grow(f))
@@ -525,8 +561,17 @@ static size_t framer_window(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *
 int elfm_framer_next(elfm_framer *f, elfm_frame *out)
 {
   if (f->origin_us == INT64_MIN || out->w != f->w || out->h != f->h) return 0;
-  int64_t t0 = f->origin_us + f->next_index * f->opt.stride_us;
+  const int64_t t0 = f->next_t0;
   int64_t t1 = t0 + f->opt.dt_us;
+  /* ELFM_START_EACH_TRIGGER: an edge inside the window ends it there. Once
+   * events up to t1 have been pushed, every edge before t1 has been too
+   * (chunks come in time order), so the cut is final when the window closes. */
+  while (f->trig_n > 0 && f->trig_t[f->trig_head] <= t0) {
+    f->trig_head = (f->trig_head + 1) & (f->trig_cap - 1);
+    f->trig_n--;
+  }
+  const int cut = f->trig_n > 0 && f->trig_t[f->trig_head] < t1;
+  if (cut) t1 = f->trig_t[f->trig_head];
   int closed = f->t_seen != INT64_MIN && t1 <= f->t_seen;
   if (!closed && f->finished) closed = f->have_events && t0 <= f->t_last_kept;
   if (!closed) return 0;
@@ -538,11 +583,12 @@ int elfm_framer_next(elfm_framer *f, elfm_frame *out)
   out->n_events = nev;
   out->t_start_us = t0;
   out->t_end_us = t1;
-  out->t_us = count ? t0 + f->opt.dt_us / 2 : t1;
+  out->t_us = count ? t0 + (t1 - t0) / 2 : t1;
   out->index = f->next_index;
   f->next_index++;
   /* drop what no later window needs */
-  int64_t next_t0 = t0 + f->opt.stride_us;
+  const int64_t next_t0 = cut ? t1 : t0 + f->opt.stride_us;
+  f->next_t0 = next_t0;
   while (f->q_n > 0 && f->q_t[f->q_head] < next_t0) {
     f->q_head = (f->q_head + 1) & (f->q_cap - 1);
     f->q_n--;

@@ -415,6 +415,9 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
                                                                      : ELFM_PATH_DENSE;
   vol->t_us = frame->t_us;
   vol->frame = frame->index;
+  vol->t_start_us = frame->t_start_us;
+  vol->t_end_us = frame->t_end_us;
+  vol->n_events = frame->n_events;
   vol->um_per_px = p->calib.um_per_px;
   vol->z_min_um = p->calib.z_min_um;
   vol->z_step_um = p->calib.z_step_um;

@@ -235,6 +235,76 @@ static void test_trigger_start(void)
   elfm_frame_free(f);
 }
 
+/* ELFM_START_EACH_TRIGGER: every rising edge restarts the grid. Pulses at
+ * 2500 (origin), 5300 and 5800 (two edges inside one window), an OFF edge
+ * at 3500 that changes nothing, and a pulse at 9000 on a window boundary. */
+static void test_each_trigger(void)
+{
+  elfm_error err;
+  for (int repr = 0; repr < 3; repr++) {
+    for (int split = 0; split < 2; split++) {
+      elfm_framer_options o;
+      elfm_framer_options_default(&o);
+      o.start = ELFM_START_EACH_TRIGGER;
+      o.repr = repr == 0 ? ELFM_REPR_EXP : repr == 1 ? ELFM_REPR_COUNT : ELFM_REPR_INTEGRAL;
+      elfm_framer *fr = NULL;
+      CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+      elfm_event_chunk *c = elfm_chunk_create(32, &err);
+      elfm_frame *f = elfm_frame_create(SW, SH, &err);
+      const elfm_trigger trig[5] = {{.t_us = 2500, .value = 1}, {.t_us = 3500, .value = 0},
+                                    {.t_us = 5300, .value = 1}, {.t_us = 5800, .value = 1},
+                                    {.t_us = 9000, .value = 1}};
+      const int64_t ev[9] = {2000, 2600, 5200, 5300, 5700, 5900, 8999, 9000, 12000};
+      /* one chunk, or two split between 5700 and 5800 (the edge at 5800
+       * arrives with the second, after the window it cuts began) */
+      int n_first_ev = split ? 5 : 9, n_first_tr = split ? 3 : 5;
+      for (int part = 0; part < 2; part++) {
+        c->n = 0;
+        c->n_trig = 0;
+        for (int k = part ? n_first_tr : 0; k < (part ? 5 : n_first_tr); k++) c->trig[c->n_trig++] = trig[k];
+        for (int k = part ? n_first_ev : 0; k < (part ? 9 : n_first_ev); k++)
+          add_event(c, ev[k], 1 + k, 1, 1);
+        if (c->n || c->n_trig) CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+      }
+      elfm_framer_finish(fr);
+      /* expected windows: [2500,3500) [3500,4500) [4500,5300) [5300,5800)
+       * [5800,6800) [6800,7800) [7800,8800) [8800,9000) [9000,10000)
+       * [10000,11000) [11000,12000) [12000,13000) */
+      const int64_t w0[12] = {2500, 3500, 4500, 5300, 5800, 6800, 7800, 8800, 9000, 10000, 11000, 12000};
+      const int64_t w1[12] = {3500, 4500, 5300, 5800, 6800, 7800, 8800, 9000, 10000, 11000, 12000, 13000};
+      const size_t nev[12] = {1, 0, 1, 2, 1, 0, 0, 1, 1, 0, 0, 1};
+      int n = 0;
+      while (elfm_framer_next(fr, f) == 1 && n < 12) {
+        CHECK_EQ_INT(f->index, n);
+        CHECK_EQ_INT(f->t_start_us, w0[n]);
+        CHECK_EQ_INT(f->t_end_us, w1[n]);
+        CHECK_EQ_INT(f->n_events, nev[n]);
+        CHECK_EQ_INT(f->t_us, repr == 1 ? (w0[n] + w1[n]) / 2 : w1[n]);
+        n++;
+      }
+      CHECK_EQ_INT(n, 12);
+      elfm_framer_free(fr);
+      elfm_chunk_free(c);
+      elfm_frame_free(f);
+    }
+  }
+  /* edges out of order are a format error, not a silent misalignment */
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_EACH_TRIGGER;
+  elfm_framer *fr = NULL;
+  CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create(8, &err);
+  c->trig[0] = (elfm_trigger){.t_us = 1000, .value = 1};
+  c->trig[1] = (elfm_trigger){.t_us = 3000, .value = 1};
+  c->trig[2] = (elfm_trigger){.t_us = 2000, .value = 1};
+  c->n_trig = 3;
+  CHECK(elfm_framer_push(fr, c, &err) == ELFM_ERR_FORMAT);
+  CHECK(strstr(err.message, "trigger") != NULL);
+  elfm_framer_free(fr);
+  elfm_chunk_free(c);
+}
+
 static void test_bad_input(void)
 {
   elfm_error err;
@@ -249,6 +319,9 @@ static void test_bad_input(void)
   CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
   elfm_framer_options_default(&o);
   o.tau_us = -1;
+  CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
+  elfm_framer_options_default(&o);
+  o.start = (elfm_frame_start)(ELFM_START_EACH_TRIGGER + 1);
   CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
   elfm_framer_options_default(&o);
   CHECK(elfm_framer_create(&o, 0, SH, &fr, &err) == ELFM_ERR_INVALID);
@@ -273,6 +346,7 @@ int main(void)
   test_lin_count_signed();
   test_stride_and_chunking();
   test_trigger_start();
+  test_each_trigger();
   test_bad_input();
   return check_report();
 }
