@@ -59,8 +59,10 @@ int cmd_track(int argc, char **argv)
   c.o = &o;
   c.calib = &calib;
   elfm_track_store_init(&c.store);
+  elfm_frame_times_init(&c.frame_times);
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
+  snprintf(c.p_fr, sizeof c.p_fr, "%s/frames.csv", o.out);
   char p_isbi[1100], p_tm[1100], p_sum[1100];
   snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", o.out);
   snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", o.out);
@@ -83,8 +85,14 @@ int cmd_track(int argc, char **argv)
   if (!c.lk) { cli_fail(C, &err); goto done; }
   c.fdet = fopen(c.p_det, "w");
   c.ftr = fopen(c.p_tr, "w");
-  if (!c.fdet || !c.ftr) {
-    cli_message(C, CLI_FAIL, "%s: cannot create: %s", c.fdet ? c.p_tr : c.p_det, strerror(errno));
+  c.ffr = fopen(c.p_fr, "w");
+  if (!c.fdet || !c.ftr || !c.ffr) {
+    cli_message(C, CLI_FAIL, "%s: cannot create: %s",
+                !c.fdet ? c.p_det : !c.ftr ? c.p_tr : c.p_fr, strerror(errno));
+    goto done;
+  }
+  if (fputs("frame,t_us,t_start_us,t_end_us,n_events,n_detections\n", c.ffr) < 0) {
+    cli_message(C, CLI_FAIL, "%s: write failed: %s", c.p_fr, strerror(errno));
     goto done;
   }
   if (elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
@@ -119,6 +127,7 @@ int cmd_track(int argc, char **argv)
   if (st == ELFM_OK) st = track_det_flush_before(&c, INT64_MAX, &err);
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
   if (st == ELFM_OK) st = close_file(&c.ftr, c.p_tr, &err);
+  if (st == ELFM_OK) st = close_file(&c.ffr, c.p_fr, &err);
   if (st == ELFM_OK) {
     fx = fopen(p_isbi, "w");
     if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_isbi, -1, "cannot create: %s", strerror(errno));
@@ -138,6 +147,13 @@ int cmd_track(int argc, char **argv)
   if (input_failed) {
     cli_fail(C, &input_err);
     if (st != ELFM_OK) cli_fail(C, &err);
+    goto done;
+  }
+  if (st == ELFM_OK && rs.triggers == 0 && (o.recon.framer.start == ELFM_START_FIRST_TRIGGER ||
+                                             o.recon.framer.start == ELFM_START_EACH_TRIGGER)) {
+    /* the outputs are written (empty), but an empty run is not a success */
+    cli_message(C, CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
+                cli_start_name(o.recon.framer.start), o.events);
     goto done;
   }
   if (st != ELFM_OK) {

@@ -135,8 +135,9 @@ typedef struct track_ctx {
   } *fin;
   size_t fin_cap;
   elfm_linker *lk;
-  FILE *fdet, *ftr;
-  char p_det[1100], p_tr[1100];
+  FILE *fdet, *ftr, *ffr;      /* detections.csv, tracks.csv, frames.csv */
+  elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
+  char p_det[1100], p_tr[1100], p_fr[1100];
   elfm_track_store store;
   int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;

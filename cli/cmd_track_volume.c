@@ -2,6 +2,8 @@
  * recon driver: peak detection on the worker threads, then in frame order
  * linking, writing detections, and smoothing, filtering and writing the
  * tracks that ended (see cmd_track.h). */
+#include <errno.h>
+#include <inttypes.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -90,6 +92,7 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
   const size_t ns = st == ELFM_OK ? n : 0;
   double t0 = cli_now_s();
   elfm_smooth_options so_run = c->o->smooth;
+  so_run.frame_times = &c->frame_times;
   so_run.motion_lead_um = track_motion_lead_um(c);
   const elfm_smooth_options *so = &so_run;
   const int nt = ns > 1 && c->n_threads > 1 ? c->n_threads : 1;
@@ -472,6 +475,13 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
       }
     }
   }
+  /* frames.csv: every frame's window, also those without a detection, so
+   * that `score --frames` knows when each frame was (windows opened by
+   * trigger edges are not evenly spaced) */
+  if (fprintf(c->ffr, "%" PRId64 ",%" PRId64 ",%" PRId64 ",%" PRId64 ",%zu,%d\n", v->frame,
+              v->t_us, v->t_start_us, v->t_end_us, v->n_events, kept) < 0)
+    return elfm_error_set(err, ELFM_ERR_IO, c->p_fr, -1, "write failed: %s", strerror(errno));
+  if ((st = elfm_frame_times_add(&c->frame_times, v->frame, v->t_us, err)) != ELFM_OK) return st;
   c->n_frames++;
   c->n_det += kept;
   c->last_frame = v->frame;
@@ -483,6 +493,8 @@ void track_ctx_free(track_ctx *c)
 {
   if (c->fdet) fclose(c->fdet);
   if (c->ftr) fclose(c->ftr);
+  if (c->ffr) fclose(c->ffr);
+  elfm_frame_times_free(&c->frame_times);
   elfm_link_free(c->lk);
   for (int t = 0; c->pk && t < c->n_threads; t++) elfm_peaks_free(c->pk[t]);
   free(c->pk);

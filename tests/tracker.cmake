@@ -5,6 +5,7 @@ elfm_add_test(test_link_fill test_link_fill.c TIMEOUT 60)
 elfm_add_test(test_smooth test_smooth.c TIMEOUT 60)
 elfm_add_test(test_analysis test_analysis.c TIMEOUT 60)
 elfm_add_test(test_tracks test_tracks.c TIMEOUT 60)
+elfm_add_test(test_frame_times test_frame_times.c TIMEOUT 60)
 # End to end (simulate -> eventlfm track -> score): short scenes by default,
 # the long ones (stage_accel, blink, blink_moving, worm) labelled slow.
 elfm_add_test(test_track_e2e test_track_e2e.c TIMEOUT 300)

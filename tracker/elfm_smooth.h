@@ -129,6 +129,11 @@ typedef struct elfm_smooth_options {
   double motion_lead_fade_um_per_ms;
   int motion_n_views;                       /* 0: lateral model only */
   double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
+  /* elfm_track_smooth only: the run's frame times (elfm_tracks.h; borrowed,
+   * may be NULL). A gap frame's time comes from here when recorded, else
+   * it is interpolated between the gap's ends (exact for evenly spaced
+   * frames). */
+  const elfm_frame_times *frame_times;
 } elfm_smooth_options;
 
 void elfm_smooth_options_default(elfm_smooth_options *o);

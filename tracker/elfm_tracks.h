@@ -24,6 +24,33 @@
 extern "C" {
 #endif
 
+/* ---- Frame times ----
+ * The time (t_us) of every frame of a run, for the frames of a track's span
+ * that have no real point (gaps), whose times the smoother and tracks.csv
+ * need. Evenly spaced frames need nothing: a gap's times lie on the line
+ * between its ends. Windows opened by trigger edges (`--start
+ * each-trigger`) are not evenly spaced, so the run records each frame's
+ * time here as it goes. Stored as runs of evenly spaced frames (first
+ * frame, its time, the step): one run for a fixed frame rate, two or three
+ * per trigger edge otherwise, so memory grows with the edges, not the
+ * frames (16 bytes x 3 per light pulse). */
+typedef struct elfm_frame_times {
+  size_t n, cap;
+  int64_t *frame, *t_us, *step_us; /* per run; step 0 while the run has one frame */
+  int64_t last_frame;               /* latest frame added, -1 none */
+} elfm_frame_times;
+
+void elfm_frame_times_init(elfm_frame_times *ft);
+void elfm_frame_times_free(elfm_frame_times *ft);
+/* Record frame's time; frames must be added in increasing order, each after
+ * the previous one (ELFM_ERR_INVALID otherwise), times increasing. */
+elfm_status elfm_frame_times_add(elfm_frame_times *ft, int64_t frame, int64_t t_us,
+                                 elfm_error *err);
+/* The time of a recorded frame (one between two recorded frames that was
+ * skipped lies on its run's line); 0 with *t_us untouched for a frame
+ * before the first or after the last. */
+int elfm_frame_times_get(const elfm_frame_times *ft, int64_t frame, int64_t *t_us);
+
 /* Motion models the smoother chooses from (elfm_smooth.h). */
 typedef enum elfm_motion_model {
   ELFM_MODEL_AUTO = 0,       /* choose per track by BIC */

@@ -119,13 +119,21 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     raw[d->frame - f0] = (int32_t)i;
     tq[d->frame - f0] = d->t_us;
   }
-  /* Gap frames: time interpolated between the real neighbours (frames are
-   * evenly spaced in time, so this is exact for a fixed frame rate). */
+  /* Gap frames: the run's recorded time (o->frame_times), else time
+   * interpolated between the real neighbours (exact for a fixed frame
+   * rate; windows opened by trigger edges are not evenly spaced). A
+   * recorded time must lie strictly between the gap's ends, as the
+   * frames' order says; else the interpolation stands. */
   for (size_t i = 0; i + 1 < n; i++) {
     int64_t fa = t->pts[i].frame, fb = t->pts[i + 1].frame;
     int64_t ta = t->pts[i].t_us, tb = t->pts[i + 1].t_us;
-    for (int64_t f = fa + 1; f < fb; f++)
-      tq[f - f0] = ta + (int64_t)llround((double)(tb - ta) * (double)(f - fa) / (double)(fb - fa));
+    for (int64_t f = fa + 1; f < fb; f++) {
+      int64_t tr;
+      if (o->frame_times && elfm_frame_times_get(o->frame_times, f, &tr) && tr > ta && tr < tb)
+        tq[f - f0] = tr;
+      else
+        tq[f - f0] = ta + (int64_t)llround((double)(tb - ta) * (double)(f - fa) / (double)(fb - fa));
+    }
   }
   /* Points the view fit found where no peak stood out (gap filling, the
    * guided search) are noisier than the peaks: per-point sigmas, the
