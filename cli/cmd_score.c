@@ -14,7 +14,10 @@
 struct score_opts {
   const char *truth, *tracks, *detections, *calib;
   int json;
-  int window_run;            /* --window-us run: the run's dt_us from summary.json */
+  int window_run;            /* --window-us run: the run's dt_us from summary.json, or
+                                each frame's own window with --frames */
+  const char *frames;        /* --frames FILE, or "run" */
+  char frames_path[4096];
   const char *window_source; /* where the window came from, for the table */
   elfm_score_options so;
 };
@@ -25,7 +28,8 @@ static void score_usage(FILE *f)
           "usage: eventlfm score --truth truth.csv (--tracks tracks.csv | --detections detections.csv)\n"
           "                      [--tracks tracks.csv] [--detections detections.csv]\n"
           "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
-          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--window-us W|run]\n"
+          "                      [--eps-um 4] [--kz 4] [--n-frames N] [--frames FILE|run]\n"
+          "                      [--window-us W|run]\n"
           "                      [--motion-fade-um-per-ms F] [--json]\n"
           "\n"
           "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
@@ -47,11 +51,16 @@ static void score_usage(FILE *f)
           "slow samples with --repr integral); slower points are left out.\n"
           "--n-frames N: the run had frames 0..N-1 (summary.json's volume count), so frames\n"
           "before the first or after the last row of the files count too.\n"
+          "--frames FILE: the run's frame list (track's frames.csv: frame, t_us, t_start_us,\n"
+          "t_end_us): every frame counts at its own time, also frames without any row and\n"
+          "windows that are not evenly spaced (track --start each-trigger). 'run': the\n"
+          "frames.csv beside tracks.csv (or detections.csv). Replaces --n-frames.\n"
           "--window-us W: a frame stands for the events of (t_us - W, t_us]; an object counts\n"
           "when it was bright for at least half of that window (blinking objects whose pulse\n"
           "ended just before the window's end). 'run': parameters.dt_us of the summary.json\n"
-          "beside tracks.csv (the run's accumulation time). Default 0: SPEC 7 as written, an\n"
-          "object counts when it is bright at t_us.\n"
+          "beside tracks.csv (the run's accumulation time); with --frames, each frame's own\n"
+          "window [t_start_us, t_end_us). Default 0: SPEC 7 as written, an object counts\n"
+          "when it is bright at t_us.\n"
           "--json prints one JSON object on stdout instead of the table.\n");
 }
 
@@ -114,6 +123,8 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   cJSON_AddNumberToObject(o, "eps_um", op->so.eps_um);
   cJSON_AddNumberToObject(o, "kz", op->so.kz);
   cJSON_AddNumberToObject(o, "window_us", op->so.window_us);
+  cJSON_AddBoolToObject(o, "window_frames", op->so.window_frames);
+  cJSON_AddBoolToObject(o, "frame_list", op->frames != NULL);
   char *text = cJSON_PrintUnformatted(o);
   cJSON_Delete(o);
   if (!text) return cli_message("score", CLI_FAIL, "out of memory");
@@ -124,9 +135,13 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
 
 static void print_table(const struct score_opts *op, const elfm_score_result *r)
 {
-  printf("scoring (eps %.3g um, kz %.3g, %d frames%s, window %.0f us%s)\n", op->so.eps_um,
-         op->so.kz, r->n_frames, op->so.have_bounds ? ", truth inside the volume only" : "",
-         op->so.window_us, op->window_source ? op->window_source : "");
+  char window[96];
+  if (op->so.window_frames) snprintf(window, sizeof window, "each frame's own window");
+  else snprintf(window, sizeof window, "window %.0f us%s", op->so.window_us,
+                op->window_source ? op->window_source : "");
+  printf("scoring (eps %.3g um, kz %.3g, %d frames%s%s, %s)\n", op->so.eps_um, op->so.kz,
+         r->n_frames, op->frames ? " from the frame list" : "",
+         op->so.have_bounds ? ", truth inside the volume only" : "", window);
   if (r->n_frames_unscored > 0)
     printf("  %d frame(s) outside the truth's time range not scored\n", r->n_frames_unscored);
   printf("detections%s\n", r->detections_from_tracks ? " (raw points of the tracks)" : "");
@@ -207,7 +222,7 @@ static int window_from_summary(struct score_opts *op)
 int cmd_score(int argc, char **argv)
 {
   enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
-         OPT_NFRAMES, OPT_WINDOW, OPT_FADE };
+         OPT_NFRAMES, OPT_WINDOW, OPT_FADE, OPT_FRAMES };
   static const struct option longopts[] = {
       {"truth", required_argument, NULL, OPT_TRUTH},
       {"tracks", required_argument, NULL, OPT_TRACKS},
@@ -219,6 +234,7 @@ int cmd_score(int argc, char **argv)
       {"json", no_argument, NULL, OPT_JSON},
       {"n-frames", required_argument, NULL, OPT_NFRAMES},
       {"window-us", required_argument, NULL, OPT_WINDOW},
+      {"frames", required_argument, NULL, OPT_FRAMES},
       {"motion-fade-um-per-ms", required_argument, NULL, OPT_FADE},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
@@ -262,6 +278,7 @@ int cmd_score(int argc, char **argv)
       if (op.so.n_frames_hint < 1 || op.so.n_frames_hint > 50000000)
         return cli_message("score", CLI_USAGE, "--n-frames must be 1..50000000");
       break;
+    case OPT_FRAMES: op.frames = optarg; break;
     case OPT_WINDOW:
       if (!strcmp(optarg, "run")) {
         op.window_run = 1;
@@ -293,9 +310,26 @@ int cmd_score(int argc, char **argv)
     if (elfm_calib_load(op.calib, &cal, &err) != ELFM_OK) return cli_fail("score", &err);
     elfm_score_options_set_calib(&op.so, &cal);
   }
+  elfm_table *frames = NULL;
+  if (op.frames) {
+    const char *path = op.frames;
+    if (!strcmp(op.frames, "run")) {
+      const char *beside = op.tracks ? op.tracks : op.detections;
+      const char *slash = strrchr(beside, '/');
+      int dir_len = slash ? (int)(slash - beside) + 1 : 0;
+      if (snprintf(op.frames_path, sizeof op.frames_path, "%.*sframes.csv", dir_len, beside) >=
+          (int)sizeof op.frames_path)
+        return cli_message("score", CLI_USAGE, "--frames run: the path is too long");
+      path = op.frames_path;
+    }
+    if (elfm_table_load_csv(path, &frames, &err) != ELFM_OK) return cli_fail("score", &err);
+    op.so.frames = frames;
+  }
   /* The default is SPEC 7 as written (bright at t_us); the window rule is
    * asked for (docs/bench.md "Blinking objects" has both on blink). */
-  if (op.window_run) {
+  if (op.window_run && frames) {
+    op.so.window_frames = 1;
+  } else if (op.window_run) {
     if (!op.tracks)
       return cli_message("score", CLI_USAGE, "--window-us run needs --tracks (its summary.json)");
     if (!window_from_summary(&op)) {
@@ -306,8 +340,10 @@ int cmd_score(int argc, char **argv)
     }
   }
   elfm_score_result r;
-  if (elfm_score_files(op.truth, op.tracks, op.detections, &op.so, &r, &err) != ELFM_OK)
-    return cli_fail("score", &err);
+  elfm_status st = elfm_score_files(op.truth, op.tracks, op.detections, &op.so, &r, &err);
+  elfm_table_free(frames);
+  op.so.frames = NULL;
+  if (st != ELFM_OK) return cli_fail("score", &err);
   if (op.json) return print_json(&op, &r);
   print_table(&op, &r);
   return CLI_OK;

@@ -196,6 +196,21 @@ typedef struct elfm_score_options {
    * files then count too, their t_us extrapolated with the mean frame
    * spacing. 0 (default): only the span of frames seen in the files. */
   int64_t n_frames_hint;
+  /* The run's frame list (`eventlfm track`'s frames.csv: frame, t_us,
+   * t_start_us, t_end_us; borrowed, may be NULL). Every frame it lists
+   * counts, with its own t_us, also frames without any row and frames that
+   * are not evenly spaced (windows opened by trigger edges, `--start
+   * each-trigger`). Rows of detections or tracks at a frame it does not
+   * list, or with another t_us, are errors. Frames must increase in index
+   * and time, with t_start_us <= t_us <= t_end_us and t_start_us <
+   * t_end_us. Supersedes n_frames_hint. */
+  const struct elfm_table *frames;
+  /* 1 (needs frames): the window rule below over each frame's own window
+   * [t_start_us, t_end_us) instead of (t_us - window_us, t_us]. Why: a
+   * window cut short by a trigger edge ends where the pulse begins, and
+   * its t_us sits on the edge, where the truth's brightness is interpolated
+   * between a dark and a lit sample; its own window is dark. */
+  int window_frames;
   /* > 0: a frame stands for the window (t_us - window_us, t_us] of events
    * that built it (the accumulation time dt of `eventlfm track`), and an
    * object counts at that frame when it was bright for at least half of that

@@ -372,7 +372,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   elfm_status s = elfm_score_columns(detections, cd, tracks, ct, err);
   if (s != ELFM_OK) return s;
 
-  frames_t fr = {0, 0, NULL};
+  frames_t fr = {0, 0, NULL, NULL, NULL};
   truth_t tr;
   memset(&tr, 0, sizeof tr);
   points_t dp, raw;
@@ -381,7 +381,11 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   cands_t cand;
   memset(&cand, 0, sizeof cand);
 
-  s = elfm_score_frames_build(&fr, detections, cd, tracks, ct, opt->n_frames_hint, err);
+  if (opt->window_frames && !opt->frames)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "the window rule over each frame's own window needs the frame list");
+  s = elfm_score_frames_build(&fr, detections, cd, tracks, ct, opt->n_frames_hint, opt->frames,
+                              err);
   if (s != ELFM_OK) goto done;
   if ((s = elfm_score_frames_trim(&fr, truth, &out->n_frames_unscored, err)) != ELFM_OK) goto done;
   out->n_frames = fr.n - out->n_frames_unscored;
@@ -428,7 +432,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
     }
   }
 done:
-  free(fr.t_us);
+  elfm_score_frames_free(&fr);
   elfm_score_truth_free(&tr);
   elfm_score_points_free(&dp);
   elfm_score_points_free(&raw);

@@ -72,6 +72,9 @@ typedef struct {
   int64_t f_min;
   int n;             /* frames f_min .. f_min + n - 1 */
   double *t_us;      /* n; NaN where unknown (outside known frames: none) */
+  /* each frame's window [t_start, t_end), from a frames table (NULL
+   * without one; NaN for a frame the table does not list) */
+  double *t_start_us, *t_end_us;
 } frames_t;
 
 /* Points at frame slots: the truth samples that count, the detections, the
@@ -122,9 +125,11 @@ elfm_status elfm_score_reserve_cost(double **cost, size_t *cap, size_t need, elf
  * z_um, raw_x_um, raw_y_um, raw_z_um); a NULL table is skipped. */
 elfm_status elfm_score_columns(const elfm_table *dets, int *cd, const elfm_table *tracks,
                                int *ct, elfm_error *err);
-/* The frame list (elfm_score.h, FRAMES); fr->t_us is the caller's to free. */
+/* The frame list (elfm_score.h, FRAMES); free with elfm_score_frames_free. */
+void elfm_score_frames_free(frames_t *fr);
 elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const int *cd,
                                     const elfm_table *trk, const int *ct, int64_t n_frames_hint,
+                                    const elfm_table *frames_tab,
                                     elfm_error *err);
 /* Frames whose t_us lies outside the truth's time range (its first to its
  * last sample over all ids) are not scored (elfm_score.h, FRAMES): their

@@ -23,6 +23,7 @@
  * follow this order. */
 static const char *const truth_cols[] = {"id", "t_us", "x_um", "y_um", "z_um", "brightness"};
 static const char *const det_cols[] = {"frame", "t_us", "x_um", "y_um", "z_um"};
+static const char *const frame_cols[] = {"frame", "t_us", "t_start_us", "t_end_us"};
 static const char *const track_cols[] = {"track_id", "frame", "t_us", "x_um", "y_um",
                                          "z_um", "raw_x_um", "raw_y_um", "raw_z_um"};
 
@@ -147,6 +148,9 @@ static elfm_status frames_fill(frames_t *fr, const elfm_table *t, int c_frame, i
   for (size_t r = 0; r < t->n_rows; r++) {
     int64_t f = (int64_t)elfm_table_get(t, r, c_frame) - fr->f_min;
     double tu = elfm_table_get(t, r, c_t);
+    if (fr->t_start_us && (f < 0 || f >= fr->n || isnan(fr->t_start_us[f])))
+      return elfm_error_set_line(err, ELFM_ERR_FORMAT, t->path, t->line[r],
+                                 "frame %lld is not in the frame list", (long long)(f + fr->f_min));
     if (isnan(fr->t_us[f])) {
       fr->t_us[f] = tu;
       src_row[f] = r;
@@ -161,12 +165,57 @@ static elfm_status frames_fill(frames_t *fr, const elfm_table *t, int c_frame, i
   return ELFM_OK;
 }
 
+void elfm_score_frames_free(frames_t *fr)
+{
+  free(fr->t_us);
+  free(fr->t_start_us);
+  free(fr->t_end_us);
+  fr->t_us = fr->t_start_us = fr->t_end_us = NULL;
+}
+
+/* The frame list's own checks (elfm_score.h, frames): required values,
+ * integer frames, index and time increasing, t_start <= t_us <= t_end and
+ * t_start < t_end. Its span goes into fmin / fmax. */
+static elfm_status frames_table_check(const elfm_table *ft, const int *cf, int64_t *fmin,
+                                      int64_t *fmax, elfm_error *err)
+{
+  double prev_f = -INFINITY, prev_t = -INFINITY;
+  for (size_t r = 0; r < ft->n_rows; r++) {
+    double v[4] = {0, 0, 0, 0};
+    elfm_status s;
+    for (int k = 0; k < 4; k++)
+      if ((s = get_req(ft, r, cf[k], frame_cols[k], &v[k], err)) != ELFM_OK) return s;
+    if (!is_index(v[0]))
+      return elfm_error_set_line(err, ELFM_ERR_FORMAT, ft->path, ft->line[r],
+                                 "column frame must be an integer frame index");
+    if (!(v[0] > prev_f) || !(v[1] > prev_t))
+      return elfm_error_set_line(err, ELFM_ERR_FORMAT, ft->path, ft->line[r],
+                                 "frame %.0f (t_us %.0f) does not follow the previous row's: "
+                                 "frames and their times must increase", v[0], v[1]);
+    if (!(v[2] <= v[1] && v[1] <= v[3] && v[2] < v[3]))
+      return elfm_error_set_line(err, ELFM_ERR_FORMAT, ft->path, ft->line[r],
+                                 "frame %.0f: t_us %.0f is not inside its window [%.0f, %.0f)",
+                                 v[0], v[1], v[2], v[3]);
+    prev_f = v[0];
+    prev_t = v[1];
+    if ((int64_t)v[0] < *fmin) *fmin = (int64_t)v[0];
+    if ((int64_t)v[0] > *fmax) *fmax = (int64_t)v[0];
+  }
+  return ELFM_OK;
+}
+
 elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const int *cd,
                                     const elfm_table *trk, const int *ct, int64_t n_frames_hint,
-                                    elfm_error *err)
+                                    const elfm_table *ft, elfm_error *err)
 {
   int64_t fmin = INT64_MAX, fmax = INT64_MIN;
   elfm_status s;
+  int cf[4];
+  if (ft) {
+    if ((s = elfm_table_require(ft, frame_cols, 4, cf, err)) != ELFM_OK) return s;
+    if ((s = frames_table_check(ft, cf, &fmin, &fmax, err)) != ELFM_OK) return s;
+    n_frames_hint = 0; /* the list says which frames there were */
+  }
   if (dets && (s = frames_scan(dets, cd[0], cd[1], &fmin, &fmax, err)) != ELFM_OK) return s;
   if (trk && (s = frames_scan(trk, ct[1], ct[2], &fmin, &fmax, err)) != ELFM_OK) return s;
   fr->n = 0;
@@ -196,7 +245,21 @@ elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const 
   }
   for (int i = 0; i < fr->n; i++) fr->t_us[i] = NAN;
   s = ELFM_OK;
-  if (dets) s = frames_fill(fr, dets, cd[0], cd[1], src_row, src_tab, err);
+  if (ft) {
+    fr->t_start_us = malloc((size_t)fr->n * sizeof *fr->t_start_us);
+    fr->t_end_us = malloc((size_t)fr->n * sizeof *fr->t_end_us);
+    if (!fr->t_start_us || !fr->t_end_us) s = elfm_score_nomem(err);
+    for (int i = 0; s == ELFM_OK && i < fr->n; i++) fr->t_start_us[i] = fr->t_end_us[i] = NAN;
+    for (size_t r = 0; s == ELFM_OK && r < ft->n_rows; r++) {
+      int64_t f = (int64_t)elfm_table_get(ft, r, cf[0]) - fr->f_min;
+      fr->t_us[f] = elfm_table_get(ft, r, cf[1]);
+      fr->t_start_us[f] = elfm_table_get(ft, r, cf[2]);
+      fr->t_end_us[f] = elfm_table_get(ft, r, cf[3]);
+      src_row[f] = r;
+      src_tab[f] = ft;
+    }
+  }
+  if (s == ELFM_OK && dets) s = frames_fill(fr, dets, cd[0], cd[1], src_row, src_tab, err);
   if (s == ELFM_OK && trk) s = frames_fill(fr, trk, ct[1], ct[2], src_row, src_tab, err);
   /* Known frames must be in time order; unknown ones in between are
    * interpolated from their known neighbours. */
@@ -219,6 +282,9 @@ elfm_status elfm_score_frames_build(frames_t *fr, const elfm_table *dets, const 
     }
     prev = i;
   }
+  /* With a frame list, a frame it does not list did not exist: no time */
+  for (int i = 0; s == ELFM_OK && ft && i < fr->n; i++)
+    if (isnan(fr->t_start_us[i])) fr->t_us[i] = NAN;
   /* Frames outside the known range (only with a hint): extrapolate with the
    * mean spacing of the known frames; with a single known frame there is no
    * spacing and they stay unknown (NaN: never scored). */
@@ -414,7 +480,28 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
        * the samples in (t - window, t]; samples are dense (<= 100 us, SPEC
        * §6). With no sample inside the window, the value at t decides. */
       int window_votes = -1; /* -1: no vote, 0 dark, 1 lit */
-      if (o->window_us > 0) {
+      if (o->window_frames && fr->t_start_us) {
+        /* the frame's own window [t_start, t_end) (elfm_score.h) */
+        const double w0 = fr->t_start_us[f], w1 = fr->t_end_us[f];
+        while (wcur < j && elfm_table_get(tt, ord[wcur].idx, c[1]) < w0) wcur++;
+        int64_t n_in = 0, n_lit = 0;
+        for (size_t q = wcur; q < j && elfm_table_get(tt, ord[q].idx, c[1]) < w1; q++) {
+          n_in++;
+          n_lit += elfm_table_get(tt, ord[q].idx, c[5]) > 0;
+        }
+        if (n_in > 0) {
+          window_votes = 2 * n_lit >= n_in;
+        } else {
+          /* A window shorter than the sampling (one cut short just before
+           * a trigger edge): the latest sample before it holds. Neither
+           * the brightness interpolated inside it nor the sample nearest
+           * to it will do: a window that ends at a rising edge lies
+           * between a dark and a lit sample, and both would light it when
+           * the edge is just before a sample (blink seed 7, 4 us). */
+          size_t q = wcur > i ? wcur - 1 : i;
+          window_votes = elfm_table_get(tt, ord[q].idx, c[5]) > 0;
+        }
+      } else if (o->window_us > 0) {
         while (wcur < j && elfm_table_get(tt, ord[wcur].idx, c[1]) <= t - o->window_us) wcur++;
         int64_t n_in = 0, n_lit = 0;
         for (size_t q = wcur; q < j && elfm_table_get(tt, ord[q].idx, c[1]) <= t; q++) {
