@@ -1,0 +1,69 @@
+#!/bin/sh
+# Windows opened by the LED (`--start each-trigger`, docs/tracker.md
+# "Windows opened by the LED"): blinking beads at rest (`blink`), seed 8,
+# 200 ms, whose 1 ms pulses start at random phases against the 1 ms grid.
+#  - On the grid from the first event, a pulse spreads over two windows and
+#    the window rule calls one of them dark (alpha 0.338 measured); with
+#    each rising edge opening a window, each pulse has one (alpha 0.865,
+#    recall 0.960, precision 0.973, scored over each frame's own window
+#    with the frame list).
+#  - frames.csv: the windows tile the recording without gaps or overlaps,
+#    none is longer than dt, and every LED onset in stimulus.csv after the
+#    first opens one.
+#  - the smoothed tracks' gap frames carry the frames' own times (score
+#    refuses a tracks.csv whose times disagree with the frame list).
+#  - a trigger start on a recording without edges fails with a message;
+#    a bad --start is a usage error.
+# Usage: track_trigger.sh BINARY
+bin=$1
+. "$(dirname "$0")/track_lib.sh"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect_usage_errors "--start bogus"
+
+simulate_or_skip "$tmp/b" blink 200 8
+score_args="--window-us run"
+track_score "$tmp/b" "$tmp/grid" "$tmp/grid.json"
+score_args="--frames run --window-us run"
+track_score "$tmp/b" "$tmp/each" "$tmp/each.json" --start each-trigger
+a0=$(key "$tmp/grid.json" alpha); a1=$(key "$tmp/each.json" alpha)
+r1=$(key "$tmp/each.json" recall); p1=$(key "$tmp/each.json" precision)
+echo "blink seed 8: alpha $a0 (grid from the first event) -> $a1 (each trigger); recall $r1, precision $p1"
+expect_gain "$a0" "$a1" 0.3 "each-trigger gains < 0.3 alpha"
+expect_gain 0.8 "$a1" 0 "each-trigger alpha <= 0.8"
+expect_gain 0.95 "$r1" 0 "each-trigger recall <= 0.95"
+expect_gain 0.95 "$p1" 0 "each-trigger precision <= 0.95"
+[ "$(key "$tmp/each/summary.json" start)" = '"each-trigger"' ] ||
+  { echo "FAIL: summary.json start"; fail=$((fail+1)); }
+
+# frames.csv against the LED's onsets
+awk -F, -v dt=1000 '
+  FNR == 1 { next }
+  FILENAME ~ /stimulus/ { if ($3 == 1) on[++n_on] = $1; next }
+  { if (nf > 0 && $3 != prev_end) { print "FAIL: frame " $1 " starts at " $3 ", not " prev_end; bad++ }
+    if ($4 - $3 > dt || $4 <= $3) { print "FAIL: frame " $1 " window " $3 ".." $4; bad++ }
+    if ($2 != $4) { print "FAIL: frame " $1 " t_us " $2 " is not its window end"; bad++ }
+    start[$3] = 1; prev_end = $4; nf++; last = $4 }
+  END {
+    for (k = 1; k <= n_on; k++) if (on[k] < last && !(on[k] in start)) { print "FAIL: onset " on[k] " opens no window"; bad++ }
+    if (n_on < 5 || nf < 150) { print "FAIL: " n_on " onsets, " nf " frames"; bad++ }
+    exit bad > 0 }' "$tmp/b/stimulus.csv" "$tmp/each/frames.csv" || fail=$((fail+1))
+
+# tracks.csv's gap frames against the frame list: score checks every row
+"$bin" score --truth "$tmp/b/truth.csv" --tracks "$tmp/each/tracks.csv" --frames run >/dev/null ||
+  { echo "FAIL: tracks.csv disagrees with frames.csv"; fail=$((fail+1)); }
+gaps=$(awk -F, 'NR > 1 && $7 == ""' "$tmp/each/tracks.csv" | wc -l)
+[ "$gaps" -gt 100 ] || { echo "FAIL: only $gaps gap frames in tracks.csv"; fail=$((fail+1)); }
+
+# no edges: a clear failure, not an empty success
+simulate_or_skip "$tmp/f" flow 10 1
+"$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/none" -q \
+  --start each-trigger 2>"$tmp/none.err"
+rc=$?
+[ $rc -eq 1 ] && grep -q "no trigger edge" "$tmp/none.err" ||
+  { echo "FAIL: no edges: exit $rc, '$(cat "$tmp/none.err")'"; fail=$((fail+1)); }
+[ -f "$tmp/none/frames.csv" ] || { echo "FAIL: no frames.csv without edges"; fail=$((fail+1)); }
+
+[ $fail -eq 0 ] && echo "track_trigger: all passed" || echo "track_trigger: $fail failed"
+[ $fail -eq 0 ]
