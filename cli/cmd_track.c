@@ -194,6 +194,14 @@ int cmd_track(int argc, char **argv)
                     "surface a pulse that ends late in a window shows again in the next frame; "
                     "--repr lin keeps each pulse in its own (README, blinking objects)\n",
             rs.triggers, c.median_speed_um_per_ms);
+  if (!o.quiet && rs.triggers >= 4 && o.recon.framer.start != ELFM_START_EACH_TRIGGER &&
+      c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
+    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges (pulsed "
+                    "light?): --start each-trigger opens a window at each rising edge, one pulse "
+                    "to a frame, which a pulse at a random phase against the window grid is not; "
+                    "score such a run with --frames run --window-us run (README, blinking "
+                    "objects)\n",
+            rs.triggers);
   rc = CLI_OK;
 done:
   if (fx) fclose(fx);

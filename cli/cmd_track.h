@@ -225,9 +225,10 @@ double track_median_speed_um_per_ms(const elfm_track_store *s);
  * integral loses them); static ones (blinking beads) gain nothing from it. */
 #define TRACK_HINT_MIN_SPEED_UM_PER_MS 0.03
 #define TRACK_HINT_MAX_SPEED_UM_PER_MS 1.0
-/* The note for pulsed light (trigger edges in the file) on the exponential
- * surface: only when the tracks move, as blink_moving's at 2.5 um/ms; beads
- * at rest (blink) do better with the default (README). */
+/* The notes for pulsed light (trigger edges in the file): --repr lin on the
+ * exponential surface only when the tracks move, as blink_moving's at 2.5
+ * um/ms, beads at rest (blink) doing better with the default; --start
+ * each-trigger when they do not (README). */
 #define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
 /* Objects moving further than this between frames (median track speed x
  * frame interval) are tracked better with shorter windows. Flow at 2.5-8

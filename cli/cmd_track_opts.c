@@ -819,7 +819,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
      * points, blink 200 ms seeds 1-12 (docs/tracker.md "Windows opened by
      * the LED"): mean alpha 0.910 -> 0.935, all but 5 of the 1245 bead-pulses
      * found (29 before), 179 of 180 beads in one track (175); blink_moving
-     * (--repr lin) seeds 1-9: 0.8498 -> 0.8502. */
+     * (--repr lin) seeds 1-9: 0.8460 -> 0.8502. */
     o.guided_min_points = 2;
   }
   if (!(o.guided_low >= 0) || !(o.guided_radius_um > 0) || o.guided_min_points < 1)

@@ -14,6 +14,8 @@
 #    first opens one.
 #  - the smoothed tracks' gap frames carry the frames' own times (score
 #    refuses a tracks.csv whose times disagree with the frame list).
+#  - without -q, track suggests --start each-trigger on a recording with
+#    trigger edges and objects at rest (not once it is given);
 #  - a trigger start on a recording without edges fails with a message;
 #    a bad --start is a usage error.
 # Usage: track_trigger.sh BINARY
@@ -61,6 +63,14 @@ awk -F, -v dt=1000 '
   { echo "FAIL: tracks.csv disagrees with frames.csv"; fail=$((fail+1)); }
 gaps=$(awk -F, 'NR > 1 && $7 == ""' "$tmp/each/tracks.csv" | wc -l)
 [ "$gaps" -gt 100 ] || { echo "FAIL: only $gaps gap frames in tracks.csv"; fail=$((fail+1)); }
+
+# without -q, track suggests each-trigger on a recording with edges
+"$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/note" \
+  2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note)"; fail=$((fail+1)); }
+grep -q "trigger edges.*--start each-trigger" "$tmp/note.err" || { echo "FAIL: no each-trigger note"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/note" \
+  --start each-trigger 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note, each)"; fail=$((fail+1)); }
+grep -q "trigger edges" "$tmp/note.err" && { echo "FAIL: the note with each-trigger"; fail=$((fail+1)); }
 
 # no edges: a clear failure, not an empty success
 simulate_or_skip "$tmp/f" flow 10 1
