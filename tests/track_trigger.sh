@@ -8,7 +8,8 @@
 #    recall 0.960, precision 0.973, scored over each frame's own window
 #    with the frame list, with the guided view fit from 10 points on).
 #  - with each-trigger the guided view fit starts from a track's second
-#    point, one per pulse (alpha 0.921, recall 1.000, precision 0.974).
+#    point, one per pulse, and a track needs 3 points, not 5 (alpha 0.921,
+#    recall 1.000, precision 0.974).
 #  - frames.csv: the windows tile the recording without gaps or overlaps,
 #    none is longer than dt, and every LED onset in stimulus.csv after the
 #    first opens one.
@@ -42,6 +43,8 @@ expect_gain 0.98 "$r2" 0 "each-trigger recall <= 0.98"
 expect_gain 0.95 "$p2" 0 "each-trigger precision <= 0.95"
 [ "$(key "$tmp/each/summary.json" guided_min_points)" = 2 ] ||
   { echo "FAIL: guided_min_points is not 2 with each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/each/summary.json" min_points)" = 3 ] ||
+  { echo "FAIL: min_points is not 3 with each-trigger"; fail=$((fail+1)); }
 [ "$(key "$tmp/each/summary.json" start)" = '"each-trigger"' ] ||
   { echo "FAIL: summary.json start"; fail=$((fail+1)); }
 
