@@ -67,6 +67,23 @@ typedef struct track_opts {
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
 
+/* Which of track's options were given on the command line, for the
+ * defaults that depend on other options (cmd_track_defaults.c): a default
+ * is derived only where its option was not given. */
+typedef struct track_given {
+  int thr, low, depth, min;          /* --threshold-*, --threshold-low/-depth-um/-min */
+  int stitch, rxy, mbias;            /* --stitch-points, --radius-xy-um, --motion-lead/-delay */
+  int fillv, fillk, fille;           /* --fill-views, --fill-frames, --fill-ends */
+  int spath, spord, fsdp, fade;      /* --short-path-um, --spline-order, --fit-sd-power,
+                                        --motion-fade-um-per-ms */
+  int locpow, near;                  /* --localize-power, --localize-near-um */
+  int gmp, minpts;                   /* --guided-min-points, --min-points */
+} track_given;
+
+/* Fill in the derived defaults of a parsed *o (g: what was given) and
+ * check the guided search's values: CLI_OK, or a usage error (shown). */
+int track_opts_derive(track_opts *o, const track_given *g);
+
 /* Neighbours per view fit (localize_near_um): a view's window meets a few
  * images. */
 #define TRACK_NEAR_MAX 16

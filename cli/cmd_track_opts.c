@@ -1,7 +1,8 @@
 /* cmd_track_opts.c — eventlfm track's options: its defaults (where they
  * differ from the libraries', and why: each measured on the simulator),
- * --help, and the parsing, with the defaults that depend on other options
- * (the representation, the motion). The run is in cmd_track.c. */
+ * --help, and the parsing. The defaults that depend on other options (the
+ * representation, the motion, the window start) are in
+ * cmd_track_defaults.c; the run is in cmd_track.c. */
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
@@ -343,28 +344,6 @@ static void usage(FILE *f)
     "  -h, --help           this text\n");
 }
 
-/* The mean age (us) of a window's events under the view fit's pixel
- * weights value^P, on an ON time surface whose value falls with an event's
- * age a: exp(-a / tau) (exp) or 1 - a / tau until tau (lin), over a window
- * of dt us in which the events are spread evenly. It is the delay of the
- * motion bias (track's --motion-delay-us, less the measured 150 us):
- * the fit places a moving object where it was that long before the
- * frame's end. exp: with k = P / tau, 1/k - dt e^(-k dt) / (1 - e^(-k dt)).
- * lin, with L = min(dt, tau) and s = 1 - a / tau running from 1 to
- * r = 1 - L / tau: tau (1 - r^(P+1) - (P+1) (1 - r^(P+2)) / (P+2)) /
- * (1 - r^(P+1)); tau / (P + 2) when dt >= tau (a sample: tau 1000 us, P 3:
- * 200 us, against 281 us on the exp surface of the same tau). */
-static double surface_mean_age_us(elfm_repr repr, double power, double tau_us, double dt_us)
-{
-  if (repr == ELFM_REPR_EXP) {
-    const double k = power / tau_us, w = dt_us;
-    return 1.0 / k - w * exp(-k * w) / (1.0 - exp(-k * w));
-  }
-  const double r = 1.0 - (dt_us < tau_us ? dt_us : tau_us) / tau_us;
-  const double r1 = pow(r, power + 1.0), r2 = pow(r, power + 2.0);
-  return tau_us * (1.0 - r1 - (power + 1.0) * (1.0 - r2) / (power + 2.0)) / (1.0 - r1);
-}
-
 static int parse_vec3(const char *s, double v[3])
 {
   char *end;
@@ -409,7 +388,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   static const char *const C = "track";
   track_opts o;
   track_defaults(&o);
-  int thr_given = 0, low_given = 0, depth_given = 0, min_given = 0, stitch_given = 0, rxy_given = 0, mbias_given = 0, fillv_given = 0, fillk_given = 0, fille_given = 0, spath_given = 0, spord_given = 0, fsdp_given = 0, fade_given = 0, locpow_given = 0, near_given = 0, gmp_given = 0, minpts_given = 0;
+  track_given g;
+  memset(&g, 0, sizeof g);
   static const struct option lo[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -488,15 +468,15 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_CALIB: o.calib = a; break;
     case O_EVENTS: o.events = a; break;
     case O_OUT: o.out = a; break;
-    case O_THK: thr_given = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
-    case O_THA: thr_given = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
-    case O_THDEPTH: depth_given = 1; if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
-    case O_HYST: low_given = 1; if (!cli_parse_double(C, "--threshold-low", a, &o.peaks.hysteresis_low)) return CLI_USAGE; break;
+    case O_THK: g.thr = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
+    case O_THA: g.thr = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
+    case O_THDEPTH: g.depth = 1; if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_HYST: g.low = 1; if (!cli_parse_double(C, "--threshold-low", a, &o.peaks.hysteresis_low)) return CLI_USAGE; break;
     case O_VEXP: if (!cli_parse_double(C, "--views-exponent", a, &o.views_exponent)) return CLI_USAGE; break;
     case O_LINKKZ: if (!cli_parse_double(C, "--link-kz", a, &o.link.kz)) return CLI_USAGE; break;
     case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
     case O_GUIDEDR: if (!cli_parse_double(C, "--guided-radius-um", a, &o.guided_radius_um)) return CLI_USAGE; break;
-    case O_GUIDEDM: gmp_given = 1; if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
+    case O_GUIDEDM: g.gmp = 1; if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
     case O_VSUP:
       if (!cli_parse_double(C, "--view-support", a, &o.view_support)) return CLI_USAGE;
       if (!(o.view_support >= 0 && o.view_support <= 1))
@@ -513,13 +493,13 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return cli_message(C, CLI_USAGE, "--localize-window-px must be 1..32, not '%s'", a);
       break;
     case O_LOCPOW:
-      locpow_given = 1;
+      g.locpow = 1;
       if (!cli_parse_int(C, "--localize-power", a, &o.loc.power)) return CLI_USAGE;
       if (o.loc.power < 1 || o.loc.power > 8)
         return cli_message(C, CLI_USAGE, "--localize-power must be 1..8, not '%s'", a);
       break;
     case O_LOCNEAR:
-      near_given = 1;
+      g.near = 1;
       if (!cli_parse_double_in(C, "--localize-near-um", a, 0, 0, 1000, "0..1000",
                                &o.localize_near_um))
         return CLI_USAGE;
@@ -535,7 +515,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return cli_message(C, CLI_USAGE, "--localize-min-views must be 2..255, not '%s'", a);
       break;
     case O_FILLV:
-      fillv_given = 1;
+      g.fillv = 1;
       if (!parse_views_or_off(C, "--fill-views", a, &o.fill_views)) return CLI_USAGE;
       break;
     case O_FILLG:
@@ -563,20 +543,20 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;
       break;
     case O_FILLK:
-      fillk_given = 1;
+      g.fillk = 1;
       if (!cli_parse_int(C, "--fill-frames", a, &o.fill_frames)) return CLI_USAGE;
       if (o.fill_frames < 1 || o.fill_frames > TRACK_FILL_MAX_FRAMES || o.fill_frames % 2 == 0)
         return cli_message(C, CLI_USAGE, "--fill-frames must be odd, 1..%d, not '%s'",
                            TRACK_FILL_MAX_FRAMES, a);
       break;
     case O_FILLE:
-      fille_given = 1;
+      g.fille = 1;
       if (!strcmp(a, "on")) o.fill_ends = 1;
       else if (!strcmp(a, "off")) o.fill_ends = 0;
       else return cli_message(C, CLI_USAGE, "--fill-ends must be on or off, not '%s'", a);
       break;
     case O_SPATH:
-      spath_given = 1;
+      g.spath = 1;
       if (!cli_parse_double_in(C, "--short-path-um", a, 0, 0, 1000, "0..1000", &o.link.short_path_um))
         return CLI_USAGE;
       break;
@@ -593,7 +573,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
     case O_STITCHN:
       if (!cli_parse_int(C, "--stitch-points", a, &o.link.stitch_points)) return CLI_USAGE;
-      stitch_given = 1;
+      g.stitch = 1;
       break;
     case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
     case O_ENCUM:
@@ -630,11 +610,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       else if (!strcmp(a, "off")) o.views_rule = 0;
       else return cli_message(C, CLI_USAGE, "--views-rule must be on or off, not '%s'", a);
       break;
-    case O_THMIN: min_given = 1; if (!cli_parse_double(C, "--threshold-min", a, &o.peaks.absolute_min)) return CLI_USAGE; break;
-    case O_THR: thr_given = 1; if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
+    case O_THMIN: g.min = 1; if (!cli_parse_double(C, "--threshold-min", a, &o.peaks.absolute_min)) return CLI_USAGE; break;
+    case O_THR: g.thr = 1; if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
     case O_RXY:
       if (!cli_parse_double(C, "--radius-xy-um", a, &o.peaks.radius_xy_um)) return CLI_USAGE;
-      rxy_given = 1;
+      g.rxy = 1;
       break;
     case O_RZ: if (!cli_parse_double(C, "--radius-z-um", a, &o.peaks.radius_z_um)) return CLI_USAGE; break;
     case O_SEP: if (!cli_parse_double(C, "--min-separation-um", a, &o.peaks.min_separation_um)) return CLI_USAGE; break;
@@ -650,7 +630,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_GATE: if (!cli_parse_double(C, "--gate-um", a, &o.link.gate_um)) return CLI_USAGE; break;
     case O_MAXGAP: if (!cli_parse_int(C, "--max-gap", a, &o.link.max_gap_frames)) return CLI_USAGE; break;
-    case O_MINPTS: minpts_given = 1; if (!cli_parse_int(C, "--min-points", a, &o.link.min_points)) return CLI_USAGE; break;
+    case O_MINPTS: g.minpts = 1; if (!cli_parse_int(C, "--min-points", a, &o.link.min_points)) return CLI_USAGE; break;
     case O_LAG:
       if (!strcmp(a, "on")) o.lag_correct = 1;
       else if (!strcmp(a, "off")) o.lag_correct = 0;
@@ -690,31 +670,31 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         cli_message(C, CLI_USAGE, "--spline-order must be 2 or 3, not '%s'", a);
         return CLI_USAGE;
       }
-      spord_given = 1;
+      g.spord = 1;
       break;
     case O_MFADE:
       if (!cli_parse_double_in(C, "--motion-fade-um-per-ms", a, 0, 1, 100, "> 0 and <= 100",
                                &o.smooth.motion_lead_fade_um_per_ms))
         return CLI_USAGE;
-      fade_given = 1;
+      g.fade = 1;
       break;
     case O_FSDP:
       if (!cli_parse_double_in(C, "--fit-sd-power", a, 0, 0, 4, "0..4", &o.smooth.fit_sd_power))
         return CLI_USAGE;
-      fsdp_given = 1;
+      g.fsdp = 1;
       break;
     case O_RES: o.resolution = 1; break;
     case O_MLEAD:
       if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
                                &o.smooth.motion_lead_um))
         return CLI_USAGE;
-      mbias_given = 1;
+      g.mbias = 1;
       break;
     case O_MDELAY:
       if (!cli_parse_double_in(C, "--motion-delay-us", a, -1e6, 0, 1e6, "-1e6..1e6",
                                &o.smooth.motion_delay_us))
         return CLI_USAGE;
-      mbias_given = 1;
+      g.mbias = 1;
       break;
     case O_MAXOUT:
       if (!cli_parse_double(C, "--max-outlier-frac", a, &o.max_outlier_frac)) return CLI_USAGE;
@@ -728,255 +708,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !rxy_given) {
-    /* The integral has no trail to make side maxima, so a one-voxel box
-     * separates neighbours a 3 um box merges: worm neurons come in pairs
-     * 6 um apart. Worm 200 ms seeds 1-4, means, box 3 / 2 / 1.5 um: F1
-     * 0.887 / 0.911 / 0.912, alpha 0.724 / 0.744 / 0.773. (On flow's time
-     * surface 1.5 um loses: alpha 0.733 -> 0.705 over 8 seeds.) */
-    o.peaks.radius_xy_um = 1.5;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spord_given) {
-    /* Slowly crawling cells: at 0.1-0.34 um/ms a neuron's acceleration is
-     * far below its placement noise, and the jerk penalty's freer fit
-     * (a constant acceleration costs nothing) lost: worm 200 ms seeds 1-4,
-     * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
-    o.smooth.spline_order = 2;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fsdp_given) {
-    /* Worm 200 ms seeds 1-4 with it: alpha 0.830 / 0.785 / 0.754 / 0.826
-     * -> 0.825 / 0.785 / 0.754 / 0.826. */
-    o.smooth.fit_sd_power = 0;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fillv_given) {
-    /* Neurons come in pairs 6 um apart on the integral, and 4 views let a
-     * fill land on the partner or on another track's neuron: worm 200 ms
-     * seeds 1-4, fills within the scoring gate 64-78 % at 4 views, 95-100 %
-     * at 8; F1 0.913 / 0.867 / 0.868 / 0.914 at 4, 0.930 / 0.876 / 0.873 /
-     * 0.926 at 8 (0.917 / 0.884 / 0.894 / 0.926 without filling), alpha
-     * 0.813 / 0.771 / 0.737 / 0.816 at 8 (0.800 / 0.762 / 0.735 / 0.814). */
-    o.fill_views = 8;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fillk_given) {
-    /* The integral already holds every past event (a leaky sum), so its
-     * neighbouring frames add no events, only a neighbour's light: worm
-     * 200 ms seeds 1-4 with 3 frames, alpha the same, precision 0.933 /
-     * 0.896 / 0.892 / 0.941 -> 0.926 / 0.846 / 0.886 / 0.939. */
-    o.fill_frames = 1;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !near_given) {
-    /* Two neurons of a C. elegans pair, 6-7 um apart at one depth, have
-     * images that overlap in every view once out of focus, and each pulls
-     * the other's centroid (lateral RMSE 0.84-0.90 um at |z| 45-60 um
-     * against 0.40 um for neurons 14 um apart, worm seeds 1-4). The
-     * integral's image is the object itself, symmetric, so the other's
-     * light can be read mirrored and taken out (recon/localize.c). Worm,
-     * thirteenth session, mean alpha_detections / alpha off -> 12 um:
-     * 200 ms seeds 1-4 0.888 / 0.891 -> 0.900 / 0.899, held-out 5-7
-     * 0.881 / 0.872 -> 0.888 / 0.874, unseen 200 ms seeds 8-12 0.888 /
-     * 0.896 -> 0.898 / 0.908, 150 ms 0.874 / 0.865 -> 0.882 / 0.879,
-     * 500 ms 0.878 / 0.773 -> 0.887 / 0.844. Not on time surfaces, where a
-     * moving object's image is a comet, not symmetric: flow 100 ms seeds
-     * 1-20 alpha 0.818 -> 0.817 (alpha_detections 0.808 -> 0.810), held-out
-     * seeds 21-24 0.810 -> 0.791 (docs/tracker.md "Neighbours taken out"). */
-    o.localize_near_um = 12;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !locpow_given) {
-    /* The view fit weighs each pixel by value^3 on a time surface, where
-     * the newest events are the object; the integral's value is the
-     * object's brightness, and its whole image counts alike. Twelfth
-     * session, with the start levels, worm 200 ms, power 3 / 2 / 1: seeds
-     * 1-4 alpha 0.871 / 0.877 / 0.882 (per seed at 1: 0.885 / 0.828 /
-     * 0.841 / 0.929 -> 0.909 / 0.830 / 0.851 / 0.939), held-out seeds 5-7
-     * 0.866 / 0.857 / 0.868 (0.825 / 0.930 / 0.842 -> 0.844 / 0.932 /
-     * 0.828); lateral RMSE 0.25 -> 0.27 um. Thirteenth session: with
-     * the partner's light taken out (localize_near_um), power 2 places
-     * better than 1 on every worm set, mean alpha_detections / alpha (200 ms
-     * seeds 1-4, 5-7, 8-12, 150 ms, 500 ms): power 1 0.902 / 0.900 / 0.903
-     * / 0.887 / 0.895 and 0.900 / 0.878 / 0.911 / 0.881 / 0.845; power 2
-     * 0.911 / 0.901 / 0.910 / 0.900 / 0.901 and 0.911 / 0.871 / 0.911 /
-     * 0.875 / 0.864; power 3 0.907 / 0.902 / 0.910 / 0.899 / 0.893 and
-     * 0.892 / 0.887 / 0.909 / 0.903 / 0.844. Without the partner taken out,
-     * its far tail counted for less at power 1. */
-    o.loc.power = 2;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !spath_given) {
-    /* Crawling neurons cover a few um in 8 frames: the cap binds only
-     * where noisy points inflate the path, and fewer points predict worse
-     * there (worm 200 ms seeds 1-4 with it: alpha the same, precision
-     * 0.933 / 0.896 / 0.892 / 0.941 -> 0.924 / 0.884 / 0.890 / 0.941). */
-    o.link.short_path_um = 0;
-  }
-  if (o.recon.framer.repr == ELFM_REPR_INTEGRAL && !fille_given) {
-    /* Past a neuron's track's end the fit finds its partner: worm 200 ms
-     * seeds 1-4, precision 0.933 / 0.896 / 0.892 / 0.941 -> 0.933 / 0.887 /
-     * 0.862 / 0.940, alpha the same or lower (seed 3 0.754 -> 0.752). */
-    o.fill_ends = 0;
-  }
-  if (o.recon.framer.start == ELFM_START_EACH_TRIGGER && !gmp_given) {
-    /* Windows opened by the LED: a bead gets one point per pulse, so 10
-     * points take 10 pulses (250 ms at blink's 2-50 ms gaps) before the
-     * guided view fit looks for it where its track expects it. From 2
-     * points, blink 200 ms seeds 1-12 (docs/tracker.md "Windows opened by
-     * the LED"): mean alpha 0.910 -> 0.935, all but 5 of the 1245 bead-pulses
-     * found (29 before), 179 of 180 beads in one track (175); blink_moving
-     * (--repr lin) seeds 1-9: 0.8460 -> 0.8502. */
-    o.guided_min_points = 2;
-  }
-  if (o.recon.framer.start == ELFM_START_EACH_TRIGGER && !minpts_given) {
-    /* ... and a track of 5 points is 5 pulses: a deep bead that fades
-     * after 4 had no track (blink seed 7, bead 13). A ghost would have to
-     * come back at one place in 3 pulse frames. 3 points: blink seeds
-     * 1-12 0.935 -> 0.938 (seed 7 0.886 -> 0.925, the others the same,
-     * 180 of 180 beads in one track), blink_moving (--repr lin) seeds 1-9
-     * 0.8502 -> 0.8627 (every seed the same or up). */
-    o.link.min_points = 3;
-  }
-  if (!(o.guided_low >= 0) || !(o.guided_radius_um > 0) || o.guided_min_points < 1)
-    return cli_message(C, CLI_USAGE,
-                       "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
-  if (!thr_given) {
-    if (o.recon.framer.repr == ELFM_REPR_COUNT) o.peaks.relative = 0.35;  /* counts have no fixed scale */
-    else if (o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
-      /* The integral's scale is brightness (255 at 8 steps over the
-       * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means, at
-       * the floor of 2 steps, threshold 10 / 15: F1 0.893 / 0.905, alpha
-       * 0.777 / 0.778 (at a floor of 1.5, threshold 10 / 15 / 20 / 30 /
-       * 40: alpha 0.728 / 0.731 / 0.724 / 0.716 / 0.689 with a 3 um box).
-       * Twelfth session, with the integral's start levels (brighter first
-       * frames, whose ghosts reach 10-30): threshold / hysteresis 15 / 15,
-       * 20 / 0, 20 / 15, 25 / 0, 30 / 0: seeds 1-4 F1 0.912 / 0.946 /
-       * 0.941 / 0.958 / 0.956, alpha 0.871 / 0.871 / 0.873 / 0.877 /
-       * 0.874; held-out seeds 5-7 F1 0.918 / 0.941 / 0.933 / 0.943 / 0.946,
-       * alpha 0.862 / 0.866 / 0.856 / 0.845 / 0.826. Thirteenth session:
-       * with bright levels leaking at 2 x the leak (tau_bright_us) the
-       * images are brighter, and so are their ghosts; threshold 20 / 25 /
-       * 30, mean alpha over worm 200 ms seeds 1-4 / 5-7 / 8-12, 150 ms, 500
-       * ms: 0.923 / 0.898 / 0.924 / 0.915 / 0.895, 0.927 / 0.919 / 0.927 /
-       * 0.909 / 0.907, 0.925 / 0.911 / 0.927 / 0.908 / 0.907; detection
-       * precision on seeds 1-12 0.70-0.90, 0.88-0.98, 0.89-1.00. */
-      o.peaks.absolute = 25;
-      if (!low_given) o.peaks.hysteresis_low = 0;
-    } else {
-      /* 45 with the view-support test (below), 50 without it: the test
-       * removes the ghosts a lower threshold lets in (docs/tracker.md
-       * "View support"). */
-      o.peaks.absolute = o.view_support > 0 ? 45 : 50;
-      /* Hysteresis 45: a bead dimmed by defocus keeps its track without
-       * letting the ghosts of that brightness start tracks. Flow 100 ms
-       * seeds 1 / 2: F1 0.874 -> 0.886 / 0.889 -> 0.907, alpha 0.627 -> 0.667 /
-       * 0.566 -> 0.612, lateral RMSE 0.43-0.47 -> 0.44-0.49 um; stage F1 0.898
-       * -> 0.914; at 40 the RMSE passed 0.5 um (docs/tracker.md). Now 30:
-       * with the 5 um weak gate (above) ghosts of that brightness rarely
-       * sit where a track expects its bead; below ~30 the robust-noise
-       * rule (median + 6 sigma) sets the floor (25 gave the same peaks). */
-      if (!low_given) o.peaks.hysteresis_low = 30;
-      /* Deep beads' peaks fall below 45 (their images are 5-10x dimmer
-       * and wider: recall 0.44 at |z| 60-80 um on flow), so the threshold
-       * falls with depth to 30 - and a peak only that lowered threshold
-       * lets in must have deep_peak_views views agree on it (the view fit,
-       * below), which the ghosts at that level rarely have. Flow 100 ms
-       * seeds 1-20: F1 0.9461 -> 0.9525, alpha 0.7741 -> 0.7846, recall
-       * 0.914 -> 0.926, lateral RMSE 0.456 -> 0.463 um; held-out seeds
-       * 21-24 alpha +0.063 / +0.008 / +0.015 / +0.027. Not on a stage:
-       * there the deep tracks' noise reached the velocity (speed error
-       * 0.41 / 0.18 / 0.06 % -> 0.44 / 0.27 / 0.58 %, seeds 1-3). Without
-       * the view test: F1 0.9445, precision 0.982 -> 0.963; 8 / 12 views:
-       * F1 0.9511 / 0.9501, alpha 0.7863 / 0.7762 (docs/tracker.md "Deep
-       * peaks"). */
-      if (!depth_given && o.motion != MOTION_STAGE) {
-        o.peaks.depth_range_um = 60;
-        if (!min_given) o.peaks.absolute_min = 30;
-      }
-    }
-  }
-  if (o.motion == MOTION_STAGE) {
-    o.smooth.allow_spline = 0;
-    if (o.has_stage_v) memcpy(o.link.prior_velocity_um_per_ms, o.stage_v, sizeof o.stage_v);
-    /* Everything translates with the stage, so no object comes back onto a
-     * path, while a bead trailing another on the same line (or re-entering
-     * the field on it) lies on that path: stitching joined two such
-     * beads, the track was rejected for outliers (stage 200 ms alpha 0.717
-     * -> 0.677). */
-    if (!stitch_given) o.link.stitch_points = 0;
-    /* A stage translates everything straight: no turn for the path cap to
-     * follow, and the longer fit averages more noise (stage seeds 1-3 with
-     * it: alpha 0.741 / 0.807 / 0.723 -> 0.736 / 0.806 / 0.715, speed
-     * error 0.41 / 0.19 / 0.07 % -> 0.30 / 0.24 / 0.11 %). */
-    if (!spath_given) o.link.short_path_um = 0;
-    /* Rigid motion has one direction, which the tracks' smoothed velocity
-     * gives well even at 0.1 um/ms: the lead need not fade below 0.5 um/ms.
-     * stage_accel 300 ms (0.1 -> 2.5 um/ms): fitted acceleration 3.6 % ->
-     * 2.2 % off, alpha 0.543 -> 0.576; stage seeds 1-3 (2.5 um/ms) the same
-     * byte for byte. */
-    if (!fade_given) o.smooth.motion_lead_fade_um_per_ms = 0.05;
-  } else if (o.motion == MOTION_FREE && o.smooth.model == ELFM_MODEL_AUTO) {
-    o.smooth.model = ELFM_MODEL_SPLINE;
-  }
-  if (o.lag_correct) o.link.lag_tau_us = o.recon.framer.tau_us;
-  if (!mbias_given && !o.lag_correct && o.localize_views &&
-      (o.recon.framer.repr == ELFM_REPR_EXP || o.recon.framer.repr == ELFM_REPR_LIN) &&
-      o.recon.framer.polarity == ELFM_POL_ON) {
-    /* The view fit of an ON time surface places a moving object ahead of
-     * where it is (ON events fire on its leading half) and where it was a
-     * little earlier (the weights value^P favour the newest events, not the
-     * frame's end): along its lateral motion v the error is lead - delay x
-     * |v|. `eventlfm score --calib`'s regression of the detections' error on
-     * the views' model of that bias (elfm_score.h), flow 100 ms seeds 1-8:
-     * lead 1.16-1.38 um (mean 1.25), delay 392-485 us (mean 431). The
-     * delay is the mean age of the weighted events in the window (below)
-     * + 150-190 us at tau 500 / 1000 / 2000 us and power 1 / 2 / 3 (seeds
-     * 1-4): 150 us, the value at the defaults, is kept. (The sixth session's
-     * 0.8 um and age + 20 us came from a regression on the lateral speed
-     * alone, which beads climbing steeply in z bias low; docs/tracker.md
-     * "Motion bias".) The lead belongs to the sample (brighter beads lead
-     * further: below), and `eventlfm score` reports it for a simulated
-     * scene like the user's. Flow seeds 1-20 alpha 0.8032 ->
-     * 0.8043 (0.8 um, age + 20 us against these), held-out seeds 21-24
-     * 0.8022 -> 0.8037, stage seeds 1-3 0.741 / 0.807 / 0.723 -> 0.769 /
-     * 0.837 / 0.750. */
-    const double age_us = surface_mean_age_us(o.recon.framer.repr, o.loc.power,
-                                              o.recon.framer.tau_us, (double)o.recon.framer.dt_us);
-    o.smooth.motion_lead_um = 1.25;
-    o.smooth.motion_delay_us = age_us + 150.0;
-    /* Brighter beads lead further, and their in-focus peaks are wider
-     * (the arc of ON events reaches further out): flow 100 ms at 0.5 / 1 /
-     * 2 / 4 x the beads' flux, lead (score --calib) against the median
-     * width of the peaks within 20 um of focus (elfm_detection.width_um),
-     * 14 recordings: lead = 1.52 x width, RMS 0.067 um without the dimmest
-     * (an affine fit's intercept is 0.03 um). So the lead follows the
-     * recording's peaks (track_motion_lead_um); 1.25 um until 50 peaks. */
-    o.motion_lead_auto = 1;
-  } else if (!mbias_given && !o.lag_correct && o.localize_views &&
-             o.recon.framer.repr == ELFM_REPR_INTEGRAL) {
-    /* The integral places a crawling neuron ahead of itself too, by a
-     * lead: `eventlfm score --calib --motion-fade-um-per-ms 0.05` on the
-     * raw detections, worm 200 ms seeds 1-4 (neurons at 0.12 um/ms, one
-     * speed: lead and delay not separable), mean error along the motion
-     * +0.168 / +0.215 / +0.261 / +0.170 um. At these speeds the default
-     * fade (0.5 um/ms) would keep a quarter of the lead, so the fade is
-     * lowered to 0.05 um/ms. Worm seeds 1-4 alpha 0.830 / 0.785 /
-     * 0.754 / 0.826 -> 0.833 / 0.791 / 0.760 / 0.830 (lead 0.15 / 0.25:
-     * means 0.8043 / 0.8010 against 0.8035 at 0.2; fade 0.5: 0.8018).
-     * Twelfth session: most of that lead was the first frames', where an
-     * integral started from 0 showed only where each neuron had moved to.
-     * Started from its levels (--integral-start-ms) the detections lie
-     * +0.068 / +0.105 / +0.122 / +0.052 um ahead (seeds 1-4; 0.10-0.16 on
-     * 5-7), and alpha at lead 0 / 0.1 / 0.2 is 0.8690 / 0.8708 / 0.8688
-     * (held-out seeds 5-7: 0.858 / 0.860 / 0.860): 0.1. Thirteenth
-     * session: with bright levels leaking more slowly (tau_bright_us) the
-     * detections lag a little instead: -0.070 / -0.029 / -0.055 / -0.087 /
-     * -0.057 / -0.053 / +0.003 um along the motion (seeds 1-7, mean
-     * -0.05). Mean alpha over 200 ms seeds 1-4 / 5-7 / 8-12, 150 ms, 500
-     * ms at lead 0.1: 0.927 / 0.919 / 0.927 / 0.909 / 0.907; given as
-     * --motion-lead-um 0 / -0.05 (which leaves the fade at 0.5): 0.938 /
-     * 0.927 / 0.937 / 0.918 / 0.918, 0.938 / 0.928 / 0.938 / 0.919 /
-     * 0.919; -0.05 here, with the fade at 0.05: 0.940 / 0.929 / 0.939 /
-     * 0.920 / 0.921. */
-    o.smooth.motion_lead_um = -0.05;
-    o.smooth.motion_delay_us = 0;
-    if (!fade_given) o.smooth.motion_lead_fade_um_per_ms = 0.05;
-  }
+  const int rc = track_opts_derive(&o, &g);
+  if (rc != CLI_OK) return rc;
   *out = o;
   return CLI_OK;
 }
