@@ -22,6 +22,8 @@ typedef struct recon_args {
 typedef struct recon_out {
   const recon_args *a;
   char dir[4096];
+  FILE *ffr;              /* frames.csv */
+  char p_fr[4200];
   int64_t saved_volumes, saved_mips;
   elfm_status status;
 } recon_out;
@@ -34,7 +36,8 @@ static void usage(FILE *f)
           "usage: eventlfm recon --calib calib.json (--events FILE | --tiff STACK.tif) --out DIR\n"
           "                      [options]\n\n"
           "Refocuses events (or a conventional light-field TIFF stack) into volumes on the\n"
-          "z planes of the calibration and writes DIR/summary.json; with --save-volumes\n"
+          "z planes of the calibration and writes DIR/summary.json and DIR/frames.csv (each\n"
+          "volume's frame, t_us, window and events); with --save-volumes\n"
           "DIR/volumes/vol_NNNNNN.exr (one float channel per z plane), with --save-mips\n"
           "DIR/mips/mip_NNNNNN.png (depth-colour-coded x-y, x-z, y-z projections).\n\n"
           "frames and refocusing (the same options as eventlfm track's):\n");
@@ -70,6 +73,11 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
 {
   recon_out *o = user;
   char path[4200];
+  /* every volume's time and window: volumes and MIPs are named by frame,
+   * and windows opened by trigger edges are not evenly spaced */
+  if (fprintf(o->ffr, "%lld,%lld,%lld,%lld,%zu\n", (long long)v->frame, (long long)v->t_us,
+              (long long)v->t_start_us, (long long)v->t_end_us, v->n_events) < 0)
+    return elfm_error_set(err, ELFM_ERR_IO, o->p_fr, -1, "write failed: %s", strerror(errno));
   if (o->a->save_volumes) {
     snprintf(path, sizeof path, "%s/volumes/vol_%06lld.exr", o->dir, (long long)v->frame);
     elfm_status st = elfm_volume_write_exr(v, path, err);
@@ -210,13 +218,21 @@ int cmd_recon(int argc, char **argv)
     snprintf(sub, sizeof sub, "%s/mips", o.dir);
     if (!make_dir(sub)) return CLI_FAIL;
   }
+  snprintf(o.p_fr, sizeof o.p_fr, "%s/frames.csv", o.dir);
+  if (!(o.ffr = fopen(o.p_fr, "w")) || fputs("frame,t_us,t_start_us,t_end_us,n_events\n", o.ffr) < 0) {
+    if (o.ffr) fclose(o.ffr);
+    return cli_message("recon", CLI_FAIL, "%s: cannot write: %s", o.p_fr, strerror(errno));
+  }
   if (!a.quiet) r->progress = progress;
   elfm_recon_stats s;
   memset(&s, 0, sizeof s);
   elfm_status st = a.tiff ? elfm_recon_run_tiff(a.tiff, &cal, r, on_volume, &o, &s, &err)
                           : elfm_recon_run(a.events, &cal, r, on_volume, &o, &s, &err);
   if (!a.quiet) fputc('\n', stderr);
-  if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL)) return CLI_FAIL;
+  /* frames.csv holds the volumes made before an error too: close it first */
+  int fr_bad = ferror(o.ffr) | (fclose(o.ffr) != 0);
+  if (fr_bad) cli_message("recon", CLI_FAIL, "%s: write failed: %s", o.p_fr, strerror(errno));
+  if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL) || fr_bad) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
   if (!a.tiff && s.triggers == 0 && (r->framer.start == ELFM_START_FIRST_TRIGGER ||
                                      r->framer.start == ELFM_START_EACH_TRIGGER))

@@ -11,6 +11,7 @@
 #include "check.h"
 #include "elfm_datasets.h"
 #include "elfm_recon.h"
+#include "elfm_table.h"
 
 static char dir[] = "/tmp/elfm_recon_cli_XXXXXX";
 
@@ -88,6 +89,23 @@ int main(void)
     snprintf(after, sizeof after, "r/volumes/vol_%06d.exr", nvol);
     CHECK(exists(last) && !exists(after));
     CHECK(cJSON_GetObjectItem(c, "saved_mips")->valuedouble == nvol);
+    /* frames.csv: one row per volume, windows of 2 ms end to end */
+    elfm_table *ft = NULL;
+    snprintf(last, sizeof last, "%s/r/frames.csv", dir);
+    CHECK_OK(elfm_table_load_csv(last, &ft, &err), &err);
+    if (ft) {
+      CHECK_EQ_INT(ft->n_rows, nvol);
+      int cf = elfm_table_col(ft, "frame"), ct = elfm_table_col(ft, "t_us"),
+          c0 = elfm_table_col(ft, "t_start_us"), c1 = elfm_table_col(ft, "t_end_us");
+      CHECK(cf >= 0 && ct >= 0 && c0 >= 0 && c1 >= 0 && elfm_table_col(ft, "n_events") >= 0);
+      for (size_t k = 0; cf >= 0 && ct >= 0 && c0 >= 0 && c1 >= 0 && k < ft->n_rows; k++) {
+        CHECK(elfm_table_get(ft, k, cf) == (double)k);
+        CHECK(elfm_table_get(ft, k, c1) - elfm_table_get(ft, k, c0) == 2000);
+        CHECK(elfm_table_get(ft, k, ct) == elfm_table_get(ft, k, c1)); /* exp: the window's end */
+        if (k > 0) CHECK(elfm_table_get(ft, k, c0) == elfm_table_get(ft, k - 1, c1));
+      }
+      elfm_table_free(ft);
+    }
     CHECK(t && cJSON_GetObjectItem(t, "events_per_s") && cJSON_GetObjectItem(t, "volumes_per_s") &&
           cJSON_GetObjectItem(t, "realtime_factor") && cJSON_GetObjectItem(t, "peak_rss_mb"));
     CHECK(p && cJSON_GetObjectItem(p, "dt_us")->valuedouble == 2000);
