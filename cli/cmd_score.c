@@ -219,6 +219,27 @@ static int window_from_summary(struct score_opts *op)
   return ok;
 }
 
+/* 1 when the frames.csv at path loads and its windows differ in length or
+ * leave gaps (windows opened by trigger edges); 0 otherwise, also when it
+ * is absent or unreadable (then nothing is said: --frames was not asked). */
+static int uneven_windows(const char *path)
+{
+  elfm_table *t = NULL;
+  elfm_error err;
+  if (elfm_table_load_csv(path, &t, &err) != ELFM_OK) return 0;
+  const int c0 = elfm_table_col(t, "t_start_us"), c1 = elfm_table_col(t, "t_end_us");
+  int uneven = 0;
+  if (c0 >= 0 && c1 >= 0 && t->n_rows >= 2) {
+    const double len0 = elfm_table_get(t, 0, c1) - elfm_table_get(t, 0, c0);
+    const double step0 = elfm_table_get(t, 1, c0) - elfm_table_get(t, 0, c0);
+    for (size_t r = 1; r < t->n_rows && !uneven; r++)
+      uneven = elfm_table_get(t, r, c1) - elfm_table_get(t, r, c0) != len0 ||
+               elfm_table_get(t, r, c0) - elfm_table_get(t, r - 1, c0) != step0;
+  }
+  elfm_table_free(t);
+  return uneven;
+}
+
 int cmd_score(int argc, char **argv)
 {
   enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
@@ -311,19 +332,26 @@ int cmd_score(int argc, char **argv)
     elfm_score_options_set_calib(&op.so, &cal);
   }
   elfm_table *frames = NULL;
+  const char *beside = op.tracks ? op.tracks : op.detections;
+  const char *slash = strrchr(beside, '/');
+  int dir_len = slash ? (int)(slash - beside) + 1 : 0;
+  if (snprintf(op.frames_path, sizeof op.frames_path, "%.*sframes.csv", dir_len, beside) >=
+      (int)sizeof op.frames_path)
+    op.frames_path[0] = '\0';
   if (op.frames) {
     const char *path = op.frames;
     if (!strcmp(op.frames, "run")) {
-      const char *beside = op.tracks ? op.tracks : op.detections;
-      const char *slash = strrchr(beside, '/');
-      int dir_len = slash ? (int)(slash - beside) + 1 : 0;
-      if (snprintf(op.frames_path, sizeof op.frames_path, "%.*sframes.csv", dir_len, beside) >=
-          (int)sizeof op.frames_path)
-        return cli_message("score", CLI_USAGE, "--frames run: the path is too long");
+      if (!op.frames_path[0]) return cli_message("score", CLI_USAGE, "--frames run: the path is too long");
       path = op.frames_path;
     }
     if (elfm_table_load_csv(path, &frames, &err) != ELFM_OK) return cli_fail("score", &err);
     op.so.frames = frames;
+  } else if (op.frames_path[0] && uneven_windows(op.frames_path)) {
+    /* Without the list, frames between two rows are spread evenly in time,
+     * which a run with windows cut at trigger edges does not have. */
+    cli_message("score", 0, "note: %s lists windows that are not evenly spaced (track --start "
+                "each-trigger): --frames run scores every frame at its own time",
+                op.frames_path);
   }
   /* The default is SPEC 7 as written (bright at t_us); the window rule is
    * asked for (docs/bench.md "Blinking objects" has both on blink). */

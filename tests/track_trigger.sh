@@ -14,7 +14,8 @@
 #    none is longer than dt, and every LED onset in stimulus.csv after the
 #    first opens one.
 #  - the smoothed tracks' gap frames carry the frames' own times (score
-#    refuses a tracks.csv whose times disagree with the frame list).
+#    refuses a tracks.csv whose times disagree with the frame list);
+#    score without --frames notes that the run's windows are uneven.
 #  - without -q, track suggests --start each-trigger on a recording with
 #    trigger edges and objects at rest (not once it is given);
 #  - a trigger start on a recording without edges fails with a message;
@@ -66,6 +67,12 @@ awk -F, -v dt=1000 '
   { echo "FAIL: tracks.csv disagrees with frames.csv"; fail=$((fail+1)); }
 gaps=$(awk -F, 'NR > 1 && $7 == ""' "$tmp/each/tracks.csv" | wc -l)
 [ "$gaps" -gt 100 ] || { echo "FAIL: only $gaps gap frames in tracks.csv"; fail=$((fail+1)); }
+
+# score without the list notes that the windows are uneven (not for the grid)
+"$bin" score --truth "$tmp/b/truth.csv" --tracks "$tmp/each/tracks.csv" --json >/dev/null 2>"$tmp/sn.err"
+grep -q "not evenly spaced.*--frames run" "$tmp/sn.err" || { echo "FAIL: no --frames note"; fail=$((fail+1)); }
+"$bin" score --truth "$tmp/b/truth.csv" --tracks "$tmp/grid/tracks.csv" --json >/dev/null 2>"$tmp/sn.err"
+[ -s "$tmp/sn.err" ] && { echo "FAIL: a note on the grid: $(cat "$tmp/sn.err")"; fail=$((fail+1)); }
 
 # without -q, track suggests each-trigger on a recording with edges
 "$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/note" \
