@@ -72,12 +72,17 @@ int cli_parse_polarity(const char *cmd, const char *s, elfm_polarity *out);
 int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *out);
 const char *cli_repr_name(elfm_repr v);
 const char *cli_start_name(elfm_frame_start v);
+/* A trigger start (--start trigger / each-trigger) that opened no window:
+ * the message naming the file, the edges it had and the channel asked
+ * for. Returns CLI_FAIL. */
+int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, const char *file,
+                             int64_t edges);
 const char *cli_polarity_name(elfm_polarity v);
 const char *cli_refocus_path_name(elfm_refocus_path v);
 const char *cli_ghost_threshold_name(elfm_ghost_threshold v);
 
 /* The reconstruction options recon and track share (--dt-us, --stride-us,
- * --tau-us, --repr, --polarity, --start, --median, --from-us, --to-us, --path,
+ * --tau-us, --repr, --polarity, --start, --trigger-channel, --median, --from-us, --to-us, --path,
  * --ghost, --ghost-value, --agree, --threads, --batch): one parser, one set
  * of checks and messages and one help text, so that an option means and
  * checks the same in both commands. Each command keeps its own defaults:
@@ -98,7 +103,7 @@ enum {
   CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
   CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
   CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT, CLI_RO_ISTART, CLI_RO_ISTART_AGE,
-  CLI_RO_TAU_BRIGHT, CLI_RO_START
+  CLI_RO_TAU_BRIGHT, CLI_RO_START, CLI_RO_TRIG_CH
 };
 #define CLI_RECON_LONG_OPTIONS                                                                 \
   {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
@@ -115,7 +120,8 @@ enum {
   {"integral-start-ms", required_argument, 0, CLI_RO_ISTART},                                  \
   {"integral-start-age-ms", required_argument, 0, CLI_RO_ISTART_AGE},                          \
   {"tau-bright-us", required_argument, 0, CLI_RO_TAU_BRIGHT},                                 \
-  {"start", required_argument, 0, CLI_RO_START}
+  {"start", required_argument, 0, CLI_RO_START},                                               \
+  {"trigger-channel", required_argument, 0, CLI_RO_TRIG_CH}
 
 typedef struct cli_recon_parse {
   elfm_recon_options *ro;  /* the command's defaults, then the options given */

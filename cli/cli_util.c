@@ -180,6 +180,23 @@ const char *cli_start_name(elfm_frame_start v)
   }
   return "?";
 }
+int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, const char *file,
+                             int64_t edges)
+{
+  if (edges == 0)
+    return cli_message(cmd, CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
+                       cli_start_name(fo->start), file);
+  if (fo->trigger_channel >= 0)
+    return cli_message(cmd, CLI_FAIL,
+                       "--start %s: %s has %lld trigger edges but no rising one on channel %d "
+                       "(--trigger-channel), so no window opened",
+                       cli_start_name(fo->start), file, (long long)edges, fo->trigger_channel);
+  return cli_message(cmd, CLI_FAIL,
+                     "--start %s: %s has %lld trigger edges but no rising one before its last "
+                     "event, so no window opened", cli_start_name(fo->start), file,
+                     (long long)edges);
+}
+
 const char *cli_repr_name(elfm_repr v) { return name_of(repr_names, N_OF(repr_names), (int)v); }
 const char *cli_polarity_name(elfm_polarity v)
 { return name_of(polarity_names, N_OF(polarity_names), (int)v); }
@@ -324,6 +341,8 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     return cli_parse_double_in(cmd, "--tau-bright-us", arg, 0, 1, HUGE_VAL, "> 0",
                                &fo->tau_bright_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
+  case CLI_RO_TRIG_CH:
+    return int_in(cmd, "--trigger-channel", arg, -1, 255, "-1 (any) .. 255", &fo->trigger_channel);
   case CLI_RO_START:
     if (!strcmp(arg, "first")) fo->start = ELFM_START_FIRST_EVENT;
     else if (!strcmp(arg, "trigger")) fo->start = ELFM_START_FIRST_TRIGGER;
@@ -455,6 +474,7 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "stride_us", (double)(fo->stride_us ? fo->stride_us : fo->dt_us));
   cJSON_AddStringToObject(par, "repr", cli_repr_name(fo->repr));
   cJSON_AddStringToObject(par, "start", cli_start_name(fo->start));
+  cJSON_AddNumberToObject(par, "trigger_channel", fo->trigger_channel);
   cJSON_AddNumberToObject(par, "tau_us", fo->tau_us);
   cJSON_AddStringToObject(par, "polarity", cli_polarity_name(fo->polarity));
   cJSON_AddNumberToObject(par, "off_weight", fo->off_weight);
@@ -489,6 +509,8 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "                       (the first, and every rising edge ends the window it\n"
           "                       falls in and opens the next: one window per light\n"
           "                       pulse, whatever its phase; blinking objects)\n"
+          "  --trigger-channel N  the trigger starts use only channel N's edges (default -1:\n"
+          "                       any channel)\n"
           "  --repr R             exp | lin | count | integral (default %s; exp, lin: time\n"
           "                       surfaces; integral: each pixel's leaky sum of ON minus\n"
           "                       OFF events, its log brightness: no lead along the motion)\n"

@@ -234,10 +234,9 @@ int cmd_recon(int argc, char **argv)
   if (fr_bad) cli_message("recon", CLI_FAIL, "%s: write failed: %s", o.p_fr, strerror(errno));
   if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL) || fr_bad) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
-  if (!a.tiff && s.triggers == 0 && (r->framer.start == ELFM_START_FIRST_TRIGGER ||
-                                     r->framer.start == ELFM_START_EACH_TRIGGER))
-    return cli_message("recon", CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
-                       cli_start_name(r->framer.start), a.events);
+  if (!a.tiff && s.frames == 0 && (r->framer.start == ELFM_START_FIRST_TRIGGER ||
+                                   r->framer.start == ELFM_START_EACH_TRIGGER))
+    return cli_trigger_start_failed("recon", &r->framer, a.events, s.triggers);
   if (!a.quiet)
     fprintf(stderr, "recon: %lld events -> %lld volumes (%lld sparse) in %.2f s: %.0f volumes/s, "
             "%.2f Mev/s, %.2fx real time; %s/summary.json\n",

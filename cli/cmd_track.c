@@ -149,11 +149,10 @@ int cmd_track(int argc, char **argv)
     if (st != ELFM_OK) cli_fail(C, &err);
     goto done;
   }
-  if (st == ELFM_OK && rs.triggers == 0 && (o.recon.framer.start == ELFM_START_FIRST_TRIGGER ||
-                                             o.recon.framer.start == ELFM_START_EACH_TRIGGER)) {
+  if (st == ELFM_OK && c.n_frames == 0 && (o.recon.framer.start == ELFM_START_FIRST_TRIGGER ||
+                                            o.recon.framer.start == ELFM_START_EACH_TRIGGER)) {
     /* the outputs are written (empty), but an empty run is not a success */
-    cli_message(C, CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
-                cli_start_name(o.recon.framer.start), o.events);
+    cli_trigger_start_failed(C, &o.recon.framer, o.events, rs.triggers);
     goto done;
   }
   if (st != ELFM_OK) {

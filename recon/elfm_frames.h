@@ -139,6 +139,7 @@ typedef struct elfm_framer_options {
   int64_t stride_us;    /* window start to next start; 0 = dt; 1..dt */
   elfm_frame_start start;
   int64_t start_us;     /* for ELFM_START_AT_TIME */
+  int trigger_channel;  /* the trigger starts: only this channel's edges; -1 (default) any */
   elfm_repr repr;
   double tau_us;        /* time-surface decay; default 1000 (= dt, so the oldest event of
                            a window still shows at 255/e). INTEGRAL: the leak time

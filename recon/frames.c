@@ -143,6 +143,7 @@ void elfm_framer_options_default(elfm_framer_options *o)
   o->dt_us = 1000;
   o->stride_us = 0;
   o->start = ELFM_START_FIRST_EVENT;
+  o->trigger_channel = -1;
   o->repr = ELFM_REPR_EXP;
   o->tau_us = 1000.0;
   o->polarity = ELFM_POL_BOTH;
@@ -183,6 +184,9 @@ elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown polarity %d", (int)o->polarity);
   if ((unsigned)o->start > ELFM_START_EACH_TRIGGER)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown start mode %d", (int)o->start);
+  if (o->trigger_channel < -1 || o->trigger_channel > 255)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "trigger channel %d is outside -1 (any) .. 255", o->trigger_channel);
   return ELFM_OK;
 }
 
@@ -384,9 +388,10 @@ static int framer_grow_trig(elfm_framer *f)
 elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err)
 {
   const int each = f->opt.start == ELFM_START_EACH_TRIGGER;
+  const int ch = f->opt.trigger_channel;
   if (f->origin_us == INT64_MIN && (f->opt.start == ELFM_START_FIRST_TRIGGER || each)) {
     for (size_t i = 0; i < c->n_trig; i++)
-      if (c->trig[i].value == 1) {
+      if (c->trig[i].value == 1 && (ch < 0 || c->trig[i].channel == ch)) {
         f->origin_us = f->next_t0 = c->trig[i].t_us;
         break;
       }
@@ -396,7 +401,8 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
       const int64_t t = c->trig[i].t_us;
       /* the edge that set the origin opens window 0 already; edges must
        * come in time order, as the events do */
-      if (c->trig[i].value != 1 || t <= f->origin_us) continue;
+      if (c->trig[i].value != 1 || (ch >= 0 && c->trig[i].channel != ch) || t <= f->origin_us)
+        continue;
       if (f->trig_n > 0 && t < f->trig_t[(f->trig_head + f->trig_n - 1) & (f->trig_cap - 1)])
         return elfm_error_set(err, ELFM_ERR_FORMAT, NULL, -1,
                               "trigger edge at %lld us is before the previous edge", (long long)t);

@@ -288,6 +288,41 @@ static void test_each_trigger(void)
       elfm_frame_free(f);
     }
   }
+  /* trigger_channel: only that channel's edges open windows (a second
+   * input, e.g. a camera's frame clock on channel 1, must not cut them) */
+  {
+    elfm_framer_options o;
+    elfm_framer_options_default(&o);
+    CHECK_EQ_INT(o.trigger_channel, -1);
+    o.start = ELFM_START_EACH_TRIGGER;
+    o.trigger_channel = 0;
+    elfm_framer *fr = NULL;
+    CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+    elfm_event_chunk *c = elfm_chunk_create(16, &err);
+    elfm_frame *f = elfm_frame_create(SW, SH, &err);
+    c->trig[0] = (elfm_trigger){.t_us = 500, .channel = 1, .value = 1};  /* not ours */
+    c->trig[1] = (elfm_trigger){.t_us = 1000, .channel = 0, .value = 1}; /* origin */
+    c->trig[2] = (elfm_trigger){.t_us = 1400, .channel = 1, .value = 1}; /* not ours */
+    c->trig[3] = (elfm_trigger){.t_us = 2600, .channel = 0, .value = 1}; /* cuts [2000, 3000) */
+    c->n_trig = 4;
+    add_event(c, 700, 1, 1, 1);
+    add_event(c, 1200, 2, 1, 1);
+    add_event(c, 4000, 3, 1, 1);
+    CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+    elfm_framer_finish(fr);
+    const int64_t w0[5] = {1000, 2000, 2600, 3600, 4600};
+    int n = 0;
+    while (elfm_framer_next(fr, f) == 1 && n < 5) {
+      CHECK_EQ_INT(f->t_start_us, w0[n]);
+      n++;
+    }
+    CHECK_EQ_INT(n, 4); /* the last window, [3600, 4600), holds the last event */
+    elfm_framer_free(fr);
+    elfm_chunk_free(c);
+    elfm_frame_free(f);
+    o.trigger_channel = 256;
+    CHECK(elfm_framer_create(&o, SW, SH, &fr, &err) == ELFM_ERR_INVALID);
+  }
   /* edges out of order are a format error, not a silent misalignment */
   elfm_framer_options o;
   elfm_framer_options_default(&o);

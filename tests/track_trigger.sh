@@ -18,15 +18,16 @@
 #    score without --frames notes that the run's windows are uneven.
 #  - without -q, track suggests --start each-trigger on a recording with
 #    trigger edges and objects at rest (not once it is given);
-#  - a trigger start on a recording without edges fails with a message;
-#    a bad --start is a usage error.
+#  - a trigger start on a recording without edges, or without edges on
+#    the --trigger-channel asked for, fails with a message; a bad --start
+#    or channel is a usage error.
 # Usage: track_trigger.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-expect_usage_errors "--start bogus"
+expect_usage_errors "--start bogus" "--trigger-channel 256" "--trigger-channel -2"
 
 simulate_or_skip "$tmp/b" blink 200 8
 score_args="--window-us run"
@@ -90,6 +91,16 @@ rc=$?
 [ $rc -eq 1 ] && grep -q "no trigger edge" "$tmp/none.err" ||
   { echo "FAIL: no edges: exit $rc, '$(cat "$tmp/none.err")'"; fail=$((fail+1)); }
 [ -f "$tmp/none/frames.csv" ] || { echo "FAIL: no frames.csv without edges"; fail=$((fail+1)); }
+# edges on another channel than the one asked for: the same, saying so
+"$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/ch3" -q \
+  --start each-trigger --trigger-channel 3 2>"$tmp/ch3.err"
+rc=$?
+[ $rc -eq 1 ] && grep -q "no rising one on channel 3" "$tmp/ch3.err" ||
+  { echo "FAIL: channel 3: exit $rc, '$(cat "$tmp/ch3.err")'"; fail=$((fail+1)); }
+# the LED's own channel (0) gives the run of any channel
+"$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/ch0" -q \
+  --start each-trigger --trigger-channel 0 && cmp -s "$tmp/ch0/tracks.csv" "$tmp/each/tracks.csv" ||
+  { echo "FAIL: --trigger-channel 0 differs from any channel"; fail=$((fail+1)); }
 
 [ $fail -eq 0 ] && echo "track_trigger: all passed" || echo "track_trigger: $fail failed"
 [ $fail -eq 0 ]
