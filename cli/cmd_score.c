@@ -350,8 +350,15 @@ int cmd_score(int argc, char **argv)
     /* Without the list, frames between two rows are spread evenly in time,
      * which a run with windows cut at trigger edges does not have. */
     cli_message("score", 0, "note: %s lists windows that are not evenly spaced (track --start "
-                "each-trigger): --frames run scores every frame at its own time",
+                "each-trigger): --frames run scores every frame at its own time, and with "
+                "--window-us run over its own window (a window cut at an LED edge has its t_us "
+                "on the edge, where SPEC 7 as written calls it lit)",
                 op.frames_path);
+  }
+  if (frames && !op.window_run && uneven_windows(frames->path)) {
+    cli_message("score", 0, "note: the frame list's windows are not evenly spaced: SPEC 7 as "
+                "written counts a window cut at an LED edge as lit (its t_us is the edge); "
+                "--window-us run votes over each frame's own window");
   }
   /* The default is SPEC 7 as written (bright at t_us); the window rule is
    * asked for (docs/bench.md "Blinking objects" has both on blink). */
