@@ -1,8 +1,8 @@
 /* link_internal.h — private to tracker/: the linker's state and the helpers
  * shared by link.c (life cycle and the per-frame linking, steps 1-4 of
- * elfm_link_step, see elfm_link.h) and link_repair.c (the repair steps 5
- * to 7 that step runs last: stitching, swap and encounter review). Not public:
- * callers use elfm_link.h. */
+ * elfm_link_step, see elfm_link.h), link_candidates.c (its step 2) and
+ * link_repair.c (the repair steps 5 to 7 that step runs last: stitching,
+ * swap and encounter review). Not public: callers use elfm_link.h. */
 #ifndef ELFM_LINK_INTERNAL_H
 #define ELFM_LINK_INTERNAL_H
 
@@ -131,6 +131,23 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o);
  *   p(t) = p0 + v sin(w t) / w + (k x v)(1 - cos(w t)) / w,  k = omega / w. */
 void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
                             double dt_ms, double out[3]);
+
+/* Is d a weak detection too far (squared anisotropic distance d2) from a
+ * track's prediction to join it? */
+static inline int link_weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
+{
+  return d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um;
+}
+
+/* link_candidates.c: step 2 of elfm_link_step. For each of the nt live
+ * tracks (their pred, gate_um, missed and rest hypothesis set by step 1),
+ * the detections within its gate, nearest first, at most max_candidates:
+ * l->cand[i * max_candidates ..] and l->n_cand[i], each at the cost d2 /
+ * gate2 + gap_cost x missed, a detection found under both hypotheses at
+ * its lower cost. From a FLANN k-d tree over the frame's nd detections, or
+ * every pair with o.brute_force. */
+elfm_status elfm_link_candidates(elfm_linker *l, const elfm_detection *det, size_t nt, size_t nd,
+                                 elfm_error *err);
 
 /* link_repair.c: the repair steps, run by elfm_link_step after the frame's
  * attachments and births; nd is the frame's detection count (their
