@@ -119,6 +119,10 @@ static const name_value path_names[] = {
 static const name_value ghost_names[] = {
     {"none", ELFM_GHOST_THR_NONE}, {"abs", ELFM_GHOST_THR_ABS},
     {"frac", ELFM_GHOST_THR_FRAC_MAX}, {"mad", ELFM_GHOST_THR_MAD}};
+/* --start: ELFM_START_AT_TIME is the library's (--from-us), not a name */
+static const name_value start_names[] = {{"first", ELFM_START_FIRST_EVENT},
+                                         {"trigger", ELFM_START_FIRST_TRIGGER},
+                                         {"each-trigger", ELFM_START_EACH_TRIGGER}};
 #define N_OF(t) (sizeof(t) / sizeof((t)[0]))
 
 /* Look s up in t; on failure print the choices ("a, b or c") for opt. */
@@ -171,15 +175,7 @@ int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *ou
 }
 
 const char *cli_start_name(elfm_frame_start v)
-{
-  switch (v) {
-  case ELFM_START_FIRST_EVENT: return "first";
-  case ELFM_START_AT_TIME: return "at-time";
-  case ELFM_START_FIRST_TRIGGER: return "trigger";
-  case ELFM_START_EACH_TRIGGER: return "each-trigger";
-  }
-  return "?";
-}
+{ return name_of(start_names, N_OF(start_names), (int)v); }
 int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, const char *file,
                              int64_t edges)
 {
@@ -343,15 +339,12 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
   case CLI_RO_TRIG_CH:
     return int_in(cmd, "--trigger-channel", arg, -1, 255, "-1 (any) .. 255", &fo->trigger_channel);
-  case CLI_RO_START:
-    if (!strcmp(arg, "first")) fo->start = ELFM_START_FIRST_EVENT;
-    else if (!strcmp(arg, "trigger")) fo->start = ELFM_START_FIRST_TRIGGER;
-    else if (!strcmp(arg, "each-trigger")) fo->start = ELFM_START_EACH_TRIGGER;
-    else {
-      cli_message(cmd, CLI_USAGE, "--start: '%s' is not first, trigger or each-trigger", arg);
-      return 0;
-    }
+  case CLI_RO_START: {
+    int v = 0;
+    if (!parse_name(cmd, "--start", arg, start_names, N_OF(start_names), &v)) return 0;
+    fo->start = (elfm_frame_start)v;
     return 1;
+  }
   case CLI_RO_OFF_WEIGHT:
     return cli_parse_double_in(cmd, "--off-weight", arg, 0, 1, 100, "in (0, 100]", &fo->off_weight);
   case CLI_RO_ISTART: {
