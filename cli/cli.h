@@ -72,11 +72,18 @@ int cli_parse_polarity(const char *cmd, const char *s, elfm_polarity *out);
 int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *out);
 const char *cli_repr_name(elfm_repr v);
 const char *cli_start_name(elfm_frame_start v);
-/* A trigger start (--start trigger / each-trigger) that opened no window:
- * the message naming the file, the edges it had and the channel asked
- * for. Returns CLI_FAIL. */
-int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, const char *file,
-                             int64_t edges);
+/* A trigger start (--start trigger / each-trigger) that opened no window
+ * (`volumes` made, from the run's stats): the message naming the file, the
+ * edges it had and the channel asked for, and CLI_FAIL. CLI_OK otherwise. */
+int cli_check_trigger_start(const char *cmd, const elfm_framer_options *fo, const char *file,
+                            int64_t volumes, int64_t edges);
+
+/* frames.csv, written by recon and track: one row per volume, its frame,
+ * t_us, window [t_start_us, t_end_us) and events, and with n_detections >= 0
+ * (track) that column too. The header says which (with_detections). */
+elfm_status cli_frames_csv_header(FILE *f, const char *path, int with_detections, elfm_error *err);
+elfm_status cli_frames_csv_row(FILE *f, const char *path, const elfm_volume *v, int n_detections,
+                               elfm_error *err);
 const char *cli_polarity_name(elfm_polarity v);
 const char *cli_refocus_path_name(elfm_refocus_path v);
 const char *cli_ghost_threshold_name(elfm_ghost_threshold v);

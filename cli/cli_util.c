@@ -176,9 +176,12 @@ int cli_parse_refocus_path(const char *cmd, const char *s, elfm_refocus_path *ou
 
 const char *cli_start_name(elfm_frame_start v)
 { return name_of(start_names, N_OF(start_names), (int)v); }
-int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, const char *file,
-                             int64_t edges)
+int cli_check_trigger_start(const char *cmd, const elfm_framer_options *fo, const char *file,
+                            int64_t volumes, int64_t edges)
 {
+  if (volumes > 0 ||
+      (fo->start != ELFM_START_FIRST_TRIGGER && fo->start != ELFM_START_EACH_TRIGGER))
+    return CLI_OK;
   if (edges == 0)
     return cli_message(cmd, CLI_FAIL, "--start %s: %s has no trigger edge, so no window opened",
                        cli_start_name(fo->start), file);
@@ -191,6 +194,24 @@ int cli_trigger_start_failed(const char *cmd, const elfm_framer_options *fo, con
                      "--start %s: %s has %lld trigger edges but no rising one before its last "
                      "event, so no window opened", cli_start_name(fo->start), file,
                      (long long)edges);
+}
+
+elfm_status cli_frames_csv_header(FILE *f, const char *path, int with_detections, elfm_error *err)
+{
+  if (fputs(with_detections ? "frame,t_us,t_start_us,t_end_us,n_events,n_detections\n"
+                            : "frame,t_us,t_start_us,t_end_us,n_events\n", f) < 0)
+    return elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  return ELFM_OK;
+}
+
+elfm_status cli_frames_csv_row(FILE *f, const char *path, const elfm_volume *v, int n_detections,
+                               elfm_error *err)
+{
+  int k = fprintf(f, "%" PRId64 ",%" PRId64 ",%" PRId64 ",%" PRId64 ",%zu", v->frame, v->t_us,
+                  v->t_start_us, v->t_end_us, v->n_events);
+  if (k >= 0) k = n_detections >= 0 ? fprintf(f, ",%d\n", n_detections) : fputs("\n", f);
+  if (k < 0) return elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  return ELFM_OK;
 }
 
 const char *cli_repr_name(elfm_repr v) { return name_of(repr_names, N_OF(repr_names), (int)v); }

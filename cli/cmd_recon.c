@@ -75,9 +75,8 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   char path[4200];
   /* every volume's time and window: volumes and MIPs are named by frame,
    * and windows opened by trigger edges are not evenly spaced */
-  if (fprintf(o->ffr, "%lld,%lld,%lld,%lld,%zu\n", (long long)v->frame, (long long)v->t_us,
-              (long long)v->t_start_us, (long long)v->t_end_us, v->n_events) < 0)
-    return elfm_error_set(err, ELFM_ERR_IO, o->p_fr, -1, "write failed: %s", strerror(errno));
+  elfm_status fs = cli_frames_csv_row(o->ffr, o->p_fr, v, -1, err);
+  if (fs != ELFM_OK) return fs;
   if (o->a->save_volumes) {
     snprintf(path, sizeof path, "%s/volumes/vol_%06lld.exr", o->dir, (long long)v->frame);
     elfm_status st = elfm_volume_write_exr(v, path, err);
@@ -219,9 +218,11 @@ int cmd_recon(int argc, char **argv)
     if (!make_dir(sub)) return CLI_FAIL;
   }
   snprintf(o.p_fr, sizeof o.p_fr, "%s/frames.csv", o.dir);
-  if (!(o.ffr = fopen(o.p_fr, "w")) || fputs("frame,t_us,t_start_us,t_end_us,n_events\n", o.ffr) < 0) {
-    if (o.ffr) fclose(o.ffr);
+  if (!(o.ffr = fopen(o.p_fr, "w")))
     return cli_message("recon", CLI_FAIL, "%s: cannot write: %s", o.p_fr, strerror(errno));
+  if (cli_frames_csv_header(o.ffr, o.p_fr, 0, &err) != ELFM_OK) {
+    fclose(o.ffr);
+    return cli_fail("recon", &err);
   }
   if (!a.quiet) r->progress = progress;
   elfm_recon_stats s;
@@ -234,9 +235,8 @@ int cmd_recon(int argc, char **argv)
   if (fr_bad) cli_message("recon", CLI_FAIL, "%s: write failed: %s", o.p_fr, strerror(errno));
   if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL) || fr_bad) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
-  if (!a.tiff && s.frames == 0 && (r->framer.start == ELFM_START_FIRST_TRIGGER ||
-                                   r->framer.start == ELFM_START_EACH_TRIGGER))
-    return cli_trigger_start_failed("recon", &r->framer, a.events, s.triggers);
+  if (!a.tiff && cli_check_trigger_start("recon", &r->framer, a.events, s.frames, s.triggers))
+    return CLI_FAIL;
   if (!a.quiet)
     fprintf(stderr, "recon: %lld events -> %lld volumes (%lld sparse) in %.2f s: %.0f volumes/s, "
             "%.2f Mev/s, %.2fx real time; %s/summary.json\n",

@@ -91,11 +91,8 @@ int cmd_track(int argc, char **argv)
                 !c.fdet ? c.p_det : !c.ftr ? c.p_tr : c.p_fr, strerror(errno));
     goto done;
   }
-  if (fputs("frame,t_us,t_start_us,t_end_us,n_events,n_detections\n", c.ffr) < 0) {
-    cli_message(C, CLI_FAIL, "%s: write failed: %s", c.p_fr, strerror(errno));
-    goto done;
-  }
-  if (elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
+  if (cli_frames_csv_header(c.ffr, c.p_fr, 1, &err) != ELFM_OK ||
+      elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
       elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK) {
     cli_fail(C, &err);
     goto done;
@@ -149,12 +146,9 @@ int cmd_track(int argc, char **argv)
     if (st != ELFM_OK) cli_fail(C, &err);
     goto done;
   }
-  if (st == ELFM_OK && c.n_frames == 0 && (o.recon.framer.start == ELFM_START_FIRST_TRIGGER ||
-                                            o.recon.framer.start == ELFM_START_EACH_TRIGGER)) {
-    /* the outputs are written (empty), but an empty run is not a success */
-    cli_trigger_start_failed(C, &o.recon.framer, o.events, rs.triggers);
+  /* the outputs are written (empty), but an empty run is not a success */
+  if (st == ELFM_OK && cli_check_trigger_start(C, &o.recon.framer, o.events, c.n_frames, rs.triggers))
     goto done;
-  }
   if (st != ELFM_OK) {
     cli_fail(C, &err);
     /* what was found before the error is not lost: the detections gap

@@ -2,8 +2,6 @@
  * recon driver: peak detection on the worker threads, then in frame order
  * linking, writing detections, and smoothing, filtering and writing the
  * tracks that ended (see cmd_track.h). */
-#include <errno.h>
-#include <inttypes.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -478,9 +476,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   /* frames.csv: every frame's window, also those without a detection, so
    * that `score --frames` knows when each frame was (windows opened by
    * trigger edges are not evenly spaced) */
-  if (fprintf(c->ffr, "%" PRId64 ",%" PRId64 ",%" PRId64 ",%" PRId64 ",%zu,%d\n", v->frame,
-              v->t_us, v->t_start_us, v->t_end_us, v->n_events, kept) < 0)
-    return elfm_error_set(err, ELFM_ERR_IO, c->p_fr, -1, "write failed: %s", strerror(errno));
+  if ((st = cli_frames_csv_row(c->ffr, c->p_fr, v, kept, err)) != ELFM_OK) return st;
   if ((st = elfm_frame_times_add(&c->frame_times, v->frame, v->t_us, err)) != ELFM_OK) return st;
   c->n_frames++;
   c->n_det += kept;
