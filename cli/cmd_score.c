@@ -219,14 +219,10 @@ static int window_from_summary(struct score_opts *op)
   return ok;
 }
 
-/* 1 when the frames.csv at path loads and its windows differ in length or
- * leave gaps (windows opened by trigger edges); 0 otherwise, also when it
- * is absent or unreadable (then nothing is said: --frames was not asked). */
-static int uneven_windows(const char *path)
+/* 1 when the frame list's windows differ in length or step (windows opened
+ * by trigger edges); 0 otherwise, also without the columns. */
+static int uneven_windows(const elfm_table *t)
 {
-  elfm_table *t = NULL;
-  elfm_error err;
-  if (elfm_table_load_csv(path, &t, &err) != ELFM_OK) return 0;
   const int c0 = elfm_table_col(t, "t_start_us"), c1 = elfm_table_col(t, "t_end_us");
   int uneven = 0;
   if (c0 >= 0 && c1 >= 0 && t->n_rows >= 2) {
@@ -236,7 +232,6 @@ static int uneven_windows(const char *path)
       uneven = elfm_table_get(t, r, c1) - elfm_table_get(t, r, c0) != len0 ||
                elfm_table_get(t, r, c0) - elfm_table_get(t, r - 1, c0) != step0;
   }
-  elfm_table_free(t);
   return uneven;
 }
 
@@ -346,16 +341,22 @@ int cmd_score(int argc, char **argv)
     }
     if (elfm_table_load_csv(path, &frames, &err) != ELFM_OK) return cli_fail("score", &err);
     op.so.frames = frames;
-  } else if (op.frames_path[0] && uneven_windows(op.frames_path)) {
+  } else if (op.frames_path[0]) {
     /* Without the list, frames between two rows are spread evenly in time,
-     * which a run with windows cut at trigger edges does not have. */
-    cli_message("score", 0, "note: %s lists windows that are not evenly spaced (track --start "
-                "each-trigger): --frames run scores every frame at its own time, and with "
-                "--window-us run over its own window (a window cut at an LED edge has its t_us "
-                "on the edge, where SPEC 7 as written calls it lit)",
-                op.frames_path);
+     * which a run with windows cut at trigger edges does not have. A list
+     * that is absent or unreadable says nothing: --frames was not asked. */
+    elfm_table *beside_list = NULL;
+    elfm_error ignored;
+    if (elfm_table_load_csv(op.frames_path, &beside_list, &ignored) == ELFM_OK &&
+        uneven_windows(beside_list))
+      cli_message("score", 0, "note: %s lists windows that are not evenly spaced (track --start "
+                  "each-trigger): --frames run scores every frame at its own time, and with "
+                  "--window-us run over its own window (a window cut at an LED edge has its "
+                  "t_us on the edge, where SPEC 7 as written calls it lit)",
+                  op.frames_path);
+    elfm_table_free(beside_list);
   }
-  if (frames && !op.window_run && uneven_windows(frames->path)) {
+  if (frames && !op.window_run && uneven_windows(frames)) {
     cli_message("score", 0, "note: the frame list's windows are not evenly spaced: SPEC 7 as "
                 "written counts a window cut at an LED edge as lit (its t_us is the edge); "
                 "--window-us run votes over each frame's own window");
