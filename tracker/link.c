@@ -557,7 +557,6 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   l->last_frame = frame;
   l->last_t_us = t_us;
   const elfm_link_options *o = &l->o;
-  const double kz = o->kz;
 
   /* 1. End tracks dark for too long (stable compaction keeps the order
    * deterministic); predict the others. */
@@ -686,14 +685,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       int any = 0;
       for (int r = 0; r < nr; r++) {
         const live_track *lt = &l->live[l->rows[r]];
-        double g = o->rescue_gate_factor * lt->gate_um, g2 = g * g;
+        const double g = o->rescue_gate_factor * lt->gate_um;
         for (int c = 0; c < nc; c++) {
-          const elfm_detection *dd = &det[l->cols[c]];
-          double dx = dd->x_um - lt->pred[0], dy = dd->y_um - lt->pred[1],
-                 dz = (dd->z_um - lt->pred[2]) / kz;
-          double d2 = dx * dx + dy * dy + dz * dz;
-          int ok = d2 < g2 && !link_weak_out(o, dd, d2);
-          l->cost[(size_t)r * nc + c] = ok ? d2 / g2 + o->gap_cost * lt->missed : INFINITY;
+          double cost;
+          int ok = link_gated_cost(o, lt->pred, g, lt->missed, &det[l->cols[c]], &cost);
+          l->cost[(size_t)r * nc + c] = ok ? cost : INFINITY;
           any |= ok;
         }
       }

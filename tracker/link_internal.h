@@ -132,11 +132,21 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o);
 void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
                             double dt_ms, double out[3]);
 
-/* Is d a weak detection too far (squared anisotropic distance d2) from a
- * track's prediction to join it? */
-static inline int link_weak_out(const elfm_link_options *o, const elfm_detection *d, double d2)
+/* Can detection d join a track, dark for `missed` frames, whose hypothesis
+ * puts it at c[] within gate_um? 1 with *cost = d2 / gate^2 + gap_cost x
+ * missed (d2 the squared anisotropic distance, z / kz), the cost every
+ * candidate of steps 2 and 3b carries; 0 outside the gate, and for a weak
+ * detection beyond the weak gate. */
+static inline int link_gated_cost(const elfm_link_options *o, const double c[3], double gate_um,
+                                  int missed, const elfm_detection *d, double *cost)
 {
-  return d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um;
+  const double g2 = gate_um * gate_um;
+  const double dx = d->x_um - c[0], dy = d->y_um - c[1], dz = (d->z_um - c[2]) / o->kz;
+  const double d2 = dx * dx + dy * dy + dz * dz;
+  if (d2 >= g2) return 0;
+  if (d->weak && o->weak_gate_um > 0 && d2 >= o->weak_gate_um * o->weak_gate_um) return 0;
+  *cost = d2 / g2 + o->gap_cost * missed;
+  return 1;
 }
 
 /* link_candidates.c: step 2 of elfm_link_step. For each of the nt live
