@@ -72,7 +72,8 @@ int track_opts_parse(int argc, char **argv, track_opts *o);
  * is derived only where its option was not given. */
 typedef struct track_given {
   int thr, low, depth, min;          /* --threshold-*, --threshold-low/-depth-um/-min */
-  int stitch, rxy, mbias;            /* --stitch-points, --radius-xy-um, --motion-lead/-delay */
+  int stitch, rxy, mlead, mdelay;    /* --stitch-points, --radius-xy-um, --motion-lead-um,
+                                        --motion-delay-us */
   int fillv, fillk, fille;           /* --fill-views, --fill-frames, --fill-ends */
   int spath, spord, fsdp, fade;      /* --short-path-um, --spline-order, --fit-sd-power,
                                         --motion-fade-um-per-ms */

@@ -220,7 +220,12 @@ int track_opts_derive(track_opts *o, const track_given *g)
     o->smooth.model = ELFM_MODEL_SPLINE;
   }
   if (o->lag_correct) o->link.lag_tau_us = o->recon.framer.tau_us;
-  if (!g->mbias && !o->lag_correct && o->localize_views &&
+  /* The motion bias's two terms are defaults each on its own: a lead or a
+   * delay given alone leaves the other at its default (before, either one
+   * given set the other to 0, and a delay given alone, lead 0, took flow
+   * seeds 1-20 from alpha 0.818 to 0.639). */
+  const int bias_default = !o->lag_correct && o->localize_views;
+  if (bias_default &&
       (o->recon.framer.repr == ELFM_REPR_EXP || o->recon.framer.repr == ELFM_REPR_LIN) &&
       o->recon.framer.polarity == ELFM_POL_ON) {
     /* The view fit of an ON time surface places a moving object ahead of
@@ -243,8 +248,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 0.837 / 0.750. */
     const double age_us = surface_mean_age_us(o->recon.framer.repr, o->loc.power,
                                               o->recon.framer.tau_us, (double)o->recon.framer.dt_us);
-    o->smooth.motion_lead_um = 1.25;
-    o->smooth.motion_delay_us = age_us + 150.0;
+    if (!g->mdelay) o->smooth.motion_delay_us = age_us + 150.0;
     /* Brighter beads lead further, and their in-focus peaks are wider
      * (the arc of ON events reaches further out): flow 100 ms at 0.5 / 1 /
      * 2 / 4 x the beads' flux, lead (score --calib) against the median
@@ -252,9 +256,11 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 14 recordings: lead = 1.52 x width, RMS 0.067 um without the dimmest
      * (an affine fit's intercept is 0.03 um). So the lead follows the
      * recording's peaks (track_motion_lead_um); 1.25 um until 50 peaks. */
-    o->motion_lead_auto = 1;
-  } else if (!g->mbias && !o->lag_correct && o->localize_views &&
-             o->recon.framer.repr == ELFM_REPR_INTEGRAL) {
+    if (!g->mlead) {
+      o->smooth.motion_lead_um = 1.25;
+      o->motion_lead_auto = 1;
+    }
+  } else if (bias_default && o->recon.framer.repr == ELFM_REPR_INTEGRAL) {
     /* The integral places a crawling neuron ahead of itself too, by a
      * lead: `eventlfm score --calib --motion-fade-um-per-ms 0.05` on the
      * raw detections, worm 200 ms seeds 1-4 (neurons at 0.12 um/ms, one
@@ -279,8 +285,8 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 0.927 / 0.937 / 0.918 / 0.918, 0.938 / 0.928 / 0.938 / 0.919 /
      * 0.919; -0.05 here, with the fade at 0.05: 0.940 / 0.929 / 0.939 /
      * 0.920 / 0.921. */
-    o->smooth.motion_lead_um = -0.05;
-    o->smooth.motion_delay_us = 0;
+    if (!g->mlead) o->smooth.motion_lead_um = -0.05;
+    if (!g->mdelay) o->smooth.motion_delay_us = 0;
     if (!g->fade) o->smooth.motion_lead_fade_um_per_ms = 0.05;
   }
   return CLI_OK;

@@ -335,7 +335,8 @@ static void usage(FILE *f)
     "                       until 50 peaks), D the weighted events' mean age + 150 us\n"
     "                       (431 us at tau 1 ms); integral: A -0.05, D 0 (worm\n"
     "                       neurons); else 0, 0 = off. eventlfm score --calib\n"
-    "                       measures A and D on a simulated scene\n"
+    "                       measures A and D on a simulated scene; one given alone\n"
+    "                       leaves the other at its default\n"
     "  --motion-fade-um-per-ms F  below this speed the lead fades out (the direction\n"
     "                       of motion is noise): 0.5; integral and --motion stage 0.05\n"
     "analysis:\n"
@@ -688,13 +689,13 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double_in(C, "--motion-lead-um", a, -100, 0, 100, "-100..100",
                                &o.smooth.motion_lead_um))
         return CLI_USAGE;
-      g.mbias = 1;
+      g.mlead = 1;
       break;
     case O_MDELAY:
       if (!cli_parse_double_in(C, "--motion-delay-us", a, -1e6, 0, 1e6, "-1e6..1e6",
                                &o.smooth.motion_delay_us))
         return CLI_USAGE;
-      g.mbias = 1;
+      g.mdelay = 1;
       break;
     case O_MAXOUT:
       if (!cli_parse_double(C, "--max-outlier-frac", a, &o.max_outlier_frac)) return CLI_USAGE;

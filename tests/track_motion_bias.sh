@@ -55,6 +55,20 @@ awk -v a="$ml" -v d="$md" 'BEGIN { exit !(a > 1.0 && a < 1.5 && d > 340 && d < 5
   { echo "FAIL: flow lead $ml / delay $md far from 1.25 / 431"; fail=$((fail+1)); }
 # the detections are written as measured: the same with or without correction
 cmp -s "$tmp/flow/off/detections.csv" "$tmp/flow/def/detections.csv" || { echo "FAIL: detections.csv changed"; fail=$((fail+1)); }
+# one term given leaves the other at its default (a delay alone once set
+# the lead to 0: flow seeds 1-20 alpha 0.818 -> 0.639)
+"$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/flow/dly" -q \
+  --to-us 10000 --motion-delay-us 400 || { echo "FAIL: track --motion-delay-us 400"; fail=$((fail+1)); }
+grep -q '"motion_lead_auto":[[:space:]]*true' "$tmp/flow/dly/summary.json" &&
+  [ "$(key "$tmp/flow/dly/summary.json" motion_delay_us)" = 400 ] ||
+  { echo "FAIL: --motion-delay-us alone: lead not the default, or delay not 400"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/flow/ld" -q \
+  --to-us 10000 --motion-lead-um 1.1 || { echo "FAIL: track --motion-lead-um 1.1"; fail=$((fail+1)); }
+ld=$(key "$tmp/flow/ld/summary.json" motion_delay_us)
+grep -q '"motion_lead_auto":[[:space:]]*false' "$tmp/flow/ld/summary.json" &&
+  [ "$(key "$tmp/flow/ld/summary.json" motion_lead_um)" = 1.1 ] &&
+  awk -v d="$ld" 'BEGIN { exit !(d > 425 && d < 435) }' ||
+  { echo "FAIL: --motion-lead-um alone: lead not 1.1, or delay $ld not the default"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/st1" stage 100 5
 simulate_or_skip "$tmp/st2" stage 100 6
