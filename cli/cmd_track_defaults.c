@@ -34,7 +34,10 @@ static double surface_mean_age_us(elfm_repr repr, double power, double tau_us, d
 int track_opts_derive(track_opts *o, const track_given *g)
 {
   static const char *const C = "track";
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->rxy) {
+  /* neither is changed below */
+  const int integral = o->recon.framer.repr == ELFM_REPR_INTEGRAL;
+  const int each_trigger = o->recon.framer.start == ELFM_START_EACH_TRIGGER;
+  if (integral && !g->rxy) {
     /* The integral has no trail to make side maxima, so a one-voxel box
      * separates neighbours a 3 um box merges: worm neurons come in pairs
      * 6 um apart. Worm 200 ms seeds 1-4, means, box 3 / 2 / 1.5 um: F1
@@ -42,19 +45,19 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * surface 1.5 um loses: alpha 0.733 -> 0.705 over 8 seeds.) */
     o->peaks.radius_xy_um = 1.5;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->spord) {
+  if (integral && !g->spord) {
     /* Slowly crawling cells: at 0.1-0.34 um/ms a neuron's acceleration is
      * far below its placement noise, and the jerk penalty's freer fit
      * (a constant acceleration costs nothing) lost: worm 200 ms seeds 1-4,
      * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
     o->smooth.spline_order = 2;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->fsdp) {
+  if (integral && !g->fsdp) {
     /* Worm 200 ms seeds 1-4 with it: alpha 0.830 / 0.785 / 0.754 / 0.826
      * -> 0.825 / 0.785 / 0.754 / 0.826. */
     o->smooth.fit_sd_power = 0;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->fillv) {
+  if (integral && !g->fillv) {
     /* Neurons come in pairs 6 um apart on the integral, and 4 views let a
      * fill land on the partner or on another track's neuron: worm 200 ms
      * seeds 1-4, fills within the scoring gate 64-78 % at 4 views, 95-100 %
@@ -63,14 +66,14 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 0.813 / 0.771 / 0.737 / 0.816 at 8 (0.800 / 0.762 / 0.735 / 0.814). */
     o->fill_views = 8;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->fillk) {
+  if (integral && !g->fillk) {
     /* The integral already holds every past event (a leaky sum), so its
      * neighbouring frames add no events, only a neighbour's light: worm
      * 200 ms seeds 1-4 with 3 frames, alpha the same, precision 0.933 /
      * 0.896 / 0.892 / 0.941 -> 0.926 / 0.846 / 0.886 / 0.939. */
     o->fill_frames = 1;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->near) {
+  if (integral && !g->near) {
     /* Two neurons of a C. elegans pair, 6-7 um apart at one depth, have
      * images that overlap in every view once out of focus, and each pulls
      * the other's centroid (lateral RMSE 0.84-0.90 um at |z| 45-60 um
@@ -87,7 +90,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * seeds 21-24 0.810 -> 0.791 (docs/tracker.md "Neighbours taken out"). */
     o->localize_near_um = 12;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->locpow) {
+  if (integral && !g->locpow) {
     /* The view fit weighs each pixel by value^3 on a time surface, where
      * the newest events are the object; the integral's value is the
      * object's brightness, and its whole image counts alike. Twelfth
@@ -106,20 +109,20 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * its far tail counted for less at power 1. */
     o->loc.power = 2;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->spath) {
+  if (integral && !g->spath) {
     /* Crawling neurons cover a few um in 8 frames: the cap binds only
      * where noisy points inflate the path, and fewer points predict worse
      * there (worm 200 ms seeds 1-4 with it: alpha the same, precision
      * 0.933 / 0.896 / 0.892 / 0.941 -> 0.924 / 0.884 / 0.890 / 0.941). */
     o->link.short_path_um = 0;
   }
-  if (o->recon.framer.repr == ELFM_REPR_INTEGRAL && !g->fille) {
+  if (integral && !g->fille) {
     /* Past a neuron's track's end the fit finds its partner: worm 200 ms
      * seeds 1-4, precision 0.933 / 0.896 / 0.892 / 0.941 -> 0.933 / 0.887 /
      * 0.862 / 0.940, alpha the same or lower (seed 3 0.754 -> 0.752). */
     o->fill_ends = 0;
   }
-  if (o->recon.framer.start == ELFM_START_EACH_TRIGGER && !g->gmp) {
+  if (each_trigger && !g->gmp) {
     /* Windows opened by the LED: a bead gets one point per pulse, so 10
      * points take 10 pulses (250 ms at blink's 2-50 ms gaps) before the
      * guided view fit looks for it where its track expects it. From 2
@@ -129,7 +132,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * (--repr lin) seeds 1-9: 0.8460 -> 0.8502. */
     o->guided_min_points = 2;
   }
-  if (o->recon.framer.start == ELFM_START_EACH_TRIGGER && !g->minpts) {
+  if (each_trigger && !g->minpts) {
     /* ... and a track of 5 points is 5 pulses: a deep bead that fades
      * after 4 had no track (blink seed 7, bead 13). A ghost would have to
      * come back at one place in 3 pulse frames. 3 points: blink seeds
@@ -143,7 +146,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
                        "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");
   if (!g->thr) {
     if (o->recon.framer.repr == ELFM_REPR_COUNT) o->peaks.relative = 0.35;  /* counts have no fixed scale */
-    else if (o->recon.framer.repr == ELFM_REPR_INTEGRAL) {
+    else if (integral) {
       /* The integral's scale is brightness (255 at 8 steps over the
        * floor), not recency: worm 200 ms at 500 Hz seeds 1-4, means, at
        * the floor of 2 steps, threshold 10 / 15: F1 0.893 / 0.905, alpha
@@ -260,7 +263,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
       o->smooth.motion_lead_um = 1.25;
       o->motion_lead_auto = 1;
     }
-  } else if (bias_default && o->recon.framer.repr == ELFM_REPR_INTEGRAL) {
+  } else if (bias_default && integral) {
     /* The integral places a crawling neuron ahead of itself too, by a
      * lead: `eventlfm score --calib --motion-fade-um-per-ms 0.05` on the
      * raw detections, worm 200 ms seeds 1-4 (neurons at 0.12 um/ms, one
