@@ -279,5 +279,56 @@ int main(void)
     }
     elfm_link_free(l);
   }
+
+  /* 5. Filling after a swap review exchanged two tracks' tails. P moves
+   * along +x at 3 um/ms from frame 0; Q, born at frame 24, at 20 degrees to
+   * it; one detection between them while closer than 5 um (frames 29-31).
+   * The review gives each track its own object's tail; the exchange leaves
+   * Q's track far shorter than P's head, and the index of P's gap closing
+   * (its review done) once outlived the exchange: a fill then read past the
+   * end of Q's points (heap overflow under AddressSanitizer; flow 1 s seed 5
+   * with the circle fit on). Both tracks take a point before their first. */
+  {
+    elfm_link_options ow;
+    elfm_link_options_default(&ow);
+    ow.swap_points = 6;
+    elfm_linker *l = elfm_link_create(&ow, &err);
+    CHECK(l != NULL);
+    const double th = 20 * M_PI / 180;
+    int64_t ids[2] = {-1, -1};
+    for (int f = 4; f < 46; f++) {
+      double t = f - 30, px = 3 * t, py = 0, qx = 3 * t * cos(th), qy = 3 * t * sin(th);
+      elfm_detection d[2];
+      int n = 0;
+      if (hypot(px - qx, py - qy) < 5) {
+        d[n++] = mk(f, T0 + 1000 * f, 0.5 * (px + qx), 0.5 * (py + qy), 5);
+      } else {
+        d[n++] = mk(f, T0 + 1000 * f, px, py, 5);
+        if (f >= 24) d[n++] = mk(f, T0 + 1000 * f, qx, qy, 5);
+      }
+      CHECK_OK(elfm_link_step(l, f, T0 + 1000 * f, d, n, &err), &err);
+      if (f == 45)
+        for (int i = 0; i < 2; i++) ids[i] = elfm_link_last_track_id(l, i);
+    }
+    for (int i = 0; i < 2; i++) {
+      elfm_detection early = mk(1 + i, T0 + 1000 * (1 + i), -90, 0, 5);
+      CHECK_OK(elfm_link_fill(l, ids[i], &early, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0, own = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) {
+      n++;
+      int ordered = t->pts[0].frame <= 2;
+      for (size_t k = 1; k < t->n; k++) ordered &= t->pts[k].frame > t->pts[k - 1].frame;
+      CHECK(ordered);
+      /* started on P (y = 0 after the filled point) or on Q: the same at the end? */
+      int start_p = fabs(t->pts[1].y_um) < 1, end_p = fabs(t->pts[t->n - 1].y_um) < 1;
+      own += start_p == end_p;
+      elfm_track_free(t);
+    }
+    CHECK_MSG(n == 2 && own == 2, "swap then fill: %d tracks, %d on their own object", n, own);
+    elfm_link_free(l);
+  }
   return check_report();
 }

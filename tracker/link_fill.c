@@ -156,7 +156,11 @@ elfm_status elfm_link_fill(elfm_linker *l, int64_t track_id, const elfm_detectio
                             "link: fill frame %lld not before track %lld's last frame %lld",
                             (long long)d[j].frame, (long long)track_id,
                             (long long)t->pts[t->n - 1].frame);
-    const int64_t tail_frame = lt->tail0 > 0 ? t->pts[lt->tail0].frame : INT64_MIN;
+    /* Only a gap closing still under review needs its index kept: once
+     * reviewed, or after a stitch or an exchange of tails, tail0 may index
+     * past the track's points (it is not maintained then). */
+    const int64_t tail_frame =
+        lt->review && lt->tail0 > 0 && lt->tail0 < t->n ? t->pts[lt->tail0].frame : INT64_MIN;
     elfm_status st = elfm_track_insert(t, &d[j], err);
     if (st != ELFM_OK) return st;
     if (d[j].frame < tail_frame) lt->tail0++; /* the gap closing under review keeps its point */

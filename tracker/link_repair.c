@@ -318,9 +318,11 @@ elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
       }
       refresh_state(o, A);
       refresh_state(o, B);
-      A->tail0 = bt;
+      /* the junctions now: B's head meets A's old tail at bt, A's head
+       * meets B's old tail at best_s; both reviewed */
+      A->tail0 = best_s;
       A->review = 0;
-      B->tail0 = best_s;
+      B->tail0 = bt;
     }
     B->review = 0;
   }
