@@ -79,6 +79,7 @@ typedef struct track_given {
                                         --motion-fade-um-per-ms */
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
+  int circ;                          /* --circle-points */
 } track_given;
 
 /* Fill in the derived defaults of a parsed *o (g: what was given) and

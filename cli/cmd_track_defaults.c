@@ -132,6 +132,14 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * (--repr lin) seeds 1-9: 0.8460 -> 0.8502. */
     o->guided_min_points = 2;
   }
+  if (each_trigger && !g->circ) {
+    /* Windows opened by the LED give a track one point per pulse, so 15
+     * points span 45 frames or more, and a track that took another bead's
+     * pulse on the way fits a circle: blink_moving (--repr lin) seeds 1-9
+     * alpha 0.8627 -> 0.8564 with it (seed 1 0.851 -> 0.794, the others
+     * the same); blink the same. */
+    o->link.circle_points = 0;
+  }
   if (each_trigger && !g->minpts) {
     /* ... and a track of 5 points is 5 pulses: a deep bead that fades
      * after 4 had no track (blink seed 7, bead 13). A ghost would have to

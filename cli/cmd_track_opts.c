@@ -128,6 +128,18 @@ static void track_defaults(track_opts *o)
    * "Fast beads"). Off with --motion stage and on the integral
    * (below). */
   o->link.short_path_um = 20;
+  /* A track dark for 2 frames or more is predicted along the circle its
+   * last 15 points follow (elfm_link.h circle_points): flow beads circle
+   * (radius 8-20 um at 2.5-4 um/ms) and the deep ones go dark for 10-35
+   * frames, where the short fit's turn missed them by tens of um. Flow
+   * 1 s seeds 1-8 alpha 0.6358 -> 0.7309, held-out 9-12 0.6231 -> 0.6813;
+   * 100 ms seeds 1-20 0.8184 -> 0.8315, held-out 21-32 0.7918 -> 0.8211
+   * (15 points after 2 frames, chosen among 10-30 points after 1-5 frames
+   * on seeds 1-8 and 1-20; docs/tracker.md "Circles through long gaps").
+   * Worm (integral), blink, stage and stage_accel: the same or within
+   * 0.0001; off with --start each-trigger (cmd_track_defaults.c). */
+  o->link.circle_points = 15;
+  o->link.circle_after = 2;
   /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
    * detections' errors are correlated from frame to frame (flow: lag-1
    * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
@@ -275,6 +287,10 @@ static void usage(FILE *f)
     "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
     "                       when they span more than L um of path, as fast objects'\n"
     "                       do (20; 0 = always 8; --motion stage, --repr integral: 0)\n"
+    "  --circle-points N    a track dark for --circle-after M frames (2) or more is\n"
+    "                       predicted along the circle through its last N points,\n"
+    "                       when they follow one better than a line (15; 0 off;\n"
+    "                       --start each-trigger: 0)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10; 2 with\n"
@@ -378,7 +394,7 @@ enum {
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_RJOIN, O_RESTV
 };
 
@@ -434,6 +450,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
       {"short-path-um", required_argument, 0, O_SPATH},
+      {"circle-points", required_argument, 0, O_CIRCN},
+      {"circle-after", required_argument, 0, O_CIRCA},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
       {"guided-min-points", required_argument, 0, O_GUIDEDM},
@@ -560,6 +578,17 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       g.spath = 1;
       if (!cli_parse_double_in(C, "--short-path-um", a, 0, 0, 1000, "0..1000", &o.link.short_path_um))
         return CLI_USAGE;
+      break;
+    case O_CIRCN:
+      g.circ = 1;
+      if (!cli_parse_int(C, "--circle-points", a, &o.link.circle_points)) return CLI_USAGE;
+      if (o.link.circle_points != 0 && (o.link.circle_points < 6 || o.link.circle_points > 1000))
+        return cli_message(C, CLI_USAGE, "--circle-points must be 0 (off) or 6..1000, not %s", a);
+      break;
+    case O_CIRCA:
+      if (!cli_parse_int(C, "--circle-after", a, &o.link.circle_after)) return CLI_USAGE;
+      if (o.link.circle_after < 1 || o.link.circle_after > 1000)
+        return cli_message(C, CLI_USAGE, "--circle-after must be 1..1000 frames, not %s", a);
       break;
     case O_FILLN:
       if (!cli_parse_int(C, "--fill-max-gap", a, &o.fill_max_gap)) return CLI_USAGE;

@@ -7,7 +7,10 @@
  *     scene's beads turn ~17 degrees per millisecond), after missed frames
  *     as a constant-rate turn (the fit's velocity rotating at the rate its
  *     normal acceleration gives, at constant speed: it stays on the circle
- *     where an extrapolated acceleration diverges); tracks of 2-3
+ *     where an extrapolated acceleration diverges); with circle_points,
+ *     a track dark for circle_after frames or more whose last
+ *     circle_points points follow a circle better than a line is
+ *     predicted along that circle at its fitted rate; tracks of 2-3
  *     points use a constant velocity fitted to their last `history` points,
  *     a track with one point prior_velocity_um_per_ms; while the recording's
  *     objects are at rest (rest_speed_um_per_ms), a track dark for more
@@ -67,6 +70,25 @@ typedef struct elfm_link_options {
                                       0 = off (default; track: 20 um, off with --motion stage
                                       and --repr integral) */
   int short_gap;                   /* default 6: missed frames the gate widens for turns */
+  /* Long gaps on a circling path. The constant-rate turn takes its rate
+   * from the short fit, a few um of path whose noise the turn carries
+   * on: over a 10-30 frame gap it missed a flow bead by 15-37 um (median,
+   * simulated helices with the detector's noise), where a circle through
+   * the last 15-40 points misses by 4-7 um. So a track dark for at least
+   * circle_after frames (default 2) is predicted on the circle fitted to
+   * its last circle_points real points (0 = off, the default; >= 6):
+   * their plane of least spread, the circle in it, the angle as a
+   * constant rate in time. Only when the points cover at least
+   * circle_min_arc_rad of it (1 rad), it is no wider than
+   * circle_max_radius_um (60 um), and, travelled at its rate, it fits them
+   * better than a straight line at constant velocity by
+   * circle_line_ratio (0.5, root mean square in the linker's metric):
+   * noisy depths of an object moving straight also fit a circle. */
+  int circle_points;
+  int circle_after;
+  double circle_min_arc_rad;
+  double circle_max_radius_um;
+  double circle_line_ratio;
   double gap_cost;                 /* default 0.02 per missed frame (cost units above) */
   int max_candidates;              /* per track, default 8 */
   /* Time-surface lag correction (elfm_peaks.h): when tau_us > 0, each

@@ -46,6 +46,11 @@ void elfm_link_options_default(elfm_link_options *o)
   o->encounter_ratio = 0.5;
   o->review_join_factor = 2;
   o->rest_speed_um_per_ms = 0.5;
+  o->circle_points = 0;
+  o->circle_after = 2;
+  o->circle_min_arc_rad = 1.0;
+  o->circle_max_radius_um = 60;
+  o->circle_line_ratio = 0.5;
 }
 
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
@@ -68,13 +73,18 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       !(o->review_join_factor >= 0) || !isfinite(o->review_join_factor) ||
       o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us) ||
-      !(o->rest_speed_um_per_ms >= 0) || !isfinite(o->rest_speed_um_per_ms)) {
+      !(o->rest_speed_um_per_ms >= 0) || !isfinite(o->rest_speed_um_per_ms) ||
+      (o->circle_points != 0 && o->circle_points < 6) || o->circle_after < 1 ||
+      !(o->circle_min_arc_rad >= 0) || !isfinite(o->circle_min_arc_rad) ||
+      !(o->circle_max_radius_um > 0) || !(o->circle_line_ratio > 0) ||
+      !(o->circle_line_ratio <= 1)) {
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
                    "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance, "
                    "pad and apart frames >= 0, 0 < encounter ratio <= 1, review join factor >= 0, priority points and "
-                   "short path >= 0, rest speed >= 0)");
+                   "short path >= 0, rest speed >= 0, circle points 0 or >= 6, circle after >= 1, "
+                   "circle arc >= 0, circle radius > 0, 0 < circle line ratio <= 1)");
     return NULL;
   }
   elfm_linker *l = calloc(1, sizeof *l);
@@ -276,6 +286,12 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
   const int64_t tr = t->pts[n - 1].t_us;
   memcpy(lt->vel_um_per_ms, prior, sizeof lt->vel_um_per_ms);
   lt->has_short = 0;
+  lt->circ.ok = 0;
+  if (o->circle_points > 0) {
+    const size_t c0 = n > (size_t)o->circle_points ? n - (size_t)o->circle_points : 0;
+    elfm_link_fit_circle(t->pts, c0, n, tr, o->circle_min_arc_rad, o->circle_max_radius_um,
+                         o->circle_line_ratio, o->kz, &lt->circ);
+  }
   size_t k0 = n > (size_t)history ? n - (size_t)history : 0;
   if (n - k0 >= 2) {
     double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
@@ -455,6 +471,8 @@ static void predict_track(const elfm_link_options *o, live_track *lt, int64_t t_
   if (lt->has_short && lt->missed <= 0)
     for (int a = 0; a < 3; a++)
       lt->pred[a] = lt->fit_pos[a] + lt->fit_vel[a] * dt_ms + 0.5 * lt->fit_acc[a] * dt_ms * dt_ms;
+  else if (lt->circ.ok && lt->missed >= o->circle_after)
+    elfm_link_circle_predict(&lt->circ, dt_ms, lt->pred);
   else if (lt->has_short)  /* long gap: keep turning, at constant speed */
     elfm_link_predict_turn(lt->fit_pos, lt->fit_vel, lt->fit_acc, dt_ms, lt->pred);
   else

@@ -1,0 +1,33 @@
+#!/bin/sh
+# The circle through long gaps (`eventlfm track --circle-points`, default
+# 15, after --circle-after 2 missed frames; elfm_link.h circle_points):
+#  - flow 100 ms seed 14: the deep beads' tracks carry on across their dark
+#    stretches along the circle they were on; alpha at least 0.02 above
+#    --circle-points 0 (0.869 -> 0.912 when it came);
+#  - summary.json records 15, and 0 with --start each-trigger (blink), the
+#    derived default there;
+#  - 1-5 points, a negative or zero --circle-after, and non-numbers are
+#    usage errors.
+# Usage: track_circle.sh BINARY
+bin=$1
+. "$(dirname "$0")/track_lib.sh"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect_usage_errors "--circle-points 3" "--circle-points -1" "--circle-points x" \
+  "--circle-after 0" "--circle-after y"
+simulate_or_skip "$tmp/f" flow 100 14
+track_score "$tmp/f" "$tmp/off" "$tmp/off.json" --circle-points 0
+track_score "$tmp/f" "$tmp/on" "$tmp/on.json"
+a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/on.json" alpha)
+echo "flow seed 14: alpha $a0 without the circle, $a1 with it"
+expect_gain "$a0" "$a1" 0.02 "the circle gains < 0.02 alpha ($a0 -> $a1)"
+[ "$(key "$tmp/on/summary.json" circle_points)" = 15 ] ||
+  { echo "FAIL: circle_points not 15 in summary.json"; fail=$((fail+1)); }
+simulate_or_skip "$tmp/b" blink 60 1
+"$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/bt" \
+  --start each-trigger --quiet || { echo "FAIL: track --start each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/bt/summary.json" circle_points)" = 0 ] ||
+  { echo "FAIL: circle_points not 0 with --start each-trigger"; fail=$((fail+1)); }
+[ $fail -eq 0 ] && echo "track_circle: all passed" || echo "track_circle: $fail failed"
+[ $fail -eq 0 ]
