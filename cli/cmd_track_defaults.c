@@ -221,6 +221,10 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * it: alpha 0.741 / 0.807 / 0.723 -> 0.736 / 0.806 / 0.715, speed
      * error 0.41 / 0.19 / 0.07 % -> 0.30 / 0.24 / 0.11 %). */
     if (!g->spath) o->link.short_path_um = 0;
+    /* ... nor a circle for a dark track to follow (elfm_link.h
+     * circle_points): stage 200 ms with it, alpha 0.870 / 0.909 / 0.826
+     * -> 0.847 / 0.909 / 0.826 (seeds 1-3). */
+    if (!g->circ) o->link.circle_points = 0;
     /* Rigid motion has one direction, which the tracks' smoothed velocity
      * gives well even at 0.1 um/ms: the lead need not fade below 0.5 um/ms.
      * stage_accel 300 ms (0.1 -> 2.5 um/ms): fitted acceleration 3.6 % ->

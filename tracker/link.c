@@ -48,6 +48,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->rest_speed_um_per_ms = 0.5;
   o->circle_points = 0;
   o->circle_after = 2;
+  o->circle_gap_points = 4;
   o->circle_min_arc_rad = 1.0;
   o->circle_max_radius_um = 60;
   o->circle_line_ratio = 0.5;

@@ -1,4 +1,4 @@
-/* link_circle.c — the linker's circle fit: a track's recent path as an arc
+/* elfm_link_circle.c — the linker's circle fit: a track's recent path as an arc
  * travelled at a constant rate, for predicting where it is after a long gap
  * (link_internal.h says where it is used and why). */
 #include "link_internal.h"
@@ -65,7 +65,7 @@ static int solve3(const double m[3][3], const double b[3], double x[3])
 
 int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
                          double min_arc_rad, double max_radius_um, double line_ratio, double kz,
-                         link_circle *c)
+                         elfm_link_circle *c)
 {
   c->ok = 0;
   const size_t n = k1 - k0;
@@ -116,23 +116,33 @@ int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_
   if (!(r2 > 0)) return 0;
   c->r_um = sqrt(r2);
   if (!(c->r_um <= max_radius_um)) return 0; /* a straight path: no turn to keep */
-  /* the angle, unwrapped along the track, as a straight line in time */
-  double prev = 0, unwrap = 0, st = 0, stt = 0, sa = 0, sta = 0;
+  /* The angle, unwrapped along the track, as a straight line in time. A
+   * step is taken as the turn nearest the rate fitted to the points before
+   * it, not as the nearest angle: across a gap a flow bead turns by more
+   * than half a circle (16 frames at 0.2 rad/ms: 3.2 rad), and the
+   * nearest angle would run it backwards. */
+  double prev = 0, unwrap = 0, st = 0, stt = 0, sa = 0, sta = 0, t_prev = 0;
   for (size_t k = k0; k < k1; k++) {
     const double e[3] = {pts[k].x_um - m[0], pts[k].y_um - m[1], pts[k].z_um - m[2]};
     const double x = e[0] * c->e1[0] + e[1] * c->e1[1] + e[2] * c->e1[2] - c->cx;
     const double y = e[0] * c->e2[0] + e[1] * c->e2[1] + e[2] * c->e2[2] - c->cy;
-    double ang = atan2(y, x);
+    const double ang = atan2(y, x);
+    const double tm = (double)(pts[k].t_us - tr) * 1e-3;
     if (k > k0) {
       double d = ang - prev;
       while (d > M_PI) d -= 2 * M_PI;
       while (d < -M_PI) d += 2 * M_PI;
+      const double m_done = (double)(k - k0), den_done = m_done * stt - st * st;
+      if (m_done >= 2 && den_done > 1e-12) {
+        const double expect = (m_done * sta - st * sa) / den_done * (tm - t_prev);
+        d += 2 * M_PI * round((expect - d) / (2 * M_PI));
+      }
       unwrap += d;
     } else {
       unwrap = ang;
     }
     prev = ang;
-    const double tm = (double)(pts[k].t_us - tr) * 1e-3;
+    t_prev = tm;
     st += tm;
     stt += tm * tm;
     sa += unwrap;
@@ -178,7 +188,7 @@ int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_
   return 1;
 }
 
-void elfm_link_circle_predict(const link_circle *c, double dt_ms, double out[3])
+void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double out[3])
 {
   const double a = c->angle0 + c->omega_rad_per_ms * dt_ms;
   const double x = c->cx + c->r_um * cos(a), y = c->cy + c->r_um * sin(a);

@@ -47,7 +47,8 @@ static double ends_intensity(const elfm_track *t, size_t k)
 }
 
 /* The gap between pts[k-1] and pts[k] of t; h: points each end's fit uses. */
-static void make_gap(const elfm_track *t, size_t k, size_t h, elfm_link_gap *g)
+static void make_gap(const elfm_link_options *o, const elfm_track *t, size_t k, size_t h,
+                     elfm_link_gap *g)
 {
   memset(g, 0, sizeof *g);
   g->track_id = t->id;
@@ -58,6 +59,16 @@ static void make_gap(const elfm_track *t, size_t k, size_t h, elfm_link_gap *g)
   end_fit(t, k > h ? k - h : 0, k, k - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
   end_fit(t, k, t->n - k > h ? k + h : t->n, k, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
   g->intensity = ends_intensity(t, k);
+  /* Across the gap: the circle through circle_gap_points points on each
+   * side (at least 3), where the two ends' turns each extrapolate over
+   * half of it (elfm_link_options.circle_gap_points says what it gains). */
+  if (o->circle_points > 0 && o->circle_gap_points >= 3) {
+    const size_t side = (size_t)o->circle_gap_points;
+    const size_t c0 = k > side ? k - side : 0, c1 = t->n - k > side ? k + side : t->n;
+    if (k - c0 >= 3 && c1 - k >= 3)
+      elfm_link_fit_circle(t->pts, c0, c1, g->t0_us, o->circle_min_arc_rad,
+                           o->circle_max_radius_um, o->circle_line_ratio, o->kz, &g->circle);
+  }
 }
 
 /* The open gap at one end of t (t->n >= 1): before its first point
@@ -99,12 +110,12 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
     if (!all) {
       if (l->live[i].last_frame != l->last_frame || t->n < s) continue;
       size_t k = t->n - s;
-      if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
+      if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(&l->o, t, k, h, &out[n++]);
       else if (k == 0)  /* the track's birth */
         open_gap(t, 0, h, l->o.max_gap_frames, &out[n++]);
     } else {
       for (size_t k = t->n > s ? t->n - s + 1 : 1; k < t->n && n < cap; k++)
-        if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(t, k, h, &out[n++]);
+        if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(&l->o, t, k, h, &out[n++]);
     }
   }
   *n_out = n;
@@ -122,6 +133,10 @@ void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3
   elfm_link_predict_turn(g->p1_um, vb, g->a1_um_per_ms2, d1, b);
   if (g->open_start || g->open_end) {
     memcpy(xyz_um, g->open_start ? b : f, sizeof b);
+    return;
+  }
+  if (g->circle.ok) {
+    elfm_link_circle_predict(&g->circle, d0, xyz_um);
     return;
   }
   const double span = d0 + d1, w = span > 0 ? d0 / span : 0.5;

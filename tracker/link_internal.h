@@ -12,16 +12,6 @@
 #include "elfm_link.h"
 #include "elfm_score.h"
 
-/* A track's recent path as an arc of a circle travelled at a constant rate
- * (elfm_link_fit_circle): m + e1 x + e2 y with (x, y) = (cx, cy) + r_um
- * (cos a, sin a), a = angle0 + omega_rad_per_ms x (t - last point's t). */
-typedef struct link_circle {
-  int ok;
-  double m[3], e1[3], e2[3];
-  double cx, cy, r_um;
-  double angle0, omega_rad_per_ms;
-} link_circle;
-
 /* A track still being extended, with its fits and this frame's prediction. */
 typedef struct live_track {
   elfm_track *t;
@@ -30,7 +20,7 @@ typedef struct live_track {
   double vel_um_per_ms[3];  /* long constant-velocity fit; the prior with one point */
   double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
   int has_short;            /* the short fit exists (>= 4 points) */
-  link_circle circ;         /* circle fit over circle_points points (circ.ok: it exists) */
+  elfm_link_circle circ;    /* circle fit over circle_points points (circ.ok: it exists) */
   double pred[3];           /* prediction for the current frame */
   double gate_um;           /* gate for the current frame */
   /* In a recording at rest, a track dark for more than short_gap frames
@@ -150,10 +140,10 @@ void elfm_link_predict_turn(const double p0[3], const double v[3], const double 
  * that does not turn) or the points cover less than min_arc_rad of it. */
 int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
                          double min_arc_rad, double max_radius_um, double line_ratio, double kz,
-                         link_circle *c);
+                         elfm_link_circle *c);
 
 /* Position on the circle dt_ms after its reference time. */
-void elfm_link_circle_predict(const link_circle *c, double dt_ms, double out[3]);
+void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double out[3]);
 
 /* Can detection d join a track, dark for `missed` frames, whose hypothesis
  * puts it at c[] within gate_um? 1 with *cost = d2 / gate^2 + gap_cost x
