@@ -16,6 +16,7 @@
 
 #include "check.h"
 #include "elfm_tracker.h"
+#include "link_test_util.h"
 #include "link_internal.h"
 
 static const int64_t T0 = 1000000000000LL; /* absolute times near 1e12 us */
@@ -113,16 +114,6 @@ static void run_gap(const path *p, int circle_points, uint64_t seed, int *n_trac
     if (t->n > *longest) *longest = t->n;
     elfm_track_free(t);
   }
-  elfm_link_free(l);
-}
-
-/* Finish the linker, drop its tracks, free it. */
-static void end_linker(elfm_linker *l)
-{
-  elfm_error err;
-  CHECK_OK(elfm_link_finish(l, &err), &err);
-  elfm_track *t;
-  while ((t = elfm_link_pop_finished(l))) elfm_track_free(t);
   elfm_link_free(l);
 }
 

@@ -10,6 +10,7 @@
 
 #include "check.h"
 #include "elfm_tracker.h"
+#include "link_test_util.h"
 
 static elfm_detection mk(int64_t frame, int64_t t_us, double x, double y, double z)
 {
@@ -31,16 +32,6 @@ static void circle(double t_ms, double p[3])
   p[0] = R * cos(w * t_ms);
   p[1] = R * sin(w * t_ms);
   p[2] = 0.5 * t_ms;
-}
-
-/* Finish the linker, drop its tracks, free it. */
-static void end_linker(elfm_linker *l)
-{
-  elfm_error err;
-  CHECK_OK(elfm_link_finish(l, &err), &err);
-  elfm_track *t;
-  while ((t = elfm_link_pop_finished(l))) elfm_track_free(t);
-  elfm_link_free(l);
 }
 
 int main(void)
