@@ -92,7 +92,9 @@ typedef struct elfm_link_options {
    * two ends' turns each extrapolated over half the gap. Flow 100 ms seeds
    * 1-20 alpha 0.8315 -> 0.8408 (every seed up), held-out 21-32 0.8211 ->
    * 0.8259; 1 s seeds 1-8 0.7309 -> 0.7373, 9-12 0.6813 -> 0.6820 (3 / 6 /
-   * 8 points: 0.8393 / 0.8393 / 0.8392 at 100 ms). */
+   * 8 points: 0.8393 / 0.8393 / 0.8392 at 100 ms). With the fit's angle
+   * unwrapped by its rate (link_circle.c), which a gap needs: 0.8398,
+   * 0.8295, 0.7486, 0.6836. */
   int circle_gap_points;
   double circle_min_arc_rad;
   double circle_max_radius_um;
@@ -226,13 +228,6 @@ elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us,
                               double *xyz_um, double *intensity, int cap, int *n_out,
                               elfm_error *err);
 
-/* ---- Gap filling (cmd_track's back-fill). A track that coasted through
- * frames where its object left no peak has a gap; once the track has
- * settle_points real points after the gap, the gap is settled (the swap
- * review, at swap_points, has had its say). The caller, who still holds
- * those frames, may then search them near where the two ends put the
- * object and give the linker what it found. Only the track's past
- * changes: its last settle_points points, and so its predictions, do not. */
 /* A path as an arc of a circle travelled at a constant rate (the circle
  * fit, circle_points above): m + e1 x + e2 y with (x, y) = (cx, cy) + r_um
  * (cos a, sin a), a = angle0 + omega_rad_per_ms x (t - the fit's reference
@@ -244,6 +239,13 @@ typedef struct elfm_link_circle {
   double angle0, omega_rad_per_ms;
 } elfm_link_circle;
 
+/* ---- Gap filling (cmd_track's back-fill). A track that coasted through
+ * frames where its object left no peak has a gap; once the track has
+ * settle_points real points after the gap, the gap is settled (the swap
+ * review, at swap_points, has had its say). The caller, who still holds
+ * those frames, may then search them near where the two ends put the
+ * object and give the linker what it found. Only the track's past
+ * changes: its last settle_points points, and so its predictions, do not. */
 typedef struct elfm_link_gap {
   int64_t track_id;
   int open_start;               /* 1: the frames before the track's first point (frame1):

@@ -1,4 +1,4 @@
-/* elfm_link_circle.c — the linker's circle fit: a track's recent path as an arc
+/* link_circle.c — the linker's circle fit: a track's recent path as an arc
  * travelled at a constant rate, for predicting where it is after a long gap
  * (link_internal.h says where it is used and why). */
 #include "link_internal.h"

@@ -135,9 +135,12 @@ void elfm_link_predict_turn(const double p0[3], const double v[3], const double 
 
 /* link_circle.c: the circle fit. Over pts[k0 .. k1) (>= 6 points; times
  * in ms from tr): the plane of least spread through their mean, the
- * algebraic circle in it, and the angle along it as a straight line in
+ * algebraic circle in it, and the angle along it (each step unwrapped as
+ * the turn nearest the rate of the points before it) as a straight line in
  * time. 0 (c->ok 0) when the circle is wider than max_radius_um (a path
- * that does not turn) or the points cover less than min_arc_rad of it. */
+ * that does not turn), the points cover less than min_arc_rad of it, or
+ * it does not fit them line_ratio times better than a straight line at
+ * constant velocity (root mean square, z / kz). */
 int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
                          double min_arc_rad, double max_radius_um, double line_ratio, double kz,
                          elfm_link_circle *c);
