@@ -336,28 +336,6 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
   lt->has_short = elfm_link_fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
 }
 
-/* Shared with link_repair.c; the model and why: link_internal.h. */
-void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
-                            double dt_ms, double out[3])
-{
-  double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-  double om[3] = {0, 0, 0};
-  if (v2 > 1e-12) {
-    om[0] = (v[1] * acc[2] - v[2] * acc[1]) / v2;
-    om[1] = (v[2] * acc[0] - v[0] * acc[2]) / v2;
-    om[2] = (v[0] * acc[1] - v[1] * acc[0]) / v2;
-  }
-  double w = sqrt(om[0] * om[0] + om[1] * om[1] + om[2] * om[2]);
-  if (!(w * dt_ms > 1e-6)) {  /* no turn: a straight line */
-    for (int a = 0; a < 3; a++) out[a] = p0[a] + v[a] * dt_ms;
-    return;
-  }
-  double k[3] = {om[0] / w, om[1] / w, om[2] / w};
-  double kv[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
-  double s = sin(w * dt_ms) / w, c = (1 - cos(w * dt_ms)) / w;
-  for (int a = 0; a < 3; a++) out[a] = p0[a] + v[a] * s + kv[a] * c;
-}
-
 static elfm_status end_track(elfm_linker *l, elfm_track *t, elfm_error *err)
 {
   if (t->n < (size_t)l->o.min_points) {

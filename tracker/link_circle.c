@@ -1,6 +1,8 @@
-/* link_circle.c — the linker's circle fit: a track's recent path as an arc
- * travelled at a constant rate, for predicting where it is after a long gap
- * (link_internal.h says where it is used and why). */
+/* link_circle.c — the linker's predictions along arcs: the constant-rate
+ * turn of the short fit (after a missed frame), and the circle fit, a
+ * track's recent path as an arc travelled at a constant rate (after a long
+ * gap, and across a settled gap). link_internal.h says where each is used
+ * and why. */
 #include "link_internal.h"
 
 #include <math.h>
@@ -193,4 +195,27 @@ void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double ou
   const double a = c->angle0 + c->omega_rad_per_ms * dt_ms;
   const double x = c->cx + c->r_um * cos(a), y = c->cy + c->r_um * sin(a);
   for (int i = 0; i < 3; i++) out[i] = c->m[i] + c->e1[i] * x + c->e2[i] * y;
+}
+
+/* Shared with link.c, link_repair.c and link_fill.c; the model and why:
+ * link_internal.h. */
+void elfm_link_predict_turn(const double p0[3], const double v[3], const double acc[3],
+                            double dt_ms, double out[3])
+{
+  double v2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+  double om[3] = {0, 0, 0};
+  if (v2 > 1e-12) {
+    om[0] = (v[1] * acc[2] - v[2] * acc[1]) / v2;
+    om[1] = (v[2] * acc[0] - v[0] * acc[2]) / v2;
+    om[2] = (v[0] * acc[1] - v[1] * acc[0]) / v2;
+  }
+  double w = sqrt(om[0] * om[0] + om[1] * om[1] + om[2] * om[2]);
+  if (!(w * dt_ms > 1e-6)) {  /* no turn: a straight line */
+    for (int a = 0; a < 3; a++) out[a] = p0[a] + v[a] * dt_ms;
+    return;
+  }
+  double k[3] = {om[0] / w, om[1] / w, om[2] / w};
+  double kv[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+  double s = sin(w * dt_ms) / w, c = (1 - cos(w * dt_ms)) / w;
+  for (int a = 0; a < 3; a++) out[a] = p0[a] + v[a] * s + kv[a] * c;
 }
