@@ -256,20 +256,11 @@ int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
     }
   }
   double M[3][3] = {{S[0], S[1], S[2]}, {S[1], S[2], S[3]}, {S[2], S[3], S[4]}};
-  double det = M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1]) -
-               M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0]) +
-               M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0]);
+  const double det = link_det3(M);
   if (!(fabs(det) > 1e-9)) return 0;  /* fewer than 3 distinct times */
   for (int a = 0; a < 3; a++) {
     double c[3];
-    for (int j = 0; j < 3; j++) {  /* Cramer: replace column j by R[a] */
-      double A[3][3];
-      memcpy(A, M, sizeof A);
-      for (int r = 0; r < 3; r++) A[r][j] = R[a][r];
-      c[j] = (A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-              A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-              A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0])) / det;
-    }
+    link_cramer3(M, det, R[a], c);
     pos[a] = c[0];
     vel[a] = c[1];
     acc[a] = 2 * c[2];

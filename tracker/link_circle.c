@@ -6,7 +6,6 @@
 #include "link_internal.h"
 
 #include <math.h>
-#include <string.h>
 
 /* Eigen-decomposition of the symmetric 3x3 a (destroyed) by cyclic Jacobi
  * rotations: eigenvalues into w[], eigenvectors into the columns of v. A
@@ -43,26 +42,6 @@ static void eigen_sym3(double a[3][3], double w[3], double v[3][3])
       }
   }
   for (int i = 0; i < 3; i++) w[i] = a[i][i];
-}
-
-/* Solve the 3x3 system m x = b by Cramer's rule; 0 when near singular. */
-static int solve3(const double m[3][3], const double b[3], double x[3])
-{
-  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-  const double scale = fabs(m[0][0] * m[1][1] * m[2][2]) + 1e-300;
-  if (!(fabs(det) > 1e-12 * scale)) return 0;
-  for (int c = 0; c < 3; c++) {
-    double t[3][3];
-    memcpy(t, m, sizeof t);
-    for (int r = 0; r < 3; r++) t[r][c] = b[r];
-    x[c] = (t[0][0] * (t[1][1] * t[2][2] - t[1][2] * t[2][1]) -
-            t[0][1] * (t[1][0] * t[2][2] - t[1][2] * t[2][0]) +
-            t[0][2] * (t[1][0] * t[2][1] - t[1][1] * t[2][0])) /
-           det;
-  }
-  return 1;
 }
 
 int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
@@ -110,8 +89,11 @@ int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_
       for (int j = 0; j < 3; j++) A[i][j] += row[i] * row[j];
     }
   }
+  /* near singular (relative to the diagonal's scale): collinear points */
+  const double det = link_det3(A);
+  if (!(fabs(det) > 1e-12 * (fabs(A[0][0] * A[1][1] * A[2][2]) + 1e-300))) return 0;
   double s[3];
-  if (!solve3(A, b, s)) return 0;
+  link_cramer3(A, det, b, s);
   c->cx = s[0] / 2;
   c->cy = s[1] / 2;
   const double r2 = s[2] + c->cx * c->cx + c->cy * c->cy;

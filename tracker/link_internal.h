@@ -107,6 +107,26 @@ elfm_status elfm_link_reserve_cost(elfm_linker *l, size_t need, elfm_error *err)
 /* Mean intensity of t's points a .. b-1 (0 when the range is empty). */
 double elfm_link_mean_intensity(const elfm_track *t, size_t a, size_t b);
 
+/* The determinant of a 3x3 matrix, and x = m^-1 b by Cramer's rule given
+ * that determinant (non-zero; each caller judges when it is too small):
+ * the 3x3 normal equations of elfm_link_fit_quad and of the circle fit. */
+static inline double link_det3(const double m[3][3])
+{
+  return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+         m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+         m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+static inline void link_cramer3(const double m[3][3], double det, const double b[3], double x[3])
+{
+  for (int j = 0; j < 3; j++) { /* replace column j by b */
+    double a[3][3];
+    for (int r = 0; r < 3; r++)
+      for (int c = 0; c < 3; c++) a[r][c] = c == j ? b[r] : m[r][c];
+    x[j] = link_det3(a) / det;
+  }
+}
+
 /* Least-squares p = c0 + c1 t + c2 t^2 over pts[k0 .. k1) (t in ms from
  * tr): position, velocity and acceleration at tr. 0 when fewer than 3
  * distinct times (outputs untouched). */
