@@ -78,13 +78,18 @@ static elfm_detection det_at(const path *p, int64_t frame, uint64_t *noise, doub
   return d;
 }
 
+/* The fit's settings throughout (set at the start of main): >= 1 rad, a
+ * radius <= 60 um, 2 x better than a line, z / 4 (a test driver's static,
+ * as check.h's counters). */
+static elfm_link_options fit_opts;
+
 /* Fit frames f0 .. f0+n-1 of p (noise as given); tr the last point's time. */
 static int fit(const path *p, int f0, int n, uint64_t *noise, double sd_xy, double sd_z,
                elfm_link_circle *c)
 {
   elfm_detection pts[64];
   for (int k = 0; k < n; k++) pts[k] = det_at(p, f0 + k, noise, sd_xy, sd_z);
-  return elfm_link_fit_circle(pts, 0, (size_t)n, pts[n - 1].t_us, 1.0, 60, 0.5, 4, c);
+  return elfm_link_fit_circle(&fit_opts, pts, 0, (size_t)n, pts[n - 1].t_us, c);
 }
 
 /* Track count and the longest track's points of a run of the linker over
@@ -119,6 +124,11 @@ static void run_gap(const path *p, int circle_points, uint64_t seed, int *n_trac
 
 int main(void)
 {
+  elfm_link_options_default(&fit_opts);
+  fit_opts.circle_min_arc_rad = 1.0;
+  fit_opts.circle_max_radius_um = 60;
+  fit_opts.circle_line_ratio = 0.5;
+  fit_opts.kz = 4;
   /* 1. Exact circles in tilted planes: radius, rate and a prediction 20 ms
    * on, with times near 1e12 us, at the origin and 1e4 um from it. */
   for (int k = 0; k < 6; k++) {
@@ -163,6 +173,8 @@ int main(void)
      * Without it (ratio 1) 22 fitted a circle when this was written; with
      * 0.5, 1. */
     int with_test = 0, without = 0;
+    elfm_link_options no_line_test = fit_opts;
+    no_line_test.circle_line_ratio = 1.0;
     for (uint64_t s = 1; s <= 500; s++) {
       uint64_t noise = s * 2654435761ULL + 17;
       elfm_detection pts[6];
@@ -172,8 +184,8 @@ int main(void)
         pts[k].y_um += 0.5 * normal(&noise);
         pts[k].z_um += 3.5 * normal(&noise);
       }
-      with_test += elfm_link_fit_circle(pts, 0, 6, pts[5].t_us, 1.0, 60, 0.5, 4, &c);
-      without += elfm_link_fit_circle(pts, 0, 6, pts[5].t_us, 1.0, 60, 1.0, 4, &c);
+      with_test += elfm_link_fit_circle(&fit_opts, pts, 0, 6, pts[5].t_us, &c);
+      without += elfm_link_fit_circle(&no_line_test, pts, 0, 6, pts[5].t_us, &c);
     }
     fprintf(stderr, "pulses on a line: %d circles with the line test, %d without\n", with_test, without);
     CHECK_MSG(with_test <= 1 && without >= 5, "pulses on a line: %d circles with the line test, "
@@ -194,10 +206,10 @@ int main(void)
       pts[k] = det_at(&p, k, NULL, 0, 0);
       pts[k].t_us = T0; /* repeated times */
     }
-    CHECK(!elfm_link_fit_circle(pts, 0, 15, T0, 1.0, 60, 0.5, 4, &c));
+    CHECK(!elfm_link_fit_circle(&fit_opts, pts, 0, 15, T0, &c));
     for (int k = 0; k < 15; k++) pts[k] = det_at(&p, 0, NULL, 0, 0), pts[k].frame = k,
                                  pts[k].t_us = T0 + 1000 * k; /* at rest */
-    CHECK(!elfm_link_fit_circle(pts, 0, 15, pts[14].t_us, 1.0, 60, 0.5, 4, &c));
+    CHECK(!elfm_link_fit_circle(&fit_opts, pts, 0, 15, pts[14].t_us, &c));
   }
 
   /* 3. Through the linker: a bead circling at 3 um/ms on a radius of

@@ -281,8 +281,7 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
   lt->circ.ok = 0;
   if (o->circle_points > 0) {
     const size_t c0 = n > (size_t)o->circle_points ? n - (size_t)o->circle_points : 0;
-    elfm_link_fit_circle(t->pts, c0, n, tr, o->circle_min_arc_rad, o->circle_max_radius_um,
-                         o->circle_line_ratio, o->kz, &lt->circ);
+    elfm_link_fit_circle(o, t->pts, c0, n, tr, &lt->circ);
   }
   size_t k0 = n > (size_t)history ? n - (size_t)history : 0;
   if (n - k0 >= 2) {

@@ -44,10 +44,11 @@ static void eigen_sym3(double a[3][3], double w[3], double v[3][3])
   for (int i = 0; i < 3; i++) w[i] = a[i][i];
 }
 
-int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
-                         double min_arc_rad, double max_radius_um, double line_ratio, double kz,
-                         elfm_link_circle *c)
+int elfm_link_fit_circle(const elfm_link_options *o, const elfm_detection *pts, size_t k0,
+                         size_t k1, int64_t tr, elfm_link_circle *c)
 {
+  const double min_arc_rad = o->circle_min_arc_rad, max_radius_um = o->circle_max_radius_um;
+  const double line_ratio = o->circle_line_ratio, kz = o->kz;
   c->ok = 0;
   const size_t n = k1 - k0;
   if (n < 6) return 0;

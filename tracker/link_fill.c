@@ -66,8 +66,7 @@ static void make_gap(const elfm_link_options *o, const elfm_track *t, size_t k, 
     const size_t side = (size_t)o->circle_gap_points;
     const size_t c0 = k > side ? k - side : 0, c1 = t->n - k > side ? k + side : t->n;
     if (k - c0 >= 3 && c1 - k >= 3)
-      elfm_link_fit_circle(t->pts, c0, c1, g->t0_us, o->circle_min_arc_rad,
-                           o->circle_max_radius_um, o->circle_line_ratio, o->kz, &g->circle);
+      elfm_link_fit_circle(o, t->pts, c0, c1, g->t0_us, &g->circle);
   }
 }
 

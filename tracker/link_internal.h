@@ -157,13 +157,13 @@ void elfm_link_predict_turn(const double p0[3], const double v[3], const double 
  * in ms from tr): the plane of least spread through their mean, the
  * algebraic circle in it, and the angle along it (each step unwrapped as
  * the turn nearest the rate of the points before it) as a straight line in
- * time. 0 (c->ok 0) when the circle is wider than max_radius_um (a path
- * that does not turn), the points cover less than min_arc_rad of it, or
- * it does not fit them line_ratio times better than a straight line at
- * constant velocity (root mean square, z / kz). */
-int elfm_link_fit_circle(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
-                         double min_arc_rad, double max_radius_um, double line_ratio, double kz,
-                         elfm_link_circle *c);
+ * time. 0 (c->ok 0) when the circle is wider than o->circle_max_radius_um
+ * (a path that does not turn), the points cover less than
+ * o->circle_min_arc_rad of it, or it does not fit them
+ * o->circle_line_ratio times better than a straight line at constant
+ * velocity (root mean square, z / o->kz). */
+int elfm_link_fit_circle(const elfm_link_options *o, const elfm_detection *pts, size_t k0,
+                         size_t k1, int64_t tr, elfm_link_circle *c);
 
 /* Position on the circle dt_ms after its reference time. */
 void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double out[3]);
