@@ -110,7 +110,7 @@ enum {
   CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
   CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
   CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT, CLI_RO_ISTART, CLI_RO_ISTART_AGE,
-  CLI_RO_TAU_BRIGHT, CLI_RO_START, CLI_RO_TRIG_CH
+  CLI_RO_TAU_BRIGHT, CLI_RO_START, CLI_RO_TRIG_CH, CLI_RO_ZMIN, CLI_RO_ZMAX, CLI_RO_ZSTEP
 };
 #define CLI_RECON_LONG_OPTIONS                                                                 \
   {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
@@ -128,7 +128,9 @@ enum {
   {"integral-start-age-ms", required_argument, 0, CLI_RO_ISTART_AGE},                          \
   {"tau-bright-us", required_argument, 0, CLI_RO_TAU_BRIGHT},                                 \
   {"start", required_argument, 0, CLI_RO_START},                                               \
-  {"trigger-channel", required_argument, 0, CLI_RO_TRIG_CH}
+  {"trigger-channel", required_argument, 0, CLI_RO_TRIG_CH},                                  \
+  {"z-min-um", required_argument, 0, CLI_RO_ZMIN}, {"z-max-um", required_argument, 0, CLI_RO_ZMAX}, \
+  {"z-step-um", required_argument, 0, CLI_RO_ZSTEP}
 
 typedef struct cli_recon_parse {
   elfm_recon_options *ro;  /* the command's defaults, then the options given */
@@ -140,6 +142,8 @@ typedef struct cli_recon_parse {
   int tau_given, polarity_given; /* --repr integral has its own defaults for these */
   int tau_bright_given;          /* --tau-bright-us */
   int istart_given, istart_age_given; /* --integral-start-ms, --integral-start-age-ms */
+  double z_um[3];          /* --z-min-um, --z-max-um, --z-step-um, where z_given's bit */
+  int z_given;             /* 1, 2, 4 says so; the calibration's planes otherwise */
 } cli_recon_parse;
 
 /* 1: `code` is a shared option and `arg` a good value (stored in p->ro);
@@ -151,6 +155,12 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
  * between them (stride <= dt, from < to, a ghost threshold's value).
  * 1 when good; 0 after printing the message. */
 int cli_check_recon_options(const char *cmd, const cli_recon_parse *p);
+/* The z planes the options ask for, NaN where the calibration's stand
+ * (for elfm_calib_set_planes). */
+void cli_recon_planes(const cli_recon_parse *p, double z_um[3]);
+/* Put planes z_um (cli_recon_planes) into *cal, loaded from `calib_path`:
+ * 1, or 0 after a usage message naming the options and the file. */
+int cli_apply_planes(const char *cmd, const double z_um[3], const char *calib_path, elfm_calib *cal);
 /* The shared options' help lines, with the command's defaults `d`. */
 void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);
 /* The shared options' values into a summary.json "parameters" object (the

@@ -412,6 +412,16 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     return int_in(cmd, "--threads", arg, 0, THREADS_MAX, "0..1024 (0: all)", &ro->threads);
   case CLI_RO_BATCH:
     return int_in(cmd, "--batch", arg, 0, BATCH_MAX, "0..4096 (0: 2 x threads)", &ro->batch);
+  case CLI_RO_ZMIN:
+  case CLI_RO_ZMAX:
+  case CLI_RO_ZSTEP: {
+    /* the checks between them and the calibration's: cli_apply_planes */
+    static const char *const name[3] = {"--z-min-um", "--z-max-um", "--z-step-um"};
+    const int k = code - CLI_RO_ZMIN;
+    p->z_given |= 1 << k;
+    return k == 2 ? cli_parse_double_in(cmd, name[k], arg, 1e-3, 0, 1e4, "0.001..10000", &p->z_um[k])
+                  : cli_parse_double_in(cmd, name[k], arg, -1e4, 0, 1e4, "-10000..10000", &p->z_um[k]);
+  }
   default: return -1;
   }
 }
@@ -503,6 +513,23 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "ghost_agree_frac", ro->refocus.agree_frac);
 }
 
+void cli_recon_planes(const cli_recon_parse *p, double z_um[3])
+{
+  for (int k = 0; k < 3; k++) z_um[k] = p->z_given & (1 << k) ? p->z_um[k] : NAN;
+}
+
+int cli_apply_planes(const char *cmd, const double z_um[3], const char *calib_path, elfm_calib *cal)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  if (elfm_calib_set_planes(cal, z_um[0], z_um[1], z_um[2], &err) == ELFM_OK) return 1;
+  char msg[1200];
+  cli_message(cmd, CLI_USAGE, "--z-min-um / --z-max-um / --z-step-um with %s's planes %g..%g um "
+              "step %g: %s", calib_path, cal->z_min_um, cal->z_max_um, cal->z_step_um,
+              elfm_error_format(&err, msg, sizeof msg));
+  return 0;
+}
+
 void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
 {
   const elfm_framer_options *fo = &d->framer;
@@ -554,7 +581,11 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "  --agree F            the same as --ghost agree:F\n"
           "  --threads N          worker threads, 0..1024 (default %s)\n"
           "  --batch N            volumes refocused per parallel batch, 0..4096\n"
-          "                       (default %s)\n",
+          "                       (default %s)\n"
+          "  --z-min-um Z, --z-max-um Z, --z-step-um S   refocus on the planes Z..Z every\n"
+          "                       S um instead of the calibration's (its z.min_um,\n"
+          "                       z.max_um, z.step_um; each one given replaces its own):\n"
+          "                       the time goes with the number of planes\n",
           fo->dt_us, stride, cli_repr_name(fo->repr), fo->tau_us, ELFM_INTEGRAL_TAU_US,
           ELFM_INTEGRAL_TAU_BRIGHT_FACTOR, cli_polarity_name(fo->polarity), fo->off_weight,
           ELFM_INTEGRAL_START_AGE_US * 1e-3,

@@ -202,6 +202,9 @@ int cmd_recon(int argc, char **argv)
     cli_message("recon", 0, "note: --median 3 also filters the TIFF frames (use --median 0 for raw)");
   elfm_calib cal;
   if (elfm_calib_load(a.calib, &cal, &err)) return cli_fail("recon", &err);
+  double planes[3];
+  cli_recon_planes(&rp, planes);
+  if (!cli_apply_planes("recon", planes, a.calib, &cal)) return CLI_USAGE;
 
   recon_out o;
   memset(&o, 0, sizeof o);

@@ -16,6 +16,7 @@ enum { MOTION_AUTO = 0, MOTION_STAGE, MOTION_FREE };
 typedef struct track_opts {
   const char *calib, *events, *out;
   elfm_recon_options recon;
+  double planes_um[3];  /* --z-min-um, --z-max-um, --z-step-um; NaN: the calibration's */
   elfm_peaks_options peaks;
   elfm_link_options link;
   elfm_smooth_options smooth;

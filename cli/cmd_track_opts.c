@@ -741,6 +741,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  cli_recon_planes(&rp, o.planes_um);
   const int rc = track_opts_derive(&o, &g);
   if (rc != CLI_OK) return rc;
   *out = o;

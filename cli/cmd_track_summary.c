@@ -110,6 +110,14 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     char msg[1200];
     cJSON_AddStringToObject(j, "input_error", elfm_error_format(input_err, msg, sizeof msg));
   }
+  /* the planes refocused on: the calibration's, or --z-*-um's */
+  cJSON *vol = cJSON_AddObjectToObject(j, "volume");
+  cJSON_AddNumberToObject(vol, "w", c->calib->view_w_px);
+  cJSON_AddNumberToObject(vol, "h", c->calib->view_h_px);
+  cJSON_AddNumberToObject(vol, "nz", elfm_calib_n_planes(c->calib));
+  cJSON_AddNumberToObject(vol, "um_per_px", c->calib->um_per_px);
+  cJSON_AddNumberToObject(vol, "z_min_um", c->calib->z_min_um);
+  cJSON_AddNumberToObject(vol, "z_step_um", c->calib->z_step_um);
   cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
   cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
   cJSON_AddNumberToObject(cnt, "triggers", (double)rs->triggers);

@@ -139,6 +139,40 @@ int elfm_calib_n_planes(const elfm_calib *c)
   return (int)floor((c->z_max_um - c->z_min_um) / c->z_step_um + 0.5) + 1;
 }
 
+/* What is wrong with a z range, or NULL: one rule for calib.json and for
+ * elfm_calib_set_planes. Which key (or option) it is, the caller says. */
+static const char *planes_problem(double z_min_um, double z_max_um, double z_step_um, int *which)
+{
+  *which = 0;
+  if (!(fabs(z_min_um) <= 1e4)) return "not a finite number in -10000..10000";
+  *which = 1;
+  if (!(fabs(z_max_um) <= 1e4)) return "not a finite number in -10000..10000";
+  if (z_max_um < z_min_um) return "below z.min_um";
+  *which = 2;
+  if (!(z_step_um >= 1e-3 && z_step_um <= 1e4)) return "not a finite number in 0.001..10000";
+  if ((z_max_um - z_min_um) / z_step_um + 1 > CALIB_MAX_PLANES) return "more than 4096 z planes";
+  return NULL;
+}
+
+elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_um, double z_step_um,
+                                  elfm_error *err)
+{
+  if (isnan(z_min_um)) z_min_um = c->z_min_um;
+  if (isnan(z_max_um)) z_max_um = c->z_max_um;
+  if (isnan(z_step_um)) z_step_um = c->z_step_um;
+  static const char *const key[3] = {"z.min_um", "z.max_um", "z.step_um"};
+  int which;
+  const char *why = planes_problem(z_min_um, z_max_um, z_step_um, &which);
+  if (why)
+    return elfm_error_set(err, ELFM_ERR_RANGE, NULL, -1,
+                          "z planes %g..%g um step %g: %s: %s", z_min_um, z_max_um, z_step_um,
+                          key[which], why);
+  c->z_min_um = z_min_um;
+  c->z_max_um = z_max_um;
+  c->z_step_um = z_step_um;
+  return ELFM_OK;
+}
+
 /* ---- loading ---- */
 
 /* Context of one load: the file name and the error to fill. */
@@ -309,10 +343,10 @@ static elfm_status parse_calib(calib_ctx *cx, const cJSON *root, elfm_calib *c)
   if ((s = get_number(cx, z, "min_um", "z.min_um", -1e4, 1e4, &c->z_min_um))) return s;
   if ((s = get_number(cx, z, "max_um", "z.max_um", -1e4, 1e4, &c->z_max_um))) return s;
   if ((s = get_number(cx, z, "step_um", "z.step_um", 1e-3, 1e4, &c->z_step_um))) return s;
-  if (c->z_max_um < c->z_min_um) return key_error(cx, ELFM_ERR_RANGE, "z.max_um", "below z.min_um");
-  if ((c->z_max_um - c->z_min_um) / c->z_step_um + 1 > CALIB_MAX_PLANES)
-    return key_error(cx, ELFM_ERR_RANGE, "z.step_um", "more than 4096 z planes");
-  return ELFM_OK;
+  static const char *const key[3] = {"z.min_um", "z.max_um", "z.step_um"};
+  int which;
+  const char *why = planes_problem(c->z_min_um, c->z_max_um, c->z_step_um, &which);
+  return why ? key_error(cx, ELFM_ERR_RANGE, key[which], why) : ELFM_OK;
 }
 
 elfm_status elfm_calib_parse(const char *text, size_t len, const char *path, elfm_calib *out,

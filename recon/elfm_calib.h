@@ -72,6 +72,14 @@ void elfm_calib_project(const elfm_calib *c, int v, double x_um, double y_um,
 /* Number of z planes: floor((z_max - z_min) / z_step + 0.5) + 1. */
 int elfm_calib_n_planes(const elfm_calib *c);
 
+/* Refocus on other z planes than the calibration's: z_min_um .. z_max_um
+ * every z_step_um (NaN keeps the calibration's value). The same checks as
+ * elfm_calib_load (|z| <= 10000 um, max >= min, step 0.001..10000 um, at
+ * most 4096 planes); on error *c is unchanged (ELFM_ERR_RANGE). The views
+ * are not touched: their shift per um holds for any plane. */
+elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_um, double z_step_um,
+                                  elfm_error *err);
+
 #ifdef __cplusplus
 }
 #endif

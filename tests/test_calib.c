@@ -178,6 +178,9 @@ int main(void)
     t = replace(good, "\"step_um\":\t2", "\"step_um\":\t1e999"); /* cJSON: inf */
     expect_bad(t, ELFM_ERR_RANGE, "z.step_um");
     free(t);
+    t = replace(good, "\"step_um\":\t2", "\"step_um\":\t0.01"); /* 20,001 planes */
+    expect_bad(t, ELFM_ERR_RANGE, "z.step_um");
+    free(t);
     t = replace(good, "\"max_um\":\t100", "\"max_um\":\t-200");
     expect_bad(t, ELFM_ERR_RANGE, "z.max_um");
     free(t);
@@ -209,6 +212,31 @@ int main(void)
   expect_bad("{}", ELFM_ERR_FORMAT, "sensor");
   CHECK(elfm_calib_load("no/such/calib.json", &r, &err) == ELFM_ERR_IO);
   CHECK(strstr(err.file, "no/such/calib.json") != NULL);
+
+  /* Other planes than the file's (track / recon --z-*-um): NaN keeps a
+   * value; a bad range is refused with the calibration unchanged, by the
+   * same rules as the file's z object. */
+  {
+    elfm_calib p = c;
+    CHECK_OK(elfm_calib_set_planes(&p, NAN, NAN, 4, &err), &err);
+    CHECK(p.z_min_um == -100 && p.z_max_um == 100 && p.z_step_um == 4);
+    CHECK_EQ_INT(elfm_calib_n_planes(&p), 51);
+    CHECK_OK(elfm_calib_set_planes(&p, -20, 30, NAN, &err), &err);
+    CHECK_EQ_INT(elfm_calib_n_planes(&p), 14); /* -20, -16, .., 32: 50 / 4 rounds up to 13 steps */
+    CHECK_OK(elfm_calib_set_planes(&p, 5, 5, 1, &err), &err); /* one plane */
+    CHECK_EQ_INT(elfm_calib_n_planes(&p), 1);
+    const elfm_calib keep = p;
+    CHECK(elfm_calib_set_planes(&p, 10, 0, NAN, &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "z.max_um") && strstr(err.message, "below"));
+    CHECK(elfm_calib_set_planes(&p, NAN, NAN, 0, &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "z.step_um") != NULL);
+    CHECK(elfm_calib_set_planes(&p, -100, 100, 0.01, &err) == ELFM_ERR_RANGE); /* 20,001 planes */
+    CHECK(strstr(err.message, "4096") != NULL);
+    CHECK(elfm_calib_set_planes(&p, INFINITY, NAN, NAN, &err) == ELFM_ERR_RANGE);
+    CHECK(elfm_calib_set_planes(&p, NAN, 2e4, NAN, &err) == ELFM_ERR_RANGE);
+    CHECK(elfm_calib_set_planes(&p, NAN, NAN, -1, &err) == ELFM_ERR_RANGE);
+    CHECK(p.z_min_um == keep.z_min_um && p.z_max_um == keep.z_max_um && p.z_step_um == keep.z_step_um);
+  }
 
   /* optics is optional: a file without it loads, has_optics = 0. */
   c.has_optics = 0;

@@ -120,9 +120,28 @@ int main(void)
     CHECK_EQ_INT(v->frame, 1);
     CHECK_EQ_INT(v->nz, 101);
     elfm_volume_free(v);
+    v = NULL;
   }
 
+  /* other planes than the calibration's: -40..40 every 4 um, 21 planes in
+   * the EXR and the summary */
+  snprintf(args, sizeof args,
+           "recon --calib %s/calib.json --events %s/events.raw --out %s/rz --save-volumes --quiet "
+           "--z-min-um -40 --z-max-um 40 --z-step-um 4",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 0);
+  snprintf(path, sizeof path, "%s/rz/volumes/vol_000001.exr", dir);
+  CHECK_OK(elfm_volume_read_exr(path, &v, &err), &err);
+  if (v) {
+    CHECK_EQ_INT(v->nz, 21);
+    CHECK(v->z_min_um == -40 && v->z_step_um == 4);
+    elfm_volume_free(v);
+  }
+  CHECK(file_has("rz/summary.json", "\"nz\":\t21"));
   /* usage errors: exit 2 */
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --z-min-um 200", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  CHECK(file_has("err.txt", "calib.json's planes") && file_has("err.txt", "z.max_um"));
   CHECK_EQ_INT(run("recon"), 2);
   snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --median 4", sim, sim, dir);
   CHECK_EQ_INT(run(args), 2);

@@ -29,7 +29,8 @@ for bad in "--dt-us 10" "--dt-us x" "--stride-us -1" "--stride-us 2000" "--tau-u
            "--repr dots" "--polarity up" "--median 4" "--path fast" "--ghost bogus" \
            "--ghost frac" "--ghost frac:2" "--ghost mad:-1" "--ghost agree:2" "--ghost mad:3," \
            "--ghost-value 3" "--ghost-value -1" "--agree 1.5" "--threads -1" "--threads 5000" \
-           "--batch 5000" "--from-us x" "--from-us 5 --to-us 5" "--to-us"; do
+           "--batch 5000" "--from-us x" "--from-us 5 --to-us 5" "--to-us" "--z-step-um 0" \
+           "--z-min-um x" "--z-max-um 2e4"; do
   opt=${bad%% *}
   [ "$bad" = "--from-us 5 --to-us 5" ] && opt=--from-us
   # shellcheck disable=SC2086  # $bad is an option and its value
@@ -51,6 +52,10 @@ check 1 "bad.csv" "$bin" track --calib "$tmp/calib.json" --events "$tmp/bad.csv"
 printf '%% evt 3.0\n%% geometry 1280x720\n%% end\n' > "$tmp/trunc.raw"
 printf '\001\002\003' >> "$tmp/trunc.raw"
 check 1 "trunc.raw: byte" "$bin" track --calib "$tmp/calib.json" --events "$tmp/trunc.raw" --out "$tmp/o3" -q
+# planes that the calibration's make impossible (min above its max): a
+# usage error naming the options and the calibration, from both commands
+check 2 "calib.json's planes" "$bin" track --calib "$tmp/calib.json" --events "$tmp/missing.raw" --out "$tmp/o1" -q --z-min-um 150
+check 2 "calib.json's planes" "$bin" recon --calib "$tmp/calib.json" --events "$tmp/missing.raw" --out "$tmp/o1" --quiet --z-step-um 0.01
 # a recording cut inside a word halfway: exit 1 naming file and byte, and
 # nothing already read is lost: the tracks of the first half are written
 "$bin" simulate flow --out "$tmp/sim" --duration-ms 30 --quiet >/dev/null 2>&1 || { echo "SKIP: simulate failed"; exit 77; }
@@ -67,6 +72,11 @@ rows=$(($(wc -l < "$tmp/o5/tracks.csv" 2>/dev/null || echo 1) - 1))
 [ "$rows" -gt 10 ] || { echo "FAIL: truncated input lost the tracks read before the error ($rows rows)"; fail=$((fail+1)); }
 grep -q '"input_error"' "$tmp/o5/summary.json" 2>/dev/null || { echo "FAIL: summary.json does not record the input error"; fail=$((fail+1)); }
 [ -s "$tmp/o5/tracks_isbi.xml" ] || { echo "FAIL: truncated input left no ISBI XML"; fail=$((fail+1)); }
+# other planes than the calibration's: the summary says which were used
+check 0 "" "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o6" -q \
+  --z-min-um -60 --z-max-um 60 --z-step-um 4
+tr -d ' \t\n' < "$tmp/o6/summary.json" 2>/dev/null | grep -q '"nz":31,"um_per_px":[0-9.]*,"z_min_um":-60,"z_step_um":4' ||
+  { echo "FAIL: track --z-*-um: summary.json lacks the 31 planes -60..60 step 4"; fail=$((fail+1)); }
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
