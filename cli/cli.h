@@ -23,6 +23,7 @@
 int cmd_info(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 int cmd_calib(int argc, char **argv);
+int cmd_calib_refine(int argc, char **argv); /* calib refine (cmd_calib_refine.c) */
 int cmd_simulate(int argc, char **argv);
 int cmd_recon(int argc, char **argv);
 int cmd_track(int argc, char **argv);

@@ -1,6 +1,7 @@
 /* cmd_calib.c — eventlfm calib from-optics: build calib.json from the optics
  * (SPEC §2), defaults = the EventLFM paper's system; `calib show FILE`
- * loads and checks a calib.json and prints its summary. */
+ * loads and checks a calib.json and prints its summary; `calib refine` is
+ * in cmd_calib_refine.c. */
 #include <getopt.h>
 #include <stdio.h>
 #include <string.h>
@@ -20,11 +21,13 @@ static void usage(FILE *f)
 {
   fprintf(f,
           "usage: eventlfm calib from-optics [options] --out calib.json\n"
+          "       eventlfm calib refine --calib calib.json --events FILE --out refined.json\n"
           "       eventlfm calib show calib.json\n"
           "\n"
           "from-optics builds a calibration from the microscope's optics (SPEC 2: exact\n"
           "non-paraxial view angles; views laid out at the nominal spacing around the\n"
-          "sensor centre). Defaults are the EventLFM paper's system.\n"
+          "sensor centre). Defaults are the EventLFM paper's system. refine fits the\n"
+          "views' centres to a recording of beads (eventlfm calib refine --help).\n"
           "  --na X              objective NA (0.75)\n"
           "  --n-medium X        refractive index of the medium (1.0)\n"
           "  --magnification X   objective magnification f_tube/f_obj (20)\n"
@@ -181,6 +184,7 @@ int cmd_calib(int argc, char **argv)
   }
   if (!strcmp(argv[1], "from-optics")) return from_optics(argc - 1, argv + 1);
   if (!strcmp(argv[1], "show")) return show(argc - 1, argv + 1);
+  if (!strcmp(argv[1], "refine")) return cmd_calib_refine(argc - 1, argv + 1);
   cli_message("calib", CLI_USAGE, "unknown action '%s'", argv[1]);
   usage(stderr);
   return CLI_USAGE;

@@ -80,6 +80,36 @@ int elfm_calib_n_planes(const elfm_calib *c);
 elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_um, double z_step_um,
                                   elfm_error *err);
 
+/* ---- the views' centres fitted to a recording (calib_refine.c) ----
+ * Collect, for many points fitted from all views, each view's miss
+ * (elfm_refocus_localize_misses), then move every view's centre by the
+ * median of its misses, cleared of the two moves no recording can see (all
+ * views alike: the volume's x-y origin; in proportion to the disparities:
+ * its focal plane). Repeat with the moved centres until the moves are
+ * small. `eventlfm calib refine` is the command; docs/recon.md "Fitting
+ * the views' centres" has the measurements.
+ *
+ *   elfm_calib_refine *r;  elfm_calib_refine_create(cal.n_views, 20000, &r, &err);
+ *   for each point: elfm_calib_refine_add(r, miss_px, weight);
+ *   elfm_calib_refine_apply(r, 20, &cal, shift_px, &n_moved, &err);  (and again) */
+typedef struct elfm_calib_refine elfm_calib_refine;
+/* A collector for up to max_points points (1..10^7) of n_views views
+ * (1..ELFM_MAX_VIEWS); 8 bytes per point and view. */
+elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_refine **out,
+                                     elfm_error *err);
+void elfm_calib_refine_free(elfm_calib_refine *r);
+/* One point's misses (2 per view, px) and weights (0: the view did not
+ * agree, skipped). 1, or 0 when max_points are already held (ignored). */
+int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const double *weight);
+size_t elfm_calib_refine_points(const elfm_calib_refine *r);
+/* Move each view of c with at least min_points misses by their median
+ * (gauge cleared as above; the others stay); shift_px (2 per view, may be
+ * NULL) gets the moves, *n_moved (may be NULL) the views moved. Empties the
+ * collector for the next pass. ELFM_ERR_INVALID when c has another number
+ * of views. */
+elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
+                                    double *shift_px, int *n_moved, elfm_error *err);
+
 #ifdef __cplusplus
 }
 #endif

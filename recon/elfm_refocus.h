@@ -155,6 +155,19 @@ int elfm_refocus_localize_near(const elfm_refocus_plan *p, const elfm_frame *fra
                                double y_vox, double z_vox, const double (*near_vox)[3], int n_near,
                                const elfm_localize_options *o, elfm_localize_result *out);
 
+/* elfm_refocus_localize that also says, per view v of the plan's
+ * calibration (elfm_refocus_plan_calib(p)->n_views entries), where its
+ * image centre lay off the fitted point's projection: miss_px[2 v] in u,
+ * miss_px[2 v + 1] in w (px, image minus projection), and weight[v] its
+ * weight in the fit: > 0 for every view the fit kept, also those its
+ * robust weighting played down (not counted in n_views); 0, with misses
+ * 0, for a view dropped as an outlier (beyond outlier_px) or without signal.
+ * For fitting the views' centres to a recording (elfm_calib_refine); the
+ * arrays are left unspecified when it returns 0. */
+int elfm_refocus_localize_misses(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                                 double y_vox, double z_vox, const elfm_localize_options *o,
+                                 elfm_localize_result *out, double *miss_px, double *weight);
+
 /* Per-execution scratch for `p`. Free with elfm_refocus_workspace_free.
  * The workspace remembers which rows of the volume it last wrote on the
  * sparse path, so it clears only those next time: between two executes

@@ -195,14 +195,23 @@ int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, d
 static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
                     const double (*off_vox)[3], int n_frames, double x_vox, double y_vox,
                     double z_vox, const double (*near_vox)[3], int n_near,
-                    const elfm_localize_options *o, elfm_localize_result *out);
+                    const elfm_localize_options *o, elfm_localize_result *out, double *miss_px,
+                    double *weight);
 
 int elfm_refocus_localize_frames(const elfm_refocus_plan *p, const elfm_frame *const *frames,
                                  const double (*off_vox)[3], int n_frames, double x_vox,
                                  double y_vox, double z_vox, const elfm_localize_options *o,
                                  elfm_localize_result *out)
 {
-  return localize(p, frames, off_vox, n_frames, x_vox, y_vox, z_vox, NULL, 0, o, out);
+  return localize(p, frames, off_vox, n_frames, x_vox, y_vox, z_vox, NULL, 0, o, out, NULL, NULL);
+}
+
+int elfm_refocus_localize_misses(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
+                                 double y_vox, double z_vox, const elfm_localize_options *o,
+                                 elfm_localize_result *out, double *miss_px, double *weight)
+{
+  if (!miss_px || !weight) return 0;
+  return localize(p, &frame, NULL, 1, x_vox, y_vox, z_vox, NULL, 0, o, out, miss_px, weight);
 }
 
 int elfm_refocus_localize_near(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
@@ -210,13 +219,14 @@ int elfm_refocus_localize_near(const elfm_refocus_plan *p, const elfm_frame *fra
                                const elfm_localize_options *o, elfm_localize_result *out)
 {
   if (n_near < 0 || (n_near > 0 && !near_vox)) return 0;
-  return localize(p, &frame, NULL, 1, x_vox, y_vox, z_vox, near_vox, n_near, o, out);
+  return localize(p, &frame, NULL, 1, x_vox, y_vox, z_vox, near_vox, n_near, o, out, NULL, NULL);
 }
 
 static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
                     const double (*off_vox)[3], int n_frames, double x_vox, double y_vox,
                     double z_vox, const double (*near_vox)[3], int n_near,
-                    const elfm_localize_options *o, elfm_localize_result *out)
+                    const elfm_localize_options *o, elfm_localize_result *out, double *miss_px,
+                    double *weight)
 {
   enum { MAXV = 256, MAXF = 64, MAXN = 16 };
   const elfm_calib *c = &p->calib;
@@ -343,8 +353,18 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
   int n_final = 0;
   double ss = 0, sw = 0;
   for (int v = 0; v < p->nv; v++) {
-    if (!(mass[v] > 0) || fac[v] < 0.5) continue;
+    if (miss_px) miss_px[2 * v] = miss_px[2 * v + 1] = weight[v] = 0;
+    if (!(mass[v] > 0)) continue;
     const double eu = ru[v] - (q[0] + q[2] * du[v]), ew = rw[v] - (q[1] + q[2] * dw[v]);
+    if (miss_px) {
+      /* every view kept, also one the robust weight played down: a view
+       * whose centre is off misses every point by the same sub-pixel
+       * amount, which is what a calibration wants to see */
+      miss_px[2 * v] = eu;
+      miss_px[2 * v + 1] = ew;
+      weight[v] = wt[v];
+    }
+    if (fac[v] < 0.5) continue;
     ss += wt[v] * (eu * eu + ew * ew);
     sw += wt[v];
     n_final++;

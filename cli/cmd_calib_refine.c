@@ -1,0 +1,338 @@
+/* cmd_calib_refine.c — eventlfm calib refine: fit the views' centres of a
+ * calibration to a recording of bright points (beads), so that a
+ * calibration built from the optics (calib from-optics: nominal view
+ * positions) or one that has drifted matches the microscope as it is.
+ *
+ * Each pass refocuses the first --ms of the recording with the current
+ * centres, detects the bright peaks of every volume (on the worker threads,
+ * like track), fits each from all views (elfm_refocus_localize_misses) and
+ * collects where each view's image lay off the fit; then every view moves
+ * by the median of its misses (elfm_calib_refine_apply, recon/calib_refine.c,
+ * which also says what no recording can fix). Why it matters: on the
+ * simulated flow scene, view centres off by 1 px (random per view) took
+ * the tracks' alpha from 0.862 to 0.768 (docs/recon.md). */
+#include <getopt.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "elfm_tracker.h"
+
+static const char *const C = "calib refine";
+
+typedef struct refine_opts {
+  const char *calib, *events, *out;
+  elfm_recon_options recon;
+  double ms;          /* how much of the recording each pass reads */
+  int passes;
+  double threshold;   /* peaks above this value only (bright points fit best) */
+  int min_views;      /* views that must agree with a point's fit */
+  int min_points;     /* misses a view needs to move */
+  int quiet;
+} refine_opts;
+
+/* Per batch slot: the points of the slot's volume, misses and weights. */
+typedef struct refine_slot {
+  int n;
+  double *miss, *wt; /* [max_pts][2 nv], [max_pts][nv] */
+} refine_slot;
+
+typedef struct refine_ctx {
+  const refine_opts *o;
+  int nv, max_pts;
+  elfm_localize_options lo;
+  elfm_peaks **pk;     /* [threads] */
+  elfm_detection *det; /* [threads][max_pts] */
+  refine_slot *slot;   /* [slots] */
+  elfm_calib_refine *acc;
+  int64_t volumes;
+} refine_ctx;
+
+static void usage(FILE *f)
+{
+  fprintf(f,
+          "usage: eventlfm calib refine --calib calib.json --events FILE --out refined.json\n"
+          "                             [options]\n\n"
+          "Fits the views' centres (cx, cy) of calib.json to a recording of bright points\n"
+          "(beads that move or blink, so that the event camera sees them) and writes the\n"
+          "calibration with the moved centres. Each pass refocuses the first --ms of the\n"
+          "recording, fits every bright peak from all views and moves each view by the\n"
+          "median of its images' misses. Moves no recording can see are left out: all\n"
+          "views alike (the volume's x-y origin) and in proportion to the disparities\n"
+          "(its focal plane); the disparities themselves are kept (from the optics).\n"
+          "Per-pass progress and each view's move on stderr.\n\n"
+          "  --ms T               read the first T ms of the recording per pass (200)\n"
+          "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
+          "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
+          "  --min-views N        views that must agree with a point's fit (12)\n"
+          "  --min-points N       a view moves only with at least N misses (20)\n"
+          "  --quiet              no progress\n"
+          "frames and refocusing (the same options as eventlfm track's; its defaults):\n");
+  elfm_recon_options d;
+  elfm_recon_options_default(&d);
+  d.framer.polarity = ELFM_POL_ON;
+  d.median = 0;
+  d.refocus.agree_frac = 0;
+  cli_recon_options_usage(f, &d);
+  fprintf(f, "  -h, --help           this text\n");
+}
+
+static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const elfm_refocus_plan *plan,
+                          int slot, int thread, void *user, elfm_error *err)
+{
+  refine_ctx *c = user;
+  refine_slot *s = &c->slot[slot];
+  elfm_detection *det = c->det + (size_t)thread * (size_t)c->max_pts;
+  int n = 0;
+  s->n = 0;
+  elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
+  if (st != ELFM_OK) return st;
+  for (int k = 0; k < n; k++) {
+    elfm_localize_result r;
+    double *miss = s->miss + (size_t)s->n * 2 * (size_t)c->nv, *wt = s->wt + (size_t)s->n * (size_t)c->nv;
+    if (!elfm_refocus_localize_misses(plan, frame, elfm_volume_x_vox(v, det[k].x_um),
+                                      elfm_volume_y_vox(v, det[k].y_um), elfm_volume_z_vox(v, det[k].z_um),
+                                      &c->lo, &r, miss, wt))
+      continue;
+    s->n++;
+  }
+  return ELFM_OK;
+}
+
+static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  (void)v;
+  (void)err;
+  refine_ctx *c = user;
+  const refine_slot *s = &c->slot[slot];
+  for (int k = 0; k < s->n; k++)
+    elfm_calib_refine_add(c->acc, s->miss + (size_t)k * 2 * (size_t)c->nv, s->wt + (size_t)k * (size_t)c->nv);
+  c->volumes++;
+  return ELFM_OK;
+}
+
+/* The first event's time: the passes read [t0, t0 + ms). */
+static elfm_status first_event_us(const char *path, const elfm_reader_options *ro, int64_t *t0,
+                                  elfm_error *err)
+{
+  elfm_reader *r = NULL;
+  elfm_event_chunk *ch = NULL;
+  elfm_status st = elfm_reader_open(path, ro, &r, err);
+  if (st == ELFM_OK && !(ch = elfm_chunk_create(4096, err))) st = ELFM_ERR_NOMEM;
+  *t0 = INT64_MIN;
+  while (st == ELFM_OK) {
+    st = elfm_reader_read(r, ch, err);
+    if (st != ELFM_OK || ch->n > 0) break;
+    if (ch->n == 0 && ch->n_trig == 0) break; /* end of file */
+  }
+  if (st == ELFM_OK && ch->n > 0) *t0 = ch->t_us[0];
+  if (st == ELFM_OK && *t0 == INT64_MIN)
+    st = elfm_error_set(err, ELFM_ERR_FORMAT, path, -1, "no events to fit the views to");
+  elfm_chunk_free(ch);
+  elfm_reader_close(r);
+  return st;
+}
+
+static void ctx_free(refine_ctx *c, int threads, int slots)
+{
+  for (int t = 0; c->pk && t < threads; t++) elfm_peaks_free(c->pk[t]);
+  free(c->pk);
+  free(c->det);
+  for (int s = 0; c->slot && s < slots; s++) {
+    free(c->slot[s].miss);
+    free(c->slot[s].wt);
+  }
+  free(c->slot);
+  elfm_calib_refine_free(c->acc);
+}
+
+static int parse(int argc, char **argv, refine_opts *o)
+{
+  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_QUIET };
+  static const struct option opts[] = {
+      CLI_RECON_LONG_OPTIONS,
+      {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
+      {"out", required_argument, 0, O_OUT}, {"ms", required_argument, 0, O_MS},
+      {"passes", required_argument, 0, O_PASSES}, {"threshold", required_argument, 0, O_THR},
+      {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
+      {"quiet", no_argument, 0, O_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+  memset(o, 0, sizeof *o);
+  elfm_recon_options_default(&o->recon);
+  /* track's frames: ON events, no median, no view-agreement rule (cmd_track_opts.c) */
+  o->recon.framer.polarity = ELFM_POL_ON;
+  o->recon.median = 0;
+  o->recon.refocus.agree_frac = 0;
+  o->ms = 200;
+  o->passes = 4;
+  o->threshold = 60;
+  o->min_views = 12;
+  o->min_points = 20;
+  cli_recon_parse rp = {.ro = &o->recon};
+  optind = 1;
+  opterr = 0;
+  int c;
+  while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+    const int k = cli_parse_recon_option(C, c, optarg, &rp);
+    if (k == 0) return CLI_USAGE;
+    if (k > 0) continue;
+    int ok = 1;
+    switch (c) {
+    case 'h': usage(stdout); return -1;
+    case O_CALIB: o->calib = optarg; break;
+    case O_EVENTS: o->events = optarg; break;
+    case O_OUT: o->out = optarg; break;
+    case O_MS: ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
+    case O_PASSES: {
+      double p;
+      ok = cli_parse_double_in(C, "--passes", optarg, 1, 0, 20, "1..20", &p) && p == floor(p);
+      if (!ok) return cli_message(C, CLI_USAGE, "--passes must be a whole number 1..20, not '%s'", optarg);
+      o->passes = (int)p;
+      break;
+    }
+    case O_THR: ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold); break;
+    case O_MINV: {
+      double p;
+      ok = cli_parse_double_in(C, "--min-views", optarg, 3, 0, ELFM_MAX_VIEWS, "3..81", &p) && p == floor(p);
+      if (!ok) return cli_message(C, CLI_USAGE, "--min-views must be a whole number 3..81, not '%s'", optarg);
+      o->min_views = (int)p;
+      break;
+    }
+    case O_MINP: {
+      double p;
+      ok = cli_parse_double_in(C, "--min-points", optarg, 1, 0, 1e6, "1..1000000", &p) && p == floor(p);
+      if (!ok) return cli_message(C, CLI_USAGE, "--min-points must be a whole number 1..1000000, not '%s'", optarg);
+      o->min_points = (int)p;
+      break;
+    }
+    case O_QUIET: o->quiet = 1; break;
+    default: return cli_bad_option(C, c, argv);
+    }
+    if (!ok) return CLI_USAGE;
+  }
+  if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
+  if (!o->calib || !o->events || !o->out)
+    return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (o->recon.from_us != INT64_MIN || o->recon.to_us != INT64_MAX)
+    return cli_message(C, CLI_USAGE, "--from-us / --to-us: each pass reads the first --ms");
+  if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  return CLI_OK;
+}
+
+/* One pass: refocus, fit, collect (into c->acc). */
+static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
+                            elfm_error *err)
+{
+  ro.worker = worker;
+  ro.worker_user = c;
+  ro.on_volume_slot = on_volume;
+  ro.progress = NULL;
+  c->volumes = 0;
+  return elfm_recon_run(c->o->events, cal, &ro, NULL, c, NULL, err);
+}
+
+int cmd_calib_refine(int argc, char **argv)
+{
+  refine_opts o;
+  const int pr = parse(argc, argv, &o);
+  if (pr != CLI_OK) return pr < 0 ? CLI_OK : pr;
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_calib cal;
+  if (elfm_calib_load(o.calib, &cal, &err)) return cli_fail(C, &err);
+  int64_t t0;
+  if (first_event_us(o.events, &o.recon.reader, &t0, &err) != ELFM_OK) return cli_fail(C, &err);
+  o.recon.from_us = t0;
+  o.recon.to_us = t0 + (int64_t)llround(o.ms * 1000);
+
+  int threads = 0, slots = 0;
+  if (elfm_recon_layout(&o.recon, &threads, &slots, &err) != ELFM_OK) return cli_fail(C, &err);
+  refine_ctx c;
+  memset(&c, 0, sizeof c);
+  c.o = &o;
+  c.nv = cal.n_views;
+  c.max_pts = 1000;
+  elfm_localize_options_default(&c.lo);
+  c.lo.min_views = o.min_views;
+  elfm_peaks_options po;
+  elfm_peaks_options_default(&po);
+  po.absolute = o.threshold;
+  c.pk = calloc((size_t)threads, sizeof *c.pk);
+  c.det = malloc((size_t)threads * (size_t)c.max_pts * sizeof *c.det);
+  c.slot = calloc((size_t)slots, sizeof *c.slot);
+  int ok = c.pk && c.det && c.slot;
+  for (int s = 0; ok && s < slots; s++) {
+    c.slot[s].miss = malloc((size_t)c.max_pts * 2 * (size_t)c.nv * sizeof(double));
+    c.slot[s].wt = malloc((size_t)c.max_pts * (size_t)c.nv * sizeof(double));
+    ok = c.slot[s].miss && c.slot[s].wt;
+  }
+  if (!ok) {
+    ctx_free(&c, threads, slots);
+    return cli_message(C, CLI_FAIL, "out of memory");
+  }
+  int W = 0, H = 0, NZ = 0;
+  W = cal.view_w_px;
+  H = cal.view_h_px;
+  NZ = elfm_calib_n_planes(&cal);
+  for (int t = 0; t < threads; t++)
+    if (!(c.pk[t] = elfm_peaks_create(&po, W, H, NZ, &err))) {
+      ctx_free(&c, threads, slots);
+      return cli_fail(C, &err);
+    }
+  if (elfm_calib_refine_create(c.nv, 200000, &c.acc, &err) != ELFM_OK) {
+    ctx_free(&c, threads, slots);
+    return cli_fail(C, &err);
+  }
+  double total[2 * ELFM_MAX_VIEWS] = {0};
+  int rc = CLI_OK;
+  for (int pass = 0; pass < o.passes; pass++) {
+    /* The first pass starts from centres that may be off by a few pixels:
+     * a wider window (7 x 7) and a looser outlier test let the views find
+     * their images; later passes use the view fit's own settings. */
+    elfm_localize_options_default(&c.lo);
+    c.lo.min_views = o.min_views;
+    if (pass == 0) {
+      c.lo.half_window_px = 3;
+      c.lo.outlier_px = 3;
+    }
+    if (run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
+      rc = cli_fail(C, &err);
+      break;
+    }
+    const size_t npts = elfm_calib_refine_points(c.acc);
+    double shift[2 * ELFM_MAX_VIEWS];
+    int moved = 0;
+    if (elfm_calib_refine_apply(c.acc, o.min_points, &cal, shift, &moved, &err) != ELFM_OK) {
+      rc = cli_fail(C, &err);
+      break;
+    }
+    double worst = 0, ss = 0;
+    for (int v = 0; v < c.nv; v++) {
+      const double m = hypot(shift[2 * v], shift[2 * v + 1]);
+      worst = fmax(worst, m);
+      ss += m * m;
+      total[2 * v] += shift[2 * v];
+      total[2 * v + 1] += shift[2 * v + 1];
+    }
+    if (!o.quiet)
+      fprintf(stderr, "calib refine: pass %d: %" PRId64 " volumes, %zu points, %d of %d views moved, "
+              "RMS %.3f px, largest %.3f px\n", pass + 1, c.volumes, npts, moved, c.nv,
+              sqrt(ss / c.nv), worst);
+    if (npts == 0) {
+      rc = cli_message(C, CLI_FAIL, "%s: no point in the first %g ms could be fitted from %d views "
+                       "(try a lower --threshold or --min-views, or a longer --ms)", o.events, o.ms,
+                       o.min_views);
+      break;
+    }
+  }
+  ctx_free(&c, threads, slots);
+  if (rc != CLI_OK) return rc;
+  if (!o.quiet)
+    for (int v = 0; v < cal.n_views; v++)
+      fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px\n", cal.views[v].i, cal.views[v].j,
+              total[2 * v], total[2 * v + 1]);
+  if (elfm_calib_save(&cal, o.out, &err)) return cli_fail(C, &err);
+  return CLI_OK;
+}

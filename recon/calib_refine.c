@@ -1,0 +1,158 @@
+/* calib_refine.c — the views' centres (cx, cy) fitted to a recording.
+ *
+ * A point fitted from all views (elfm_refocus_localize) leaves, in each
+ * view, a miss: its image centre minus the point's projection. With the
+ * right centres the misses scatter around 0; a view whose centre is off by
+ * (a, b) px misses every point by about (a, b), less what the fit itself
+ * absorbs. So the median of a view's misses over many points is how far to
+ * move its centre; a few passes (each with the moved centres) converge.
+ *
+ * Two moves no recording can see (the gauge): the same shift of every view
+ * (the whole volume moves sideways) and a shift in proportion to each view's
+ * disparity (the volume moves in z). A point's fit takes both up, so the
+ * misses carry neither; the moves are cleared of them anyway (least squares
+ * on 1 and du per axis), so that refining never moves the volume's origin or
+ * its focal plane. Only the centres are fitted: the disparities follow from
+ * the optics, and SPEC §2 says to model more (rotation, scale) only when
+ * data show it is needed. */
+#include "elfm_calib.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct elfm_calib_refine {
+  int nv;
+  size_t cap;
+  size_t n_points;
+  size_t *n;      /* [nv] misses collected per view */
+  float *mu, *mw; /* [nv][cap] */
+  float *scratch; /* [cap] for the medians */
+};
+
+elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_refine **out,
+                                     elfm_error *err)
+{
+  *out = NULL;
+  if (n_views < 1 || n_views > ELFM_MAX_VIEWS || max_points < 1 || max_points > 10000000)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calib refine: %d views (1..%d), %zu points (1..10000000)", n_views,
+                          ELFM_MAX_VIEWS, max_points);
+  elfm_calib_refine *r = calloc(1, sizeof *r);
+  if (!r) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
+  r->nv = n_views;
+  r->cap = max_points;
+  r->n = calloc((size_t)n_views, sizeof *r->n);
+  r->mu = malloc((size_t)n_views * max_points * sizeof *r->mu);
+  r->mw = malloc((size_t)n_views * max_points * sizeof *r->mw);
+  r->scratch = malloc(max_points * sizeof *r->scratch);
+  if (!r->n || !r->mu || !r->mw || !r->scratch) {
+    elfm_calib_refine_free(r);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1,
+                          "calib refine: out of memory for %zu points x %d views", max_points, n_views);
+  }
+  *out = r;
+  return ELFM_OK;
+}
+
+void elfm_calib_refine_free(elfm_calib_refine *r)
+{
+  if (!r) return;
+  free(r->n);
+  free(r->mu);
+  free(r->mw);
+  free(r->scratch);
+  free(r);
+}
+
+int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const double *weight)
+{
+  if (r->n_points >= r->cap) return 0;
+  for (int v = 0; v < r->nv; v++) {
+    const double a = miss_px[2 * v], b = miss_px[2 * v + 1];
+    /* a view that does not agree, or a value no fit gives: not a miss */
+    if (!(weight[v] > 0) || !(fabs(a) < 1e3 && fabs(b) < 1e3)) continue;
+    const size_t k = r->n[v]++;
+    r->mu[(size_t)v * r->cap + k] = (float)a;
+    r->mw[(size_t)v * r->cap + k] = (float)b;
+  }
+  r->n_points++;
+  return 1;
+}
+
+size_t elfm_calib_refine_points(const elfm_calib_refine *r)
+{
+  return r->n_points;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+  const float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+static double median_of(float *tmp, const float *a, size_t n)
+{
+  memcpy(tmp, a, n * sizeof *tmp);
+  qsort(tmp, n, sizeof *tmp, cmp_float);
+  return n % 2 ? tmp[n / 2] : 0.5 * ((double)tmp[n / 2 - 1] + tmp[n / 2]);
+}
+
+/* s[v] -= a + b d[v] over the views with use[v], least squares; with no
+ * spread of d among them, only the mean. */
+static void clear_gauge(int nv, const int *use, const double *d, double *s)
+{
+  double n = 0, sd = 0, sdd = 0, ss = 0, sds = 0;
+  for (int v = 0; v < nv; v++) {
+    if (!use[v]) continue;
+    n += 1;
+    sd += d[v];
+    sdd += d[v] * d[v];
+    ss += s[v];
+    sds += d[v] * s[v];
+  }
+  if (n < 1) return;
+  const double det = n * sdd - sd * sd;
+  double a = ss / n, b = 0;
+  if (n >= 3 && det > 1e-12 * n * sdd) {
+    b = (n * sds - sd * ss) / det;
+    a = (ss - b * sd) / n;
+  }
+  for (int v = 0; v < nv; v++)
+    if (use[v]) s[v] -= a + b * d[v];
+}
+
+elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
+                                    double *shift_px, int *n_moved, elfm_error *err)
+{
+  if (c->n_views != r->nv)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calib refine: the calibration has %d views, the misses %d", c->n_views,
+                          r->nv);
+  if (min_points < 1) min_points = 1;
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
+         dw[ELFM_MAX_VIEWS] = {0};
+  int use[ELFM_MAX_VIEWS] = {0}, moved = 0;
+  for (int v = 0; v < r->nv; v++) {
+    use[v] = r->n[v] >= (size_t)min_points;
+    su[v] = use[v] ? median_of(r->scratch, r->mu + (size_t)v * r->cap, r->n[v]) : 0;
+    sw[v] = use[v] ? median_of(r->scratch, r->mw + (size_t)v * r->cap, r->n[v]) : 0;
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+    moved += use[v];
+  }
+  clear_gauge(r->nv, use, du, su);
+  clear_gauge(r->nv, use, dw, sw);
+  for (int v = 0; v < r->nv; v++) {
+    c->views[v].cx_px += su[v];
+    c->views[v].cy_px += sw[v];
+    if (shift_px) {
+      shift_px[2 * v] = su[v];
+      shift_px[2 * v + 1] = sw[v];
+    }
+  }
+  if (n_moved) *n_moved = moved;
+  memset(r->n, 0, (size_t)r->nv * sizeof *r->n);
+  r->n_points = 0;
+  return ELFM_OK;
+}

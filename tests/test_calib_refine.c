@@ -1,0 +1,349 @@
+/* test_calib_refine.c — fitting the views' centres to data:
+ *  - elfm_refocus_localize_misses: with the right centres every view's miss
+ *    is ~0; a view whose images sit 0.8 px right and 0.5 px up misses by
+ *    about that, the others by little; bad input gives 0;
+ *  - elfm_calib_refine on synthetic frames (lfm_render.h) drawn with true
+ *    centres while the fit uses centres off by up to ~2 px (and free of the
+ *    two moves no data can show): three passes bring every view within
+ *    0.03 px; a calibration already right moves by < 0.01 px; the
+ *    collector's edges (full, NaN misses, too few points, another number of
+ *    views, bad sizes);
+ *  - `eventlfm calib refine` on a simulated flow recording whose calib.json
+ *    was moved the same way: the written calibration lies within 0.1 px of
+ *    the simulator's (0.06 px measured: the simulated images hold a bias of
+ *    that size), the true one moves by less than 0.1 px; usage errors exit 2,
+ *    a missing or empty recording exits 1 naming the file. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "check.h"
+#include "elfm_datasets.h"
+#include "elfm_recon.h"
+#include "lfm_render.h"
+
+static double lcg(uint32_t *s)
+{
+  *s = *s * 1664525u + 1013904223u;
+  return (*s >> 8) % 100001 / 100000.0;
+}
+
+/* Remove from e[v] (one axis) its least-squares fit a + b d[v]: the moves
+ * no recording can show (elfm_calib.h). */
+static void gauge_free(int nv, const double *d, double *e)
+{
+  double n = nv, sd = 0, sdd = 0, se = 0, sde = 0;
+  for (int v = 0; v < nv; v++) {
+    sd += d[v];
+    sdd += d[v] * d[v];
+    se += e[v];
+    sde += d[v] * e[v];
+  }
+  const double b = (n * sde - sd * se) / (n * sdd - sd * sd), a = (se - b * sd) / n;
+  for (int v = 0; v < nv; v++) e[v] -= a + b * d[v];
+}
+
+/* *c moved by a gauge-free pattern of about `rms_px` per axis (seeded). */
+static void perturb(elfm_calib *c, double rms_px, uint32_t seed)
+{
+  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
+         dw[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < c->n_views; v++) {
+    eu[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1); /* uniform: sd = 1.7 / sqrt 3 ~ 1 x rms */
+    ew[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1);
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+  }
+  gauge_free(c->n_views, du, eu);
+  gauge_free(c->n_views, dw, ew);
+  for (int v = 0; v < c->n_views; v++) {
+    c->views[v].cx_px += eu[v];
+    c->views[v].cy_px += ew[v];
+  }
+}
+
+/* Largest gauge-free difference of a's centres from b's, px. */
+static double centre_error(const elfm_calib *a, const elfm_calib *b)
+{
+  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
+         dw[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < a->n_views; v++) {
+    eu[v] = a->views[v].cx_px - b->views[v].cx_px;
+    ew[v] = a->views[v].cy_px - b->views[v].cy_px;
+    du[v] = b->views[v].dx_px_per_um;
+    dw[v] = b->views[v].dy_px_per_um;
+  }
+  gauge_free(a->n_views, du, eu);
+  gauge_free(a->n_views, dw, ew);
+  double worst = 0;
+  for (int v = 0; v < a->n_views; v++) worst = fmax(worst, hypot(eu[v], ew[v]));
+  return worst;
+}
+
+static void to_vox(const elfm_calib *c, double x, double y, double z, double q[3])
+{
+  q[0] = x / c->um_per_px + 0.5 * (c->view_w_px - 1);
+  q[1] = y / c->um_per_px + 0.5 * (c->view_h_px - 1);
+  q[2] = (z - c->z_min_um) / c->z_step_um;
+}
+
+static void test_misses(const elfm_calib *c, elfm_frame *f)
+{
+  elfm_error err;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, NULL, &p, &err), &err);
+  if (!p) return;
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  double miss[2 * ELFM_MAX_VIEWS], wt[ELFM_MAX_VIEWS], q[3];
+  elfm_localize_result r;
+  const double x = 10.2, y = -7.9, z = 22.5;
+  to_vox(c, x, y, z, q);
+  /* the right centres: every agreeing view misses by ~0 */
+  elfm_frame_clear(f);
+  render_views(f, c, x, y, z, 255.0, 1.3, 0, 0, 0);
+  CHECK(elfm_refocus_localize_misses(p, f, q[0] + 0.4, q[1] - 0.3, q[2] + 1, &o, &r, miss, wt));
+  int agree = 0;
+  double worst = 0;
+  for (int v = 0; v < c->n_views; v++) {
+    if (wt[v] > 0) agree++;
+    worst = fmax(worst, hypot(miss[2 * v], miss[2 * v + 1]));
+  }
+  CHECK_MSG(agree >= 20 && agree >= r.n_views, "%d views kept (fit says %d agree)", agree, r.n_views);
+  CHECK_MSG(worst < 0.03, "right centres, largest miss %.3f px", worst);
+  /* view 7's images drawn 0.8 px right and 0.5 px up of where the centres
+   * put them: it misses by about that (the fit takes a 1/25-ish share) */
+  elfm_calib moved = *c;
+  moved.views[7].cx_px += 0.8;
+  moved.views[7].cy_px -= 0.5;
+  elfm_frame_clear(f);
+  render_views(f, &moved, x, y, z, 255.0, 1.3, 0, 0, 0);
+  CHECK(elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, wt));
+  CHECK_MSG(wt[7] > 0 && fabs(miss[14] - 0.8) < 0.15 && fabs(miss[15] + 0.5) < 0.15,
+            "moved view misses (%.3f, %.3f), weight %g", miss[14], miss[15], wt[7]);
+  worst = 0;
+  for (int v = 0; v < c->n_views; v++)
+    if (v != 7) worst = fmax(worst, hypot(miss[2 * v], miss[2 * v + 1]));
+  CHECK_MSG(worst < 0.15, "the other views miss by up to %.3f px", worst);
+  /* no arrays, no frame, no object: 0 */
+  CHECK(!elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, NULL, wt));
+  CHECK(!elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, NULL));
+  elfm_frame_clear(f);
+  CHECK(!elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, wt));
+  elfm_refocus_plan_free(p);
+}
+
+/* One pass over `n` synthetic beads drawn with `truth`, fitted with *c's
+ * centres; *c moves. Returns the points collected. */
+static size_t refine_pass(elfm_calib *c, const elfm_calib *truth, elfm_frame *f,
+                          elfm_calib_refine *acc, int half_window, double outlier_px, uint32_t seed)
+{
+  elfm_error err;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, NULL, &p, &err), &err);
+  if (!p) return 0;
+  elfm_localize_options o;
+  elfm_localize_options_default(&o);
+  o.half_window_px = half_window;
+  o.outlier_px = outlier_px;
+  o.min_views = 12;
+  const double fov_um = 0.5 * (c->view_w_px - 1) * c->um_per_px;
+  double miss[2 * ELFM_MAX_VIEWS], wt[ELFM_MAX_VIEWS];
+  for (int k = 0; k < 150; k++) {
+    const double x = (2 * lcg(&seed) - 1) * (fov_um - 30), y = (2 * lcg(&seed) - 1) * (fov_um - 30);
+    const double z = (2 * lcg(&seed) - 1) * 60;
+    elfm_frame_clear(f);
+    render_views(f, truth, x, y, z, 255.0, 1.3, 0, 0, 0);
+    double q[3];
+    to_vox(c, x, y, z, q);
+    elfm_localize_result r;
+    if (elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, wt))
+      elfm_calib_refine_add(acc, miss, wt);
+  }
+  const size_t n = elfm_calib_refine_points(acc);
+  double shift[2 * ELFM_MAX_VIEWS];
+  int moved = -1;
+  CHECK_OK(elfm_calib_refine_apply(acc, 20, c, shift, &moved, &err), &err);
+  CHECK_EQ_INT(elfm_calib_refine_points(acc), 0); /* emptied for the next pass */
+  CHECK_EQ_INT(moved, c->n_views);
+  elfm_refocus_plan_free(p);
+  return n;
+}
+
+static void test_refine(const elfm_calib *truth, elfm_frame *f)
+{
+  elfm_error err;
+  elfm_calib_refine *acc = NULL;
+  CHECK_OK(elfm_calib_refine_create(truth->n_views, 1000, &acc, &err), &err);
+  if (!acc) return;
+  elfm_calib c = *truth;
+  perturb(&c, 1.0, 5);
+  const double before = centre_error(&c, truth);
+  CHECK_MSG(before > 1.0, "the perturbation is too small to test (%.2f px)", before);
+  double after = before;
+  for (int pass = 0; pass < 3; pass++) {
+    const size_t n = refine_pass(&c, truth, f, acc, pass ? 2 : 3, pass ? 1.5 : 3.0, 100 + pass);
+    CHECK_MSG(n >= 100, "pass %d: only %zu of 150 beads fitted", pass, n);
+    after = centre_error(&c, truth);
+  }
+  printf("synthetic: centres off by up to %.3f px -> %.4f px after 3 passes\n", before, after);
+  CHECK_MSG(after < 0.03, "after 3 passes still %.4f px off", after);
+  /* the gauge: the mean move and the move along the disparities are 0, so
+   * the volume neither shifts nor refocuses (the truth's origin holds) */
+  double mu = 0;
+  for (int v = 0; v < c.n_views; v++) mu += c.views[v].cx_px - truth->views[v].cx_px;
+  CHECK_MSG(fabs(mu / c.n_views) < 1e-9, "mean move %.3g px", mu / c.n_views);
+  /* already right: moves by < 0.01 px */
+  c = *truth;
+  refine_pass(&c, truth, f, acc, 2, 1.5, 300);
+  CHECK_MSG(centre_error(&c, truth) < 0.01, "a right calibration moved by %.4f px",
+            centre_error(&c, truth));
+
+  /* the collector's edges */
+  double miss[2 * ELFM_MAX_VIEWS] = {0}, wt[ELFM_MAX_VIEWS];
+  for (int v = 0; v < ELFM_MAX_VIEWS; v++) wt[v] = 1;
+  miss[0] = NAN;      /* view 0's miss unusable: skipped, the others kept */
+  miss[3] = INFINITY; /* view 1 too */
+  for (int k = 0; k < 1000; k++) CHECK(elfm_calib_refine_add(acc, miss, wt));
+  CHECK(!elfm_calib_refine_add(acc, miss, wt)); /* full */
+  CHECK_EQ_INT(elfm_calib_refine_points(acc), 1000);
+  c = *truth;
+  int moved = 0;
+  CHECK_OK(elfm_calib_refine_apply(acc, 20, &c, NULL, &moved, &err), &err);
+  CHECK_EQ_INT(moved, truth->n_views - 2); /* views 0 and 1 had no usable miss */
+  CHECK(c.views[0].cx_px == truth->views[0].cx_px && c.views[1].cy_px == truth->views[1].cy_px);
+  elfm_calib other = *truth;
+  other.n_views = truth->n_views - 1;
+  CHECK(elfm_calib_refine_apply(acc, 20, &other, NULL, NULL, &err) == ELFM_ERR_INVALID);
+  elfm_calib_refine_free(acc);
+  acc = NULL;
+  CHECK(elfm_calib_refine_create(0, 10, &acc, &err) == ELFM_ERR_INVALID && !acc);
+  CHECK(elfm_calib_refine_create(ELFM_MAX_VIEWS + 1, 10, &acc, &err) == ELFM_ERR_INVALID && !acc);
+  CHECK(elfm_calib_refine_create(25, 0, &acc, &err) == ELFM_ERR_INVALID && !acc);
+  elfm_calib_refine_free(NULL);
+}
+
+static char dir[] = "/tmp/elfm_calib_refine_XXXXXX";
+
+static int run(const char *args)
+{
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+static int err_has(const char *text)
+{
+  char path[700], buf[8192];
+  snprintf(path, sizeof path, "%s/err.txt", dir);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  return strstr(buf, text) != NULL;
+}
+
+static void test_cli(void)
+{
+  char bin[600];
+  snprintf(bin, sizeof bin, "%s/eventlfm", ELFM_BINARY_DIR);
+  if (access(bin, X_OK) != 0) {
+    printf("SKIP the command: %s not built\n", bin);
+    return;
+  }
+  if (!mkdtemp(dir)) {
+    printf("SKIP the command: no temporary directory\n");
+    return;
+  }
+  elfm_error err;
+  elfm_scene *sc = NULL;
+  CHECK_OK(elfm_scene_load("flow", &sc, &err), &err);
+  if (!sc) return;
+  CHECK_OK(elfm_scene_set_param(sc, "duration_ms=60", &err), &err);
+  char sim[700], p[800], q[800], args[3000];
+  snprintf(sim, sizeof sim, "%s/sim", dir);
+  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
+  CHECK_OK(elfm_sim_run(sc, sim, &so, NULL, &err), &err);
+  elfm_scene_free(sc);
+  elfm_calib truth, c;
+  snprintf(p, sizeof p, "%s/calib.json", sim);
+  CHECK_OK(elfm_calib_load(p, &truth, &err), &err);
+  c = truth;
+  perturb(&c, 1.0, 9);
+  snprintf(p, sizeof p, "%s/moved.json", dir);
+  CHECK_OK(elfm_calib_save(&c, p, &err), &err);
+
+  snprintf(args, sizeof args, "calib refine --calib %s/moved.json --events %s/events.raw --out %s/r.json --ms 60",
+           dir, sim, dir);
+  CHECK_EQ_INT(run(args), 0);
+  CHECK(err_has("pass 4") && err_has("view (+2, +2)")); /* progress and the moves on stderr */
+  elfm_calib r;
+  snprintf(q, sizeof q, "%s/r.json", dir);
+  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  const double before = centre_error(&c, &truth), after = centre_error(&r, &truth);
+  printf("simulated flow, 60 ms: centres off by up to %.3f px -> %.4f px\n", before, after);
+  CHECK_MSG(before > 1.0 && after < 0.1, "refined centres off by %.3f px (%.3f before)", after, before);
+  CHECK(r.z_step_um == truth.z_step_um && r.views[3].dx_px_per_um == truth.views[3].dx_px_per_um);
+  /* the simulator's own calibration stays */
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/t.json --ms 60 --passes 2 --quiet",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 0);
+  snprintf(q, sizeof q, "%s/t.json", dir);
+  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  CHECK_MSG(centre_error(&r, &truth) < 0.1, "the right calibration moved by %.3f px",
+            centre_error(&r, &truth));
+
+  /* usage errors: exit 2 */
+  CHECK_EQ_INT(run("calib refine"), 2);
+  const char *bad[] = {"--passes 0", "--passes 2.5", "--ms 0", "--min-views 2", "--threshold -1",
+                       "--from-us 5", "--dt-us 10", "--bogus"};
+  for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
+    snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json %s",
+             sim, sim, dir, bad[k]);
+    CHECK_MSG(run(args) == 2, "%s: not a usage error", bad[k]);
+  }
+  /* failures: exit 1 naming the file; nothing written */
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/none.raw --out %s/u.json", sim, dir, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(err_has("none.raw"));
+  snprintf(p, sizeof p, "%s/empty.csv", dir);
+  FILE *fe = fopen(p, "w");
+  if (fe) {
+    fputs("t_us,x,y,p\n", fe);
+    fclose(fe);
+  }
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/empty.csv --out %s/u.json --quiet", sim, dir, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(err_has("empty.csv") && err_has("no events"));
+  /* bright points nowhere (threshold above any peak): exit 1 saying so */
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --ms 5 --threshold 1e6 --quiet",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(err_has("no point"));
+  snprintf(p, sizeof p, "%s/u.json", dir);
+  CHECK_MSG(access(p, F_OK) != 0, "a failed refine wrote %s", p);
+
+  snprintf(args, sizeof args, "rm -rf '%s'", dir);
+  if (system(args) != 0) fprintf(stderr, "could not remove %s\n", dir);
+}
+
+int main(void)
+{
+  elfm_calib c;
+  elfm_optics op;
+  elfm_error err;
+  elfm_optics_default(&op);
+  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
+  elfm_frame *f = elfm_frame_create(c.sensor_width_px, c.sensor_height_px, &err);
+  CHECK(f != NULL);
+  if (!f) return check_report();
+  test_misses(&c, f);
+  test_refine(&c, f);
+  elfm_frame_free(f);
+  test_cli();
+  return check_report();
+}
