@@ -32,6 +32,7 @@ typedef struct refine_opts {
   int min_views;      /* views that must agree with a point's fit */
   int min_points;     /* misses a view needs to move */
   int quiet;
+  double planes_um[3]; /* --z-*-um for the passes' volumes (NaN: the calibration's) */
 } refine_opts;
 
 /* Per batch slot: the points of the slot's volume, misses and weights. */
@@ -70,7 +71,8 @@ static void usage(FILE *f)
           "  --min-views N        views that must agree with a point's fit (12)\n"
           "  --min-points N       a view moves only with at least N misses (20)\n"
           "  --quiet              no progress\n"
-          "frames and refocusing (the same options as eventlfm track's; its defaults):\n");
+          "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
+          "--z-*-um set the passes' planes, the file written keeps its own):\n");
   elfm_recon_options d;
   elfm_recon_options_default(&d);
   d.framer.polarity = ELFM_POL_ON;
@@ -149,6 +151,19 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
   elfm_calib_refine_free(c->acc);
 }
 
+/* A whole number in lo..hi, or a usage message naming the option: 1 / 0. */
+static int int_in(const char *opt, const char *arg, int lo, int hi, int *out)
+{
+  int v;
+  if (!cli_parse_int(C, opt, arg, &v)) return 0;
+  if (v < lo || v > hi) {
+    cli_message(C, CLI_USAGE, "%s must be %d..%d, not '%s'", opt, lo, hi, arg);
+    return 0;
+  }
+  *out = v;
+  return 1;
+}
+
 static int parse(int argc, char **argv, refine_opts *o)
 {
   enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_QUIET };
@@ -185,28 +200,10 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_EVENTS: o->events = optarg; break;
     case O_OUT: o->out = optarg; break;
     case O_MS: ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
-    case O_PASSES: {
-      double p;
-      ok = cli_parse_double_in(C, "--passes", optarg, 1, 0, 20, "1..20", &p) && p == floor(p);
-      if (!ok) return cli_message(C, CLI_USAGE, "--passes must be a whole number 1..20, not '%s'", optarg);
-      o->passes = (int)p;
-      break;
-    }
+    case O_PASSES: ok = int_in("--passes", optarg, 1, 20, &o->passes); break;
     case O_THR: ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold); break;
-    case O_MINV: {
-      double p;
-      ok = cli_parse_double_in(C, "--min-views", optarg, 3, 0, ELFM_MAX_VIEWS, "3..81", &p) && p == floor(p);
-      if (!ok) return cli_message(C, CLI_USAGE, "--min-views must be a whole number 3..81, not '%s'", optarg);
-      o->min_views = (int)p;
-      break;
-    }
-    case O_MINP: {
-      double p;
-      ok = cli_parse_double_in(C, "--min-points", optarg, 1, 0, 1e6, "1..1000000", &p) && p == floor(p);
-      if (!ok) return cli_message(C, CLI_USAGE, "--min-points must be a whole number 1..1000000, not '%s'", optarg);
-      o->min_points = (int)p;
-      break;
-    }
+    case O_MINV: ok = int_in("--min-views", optarg, 3, ELFM_MAX_VIEWS, &o->min_views); break;
+    case O_MINP: ok = int_in("--min-points", optarg, 1, 1000000, &o->min_points); break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -218,6 +215,7 @@ static int parse(int argc, char **argv, refine_opts *o)
   if (o->recon.from_us != INT64_MIN || o->recon.to_us != INT64_MAX)
     return cli_message(C, CLI_USAGE, "--from-us / --to-us: each pass reads the first --ms");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  cli_recon_planes(&rp, o->planes_um);
   return CLI_OK;
 }
 
@@ -242,6 +240,10 @@ int cmd_calib_refine(int argc, char **argv)
   elfm_error_clear(&err);
   elfm_calib cal;
   if (elfm_calib_load(o.calib, &cal, &err)) return cli_fail(C, &err);
+  /* the passes may refocus on other planes (--z-*-um); the file written
+   * keeps the calibration's own */
+  const double z_file[3] = {cal.z_min_um, cal.z_max_um, cal.z_step_um};
+  if (!cli_apply_planes(C, o.planes_um, o.calib, &cal)) return CLI_USAGE;
   int64_t t0;
   if (first_event_us(o.events, &o.recon.reader, &t0, &err) != ELFM_OK) return cli_fail(C, &err);
   o.recon.from_us = t0;
@@ -272,12 +274,9 @@ int cmd_calib_refine(int argc, char **argv)
     ctx_free(&c, threads, slots);
     return cli_message(C, CLI_FAIL, "out of memory");
   }
-  int W = 0, H = 0, NZ = 0;
-  W = cal.view_w_px;
-  H = cal.view_h_px;
-  NZ = elfm_calib_n_planes(&cal);
+  const int nz = elfm_calib_n_planes(&cal);
   for (int t = 0; t < threads; t++)
-    if (!(c.pk[t] = elfm_peaks_create(&po, W, H, NZ, &err))) {
+    if (!(c.pk[t] = elfm_peaks_create(&po, cal.view_w_px, cal.view_h_px, nz, &err))) {
       ctx_free(&c, threads, slots);
       return cli_fail(C, &err);
     }
@@ -333,6 +332,9 @@ int cmd_calib_refine(int argc, char **argv)
     for (int v = 0; v < cal.n_views; v++)
       fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px\n", cal.views[v].i, cal.views[v].j,
               total[2 * v], total[2 * v + 1]);
+  cal.z_min_um = z_file[0];
+  cal.z_max_um = z_file[1];
+  cal.z_step_um = z_file[2];
   if (elfm_calib_save(&cal, o.out, &err)) return cli_fail(C, &err);
   return CLI_OK;
 }

@@ -297,10 +297,19 @@ static void test_cli(void)
   CHECK_MSG(centre_error(&r, &truth) < 0.1, "the right calibration moved by %.3f px",
             centre_error(&r, &truth));
 
+  /* coarser planes for the passes: the file written keeps its own */
+  snprintf(args, sizeof args, "calib refine --calib %s/moved.json --events %s/events.raw --out %s/z.json --ms 30 --passes 1 --z-step-um 4 --quiet",
+           dir, sim, dir);
+  CHECK_EQ_INT(run(args), 0);
+  snprintf(q, sizeof q, "%s/z.json", dir);
+  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  CHECK(r.z_step_um == truth.z_step_um && r.z_min_um == truth.z_min_um);
+  CHECK_MSG(centre_error(&r, &truth) < 0.5 * centre_error(&c, &truth), "one pass on 4 um planes: %.3f px",
+            centre_error(&r, &truth));
   /* usage errors: exit 2 */
   CHECK_EQ_INT(run("calib refine"), 2);
   const char *bad[] = {"--passes 0", "--passes 2.5", "--ms 0", "--min-views 2", "--threshold -1",
-                       "--from-us 5", "--dt-us 10", "--bogus"};
+                       "--from-us 5", "--dt-us 10", "--bogus", "--z-min-um 500"};
   for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
     snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json %s",
              sim, sim, dir, bad[k]);
