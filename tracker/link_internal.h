@@ -18,6 +18,7 @@ typedef struct live_track {
   int64_t last_frame, last_t_us;
   double last[3];           /* last real position */
   double vel_um_per_ms[3];  /* long constant-velocity fit; the prior with one point */
+  double lin_pos[3];        /* that fit's position at the last point's time */
   double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
   int has_short;            /* the short fit exists (>= 4 points) */
   elfm_link_circle circ;    /* circle fit over circle_points points (circ.ok: it exists) */
