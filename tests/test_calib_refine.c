@@ -16,10 +16,10 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "check.h"
+#include "cli_test_util.h"
 #include "elfm_datasets.h"
 #include "elfm_recon.h"
 #include "lfm_render.h"
@@ -227,25 +227,8 @@ static void test_refine(const elfm_calib *truth, elfm_frame *f)
 
 static char dir[] = "/tmp/elfm_calib_refine_XXXXXX";
 
-static int run(const char *args)
-{
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
-static int err_has(const char *text)
-{
-  char path[700], buf[8192];
-  snprintf(path, sizeof path, "%s/err.txt", dir);
-  FILE *f = fopen(path, "r");
-  if (!f) return 0;
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
-  fclose(f);
-  buf[n] = '\0';
-  return strstr(buf, text) != NULL;
-}
+static int run(const char *args) { return cli_run(dir, args); }
+static int err_has(const char *text) { return cli_file_has(dir, "err.txt", text); }
 
 static void test_cli(void)
 {

@@ -9,32 +9,15 @@
 #include <cjson/cJSON.h>
 
 #include "check.h"
+#include "cli_test_util.h"
 #include "elfm_datasets.h"
 #include "elfm_recon.h"
 #include "elfm_table.h"
 
 static char dir[] = "/tmp/elfm_recon_cli_XXXXXX";
 
-/* Run eventlfm with args; stderr to dir/err.txt; returns the exit code. */
-static int run(const char *args)
-{
-  char cmd[4096];
-  snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
-  int rc = system(cmd);
-  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
-static int file_has(const char *name, const char *text)
-{
-  char path[700], buf[8192];
-  snprintf(path, sizeof path, "%s/%s", dir, name);
-  FILE *f = fopen(path, "r");
-  if (!f) return 0;
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
-  fclose(f);
-  buf[n] = '\0';
-  return strstr(buf, text) != NULL;
-}
+static int run(const char *args) { return cli_run(dir, args); }
+static int file_has(const char *name, const char *text) { return cli_file_has(dir, name, text); }
 
 static int exists(const char *rel)
 {

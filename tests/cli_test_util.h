@@ -1,0 +1,34 @@
+/* cli_test_util.h — what the tests that run the eventlfm program share
+ * (include after check.h). */
+#ifndef ELFM_TESTS_CLI_TEST_UTIL_H
+#define ELFM_TESTS_CLI_TEST_UTIL_H
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+/* Run `eventlfm ARGS` from the build tree, stdout to DIR/out.txt, stderr
+ * to DIR/err.txt; its exit code (-1: it did not exit). */
+static inline int cli_run(const char *dir, const char *args)
+{
+  char cmd[4096];
+  snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
+  int rc = system(cmd);
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/* 1 when DIR/NAME's first 8 kB hold `text`. */
+static inline int cli_file_has(const char *dir, const char *name, const char *text)
+{
+  char path[700], buf[8192];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "r");
+  if (!f) return 0;
+  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  fclose(f);
+  buf[n] = '\0';
+  return strstr(buf, text) != NULL;
+}
+
+#endif
