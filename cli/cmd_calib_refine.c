@@ -23,6 +23,10 @@
 
 static const char *const C = "calib refine";
 
+/* The coarse step's points per volume: the brightest, whose images stand
+ * out in every view. */
+#define VOTERS_PER_VOLUME 50
+
 typedef struct refine_opts {
   const char *calib, *events, *out;
   elfm_recon_options recon;
@@ -31,6 +35,7 @@ typedef struct refine_opts {
   double threshold;   /* peaks above this value only (bright points fit best) */
   int min_views;      /* views that must agree with a point's fit */
   int min_points;     /* misses a view needs to move */
+  int search_px;      /* the coarse step's reach (0: none) */
   int quiet;
   double planes_um[3]; /* --z-*-um for the passes' volumes (NaN: the calibration's) */
 } refine_opts;
@@ -39,6 +44,8 @@ typedef struct refine_opts {
 typedef struct refine_slot {
   int n;
   double *miss, *wt; /* [max_pts][2 nv], [max_pts][nv] */
+  double (*pos)[3];  /* the coarse step: the points, um */
+  const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
 } refine_slot;
 
 typedef struct refine_ctx {
@@ -49,6 +56,8 @@ typedef struct refine_ctx {
   elfm_detection *det; /* [threads][max_pts] */
   refine_slot *slot;   /* [slots] */
   elfm_calib_refine *acc;
+  const elfm_calib *cal; /* the centres of this pass */
+  int voting;            /* this pass is the coarse step */
   int64_t volumes;
 } refine_ctx;
 
@@ -70,6 +79,9 @@ static void usage(FILE *f)
           "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
           "  --min-views N        views that must agree with a point's fit (12)\n"
           "  --min-points N       a view moves only with at least N misses (20)\n"
+          "  --search-px R        first a coarse step: each view's images are looked for\n"
+          "                       up to R px from where the centres put them (12; 0: no\n"
+          "                       such step), for centres from the optics alone\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");
@@ -92,6 +104,17 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
   s->n = 0;
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
   if (st != ELFM_OK) return st;
+  if (c->voting) {
+    /* the brightest points vote (the callback, in frame order) */
+    s->frame = frame;
+    for (int k = 0; k < n && k < VOTERS_PER_VOLUME; k++) {
+      s->pos[k][0] = det[k].x_um;
+      s->pos[k][1] = det[k].y_um;
+      s->pos[k][2] = det[k].z_um;
+      s->n++;
+    }
+    return ELFM_OK;
+  }
   for (int k = 0; k < n; k++) {
     elfm_localize_result r;
     double *miss = s->miss + (size_t)s->n * 2 * (size_t)c->nv, *wt = s->wt + (size_t)s->n * (size_t)c->nv;
@@ -110,6 +133,12 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
   (void)err;
   refine_ctx *c = user;
   const refine_slot *s = &c->slot[slot];
+  if (c->voting) {
+    for (int k = 0; k < s->n; k++)
+      elfm_calib_refine_vote(c->acc, c->cal, s->frame, s->pos[k][0], s->pos[k][1], s->pos[k][2]);
+    c->volumes++;
+    return ELFM_OK;
+  }
   for (int k = 0; k < s->n; k++)
     elfm_calib_refine_add(c->acc, s->miss + (size_t)k * 2 * (size_t)c->nv, s->wt + (size_t)k * (size_t)c->nv);
   c->volumes++;
@@ -146,6 +175,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
   for (int s = 0; c->slot && s < slots; s++) {
     free(c->slot[s].miss);
     free(c->slot[s].wt);
+    free(c->slot[s].pos);
   }
   free(c->slot);
   elfm_calib_refine_free(c->acc);
@@ -166,13 +196,14 @@ static int int_in(const char *opt, const char *arg, int lo, int hi, int *out)
 
 static int parse(int argc, char **argv, refine_opts *o)
 {
-  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_QUIET };
+  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
       {"out", required_argument, 0, O_OUT}, {"ms", required_argument, 0, O_MS},
       {"passes", required_argument, 0, O_PASSES}, {"threshold", required_argument, 0, O_THR},
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
+      {"search-px", required_argument, 0, O_SEARCH},
       {"quiet", no_argument, 0, O_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   elfm_recon_options_default(&o->recon);
@@ -185,6 +216,7 @@ static int parse(int argc, char **argv, refine_opts *o)
   o->threshold = 60;
   o->min_views = 12;
   o->min_points = 20;
+  o->search_px = 12;
   cli_recon_parse rp = {.ro = &o->recon};
   optind = 1;
   opterr = 0;
@@ -204,6 +236,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_THR: ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold); break;
     case O_MINV: ok = int_in("--min-views", optarg, 3, ELFM_MAX_VIEWS, &o->min_views); break;
     case O_MINP: ok = int_in("--min-points", optarg, 1, 1000000, &o->min_points); break;
+    case O_SEARCH: ok = int_in("--search-px", optarg, 0, 64, &o->search_px); break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -268,7 +301,8 @@ int cmd_calib_refine(int argc, char **argv)
   for (int s = 0; ok && s < slots; s++) {
     c.slot[s].miss = malloc((size_t)c.max_pts * 2 * (size_t)c.nv * sizeof(double));
     c.slot[s].wt = malloc((size_t)c.max_pts * (size_t)c.nv * sizeof(double));
-    ok = c.slot[s].miss && c.slot[s].wt;
+    c.slot[s].pos = malloc(VOTERS_PER_VOLUME * sizeof *c.slot[s].pos);
+    ok = c.slot[s].miss && c.slot[s].wt && c.slot[s].pos;
   }
   if (!ok) {
     ctx_free(&c, threads, slots);
@@ -286,6 +320,35 @@ int cmd_calib_refine(int argc, char **argv)
   }
   double total[2 * ELFM_MAX_VIEWS] = {0};
   int rc = CLI_OK;
+  c.cal = &cal;
+  if (o.search_px > 0) {
+    /* the coarse step (elfm_calib_refine_apply_votes) */
+    double shift[2 * ELFM_MAX_VIEWS];
+    int moved = 0;
+    c.voting = 1;
+    if (elfm_calib_refine_set_search(c.acc, o.search_px, &err) != ELFM_OK ||
+        run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
+      ctx_free(&c, threads, slots);
+      return cli_fail(C, &err);
+    }
+    const size_t nv = elfm_calib_refine_votes(c.acc);
+    if (elfm_calib_refine_apply_votes(c.acc, &cal, shift, &moved, &err) != ELFM_OK) {
+      ctx_free(&c, threads, slots);
+      return cli_fail(C, &err);
+    }
+    c.voting = 0;
+    double worst = 0, ss = 0;
+    for (int v = 0; v < c.nv; v++) {
+      const double m = hypot(shift[2 * v], shift[2 * v + 1]);
+      worst = fmax(worst, m);
+      ss += m * m;
+      total[2 * v] += shift[2 * v];
+      total[2 * v + 1] += shift[2 * v + 1];
+    }
+    if (!o.quiet)
+      fprintf(stderr, "calib refine: coarse step (+-%d px): %zu points, %d of %d views moved, RMS %.3f px, "
+              "largest %.3f px\n", o.search_px, nv, moved, c.nv, sqrt(ss / c.nv), worst);
+  }
   for (int pass = 0; pass < o.passes; pass++) {
     /* The first pass starts from centres that may be off by a few pixels:
      * a wider window (7 x 7) and a looser outlier test let the views find

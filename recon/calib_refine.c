@@ -16,6 +16,7 @@
  * the optics, and SPEC §2 says to model more (rotation, scale) only when
  * data show it is needed. */
 #include "elfm_calib.h"
+#include "elfm_frames.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -28,6 +29,9 @@ struct elfm_calib_refine {
   size_t *n;      /* [nv] misses collected per view */
   float *mu, *mw; /* [nv][cap] */
   float *scratch; /* [cap] for the medians */
+  int search_px;  /* the votes' half-width R (0: no votes) */
+  double *votes;  /* [nv][(2R + 1)^2] frame values by offset from the projection */
+  size_t n_votes; /* points voted */
 };
 
 elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_refine **out,
@@ -62,6 +66,7 @@ void elfm_calib_refine_free(elfm_calib_refine *r)
   free(r->mu);
   free(r->mw);
   free(r->scratch);
+  free(r->votes);
   free(r);
 }
 
@@ -154,5 +159,140 @@ elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_c
   if (n_moved) *n_moved = moved;
   memset(r->n, 0, (size_t)r->nv * sizeof *r->n);
   r->n_points = 0;
+  return ELFM_OK;
+}
+
+/* ---- the coarse step: votes ----
+ * The fine passes need each view's image within the view fit's window of
+ * where the centres put it (a few px); a calibration from the optics alone
+ * can be 10 px off (the MLA's placement). So first, for every point, each
+ * view adds the frame's values around the point's projection into a map by
+ * offset: other objects fall anywhere in it, the point's own image always
+ * at the view's error, which the map's peak gives. */
+elfm_status elfm_calib_refine_set_search(elfm_calib_refine *r, int radius_px, elfm_error *err)
+{
+  if (radius_px < 0 || radius_px > 64)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "calib refine: search radius %d px (0..64)",
+                          radius_px);
+  free(r->votes);
+  r->votes = NULL;
+  r->search_px = radius_px;
+  r->n_votes = 0;
+  if (!radius_px) return ELFM_OK;
+  const size_t side = 2 * (size_t)radius_px + 1;
+  r->votes = calloc((size_t)r->nv * side * side, sizeof *r->votes);
+  if (!r->votes) {
+    r->search_px = 0;
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory for the votes");
+  }
+  return ELFM_OK;
+}
+
+void elfm_calib_refine_vote(elfm_calib_refine *r, const elfm_calib *c, const elfm_frame *f, double x_um,
+                            double y_um, double z_um)
+{
+  const int R = r->search_px, side = 2 * R + 1;
+  if (!R || !f || c->n_views != r->nv || !(fabs(x_um) < 1e5 && fabs(y_um) < 1e5 && fabs(z_um) < 1e5))
+    return;
+  for (int v = 0; v < r->nv; v++) {
+    double u, w;
+    elfm_calib_project(c, v, x_um, y_um, z_um, &u, &w);
+    const long iu = lround(u), iw = lround(w);
+    double *h = r->votes + (size_t)v * (size_t)side * (size_t)side;
+    for (int b = -R; b <= R; b++) {
+      const long y = iw + b;
+      if (y < 0 || y >= f->h) continue;
+      const float *row = f->data + (size_t)y * (size_t)f->w;
+      for (int a = -R; a <= R; a++) {
+        const long x = iu + a;
+        if (x < 0 || x >= f->w || !(row[x] > 0)) continue;
+        h[(size_t)(b + R) * (size_t)side + (size_t)(a + R)] += row[x];
+      }
+    }
+  }
+  r->n_votes++;
+}
+
+size_t elfm_calib_refine_votes(const elfm_calib_refine *r)
+{
+  return r->n_votes;
+}
+
+elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, double *shift_px,
+                                          int *n_moved, elfm_error *err)
+{
+  if (c->n_views != r->nv)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calib refine: the calibration has %d views, the votes %d", c->n_views, r->nv);
+  const int R = r->search_px, side = 2 * R + 1;
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
+         dw[ELFM_MAX_VIEWS] = {0};
+  int use[ELFM_MAX_VIEWS] = {0}, moved = 0;
+  for (int v = 0; R > 0 && r->n_votes > 0 && v < r->nv; v++) {
+    const double *h = r->votes + (size_t)v * (size_t)side * (size_t)side;
+    /* the peak of the map smoothed over 3 x 3 (an image is a few px wide),
+     * then the centroid of the smoothed map above its median around it */
+    double best = 0, *sm = calloc((size_t)side * (size_t)side, sizeof *sm);
+    if (!sm) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
+    int pa = 0, pb = 0;
+    for (int b = 0; b < side; b++)
+      for (int a = 0; a < side; a++) {
+        double t = 0;
+        for (int y = b - 1; y <= b + 1; y++)
+          for (int x = a - 1; x <= a + 1; x++)
+            if (x >= 0 && y >= 0 && x < side && y < side) t += h[(size_t)y * (size_t)side + (size_t)x];
+        sm[(size_t)b * (size_t)side + (size_t)a] = t;
+        if (t > best) {
+          best = t;
+          pa = a;
+          pb = b;
+        }
+      }
+    /* the median of the smoothed map: the background the other objects give */
+    float *tmp = malloc((size_t)side * (size_t)side * sizeof *tmp);
+    if (!tmp) {
+      free(sm);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
+    }
+    for (size_t k = 0; k < (size_t)side * (size_t)side; k++) tmp[k] = (float)sm[k];
+    qsort(tmp, (size_t)side * (size_t)side, sizeof *tmp, cmp_float);
+    const double bg = tmp[(size_t)side * (size_t)side / 2];
+    free(tmp);
+    double m = 0, ma = 0, mb = 0;
+    for (int b = pb - 1; b <= pb + 1; b++)
+      for (int a = pa - 1; a <= pa + 1; a++) {
+        if (a < 0 || b < 0 || a >= side || b >= side) continue;
+        const double t = sm[(size_t)b * (size_t)side + (size_t)a] - bg;
+        if (t <= 0) continue;
+        m += t;
+        ma += t * a;
+        mb += t * b;
+      }
+    free(sm);
+    /* a peak that does not stand out of the background (no object seen by
+     * this view, or a view off the sensor): no move */
+    if (!(best > 2 * bg) || !(m > 0)) continue;
+    use[v] = 1;
+    su[v] = ma / m - R;
+    sw[v] = mb / m - R;
+    moved++;
+  }
+  for (int v = 0; v < r->nv; v++) {
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+  }
+  clear_gauge(r->nv, use, du, su);
+  clear_gauge(r->nv, use, dw, sw);
+  for (int v = 0; v < r->nv; v++) {
+    c->views[v].cx_px += su[v];
+    c->views[v].cy_px += sw[v];
+    if (shift_px) {
+      shift_px[2 * v] = su[v];
+      shift_px[2 * v + 1] = sw[v];
+    }
+  }
+  if (n_moved) *n_moved = moved;
+  if (R > 0) memset(r->votes, 0, (size_t)r->nv * (size_t)side * (size_t)side * sizeof *r->votes);
+  r->n_votes = 0;
   return ELFM_OK;
 }

@@ -109,6 +109,19 @@ size_t elfm_calib_refine_points(const elfm_calib_refine *r);
  * of views. */
 elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
                                     double *shift_px, int *n_moved, elfm_error *err);
+/* The coarse step, for centres too far off for the view fit's window (a
+ * calibration from the optics alone): every point votes, in each view,
+ * with the frame's values at offsets up to radius_px from its projection;
+ * each view moves to the peak of its votes (gauge cleared as above; a view
+ * whose peak is not twice the votes' median stays). set_search allocates
+ * the votes (0..64 px; 0 frees them), apply_votes empties them. */
+struct elfm_frame;
+elfm_status elfm_calib_refine_set_search(elfm_calib_refine *r, int radius_px, elfm_error *err);
+void elfm_calib_refine_vote(elfm_calib_refine *r, const elfm_calib *c, const struct elfm_frame *f,
+                            double x_um, double y_um, double z_um);
+size_t elfm_calib_refine_votes(const elfm_calib_refine *r);
+elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, double *shift_px,
+                                          int *n_moved, elfm_error *err);
 
 #ifdef __cplusplus
 }
