@@ -15,7 +15,8 @@ elfm_add_test(test_track_e2e_slow test_track_e2e.c ARGS slow LABELS slow TIMEOUT
 # The `eventlfm track` shell tests: tests/NAME.sh BINARY, exit 77 = skipped.
 function(elfm_add_track_script name)
   add_test(NAME ${name} COMMAND ${CMAKE_SOURCE_DIR}/tests/${name}.sh ${CMAKE_BINARY_DIR}/eventlfm)
-  set_tests_properties(${name} PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT 120)
+  math(EXPR t "120 * ${ELFM_TIMEOUT_FACTOR}")
+  set_tests_properties(${name} PROPERTIES SKIP_RETURN_CODE 77 TIMEOUT ${t})
 endfunction()
 elfm_add_track_script(track_cli)
 elfm_add_track_script(track_view_support)
