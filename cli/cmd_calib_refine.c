@@ -252,6 +252,22 @@ static int parse(int argc, char **argv, refine_opts *o)
   return CLI_OK;
 }
 
+/* A pass's moves (2 per view) into the running totals; their RMS and
+ * largest, px, for the progress line. */
+static void add_moves(int nv, const double *shift, double *total, double *rms, double *worst)
+{
+  double ss = 0;
+  *worst = 0;
+  for (int v = 0; v < nv; v++) {
+    const double m = hypot(shift[2 * v], shift[2 * v + 1]);
+    *worst = fmax(*worst, m);
+    ss += m * m;
+    total[2 * v] += shift[2 * v];
+    total[2 * v + 1] += shift[2 * v + 1];
+  }
+  *rms = sqrt(ss / nv);
+}
+
 /* One pass: refocus, fit, collect (into c->acc). */
 static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
                             elfm_error *err)
@@ -289,8 +305,6 @@ int cmd_calib_refine(int argc, char **argv)
   c.o = &o;
   c.nv = cal.n_views;
   c.max_pts = 1000;
-  elfm_localize_options_default(&c.lo);
-  c.lo.min_views = o.min_views;
   elfm_peaks_options po;
   elfm_peaks_options_default(&po);
   po.absolute = o.threshold;
@@ -337,17 +351,11 @@ int cmd_calib_refine(int argc, char **argv)
       return cli_fail(C, &err);
     }
     c.voting = 0;
-    double worst = 0, ss = 0;
-    for (int v = 0; v < c.nv; v++) {
-      const double m = hypot(shift[2 * v], shift[2 * v + 1]);
-      worst = fmax(worst, m);
-      ss += m * m;
-      total[2 * v] += shift[2 * v];
-      total[2 * v + 1] += shift[2 * v + 1];
-    }
+    double rms, worst;
+    add_moves(c.nv, shift, total, &rms, &worst);
     if (!o.quiet)
       fprintf(stderr, "calib refine: coarse step (+-%d px): %zu points, %d of %d views moved, RMS %.3f px, "
-              "largest %.3f px\n", o.search_px, nv, moved, c.nv, sqrt(ss / c.nv), worst);
+              "largest %.3f px\n", o.search_px, nv, moved, c.nv, rms, worst);
   }
   for (int pass = 0; pass < o.passes; pass++) {
     /* The first pass starts from centres that may be off by a few pixels:
@@ -370,18 +378,12 @@ int cmd_calib_refine(int argc, char **argv)
       rc = cli_fail(C, &err);
       break;
     }
-    double worst = 0, ss = 0;
-    for (int v = 0; v < c.nv; v++) {
-      const double m = hypot(shift[2 * v], shift[2 * v + 1]);
-      worst = fmax(worst, m);
-      ss += m * m;
-      total[2 * v] += shift[2 * v];
-      total[2 * v + 1] += shift[2 * v + 1];
-    }
+    double rms, worst;
+    add_moves(c.nv, shift, total, &rms, &worst);
     if (!o.quiet)
       fprintf(stderr, "calib refine: pass %d: %" PRId64 " volumes, %zu points, %d of %d views moved, "
               "RMS %.3f px, largest %.3f px\n", pass + 1, c.volumes, npts, moved, c.nv,
-              sqrt(ss / c.nv), worst);
+              rms, worst);
     if (npts == 0) {
       rc = cli_message(C, CLI_FAIL, "%s: no point in the first %g ms could be fitted from %d views "
                        "(try a lower --threshold or --min-views, or a longer --ms)", o.events, o.ms,

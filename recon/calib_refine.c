@@ -127,6 +127,27 @@ static void clear_gauge(int nv, const int *use, const double *d, double *s)
     if (use[v]) s[v] -= a + b * d[v];
 }
 
+/* Move c's views with use[v] by (su[v], sw[v]) cleared of the gauge; the
+ * moves into shift_px (2 per view, may be NULL). */
+static void move_views(elfm_calib *c, const int *use, double *su, double *sw, double *shift_px)
+{
+  double du[ELFM_MAX_VIEWS] = {0}, dw[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < c->n_views; v++) {
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+  }
+  clear_gauge(c->n_views, use, du, su);
+  clear_gauge(c->n_views, use, dw, sw);
+  for (int v = 0; v < c->n_views; v++) {
+    c->views[v].cx_px += su[v];
+    c->views[v].cy_px += sw[v];
+    if (shift_px) {
+      shift_px[2 * v] = su[v];
+      shift_px[2 * v + 1] = sw[v];
+    }
+  }
+}
+
 elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
                                     double *shift_px, int *n_moved, elfm_error *err)
 {
@@ -135,27 +156,15 @@ elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_c
                           "calib refine: the calibration has %d views, the misses %d", c->n_views,
                           r->nv);
   if (min_points < 1) min_points = 1;
-  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
-         dw[ELFM_MAX_VIEWS] = {0};
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0};
   int use[ELFM_MAX_VIEWS] = {0}, moved = 0;
   for (int v = 0; v < r->nv; v++) {
     use[v] = r->n[v] >= (size_t)min_points;
     su[v] = use[v] ? median_of(r->scratch, r->mu + (size_t)v * r->cap, r->n[v]) : 0;
     sw[v] = use[v] ? median_of(r->scratch, r->mw + (size_t)v * r->cap, r->n[v]) : 0;
-    du[v] = c->views[v].dx_px_per_um;
-    dw[v] = c->views[v].dy_px_per_um;
     moved += use[v];
   }
-  clear_gauge(r->nv, use, du, su);
-  clear_gauge(r->nv, use, dw, sw);
-  for (int v = 0; v < r->nv; v++) {
-    c->views[v].cx_px += su[v];
-    c->views[v].cy_px += sw[v];
-    if (shift_px) {
-      shift_px[2 * v] = su[v];
-      shift_px[2 * v + 1] = sw[v];
-    }
-  }
+  move_views(c, use, su, sw, shift_px);
   if (n_moved) *n_moved = moved;
   memset(r->n, 0, (size_t)r->nv * sizeof *r->n);
   r->n_points = 0;
@@ -225,15 +234,21 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "calib refine: the calibration has %d views, the votes %d", c->n_views, r->nv);
   const int R = r->search_px, side = 2 * R + 1;
-  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
-         dw[ELFM_MAX_VIEWS] = {0};
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0};
   int use[ELFM_MAX_VIEWS] = {0}, moved = 0;
+  const size_t cells = (size_t)side * (size_t)side;
+  double *sm = R > 0 ? malloc(cells * sizeof *sm) : NULL;
+  float *tmp = R > 0 ? malloc(cells * sizeof *tmp) : NULL;
+  if (R > 0 && (!sm || !tmp)) {
+    free(sm);
+    free(tmp);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
+  }
   for (int v = 0; R > 0 && r->n_votes > 0 && v < r->nv; v++) {
-    const double *h = r->votes + (size_t)v * (size_t)side * (size_t)side;
+    const double *h = r->votes + (size_t)v * cells;
     /* the peak of the map smoothed over 3 x 3 (an image is a few px wide),
      * then the centroid of the smoothed map above its median around it */
-    double best = 0, *sm = calloc((size_t)side * (size_t)side, sizeof *sm);
-    if (!sm) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
+    double best = 0;
     int pa = 0, pb = 0;
     for (int b = 0; b < side; b++)
       for (int a = 0; a < side; a++) {
@@ -249,15 +264,9 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
         }
       }
     /* the median of the smoothed map: the background the other objects give */
-    float *tmp = malloc((size_t)side * (size_t)side * sizeof *tmp);
-    if (!tmp) {
-      free(sm);
-      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
-    }
-    for (size_t k = 0; k < (size_t)side * (size_t)side; k++) tmp[k] = (float)sm[k];
-    qsort(tmp, (size_t)side * (size_t)side, sizeof *tmp, cmp_float);
-    const double bg = tmp[(size_t)side * (size_t)side / 2];
-    free(tmp);
+    for (size_t k = 0; k < cells; k++) tmp[k] = (float)sm[k];
+    qsort(tmp, cells, sizeof *tmp, cmp_float);
+    const double bg = tmp[cells / 2];
     double m = 0, ma = 0, mb = 0;
     for (int b = pb - 1; b <= pb + 1; b++)
       for (int a = pa - 1; a <= pa + 1; a++) {
@@ -268,7 +277,6 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
         ma += t * a;
         mb += t * b;
       }
-    free(sm);
     /* a peak that does not stand out of the background (no object seen by
      * this view, or a view off the sensor): no move */
     if (!(best > 2 * bg) || !(m > 0)) continue;
@@ -277,22 +285,11 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
     sw[v] = mb / m - R;
     moved++;
   }
-  for (int v = 0; v < r->nv; v++) {
-    du[v] = c->views[v].dx_px_per_um;
-    dw[v] = c->views[v].dy_px_per_um;
-  }
-  clear_gauge(r->nv, use, du, su);
-  clear_gauge(r->nv, use, dw, sw);
-  for (int v = 0; v < r->nv; v++) {
-    c->views[v].cx_px += su[v];
-    c->views[v].cy_px += sw[v];
-    if (shift_px) {
-      shift_px[2 * v] = su[v];
-      shift_px[2 * v + 1] = sw[v];
-    }
-  }
+  free(sm);
+  free(tmp);
+  move_views(c, use, su, sw, shift_px);
   if (n_moved) *n_moved = moved;
-  if (R > 0) memset(r->votes, 0, (size_t)r->nv * (size_t)side * (size_t)side * sizeof *r->votes);
+  if (R > 0) memset(r->votes, 0, (size_t)r->nv * cells * sizeof *r->votes);
   r->n_votes = 0;
   return ELFM_OK;
 }
