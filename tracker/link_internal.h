@@ -200,6 +200,17 @@ elfm_status elfm_link_candidates(elfm_linker *l, const elfm_detection *det, size
  * attachments and births; nd is the frame's detection count (their
  * det_id are relabelled when a track they joined changes). */
 
+/* Step 1, predictions (link_predict.c). Fill lt->pred and lt->gate_um
+ * for a frame at t_us (lt->missed set); at_rest: elfm_link_objects_at_rest
+ * for this frame. */
+void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest);
+/* Most live tracks of >= 4 points slower than rest_speed_um_per_ms by
+ * their straight-line fit, or none has 4 points yet. */
+int elfm_link_objects_at_rest(const elfm_linker *l);
+/* The rest hypothesis of a track dark for more than short_gap frames:
+ * lt->has_rest, rest and rest_gate_um. */
+void elfm_link_predict_rest(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest);
+
 /* Step 5, stitching (o.stitch_points > 0): each track that reached
  * stitch_points points in `frame` may be appended to a live track dark
  * since before its first point; the young track is then freed and removed
