@@ -47,6 +47,10 @@ int cli_message(const char *cmd, int code, const char *fmt, ...)
 int cli_parse_double(const char *cmd, const char *opt, const char *s, double *out);
 int cli_parse_int64(const char *cmd, const char *opt, const char *s, int64_t *out);
 int cli_parse_int(const char *cmd, const char *opt, const char *s, int *out);
+/* A whole number in lo..hi; out of range: a usage message "OPT must be
+ * RANGE, not 'S'" (range says it in words). */
+int cli_parse_int_in(const char *cmd, const char *opt, const char *s, int lo, int hi,
+                     const char *range, int *out);
 /* A number in lo..hi (lo excluded when lo_open); out of range: a usage
  * message "OPT must be RANGE, not 'S'" (range says it in words). */
 int cli_parse_double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,

@@ -246,8 +246,8 @@ static int int64_in(const char *cmd, const char *opt, const char *s, int64_t lo,
   return 1;
 }
 
-static int int_in(const char *cmd, const char *opt, const char *s, int lo, int hi,
-                  const char *range, int *out)
+int cli_parse_int_in(const char *cmd, const char *opt, const char *s, int lo, int hi,
+                     const char *range, int *out)
 {
   int64_t v;
   if (!int64_in(cmd, opt, s, lo, hi, range, &v)) return 0;
@@ -359,7 +359,7 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
                                &fo->tau_bright_us);
   case CLI_RO_REPR: return cli_parse_repr(cmd, arg, &fo->repr);
   case CLI_RO_TRIG_CH:
-    return int_in(cmd, "--trigger-channel", arg, -1, 255, "-1 (any) .. 255", &fo->trigger_channel);
+    return cli_parse_int_in(cmd, "--trigger-channel", arg, -1, 255, "-1 (any) .. 255", &fo->trigger_channel);
   case CLI_RO_START: {
     int v = 0;
     if (!parse_name(cmd, "--start", arg, start_names, N_OF(start_names), &v)) return 0;
@@ -409,9 +409,9 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
   case CLI_RO_AGREE:
     return cli_parse_double_in(cmd, "--agree", arg, 0, 0, 1, "0..1", &ro->refocus.agree_frac);
   case CLI_RO_THREADS:
-    return int_in(cmd, "--threads", arg, 0, THREADS_MAX, "0..1024 (0: all)", &ro->threads);
+    return cli_parse_int_in(cmd, "--threads", arg, 0, THREADS_MAX, "0..1024 (0: all)", &ro->threads);
   case CLI_RO_BATCH:
-    return int_in(cmd, "--batch", arg, 0, BATCH_MAX, "0..4096 (0: 2 x threads)", &ro->batch);
+    return cli_parse_int_in(cmd, "--batch", arg, 0, BATCH_MAX, "0..4096 (0: 2 x threads)", &ro->batch);
   case CLI_RO_ZMIN:
   case CLI_RO_ZMAX:
   case CLI_RO_ZSTEP: {

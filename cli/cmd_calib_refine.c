@@ -181,19 +181,6 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
   elfm_calib_refine_free(c->acc);
 }
 
-/* A whole number in lo..hi, or a usage message naming the option: 1 / 0. */
-static int int_in(const char *opt, const char *arg, int lo, int hi, int *out)
-{
-  int v;
-  if (!cli_parse_int(C, opt, arg, &v)) return 0;
-  if (v < lo || v > hi) {
-    cli_message(C, CLI_USAGE, "%s must be %d..%d, not '%s'", opt, lo, hi, arg);
-    return 0;
-  }
-  *out = v;
-  return 1;
-}
-
 static int parse(int argc, char **argv, refine_opts *o)
 {
   enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_QUIET };
@@ -232,11 +219,11 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_EVENTS: o->events = optarg; break;
     case O_OUT: o->out = optarg; break;
     case O_MS: ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
-    case O_PASSES: ok = int_in("--passes", optarg, 1, 20, &o->passes); break;
+    case O_PASSES: ok = cli_parse_int_in(C, "--passes", optarg, 1, 20, "1..20", &o->passes); break;
     case O_THR: ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold); break;
-    case O_MINV: ok = int_in("--min-views", optarg, 3, ELFM_MAX_VIEWS, &o->min_views); break;
-    case O_MINP: ok = int_in("--min-points", optarg, 1, 1000000, &o->min_points); break;
-    case O_SEARCH: ok = int_in("--search-px", optarg, 0, 64, &o->search_px); break;
+    case O_MINV: ok = cli_parse_int_in(C, "--min-views", optarg, 3, ELFM_MAX_VIEWS, "3..81", &o->min_views); break;
+    case O_MINP: ok = cli_parse_int_in(C, "--min-points", optarg, 1, 1000000, "1..1000000", &o->min_points); break;
+    case O_SEARCH: ok = cli_parse_int_in(C, "--search-px", optarg, 0, 64, "0..64", &o->search_px); break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }

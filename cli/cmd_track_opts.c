@@ -589,9 +589,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return cli_message(C, CLI_USAGE, "--circle-points must be 0 (off) or 6..1000, not %s", a);
       break;
     case O_CIRCA:
-      if (!cli_parse_int(C, "--circle-after", a, &o.link.circle_after)) return CLI_USAGE;
-      if (o.link.circle_after < 1 || o.link.circle_after > 1000)
-        return cli_message(C, CLI_USAGE, "--circle-after must be 1..1000 frames, not %s", a);
+      if (!cli_parse_int_in(C, "--circle-after", a, 1, 1000, "1..1000 frames", &o.link.circle_after))
+        return CLI_USAGE;
       break;
     case O_FILLN:
       if (!cli_parse_int(C, "--fill-max-gap", a, &o.fill_max_gap)) return CLI_USAGE;

@@ -286,6 +286,20 @@ static char dir[] = "/tmp/elfm_calib_refine_XXXXXX";
 static int run(const char *args) { return cli_run(dir, args); }
 static int err_has(const char *text) { return cli_file_has(dir, "err.txt", text); }
 
+/* `eventlfm calib refine --calib CALIB --events SIM/events.raw --out
+ * DIR/OUT EXTRA`; exit 0 and *r the calibration it wrote, checked. */
+static void refine_cli(const char *calib, const char *sim, const char *out, const char *extra,
+                       elfm_calib *r)
+{
+  char args[3000], q[800];
+  elfm_error err;
+  snprintf(args, sizeof args, "calib refine --calib %s --events %s/events.raw --out %s/%s %s", calib,
+           sim, dir, out, extra);
+  CHECK_EQ_INT(run(args), 0);
+  snprintf(q, sizeof q, "%s/%s", dir, out);
+  CHECK_OK(elfm_calib_load(q, r, &err), &err);
+}
+
 static void test_cli(void)
 {
   char bin[600];
@@ -316,23 +330,18 @@ static void test_cli(void)
   snprintf(p, sizeof p, "%s/moved.json", dir);
   CHECK_OK(elfm_calib_save(&c, p, &err), &err);
 
-  snprintf(args, sizeof args, "calib refine --calib %s/moved.json --events %s/events.raw --out %s/r.json --ms 60",
-           dir, sim, dir);
-  CHECK_EQ_INT(run(args), 0);
-  CHECK(err_has("pass 4") && err_has("view (+2, +2)")); /* progress and the moves on stderr */
+  char moved[800], far_path[800];
+  snprintf(moved, sizeof moved, "%s", p);
   elfm_calib r;
-  snprintf(q, sizeof q, "%s/r.json", dir);
-  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  refine_cli(moved, sim, "r.json", "--ms 60", &r);
+  CHECK(err_has("pass 4") && err_has("view (+2, +2)")); /* progress and the moves on stderr */
   const double before = centre_error(&c, &truth), after = centre_error(&r, &truth);
   printf("simulated flow, 60 ms: centres off by up to %.3f px -> %.4f px\n", before, after);
   CHECK_MSG(before > 1.0 && after < 0.1, "refined centres off by %.3f px (%.3f before)", after, before);
   CHECK(r.z_step_um == truth.z_step_um && r.views[3].dx_px_per_um == truth.views[3].dx_px_per_um);
   /* the simulator's own calibration stays */
-  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/t.json --ms 60 --passes 2 --quiet",
-           sim, sim, dir);
-  CHECK_EQ_INT(run(args), 0);
-  snprintf(q, sizeof q, "%s/t.json", dir);
-  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  snprintf(q, sizeof q, "%s/calib.json", sim);
+  refine_cli(q, sim, "t.json", "--ms 60 --passes 2 --quiet", &r);
   CHECK_MSG(centre_error(&r, &truth) < 0.1, "the right calibration moved by %.3f px",
             centre_error(&r, &truth));
 
@@ -340,20 +349,12 @@ static void test_cli(void)
    * coarse step brings them in; without it (--search-px 0) they stay off */
   elfm_calib far = truth;
   perturb(&far, 4.0, 31);
-  snprintf(p, sizeof p, "%s/far.json", dir);
-  CHECK_OK(elfm_calib_save(&far, p, &err), &err);
-  snprintf(args, sizeof args, "calib refine --calib %s/far.json --events %s/events.raw --out %s/f.json --ms 60",
-           dir, sim, dir);
-  CHECK_EQ_INT(run(args), 0);
+  snprintf(far_path, sizeof far_path, "%s/far.json", dir);
+  CHECK_OK(elfm_calib_save(&far, far_path, &err), &err);
+  refine_cli(far_path, sim, "f.json", "--ms 60", &r);
   CHECK(err_has("coarse step"));
-  snprintf(q, sizeof q, "%s/f.json", dir);
-  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
   const double far_after = centre_error(&r, &truth);
-  snprintf(args, sizeof args, "calib refine --calib %s/far.json --events %s/events.raw --out %s/f0.json --ms 60 --search-px 0 --quiet",
-           dir, sim, dir);
-  CHECK_EQ_INT(run(args), 0);
-  snprintf(q, sizeof q, "%s/f0.json", dir);
-  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  refine_cli(far_path, sim, "f0.json", "--ms 60 --search-px 0 --quiet", &r);
   const double far_fine_only = centre_error(&r, &truth);
   printf("simulated flow, centres up to %.2f px off: %.4f px with the coarse step, %.3f px without\n",
          centre_error(&far, &truth), far_after, far_fine_only);
@@ -361,11 +362,7 @@ static void test_cli(void)
   CHECK_MSG(far_fine_only > 1, "without the coarse step the far-off centres came in (%.3f px): the test "
             "no longer shows what the step is for", far_fine_only);
   /* coarser planes for the passes: the file written keeps its own */
-  snprintf(args, sizeof args, "calib refine --calib %s/moved.json --events %s/events.raw --out %s/z.json --ms 30 --passes 1 --z-step-um 4 --quiet",
-           dir, sim, dir);
-  CHECK_EQ_INT(run(args), 0);
-  snprintf(q, sizeof q, "%s/z.json", dir);
-  CHECK_OK(elfm_calib_load(q, &r, &err), &err);
+  refine_cli(moved, sim, "z.json", "--ms 30 --passes 1 --z-step-um 4 --quiet", &r);
   CHECK(r.z_step_um == truth.z_step_um && r.z_min_um == truth.z_min_um);
   CHECK_MSG(centre_error(&r, &truth) < 0.5 * centre_error(&c, &truth), "one pass on 4 um planes: %.3f px",
             centre_error(&r, &truth));
