@@ -68,13 +68,13 @@ static void usage(FILE *f)
           "                             [options]\n\n"
           "Fits the views' centres (cx, cy) of calib.json to a recording of bright points\n"
           "(beads that move or blink, so that the event camera sees them) and writes the\n"
-          "calibration with the moved centres. Each pass refocuses the first --ms of the\n"
-          "recording, fits every bright peak from all views and moves each view by the\n"
-          "median of its images' misses. Moves no recording can see are left out: all\n"
+          "calibration with the moved centres. Each pass refocuses --ms of the recording\n"
+          "(from its first event, or from --from-us to --to-us at most), fits every bright\n"
+          "peak from all views and moves each view by the median of its images' misses. Moves no recording can see are left out: all\n"
           "views alike (the volume's x-y origin) and in proportion to the disparities\n"
           "(its focal plane); the disparities themselves are kept (from the optics).\n"
           "Per-pass progress and each view's move on stderr.\n\n"
-          "  --ms T               read the first T ms of the recording per pass (200)\n"
+          "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
           "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
           "  --min-views N        views that must agree with a point's fit (12)\n"
@@ -232,8 +232,8 @@ static int parse(int argc, char **argv, refine_opts *o)
   if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!o->calib || !o->events || !o->out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
-  if (o->recon.from_us != INT64_MIN || o->recon.to_us != INT64_MAX)
-    return cli_message(C, CLI_USAGE, "--from-us / --to-us: each pass reads the first --ms");
+  if (o->recon.from_us != INT64_MIN && o->recon.to_us != INT64_MAX && o->recon.to_us <= o->recon.from_us)
+    return cli_message(C, CLI_USAGE, "--to-us must be after --from-us");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o->planes_um);
   return CLI_OK;
@@ -280,10 +280,14 @@ int cmd_calib_refine(int argc, char **argv)
    * keeps the calibration's own */
   const double z_file[3] = {cal.z_min_um, cal.z_max_um, cal.z_step_um};
   if (!cli_apply_planes(C, o.planes_um, o.calib, &cal)) return CLI_USAGE;
-  int64_t t0;
-  if (first_event_us(o.events, &o.recon.reader, &t0, &err) != ELFM_OK) return cli_fail(C, &err);
+  /* Every pass reads the same stretch: --ms from the first event, or from
+   * --from-us (beads may enter the field late), cut at --to-us. */
+  int64_t t0 = o.recon.from_us;
+  if (t0 == INT64_MIN && first_event_us(o.events, &o.recon.reader, &t0, &err) != ELFM_OK)
+    return cli_fail(C, &err);
+  const int64_t t1 = t0 + (int64_t)llround(o.ms * 1000);
   o.recon.from_us = t0;
-  o.recon.to_us = t0 + (int64_t)llround(o.ms * 1000);
+  if (o.recon.to_us > t1) o.recon.to_us = t1;
 
   int threads = 0, slots = 0;
   if (elfm_recon_layout(&o.recon, &threads, &slots, &err) != ELFM_OK) return cli_fail(C, &err);
@@ -372,9 +376,9 @@ int cmd_calib_refine(int argc, char **argv)
               "RMS %.3f px, largest %.3f px\n", pass + 1, c.volumes, npts, moved, c.nv,
               rms, worst);
     if (npts == 0) {
-      rc = cli_message(C, CLI_FAIL, "%s: no point in the first %g ms could be fitted from %d views "
-                       "(try a lower --threshold or --min-views, or a longer --ms)", o.events, o.ms,
-                       o.min_views);
+      rc = cli_message(C, CLI_FAIL, "%s: no point in %" PRId64 "..%" PRId64 " us could be fitted from "
+                       "%d views (try a lower --threshold or --min-views, or a longer --ms)", o.events,
+                       o.recon.from_us, o.recon.to_us, o.min_views);
       break;
     }
   }

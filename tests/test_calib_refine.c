@@ -361,6 +361,9 @@ static void test_cli(void)
   CHECK_MSG(centre_error(&far, &truth) > 5 && far_after < 0.1, "far off: %.3f px after refining", far_after);
   CHECK_MSG(far_fine_only > 1, "without the coarse step the far-off centres came in (%.3f px): the test "
             "no longer shows what the step is for", far_fine_only);
+  /* a later stretch (--from-us) or a shorter one (--to-us) works as well */
+  refine_cli(moved, sim, "w.json", "--from-us 20000 --to-us 60000 --quiet", &r);
+  CHECK_MSG(centre_error(&r, &truth) < 0.1, "refined on 20-60 ms: %.3f px", centre_error(&r, &truth));
   /* coarser planes for the passes: the file written keeps its own */
   refine_cli(moved, sim, "z.json", "--ms 30 --passes 1 --z-step-um 4 --quiet", &r);
   CHECK(r.z_step_um == truth.z_step_um && r.z_min_um == truth.z_min_um);
@@ -369,7 +372,7 @@ static void test_cli(void)
   /* usage errors: exit 2 */
   CHECK_EQ_INT(run("calib refine"), 2);
   const char *bad[] = {"--passes 0", "--passes 2.5", "--ms 0", "--min-views 2", "--threshold -1",
-                       "--from-us 5", "--dt-us 10", "--bogus", "--z-min-um 500", "--search-px 65"};
+                       "--from-us 50 --to-us 40", "--dt-us 10", "--bogus", "--z-min-um 500", "--search-px 65"};
   for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
     snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json %s",
              sim, sim, dir, bad[k]);
@@ -393,6 +396,16 @@ static void test_cli(void)
            sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
   CHECK(err_has("no point"));
+  /* --from-us, --to-us: the passes read that stretch. Past the last
+   * event nothing can be fitted, and the message names the stretch */
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --from-us 90000 --quiet",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(err_has("90000..290000 us"));
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --to-us 500 --quiet",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(err_has("..500 us"));
   snprintf(p, sizeof p, "%s/u.json", dir);
   CHECK_MSG(access(p, F_OK) != 0, "a failed refine wrote %s", p);
 
