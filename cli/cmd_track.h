@@ -55,12 +55,20 @@ typedef struct track_opts {
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
  * within TRACK_WIDTH_FOCUS_UM of focus, binned up to 10 um; at least
- * TRACK_WIDTH_MIN_PEAKS of them, else the fixed default. */
+ * TRACK_WIDTH_MIN_PEAKS of them, else the fixed default. The lead is
+ * TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH x their median, at
+ * least 0: pixels that objects pass again and again (flows, swimming
+ * animals), where the last object's OFF events left each reference above
+ * the background. With --motion stage, where most pixels see a bead pass
+ * once, TRACK_LEAD_PER_WIDTH_FIRST_PASS x the median (docs/tracker.md
+ * "The lead in the sensor's steady state"). */
 #define TRACK_WIDTH_BIN_UM 0.01
 #define TRACK_WIDTH_BINS 1000
 #define TRACK_WIDTH_FOCUS_UM 20.0
 #define TRACK_WIDTH_MIN_PEAKS 50
-#define TRACK_LEAD_PER_WIDTH 1.52
+#define TRACK_LEAD_PER_WIDTH 1.80
+#define TRACK_LEAD_AT_ZERO_WIDTH_UM (-0.37)
+#define TRACK_LEAD_PER_WIDTH_FIRST_PASS 1.52
 
 /* The options (cmd_track_opts.c): track's defaults, then argv. CLI_OK: run
  * with *o; TRACK_PARSE_HELP: --help was printed (exit 0); otherwise the
@@ -233,8 +241,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
 /* Count peak d's width into c's histogram when it is a strong in-focus peak
  * (not weak, not a view-fit point, |z| < TRACK_WIDTH_FOCUS_UM). */
 void track_width_add(track_ctx *c, const elfm_detection *d);
-/* The lead to smooth with: with motion_lead_auto and enough widths,
- * TRACK_LEAD_PER_WIDTH x their median; else the options' lead. */
+/* The median width of those peaks, um; NAN before the first. */
+double track_peak_width_median_um(const track_ctx *c);
+/* The lead to smooth with: with motion_lead_auto and enough widths, from
+ * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);
 /* The median over the store's smoothed tracks of each track's mean lateral
  * speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */

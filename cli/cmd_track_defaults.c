@@ -270,7 +270,16 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * width of the peaks within 20 um of focus (elfm_detection.width_um),
      * 14 recordings: lead = 1.52 x width, RMS 0.067 um without the dimmest
      * (an affine fit's intercept is 0.03 um). So the lead follows the
-     * recording's peaks (track_motion_lead_um); 1.25 um until 50 peaks. */
+     * recording's peaks (track_motion_lead_um); 1.25 um until 50 peaks.
+     * Those were a simulation's first 100 ms, where every pixel's
+     * reference still lay anywhere in its dead band. Once objects have
+     * passed, their OFF events leave it above the background, the leading
+     * edge fires later, and dim beads lead much less: flow 1 s at 0.5 / 1 /
+     * 2 x the flux, detections after 400 ms, lead = 1.80 x width - 0.37
+     * um (12 recordings; RMS 0.125 um against 0.193 for 1.52 x width).
+     * A real recording starts in that state (docs/tracker.md "The lead in
+     * the sensor's steady state"); --motion stage, whose pixels mostly see
+     * a bead pass once, keeps 1.52 x width (track_motion_lead_um). */
     if (!g->mlead) {
       o->smooth.motion_lead_um = 1.25;
       o->motion_lead_auto = 1;

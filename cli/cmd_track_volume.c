@@ -52,13 +52,21 @@ void track_width_add(track_ctx *c, const elfm_detection *d)
   c->n_width++;
 }
 
-double track_motion_lead_um(const track_ctx *c)
+double track_peak_width_median_um(const track_ctx *c)
 {
-  if (!c->o->motion_lead_auto || c->n_width < TRACK_WIDTH_MIN_PEAKS) return c->o->smooth.motion_lead_um;
+  if (c->n_width == 0) return NAN;
   int64_t half = (c->n_width + 1) / 2, acc = 0;
   int b = 0;
   while (b < TRACK_WIDTH_BINS - 1 && (acc += c->width_hist[b]) < half) b++;
-  return TRACK_LEAD_PER_WIDTH * b * TRACK_WIDTH_BIN_UM;
+  return b * TRACK_WIDTH_BIN_UM;
+}
+
+double track_motion_lead_um(const track_ctx *c)
+{
+  if (!c->o->motion_lead_auto || c->n_width < TRACK_WIDTH_MIN_PEAKS) return c->o->smooth.motion_lead_um;
+  const double w_um = track_peak_width_median_um(c);
+  if (c->o->motion == MOTION_STAGE) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
+  return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);
 }
 
 /* Smooth, filter and write the tracks the linker has finished. Each track
