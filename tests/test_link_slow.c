@@ -19,19 +19,6 @@
 
 enum { DT_US = 2000, GAP0 = 30, GAP1 = 42, END = 60 };
 
-static elfm_detection mk(double x, double y, double z, double intensity)
-{
-  elfm_detection d;
-  memset(&d, 0, sizeof d);
-  d.x_um = x;
-  d.y_um = y;
-  d.z_um = z;
-  d.intensity = intensity;
-  d.sigma_x_um = d.sigma_y_um = 1.6;
-  d.sigma_z_um = 9;
-  return d;
-}
-
 /* Neuron a (0: the dim one at y = 0, 1: its partner at y = 6) in frame f,
  * moving `step_um` per frame along x; small fixed jitter (+-0.1 um). */
 static elfm_detection neuron(int a, int f, double step_um)
@@ -39,7 +26,7 @@ static elfm_detection neuron(int a, int f, double step_um)
   const double jit = 0.1 * sin(1.7 * f + 3 * a);
   double y = 6.0 * a + jit;
   if (a == 0 && (f == GAP0 - 2 || f == GAP0 - 1)) y += 1.5; /* pulled towards the partner */
-  return mk(step_um * f + 0.1 * cos(2.3 * f + a), y, -48 + jit, a ? 80 : 35);
+  return link_test_det(step_um * f + 0.1 * cos(2.3 * f + a), y, -48 + jit, a ? 80 : 35);
 }
 
 /* Run the scene; *pred_y: where the dim neuron's track is predicted in the

@@ -1,6 +1,7 @@
 # Tracker: peaks, linker, smoother, track store and writers, analysis, track command.
 elfm_add_test(test_peaks test_peaks.c TIMEOUT 60)
 elfm_add_test(test_link test_link.c TIMEOUT 60)
+elfm_add_test(test_link_input test_link_input.c TIMEOUT 60)
 elfm_add_test(test_link_fill test_link_fill.c TIMEOUT 60)
 elfm_add_test(test_link_circle test_link_circle.c TIMEOUT 60)
 elfm_add_test(test_link_slow test_link_slow.c)

@@ -1,0 +1,104 @@
+/* test_link_input.c — the linker's bad input (frames and times that go
+ * back, NaN and infinite positions, NULL detections, out-of-range
+ * options: each an error code, no crash) and its lag correction. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_tracker.h"
+#include "link_test_util.h"
+
+static elfm_detection mk(double x, double y, double z) { return link_test_det(x, y, z, 1); }
+
+int main(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_link_options o;
+  elfm_link_options_default(&o);
+  const int64_t T0 = 1000000000000LL;  /* absolute times near 1e12 us */
+
+  /* 1. Bad input. */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    elfm_detection d = mk(0, 0, 0);
+    CHECK_OK(elfm_link_step(l, 5, T0, &d, 1, &err), &err);
+    CHECK_EQ_INT(elfm_link_step(l, 5, T0 + 1000, &d, 1, &err), ELFM_ERR_INVALID);
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 - 1, &d, 1, &err), ELFM_ERR_INVALID);
+    d.y_um = NAN;
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, &d, 1, &err), ELFM_ERR_NUMERIC);
+    d.y_um = INFINITY;
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, &d, 1, &err), ELFM_ERR_NUMERIC);
+    CHECK_EQ_INT(elfm_link_step(l, 6, T0 + 1000, NULL, 3, &err), ELFM_ERR_INVALID);
+    elfm_link_free(l);
+    elfm_link_options bad = o;
+    bad.gate_um = 0;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.rest_speed_um_per_ms = -0.1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad.rest_speed_um_per_ms = NAN;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.stitch_points = 3;  /* a young track needs 4 points for its path */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 3;    /* a tail needs 4 points for its fit */
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.swap_points = 6;
+    bad.swap_ratio = 1.5;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_um = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_um = NAN;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_pad = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_apart = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_ratio = 0;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.encounter_ratio = 1.5;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.review_join_factor = -0.5;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.priority_points = -1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    bad = o;
+    bad.history = 1;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    elfm_link_free(NULL);
+    CHECK(elfm_link_pop_finished(NULL) == NULL);
+  }
+
+  /* 2. Lag correction through the linker: detections trail a bead moving at
+   * 1 um/ms by the model lag; with lag_tau_us set the attached points sit on
+   * the truth again. */
+  {
+    elfm_link_options ol = o;
+    ol.lag_tau_us = 2000;
+    ol.min_points = 1;
+    elfm_linker *l = elfm_link_create(&ol, &err);
+    double lag = elfm_peaks_trail_lag_um(2.0, 1.6);
+    double worst = 0;
+    for (int f = 0; f < 30; f++) {
+      elfm_detection d = mk(1.0 * f - lag, 0, 0);
+      d.sigma_x_um = 1.6;
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+      if (f >= 1 && fabs(d.x_um - f) > worst) worst = fabs(d.x_um - f);
+    }
+    CHECK_MSG(lag > 0.5 && worst < 0.05, "lag %g, worst corrected error %g", lag, worst);
+    elfm_link_free(l);
+  }
+  return check_report();
+}
