@@ -112,6 +112,10 @@ static void track_defaults(track_opts *o)
    * nothing else measured: worm 200 ms seeds 1-4, 6-12, 150 and 500 ms,
    * flow seeds 1-24, dense flow and stage the same to the last digit). */
   o->link.encounter_apart = 4;
+  /* ... and along the heads' circles (elfm_link.h encounter_circle_ratio;
+   * off where circle_points is): flow 1 s seeds 1-8 (docs/tracker.md
+   * "Encounters along circles"). */
+  o->link.encounter_circle_ratio = 0.5;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
    * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
@@ -278,6 +282,8 @@ static void usage(FILE *f)
     "  --encounter-apart N  up to N frames apart, then together again, are one\n"
     "                       encounter (4)\n"
     "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
+    "  --encounter-circle-ratio R  ... or when the heads' circles (--circle-points)\n"
+    "                       meet the tails the other way R times better (0.5; 0 = off)\n"
     "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
     "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
     "  --rest-speed-um-per-ms V  while most tracks of >= 4 points move slower than V,\n"
@@ -399,7 +405,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_RJOIN, O_RESTV
+  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_RJOIN, O_RESTV
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -429,6 +435,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"encounter-apart", required_argument, 0, O_ENCAPART},
       {"rest-speed-um-per-ms", required_argument, 0, O_RESTV},
       {"encounter-ratio", required_argument, 0, O_ENCR},
+      {"encounter-circle-ratio", required_argument, 0, O_ENCCR},
       {"review-join-factor", required_argument, 0, O_RJOIN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
@@ -611,6 +618,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
     case O_ENCUM:
       if (!cli_parse_double_in(C, "--encounter-um", a, 0, 0, 1e6, ">= 0", &o.link.encounter_um)) return CLI_USAGE;
+      break;
+    case O_ENCCR:
+      if (!cli_parse_double_in(C, "--encounter-circle-ratio", a, 0, 0, 1, "0 <= R <= 1",
+                               &o.link.encounter_circle_ratio))
+        return CLI_USAGE;
       break;
     case O_ENCR:
       if (!cli_parse_double_in(C, "--encounter-ratio", a, 0, 1, 1, "0 < R <= 1", &o.link.encounter_ratio))

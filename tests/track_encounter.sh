@@ -33,7 +33,8 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--encounter-um -1" "--encounter-um x" "--encounter-ratio 0" \
   "--encounter-ratio 1.5" "--encounter-pad -1" "--review-join-factor -1" "--encounter-apart -1" \
-  "--encounter-apart x"
+  "--encounter-apart x" "--encounter-circle-ratio -0.1" "--encounter-circle-ratio 1.5" \
+  "--encounter-circle-ratio x"
 # compare SEED OFF_OPTIONS MIN WHAT KEY VALUE: flow 100 ms seed SEED tracked
 # with OFF_OPTIONS and with the defaults; the defaults must gain more than
 # MIN alpha, and summary.json must record KEY = VALUE.

@@ -189,6 +189,18 @@ typedef struct elfm_link_options {
    * 14-17). */
   int encounter_apart;
   double encounter_ratio; /* like swap_ratio, for encounters (default 0.5) */
+  /* With circle_points, an encounter's heads are also joined to the tails
+   * along their circles: the circle through each head's last circle_points
+   * points (where one fits, elfm_link_circle), travelled at its rate, is
+   * compared with the first swap_points points of each tail (mean squared
+   * miss), and the tails are exchanged when the other way misses
+   * encounter_circle_ratio times less (root of the summed mean squares;
+   * within review_join_factor x gate_um too). 0 = off (default; track:
+   * 0.5). Why: two flow beads on their helices that meet and part often
+   * look like a straight crossing over the 8 points of the heads' and
+   * tails' quadratic fits, while their 15-point circles say which way
+   * each turned (flow 1 s: docs/tracker.md "Encounters along circles"). */
+  double encounter_circle_ratio;
   /* Steps 6 and 7 exchange tails only when both new joins lie within
    * review_join_factor x gate_um (root mean square): past that neither
    * extrapolation is known. Default 2; 0 = no limit. */
