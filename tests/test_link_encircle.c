@@ -17,7 +17,6 @@
  * encounter_circle_ratio out of range the linker is not created. */
 #include <math.h>
 #include <stdio.h>
-#include <string.h>
 
 #include "check.h"
 #include "elfm_tracker.h"
@@ -25,14 +24,10 @@
 
 enum { N_FRAMES = 80, MEET = 40 };
 
+/* A bright detection with sigmas of 1 um laterally and 3 um in z. */
 static elfm_detection mk(double x, double y, double z)
 {
-  elfm_detection d;
-  memset(&d, 0, sizeof d);
-  d.x_um = x;
-  d.y_um = y;
-  d.z_um = z;
-  d.intensity = 100;
+  elfm_detection d = link_test_det(x, y, z, 100);
   d.sigma_x_um = d.sigma_y_um = 1;
   d.sigma_z_um = 3;
   return d;
