@@ -116,6 +116,13 @@ static void track_defaults(track_opts *o)
    * off where circle_points is): flow 1 s seeds 1-8 (docs/tracker.md
    * "Encounters along circles"). */
   o->link.encounter_circle_ratio = 0.5;
+  /* ... and, while the objects are at rest, along straight lines through
+   * 20 points (elfm_link.h encounter_line_ratio): worm 500 ms seeds 1-8
+   * and 13-16 alpha 0.9005 -> 0.9116, held-out seeds 17-24 0.8742 ->
+   * 0.8908, no seed down; flow, stage, blink and blink_moving tracks.csv
+   * byte for byte the same (docs/tracker.md "Slow encounters along
+   * straight lines"). */
+  o->link.encounter_line_ratio = 0.5;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
    * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
@@ -284,6 +291,10 @@ static void usage(FILE *f)
     "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
     "  --encounter-circle-ratio R  ... or when the heads' circles (--circle-points)\n"
     "                       meet the tails the other way R times better (0.5; 0 = off)\n"
+    "  --encounter-line-ratio R  ... or, while the objects are at rest (see\n"
+    "                       --rest-speed-um-per-ms), when straight lines through 20\n"
+    "                       points of each head and tail join the other way R times\n"
+    "                       better; the review then waits for 20 points (0.5; 0 = off)\n"
     "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
     "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
     "  --rest-speed-um-per-ms V  while most tracks of >= 4 points move slower than V,\n"
@@ -405,7 +416,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_RJOIN, O_RESTV
+  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -436,6 +447,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"rest-speed-um-per-ms", required_argument, 0, O_RESTV},
       {"encounter-ratio", required_argument, 0, O_ENCR},
       {"encounter-circle-ratio", required_argument, 0, O_ENCCR},
+      {"encounter-line-ratio", required_argument, 0, O_ENCLR},
       {"review-join-factor", required_argument, 0, O_RJOIN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
@@ -622,6 +634,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_ENCCR:
       if (!cli_parse_double_in(C, "--encounter-circle-ratio", a, 0, 0, 1, "0 <= R <= 1",
                                &o.link.encounter_circle_ratio))
+        return CLI_USAGE;
+      break;
+    case O_ENCLR:
+      if (!cli_parse_double_in(C, "--encounter-line-ratio", a, 0, 0, 1, "0 <= R <= 1",
+                               &o.link.encounter_line_ratio))
         return CLI_USAGE;
       break;
     case O_ENCR:

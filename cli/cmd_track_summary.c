@@ -182,6 +182,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "rest_speed_um_per_ms", o->link.rest_speed_um_per_ms);
   cJSON_AddNumberToObject(par, "encounter_ratio", o->link.encounter_ratio);
   cJSON_AddNumberToObject(par, "encounter_circle_ratio", o->link.encounter_circle_ratio);
+  cJSON_AddNumberToObject(par, "encounter_line_ratio", o->link.encounter_line_ratio);
   cJSON_AddNumberToObject(par, "review_join_factor", o->link.review_join_factor);
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);
   cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);

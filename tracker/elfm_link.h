@@ -201,6 +201,16 @@ typedef struct elfm_link_options {
    * tails' quadratic fits, while their 15-point circles say which way
    * each turned (flow 1 s: docs/tracker.md "Encounters along circles"). */
   double encounter_circle_ratio;
+  /* While the objects are at rest (rest_speed_um_per_ms, as for the slow
+   * line of a dark track), step 7 waits until both tracks have `history`
+   * points after the encounter, and also exchanges the tails when straight
+   * lines through up to `history` points of each head and tail join
+   * crosswise encounter_line_ratio times better (root of the summed
+   * squares) and within review_join_factor x the gate. 0 (the default)
+   * = off; in [0, 1]. Why: two slow objects that stay merged for tens of
+   * frames, as worm neurons crossing in z, leave 8-point quadratic fits
+   * whose extrapolations over the encounter decide nothing. */
+  double encounter_line_ratio;
   /* Steps 6 and 7 exchange tails only when both new joins lie within
    * review_join_factor x gate_um (root mean square): past that neither
    * extrapolation is known. Default 2; 0 = no limit. */

@@ -45,6 +45,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->encounter_apart = 0;
   o->encounter_ratio = 0.5;
   o->encounter_circle_ratio = 0;
+  o->encounter_line_ratio = 0;
   o->review_join_factor = 2;
   o->rest_speed_um_per_ms = 0.5;
   o->circle_points = 0;
@@ -73,6 +74,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
       o->encounter_apart < 0 ||
       !(o->encounter_ratio > 0) || !(o->encounter_ratio <= 1) ||
       !(o->encounter_circle_ratio >= 0) || !(o->encounter_circle_ratio <= 1) ||
+      !(o->encounter_line_ratio >= 0) || !(o->encounter_line_ratio <= 1) ||
       !(o->review_join_factor >= 0) || !isfinite(o->review_join_factor) ||
       o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
       !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us) ||
@@ -85,7 +87,7 @@ elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
                    "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
                    "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
                    "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance, "
-                   "pad and apart frames >= 0, 0 < encounter ratio <= 1, 0 <= encounter circle ratio <= 1, review join factor >= 0, priority points and "
+                   "pad and apart frames >= 0, 0 < encounter ratio <= 1, 0 <= encounter circle and line ratios <= 1, review join factor >= 0, priority points and "
                    "short path >= 0, rest speed >= 0, circle points 0 or >= 6, circle after >= 1, "
                    "circle arc >= 0, circle radius > 0, 0 < circle line ratio <= 1)");
     return NULL;

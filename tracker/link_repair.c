@@ -204,6 +204,53 @@ static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_det
   return dx * dx + dy * dy + dz * dz;
 }
 
+/* Least-squares line p = c0 + c1 (t - tr) over pts[k0 .. k1); 0 when the
+ * points span fewer than 2 distinct times. */
+static int fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
+                    double vel[3])
+{
+  double m = 0, st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
+  for (size_t k = k0; k < k1; k++) {
+    const double tm = (double)(pts[k].t_us - tr) * 1e-3;
+    const double p[3] = {pts[k].x_um, pts[k].y_um, pts[k].z_um};
+    m += 1;
+    st += tm;
+    stt += tm * tm;
+    for (int a = 0; a < 3; a++) {
+      sx[a] += p[a];
+      stx[a] += tm * p[a];
+    }
+  }
+  const double den = m * stt - st * st;
+  if (!(den > 1e-12)) return 0;
+  for (int a = 0; a < 3; a++) {
+    vel[a] = (m * stx[a] - st * sx[a]) / den;
+    pos[a] = (sx[a] - vel[a] * st) / m;
+  }
+  return 1;
+}
+
+/* As junction_cost2, with straight lines over up to `history` points. */
+static double line_junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp,
+                                  size_t tn, size_t history, double kz)
+{
+  size_t hk = hn < history ? hn : history, tk = tn < history ? tn : history;
+  if (hk < 4 || tk < 4) return INFINITY;
+  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
+  double hpos[3], hvel[3], tpos[3], tvel[3];
+  if (!fit_line(hp, hn - hk, hn, th, hpos, hvel) || !fit_line(tp, 0, tk, tt, tpos, tvel))
+    return INFINITY;
+  const int64_t tm = th + (tt - th) / 2;
+  const double dh = (double)(tm - th) * 1e-3, dt = (double)(tm - tt) * 1e-3;
+  double s = 0;
+  for (int a = 0; a < 3; a++) {
+    double d = (hpos[a] + hvel[a] * dh) - (tpos[a] + tvel[a] * dt);
+    if (a == 2) d /= kz;
+    s += d * d;
+  }
+  return s;
+}
+
 /* The exchange's two joins (alt: their summed squared distances) are
  * within review_join_factor x gate_um, root mean square. Why: around a
  * sharp turn, or after a long gap, neither head's extrapolation says where
@@ -462,6 +509,31 @@ static int circle_says_exchange(const elfm_link_options *o, const elfm_track *a,
   return isfinite(cur) && isfinite(alt) && alt < rc2 * cur && joins_known(o, alt);
 }
 
+/* Step 7's third test, for objects at rest (elfm_link.h
+ * encounter_line_ratio): 1 when straight lines through up to `history`
+ * points of each head and tail join crosswise encounter_line_ratio times
+ * better than as they are, and within joins_known. Why lines: where two
+ * slow objects stay merged for tens of frames (worm neurons crossing in z
+ * within the axial blur), the 8-point quadratic fits extrapolated over the
+ * encounter carry their curvature's noise, and a slow object's 8 points
+ * span little more than its placement noise (as for the slow line of
+ * elfm_link_predict_track). Worm 500 ms seed 1, tracks 6 and 7 over frames
+ * 30-84 (neurons 2 and 6 crossing 10 um apart in z, 0.3 um laterally):
+ * the quadratic junctions' ratio 0.86, the lines' 0.47 (docs/tracker.md
+ * "Slow encounters along straight lines"). */
+static int lines_say_exchange(const elfm_link_options *o, const elfm_track *a, size_t ah,
+                              size_t at, const elfm_track *b, size_t bh, size_t bt)
+{
+  const size_t H = (size_t)o->history;
+  const double kz = o->kz, rl2 = o->encounter_line_ratio * o->encounter_line_ratio;
+  const elfm_detection *ap = a->pts, *bp = b->pts;
+  const double cur = line_junction_cost2(bp, bh, bp + bt, b->n - bt, H, kz) +
+                     line_junction_cost2(ap, ah, ap + at, a->n - at, H, kz);
+  const double alt = line_junction_cost2(bp, bh, ap + at, a->n - at, H, kz) +
+                     line_junction_cost2(ap, ah, bp + bt, b->n - bt, H, kz);
+  return isfinite(cur) && alt < rl2 * cur && joins_known(o, alt);
+}
+
 /* 7. Encounter review. Flow seed 7, beads 14 and 17 at frame 54: 3 um
  * apart laterally and 10 um in z, well inside the axial blur, they gave
  * two detections at bead 17; both tracks took one, and the next frame each
@@ -478,6 +550,11 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
   const size_t K = (size_t)o->swap_points;
   const int sh = o->short_history;
   const double kz = o->kz, r2 = o->encounter_ratio * o->encounter_ratio;
+  /* Objects at rest (a crawling worm's neurons): the straight lines'
+   * test, over `history` points, so the tails must have that many. */
+  const int lines = o->encounter_line_ratio > 0 && o->rest_speed_um_per_ms > 0 &&
+                    elfm_link_objects_at_rest(l);
+  const size_t H = (size_t)o->history, KT = lines && H > K ? H : K;
   size_t w = 0;
   for (size_t e = 0; e < l->n_enc; e++) {
     link_encounter E = l->enc[e];
@@ -509,7 +586,7 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
     }
     f0 -= o->encounter_pad;
     const size_t bt = first_from(B->t, f1 + 1), at = first_from(A->t, f1 + 1);
-    if (f1 >= frame || B->t->n - bt < K || A->t->n - at < K) {  /* not yet */
+    if (f1 >= frame || B->t->n - bt < KT || A->t->n - at < KT) {  /* not yet */
       l->enc[w++] = E;
       continue;
     }
@@ -524,7 +601,8 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
      * 12 crossing 1-3 um apart while one turns in z, the circles' ratio
      * 0.49 against 2.5 for the junctions, which were right. */
     if (!(isfinite(cur) && alt < r2 * cur && joins_known(o, alt)) &&
-        !(isfinite(cur) && alt < cur && circle_says_exchange(o, A->t, ah, at, B->t, bh, bt, K)))
+        !(isfinite(cur) && alt < cur && circle_says_exchange(o, A->t, ah, at, B->t, bh, bt, K)) &&
+        !(lines && lines_say_exchange(o, A->t, ah, at, B->t, bh, bt)))
       continue;
     /* a gap closing still to be reviewed in a tail moves with it */
     size_t a_tail0 = A->tail0, b_tail0 = B->tail0;
@@ -552,7 +630,16 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
     /* later encounters of either track were their tails' */
     for (size_t g = e + 1; g < l->n_enc; g++) {
       link_encounter *G = &l->enc[g];
-      if (G->first <= f1) continue;
+      if (G->first <= f1) {
+        /* The same two tracks' encounter begun within this one (they
+         * were apart a frame or a few in it) is this meeting, judged now:
+         * dropped (no track has id -1). Reviewed on the exchanged tracks,
+         * its shorter heads undid the exchange: worm 500 ms seed 1, tracks
+         * 6 and 7, encounters 30-84, 61-84 and 81-84 (alpha 0.903 ->
+         * 0.913; flow's tracks.csv the same). */
+        if (G->a_id == E.a_id && G->b_id == E.b_id && G->first >= f0) G->a_id = G->b_id = -1;
+        continue;
+      }
       int64_t *ids[2] = {&G->a_id, &G->b_id};
       for (int m = 0; m < 2; m++) {
         if (*ids[m] == E.a_id) *ids[m] = E.b_id;
