@@ -6,87 +6,16 @@
  *   A: x = -10 + 0.001 t, y = -20, z = 5
  *   B: x =  10 - 0.001 t, y = +20, z = -10 + 0.0004 t
  * They are 40 um apart: no cross-talk through the 4 um gate.
+ * (The scene is in score_test_util.h; bad input: test_score_input.c.)
  */
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
 #include "elfm_tracker.h"
-
-#define NF 20
-static double frame_t(int f) { return 1000.0 + 1000.0 * f; }
-
-static void pos(int obj, double t, double *x, double *y, double *z)
-{
-  if (obj == 0) { *x = -10 + 0.001 * t; *y = -20; *z = 5; }
-  else { *x = 10 - 0.001 * t; *y = 20; *z = -10 + 0.0004 * t; }
-}
-
-/* A growing text buffer. */
-typedef struct { char *s; size_t n, cap; } buf_t;
-static void bprintf(buf_t *b, const char *fmt, ...)
-{
-  va_list ap;
-  for (;;) {
-    va_start(ap, fmt);
-    int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
-    va_end(ap);
-    if (b->s && (size_t)k < b->cap - b->n) { b->n += (size_t)k; return; }
-    b->cap = (b->cap + (size_t)k + 1) * 2;
-    b->s = realloc(b->s, b->cap);
-    if (!b->s) abort();
-  }
-}
-
-static elfm_table *parse(buf_t *b, const char *name)
-{
-  elfm_table *t = NULL;
-  elfm_error err;
-  elfm_error_clear(&err);
-  elfm_status s = elfm_table_parse(b->s, b->n, name, &t, &err);
-  if (s != ELFM_OK) {
-    char m[1200];
-    fprintf(stderr, "test input did not parse: %s\n", elfm_error_format(&err, m, sizeof m));
-    abort();
-  }
-  free(b->s);
-  memset(b, 0, sizeof *b);
-  return t;
-}
-
-/* Truth with optional dark interval for B (frames dark_from..) */
-static elfm_table *make_truth(double b_dark_from_t)
-{
-  buf_t b = {0};
-  bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
-  for (int t = 0; t <= 25000; t += 100)
-    for (int o = 0; o < 2; o++) {
-      double x, y, z;
-      pos(o, t, &x, &y, &z);
-      double br = (o == 1 && t >= b_dark_from_t) ? 0.0 : 1.0;
-      bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,%g\n", o + 7, t, x, y, z, br);
-    }
-  return parse(&b, "truth.csv");
-}
-
-/* Track rows for object o over frames [f0, f1] with id, offset, and frames
- * [g0, g1] as gap-closing fills (raw empty, position junk). */
-static void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double dy, double dz,
-                      int g0, int g1)
-{
-  for (int f = f0; f <= f1; f++) {
-    double x, y, z;
-    pos(o, frame_t(f), &x, &y, &z);
-    if (f >= g0 && f <= g1)
-      bprintf(b, "%d,%d,%.0f,%.17g,%.17g,%.17g,,,,0,0,0,1\n", id, f, frame_t(f), x + 50, y, z);
-    else
-      bprintf(b, "%d,%d,%.0f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,0.001,0,0,1\n", id, f,
-              frame_t(f), x + dx, y + dy, z + dz, x + dx, y + dy, z + dz);
-  }
-}
+#include "score_test_util.h"
 
 /* detections.csv with both objects exactly where they are in frames
  * f0..f1, except frames skip_a and skip_b (-1: none). */
@@ -121,10 +50,6 @@ static elfm_table *make_truth_pulsed(void)
   return parse(&b, "truth.csv");
 }
 
-static const char *TRACK_HEADER =
-    "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um,vx_um_per_ms,vy_um_per_ms,"
-    "vz_um_per_ms,intensity\n";
-
 static elfm_score_result run(const elfm_table *truth, const elfm_table *tracks,
                              const elfm_table *dets, const elfm_score_options *o)
 {
@@ -135,21 +60,6 @@ static elfm_score_result run(const elfm_table *truth, const elfm_table *tracks,
   elfm_score_options_default(&def);
   CHECK_OK(elfm_score_tables(truth, tracks, dets, o ? o : &def, &r, &err), &err);
   return r;
-}
-
-static void expect_fail(const elfm_table *truth, const elfm_table *tracks, const elfm_table *dets,
-                        elfm_status code, const char *file, int64_t line, const char *what)
-{
-  elfm_score_result r;
-  elfm_error err;
-  elfm_error_clear(&err);
-  elfm_score_options def;
-  elfm_score_options_default(&def);
-  elfm_status s = elfm_score_tables(truth, tracks, dets, &def, &r, &err);
-  CHECK_MSG(s == code, "%s: got %s: %s", what, elfm_status_str(s), err.message);
-  CHECK_MSG(strcmp(err.file, file) == 0, "%s: file '%s'", what, err.file);
-  CHECK_MSG(err.line == line, "%s: line %lld, expected %lld (%s)", what, (long long)err.line,
-            (long long)line, err.message);
 }
 
 int main(void)
@@ -494,104 +404,7 @@ int main(void)
     elfm_table_free(tr);
   }
 
-  /* 11. Bad input -> error naming file and line. */
-  {
-    buf_t b = {0};
-    bprintf(&b, "%s", TRACK_HEADER);
-    add_track(&b, 1, 0, 0, 3, 0, 0, 0, -1, -1);
-    elfm_table *good_tracks = parse(&b, "tracks.csv");
-
-    bprintf(&b, "id,t_us,x_um,y_um,z_um\n1,0,0,0,0\n");
-    elfm_table *t_nocol = parse(&b, "truth.csv");
-    expect_fail(t_nocol, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 1, "missing brightness");
-
-    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,1\n1,100,,0,0,1\n");
-    elfm_table *t_nan = parse(&b, "truth.csv");
-    expect_fail(t_nan, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 3, "empty x_um");
-
-    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,1\n2,0,0,0,0,1\n1,200,0,0,0,1\n"
-                "2,100,0,0,0,1\n1,100,0,0,0,1\n");
-    elfm_table *t_uns = parse(&b, "truth.csv");
-    expect_fail(t_uns, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 6, "unsorted truth");
-
-    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1,0,0,0,0,-1\n");
-    elfm_table *t_neg = parse(&b, "truth.csv");
-    expect_fail(t_neg, good_tracks, NULL, ELFM_ERR_RANGE, "truth.csv", 2, "negative brightness");
-
-    bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n1.5,0,0,0,0,1\n");
-    elfm_table *t_frac = parse(&b, "truth.csv");
-    expect_fail(t_frac, good_tracks, NULL, ELFM_ERR_FORMAT, "truth.csv", 2, "fractional id");
-
-    bprintf(&b, "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um\n1,0,1000,0,0,0,0,0\n");
-    elfm_table *k_nocol = parse(&b, "tracks.csv");
-    expect_fail(truth, k_nocol, NULL, ELFM_ERR_FORMAT, "tracks.csv", 1, "missing raw_z_um");
-
-    bprintf(&b, "%s1,0,1000,0,0,0,0,0,0,0,0,0,1\n1,1,2000,0,0,0,0,0,0,0,0,0,1\n"
-                "1,1,2000,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
-    elfm_table *k_dup = parse(&b, "tracks.csv");
-    expect_fail(truth, k_dup, NULL, ELFM_ERR_FORMAT, "tracks.csv", 4, "duplicate frame");
-
-    bprintf(&b, "%s1,0,1000,0,0,0,0,0,0,0,0,0,1\n2,0,1001,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
-    elfm_table *k_time = parse(&b, "tracks.csv");
-    expect_fail(truth, k_time, NULL, ELFM_ERR_FORMAT, "tracks.csv", 3, "inconsistent frame time");
-
-    bprintf(&b, "%s1,0,1000,0,0,0,0,,0,0,0,0,1\n", TRACK_HEADER);
-    elfm_table *k_part = parse(&b, "tracks.csv");
-    expect_fail(truth, k_part, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "partial raw");
-
-    bprintf(&b, "%s1,0,1000,,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
-    elfm_table *k_nan = parse(&b, "tracks.csv");
-    expect_fail(truth, k_nan, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "empty x_um");
-
-    bprintf(&b, "%s1,0.5,1000,0,0,0,0,0,0,0,0,0,1\n", TRACK_HEADER);
-    elfm_table *k_frac = parse(&b, "tracks.csv");
-    expect_fail(truth, k_frac, NULL, ELFM_ERR_FORMAT, "tracks.csv", 2, "fractional frame");
-
-    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n0,1000,0,0,0\n1,500,0,0,0\n");
-    elfm_table *d_back = parse(&b, "detections.csv");
-    expect_fail(truth, NULL, d_back, ELFM_ERR_FORMAT, "detections.csv", 3, "time goes back");
-
-    bprintf(&b, "frame,t_us,x_um,y_um,z_um\n0,1000,0,0,0\n50000001,500,0,0,0\n");
-    elfm_table *d_span = parse(&b, "detections.csv");
-    {
-      elfm_score_result r;
-      elfm_error err;
-      elfm_score_options def;
-      elfm_score_options_default(&def);
-      CHECK(elfm_score_tables(truth, NULL, d_span, &def, &r, &err) == ELFM_ERR_RANGE);
-      CHECK(strcmp(err.file, "detections.csv") == 0);
-      /* the cap on truth points (objects x frames where each counts) */
-      CHECK_OK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err), &err);
-      const int64_t npts = r.n_truth_points;
-      CHECK(npts > 2);
-      def.max_truth_points = npts - 1;
-      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_RANGE);
-      CHECK(strcmp(err.file, "truth.csv") == 0 && strstr(err.message, "object-frames") != NULL);
-      def.max_truth_points = npts;
-      CHECK_OK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err), &err);
-      CHECK(r.n_truth_points == npts);
-      def.max_truth_points = 0;
-      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
-      def.max_truth_points = 10000000;
-      /* neither tracks nor detections */
-      CHECK(elfm_score_tables(truth, NULL, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
-      def.eps_um = 0;
-      CHECK(elfm_score_tables(truth, good_tracks, NULL, &def, &r, &err) == ELFM_ERR_INVALID);
-    }
-    /* missing file */
-    {
-      elfm_score_result r;
-      elfm_error err;
-      elfm_score_options def;
-      elfm_score_options_default(&def);
-      CHECK(elfm_score_files("/nonexistent/truth.csv", "/nonexistent/tracks.csv", NULL, &def, &r,
-                             &err) == ELFM_ERR_IO);
-      CHECK(strstr(err.file, "truth.csv") != NULL);
-    }
-    elfm_table *all[] = {good_tracks, t_nocol, t_nan, t_uns, t_neg, t_frac, k_nocol, k_dup,
-                         k_time, k_part, k_nan, k_frac, d_back, d_span};
-    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) elfm_table_free(all[i]);
-  }
+  /* (11, bad input, is test_score_input.c.) */
 
   /* 12. Many objects in a crowded frame: the scorer must not confuse
    * neighbours 3 um apart (inside the gate of each other). Grid of 10 x 10
