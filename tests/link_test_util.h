@@ -20,6 +20,21 @@ static inline elfm_detection link_test_det(double x, double y, double z, double 
   return d;
 }
 
+/* The track command's linking defaults for steps 6 and 7 (cli/
+ * cmd_track_opts.c) on top of the library's: the linker metric's z / 1.5,
+ * the swap review after 8 points, encounters within 5 um, 4 frames apart
+ * within one, established tracks first. Circles and the reviews' ratios
+ * are left to the test. */
+static inline void link_test_review_options(elfm_link_options *o)
+{
+  elfm_link_options_default(o);
+  o->kz = 1.5;
+  o->swap_points = 8;
+  o->encounter_um = 5;
+  o->encounter_apart = 4;
+  o->priority_points = 8;
+}
+
 /* Finish the linker, drop its tracks, free it. */
 static inline void end_linker(elfm_linker *l)
 {

@@ -50,8 +50,9 @@ static inline elfm_table *parse(buf_t *b, const char *name)
   return t;
 }
 
-/* Truth with optional dark interval for B (frames dark_from..) */
-static inline elfm_table *make_truth(double b_dark_from_t)
+/* truth.csv of the scene, sampled every 100 us over 0-25 ms, with each
+ * object's brightness from br(object, t_us, arg). */
+static inline elfm_table *make_truth_with(double (*br)(int o, int t_us, double arg), double arg)
 {
   buf_t b = {0};
   bprintf(&b, "id,t_us,x_um,y_um,z_um,brightness\n");
@@ -59,10 +60,20 @@ static inline elfm_table *make_truth(double b_dark_from_t)
     for (int o = 0; o < 2; o++) {
       double x, y, z;
       pos(o, t, &x, &y, &z);
-      double br = (o == 1 && t >= b_dark_from_t) ? 0.0 : 1.0;
-      bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,%g\n", o + 7, t, x, y, z, br);
+      bprintf(&b, "%d,%d,%.17g,%.17g,%.17g,%g\n", o + 7, t, x, y, z, br(o, t, arg));
     }
   return parse(&b, "truth.csv");
+}
+
+static inline double dark_from(int o, int t_us, double b_dark_from_t)
+{
+  return (o == 1 && t_us >= b_dark_from_t) ? 0.0 : 1.0;
+}
+
+/* Truth with B dark from b_dark_from_t us on (1e9: never). */
+static inline elfm_table *make_truth(double b_dark_from_t)
+{
+  return make_truth_with(dark_from, b_dark_from_t);
 }
 
 /* Track rows for object o over frames [f0, f1] with id, offset, and frames

@@ -55,12 +55,7 @@ static int run(const double g[6], double line_ratio, int flicker)
 {
   elfm_error err;
   elfm_link_options o;
-  elfm_link_options_default(&o);
-  o.kz = 1.5;
-  o.swap_points = 8;
-  o.encounter_um = 5;
-  o.encounter_apart = 4;
-  o.priority_points = 8;
+  link_test_review_options(&o);
   o.circle_points = 0;
   o.encounter_line_ratio = line_ratio;
   elfm_linker *l = elfm_link_create(&o, &err);
