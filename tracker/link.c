@@ -273,6 +273,31 @@ int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
 }
 
 /* Shared with link_repair.c (link_internal.h). */
+int elfm_link_fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
+                       double vel[3])
+{
+  double m = 0, st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
+  for (size_t k = k0; k < k1; k++) {
+    const double tm = (double)(pts[k].t_us - tr) * 1e-3;
+    const double p[3] = {pts[k].x_um, pts[k].y_um, pts[k].z_um};
+    m += 1;
+    st += tm;
+    stt += tm * tm;
+    for (int a = 0; a < 3; a++) {
+      sx[a] += p[a];
+      stx[a] += tm * p[a];
+    }
+  }
+  const double den = m * stt - st * st;
+  if (!(den > 1e-12)) return 0;
+  for (int a = 0; a < 3; a++) {
+    vel[a] = (m * stx[a] - st * sx[a]) / den;
+    pos[a] = (sx[a] - vel[a] * st) / m;
+  }
+  return 1;
+}
+
+/* Shared with link_repair.c (link_internal.h). */
 void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
 {
   const int history = o->history, short_history = o->short_history;
@@ -291,26 +316,8 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
     elfm_link_fit_circle(o, t->pts, c0, n, tr, &lt->circ);
   }
   size_t k0 = n > (size_t)history ? n - (size_t)history : 0;
-  if (n - k0 >= 2) {
-    double st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
-    double m = (double)(n - k0);
-    for (size_t k = k0; k < n; k++) {
-      double tm = (double)(t->pts[k].t_us - tr) * 1e-3;
-      const double p[3] = {t->pts[k].x_um, t->pts[k].y_um, t->pts[k].z_um};
-      st += tm;
-      stt += tm * tm;
-      for (int a = 0; a < 3; a++) {
-        sx[a] += p[a];
-        stx[a] += tm * p[a];
-      }
-    }
-    double den = m * stt - st * st;
-    if (den > 1e-12)  /* else all points at one time: keep the prior */
-      for (int a = 0; a < 3; a++) {
-        lt->vel_um_per_ms[a] = (m * stx[a] - st * sx[a]) / den;
-        lt->lin_pos[a] = (sx[a] - lt->vel_um_per_ms[a] * st) / m;
-      }
-  }
+  /* with all points at one time, the prior is kept */
+  if (n - k0 >= 2) elfm_link_fit_line(t->pts, k0, n, tr, lt->lin_pos, lt->vel_um_per_ms);
   k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
   if (n - k0 < 4) return;
   if (o->short_path_um > 0) {

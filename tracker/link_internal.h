@@ -134,6 +134,12 @@ static inline void link_cramer3(const double m[3][3], double det, const double b
 int elfm_link_fit_quad(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr,
                        double pos[3], double vel[3], double acc[3]);
 
+/* Least-squares p = c0 + c1 t over pts[k0 .. k1) (t in ms from tr):
+ * position and velocity at tr. 0 when fewer than 2 distinct times
+ * (outputs untouched). */
+int elfm_link_fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
+                       double vel[3]);
+
 /* Least-squares fits over the recent real points of lt->t (at least one),
  * times relative to the last point in ms (never float absolute times): a
  * constant velocity over o->history points into lt->vel_um_per_ms

@@ -204,32 +204,6 @@ static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_det
   return dx * dx + dy * dy + dz * dz;
 }
 
-/* Least-squares line p = c0 + c1 (t - tr) over pts[k0 .. k1); 0 when the
- * points span fewer than 2 distinct times. */
-static int fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t tr, double pos[3],
-                    double vel[3])
-{
-  double m = 0, st = 0, stt = 0, sx[3] = {0, 0, 0}, stx[3] = {0, 0, 0};
-  for (size_t k = k0; k < k1; k++) {
-    const double tm = (double)(pts[k].t_us - tr) * 1e-3;
-    const double p[3] = {pts[k].x_um, pts[k].y_um, pts[k].z_um};
-    m += 1;
-    st += tm;
-    stt += tm * tm;
-    for (int a = 0; a < 3; a++) {
-      sx[a] += p[a];
-      stx[a] += tm * p[a];
-    }
-  }
-  const double den = m * stt - st * st;
-  if (!(den > 1e-12)) return 0;
-  for (int a = 0; a < 3; a++) {
-    vel[a] = (m * stx[a] - st * sx[a]) / den;
-    pos[a] = (sx[a] - vel[a] * st) / m;
-  }
-  return 1;
-}
-
 /* As junction_cost2, with straight lines over up to `history` points. */
 static double line_junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp,
                                   size_t tn, size_t history, double kz)
@@ -238,7 +212,8 @@ static double line_junction_cost2(const elfm_detection *hp, size_t hn, const elf
   if (hk < 4 || tk < 4) return INFINITY;
   const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
   double hpos[3], hvel[3], tpos[3], tvel[3];
-  if (!fit_line(hp, hn - hk, hn, th, hpos, hvel) || !fit_line(tp, 0, tk, tt, tpos, tvel))
+  if (!elfm_link_fit_line(hp, hn - hk, hn, th, hpos, hvel) ||
+      !elfm_link_fit_line(tp, 0, tk, tt, tpos, tvel))
     return INFINITY;
   const int64_t tm = th + (tt - th) / 2;
   const double dh = (double)(tm - th) * 1e-3, dt = (double)(tm - tt) * 1e-3;
