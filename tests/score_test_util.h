@@ -78,8 +78,8 @@ static inline elfm_table *make_truth(double b_dark_from_t)
 
 /* Track rows for object o over frames [f0, f1] with id, offset, and frames
  * [g0, g1] as gap-closing fills (raw empty, position junk). */
-static inline void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double dy, double dz,
-                      int g0, int g1)
+static inline void add_track(buf_t *b, int id, int o, int f0, int f1, double dx, double dy,
+                             double dz, int g0, int g1)
 {
   for (int f = f0; f <= f1; f++) {
     double x, y, z;

@@ -12,8 +12,11 @@
  * grid of speeds, offsets, drifts and merge distances the test asks that
  * the lines mend at least 10 of the swapped geometries (none without
  * them), break none of the right ones, and change nothing where the
- * objects are not at rest (faster than rest_speed_um_per_ms); and that
- * with encounter_line_ratio out of range the linker is not created. */
+ * objects are not at rest (faster than rest_speed_um_per_ms). With the
+ * objects seen apart every few frames inside the merge, which splits one
+ * meeting into nested encounter records, at least 22 in all are mended
+ * (18 when the nested records were reviewed again after an exchange).
+ * And with encounter_line_ratio out of range the linker is not created. */
 #include <math.h>
 #include <stdio.h>
 
@@ -126,17 +129,19 @@ int main(void)
      * 3 / 5 / 4 without the drop of nested encounters), 0 broken; 0
      * changed when not at rest. Without encounter_line_ratio none is
      * mended. */
-    CHECK_MSG(swapped_off >= 20, "flicker %d: only %d of %d geometries swapped without the lines", fl,
-              swapped_off, cases);
-    CHECK_MSG(mended >= (fl ? 4 : 10), "flicker %d: the lines mended only %d of %d swapped geometries", fl,
-              mended, swapped_off);
+    CHECK_MSG(swapped_off >= 20, "flicker %d: only %d of %d geometries swapped without the lines",
+              fl, swapped_off, cases);
+    CHECK_MSG(mended >= (fl ? 4 : 10), "flicker %d: the lines mended only %d of %d swapped geometries",
+              fl, mended, swapped_off);
     CHECK_MSG(broken == 0, "flicker %d: the lines broke %d geometries", fl, broken);
     CHECK_MSG(moving_changed == 0, "flicker %d: the lines changed %d geometries not at rest", fl,
               moving_changed);
     total_flicker_mended += fl ? mended : 0;
   }
-  CHECK_MSG(total_flicker_mended >= 22, "with flicker the lines mended only %d geometries (24 when written, "
-            "18 without the drop of nested encounters)", total_flicker_mended);
+  CHECK_MSG(total_flicker_mended >= 22,
+            "with flicker the lines mended only %d geometries (24 when written, 18 without the drop "
+            "of nested encounters)",
+            total_flicker_mended);
 
   elfm_error err;
   elfm_link_options o;
