@@ -183,47 +183,36 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
 }
 
 /* Squared anisotropic distance, at the middle of the gap, between the end
- * state of hp[0 .. hn) and the start state of tp[0 .. tn) (quadratic fits
- * over up to short_history points, turning as predict_track in link.c); INFINITY
- * when either has fewer than 4 points. */
+ * state of hp[0 .. hn) and the start state of tp[0 .. tn), each fitted
+ * over up to `points` points: quadratic fits, turning as predict_track in
+ * link.c, or with `straight`, straight lines (the slow line of
+ * elfm_link_predict_track); INFINITY when either has fewer than 4 points. */
 static double junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp, size_t tn,
-                             int short_history, double kz)
+                             int points, int straight, double kz)
 {
-  size_t sh = (size_t)short_history;
-  size_t hk = hn < sh ? hn : sh, tk = tn < sh ? tn : sh;
+  const size_t np = (size_t)points;
+  size_t hk = hn < np ? hn : np, tk = tn < np ? tn : np;
   if (hk < 4 || tk < 4) return INFINITY;
-  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
+  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us, tm = th + (tt - th) / 2;
+  const double dh = (double)(tm - th) * 1e-3, dt = (double)(tm - tt) * 1e-3;
   double hpos[3], hvel[3], hacc[3], tpos[3], tvel[3], tacc[3], a[3], b[3];
-  if (!elfm_link_fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) ||
-      !elfm_link_fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
-    return INFINITY;
-  int64_t tm = th + (tt - th) / 2;
-  elfm_link_predict_turn(hpos, hvel, hacc, (double)(tm - th) * 1e-3, a);
-  elfm_link_predict_turn(tpos, tvel, tacc, (double)(tm - tt) * 1e-3, b);
+  if (straight) {
+    if (!elfm_link_fit_line(hp, hn - hk, hn, th, hpos, hvel) ||
+        !elfm_link_fit_line(tp, 0, tk, tt, tpos, tvel))
+      return INFINITY;
+    for (int k = 0; k < 3; k++) {
+      a[k] = hpos[k] + hvel[k] * dh;
+      b[k] = tpos[k] + tvel[k] * dt;
+    }
+  } else {
+    if (!elfm_link_fit_quad(hp, hn - hk, hn, th, hpos, hvel, hacc) ||
+        !elfm_link_fit_quad(tp, 0, tk, tt, tpos, tvel, tacc))
+      return INFINITY;
+    elfm_link_predict_turn(hpos, hvel, hacc, dh, a);
+    elfm_link_predict_turn(tpos, tvel, tacc, dt, b);
+  }
   double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
   return dx * dx + dy * dy + dz * dz;
-}
-
-/* As junction_cost2, with straight lines over up to `history` points. */
-static double line_junction_cost2(const elfm_detection *hp, size_t hn, const elfm_detection *tp,
-                                  size_t tn, size_t history, double kz)
-{
-  size_t hk = hn < history ? hn : history, tk = tn < history ? tn : history;
-  if (hk < 4 || tk < 4) return INFINITY;
-  const int64_t th = hp[hn - 1].t_us, tt = tp[0].t_us;
-  double hpos[3], hvel[3], tpos[3], tvel[3];
-  if (!elfm_link_fit_line(hp, hn - hk, hn, th, hpos, hvel) ||
-      !elfm_link_fit_line(tp, 0, tk, tt, tpos, tvel))
-    return INFINITY;
-  const int64_t tm = th + (tt - th) / 2;
-  const double dh = (double)(tm - th) * 1e-3, dt = (double)(tm - tt) * 1e-3;
-  double s = 0;
-  for (int a = 0; a < 3; a++) {
-    double d = (hpos[a] + hvel[a] * dh) - (tpos[a] + tvel[a] * dt);
-    if (a == 2) d /= kz;
-    s += d * d;
-  }
-  return s;
 }
 
 /* The exchange's two joins (alt: their summed squared distances) are
@@ -307,7 +296,7 @@ elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
     const elfm_detection *bp = B->t->pts;
     const size_t bt = B->tail0, bn = B->t->n;
     const int64_t hB = bp[bt - 1].frame, fB = bp[bt].frame;
-    const double jb = junction_cost2(bp, bt, bp + bt, bn - bt, sh, kz);
+    const double jb = junction_cost2(bp, bt, bp + bt, bn - bt, sh, 0, kz);
     double best_ratio = o->swap_ratio * o->swap_ratio;
     size_t best_a = 0, best_s = 0;
     int found = 0;
@@ -318,9 +307,9 @@ elfm_status elfm_link_review_swaps(elfm_linker *l, size_t nd, elfm_error *err)
       for (size_t s = an; s-- > 4;) {
         if (ap[s].frame <= hB) break;
         if (ap[s].frame > fB || an - s < K) continue;
-        double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, kz);
-        double alt = junction_cost2(bp, bt, ap + s, an - s, sh, kz) +
-                     junction_cost2(ap, s, bp + bt, bn - bt, sh, kz);
+        double cur = jb + junction_cost2(ap, s, ap + s, an - s, sh, 0, kz);
+        double alt = junction_cost2(bp, bt, ap + s, an - s, sh, 0, kz) +
+                     junction_cost2(ap, s, bp + bt, bn - bt, sh, 0, kz);
         if (isfinite(cur) && jb > o->gate_um * o->gate_um && alt < best_ratio * cur &&
             joins_known(o, alt)) {
           best_ratio = alt / cur;
@@ -499,13 +488,13 @@ static int circle_says_exchange(const elfm_link_options *o, const elfm_track *a,
 static int lines_say_exchange(const elfm_link_options *o, const elfm_track *a, size_t ah,
                               size_t at, const elfm_track *b, size_t bh, size_t bt)
 {
-  const size_t H = (size_t)o->history;
+  const int H = o->history;
   const double kz = o->kz, rl2 = o->encounter_line_ratio * o->encounter_line_ratio;
   const elfm_detection *ap = a->pts, *bp = b->pts;
-  const double cur = line_junction_cost2(bp, bh, bp + bt, b->n - bt, H, kz) +
-                     line_junction_cost2(ap, ah, ap + at, a->n - at, H, kz);
-  const double alt = line_junction_cost2(bp, bh, ap + at, a->n - at, H, kz) +
-                     line_junction_cost2(ap, ah, bp + bt, b->n - bt, H, kz);
+  const double cur = junction_cost2(bp, bh, bp + bt, b->n - bt, H, 1, kz) +
+                     junction_cost2(ap, ah, ap + at, a->n - at, H, 1, kz);
+  const double alt = junction_cost2(bp, bh, ap + at, a->n - at, H, 1, kz) +
+                     junction_cost2(ap, ah, bp + bt, b->n - bt, H, 1, kz);
   return isfinite(cur) && alt < rl2 * cur && joins_known(o, alt);
 }
 
@@ -567,10 +556,10 @@ elfm_status elfm_link_review_encounters(elfm_linker *l, int64_t frame, size_t nd
     }
     const size_t bh = first_from(B->t, f0), ah = first_from(A->t, f0);
     const elfm_detection *bp = B->t->pts, *ap = A->t->pts;
-    double cur = junction_cost2(bp, bh, bp + bt, B->t->n - bt, sh, kz) +
-                 junction_cost2(ap, ah, ap + at, A->t->n - at, sh, kz);
-    double alt = junction_cost2(bp, bh, ap + at, A->t->n - at, sh, kz) +
-                 junction_cost2(ap, ah, bp + bt, B->t->n - bt, sh, kz);
+    double cur = junction_cost2(bp, bh, bp + bt, B->t->n - bt, sh, 0, kz) +
+                 junction_cost2(ap, ah, ap + at, A->t->n - at, sh, 0, kz);
+    double alt = junction_cost2(bp, bh, ap + at, A->t->n - at, sh, 0, kz) +
+                 junction_cost2(ap, ah, bp + bt, B->t->n - bt, sh, 0, kz);
     /* The circles decide only where the quadratic junctions lean the same
      * way (crosswise below as they are): flow 100 ms seed 20, beads 8 and
      * 12 crossing 1-3 um apart while one turns in z, the circles' ratio
