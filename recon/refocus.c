@@ -254,6 +254,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   elfm_refocus_workspace *ws = calloc(1, sizeof *ws);
   if (!ws) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   ws->plan = p;
+  ws->merge_gap_px = ELFM_REFOCUS_MERGE_GAP_PX;
   /* dense: a plane of counts of agreeing views */
   ws->plane_cnt = calloc((size_t)p->w * (size_t)p->h, 1);
   ws->row_start = calloc((size_t)p->sh + 1, sizeof *ws->row_start);

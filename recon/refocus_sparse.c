@@ -107,8 +107,10 @@ static void sort_cols(uint32_t *a, size_t n, uint64_t *bits)
 
 /* Sort the listed non-zero pixels by row (counting sort) and column, then
  * cut each view's rows into runs, view by view (one view's runs then hit
- * the same plane rows together, which keeps them in cache). */
-static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *frame,
+ * the same plane rows together, which keeps them in cache). Pixels up to
+ * gap_px apart join one run, zeros between them (see
+ * ELFM_REFOCUS_MERGE_GAP_PX). */
+static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *frame, uint32_t gap_px,
                                elfm_refocus_workspace *ws, elfm_error *err)
 {
   const uint32_t SW = (uint32_t)p->sw;
@@ -146,8 +148,8 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
         if ((int)c0 < bx->x0) { i++; continue; }
         if ((int)c0 >= bx->x1) break;
         size_t j = i + 1;
-        while (j < b && ws->sorted[j] == ws->sorted[j - 1] + 1 && (int)ws->sorted[j] < bx->x1) j++;
-        int len = (int)(j - i);
+        while (j < b && ws->sorted[j] <= ws->sorted[j - 1] + 1 + gap_px && (int)ws->sorted[j] < bx->x1) j++;
+        int len = (int)(ws->sorted[j - 1] - c0 + 1); /* the frame is 0 in the gaps */
         if (!grow((void **)&ws->runs, &ws->cap_runs, ws->n_runs + 1, sizeof *ws->runs) ||
             !grow((void **)&ws->vals, &ws->cap_vals, ws->n_vals + (size_t)len + 2, sizeof *ws->vals))
           return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (runs)");
@@ -172,7 +174,8 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
 elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,
                                 elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err)
 {
-  elfm_status st = sparse_runs(p, frame, ws, err);
+  /* the agreement rule reads each run as signal: its runs stay exact */
+  elfm_status st = sparse_runs(p, frame, p->need ? 0 : ws->merge_gap_px, ws, err);
   if (st) return st;
   const size_t n_old = sparse_begin(p, vol, ws);
   size_t old_at = 0;
