@@ -86,6 +86,7 @@ typedef struct track_given {
   int fillv, fillk, fille;           /* --fill-views, --fill-frames, --fill-ends */
   int spath, spord, fsdp, fade;      /* --short-path-um, --spline-order, --fit-sd-power,
                                         --motion-fade-um-per-ms */
+  int gcvg;                          /* --gcv-gamma */
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ;                          /* --circle-points */
@@ -160,6 +161,7 @@ typedef struct track_ctx {
     elfm_track *t;
     elfm_status st;      /* and how its smoothing went */
     elfm_error err;
+    int refit;           /* 1: smoothed again by classical GCV (smooth_track) */
   } *fin;
   size_t fin_cap;
   elfm_linker *lk;
@@ -168,7 +170,8 @@ typedef struct track_ctx {
   char p_det[1100], p_tr[1100], p_fr[1100];
   elfm_track_store store;
   int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
-  int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, first_frame, last_frame;
+  int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,
+      last_frame;
   int64_t first_t_us, last_t_us;
   double t_peaks, t_link, t_smooth;
   elfm_fwhm *fw;

@@ -52,6 +52,19 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * alpha 0.830 / 0.785 / 0.754 / 0.826 -> 0.826 / 0.784 / 0.753 / 0.824. */
     o->smooth.spline_order = 2;
   }
+  if (integral && !g->gcvg) {
+    /* The integral is a leaky sum over ~100 ms: its frames 2 ms apart share
+     * most of their events, so a neuron's placement errors are correlated
+     * over many frames, far more than on a 1 ms time surface, and GCV takes
+     * them for motion. Each effective parameter is priced higher. Worm
+     * (mean alpha, the linker's tracks unchanged; every seed up or the same
+     * at 5): 0.5 s seeds 1-8, 13-24 0.9033 -> 0.9167 (G 3 / 4 / 6 / 8:
+     * 0.9111 / 0.9145 / 0.9179 / 0.9176), 200 ms seeds 1-12 0.9419 ->
+     * 0.9505 (0.9476 / 0.9494 / 0.9504 / 0.9492). Beyond 4 it rests on
+     * smooth_track's refit: without it, G 5 dropped a whole neuron's
+     * track (200 ms seed 10: 0.948 -> 0.871) and G 6 two (0.5 s). */
+    o->smooth.gcv_gamma = 5;
+  }
   if (integral && !g->fsdp) {
     /* Worm 200 ms seeds 1-4 with it: alpha 0.830 / 0.785 / 0.754 / 0.826
      * -> 0.825 / 0.785 / 0.754 / 0.826. */

@@ -350,7 +350,9 @@ static void usage(FILE *f)
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
-    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; 1 classical)\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral 5;\n"
+    "                       1 classical); a track the robust fit would reject at G is\n"
+    "                       smoothed again at 1 and kept or rejected on that fit\n"
     "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
     "                       which leaves turns at constant speed alone (3; integral: 2)\n"
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
@@ -725,6 +727,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_GCVG:
       if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
+      g.gcvg = 1;
       break;
     case O_SPORD:
       if (!cli_parse_int(C, "--spline-order", a, &o.smooth.spline_order)) return CLI_USAGE;

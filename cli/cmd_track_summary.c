@@ -136,6 +136,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
+  cJSON_AddNumberToObject(cnt, "tracks_refit_classical_gcv", (double)c->n_refit_gcv);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
   add_num(cnt, "median_track_speed_um_per_ms", c->median_speed_um_per_ms);
   int nm[5] = {0, 0, 0, 0, 0};
