@@ -19,11 +19,12 @@ static int too_many_outliers(const track_ctx *c, const elfm_track *t)
 /* Smooth t; *refit = 1 when it was smoothed again by classical GCV. The
  * modified GCV (gcv_gamma > 1) prices each effective parameter higher, for
  * detections whose errors are correlated from frame to frame; on a track
- * that turns more than its neighbours that can choose a fit so stiff that
- * the robust loss rejects its own object's points, and the track would be
+ * that turns more than most, that can choose a fit so stiff that the
+ * robust loss rejects its own object's points, and the track would be
  * dropped as "not one object". Whether it is one is decided on the flexible
  * fit. Worm 200 ms seed 10 at gcv_gamma 5: a 101-point track of a neuron
- * dropped so, alpha 0.948 -> 0.871 (docs/tracker.md "Smoother"). */
+ * dropped so, alpha 0.948 -> 0.871 (docs/tracker.md "The integral's spline
+ * weight"). */
 static elfm_status smooth_track(const track_ctx *c, elfm_track *t, const elfm_smooth_options *so,
                                 int *refit, elfm_error *err)
 {

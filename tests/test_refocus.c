@@ -255,7 +255,7 @@ static void test_agree_exact(const elfm_calib *c0, int portable)
 /* The sparse path joins a view row's runs across gaps of up to
  * ELFM_REFOCUS_MERGE_GAP_PX zeros (refocus_internal.h): the same floats,
  * voxel for voxel, as the runs scattered one by one, on frames whose rows
- * hold clusters 0..40 px apart (around the limit), across view boxes, signed
+ * hold clusters 1..40 px apart (around the limit), across view boxes, signed
  * values (the integral) and beads, over a sequence of frames through one
  * workspace each; and the same as the dense path within 1e-4 of the
  * maximum. It must have joined runs, or it tests nothing. */

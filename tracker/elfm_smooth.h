@@ -68,9 +68,11 @@ typedef struct elfm_smooth_options {
    * GCV, right for independent errors; it undersmooths when the errors
    * are correlated from frame to frame, as an event camera's detections
    * are (a time surface shares events between frames: on flow their lag-1
-   * autocorrelation is 0.54-0.58 laterally). 1.4 (`eventlfm track`) is the
+   * autocorrelation is 0.54-0.58 laterally). 1.4 (`eventlfm track`; 5 on
+   * the integral, whose frames share most of their events) is the
    * modified GCV of Cummins, Filloon & Nychka (2001) and Kim & Gu (2004).
-   * test_smooth 9b; docs/tracker.md "Smoother". */
+   * test_smooth 9b; docs/tracker.md "Smoother", "The integral's spline
+   * weight". */
   double gcv_gamma;
   /* What the smoothing spline's prior penalises: 2 (default) the
    * acceleration, integral |a|^2 dt, whose stiff limit is a straight line;
