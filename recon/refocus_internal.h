@@ -47,8 +47,8 @@ struct elfm_refocus_plan {
   size_t need_words;          /* ceil(W / 64) */
 };
 
-/* Runs of one view's row closer than this many zero pixels are scattered
- * as one. A time-surface frame's runs are short (flow at 12.5 Mev/s: 5,600
+/* Runs of one view's row with at most this many zero pixels between them
+ * are scattered as one. A time-surface frame's runs are short (flow at 12.5 Mev/s: 5,600
  * pixels in 2,600 runs per 1 ms window), and each run costs its bounds and
  * row bookkeeping on every plane; adding a few zeros in a vectorised loop
  * is cheaper. The sums are the same bits: a voxel between two runs gets
