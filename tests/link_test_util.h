@@ -20,6 +20,16 @@ static inline elfm_detection link_test_det(double x, double y, double z, double 
   return d;
 }
 
+/* A bright detection (intensity 100) at (x, y, z) um with the sigmas of a
+ * bright object's fit: 1 um laterally, 3 um in z (the encounter tests'). */
+static inline elfm_detection link_test_det_bright(double x, double y, double z)
+{
+  elfm_detection d = link_test_det(x, y, z, 100);
+  d.sigma_x_um = d.sigma_y_um = 1;
+  d.sigma_z_um = 3;
+  return d;
+}
+
 /* The track command's linking defaults for steps 6 and 7 (cli/
  * cmd_track_opts.c) on top of the library's: the linker metric's z / 1.5,
  * the swap review after 8 points, encounters within 5 um, 4 frames apart

@@ -24,14 +24,6 @@
 
 enum { N_FRAMES = 80, MEET = 40 };
 
-/* A bright detection with sigmas of 1 um laterally and 3 um in z. */
-static elfm_detection mk(double x, double y, double z)
-{
-  elfm_detection d = link_test_det(x, y, z, 100);
-  d.sigma_x_um = d.sigma_y_um = 1;
-  d.sigma_z_um = 3;
-  return d;
-}
 
 /* Bead b in frame f (1 ms frames): both pass the origin's neighbourhood
  * at frame MEET moving along +y at v_um_per_ms, bead 0 on a circle of
@@ -67,11 +59,11 @@ static int run(const double g[6], double circle_ratio)
     bead(1, f, g, q);
     elfm_detection d[2];
     if (hypot(hypot(p[0] - q[0], p[1] - q[1]), (p[2] - q[2]) / 4) < g[5]) { /* both found at bead 1 */
-      d[0] = mk(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), q[2]);
-      d[1] = mk(0.5 * (p[0] + q[0]) + 0.1, 0.5 * (p[1] + q[1]), q[2]);
+      d[0] = link_test_det_bright(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), q[2]);
+      d[1] = link_test_det_bright(0.5 * (p[0] + q[0]) + 0.1, 0.5 * (p[1] + q[1]), q[2]);
     } else {
-      d[0] = mk(p[0], p[1], p[2]);
-      d[1] = mk(q[0], q[1], q[2]);
+      d[0] = link_test_det_bright(p[0], p[1], p[2]);
+      d[1] = link_test_det_bright(q[0], q[1], q[2]);
     }
     CHECK_OK(elfm_link_step(l, f, 1000 + (int64_t)f * 1000, d, 2, &err), &err);
   }

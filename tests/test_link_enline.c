@@ -27,14 +27,6 @@
 enum { N_FRAMES = 160, MEET = 70 };
 static const double FRAME_MS = 2;
 
-/* A detection with the integral's sigmas, 1 um laterally and 3 um in z. */
-static elfm_detection mk(double x, double y, double z)
-{
-  elfm_detection d = link_test_det(x, y, z, 100);
-  d.sigma_x_um = d.sigma_y_um = 1;
-  d.sigma_z_um = 3;
-  return d;
-}
 
 /* Object b in frame f. Object 0 rises in z at g[0] um/ms and drifts along
  * +x at g[3]; object 1 moves in z at g[1] um/ms and drifts along -x at
@@ -71,11 +63,11 @@ static int run(const double g[6], double line_ratio, int flicker)
     elfm_detection d[2];
     if (hypot(hypot(p[0] - q[0], p[1] - q[1]), (p[2] - q[2]) / 4) < g[4] &&
         !(flicker && f % flicker == 0)) { /* one spot between */
-      d[0] = mk(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
-      d[1] = mk(0.5 * (p[0] + q[0]) + 0.1, 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
+      d[0] = link_test_det_bright(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
+      d[1] = link_test_det_bright(0.5 * (p[0] + q[0]) + 0.1, 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
     } else {
-      d[0] = mk(p[0], p[1], p[2]);
-      d[1] = mk(q[0], q[1], q[2]);
+      d[0] = link_test_det_bright(p[0], p[1], p[2]);
+      d[1] = link_test_det_bright(q[0], q[1], q[2]);
     }
     CHECK_OK(elfm_link_step(l, f, 1000 + (int64_t)(f * FRAME_MS * 1000), d, 2, &err), &err);
   }
