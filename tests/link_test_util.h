@@ -30,6 +30,25 @@ static inline elfm_detection link_test_det_bright(double x, double y, double z)
   return d;
 }
 
+/* One frame f (at t_us) of two objects at p and q for the encounter tests:
+ * seen apart, or merged into one spot, found twice 0.1 um apart at their
+ * mean lateral position and z_merged, as a view fit finds a merged image. */
+static inline void link_test_step_pair(elfm_linker *l, int64_t f, int64_t t_us, const double p[3],
+                                       const double q[3], int merged, double z_merged)
+{
+  elfm_error err;
+  elfm_detection d[2];
+  if (merged) {
+    const double x = 0.5 * (p[0] + q[0]), y = 0.5 * (p[1] + q[1]);
+    d[0] = link_test_det_bright(x, y, z_merged);
+    d[1] = link_test_det_bright(x + 0.1, y, z_merged);
+  } else {
+    d[0] = link_test_det_bright(p[0], p[1], p[2]);
+    d[1] = link_test_det_bright(q[0], q[1], q[2]);
+  }
+  CHECK_OK(elfm_link_step(l, f, t_us, d, 2, &err), &err);
+}
+
 /* The track command's linking defaults for steps 6 and 7 (cli/
  * cmd_track_opts.c) on top of the library's: the linker metric's z / 1.5,
  * the swap review after 8 points, encounters within 5 um, 4 frames apart

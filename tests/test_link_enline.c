@@ -60,16 +60,10 @@ static int run(const double g[6], double line_ratio, int flicker)
     double p[3], q[3];
     object(0, f, g, p);
     object(1, f, g, q);
-    elfm_detection d[2];
-    if (hypot(hypot(p[0] - q[0], p[1] - q[1]), (p[2] - q[2]) / 4) < g[4] &&
-        !(flicker && f % flicker == 0)) { /* one spot between */
-      d[0] = link_test_det_bright(0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
-      d[1] = link_test_det_bright(0.5 * (p[0] + q[0]) + 0.1, 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2]));
-    } else {
-      d[0] = link_test_det_bright(p[0], p[1], p[2]);
-      d[1] = link_test_det_bright(q[0], q[1], q[2]);
-    }
-    CHECK_OK(elfm_link_step(l, f, 1000 + (int64_t)(f * FRAME_MS * 1000), d, 2, &err), &err);
+    /* merged: one spot between them */
+    const int merged = hypot(hypot(p[0] - q[0], p[1] - q[1]), (p[2] - q[2]) / 4) < g[4] &&
+                       !(flicker && f % flicker == 0);
+    link_test_step_pair(l, f, 1000 + (int64_t)(f * FRAME_MS * 1000), p, q, merged, 0.5 * (p[2] + q[2]));
   }
   CHECK_OK(elfm_link_finish(l, &err), &err);
   int n = 0, own = 0;
