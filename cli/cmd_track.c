@@ -59,13 +59,12 @@ int cmd_track(int argc, char **argv)
   memset(&c, 0, sizeof c);
   c.o = &o;
   c.calib = &calib;
-  elfm_track_store_init(&c.store);
   elfm_frame_times_init(&c.frame_times);
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
   snprintf(c.p_fr, sizeof c.p_fr, "%s/frames.csv", o.out);
-  char p_isbi[1100], p_tm[1100], p_sum[1100];
-  snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", o.out);
+  char p_tm[1100], p_sum[1100];
+  snprintf(c.p_isbi, sizeof c.p_isbi, "%s/tracks_isbi.xml", o.out);
   snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", o.out);
   snprintf(p_sum, sizeof p_sum, "%s/summary.json", o.out);
   int rc = CLI_FAIL;
@@ -87,14 +86,22 @@ int cmd_track(int argc, char **argv)
   c.fdet = fopen(c.p_det, "w");
   c.ftr = fopen(c.p_tr, "w");
   c.ffr = fopen(c.p_fr, "w");
-  if (!c.fdet || !c.ftr || !c.ffr) {
+  c.fisbi = fopen(c.p_isbi, "w");
+  if (!c.fdet || !c.ftr || !c.ffr || !c.fisbi) {
     cli_message(C, CLI_FAIL, "%s: cannot create: %s",
-                !c.fdet ? c.p_det : !c.ftr ? c.p_tr : c.p_fr, strerror(errno));
+                !c.fdet ? c.p_det : !c.ftr ? c.p_tr : !c.ffr ? c.p_fr : c.p_isbi, strerror(errno));
     goto done;
   }
-  if (cli_frames_csv_header(c.ffr, c.p_fr, 1, &err) != ELFM_OK ||
+  /* Each track goes to every output as it ends and is freed (track_drain):
+   * the TrackMate file lists spots by frame before the tracks, so its
+   * spots wait in a scratch file beside it until the end. */
+  const double stride_us =
+      (double)(o.recon.framer.stride_us ? o.recon.framer.stride_us : o.recon.framer.dt_us);
+  c.tm = elfm_trackmate_writer_create(p_tm, stride_us * 1e-3, 0, &err);
+  if (!c.tm || cli_frames_csv_header(c.ffr, c.p_fr, 1, &err) != ELFM_OK ||
       elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
-      elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK) {
+      elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK ||
+      elfm_tracks_write_isbi_begin(c.fisbi, c.p_isbi, &err) != ELFM_OK) {
     cli_fail(C, &err);
     goto done;
   }
@@ -126,21 +133,16 @@ int cmd_track(int argc, char **argv)
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
   if (st == ELFM_OK) st = close_file(&c.ftr, c.p_tr, &err);
   if (st == ELFM_OK) st = close_file(&c.ffr, c.p_fr, &err);
-  if (st == ELFM_OK) {
-    fx = fopen(p_isbi, "w");
-    if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_isbi, -1, "cannot create: %s", strerror(errno));
-    else st = elfm_tracks_write_isbi(fx, p_isbi, &c.store, &err);
-    if (st == ELFM_OK) st = close_file(&fx, p_isbi, &err);
-  }
+  if (st == ELFM_OK) st = elfm_tracks_write_isbi_end(c.fisbi, c.p_isbi, &err);
+  if (st == ELFM_OK) st = close_file(&c.fisbi, c.p_isbi, &err);
   if (st == ELFM_OK) {
     fx = fopen(p_tm, "w");
-    double stride_us = (double)(o.recon.framer.stride_us ? o.recon.framer.stride_us : o.recon.framer.dt_us);
     if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_tm, -1, "cannot create: %s", strerror(errno));
-    else st = elfm_tracks_write_trackmate(fx, p_tm, &c.store, stride_us * 1e-3, &err);
+    else st = elfm_trackmate_writer_finish(c.tm, fx, &err);
     if (st == ELFM_OK) st = close_file(&fx, p_tm, &err);
   }
   double wall = cli_now_s() - t0;
-  c.median_speed_um_per_ms = track_median_speed_um_per_ms(&c.store);
+  c.median_speed_um_per_ms = track_median_speed_um_per_ms(&c);
   if (st == ELFM_OK) st = track_write_summary(&c, &rs, wall, p_sum, input_failed ? &input_err : NULL, &err);
   if (input_failed) {
     cli_fail(C, &input_err);
@@ -156,12 +158,14 @@ int cmd_track(int argc, char **argv)
      * filling still held (best effort; the file may be what failed) */
     elfm_error e2;
     if (c.fdet) track_det_flush_before(&c, INT64_MAX, &e2);
+    /* and the tracks written so far end their ISBI file as a whole one */
+    if (c.fisbi) elfm_tracks_write_isbi_end(c.fisbi, c.p_isbi, &e2);
     goto done;
   }
   if (!o.quiet)
     fprintf(stderr, "eventlfm track: %" PRId64 " volumes, %" PRId64 " detections, %zu tracks "
                     "(%" PRId64 " started) in %.2f s (%.0f volumes/s, realtime factor %.2f) -> %s\n",
-            c.n_frames, c.n_det, c.store.n, elfm_link_n_started(c.lk), wall,
+            c.n_frames, c.n_det, c.n_info, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
   if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL && o.recon.framer.polarity == ELFM_POL_ON) {
     const double v = c.median_speed_um_per_ms;

@@ -168,7 +168,14 @@ typedef struct track_ctx {
   FILE *fdet, *ftr, *ffr;      /* detections.csv, tracks.csv, frames.csv */
   elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
   char p_det[1100], p_tr[1100], p_fr[1100];
-  elfm_track_store store;
+  /* What is kept of each written track (summary.json, the stage analysis):
+   * ~100 bytes. The tracks themselves are freed once written, so memory
+   * grows with the number of tracks, not with their points. */
+  elfm_track_info *info;
+  size_t n_info, info_cap;
+  FILE *fisbi;                 /* tracks_isbi.xml, a particle as each track ends */
+  elfm_trackmate_writer *tm;   /* tracks_trackmate.xml's spots, until the end */
+  char p_isbi[1100];
   int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,
       last_frame;
@@ -249,9 +256,9 @@ double track_peak_width_median_um(const track_ctx *c);
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
  * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);
-/* The median over the store's smoothed tracks of each track's mean lateral
- * speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */
-double track_median_speed_um_per_ms(const elfm_track_store *s);
+/* The median over the written tracks (c->info) of each smoothed one's mean
+ * lateral speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */
+double track_median_speed_um_per_ms(const track_ctx *c);
 /* Objects this slow are placed ahead of themselves by the ON time surface
  * and where they are by the integral (docs/tracker.md "Integral frames":
  * worm neurons move 0.1-0.34 um/ms; flow and stage beads 2.5-4, where the

@@ -77,18 +77,12 @@ static int cmp_double(const void *a, const void *b)
   return (x > y) - (x < y);
 }
 
-double track_median_speed_um_per_ms(const elfm_track_store *s)
+double track_median_speed_um_per_ms(const track_ctx *c)
 {
-  double *v = s->n ? malloc(s->n * sizeof *v) : NULL;
+  double *v = c->n_info ? malloc(c->n_info * sizeof *v) : NULL;
   size_t m = 0;
-  for (size_t i = 0; v && i < s->n; i++) {
-    const elfm_track *t = s->tracks[i];
-    if (!t->vel_um_per_ms || t->n_span == 0) continue;
-    double sum = 0;
-    for (size_t k = 0; k < t->n_span; k++)
-      sum += hypot(t->vel_um_per_ms[3 * k], t->vel_um_per_ms[3 * k + 1]);
-    if (isfinite(sum)) v[m++] = sum / (double)t->n_span;
-  }
+  for (size_t i = 0; v && i < c->n_info; i++)
+    if (isfinite(c->info[i].mean_lateral_speed_um_per_ms)) v[m++] = c->info[i].mean_lateral_speed_um_per_ms;
   double r = NAN;
   if (m > 0) {
     qsort(v, m, sizeof *v, cmp_double);
@@ -133,14 +127,14 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "end_fills", (double)c->n_filled_end);
   cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame_refused", (double)c->n_multi_refused);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
-  cJSON_AddNumberToObject(cnt, "tracks", (double)c->store.n);
+  cJSON_AddNumberToObject(cnt, "tracks", (double)c->n_info);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
   cJSON_AddNumberToObject(cnt, "tracks_refit_classical_gcv", (double)c->n_refit_gcv);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
   add_num(cnt, "median_track_speed_um_per_ms", c->median_speed_um_per_ms);
   int nm[5] = {0, 0, 0, 0, 0};
-  for (size_t i = 0; i < c->store.n; i++) nm[c->store.tracks[i]->model]++;
+  for (size_t i = 0; i < c->n_info; i++) nm[c->info[i].model]++;
   cJSON *models = cJSON_AddObjectToObject(cnt, "models");
   for (int m = 1; m < 5; m++)
     cJSON_AddNumberToObject(models, elfm_motion_model_name((elfm_motion_model)m), nm[m]);
@@ -241,9 +235,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(tim, "link_s", c->t_link);
   add_num(tim, "smooth_s", c->t_smooth);
 
-  if (c->store.n) {
+  if (c->n_info) {
     elfm_stage_result sr;
-    if (elfm_analysis_stage(&c->store, o->has_stage_v ? o->stage_v : NULL, &sr, err) == ELFM_OK) {
+    if (elfm_analysis_stage_info(c->info, c->n_info, o->has_stage_v ? o->stage_v : NULL, &sr,
+                                 err) == ELFM_OK) {
       cJSON *st = cJSON_AddObjectToObject(j, "stage");
       cJSON_AddItemToObject(st, "velocity_um_per_ms", vec3(sr.v_um_per_ms));
       cJSON_AddItemToObject(st, "velocity_sd_um_per_ms", vec3(sr.v_sd_um_per_ms));
@@ -256,20 +251,18 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   if (o->resolution) cJSON_AddItemToObject(j, "resolution", fwhm_summary(&c->fl));
 
   cJSON *tr = cJSON_AddArrayToObject(j, "tracks");
-  for (size_t i = 0; i < c->store.n; i++) {
-    const elfm_track *t = c->store.tracks[i];
+  for (size_t i = 0; i < c->n_info; i++) {
+    const elfm_track_info *t = &c->info[i];
     cJSON *e = cJSON_CreateObject();
-    double v[3];
-    elfm_track_mean_velocity(t, v);
     cJSON_AddNumberToObject(e, "id", (double)t->id);
-    cJSON_AddNumberToObject(e, "first_frame", (double)t->pts[0].frame);
-    cJSON_AddNumberToObject(e, "last_frame", (double)t->pts[t->n - 1].frame);
+    cJSON_AddNumberToObject(e, "first_frame", (double)t->first_frame);
+    cJSON_AddNumberToObject(e, "last_frame", (double)t->last_frame);
     cJSON_AddNumberToObject(e, "points", (double)t->n);
     cJSON_AddStringToObject(e, "model", elfm_motion_model_name(t->model));
     if (t->model == ELFM_MODEL_SPLINE) cJSON_AddNumberToObject(e, "spline_weight_ms3", t->spline_weight_ms3);
     add_num(e, "edf", t->edf);
     cJSON_AddNumberToObject(e, "outliers", t->n_outliers);
-    cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(v));
+    cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(t->mean_vel_um_per_ms));
     cJSON_AddItemToArray(tr, e);
   }
   char *text = cJSON_Print(j);

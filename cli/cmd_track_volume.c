@@ -63,13 +63,25 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elf
       return ELFM_OK;
     }
   }
-  if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
-  if (st != ELFM_OK) {
-    elfm_track_free(t);
-    return st;
+  /* Written to every output at once and freed: the run keeps its info only. */
+  if (st == ELFM_OK && c->n_info == c->info_cap) {
+    size_t cap = c->info_cap ? 2 * c->info_cap : 64;
+    elfm_track_info *p = realloc(c->info, cap * sizeof *p);
+    if (!p) st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (track infos)");
+    else {
+      c->info = p;
+      c->info_cap = cap;
+    }
   }
-  c->n_points_kept += (int64_t)t->n;
-  return elfm_track_store_add(&c->store, t, err);
+  if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
+  if (st == ELFM_OK) st = elfm_tracks_write_isbi_track(c->fisbi, c->p_isbi, t, err);
+  if (st == ELFM_OK) st = elfm_trackmate_writer_add(c->tm, t, err);
+  if (st == ELFM_OK) {
+    elfm_track_info_get(t, &c->info[c->n_info++]);
+    c->n_points_kept += (int64_t)t->n;
+  }
+  elfm_track_free(t);
+  return st;
 }
 
 void track_width_add(track_ctx *c, const elfm_detection *d)
@@ -540,7 +552,9 @@ void track_ctx_free(track_ctx *c)
   free(c->slot_plan);
   free(c->pred);
   free(c->pred_intensity);
-  elfm_track_store_clear(&c->store);
+  if (c->fisbi) fclose(c->fisbi);
+  elfm_trackmate_writer_free(c->tm);
+  free(c->info);
   free(c->det);
   free(c->fw);
   free(c->fl.b);

@@ -1,6 +1,8 @@
 /* test_tracks.c — track store and writers: tracks.csv (smoothed + raw,
  * empty raw on gap frames) read back with elfm_table, detections.csv, ISBI
- * 2012 XML (real detections only), TrackMate XML structure, write errors. */
+ * 2012 XML (real detections only), TrackMate XML structure, write errors;
+ * the TrackMate writer fed a track at a time sorting its spots in several
+ * passes (the same file as in one), the streamed ISBI file, track infos. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -27,6 +29,141 @@ static int count(const char *s, const char *needle)
   int n = 0;
   for (const char *p = s; (p = strstr(p, needle)); p += strlen(needle)) n++;
   return n;
+}
+
+/* Tracks fed one at a time, ending out of frame order and spanning six of
+ * the TrackMate writer's 1024-frame blocks: the file sorted in one pass
+ * and in one pass per block is the same, and it lists every spot once,
+ * frames increasing, IDs increasing within a frame, with its own track's
+ * position. */
+static void test_trackmate_passes(const char *dir)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  enum { NT = 7 };
+  elfm_track *tr[NT];
+  size_t total = 0;
+  for (int k = 0; k < NT; k++) {
+    tr[k] = elfm_track_create(100 + k, &err);
+    /* track k: from frame 900 k (decreasing with k for the odd ones, so
+     * later tracks start earlier), every (3 + k)-th frame, 400 + 150 k points */
+    const int64_t f0 = k % 2 ? 5200 - 700 * k : 900 * k, step = 3 + k;
+    for (int j = 0; j < 400 + 150 * k; j++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f0 + step * j;
+      d.t_us = 1000 * d.frame;
+      d.x_um = 1000 * k + 0.25 * j;
+      d.y_um = -j;
+      d.z_um = k;
+      d.intensity = j % 5 ? 50 + j : NAN; /* not finite: written 0 */
+      d.sigma_x_um = k % 3 ? 1.5 : 0;
+      CHECK_OK(elfm_track_append(tr[k], &d, &err), &err);
+    }
+    total += tr[k]->n;
+  }
+  char p1[700], p2[700], scratch[720];
+  snprintf(p1, sizeof p1, "%s/one_pass.xml", dir);
+  snprintf(p2, sizeof p2, "%s/passes.xml", dir);
+  for (int v = 0; v < 2; v++) {
+    const char *p = v ? p2 : p1;
+    elfm_trackmate_writer *w = elfm_trackmate_writer_create(p, 2.0, v ? 1 : 0, &err);
+    CHECK(w != NULL);
+    if (!w) return;
+    /* the scratch file is unlinked at once: nothing is left behind */
+    snprintf(scratch, sizeof scratch, "%s.spots.tmp", p);
+    CHECK(fopen(scratch, "r") == NULL);
+    for (int k = 0; k < NT; k++) CHECK_OK(elfm_trackmate_writer_add(w, tr[k], &err), &err);
+    FILE *f = fopen(p, "w");
+    CHECK_OK(elfm_trackmate_writer_finish(w, f, &err), &err);
+    fclose(f);
+    elfm_trackmate_writer_free(w);
+  }
+  char *a = slurp(p1), *b = slurp(p2);
+  CHECK(a && b && strcmp(a, b) == 0);
+  if (a) {
+    char want[64];
+    snprintf(want, sizeof want, "<AllSpots nspots=\"%zu\">", total);
+    CHECK(strstr(a, want) != NULL);
+    CHECK_EQ_INT(count(a, "<Spot "), (int)total);
+    CHECK_EQ_INT(count(a, "<Edge "), (int)total - NT);
+    /* walk the spots: frames increase, IDs increase within a frame, each
+     * spot's FRAME is its group's, each ID once, at its track's point */
+    unsigned char *seen = calloc(total, 1);
+    long long last_frame = -1, last_id = -1, group = -1;
+    int bad_order = 0, bad_pos = 0, n = 0;
+    for (const char *q = a; (q = strstr(q, "<S")); q++) {
+      long long fr, id;
+      if (sscanf(q, "<SpotsInFrame frame=\"%lld\"", &fr) == 1) {
+        bad_order += fr <= last_frame;
+        last_frame = group = fr;
+        last_id = -1;
+        continue;
+      }
+      double x, y, z;
+      if (sscanf(q, "<Spot ID=\"%lld\" name=\"ID%*d\" QUALITY=\"%*g\" POSITION_X=\"%lf\" "
+                    "POSITION_Y=\"%lf\" POSITION_Z=\"%lf\" POSITION_T=\"%*f\" FRAME=\"%lld\"",
+                 &id, &x, &y, &z, &fr) != 5)
+        continue;
+      n++;
+      bad_order += fr != group || id <= last_id || id < 0 || (size_t)id >= total;
+      last_id = id;
+      if (id < 0 || (size_t)id >= total) continue;
+      bad_order += seen[id]++;
+      /* spot IDs run through the tracks in the order they were added */
+      size_t r = (size_t)id;
+      int k = 0;
+      while (k < NT - 1 && r >= tr[k]->n) r -= tr[k++]->n;
+      const elfm_detection *d = &tr[k]->pts[r];
+      bad_pos += d->frame != fr || fabs(d->x_um - x) > 1e-4 || fabs(d->y_um - y) > 1e-4 ||
+                 fabs(d->z_um - z) > 1e-4;
+    }
+    CHECK_EQ_INT(n, (int)total);
+    CHECK_EQ_INT(bad_order, 0);
+    CHECK_EQ_INT(bad_pos, 0);
+    free(seen);
+  }
+  free(a);
+  free(b);
+  /* no tracks: a valid file with no spots */
+  elfm_trackmate_writer *w = elfm_trackmate_writer_create(p1, 1.0, 0, &err);
+  CHECK(w != NULL);
+  FILE *f = fopen(p1, "w");
+  if (w && f) CHECK_OK(elfm_trackmate_writer_finish(w, f, &err), &err);
+  if (f) fclose(f);
+  elfm_trackmate_writer_free(w);
+  a = slurp(p1);
+  CHECK(a && strstr(a, "<AllSpots nspots=\"0\">") && !strstr(a, "<SpotsInFrame") &&
+        strstr(a, "</TrackMate>"));
+  free(a);
+  /* bad arguments and a scratch file that cannot be made name the file */
+  CHECK(elfm_trackmate_writer_create(p1, 0, 0, &err) == NULL && err.code == ELFM_ERR_INVALID);
+  char nodir[760];
+  snprintf(nodir, sizeof nodir, "%s/no/such/dir/t.xml", dir);
+  CHECK(elfm_trackmate_writer_create(nodir, 1.0, 0, &err) == NULL && err.code == ELFM_ERR_IO);
+  CHECK(strstr(err.file, "no/such/dir/t.xml.spots.tmp") != NULL);
+  elfm_trackmate_writer_free(NULL);
+  /* the streamed ISBI file is the store's */
+  elfm_track_store s;
+  elfm_track_store_init(&s);
+  for (int k = 0; k < NT; k++) CHECK_OK(elfm_track_store_add(&s, tr[k], &err), &err);
+  f = fopen(p1, "w");
+  CHECK_OK(elfm_tracks_write_isbi(f, p1, &s, &err), &err);
+  fclose(f);
+  f = fopen(p2, "w");
+  CHECK_OK(elfm_tracks_write_isbi_begin(f, p2, &err), &err);
+  for (int k = 0; k < NT; k++) CHECK_OK(elfm_tracks_write_isbi_track(f, p2, tr[k], &err), &err);
+  CHECK_OK(elfm_tracks_write_isbi_end(f, p2, &err), &err);
+  fclose(f);
+  a = slurp(p1);
+  b = slurp(p2);
+  CHECK(a && b && strcmp(a, b) == 0 && count(a, "<particle>") == NT &&
+        count(a, "<detection ") == (int)total);
+  free(a);
+  free(b);
+  elfm_track_store_clear(&s);
+  remove(p1);
+  remove(p2);
 }
 
 int main(void)
@@ -194,6 +331,27 @@ int main(void)
     CHECK(strstr(err.file, "/dev/full") != NULL);
     fclose(full);
   }
+  /* a track's info: what the run keeps once the track is freed */
+  {
+    elfm_track_info ti;
+    elfm_track_info_get(s.tracks[0], &ti);
+    double v[3];
+    elfm_track_mean_velocity(s.tracks[0], v);
+    CHECK(ti.id == 7 && ti.first_frame == 10 && ti.last_frame == 29 && ti.n == 17);
+    CHECK(ti.smoothed && ti.model == s.tracks[0]->model && ti.edf == s.tracks[0]->edf);
+    CHECK_NEAR(ti.mean_vel_um_per_ms[0], v[0], 1e-12);
+    CHECK_NEAR(ti.mean_vel_um_per_ms[0], 0.5, 1e-3); /* x = 0.5 f um, frames 1 ms apart */
+    CHECK_NEAR(ti.mean_lateral_speed_um_per_ms, 0.5, 1e-3);
+    elfm_track *u = elfm_track_create(5, &err);
+    elfm_detection d;
+    memset(&d, 0, sizeof d);
+    d.frame = 3;
+    CHECK_OK(elfm_track_append(u, &d, &err), &err);
+    elfm_track_info_get(u, &ti);
+    CHECK(!ti.smoothed && isnan(ti.mean_lateral_speed_um_per_ms) && ti.first_frame == 3);
+    elfm_track_free(u);
+  }
+  test_trackmate_passes(dir);
   elfm_track_free(NULL);
   elfm_track_store_clear(&s);
   CHECK_EQ_INT(s.n, 0);

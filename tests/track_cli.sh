@@ -77,6 +77,28 @@ check 0 "" "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.
   --z-min-um -60 --z-max-um 60 --z-step-um 4
 tr -d ' \t\n' < "$tmp/o6/summary.json" 2>/dev/null | grep -q '"nz":31,"um_per_px":[0-9.]*,"z_min_um":-60,"z_step_um":4' ||
   { echo "FAIL: track --z-*-um: summary.json lacks the 31 planes -60..60 step 4"; fail=$((fail+1)); }
+# the outputs written as tracks end agree: one ISBI particle and one
+# TrackMate track per summary.json track, one spot per kept point, each
+# file whole, and no scratch file left behind (also after the input error)
+for o in o5 o6; do
+  d="$tmp/$o"
+  [ -f "$d/summary.json" ] || continue
+  nt=$(tr -d ' \t\n' < "$d/summary.json" | sed -n 's/.*"tracks":\([0-9]*\),.*/\1/p')
+  np=$(tr -d ' \t\n' < "$d/summary.json" | sed -n 's/.*"track_points":\([0-9]*\),.*/\1/p')
+  ni=$(grep -c '<particle>' "$d/tracks_isbi.xml" 2>/dev/null)
+  nm=$(grep -c '<Track ' "$d/tracks_trackmate.xml" 2>/dev/null)
+  ns=$(grep -c '<Spot ' "$d/tracks_trackmate.xml" 2>/dev/null)
+  nc=$(tail -n +2 "$d/tracks.csv" | cut -d, -f1 | sort -u | wc -l)
+  if [ -z "$nt" ] || [ "$nt" -lt 1 ] || [ "$ni" != "$nt" ] || [ "$nm" != "$nt" ] || [ "$nc" != "$nt" ] ||
+     [ "$ns" != "$np" ]; then
+    echo "FAIL: $o: tracks summary/isbi/trackmate/csv $nt/$ni/$nm/$nc, spots $ns of $np points"
+    fail=$((fail+1))
+  fi
+  [ -n "$VERBOSE" ] && echo "$o: $nt tracks, $ns spots"
+  tail -1 "$d/tracks_isbi.xml" | grep -q '</root>' || { echo "FAIL: $o: ISBI XML not closed"; fail=$((fail+1)); }
+  tail -1 "$d/tracks_trackmate.xml" | grep -q '</TrackMate>' || { echo "FAIL: $o: TrackMate XML not closed"; fail=$((fail+1)); }
+  ls "$d" | grep -q 'tmp' && { echo "FAIL: $o: scratch file left: $(ls "$d")"; fail=$((fail+1)); }
+done
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q

@@ -8,14 +8,23 @@
 elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *sv,
                                 elfm_stage_result *r, elfm_error *err)
 {
+  elfm_track_info *ti = malloc((s->n ? s->n : 1) * sizeof *ti);
+  if (!ti) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "stage analysis: out of memory");
+  for (size_t i = 0; i < s->n; i++) elfm_track_info_get(s->tracks[i], &ti[i]);
+  elfm_status st = elfm_analysis_stage_info(ti, s->n, sv, r, err);
+  free(ti);
+  return st;
+}
+
+elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const double *sv,
+                                     elfm_stage_result *r, elfm_error *err)
+{
   double sw = 0, m[3] = {0, 0, 0}, um[3] = {0, 0, 0}, uss[3] = {0, 0, 0}, sp = 0, sp2 = 0;
   size_t n = 0;
-  for (size_t i = 0; i < s->n; i++) {
-    const elfm_track *t = s->tracks[i];
-    if (!t->n_span || !t->vel_um_per_ms) continue;
-    double v[3];
-    elfm_track_mean_velocity(t, v);
-    double w = (double)t->n, speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  for (size_t i = 0; i < nt; i++) {
+    if (!ti[i].smoothed) continue;
+    const double *v = ti[i].mean_vel_um_per_ms;
+    double w = (double)ti[i].n, speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     for (int a = 0; a < 3; a++) {
       m[a] += w * v[a];
       um[a] += v[a];

@@ -30,6 +30,10 @@ typedef struct elfm_stage_result {
  * ELFM_ERR_INVALID. stage_v may be NULL. */
 elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *stage_v_um_per_ms,
                                 elfm_stage_result *out, elfm_error *err);
+/* The same from the infos of tracks already freed (elfm_track_info_get). */
+elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t n,
+                                     const double *stage_v_um_per_ms, elfm_stage_result *out,
+                                     elfm_error *err);
 
 /* Resolution. For each detection of volume v that is isolated (no other
  * detection within isolation_um laterally), the full width at half maximum

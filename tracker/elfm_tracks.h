@@ -7,9 +7,11 @@
  * also holds one smoothed state per frame of its span first..last, with
  * raw_index[k] the real point at that frame or -1 for a gap-filled frame.
  *
- * The store (elfm_track_store) owns finished tracks; it is the only thing
- * that grows with the recording's length (STYLE: "nothing grows except the
- * tracks themselves").
+ * The store (elfm_track_store) owns finished tracks, for callers that want
+ * them all in memory (tests, small runs). A long run does not keep them: it
+ * writes each track as it ends (tracks.csv, elfm_tracks_write_isbi_track,
+ * elfm_trackmate_writer) and keeps its elfm_track_info, ~100 bytes per
+ * track whatever its length.
  */
 #ifndef ELFM_TRACKS_H
 #define ELFM_TRACKS_H
@@ -89,6 +91,23 @@ elfm_status elfm_track_insert(elfm_track *t, const elfm_detection *d, elfm_error
 /* Mean smoothed velocity over the span (um/ms); zeros when not smoothed. */
 void elfm_track_mean_velocity(const elfm_track *t, double v_um_per_ms[3]);
 
+/* What a run reports of a finished track once the track itself is freed:
+ * summary.json's entry and the stage analysis (elfm_analysis_stage_info). */
+typedef struct elfm_track_info {
+  int64_t id, first_frame, last_frame; /* frames of the first and last real point */
+  size_t n;                   /* real points */
+  elfm_motion_model model;
+  double spline_weight_ms3, edf;
+  int n_outliers;
+  int smoothed;               /* 0: not smoothed; the velocities below are 0 / NAN */
+  double mean_vel_um_per_ms[3];        /* elfm_track_mean_velocity */
+  double mean_lateral_speed_um_per_ms; /* mean over the span of |(vx, vy)|; NAN when
+                                          not smoothed or not finite */
+} elfm_track_info;
+
+/* t's info; t must have at least one real point. */
+void elfm_track_info_get(const elfm_track *t, elfm_track_info *out);
+
 /* The store: takes ownership of finished tracks. */
 typedef struct elfm_track_store {
   size_t n, cap;
@@ -127,12 +146,40 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
  * scenario are the header attributes the challenge files carry). */
 elfm_status elfm_tracks_write_isbi(FILE *f, const char *path, const elfm_track_store *s,
                                    elfm_error *err);
+/* The same file a track at a time, as tracks end: begin, one call per
+ * track (in the order the file should list them), end. */
+elfm_status elfm_tracks_write_isbi_begin(FILE *f, const char *path, elfm_error *err);
+elfm_status elfm_tracks_write_isbi_track(FILE *f, const char *path, const elfm_track *t,
+                                         elfm_error *err);
+elfm_status elfm_tracks_write_isbi_end(FILE *f, const char *path, elfm_error *err);
 
 /* TrackMate XML (the TmXmlReader layout: Model/AllSpots/SpotsInFrame/Spot,
  * AllTracks/Track/Edge, FilteredTracks), positions in um, frame interval
  * in ms, one spot per real point at its smoothed position. */
 elfm_status elfm_tracks_write_trackmate(FILE *f, const char *path, const elfm_track_store *s,
                                         double frame_interval_ms, elfm_error *err);
+
+/* The same file from tracks given one at a time as they end, in bounded
+ * memory. TrackMate lists spots by frame, before the tracks, and a track's
+ * spots are known only when it ends: so each spot waits in a scratch file
+ * beside `path` (path + ".spots.tmp", unlinked as soon as it is open, so
+ * nothing is left behind), and finish sorts them by frame in passes over
+ * it, each pass holding at most ~max_sort_spots spots (0: 262144, ~15 MB;
+ * at least one block of 1024 frames). What stays in memory is 24 bytes per
+ * track. The output is byte for byte elfm_tracks_write_trackmate's for the
+ * same tracks in the same order. */
+typedef struct elfm_trackmate_writer elfm_trackmate_writer;
+
+/* NULL (err filled) on a frame interval that is not > 0, no memory, or a
+ * scratch file that cannot be created. */
+elfm_trackmate_writer *elfm_trackmate_writer_create(const char *path, double frame_interval_ms,
+                                                    size_t max_sort_spots, elfm_error *err);
+elfm_status elfm_trackmate_writer_add(elfm_trackmate_writer *w, const elfm_track *t,
+                                      elfm_error *err);
+/* Write the whole file to f (errors name the writer's path). Once. */
+elfm_status elfm_trackmate_writer_finish(elfm_trackmate_writer *w, FILE *f, elfm_error *err);
+/* Close and remove the scratch file; NULL is a no-op. */
+void elfm_trackmate_writer_free(elfm_trackmate_writer *w);
 
 #ifdef __cplusplus
 }

@@ -2,6 +2,7 @@
  * elfm_tracks.h). */
 #include "elfm_tracks.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -88,6 +89,30 @@ void elfm_track_mean_velocity(const elfm_track *t, double v[3])
   for (size_t k = 0; k < t->n_span; k++)
     for (int a = 0; a < 3; a++) v[a] += t->vel_um_per_ms[3 * k + a];
   for (int a = 0; a < 3; a++) v[a] /= (double)t->n_span;
+}
+
+void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
+{
+  memset(o, 0, sizeof *o);
+  o->id = t->id;
+  o->n = t->n;
+  if (t->n) {
+    o->first_frame = t->pts[0].frame;
+    o->last_frame = t->pts[t->n - 1].frame;
+  }
+  o->model = t->model;
+  o->spline_weight_ms3 = t->spline_weight_ms3;
+  o->edf = t->edf;
+  o->n_outliers = t->n_outliers;
+  o->smoothed = t->n_span > 0 && t->vel_um_per_ms;
+  elfm_track_mean_velocity(t, o->mean_vel_um_per_ms);
+  o->mean_lateral_speed_um_per_ms = NAN;
+  if (o->smoothed) {
+    double sum = 0;
+    for (size_t k = 0; k < t->n_span; k++)
+      sum += hypot(t->vel_um_per_ms[3 * k], t->vel_um_per_ms[3 * k + 1]);
+    if (isfinite(sum)) o->mean_lateral_speed_um_per_ms = sum / (double)t->n_span;
+  }
 }
 
 void elfm_track_store_init(elfm_track_store *s) { memset(s, 0, sizeof *s); }
