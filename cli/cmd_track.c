@@ -31,6 +31,29 @@ static int close_file(FILE **f, const char *path, elfm_error *err)
   return ELFM_OK;
 }
 
+/* The two XML files from the points c->xml holds. */
+static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char *p_tm,
+                                   elfm_error *err)
+{
+  const elfm_framer_options *fo = &c->o->recon.framer;
+  const double stride_ms = 1e-3 * (double)(fo->stride_us ? fo->stride_us : fo->dt_us);
+  FILE *f = fopen(p_isbi, "w");
+  elfm_status st = ELFM_OK;
+  if (!f) st = elfm_error_set(err, ELFM_ERR_IO, p_isbi, -1, "cannot create: %s", strerror(errno));
+  else st = elfm_track_xml_write_isbi(c->xml, f, p_isbi, err);
+  if (f && st != ELFM_OK) fclose(f);
+  else if (f) st = close_file(&f, p_isbi, err);
+  if (st != ELFM_OK) return st;
+  f = fopen(p_tm, "w");
+  if (!f) return elfm_error_set(err, ELFM_ERR_IO, p_tm, -1, "cannot create: %s", strerror(errno));
+  st = elfm_track_xml_write_trackmate(c->xml, f, p_tm, stride_ms, err);
+  if (st != ELFM_OK) {
+    fclose(f);
+    return st;
+  }
+  return close_file(&f, p_tm, err);
+}
+
 int cmd_track(int argc, char **argv)
 {
   static const char *const C = "track";
@@ -63,12 +86,12 @@ int cmd_track(int argc, char **argv)
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
   snprintf(c.p_fr, sizeof c.p_fr, "%s/frames.csv", o.out);
-  char p_tm[1100], p_sum[1100];
-  snprintf(c.p_isbi, sizeof c.p_isbi, "%s/tracks_isbi.xml", o.out);
+  char p_isbi[1100], p_tm[1100], p_sum[1100], p_scratch[1100];
+  snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", o.out);
+  snprintf(p_scratch, sizeof p_scratch, "%s/.tracks_points.tmp", o.out);
   snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", o.out);
   snprintf(p_sum, sizeof p_sum, "%s/summary.json", o.out);
   int rc = CLI_FAIL;
-  FILE *fx = NULL;
   c.fw = o.resolution ? malloc((size_t)o.max_det * sizeof *c.fw) : NULL;
   if (o.resolution && !c.fw) {
     cli_message(C, CLI_FAIL, "out of memory");
@@ -86,22 +109,19 @@ int cmd_track(int argc, char **argv)
   c.fdet = fopen(c.p_det, "w");
   c.ftr = fopen(c.p_tr, "w");
   c.ffr = fopen(c.p_fr, "w");
-  c.fisbi = fopen(c.p_isbi, "w");
-  if (!c.fdet || !c.ftr || !c.ffr || !c.fisbi) {
+  if (!c.fdet || !c.ftr || !c.ffr) {
     cli_message(C, CLI_FAIL, "%s: cannot create: %s",
-                !c.fdet ? c.p_det : !c.ftr ? c.p_tr : !c.ffr ? c.p_fr : c.p_isbi, strerror(errno));
+                !c.fdet ? c.p_det : !c.ftr ? c.p_tr : c.p_fr, strerror(errno));
     goto done;
   }
-  /* Each track goes to every output as it ends and is freed (track_drain):
-   * the TrackMate file lists spots by frame before the tracks, so its
-   * spots wait in a scratch file beside it until the end. */
-  const double stride_us =
-      (double)(o.recon.framer.stride_us ? o.recon.framer.stride_us : o.recon.framer.dt_us);
-  c.tm = elfm_trackmate_writer_create(p_tm, stride_us * 1e-3, 0, &err);
-  if (!c.tm || cli_frames_csv_header(c.ffr, c.p_fr, 1, &err) != ELFM_OK ||
+  /* Each track (or piece of a long one) goes to tracks.csv as it ends and
+   * is freed (track_drain); the XML files list a track's points together
+   * and TrackMate's by frame, so the points wait in a scratch file in the
+   * output directory until the end (elfm_track_xml). */
+  c.xml = elfm_track_xml_create(p_scratch, 0, &err);
+  if (!c.xml || cli_frames_csv_header(c.ffr, c.p_fr, 1, &err) != ELFM_OK ||
       elfm_detections_write_header(c.fdet, c.p_det, &err) != ELFM_OK ||
-      elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK ||
-      elfm_tracks_write_isbi_begin(c.fisbi, c.p_isbi, &err) != ELFM_OK) {
+      elfm_tracks_write_csv_header(c.ftr, c.p_tr, &err) != ELFM_OK) {
     cli_fail(C, &err);
     goto done;
   }
@@ -133,14 +153,7 @@ int cmd_track(int argc, char **argv)
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
   if (st == ELFM_OK) st = close_file(&c.ftr, c.p_tr, &err);
   if (st == ELFM_OK) st = close_file(&c.ffr, c.p_fr, &err);
-  if (st == ELFM_OK) st = elfm_tracks_write_isbi_end(c.fisbi, c.p_isbi, &err);
-  if (st == ELFM_OK) st = close_file(&c.fisbi, c.p_isbi, &err);
-  if (st == ELFM_OK) {
-    fx = fopen(p_tm, "w");
-    if (!fx) st = elfm_error_set(&err, ELFM_ERR_IO, p_tm, -1, "cannot create: %s", strerror(errno));
-    else st = elfm_trackmate_writer_finish(c.tm, fx, &err);
-    if (st == ELFM_OK) st = close_file(&fx, p_tm, &err);
-  }
+  if (st == ELFM_OK) st = track_write_xml(&c, p_isbi, p_tm, &err);
   double wall = cli_now_s() - t0;
   c.median_speed_um_per_ms = track_median_speed_um_per_ms(&c);
   if (st == ELFM_OK) st = track_write_summary(&c, &rs, wall, p_sum, input_failed ? &input_err : NULL, &err);
@@ -158,8 +171,8 @@ int cmd_track(int argc, char **argv)
      * filling still held (best effort; the file may be what failed) */
     elfm_error e2;
     if (c.fdet) track_det_flush_before(&c, INT64_MAX, &e2);
-    /* and the tracks written so far end their ISBI file as a whole one */
-    if (c.fisbi) elfm_tracks_write_isbi_end(c.fisbi, c.p_isbi, &e2);
+    /* and the tracks written to tracks.csv so far, to the XML files */
+    if (c.xml) track_write_xml(&c, p_isbi, p_tm, &e2);
     goto done;
   }
   if (!o.quiet)
@@ -202,7 +215,6 @@ int cmd_track(int argc, char **argv)
             rs.triggers);
   rc = CLI_OK;
 done:
-  if (fx) fclose(fx);
   track_ctx_free(&c);
   return rc;
 }

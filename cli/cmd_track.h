@@ -30,6 +30,8 @@ typedef struct track_opts {
   double views_exponent;
   int quiet;
   double max_outlier_frac;
+  int piece_points;    /* long tracks: a piece of this many points is smoothed and written
+                          once a live track has it and piece_keep_points more (0 = off) */
   double guided_low;  /* track-guided search: min value near a prediction (0 = off) */
   double guided_radius_um;
   int guided_min_points;
@@ -157,7 +159,7 @@ typedef struct track_ctx {
   double *pred;          /* [max_det][3] track predictions (guided search) */
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
-  struct fin_track {     /* a finished track being smoothed (drain), */
+  struct fin_track {     /* a finished track or a piece being smoothed (drain), */
     elfm_track *t;
     elfm_status st;      /* and how its smoothing went */
     elfm_error err;
@@ -173,9 +175,8 @@ typedef struct track_ctx {
    * grows with the number of tracks, not with their points. */
   elfm_track_info *info;
   size_t n_info, info_cap;
-  FILE *fisbi;                 /* tracks_isbi.xml, a particle as each track ends */
-  elfm_trackmate_writer *tm;   /* tracks_trackmate.xml's spots, until the end */
-  char p_isbi[1100];
+  elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */
+  int64_t n_pieces;            /* pieces taken from long live tracks (elfm_link_take_piece) */
   int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,
       last_frame;
@@ -256,6 +257,15 @@ double track_peak_width_median_um(const track_ctx *c);
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
  * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);
+/* The points a live track keeps past a piece's cut, and the context on
+ * each side of a cut, for --piece-points N: N / 4 (at least 64, more than
+ * the linker's reviews look back) and N / 8 (at least 16, at most that). */
+static inline size_t track_piece_keep(int n) { return n / 4 > 64 ? (size_t)(n / 4) : 64; }
+static inline size_t track_piece_context(int n)
+{
+  const size_t c = n / 8 > 16 ? (size_t)(n / 8) : 16, k = track_piece_keep(n);
+  return c < k ? c : k;
+}
 /* The median over the written tracks (c->info) of each smoothed one's mean
  * lateral speed |(vx, vy)| over its span, um/ms; NAN without smoothed tracks. */
 double track_median_speed_um_per_ms(const track_ctx *c);

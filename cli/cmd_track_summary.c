@@ -131,6 +131,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
   cJSON_AddNumberToObject(cnt, "tracks_refit_classical_gcv", (double)c->n_refit_gcv);
+  cJSON_AddNumberToObject(cnt, "track_pieces", (double)c->n_pieces);
   cJSON_AddNumberToObject(cnt, "track_points", (double)c->n_points_kept);
   add_num(cnt, "median_track_speed_um_per_ms", c->median_speed_um_per_ms);
   int nm[5] = {0, 0, 0, 0, 0};
@@ -196,6 +197,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "max_gap_frames", o->link.max_gap_frames);
   cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
   cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
+  cJSON_AddNumberToObject(par, "piece_points", o->piece_points);
   cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
   /* the lead the last tracks were smoothed with (all widths are in by then) */
   cJSON_AddNumberToObject(par, "motion_lead_um", track_motion_lead_um(c));
@@ -262,6 +264,9 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     if (t->model == ELFM_MODEL_SPLINE) cJSON_AddNumberToObject(e, "spline_weight_ms3", t->spline_weight_ms3);
     add_num(e, "edf", t->edf);
     cJSON_AddNumberToObject(e, "outliers", t->n_outliers);
+    /* a long track written in pieces (--piece-points): model, weight and
+     * edf are its largest piece's */
+    if (t->n_pieces > 1) cJSON_AddNumberToObject(e, "pieces", t->n_pieces);
     cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(t->mean_vel_um_per_ms));
     cJSON_AddItemToArray(tr, e);
   }

@@ -63,7 +63,8 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elf
       return ELFM_OK;
     }
   }
-  /* Written to every output at once and freed: the run keeps its info only. */
+  /* Written to tracks.csv and the XML scratch at once and freed: the run
+   * keeps its info only, a later piece's folded into its track's. */
   if (st == ELFM_OK && c->n_info == c->info_cap) {
     size_t cap = c->info_cap ? 2 * c->info_cap : 64;
     elfm_track_info *p = realloc(c->info, cap * sizeof *p);
@@ -74,11 +75,16 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elf
     }
   }
   if (st == ELFM_OK) st = elfm_tracks_write_csv(c->ftr, c->p_tr, t, err);
-  if (st == ELFM_OK) st = elfm_tracks_write_isbi_track(c->fisbi, c->p_isbi, t, err);
-  if (st == ELFM_OK) st = elfm_trackmate_writer_add(c->tm, t, err);
+  if (st == ELFM_OK) st = elfm_track_xml_add(c->xml, t, err);
   if (st == ELFM_OK) {
-    elfm_track_info_get(t, &c->info[c->n_info++]);
-    c->n_points_kept += (int64_t)t->n;
+    elfm_track_info ti;
+    elfm_track_info_get(t, &ti);
+    size_t e = c->n_info;
+    if (t->partial && t->piece > 0) /* its track's entry, from the newest */
+      for (e = c->n_info; e-- > 0 && c->info[e].id != t->id;) {}
+    if (e < c->n_info) elfm_track_info_merge(&c->info[e], &ti);
+    else c->info[c->n_info++] = ti;
+    c->n_points_kept += (int64_t)ti.n;
   }
   elfm_track_free(t);
   return st;
@@ -114,25 +120,40 @@ double track_motion_lead_um(const track_ctx *c)
  * (most of them at the end of the recording) they are smoothed in parallel;
  * filtering and writing stay in the linker's order, so the output does not
  * depend on the thread count. */
+/* Append t to the tracks to smooth (c->fin[*n]); on no memory t is freed. */
+static elfm_status fin_push(track_ctx *c, size_t *n, elfm_track *t, elfm_error *err)
+{
+  if (*n == c->fin_cap) {
+    size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
+    struct fin_track *a = realloc(c->fin, cap * sizeof *a);
+    if (!a) {
+      elfm_track_free(t);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
+    }
+    c->fin = a;
+    c->fin_cap = cap;
+  }
+  c->fin[(*n)++].t = t;
+  return ELFM_OK;
+}
+
 elfm_status track_drain(track_ctx *c, elfm_error *err)
 {
   size_t n = 0;
   elfm_track *t;
   elfm_status st = ELFM_OK;
-  while ((t = elfm_link_pop_finished(c->lk))) {
-    if (n == c->fin_cap) {
-      size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
-      struct fin_track *a = realloc(c->fin, cap * sizeof *a);
-      if (!a) {
-        elfm_track_free(t);
-        st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
-        break;
-      }
-      c->fin = a;
-      c->fin_cap = cap;
-    }
-    c->fin[n++].t = t;
+  while (st == ELFM_OK && (t = elfm_link_pop_finished(c->lk))) {
+    st = fin_push(c, &n, t, err);
     if (st == ELFM_OK) st = track_fill_end(c, t, err);
+  }
+  /* and the old points of long live tracks, as pieces (elfm_link_take_piece) */
+  while (st == ELFM_OK && c->o->piece_points > 0) {
+    const int pp = c->o->piece_points;
+    st = elfm_link_take_piece(c->lk, (size_t)pp, track_piece_keep(pp), track_piece_context(pp), &t,
+                              err);
+    if (st != ELFM_OK || !t) break;
+    st = fin_push(c, &n, t, err);
+    c->n_pieces++;
   }
   /* after an error the popped tracks are only freed: no smoothing */
   const size_t ns = st == ELFM_OK ? n : 0;
@@ -552,8 +573,7 @@ void track_ctx_free(track_ctx *c)
   free(c->slot_plan);
   free(c->pred);
   free(c->pred_intensity);
-  if (c->fisbi) fclose(c->fisbi);
-  elfm_trackmate_writer_free(c->tm);
+  elfm_track_xml_free(c->xml);
   free(c->info);
   free(c->det);
   free(c->fw);

@@ -1,8 +1,9 @@
 /* test_tracks.c — track store and writers: tracks.csv (smoothed + raw,
  * empty raw on gap frames) read back with elfm_table, detections.csv, ISBI
  * 2012 XML (real detections only), TrackMate XML structure, write errors;
- * the TrackMate writer fed a track at a time sorting its spots in several
- * passes (the same file as in one), the streamed ISBI file, track infos. */
+ * both XML files from tracks and pieces of tracks given one at a time
+ * (elfm_track_xml: sorted in one pass or several, pieces joined), the info
+ * kept of a track and of its pieces. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -31,12 +32,62 @@ static int count(const char *s, const char *needle)
   return n;
 }
 
+/* Copy of t's points [a, b) as piece `piece` of t, its own frames [from, to). */
+static elfm_track *piece_of(const elfm_track *t, size_t a, size_t b, int piece, int64_t from,
+                            int64_t to)
+{
+  elfm_error err;
+  elfm_track *p = elfm_track_create(t->id, &err);
+  for (size_t j = a; j < b; j++) CHECK_OK(elfm_track_append(p, &t->pts[j], &err), &err);
+  p->partial = 1;
+  p->piece = piece;
+  p->write_from_frame = from;
+  p->write_to_frame = to;
+  return p;
+}
+
+/* Write both XML files of tr[0 .. nt) (and pieces, in that order) through
+ * one elfm_track_xml; returns the two files' text (caller frees). */
+static void write_xml(const char *dir, elfm_track *const *tr, int nt, size_t max_sort,
+                      char **isbi, char **tm)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  char scratch[700], pi[700], pt[700];
+  snprintf(scratch, sizeof scratch, "%s/points.tmp", dir);
+  snprintf(pi, sizeof pi, "%s/isbi.xml", dir);
+  snprintf(pt, sizeof pt, "%s/tm.xml", dir);
+  *isbi = *tm = NULL;
+  elfm_track_xml *w = elfm_track_xml_create(scratch, max_sort, &err);
+  CHECK(w != NULL);
+  if (!w) return;
+  /* the scratch file is unlinked at once: nothing is left behind */
+  FILE *f = fopen(scratch, "r");
+  CHECK(f == NULL);
+  if (f) fclose(f);
+  for (int k = 0; k < nt; k++) CHECK_OK(elfm_track_xml_add(w, tr[k], &err), &err);
+  f = fopen(pi, "w");
+  CHECK_OK(elfm_track_xml_write_isbi(w, f, pi, &err), &err);
+  fclose(f);
+  f = fopen(pt, "w");
+  CHECK_OK(elfm_track_xml_write_trackmate(w, f, pt, 2.0, &err), &err);
+  fclose(f);
+  CHECK_EQ_INT(elfm_track_xml_write_trackmate(w, stdout, "x", 0, &err), ELFM_ERR_INVALID);
+  elfm_track_xml_free(w);
+  *isbi = slurp(pi);
+  *tm = slurp(pt);
+  remove(pi);
+  remove(pt);
+}
+
 /* Tracks fed one at a time, ending out of frame order and spanning six of
- * the TrackMate writer's 1024-frame blocks: the file sorted in one pass
- * and in one pass per block is the same, and it lists every spot once,
- * frames increasing, IDs increasing within a frame, with its own track's
- * position. */
-static void test_trackmate_passes(const char *dir)
+ * the sort's 1024-frame blocks: the files sorted in one pass and in one
+ * pass per block are the same; TrackMate lists every spot once, frames
+ * increasing, IDs increasing within a frame, at its own track's point; a
+ * track given in pieces (with context points on both sides) writes the
+ * same files as the whole track, and joins its pieces into one track when
+ * other tracks come between them. */
+static void test_track_xml(const char *dir)
 {
   elfm_error err;
   elfm_error_clear(&err);
@@ -62,37 +113,26 @@ static void test_trackmate_passes(const char *dir)
     }
     total += tr[k]->n;
   }
-  char p1[700], p2[700], scratch[720];
-  snprintf(p1, sizeof p1, "%s/one_pass.xml", dir);
-  snprintf(p2, sizeof p2, "%s/passes.xml", dir);
-  for (int v = 0; v < 2; v++) {
-    const char *p = v ? p2 : p1;
-    elfm_trackmate_writer *w = elfm_trackmate_writer_create(p, 2.0, v ? 1 : 0, &err);
-    CHECK(w != NULL);
-    if (!w) return;
-    /* the scratch file is unlinked at once: nothing is left behind */
-    snprintf(scratch, sizeof scratch, "%s.spots.tmp", p);
-    CHECK(fopen(scratch, "r") == NULL);
-    for (int k = 0; k < NT; k++) CHECK_OK(elfm_trackmate_writer_add(w, tr[k], &err), &err);
-    FILE *f = fopen(p, "w");
-    CHECK_OK(elfm_trackmate_writer_finish(w, f, &err), &err);
-    fclose(f);
-    elfm_trackmate_writer_free(w);
-  }
-  char *a = slurp(p1), *b = slurp(p2);
-  CHECK(a && b && strcmp(a, b) == 0);
-  if (a) {
+  char *i1, *t1, *i2, *t2;
+  write_xml(dir, tr, NT, 0, &i1, &t1);
+  write_xml(dir, tr, NT, 1, &i2, &t2);
+  CHECK(i1 && i2 && strcmp(i1, i2) == 0);
+  CHECK(t1 && t2 && strcmp(t1, t2) == 0);
+  free(i2);
+  free(t2);
+  if (i1) CHECK(count(i1, "<particle>") == NT && count(i1, "<detection ") == (int)total);
+  if (t1) {
     char want[64];
     snprintf(want, sizeof want, "<AllSpots nspots=\"%zu\">", total);
-    CHECK(strstr(a, want) != NULL);
-    CHECK_EQ_INT(count(a, "<Spot "), (int)total);
-    CHECK_EQ_INT(count(a, "<Edge "), (int)total - NT);
+    CHECK(strstr(t1, want) != NULL);
+    CHECK_EQ_INT(count(t1, "<Spot "), (int)total);
+    CHECK_EQ_INT(count(t1, "<Edge "), (int)total - NT);
     /* walk the spots: frames increase, IDs increase within a frame, each
      * spot's FRAME is its group's, each ID once, at its track's point */
     unsigned char *seen = calloc(total, 1);
     long long last_frame = -1, last_id = -1, group = -1;
     int bad_order = 0, bad_pos = 0, n = 0;
-    for (const char *q = a; (q = strstr(q, "<S")); q++) {
+    for (const char *q = t1; (q = strstr(q, "<S")); q++) {
       long long fr, id;
       if (sscanf(q, "<SpotsInFrame frame=\"%lld\"", &fr) == 1) {
         bad_order += fr <= last_frame;
@@ -123,47 +163,70 @@ static void test_trackmate_passes(const char *dir)
     CHECK_EQ_INT(bad_pos, 0);
     free(seen);
   }
-  free(a);
-  free(b);
-  /* no tracks: a valid file with no spots */
-  elfm_trackmate_writer *w = elfm_trackmate_writer_create(p1, 1.0, 0, &err);
-  CHECK(w != NULL);
-  FILE *f = fopen(p1, "w");
-  if (w && f) CHECK_OK(elfm_trackmate_writer_finish(w, f, &err), &err);
-  if (f) fclose(f);
-  elfm_trackmate_writer_free(w);
-  a = slurp(p1);
-  CHECK(a && strstr(a, "<AllSpots nspots=\"0\">") && !strstr(a, "<SpotsInFrame") &&
-        strstr(a, "</TrackMate>"));
-  free(a);
-  /* bad arguments and a scratch file that cannot be made name the file */
-  CHECK(elfm_trackmate_writer_create(p1, 0, 0, &err) == NULL && err.code == ELFM_ERR_INVALID);
+  /* track 0 (400 points) in three pieces cut at points 150 and 300, each
+   * holding 20 context points past its cuts, given one after the other:
+   * the same files as the whole track */
+  const elfm_track *a = tr[0];
+  const int64_t c1 = a->pts[150].frame, c2 = a->pts[300].frame;
+  elfm_track *pc[3] = {piece_of(a, 0, 170, 0, INT64_MIN, c1), piece_of(a, 130, 320, 1, c1, c2),
+                       piece_of(a, 280, a->n, 2, c2, INT64_MAX)};
+  elfm_track *seq[NT + 2];
+  for (int k = 0; k < 3; k++) seq[k] = pc[k];
+  for (int k = 1; k < NT; k++) seq[k + 2] = tr[k];
+  write_xml(dir, seq, NT + 2, 1, &i2, &t2);
+  CHECK(i1 && i2 && strcmp(i1, i2) == 0);
+  CHECK(t1 && t2 && strcmp(t1, t2) == 0);
+  free(i2);
+  free(t2);
+  /* the pieces with other tracks between them: still one particle and one
+   * track of 400 spots, its edges running on across the pieces */
+  elfm_track *mix[NT + 2] = {pc[0], tr[1], tr[2], pc[1], tr[3], tr[4], tr[5], pc[2], tr[6]};
+  write_xml(dir, mix, NT + 2, 1, &i2, &t2);
+  if (i2) CHECK(count(i2, "<particle>") == NT && count(i2, "<detection ") == (int)total);
+  if (t2) {
+    CHECK(count(t2, "<Track ") == NT && count(t2, "<Edge ") == (int)total - NT);
+    CHECK(strstr(t2, "<Track name=\"Track_100\" TRACK_ID=\"0\" TRACK_INDEX=\"0\" NUMBER_SPOTS=\"400\">") != NULL);
+    /* piece 0's last spot (ID 149) leads to piece 1's first (after tracks 1 and 2) */
+    char want[120];
+    snprintf(want, sizeof want, "<Edge SPOT_SOURCE_ID=\"149\" SPOT_TARGET_ID=\"%zu\" ",
+             150 + tr[1]->n + tr[2]->n);
+    CHECK(strstr(t2, want) != NULL);
+  }
+  /* and ISBI's particle of track 0 lists its frames in order, once each */
+  if (i2) {
+    const char *q = strstr(i2, "<particle>");
+    long long prev = -1, fr;
+    int m = 0, bad = 0;
+    for (q = q ? strstr(q, "<detection") : NULL; q && sscanf(q, "<detection t=\"%lld\"", &fr) == 1;
+         q = strstr(q + 1, "<detection")) {
+      const char *end = strstr(i2, "</particle>");
+      if (q > end) break;
+      bad += fr <= prev;
+      prev = fr;
+      m++;
+    }
+    CHECK_EQ_INT(m, 400);
+    CHECK_EQ_INT(bad, 0);
+  }
+  free(i2);
+  free(t2);
+  free(i1);
+  free(t1);
+  for (int k = 0; k < 3; k++) elfm_track_free(pc[k]);
+  /* no tracks: valid files with no spots */
+  write_xml(dir, tr, 0, 0, &i1, &t1);
+  CHECK(t1 && strstr(t1, "<AllSpots nspots=\"0\">") && !strstr(t1, "<SpotsInFrame") &&
+        strstr(t1, "</TrackMate>"));
+  CHECK(i1 && !strstr(i1, "<particle>") && strstr(i1, "</root>"));
+  free(i1);
+  free(t1);
+  /* a scratch file that cannot be made names itself */
   char nodir[760];
-  snprintf(nodir, sizeof nodir, "%s/no/such/dir/t.xml", dir);
-  CHECK(elfm_trackmate_writer_create(nodir, 1.0, 0, &err) == NULL && err.code == ELFM_ERR_IO);
-  CHECK(strstr(err.file, "no/such/dir/t.xml.spots.tmp") != NULL);
-  elfm_trackmate_writer_free(NULL);
-  /* the streamed ISBI file is the store's */
-  elfm_track_store s;
-  elfm_track_store_init(&s);
-  for (int k = 0; k < NT; k++) CHECK_OK(elfm_track_store_add(&s, tr[k], &err), &err);
-  f = fopen(p1, "w");
-  CHECK_OK(elfm_tracks_write_isbi(f, p1, &s, &err), &err);
-  fclose(f);
-  f = fopen(p2, "w");
-  CHECK_OK(elfm_tracks_write_isbi_begin(f, p2, &err), &err);
-  for (int k = 0; k < NT; k++) CHECK_OK(elfm_tracks_write_isbi_track(f, p2, tr[k], &err), &err);
-  CHECK_OK(elfm_tracks_write_isbi_end(f, p2, &err), &err);
-  fclose(f);
-  a = slurp(p1);
-  b = slurp(p2);
-  CHECK(a && b && strcmp(a, b) == 0 && count(a, "<particle>") == NT &&
-        count(a, "<detection ") == (int)total);
-  free(a);
-  free(b);
-  elfm_track_store_clear(&s);
-  remove(p1);
-  remove(p2);
+  snprintf(nodir, sizeof nodir, "%s/no/such/dir/t.tmp", dir);
+  CHECK(elfm_track_xml_create(nodir, 0, &err) == NULL && err.code == ELFM_ERR_IO);
+  CHECK(strstr(err.file, "no/such/dir/t.tmp") != NULL);
+  elfm_track_xml_free(NULL);
+  for (int k = 0; k < NT; k++) elfm_track_free(tr[k]);
 }
 
 int main(void)
@@ -351,7 +414,7 @@ int main(void)
     CHECK(!ti.smoothed && isnan(ti.mean_lateral_speed_um_per_ms) && ti.first_frame == 3);
     elfm_track_free(u);
   }
-  test_trackmate_passes(dir);
+  test_track_xml(dir);
   elfm_track_free(NULL);
   elfm_track_store_clear(&s);
   CHECK_EQ_INT(s.n, 0);

@@ -319,6 +319,25 @@ elfm_status elfm_link_finish(elfm_linker *l, elfm_error *err);
 /* Take the oldest finished track (caller owns it: elfm_track_free), or NULL. */
 elfm_track *elfm_link_pop_finished(elfm_linker *l);
 
+/* ---- Long tracks in bounded memory. A live track keeps its real points
+ * until it ends, so one followed for minutes would hold them all. Once a
+ * live track has at least piece_points + keep_points points of its own (not
+ * yet given in a piece), this gives a piece of it (the caller owns it: a
+ * copy, partial = 1, elfm_tracks.h): its own frames run from the previous
+ * piece's end up to the frame of the track's keep_points-th last point
+ * (the cut), and it also holds the points before them that the live track
+ * still has and context_points points after the cut, for the smoother.
+ * The live track then drops its points before the context_points ones
+ * ahead of the cut, which stay as the next piece's context, and becomes a
+ * piece itself (partial, its own frames from the cut on): it ends as the
+ * last piece. Its last keep_points points, the ones linking, the reviews
+ * (which look back ~100 points) and gap filling (60 frames) use, are
+ * untouched. One piece per call into *out, NULL when no live track is
+ * due. ELFM_ERR_INVALID with context_points > keep_points, piece_points < 1
+ * or keep_points < 64. */
+elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t keep_points,
+                                 size_t context_points, elfm_track **out, elfm_error *err);
+
 /* Speed (um/ms) of the track detection i of the LAST step joined, from its
  * recent history; NaN for a new track or i out of range. */
 double elfm_link_last_speed(const elfm_linker *l, int i);

@@ -9,9 +9,8 @@
  *
  * The store (elfm_track_store) owns finished tracks, for callers that want
  * them all in memory (tests, small runs). A long run does not keep them: it
- * writes each track as it ends (tracks.csv, elfm_tracks_write_isbi_track,
- * elfm_trackmate_writer) and keeps its elfm_track_info, ~100 bytes per
- * track whatever its length.
+ * writes each track as it ends (tracks.csv, elfm_track_xml) and keeps its
+ * elfm_track_info, ~100 bytes per track whatever its length.
  */
 #ifndef ELFM_TRACKS_H
 #define ELFM_TRACKS_H
@@ -78,7 +77,21 @@ typedef struct elfm_track {
   double spline_weight_ms3;   /* chosen spline weight (SPLINE only) */
   double edf;                 /* effective parameters per axis */
   int n_outliers;             /* points the robust loss down-weighted below 1/2 */
+  /* A piece of a long track (elfm_link_take_piece): partial = 1, and only
+   * the frames in [write_from_frame, write_to_frame) are its own, written
+   * to tracks.csv, ISBI and TrackMate; its points outside them are the
+   * smoother's context, written with the pieces before and after it. The
+   * end of a track that gave pieces is one too (write_to_frame INT64_MAX).
+   * piece: how many pieces of the track came before. */
+  int partial, piece;
+  int64_t write_from_frame, write_to_frame;
 } elfm_track;
+
+/* Whether a frame is t's to write (always, unless t is a piece). */
+static inline int elfm_track_writes_frame(const elfm_track *t, int64_t frame)
+{
+  return !t->partial || (frame >= t->write_from_frame && frame < t->write_to_frame);
+}
 
 /* A new empty track; free with elfm_track_free (NULL is a no-op). */
 elfm_track *elfm_track_create(int64_t id, elfm_error *err);
@@ -96,6 +109,8 @@ void elfm_track_mean_velocity(const elfm_track *t, double v_um_per_ms[3]);
 typedef struct elfm_track_info {
   int64_t id, first_frame, last_frame; /* frames of the first and last real point */
   size_t n;                   /* real points */
+  size_t n_rows;              /* frames first_frame .. last_frame written (smoothed) */
+  int n_pieces;               /* 1, or the pieces of a long track merged (elfm_track_info_merge) */
   elfm_motion_model model;
   double spline_weight_ms3, edf;
   int n_outliers;
@@ -105,8 +120,12 @@ typedef struct elfm_track_info {
                                           not smoothed or not finite */
 } elfm_track_info;
 
-/* t's info; t must have at least one real point. */
+/* t's info (of a piece: of its own frames only). */
 void elfm_track_info_get(const elfm_track *t, elfm_track_info *out);
+/* Fold the info of a later piece of the same track into *acc: counts and
+ * frames add up, the mean velocities are weighted by rows, the model,
+ * spline weight and edf are those of the piece with more points. */
+void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *piece);
 
 /* The store: takes ownership of finished tracks. */
 typedef struct elfm_track_store {
@@ -146,12 +165,6 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
  * scenario are the header attributes the challenge files carry). */
 elfm_status elfm_tracks_write_isbi(FILE *f, const char *path, const elfm_track_store *s,
                                    elfm_error *err);
-/* The same file a track at a time, as tracks end: begin, one call per
- * track (in the order the file should list them), end. */
-elfm_status elfm_tracks_write_isbi_begin(FILE *f, const char *path, elfm_error *err);
-elfm_status elfm_tracks_write_isbi_track(FILE *f, const char *path, const elfm_track *t,
-                                         elfm_error *err);
-elfm_status elfm_tracks_write_isbi_end(FILE *f, const char *path, elfm_error *err);
 
 /* TrackMate XML (the TmXmlReader layout: Model/AllSpots/SpotsInFrame/Spot,
  * AllTracks/Track/Edge, FilteredTracks), positions in um, frame interval
@@ -159,27 +172,35 @@ elfm_status elfm_tracks_write_isbi_end(FILE *f, const char *path, elfm_error *er
 elfm_status elfm_tracks_write_trackmate(FILE *f, const char *path, const elfm_track_store *s,
                                         double frame_interval_ms, elfm_error *err);
 
-/* The same file from tracks given one at a time as they end, in bounded
- * memory. TrackMate lists spots by frame, before the tracks, and a track's
- * spots are known only when it ends: so each spot waits in a scratch file
- * beside `path` (path + ".spots.tmp", unlinked as soon as it is open, so
- * nothing is left behind), and finish sorts them by frame in passes over
- * it, each pass holding at most ~max_sort_spots spots (0: 262144, ~15 MB;
- * at least one block of 1024 frames). What stays in memory is 24 bytes per
- * track. The output is byte for byte elfm_tracks_write_trackmate's for the
- * same tracks in the same order. */
-typedef struct elfm_trackmate_writer elfm_trackmate_writer;
+/* Both XML files from tracks given one at a time as they end, and from the
+ * pieces of long tracks (elfm_link_take_piece), in bounded memory. Both
+ * list a track's points together and TrackMate lists every spot by frame
+ * before the tracks, while the points come track by track, a long track's
+ * in pieces: so each real point (of a piece: of its own frames) waits in a
+ * scratch file, created at scratch_path and unlinked as soon as it is open
+ * (nothing is left behind), and each writer sorts them, by track or by
+ * frame, in passes over it that hold at most ~max_sort_spots points each
+ * (0: 262144, 16 MB; at least one block of 1024 frames or 64 tracks).
+ * In memory: 32 bytes per track and 24 per piece. A later piece joins
+ * the earlier ones of its track (same id): one ISBI particle, one
+ * TrackMate track whose edges run on from piece to piece. Tracks are
+ * listed in the order they first came; for whole tracks the files are byte
+ * for byte elfm_tracks_write_isbi's and elfm_tracks_write_trackmate's. A
+ * track with no point of its own is not listed. */
+typedef struct elfm_track_xml elfm_track_xml;
 
-/* NULL (err filled) on a frame interval that is not > 0, no memory, or a
- * scratch file that cannot be created. */
-elfm_trackmate_writer *elfm_trackmate_writer_create(const char *path, double frame_interval_ms,
-                                                    size_t max_sort_spots, elfm_error *err);
-elfm_status elfm_trackmate_writer_add(elfm_trackmate_writer *w, const elfm_track *t,
+/* NULL (err filled) on no memory or a scratch file that cannot be made. */
+elfm_track_xml *elfm_track_xml_create(const char *scratch_path, size_t max_sort_spots,
                                       elfm_error *err);
-/* Write the whole file to f (errors name the writer's path). Once. */
-elfm_status elfm_trackmate_writer_finish(elfm_trackmate_writer *w, FILE *f, elfm_error *err);
-/* Close and remove the scratch file; NULL is a no-op. */
-void elfm_trackmate_writer_free(elfm_trackmate_writer *w);
+elfm_status elfm_track_xml_add(elfm_track_xml *w, const elfm_track *t, elfm_error *err);
+/* Write the whole file to f (path: for messages); each may be called once
+ * or more, after the last add. */
+elfm_status elfm_track_xml_write_isbi(elfm_track_xml *w, FILE *f, const char *path,
+                                      elfm_error *err);
+elfm_status elfm_track_xml_write_trackmate(elfm_track_xml *w, FILE *f, const char *path,
+                                           double frame_interval_ms, elfm_error *err);
+/* Close the scratch file (removing it if it still has a name); NULL is a no-op. */
+void elfm_track_xml_free(elfm_track_xml *w);
 
 #ifdef __cplusplus
 }

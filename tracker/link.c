@@ -141,6 +141,58 @@ void elfm_link_free(elfm_linker *l)
   free(l);
 }
 
+elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t keep_points,
+                                 size_t context_points, elfm_track **out, elfm_error *err)
+{
+  if (out) *out = NULL;
+  if (!l || !out || piece_points < 1 || keep_points < 64 || context_points > keep_points)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "link: pieces need piece_points >= 1, keep_points >= 64, "
+                          "context_points <= keep_points");
+  for (size_t i = 0; i < l->n_live; i++) {
+    live_track *lt = &l->live[i];
+    elfm_track *t = lt->t;
+    /* its own points: from the previous cut on (all of them before one) */
+    size_t own0 = 0;
+    if (t->partial)
+      while (own0 < t->n && t->pts[own0].frame < t->write_from_frame) own0++;
+    if (t->n - own0 < piece_points + keep_points) continue;
+    const size_t cut = t->n - keep_points, end = cut + context_points,
+                 drop = cut - (cut - own0 < context_points ? cut - own0 : context_points);
+    const int64_t cut_frame = t->pts[cut].frame;
+    elfm_track *p = elfm_track_create(t->id, err);
+    if (!p) return ELFM_ERR_NOMEM;
+    p->pts = malloc(end * sizeof *p->pts);
+    if (!p->pts) {
+      elfm_track_free(p);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory (track piece)");
+    }
+    memcpy(p->pts, t->pts, end * sizeof *p->pts);
+    p->n = p->cap = end;
+    p->partial = 1;
+    p->piece = t->piece;
+    p->write_from_frame = t->partial ? t->write_from_frame : INT64_MIN;
+    p->write_to_frame = cut_frame;
+    /* the live track keeps the context before the cut and what follows */
+    memmove(t->pts, t->pts + drop, (t->n - drop) * sizeof *t->pts);
+    t->n -= drop;
+    t->partial = 1;
+    t->piece++;
+    t->write_from_frame = cut_frame;
+    t->write_to_frame = INT64_MAX;
+    /* the gap closing under review (tail0 indexes the points) moved too;
+     * one that old has long been reviewed */
+    if (lt->tail0 >= drop) lt->tail0 -= drop;
+    else {
+      lt->tail0 = 0;
+      lt->review = 0;
+    }
+    *out = p;
+    return ELFM_OK;
+  }
+  return ELFM_OK;
+}
+
 size_t elfm_link_n_live(const elfm_linker *l) { return l ? l->n_live : 0; }
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 

@@ -110,7 +110,7 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
       if (l->live[i].last_frame != l->last_frame || t->n < s) continue;
       size_t k = t->n - s;
       if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(&l->o, t, k, h, &out[n++]);
-      else if (k == 0)  /* the track's birth */
+      else if (k == 0 && !t->partial)  /* the track's birth (a piece's first point is not) */
         open_gap(t, 0, h, l->o.max_gap_frames, &out[n++]);
     } else {
       for (size_t k = t->n > s ? t->n - s + 1 : 1; k < t->n && n < cap; k++)

@@ -95,24 +95,57 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
 {
   memset(o, 0, sizeof *o);
   o->id = t->id;
-  o->n = t->n;
-  if (t->n) {
-    o->first_frame = t->pts[0].frame;
-    o->last_frame = t->pts[t->n - 1].frame;
+  o->n_pieces = 1;
+  for (size_t j = 0; j < t->n; j++) {
+    if (!elfm_track_writes_frame(t, t->pts[j].frame)) continue;
+    if (!o->n) o->first_frame = t->pts[j].frame;
+    o->last_frame = t->pts[j].frame;
+    o->n++;
   }
   o->model = t->model;
   o->spline_weight_ms3 = t->spline_weight_ms3;
   o->edf = t->edf;
   o->n_outliers = t->n_outliers;
-  o->smoothed = t->n_span > 0 && t->vel_um_per_ms;
-  elfm_track_mean_velocity(t, o->mean_vel_um_per_ms);
   o->mean_lateral_speed_um_per_ms = NAN;
-  if (o->smoothed) {
-    double sum = 0;
-    for (size_t k = 0; k < t->n_span; k++)
-      sum += hypot(t->vel_um_per_ms[3 * k], t->vel_um_per_ms[3 * k + 1]);
-    if (isfinite(sum)) o->mean_lateral_speed_um_per_ms = sum / (double)t->n_span;
+  if (!t->n_span || !t->vel_um_per_ms || !t->n) return;
+  /* the same sums, in the same order, as elfm_track_mean_velocity */
+  double lat = 0;
+  for (size_t k = 0; k < t->n_span; k++) {
+    if (!elfm_track_writes_frame(t, t->pts[0].frame + (int64_t)k)) continue;
+    for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] += t->vel_um_per_ms[3 * k + a];
+    lat += hypot(t->vel_um_per_ms[3 * k], t->vel_um_per_ms[3 * k + 1]);
+    o->n_rows++;
   }
+  if (!o->n_rows) return;
+  o->smoothed = 1;
+  for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] /= (double)o->n_rows;
+  if (isfinite(lat)) o->mean_lateral_speed_um_per_ms = lat / (double)o->n_rows;
+}
+
+void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
+{
+  if (!p->n) return;
+  if (!acc->n) acc->first_frame = p->first_frame;
+  if (p->n > acc->n) { /* the larger piece speaks for the track's model */
+    acc->model = p->model;
+    acc->spline_weight_ms3 = p->spline_weight_ms3;
+    acc->edf = p->edf;
+  }
+  const double r0 = (double)acc->n_rows, r1 = (double)p->n_rows;
+  if (r0 + r1 > 0) {
+    for (int a = 0; a < 3; a++)
+      acc->mean_vel_um_per_ms[a] =
+          (r0 * acc->mean_vel_um_per_ms[a] + r1 * p->mean_vel_um_per_ms[a]) / (r0 + r1);
+    const double l0 = acc->n_rows ? acc->mean_lateral_speed_um_per_ms : 0,
+                 l1 = p->n_rows ? p->mean_lateral_speed_um_per_ms : 0;
+    acc->mean_lateral_speed_um_per_ms = (r0 * l0 + r1 * l1) / (r0 + r1);
+  }
+  acc->smoothed |= p->smoothed;
+  acc->last_frame = p->last_frame;
+  acc->n += p->n;
+  acc->n_rows += p->n_rows;
+  acc->n_outliers += p->n_outliers;
+  acc->n_pieces += p->n_pieces;
 }
 
 void elfm_track_store_init(elfm_track_store *s) { memset(s, 0, sizeof *s); }

@@ -66,6 +66,7 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
                           "track %" PRId64 " is empty or not smoothed", t->id);
   const int64_t frame0 = t->pts[0].frame;
   for (size_t k = 0; k < t->n_span; k++) {
+    if (!elfm_track_writes_frame(t, frame0 + (int64_t)k)) continue; /* a piece's context */
     const double *p = t->pos_um + 3 * k, *v = t->vel_um_per_ms + 3 * k,
                  *sp = t->pos_sd_um + 3 * k, *sv = t->vel_sd_um_per_ms + 3 * k;
     fprintf(f, "%" PRId64 ",%" PRId64 ",%" PRId64, t->id, frame0 + (int64_t)k, t->span_t_us[k]);
@@ -101,103 +102,99 @@ static void point_pos(const elfm_track *t, size_t j, double xyz[3])
   }
 }
 
-elfm_status elfm_tracks_write_isbi_begin(FILE *f, const char *path, elfm_error *err)
+/* ---- ISBI 2012 ---- */
+
+static void isbi_begin(FILE *f)
 {
   fputs("<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"no\"?>\n<root>\n"
         "<TrackContestISBI2012 SNR=\"0\" density=\"unknown\" generationDateTime=\"\" "
         "info=\"eventlfm track; x, y, z in um, t = frame index\" scenario=\"eventlfm\">\n", f);
-  return io_check(f, path, err);
 }
 
-elfm_status elfm_tracks_write_isbi_track(FILE *f, const char *path, const elfm_track *t,
-                                         elfm_error *err)
+static void isbi_detection(FILE *f, int64_t frame, const double p[3])
 {
-  fputs("<particle>\n", f);
-  for (size_t j = 0; j < t->n; j++) {
-    double p[3];
-    point_pos(t, j, p);
-    fprintf(f, "<detection t=\"%" PRId64 "\" x=\"%.4f\" y=\"%.4f\" z=\"%.4f\"/>\n",
-            t->pts[j].frame, p[0], p[1], p[2]);
-  }
-  fputs("</particle>\n", f);
-  return io_check(f, path, err);
+  fprintf(f, "<detection t=\"%" PRId64 "\" x=\"%.4f\" y=\"%.4f\" z=\"%.4f\"/>\n", frame, p[0],
+          p[1], p[2]);
 }
 
-elfm_status elfm_tracks_write_isbi_end(FILE *f, const char *path, elfm_error *err)
-{
-  fputs("</TrackContestISBI2012>\n</root>\n", f);
-  return io_check(f, path, err);
-}
+static void isbi_end(FILE *f) { fputs("</TrackContestISBI2012>\n</root>\n", f); }
 
 elfm_status elfm_tracks_write_isbi(FILE *f, const char *path, const elfm_track_store *s,
                                    elfm_error *err)
 {
-  elfm_status st = elfm_tracks_write_isbi_begin(f, path, err);
-  for (size_t i = 0; st == ELFM_OK && i < s->n; i++)
-    st = elfm_tracks_write_isbi_track(f, path, s->tracks[i], err);
-  return st == ELFM_OK ? elfm_tracks_write_isbi_end(f, path, err) : st;
+  isbi_begin(f);
+  for (size_t i = 0; i < s->n; i++) {
+    const elfm_track *t = s->tracks[i];
+    fputs("<particle>\n", f);
+    for (size_t j = 0; j < t->n; j++) {
+      if (!elfm_track_writes_frame(t, t->pts[j].frame)) continue;
+      double p[3];
+      point_pos(t, j, p);
+      isbi_detection(f, t->pts[j].frame, p);
+    }
+    fputs("</particle>\n", f);
+  }
+  isbi_end(f);
+  return io_check(f, path, err);
 }
 
-/* ---- TrackMate ----
- * A spot as it waits in the scratch file: everything its <Spot> line
- * needs, so the line is the same whether written at once or after the
- * sort. */
-typedef struct tm_spot {
+/* ---- Both XML files from tracks given as they end ----
+ * A real point as it waits in the scratch file: everything its ISBI
+ * <detection> and TrackMate <Spot> lines need, so each line is the same
+ * whether written at once or after the sort. */
+typedef struct xml_spot {
+  int64_t entry;    /* its track's entry (order of first appearance) */
   int64_t frame;
-  uint64_t id;
+  uint64_t id;      /* TrackMate spot ID: in the order the points came */
   double xyz_um[3], intensity, radius_um;
-} tm_spot;
+} xml_spot;
 
-/* A track's entry under AllTracks: its spots' IDs are first_id .. first_id + n - 1. */
-typedef struct tm_track {
-  int64_t id;
+/* A track: its pieces' spot IDs are first_id .. first_id + n - 1 each,
+ * linked through next (SIZE_MAX ends). */
+typedef struct xml_piece {
   uint64_t first_id, n;
-} tm_track;
+  size_t next;
+} xml_piece;
 
-/* Frames per block of the finishing sort: passes take whole blocks. */
-#define TM_BLOCK_FRAMES 1024
-#define TM_DEFAULT_SORT_SPOTS ((size_t)1 << 18)
+typedef struct xml_track {
+  int64_t id;
+  uint64_t n;
+  size_t first_piece, last_piece;
+} xml_track;
 
-struct elfm_trackmate_writer {
-  char path[1024];     /* the output, for messages */
-  char scratch[1100];  /* path + ".spots.tmp"; "" once removed */
+/* Passes over the scratch file take whole blocks: of 1024 frames (sorted
+ * by frame, TrackMate) or of 64 tracks (by track, ISBI). */
+#define XML_BLOCK_FRAMES 1024
+#define XML_BLOCK_TRACKS 64
+#define XML_DEFAULT_SORT_SPOTS ((size_t)1 << 18)
+
+struct elfm_track_xml {
+  char scratch[1100];  /* its name; "" once removed */
   FILE *f;             /* the scratch file */
-  double interval_ms;
   size_t max_sort;
   uint64_t n_spots;
   int64_t frame_min, frame_max;
-  tm_track *tr;
+  xml_track *tr;
   size_t n_tr, cap_tr;
+  xml_piece *pc;
+  size_t n_pc, cap_pc;
 };
 
-static int tm_spot_cmp(const void *a, const void *b)
+elfm_track_xml *elfm_track_xml_create(const char *scratch_path, size_t max_sort_spots,
+                                      elfm_error *err)
 {
-  const tm_spot *x = a, *y = b;
-  if (x->frame != y->frame) return x->frame < y->frame ? -1 : 1;
-  return (x->id > y->id) - (x->id < y->id);
-}
-
-elfm_trackmate_writer *elfm_trackmate_writer_create(const char *path, double frame_interval_ms,
-                                                    size_t max_sort_spots, elfm_error *err)
-{
-  if (!(frame_interval_ms > 0) || !isfinite(frame_interval_ms)) {
-    elfm_error_set(err, ELFM_ERR_INVALID, path, -1, "TrackMate: frame interval must be > 0");
-    return NULL;
-  }
-  elfm_trackmate_writer *w = calloc(1, sizeof *w);
+  elfm_track_xml *w = calloc(1, sizeof *w);
   if (!w) {
-    elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "TrackMate: out of memory");
+    elfm_error_set(err, ELFM_ERR_NOMEM, scratch_path, -1, "track XML: out of memory");
     return NULL;
   }
-  snprintf(w->path, sizeof w->path, "%s", path);
-  snprintf(w->scratch, sizeof w->scratch, "%s.spots.tmp", path);
-  w->interval_ms = frame_interval_ms;
-  w->max_sort = max_sort_spots ? max_sort_spots : TM_DEFAULT_SORT_SPOTS;
+  snprintf(w->scratch, sizeof w->scratch, "%s", scratch_path);
+  w->max_sort = max_sort_spots ? max_sort_spots : XML_DEFAULT_SORT_SPOTS;
   w->frame_min = INT64_MAX;
   w->frame_max = INT64_MIN;
   w->f = fopen(w->scratch, "w+b");
   if (!w->f) {
-    elfm_error_set(err, ELFM_ERR_IO, w->scratch, -1, "TrackMate: cannot create scratch file: %s",
+    elfm_error_set(err, ELFM_ERR_IO, scratch_path, -1, "cannot create scratch file: %s",
                    strerror(errno));
     free(w);
     return NULL;
@@ -207,30 +204,64 @@ elfm_trackmate_writer *elfm_trackmate_writer_create(const char *path, double fra
   return w;
 }
 
-void elfm_trackmate_writer_free(elfm_trackmate_writer *w)
+void elfm_track_xml_free(elfm_track_xml *w)
 {
   if (!w) return;
   if (w->f) fclose(w->f);
   if (w->scratch[0]) remove(w->scratch);
   free(w->tr);
+  free(w->pc);
   free(w);
 }
 
-elfm_status elfm_trackmate_writer_add(elfm_trackmate_writer *w, const elfm_track *t,
-                                      elfm_error *err)
+static elfm_status xml_nomem(elfm_error *err)
 {
-  if (w->n_tr == w->cap_tr) {
-    size_t cap = w->cap_tr ? 2 * w->cap_tr : 64;
-    tm_track *p = realloc(w->tr, cap * sizeof *p);
-    if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, w->path, -1, "TrackMate: out of memory");
-    w->tr = p;
-    w->cap_tr = cap;
+  return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "track XML: out of memory");
+}
+
+/* The entry of a later piece's track: searched from the newest, where the
+ * long tracks that are still running tend to be. */
+static size_t xml_find(const elfm_track_xml *w, int64_t id)
+{
+  for (size_t e = w->n_tr; e-- > 0;)
+    if (w->tr[e].id == id) return e;
+  return SIZE_MAX;
+}
+
+elfm_status elfm_track_xml_add(elfm_track_xml *w, const elfm_track *t, elfm_error *err)
+{
+  if (w->n_tr == w->cap_tr || w->n_pc == w->cap_pc) {
+    size_t ct = w->n_tr == w->cap_tr ? (w->cap_tr ? 2 * w->cap_tr : 64) : w->cap_tr;
+    size_t cp = w->n_pc == w->cap_pc ? (w->cap_pc ? 2 * w->cap_pc : 64) : w->cap_pc;
+    xml_track *a = realloc(w->tr, ct * sizeof *a);
+    if (!a) return xml_nomem(err);
+    w->tr = a;
+    w->cap_tr = ct;
+    xml_piece *b = realloc(w->pc, cp * sizeof *b);
+    if (!b) return xml_nomem(err);
+    w->pc = b;
+    w->cap_pc = cp;
   }
-  w->tr[w->n_tr++] = (tm_track){t->id, w->n_spots, t->n};
+  size_t own = 0;
+  for (size_t j = 0; j < t->n; j++) own += elfm_track_writes_frame(t, t->pts[j].frame);
+  if (!own) return ELFM_OK;
+  size_t e = t->partial && t->piece > 0 ? xml_find(w, t->id) : SIZE_MAX;
+  const size_t p = w->n_pc++;
+  w->pc[p] = (xml_piece){w->n_spots, own, SIZE_MAX};
+  if (e == SIZE_MAX) {
+    e = w->n_tr++;
+    w->tr[e] = (xml_track){t->id, 0, p, p};
+  } else {
+    w->pc[w->tr[e].last_piece].next = p;
+    w->tr[e].last_piece = p;
+  }
+  w->tr[e].n += own;
   for (size_t j = 0; j < t->n; j++) {
     const elfm_detection *d = &t->pts[j];
-    tm_spot r;
+    if (!elfm_track_writes_frame(t, d->frame)) continue;
+    xml_spot r;
     memset(&r, 0, sizeof r);
+    r.entry = (int64_t)e;
     r.frame = d->frame;
     r.id = w->n_spots++;
     point_pos(t, j, r.xyz_um);
@@ -239,10 +270,125 @@ elfm_status elfm_trackmate_writer_add(elfm_trackmate_writer *w, const elfm_track
     if (d->frame < w->frame_min) w->frame_min = d->frame;
     if (d->frame > w->frame_max) w->frame_max = d->frame;
     if (fwrite(&r, sizeof r, 1, w->f) != 1)
-      return elfm_error_set(err, ELFM_ERR_IO, w->scratch[0] ? w->scratch : w->path, -1,
-                            "TrackMate: scratch file: write failed: %s", strerror(errno));
+      return elfm_error_set(err, ELFM_ERR_IO, w->scratch, -1, "scratch file: write failed: %s",
+                            strerror(errno));
   }
   return ELFM_OK;
+}
+
+static int64_t xml_block(const elfm_track_xml *w, const xml_spot *r, int by_frame)
+{
+  return by_frame ? (r->frame - w->frame_min) / XML_BLOCK_FRAMES : r->entry / XML_BLOCK_TRACKS;
+}
+
+static int xml_cmp_frame(const void *a, const void *b)
+{
+  const xml_spot *x = a, *y = b;
+  if (x->frame != y->frame) return x->frame < y->frame ? -1 : 1;
+  return (x->id > y->id) - (x->id < y->id);
+}
+
+static int xml_cmp_track(const void *a, const void *b)
+{
+  const xml_spot *x = a, *y = b;
+  if (x->entry != y->entry) return x->entry < y->entry ? -1 : 1;
+  return (x->frame > y->frame) - (x->frame < y->frame);
+}
+
+/* Read the scratch file from its start: with buf, collect the spots whose
+ * block lies in [b0, b1) into it (*m of them); with buf NULL, count every
+ * block's spots into cnt. */
+static elfm_status xml_scan(elfm_track_xml *w, int by_frame, uint64_t *cnt, int64_t b0,
+                           int64_t b1, xml_spot *buf, size_t *m, elfm_error *err)
+{
+  const char *name = w->scratch[0] ? w->scratch : "scratch file";
+  if (fflush(w->f) != 0 || fseek(w->f, 0, SEEK_SET) != 0)
+    return elfm_error_set(err, ELFM_ERR_IO, name, -1, "scratch file: %s", strerror(errno));
+  xml_spot chunk[256];
+  uint64_t seen = 0;
+  while (seen < w->n_spots) {
+    size_t want = w->n_spots - seen < 256 ? (size_t)(w->n_spots - seen) : 256;
+    size_t got = fread(chunk, sizeof chunk[0], want, w->f);
+    if (got != want)
+      return elfm_error_set(err, ELFM_ERR_IO, name, (int64_t)((seen + got) * sizeof chunk[0]),
+                            "scratch file: read failed");
+    for (size_t k = 0; k < got; k++) {
+      const int64_t b = xml_block(w, &chunk[k], by_frame);
+      if (!buf) cnt[b]++;
+      else if (b >= b0 && b < b1) buf[(*m)++] = chunk[k];
+    }
+    seen += got;
+  }
+  return ELFM_OK;
+}
+
+/* Every spot once, sorted by frame (by_frame) or by track, handed to emit
+ * a pass at a time. Each block's spots are counted first; each pass then
+ * takes a run of whole blocks that fits the budget: one pass when
+ * everything fits (most runs), a few for hours of recording, and the
+ * scratch file is only ever read from start to end. */
+typedef void (*xml_emit_fn)(FILE *f, const elfm_track_xml *w, const xml_spot *s, size_t n,
+                            double interval_ms);
+
+static elfm_status xml_sorted(elfm_track_xml *w, int by_frame, FILE *f, xml_emit_fn emit,
+                              double interval_ms, elfm_error *err)
+{
+  if (!w->n_spots) return ELFM_OK;
+  const int64_t nb = by_frame ? (w->frame_max - w->frame_min) / XML_BLOCK_FRAMES + 1
+                              : (int64_t)(w->n_tr - 1) / XML_BLOCK_TRACKS + 1;
+  uint64_t *cnt = calloc((size_t)nb, sizeof *cnt);
+  if (!cnt) return xml_nomem(err);
+  elfm_status st = xml_scan(w, by_frame, cnt, 0, 0, NULL, NULL, err);
+  xml_spot *buf = NULL;
+  size_t buf_cap = 0;
+  for (int64_t b0 = 0; st == ELFM_OK && b0 < nb;) {
+    int64_t b1 = b0 + 1;
+    uint64_t take = cnt[b0];
+    while (b1 < nb && take + cnt[b1] <= w->max_sort) take += cnt[b1++];
+    if (take > buf_cap) {
+      free(buf);
+      buf_cap = (size_t)take;
+      buf = malloc(buf_cap * sizeof *buf);
+      if (!buf) {
+        st = xml_nomem(err);
+        break;
+      }
+    }
+    size_t m = 0;
+    if (take) st = xml_scan(w, by_frame, NULL, b0, b1, buf, &m, err);
+    if (st != ELFM_OK) break;
+    qsort(buf, m, sizeof *buf, by_frame ? xml_cmp_frame : xml_cmp_track);
+    for (size_t k = 0; k < m;) { /* one call per frame, or per track */
+      size_t e = k + 1;
+      while (e < m && (by_frame ? buf[e].frame == buf[k].frame : buf[e].entry == buf[k].entry)) e++;
+      emit(f, w, buf + k, e - k, interval_ms);
+      k = e;
+    }
+    b0 = b1;
+  }
+  free(cnt);
+  free(buf);
+  return st;
+}
+
+static void isbi_particle(FILE *f, const elfm_track_xml *w, const xml_spot *s, size_t n,
+                          double interval_ms)
+{
+  (void)w;
+  (void)interval_ms;
+  fputs("<particle>\n", f);
+  for (size_t k = 0; k < n; k++) isbi_detection(f, s[k].frame, s[k].xyz_um);
+  fputs("</particle>\n", f);
+}
+
+elfm_status elfm_track_xml_write_isbi(elfm_track_xml *w, FILE *f, const char *path,
+                                      elfm_error *err)
+{
+  isbi_begin(f);
+  elfm_status st = xml_sorted(w, 0, f, isbi_particle, 0, err);
+  if (st != ELFM_OK) return st;
+  isbi_end(f);
+  return io_check(f, path, err);
 }
 
 static void tm_write_header(FILE *f, uint64_t nspots)
@@ -271,9 +417,11 @@ static void tm_write_header(FILE *f, uint64_t nspots)
   fprintf(f, "    <AllSpots nspots=\"%" PRIu64 "\">\n", nspots);
 }
 
-/* One frame's spots sp[0 .. n), sorted by ID. */
-static void tm_write_frame(FILE *f, const tm_spot *sp, size_t n, double interval_ms)
+/* One frame's spots, sorted by ID. */
+static void tm_write_frame(FILE *f, const elfm_track_xml *w, const xml_spot *sp, size_t n,
+                           double interval_ms)
 {
+  (void)w;
   const int64_t fr = sp[0].frame;
   fprintf(f, "      <SpotsInFrame frame=\"%" PRId64 "\">\n", fr);
   for (size_t k = 0; k < n; k++)
@@ -285,16 +433,24 @@ static void tm_write_frame(FILE *f, const tm_spot *sp, size_t n, double interval
   fputs("      </SpotsInFrame>\n", f);
 }
 
-static void tm_write_tracks(FILE *f, const elfm_trackmate_writer *w)
+/* AllTracks: each track's spots in the order they came, piece after piece,
+ * one edge between each two. */
+static void tm_write_tracks(FILE *f, const elfm_track_xml *w, double interval_ms)
 {
   fputs("    </AllSpots>\n    <AllTracks>\n", f);
   for (size_t i = 0; i < w->n_tr; i++) {
-    const tm_track *t = &w->tr[i];
+    const xml_track *t = &w->tr[i];
     fprintf(f, "      <Track name=\"Track_%" PRId64 "\" TRACK_ID=\"%zu\" TRACK_INDEX=\"%zu\" NUMBER_SPOTS=\"%" PRIu64 "\">\n",
             t->id, i, i, t->n);
-    for (uint64_t j = 1; j < t->n; j++)
-      fprintf(f, "        <Edge SPOT_SOURCE_ID=\"%" PRIu64 "\" SPOT_TARGET_ID=\"%" PRIu64 "\" LINK_COST=\"0\" />\n",
-              t->first_id + j - 1, t->first_id + j);
+    uint64_t prev = UINT64_MAX;
+    for (size_t p = t->first_piece; p != SIZE_MAX; p = w->pc[p].next)
+      for (uint64_t j = 0; j < w->pc[p].n; j++) {
+        const uint64_t id = w->pc[p].first_id + j;
+        if (prev != UINT64_MAX)
+          fprintf(f, "        <Edge SPOT_SOURCE_ID=\"%" PRIu64 "\" SPOT_TARGET_ID=\"%" PRIu64 "\" LINK_COST=\"0\" />\n",
+                  prev, id);
+        prev = id;
+      }
     fputs("      </Track>\n", f);
   }
   fputs("    </AllTracks>\n    <FilteredTracks>\n", f);
@@ -302,98 +458,38 @@ static void tm_write_tracks(FILE *f, const elfm_trackmate_writer *w)
   fprintf(f, "    </FilteredTracks>\n  </Model>\n  <Settings>\n"
              "    <ImageData filename=\"\" folder=\"\" width=\"0\" height=\"0\" nslices=\"0\" "
              "nframes=\"0\" pixelwidth=\"1.0\" pixelheight=\"1.0\" voxeldepth=\"1.0\" "
-             "timeinterval=\"%.6g\" />\n  </Settings>\n</TrackMate>\n", w->interval_ms);
+             "timeinterval=\"%.6g\" />\n  </Settings>\n</TrackMate>\n", interval_ms);
 }
 
-/* Read the scratch file from its start: with buf, collect the spots whose
- * block lies in [b0, b1) into it (*m of them); with buf NULL, count every
- * block's spots into cnt. */
-static elfm_status tm_scan(elfm_trackmate_writer *w, uint64_t *cnt, int64_t b0, int64_t b1,
-                           tm_spot *buf, size_t *m, elfm_error *err)
+elfm_status elfm_track_xml_write_trackmate(elfm_track_xml *w, FILE *f, const char *path,
+                                           double frame_interval_ms, elfm_error *err)
 {
-  const char *name = w->scratch[0] ? w->scratch : w->path;
-  if (fflush(w->f) != 0 || fseek(w->f, 0, SEEK_SET) != 0)
-    return elfm_error_set(err, ELFM_ERR_IO, name, -1, "TrackMate: scratch file: %s", strerror(errno));
-  tm_spot chunk[256];
-  uint64_t seen = 0;
-  while (seen < w->n_spots) {
-    size_t want = w->n_spots - seen < 256 ? (size_t)(w->n_spots - seen) : 256;
-    size_t got = fread(chunk, sizeof chunk[0], want, w->f);
-    if (got != want)
-      return elfm_error_set(err, ELFM_ERR_IO, name, (int64_t)((seen + got) * sizeof chunk[0]),
-                            "TrackMate: scratch file: read failed");
-    for (size_t k = 0; k < got; k++) {
-      const int64_t b = (chunk[k].frame - w->frame_min) / TM_BLOCK_FRAMES;
-      if (!buf) cnt[b]++;
-      else if (b >= b0 && b < b1) buf[(*m)++] = chunk[k];
-    }
-    seen += got;
-  }
-  return ELFM_OK;
-}
-
-elfm_status elfm_trackmate_writer_finish(elfm_trackmate_writer *w, FILE *f, elfm_error *err)
-{
+  if (!(frame_interval_ms > 0) || !isfinite(frame_interval_ms))
+    return elfm_error_set(err, ELFM_ERR_INVALID, path, -1, "TrackMate: frame interval must be > 0");
   tm_write_header(f, w->n_spots);
-  elfm_status st = ELFM_OK;
-  uint64_t *cnt = NULL;
-  tm_spot *buf = NULL;
-  if (w->n_spots) {
-    /* Count each block's spots, then take runs of whole blocks that fit
-     * the budget: one pass when everything fits (most runs), a few for
-     * an hour's recording, and the scratch file is read sequentially. */
-    const int64_t nb = (w->frame_max - w->frame_min) / TM_BLOCK_FRAMES + 1;
-    cnt = calloc((size_t)nb, sizeof *cnt);
-    if (!cnt) st = elfm_error_set(err, ELFM_ERR_NOMEM, w->path, -1, "TrackMate: out of memory");
-    if (st == ELFM_OK) st = tm_scan(w, cnt, 0, 0, NULL, NULL, err);
-    size_t buf_cap = 0;
-    for (int64_t b0 = 0; st == ELFM_OK && b0 < nb;) {
-      int64_t b1 = b0 + 1;
-      uint64_t take = cnt[b0];
-      while (b1 < nb && take + cnt[b1] <= w->max_sort) take += cnt[b1++];
-      if (take > buf_cap) {
-        free(buf);
-        buf_cap = (size_t)take;
-        buf = malloc(buf_cap * sizeof *buf);
-        if (!buf) {
-          buf_cap = 0;
-          st = elfm_error_set(err, ELFM_ERR_NOMEM, w->path, -1, "TrackMate: out of memory");
-          break;
-        }
-      }
-      size_t m = 0;
-      if (take) st = tm_scan(w, NULL, b0, b1, buf, &m, err);
-      if (st != ELFM_OK) break;
-      qsort(buf, m, sizeof *buf, tm_spot_cmp);
-      for (size_t k = 0; k < m;) {
-        size_t e = k + 1;
-        while (e < m && buf[e].frame == buf[k].frame) e++;
-        tm_write_frame(f, buf + k, e - k, w->interval_ms);
-        k = e;
-      }
-      b0 = b1;
-    }
-  }
-  free(cnt);
-  free(buf);
+  elfm_status st = xml_sorted(w, 1, f, tm_write_frame, frame_interval_ms, err);
   if (st != ELFM_OK) return st;
-  tm_write_tracks(f, w);
-  return io_check(f, w->path, err);
+  tm_write_tracks(f, w, frame_interval_ms);
+  return io_check(f, path, err);
 }
 
 elfm_status elfm_tracks_write_trackmate(FILE *f, const char *path, const elfm_track_store *s,
                                         double frame_interval_ms, elfm_error *err)
 {
+  if (!(frame_interval_ms > 0) || !isfinite(frame_interval_ms))
+    return elfm_error_set(err, ELFM_ERR_INVALID, path, -1, "TrackMate: frame interval must be > 0");
+  char scratch[1100];
+  snprintf(scratch, sizeof scratch, "%s.spots.tmp", path);
   elfm_error e;
   elfm_error_clear(&e);
-  elfm_trackmate_writer *w = elfm_trackmate_writer_create(path, frame_interval_ms, 0, &e);
+  elfm_track_xml *w = elfm_track_xml_create(scratch, 0, &e);
   if (!w) {
     if (err) *err = e;
     return e.code;
   }
   elfm_status st = ELFM_OK;
-  for (size_t i = 0; st == ELFM_OK && i < s->n; i++) st = elfm_trackmate_writer_add(w, s->tracks[i], err);
-  if (st == ELFM_OK) st = elfm_trackmate_writer_finish(w, f, err);
-  elfm_trackmate_writer_free(w);
+  for (size_t i = 0; st == ELFM_OK && i < s->n; i++) st = elfm_track_xml_add(w, s->tracks[i], err);
+  if (st == ELFM_OK) st = elfm_track_xml_write_trackmate(w, f, path, frame_interval_ms, err);
+  elfm_track_xml_free(w);
   return st;
 }
