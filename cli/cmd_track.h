@@ -171,8 +171,9 @@ typedef struct track_ctx {
   elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
   char p_det[1100], p_tr[1100], p_fr[1100];
   /* What is kept of each written track (summary.json, the stage analysis):
-   * ~100 bytes. The tracks themselves are freed once written, so memory
-   * grows with the number of tracks, not with their points. */
+   * 104 bytes, a later piece's folded into its track's. The tracks are
+   * freed once written and long ones written in pieces, so memory grows
+   * with the number of tracks, not with their points. */
   elfm_track_info *info;
   size_t n_info, info_cap;
   elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */

@@ -9,8 +9,9 @@
  *
  * The store (elfm_track_store) owns finished tracks, for callers that want
  * them all in memory (tests, small runs). A long run does not keep them: it
- * writes each track as it ends (tracks.csv, elfm_track_xml) and keeps its
- * elfm_track_info, ~100 bytes per track whatever its length.
+ * writes each track as it ends (tracks.csv, elfm_track_xml), a long one in
+ * pieces as it goes (elfm_link_take_piece), and keeps its elfm_track_info
+ * (104 bytes) whatever its length.
  */
 #ifndef ELFM_TRACKS_H
 #define ELFM_TRACKS_H
