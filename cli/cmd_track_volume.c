@@ -553,7 +553,14 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   c->n_det += kept;
   c->last_frame = v->frame;
   c->last_t_us = v->t_us;
-  return track_drain(c, err);
+  if ((st = track_drain(c, err)) != ELFM_OK) return st;
+  /* Frame times no track can still ask for: before the earliest point the
+   * linker holds, and before what gap filling may yet add (the kept
+   * frames, and a new track's open start a whole gap before them). */
+  int64_t keep = elfm_link_oldest_frame(c->lk);
+  const int64_t back = v->frame - (int64_t)c->ring.cap - c->o->link.max_gap_frames - 1;
+  elfm_frame_times_forget_before(&c->frame_times, back < keep ? back : keep);
+  return ELFM_OK;
 }
 
 void track_ctx_free(track_ctx *c)

@@ -106,9 +106,46 @@ static void test_smooth_gap_times(void)
   elfm_frame_times_free(&ft);
 }
 
+/* Forgetting: a recording of 10,000 trigger edges, each opening a window
+ * 1200 us after the previous one and a second 400 us later (two runs per
+ * edge), while frames more than 300 behind the newest are forgotten: the
+ * runs held stay bounded, the times kept are exact, the forgotten ones
+ * unknown. */
+static void test_forget(void)
+{
+  elfm_error err;
+  elfm_frame_times ft;
+  elfm_frame_times_init(&ft);
+  size_t most = 0;
+  int64_t frame = 0;
+  for (int e = 0; e < 10000; e++)
+    for (int k = 0; k < 2; k++, frame++) {
+      CHECK_OK(elfm_frame_times_add(&ft, frame, 1000000 + 1600LL * e + 1200LL * k, &err), &err);
+      elfm_frame_times_forget_before(&ft, frame - 300);
+      if (ft.n > most) most = ft.n;
+    }
+  CHECK(most <= 2 * 301 + 2);
+  int64_t t = 0;
+  int ok = 1;
+  for (int64_t f = frame - 300; f < frame; f++) {
+    ok &= elfm_frame_times_get(&ft, f, &t);
+    ok &= t == 1000000 + 1600LL * (f / 2) + 1200LL * (f % 2);
+  }
+  CHECK(ok);
+  CHECK(!elfm_frame_times_get(&ft, 100, &t));
+  /* forgetting before the first frame, or within the first run, keeps all */
+  elfm_frame_times_free(&ft);
+  for (int64_t f = 0; f < 10; f++) CHECK_OK(elfm_frame_times_add(&ft, f, 1000 * f, &err), &err);
+  elfm_frame_times_forget_before(&ft, -5);
+  elfm_frame_times_forget_before(&ft, 7);
+  CHECK(ft.n == 1 && elfm_frame_times_get(&ft, 0, &t) && t == 0);
+  elfm_frame_times_free(&ft);
+}
+
 int main(void)
 {
   test_runs();
   test_smooth_gap_times();
+  test_forget();
   return check_report();
 }

@@ -344,6 +344,9 @@ double elfm_link_last_speed(const elfm_linker *l, int i);
 
 /* Live tracks right now, and how many tracks were started in total. */
 size_t elfm_link_n_live(const elfm_linker *l);
+/* The earliest frame of a point the linker still holds (live tracks and
+ * finished ones not yet taken), INT64_MAX when none. */
+int64_t elfm_link_oldest_frame(const elfm_linker *l);
 int64_t elfm_link_n_started(const elfm_linker *l);
 
 /* Id of the track detection i of the LAST step joined (a new track when it

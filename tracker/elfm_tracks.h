@@ -35,7 +35,8 @@ extern "C" {
  * time here as it goes. Stored as runs of evenly spaced frames (first
  * frame, its time, the step): one run for a fixed frame rate, two or three
  * per trigger edge otherwise, so memory grows with the edges, not the
- * frames (16 bytes x 3 per light pulse). */
+ * frames (16 bytes x 3 per light pulse), and a run forgets the frames
+ * no track still needs (elfm_frame_times_forget_before). */
 typedef struct elfm_frame_times {
   size_t n, cap;
   int64_t *frame, *t_us, *step_us; /* per run; step 0 while the run has one frame */
@@ -52,6 +53,11 @@ elfm_status elfm_frame_times_add(elfm_frame_times *ft, int64_t frame, int64_t t_
  * skipped lies on its run's line); 0 with *t_us untouched for a frame
  * before the first or after the last. */
 int elfm_frame_times_get(const elfm_frame_times *ft, int64_t frame, int64_t *t_us);
+/* Forget the frames before `frame` (the run holding it stays): a run asks
+ * only for the frames of tracks still to be smoothed, so what it holds
+ * stays bounded on a recording of many trigger edges. Frames before it
+ * are then unknown (elfm_frame_times_get returns 0). */
+void elfm_frame_times_forget_before(elfm_frame_times *ft, int64_t frame);
 
 /* Motion models the smoother chooses from (elfm_smooth.h). */
 typedef enum elfm_motion_model {

@@ -1,6 +1,7 @@
 /* frame_times.c — every frame's time, stored as runs of evenly spaced
  * frames (elfm_tracks.h, "Frame times"). */
 #include <stdlib.h>
+#include <string.h>
 
 #include "elfm_tracks.h"
 
@@ -81,4 +82,22 @@ int elfm_frame_times_get(const elfm_frame_times *ft, int64_t frame, int64_t *t_u
   }
   *t_us = ft->t_us[lo] + ft->step_us[lo] * (frame - ft->frame[lo]);
   return 1;
+}
+
+void elfm_frame_times_forget_before(elfm_frame_times *ft, int64_t frame)
+{
+  if (ft->n < 2 || frame <= ft->frame[1]) return;
+  size_t lo = 0, hi = ft->n; /* the last run starting at or before frame */
+  while (hi - lo > 1) {
+    size_t mid = lo + (hi - lo) / 2;
+    if (ft->frame[mid] <= frame) lo = mid;
+    else hi = mid;
+  }
+  /* moved only once half the runs can go: O(1) amortised per frame */
+  if (2 * lo < ft->n) return;
+  const size_t keep = ft->n - lo;
+  memmove(ft->frame, ft->frame + lo, keep * sizeof *ft->frame);
+  memmove(ft->t_us, ft->t_us + lo, keep * sizeof *ft->t_us);
+  memmove(ft->step_us, ft->step_us + lo, keep * sizeof *ft->step_us);
+  ft->n = keep;
 }

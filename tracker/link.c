@@ -194,6 +194,18 @@ elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t kee
 }
 
 size_t elfm_link_n_live(const elfm_linker *l) { return l ? l->n_live : 0; }
+
+int64_t elfm_link_oldest_frame(const elfm_linker *l)
+{
+  int64_t f = INT64_MAX;
+  for (size_t i = 0; l && i < l->n_live; i++)
+    if (l->live[i].t->n && l->live[i].t->pts[0].frame < f) f = l->live[i].t->pts[0].frame;
+  for (size_t i = 0; l && i < l->fin_n; i++) {
+    const elfm_track *t = l->fin[l->fin_head + i];
+    if (t->n && t->pts[0].frame < f) f = t->pts[0].frame;
+  }
+  return f;
+}
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 
 double elfm_link_last_speed(const elfm_linker *l, int i)
