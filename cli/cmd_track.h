@@ -171,7 +171,7 @@ typedef struct track_ctx {
   elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
   char p_det[1100], p_tr[1100], p_fr[1100];
   /* What is kept of each written track (summary.json, the stage analysis):
-   * 104 bytes, a later piece's folded into its track's. The tracks are
+   * 112 bytes, a later piece's folded into its track's. The tracks are
    * freed once written and long ones written in pieces, so memory grows
    * with the number of tracks, not with their points. */
   elfm_track_info *info;

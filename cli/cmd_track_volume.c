@@ -115,11 +115,6 @@ double track_motion_lead_um(const track_ctx *c)
   return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);
 }
 
-/* Smooth, filter and write the tracks the linker has finished. Each track
- * is its own single-threaded Ceres problem, so when several finish at once
- * (most of them at the end of the recording) they are smoothed in parallel;
- * filtering and writing stay in the linker's order, so the output does not
- * depend on the thread count. */
 /* Append t to the tracks to smooth (c->fin[*n]); on no memory t is freed. */
 static elfm_status fin_push(track_ctx *c, size_t *n, elfm_track *t, elfm_error *err)
 {
@@ -137,6 +132,12 @@ static elfm_status fin_push(track_ctx *c, size_t *n, elfm_track *t, elfm_error *
   return ELFM_OK;
 }
 
+/* Smooth, filter and write the tracks the linker has finished, and the
+ * pieces of long live tracks that are due (--piece-points). Each track
+ * is its own single-threaded Ceres problem, so when several finish at once
+ * (most of them at the end of the recording) they are smoothed in parallel;
+ * filtering and writing stay in the linker's order, so the output does not
+ * depend on the thread count. */
 elfm_status track_drain(track_ctx *c, elfm_error *err)
 {
   size_t n = 0;

@@ -413,6 +413,27 @@ int main(void)
     elfm_track_info_get(u, &ti);
     CHECK(!ti.smoothed && isnan(ti.mean_lateral_speed_um_per_ms) && ti.first_frame == 3);
     elfm_track_free(u);
+    /* folding pieces: counts add, velocities weigh by rows, and the model
+     * is the largest piece's, also when a smaller one comes after it */
+    elfm_track_info a, b, c2;
+    memset(&a, 0, sizeof a);
+    a.n = a.model_n = 300; a.n_rows = 300; a.n_pieces = 1; a.smoothed = 1;
+    a.first_frame = 0; a.last_frame = 299;
+    a.model = ELFM_MODEL_SPLINE; a.edf = 9;
+    a.mean_vel_um_per_ms[0] = 1; a.mean_lateral_speed_um_per_ms = 1;
+    b = a;
+    b.n = b.model_n = 500; b.n_rows = 100; b.first_frame = 300; b.last_frame = 799;
+    b.model = ELFM_MODEL_CONST_VELOCITY; b.edf = 2;
+    b.mean_vel_um_per_ms[0] = 3; b.mean_lateral_speed_um_per_ms = 3;
+    c2 = a;
+    c2.n = c2.model_n = 100; c2.n_rows = 100; c2.first_frame = 800; c2.last_frame = 899;
+    elfm_track_info_merge(&a, &b);
+    elfm_track_info_merge(&a, &c2);
+    CHECK(a.n == 900 && a.n_rows == 500 && a.n_pieces == 3 && a.first_frame == 0 &&
+          a.last_frame == 899);
+    CHECK(a.model == ELFM_MODEL_CONST_VELOCITY && a.edf == 2 && a.model_n == 500);
+    CHECK_NEAR(a.mean_vel_um_per_ms[0], (300 * 1 + 100 * 3 + 100 * 1) / 500.0, 1e-12);
+    CHECK_NEAR(a.mean_lateral_speed_um_per_ms, 1.4, 1e-12);
   }
   test_track_xml(dir);
   elfm_track_free(NULL);

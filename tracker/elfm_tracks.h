@@ -118,8 +118,9 @@ typedef struct elfm_track_info {
   size_t n;                   /* real points */
   size_t n_rows;              /* frames first_frame .. last_frame written (smoothed) */
   int n_pieces;               /* 1, or the pieces of a long track merged (elfm_track_info_merge) */
-  elfm_motion_model model;
-  double spline_weight_ms3, edf;
+  elfm_motion_model model;    /* of a long track: its largest piece's (model_n points), */
+  double spline_weight_ms3, edf; /* as are these */
+  size_t model_n;
   int n_outliers;
   int smoothed;               /* 0: not smoothed; the velocities below are 0 / NAN */
   double mean_vel_um_per_ms[3];        /* elfm_track_mean_velocity */

@@ -105,6 +105,7 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
   o->model = t->model;
   o->spline_weight_ms3 = t->spline_weight_ms3;
   o->edf = t->edf;
+  o->model_n = o->n;
   o->n_outliers = t->n_outliers;
   o->mean_lateral_speed_um_per_ms = NAN;
   if (!t->n_span || !t->vel_um_per_ms || !t->n) return;
@@ -126,10 +127,11 @@ void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
 {
   if (!p->n) return;
   if (!acc->n) acc->first_frame = p->first_frame;
-  if (p->n > acc->n) { /* the larger piece speaks for the track's model */
+  if (p->model_n > acc->model_n) { /* the largest piece speaks for the track's model */
     acc->model = p->model;
     acc->spline_weight_ms3 = p->spline_weight_ms3;
     acc->edf = p->edf;
+    acc->model_n = p->model_n;
   }
   const double r0 = (double)acc->n_rows, r1 = (double)p->n_rows;
   if (r0 + r1 > 0) {
