@@ -206,5 +206,10 @@ elfm_status cli_count_events(const char *path, int64_t *n, int64_t *t_first_us,
 double cli_now_s(void);
 /* Peak resident set size of this process in MB (0 when unknown). */
 double cli_peak_rss_mb(void);
+/* For a progress line: ", 62 % (~55 s left)" from how far through the input
+ * a run is (frac 0..1, elfm_recon_stats.done_frac) and the wall time so
+ * far, the time left at the rate so far; ", 1 %" until 2 % are done (too
+ * early to say), "" when frac is unknown (< 0). Writes into buf, returns it. */
+const char *cli_progress_left(char *buf, size_t n, double frac, double wall_s);
 
 #endif

@@ -709,3 +709,19 @@ elfm_status cli_count_events(const char *path, int64_t *n, int64_t *t_first_us,
   elfm_reader_close(r);
   return s;
 }
+
+const char *cli_progress_left(char *buf, size_t n, double frac, double wall_s)
+{
+  if (!n) return buf;
+  buf[0] = '\0';
+  if (!(frac >= 0) || frac > 1) return buf;
+  if (frac < 0.02 || !(wall_s > 0)) {
+    snprintf(buf, n, ", %.0f %%", 100 * frac);
+    return buf;
+  }
+  const double left_s = wall_s * (1 - frac) / frac;
+  if (left_s < 90) snprintf(buf, n, ", %.0f %% (~%.0f s left)", 100 * frac, left_s);
+  else if (left_s < 5400) snprintf(buf, n, ", %.0f %% (~%.0f min left)", 100 * frac, left_s / 60);
+  else snprintf(buf, n, ", %.0f %% (~%.1f h left)", 100 * frac, left_s / 3600);
+  return buf;
+}

@@ -64,8 +64,10 @@ static int make_dir(const char *path)
 static void progress(const elfm_recon_stats *s, void *user)
 {
   (void)user;
-  fprintf(stderr, "\rrecon: %lld volumes, %.3f s of recording, %.2f Mev/s, %.2fx real time   ",
-          (long long)s->frames, s->span_s, s->events_per_s * 1e-6,
+  char left[64];
+  fprintf(stderr, "\rrecon: %lld volumes, %.3f s of recording%s, %.2f Mev/s, %.2fx real time   ",
+          (long long)s->frames, s->span_s,
+          cli_progress_left(left, sizeof left, s->done_frac, s->wall_s), s->events_per_s * 1e-6,
           s->wall_s > 0 ? s->span_s / s->wall_s : 0.0);
 }
 

@@ -17,9 +17,11 @@
 static void progress(const elfm_recon_stats *s, void *user)
 {
   const track_ctx *c = user;
-  fprintf(stderr, "\reventlfm track: %.3f s of recording, %" PRId64 " volumes, %.0f volumes/s, "
+  char left[64];
+  fprintf(stderr, "\reventlfm track: %.3f s of recording%s, %" PRId64 " volumes, %.0f volumes/s, "
                   "%zu live tracks   ",
-          s->span_s, s->frames, s->volumes_per_s, elfm_link_n_live(c->lk));
+          s->span_s, cli_progress_left(left, sizeof left, s->done_frac, s->wall_s), s->frames,
+          s->volumes_per_s, elfm_link_n_live(c->lk));
 }
 
 static int close_file(FILE **f, const char *path, elfm_error *err)

@@ -92,6 +92,9 @@ elfm_event_format elfm_reader_format(const elfm_reader *r);
 int elfm_reader_width(const elfm_reader *r);   /* 0 when unknown */
 int elfm_reader_height(const elfm_reader *r);  /* 0 when unknown */
 const char *elfm_reader_path(const elfm_reader *r);
+/* How much of the file's events has been decoded, 0..1 (by bytes); -1 when
+ * the input has no size (a pipe). For progress lines. */
+double elfm_reader_fraction(const elfm_reader *r);
 /* Times seen going back so far (only non-zero with allow_unsorted). */
 int64_t elfm_reader_backward_steps(const elfm_reader *r);
 void elfm_reader_close(elfm_reader *r);

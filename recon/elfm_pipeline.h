@@ -42,6 +42,9 @@ typedef struct elfm_recon_stats {
   double callback_s;       /* time spent in the callback */
   double events_per_s, volumes_per_s;
   double realtime_factor;  /* span_s / wall_s: > 1 is faster than real time */
+  double done_frac;        /* how far through the input, 0..1: by event time up to
+                            * to_us when one is given, else by the file's bytes;
+                            * -1 unknown (a pipe). Set in progress calls and at the end */
   int input_error;         /* 1: the run stopped at an error of its input (a truncated or
                             * corrupt file) after delivering every volume built before it;
                             * what was delivered is good, so a caller may finish its own

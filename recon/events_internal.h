@@ -82,6 +82,7 @@ struct elfm_reader {
   int width, height;        /* 0 = unknown */
   int evt21_legacy;         /* EVT 2.1 with 32-bit halves swapped (IMX636) */
   int64_t data_offset;      /* first byte after the header (and DAT's type/size) */
+  int64_t file_bytes;       /* the file's size; -1 when it has none (a pipe) */
   int64_t header_lines;     /* CSV: lines before the first event line */
 
   uint8_t *buf;             /* buf_cap bytes */

@@ -221,6 +221,23 @@ static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_erro
 }
 
 /* Wall time so far and the rates it gives (none while it is 0). */
+/* How far through the input (elfm_recon_stats.done_frac): by the file's
+ * bytes, or by event time when the run stops at to_us inside the file. */
+static double done_frac(const run *r)
+{
+  if (!r->src.reader) return -1; /* a TIFF stack: pages, not known ahead */
+  double f = elfm_reader_fraction(r->src.reader);
+  const int64_t to = r->opt->to_us, last = r->st.t_last_us;
+  if (to != INT64_MAX && last != INT64_MIN) {
+    const int64_t from = r->opt->from_us != INT64_MIN ? r->opt->from_us : r->st.t_first_us;
+    if (to > from && last >= from) {
+      const double ft = (double)(last - from) / (double)(to - from);
+      if (ft > f) f = ft > 1 ? 1 : ft;
+    }
+  }
+  return f;
+}
+
 static void stats_set_rates(elfm_recon_stats *st, double wall_s)
 {
   st->wall_s = wall_s;
@@ -297,6 +314,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
        * line said 0 volumes/s) */
       elfm_recon_stats st = r->st;
       stats_set_rates(&st, now - t_start);
+      st.done_frac = done_frac(r);
       r->opt->progress(&st, r->opt->progress_user);
     }
     if (!got) break;
@@ -309,6 +327,7 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
 static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)
 {
   stats_set_rates(&r->st, wall_s);
+  r->st.done_frac = done_frac(r);
   if (out) *out = r->st;
 }
 

@@ -311,8 +311,9 @@ elfm_status elfm_reader_open(const char *path, const elfm_reader_options *opt,
    * buffer. 64 KiB at least so that any plausible header fits. */
   struct stat sb;
   r->buf_cap = ELFM_READ_BUF_BYTES;
-  if (fstat(fileno(r->f), &sb) == 0 && S_ISREG(sb.st_mode) &&
-      (uint64_t)sb.st_size < ELFM_READ_BUF_BYTES)
+  const int sized = fstat(fileno(r->f), &sb) == 0 && S_ISREG(sb.st_mode);
+  r->file_bytes = sized ? (int64_t)sb.st_size : -1;
+  if (sized && (uint64_t)sb.st_size < ELFM_READ_BUF_BYTES)
     r->buf_cap = (size_t)sb.st_size + 1 < ((size_t)64 << 10) ? ((size_t)64 << 10)
                                                              : (size_t)sb.st_size + 1;
   r->buf = malloc(r->buf_cap);
@@ -479,6 +480,15 @@ elfm_event_format elfm_reader_format(const elfm_reader *r) { return r ? r->fmt :
 int elfm_reader_width(const elfm_reader *r) { return r ? r->width : 0; }
 int elfm_reader_height(const elfm_reader *r) { return r ? r->height : 0; }
 const char *elfm_reader_path(const elfm_reader *r) { return r ? r->path : NULL; }
+
+double elfm_reader_fraction(const elfm_reader *r)
+{
+  if (!r || r->file_bytes < 0) return -1;
+  const double body = (double)(r->file_bytes - r->data_offset);
+  if (!(body > 0)) return 1;
+  const double f = (double)(r->buf_off + (int64_t)r->pos - r->data_offset) / body;
+  return f < 0 ? 0 : f > 1 ? 1 : f;
+}
 int64_t elfm_reader_backward_steps(const elfm_reader *r) { return r ? r->backward_steps : 0; }
 
 void elfm_reader_close(elfm_reader *r)

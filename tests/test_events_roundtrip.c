@@ -119,6 +119,24 @@ static void test_roundtrip(const char *dir)
   CHECK_EQ_INT(elfm_reader_width(r), W);
   CHECK_EQ_INT(elfm_reader_height(r), H);
   CHECK_EQ_INT(elfm_reader_format(r), ELFM_FMT_EVT3);
+  /* How far through the file (progress lines): 0 before the first read,
+   * rising with each chunk, 1 at the end */
+  CHECK(elfm_reader_fraction(r) == 0);
+  {
+    elfm_event_chunk *c = elfm_chunk_create(1000, &err);
+    double prev = 0;
+    int rises = 1, reads = 0;
+    while (c && elfm_reader_read(r, c, &err) == ELFM_OK && (c->n || c->n_trig)) {
+      const double fr = elfm_reader_fraction(r);
+      rises &= fr >= prev && fr <= 1;
+      prev = fr;
+      reads++;
+    }
+    CHECK(reads > 10 && rises);
+    CHECK(elfm_reader_fraction(r) == 1);
+    elfm_chunk_free(c);
+  }
+  CHECK(elfm_reader_fraction(NULL) == -1);
   elfm_reader_close(r);
   /* Vector words make the file smaller than 2 bytes per event. */
   FILE *f = fopen(raw, "rb");

@@ -8,7 +8,8 @@
 # with the same run on whole tracks. Asked: pieces were taken; tracks.csv
 # has the same (track, frame) rows, each once; the same tracks and points
 # in summary.json, the ISBI and the TrackMate files; no scratch file left;
-# alpha within 0.01 (seed 1: 0.926 whole, 0.922 in pieces).
+# alpha within 0.01 (seed 1: 0.926 whole, 0.922 in pieces). And the
+# progress line says how far through the file the run is and what is left.
 # Usage: track_pieces.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -17,7 +18,14 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--piece-points 10" "--piece-points -1" "--piece-points x"
 simulate_or_skip "$tmp/w" worm 500 1
-track_score "$tmp/w" "$tmp/whole" "$tmp/whole.json" --dt-us 2000 --repr integral --piece-points 0
+# the whole-track run shows its progress (stderr): how far through the file
+# and the time left, "12 % (~3 s left)"
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/whole" \
+  --dt-us 2000 --repr integral --piece-points 0 2> "$tmp/whole.err" || { echo "FAIL: track whole"; fail=$((fail+1)); }
+tr '\r' '\n' < "$tmp/whole.err" | grep -Eq 'recording, [0-9]+ % \(~[0-9]+ (s|min) left\)' ||
+  { echo "FAIL: no progress with the time left:"; tr '\r' '\n' < "$tmp/whole.err" | head -3; fail=$((fail+1)); }
+"$bin" score --truth "$tmp/w/truth.csv" --tracks "$tmp/whole/tracks.csv" --detections "$tmp/whole/detections.csv" \
+  --calib "$tmp/w/calib.json" --json > "$tmp/whole.json" || { echo "FAIL: score whole"; fail=$((fail+1)); }
 track_score "$tmp/w" "$tmp/cut" "$tmp/cut.json" --dt-us 2000 --repr integral --piece-points 64
 a0=$(key "$tmp/whole.json" alpha); a1=$(key "$tmp/cut.json" alpha)
 np=$(key "$tmp/cut/summary.json" track_pieces)
