@@ -3,6 +3,7 @@
 // elfm_smooth.h). The project's only C++; its interface is the extern "C"
 // functions of elfm_smooth.h. No exceptions or output cross the boundary.
 #include "elfm_smooth.h"
+#include "smooth_banded.h"
 
 #include <ceres/ceres.h>
 
@@ -242,129 +243,15 @@ void poly_eval(const PolyFit &f, const Data &d, size_t nq, const int64_t *q, dou
   }
 }
 
-// ---- spline: banded (pentadiagonal) algebra -------------------------------
+// ---- spline: the banded algebra is C (smooth_banded.c) ---------------------
 
-// Second divided difference coefficients at interior state k (1..K-2),
-// scaled by sqrt(hbar): prior row r = sqrt(lambda) * coef . p / sigma_ref.
-void accel_coef(const std::vector<double> &ts, size_t k, double c[3])
-{
-  double h0 = ts[k] - ts[k - 1], h1 = ts[k + 1] - ts[k], hb = 0.5 * (h0 + h1);
-  double s = std::sqrt(hb) / hb;
-  c[0] = s / h0;
-  c[1] = -s * (1 / h0 + 1 / h1);
-  c[2] = s / h1;
-}
-
-// Third divided difference coefficients over states k .. k+3, times 6 (the
-// third derivative of the cubic through them) and scaled by sqrt(hbar),
-// hbar = (t_{k+3} - t_k) / 3: for frames h apart, (-1, 3, -3, 1) / h^3 x
-// sqrt(h), the analogue of accel_coef one order up.
-void jerk_coef(const std::vector<double> &ts, size_t k, double c[4])
-{
-  const double hb = (ts[k + 3] - ts[k]) / 3, s = 6 * std::sqrt(hb);
-  for (int i = 0; i < 4; i++) {
-    double den = 1;
-    for (int j = 0; j < 4; j++)
-      if (j != i) den *= ts[k + i] - ts[k + j];
-    c[i] = s / den;
-  }
-}
-
-// The prior's row over states k .. k + order (order 2: accel_coef's three,
-// centred on k + 1; order 3: jerk_coef's four), for the banded system and
-// the robust fit alike.
-void prior_coef(const std::vector<double> &ts, int order, size_t k, double c[4])
-{
-  if (order == 3) jerk_coef(ts, k, c);
-  else accel_coef(ts, k + 1, c);
-}
-
-// A = diag(W) + mu x the prior's rows: order 2 (accel_coef over 3 states)
-// is pentadiagonal, order 3 (jerk_coef over 4) heptadiagonal. LDL^T and the
-// selected inverse are written for bandwidth b = order; diagonal d of A, L
-// and A^-1 are a[d], l[d] (l[d][k] = L(k+d, k)) and z[d] (z[d][k] =
-// A^-1(k, k+d)).
+// One workspace of it, freed with its owner.
 struct Banded {
-  size_t K = 0;
-  int b = 2;
-  std::vector<double> a[4], l[4], z[4], D;
-  void resize(size_t k) {
-    K = k;
-    for (int d = 0; d < 4; d++) {
-      a[d].assign(k + 3, 0.0);
-      l[d].assign(k + 3, 0.0);
-      z[d].assign(k + 3, 0.0);
-    }
-    D.assign(k + 3, 0.0);
-  }
-  void build(const std::vector<double> &W, const std::vector<double> &ts, double mu, int order) {
-    b = order;
-    for (size_t k = 0; k < K; k++) {
-      a[0][k] = W[k];
-      for (int d = 1; d < 4; d++) a[d][k] = 0;
-    }
-    const size_t m = (size_t)order + 1;
-    for (size_t k = 0; k + m <= K; k++) {  // rows over states k .. k + order
-      double c[4];
-      prior_coef(ts, order, k, c);
-      for (size_t i = 0; i < m; i++)
-        for (size_t d = 0; i + d < m; d++) a[d][k + i] += mu * c[i] * c[i + d];
-    }
-  }
-  bool factor() {
-    for (size_t k = 0; k < K; k++) {
-      double d = a[0][k];
-      for (int i = 1; i <= b && (size_t)i <= k; i++) d -= l[i][k - i] * l[i][k - i] * D[k - i];
-      if (!(d > 0) || !std::isfinite(d)) return false;
-      D[k] = d;
-      for (int j = 1; j <= b; j++) {
-        if (k + (size_t)j >= K) {
-          l[j][k] = 0;
-          continue;
-        }
-        double e = a[j][k];
-        // L(k+j, m) L(k, m) D(m) over m = k-1 down to k+j-b
-        for (int i = 1; i + j <= b && (size_t)i <= k; i++)
-          e -= l[i + j][k - i] * l[i][k - i] * D[k - i];
-        l[j][k] = e / d;
-      }
-    }
-    return true;
-  }
-  void solve(const std::vector<double> &rhs, std::vector<double> &x) const {
-    x.assign(K, 0.0);
-    for (size_t k = 0; k < K; k++) {
-      double y = rhs[k];
-      for (int i = 1; i <= b && (size_t)i <= k; i++) y -= l[i][k - i] * x[k - i];
-      x[k] = y;
-    }
-    for (size_t k = 0; k < K; k++) x[k] /= D[k];
-    for (size_t k = K; k-- > 0;)
-      for (int i = 1; i <= b; i++)
-        if (k + (size_t)i < K) x[k] -= l[i][k] * x[k + i];
-  }
-  // A^-1(p, q) from the band already computed (p, q >= k + 1): |p - q| < b.
-  double zat(size_t p, size_t q) const {
-    if (p >= K || q >= K) return 0;
-    return p <= q ? z[q - p][p] : z[p - q][q];
-  }
-  // Selected inverse (Takahashi): A^-1 on the band, from the last row up.
-  void inverse_band() {
-    for (size_t k = K; k-- > 0;) {
-      for (int j = 1; j <= b; j++) {
-        if (k + (size_t)j >= K) {
-          z[j][k] = 0;
-          continue;
-        }
-        double s = 0;
-        for (int i = 1; i <= b; i++) s += l[i][k] * zat(k + i, k + j);
-        z[j][k] = -s;
-      }
-      double z00 = 1 / D[k];
-      for (int i = 1; i <= b; i++) z00 -= l[i][k] * z[i][k];
-      z[0][k] = z00;
-    }
-  }
+  elfm_banded w;
+  Banded() { elfm_banded_init(&w); }
+  ~Banded() { elfm_banded_free(&w); }
+  Banded(const Banded &) = delete;
+  Banded &operator=(const Banded &) = delete;
 };
 
 struct SplineSetup {
@@ -384,7 +271,7 @@ bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<doubl
   std::vector<double> W(K), b(K), x;
   *rss = 0;
   *edf = 0;
-  bd.resize(K);
+  if (!elfm_banded_resize(&bd.w, K)) return false;
   if (p) p->assign(3 * K, 0.0);
   for (int a = 0; a < 3; a++) {
     std::fill(W.begin(), W.end(), 0.0);
@@ -394,15 +281,17 @@ bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<doubl
       W[ss.state_of[i]] += wi;
       b[ss.state_of[i]] += wi * d.x[3 * i + a];
     }
-    bd.build(W, ss.ts, lambda / (ss.sig_ref[a] * ss.sig_ref[a]), ss.order);
-    if (!bd.factor()) return false;
-    bd.solve(b, x);
-    bd.inverse_band();
+    elfm_banded_build(&bd.w, W.data(), ss.ts.data(), lambda / (ss.sig_ref[a] * ss.sig_ref[a]),
+                      ss.order);
+    if (!elfm_banded_factor(&bd.w)) return false;
+    x.assign(K, 0.0);
+    elfm_banded_solve(&bd.w, b.data(), x.data());
+    elfm_banded_inverse(&bd.w);
     for (size_t i = 0; i < d.n; i++) {
       double r = (x[ss.state_of[i]] - d.x[3 * i + a]) / d.sig[3 * i + a];
       *rss += w[i] * r * r;
     }
-    for (size_t k = 0; k < K; k++) *edf += bd.z[0][k] * W[k];
+    for (size_t k = 0; k < K; k++) *edf += bd.w.z[0][k] * W[k];
     if (p)
       for (size_t k = 0; k < K; k++) (*p)[3 * k + a] = x[k];
   }
@@ -460,7 +349,7 @@ bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double
   const double scale[3] = {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]};
   for (size_t k = 0; k + (size_t)ss.order < K; k++) {  // states k .. k + order
     double c[4];
-    prior_coef(ss.ts, ss.order, k, c);
+    elfm_spline_prior_coef(ss.ts.data(), ss.order, k, c);
     if (ss.order == 3)
       prob.AddResidualBlock(new ceres::AutoDiffCostFunction<JerkResidual, 3, 3, 3, 3, 3>(
                                 new JerkResidual{{c[0], c[1], c[2], c[3]}, {scale[0], scale[1], scale[2]}}),
@@ -531,14 +420,15 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
     std::fill(W.begin(), W.end(), 0.0);
     for (size_t i = 0; i < d.n; i++)
       W[ss.state_of[i]] += w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
-    bd.resize(K);
-    bd.build(W, ss.ts, lam / (ss.sig_ref[a] * ss.sig_ref[a]), ss.order);
-    if (!bd.factor()) return false;
-    bd.inverse_band();
-    f->z0[a] = bd.z[0];
-    f->z1[a] = bd.z[1];
-    f->z2[a] = bd.z[2];
-    for (size_t k = 0; k < K; k++) f->edf += bd.z[0][k] * W[k];
+    if (!elfm_banded_resize(&bd.w, K)) return false;
+    elfm_banded_build(&bd.w, W.data(), ss.ts.data(), lam / (ss.sig_ref[a] * ss.sig_ref[a]),
+                      ss.order);
+    if (!elfm_banded_factor(&bd.w)) return false;
+    elfm_banded_inverse(&bd.w);
+    f->z0[a].assign(bd.w.z[0], bd.w.z[0] + K + 3);
+    f->z1[a].assign(bd.w.z[1], bd.w.z[1] + K + 3);
+    f->z2[a].assign(bd.w.z[2], bd.w.z[2] + K + 3);
+    for (size_t k = 0; k < K; k++) f->edf += bd.w.z[0][k] * W[k];
   }
   f->ok = true;
   return true;

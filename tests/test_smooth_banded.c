@@ -1,0 +1,100 @@
+/* test_smooth_banded.c — the smoothing spline's banded algebra
+ * (tracker/smooth_banded.c): for both orders, on uneven state times (gaps)
+ * and weights with zeros (gap frames), the LDL^T solve returns x with
+ * A x = rhs, and the selected inverse's band equals A^-1 computed column by
+ * column through the solve; the prior's rows vanish on a polynomial one
+ * degree below the penalised derivative and give its derivative on one of
+ * that degree; a matrix that is not positive definite is refused. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "smooth_banded.h"
+
+enum { K = 60 };
+
+/* (A x)[k] from the rows the build sums: diag(W) x + mu sum_r c_r (c_r . x). */
+static void apply_a(const double *W, const double *ts, double mu, int order, const double *x,
+                    double *y)
+{
+  for (size_t k = 0; k < K; k++) y[k] = W[k] * x[k];
+  for (size_t k = 0; k + (size_t)order + 1 <= K; k++) {
+    double c[4], dot = 0;
+    elfm_spline_prior_coef(ts, order, k, c);
+    for (int i = 0; i <= order; i++) dot += c[i] * x[k + i];
+    for (int i = 0; i <= order; i++) y[k + i] += mu * c[i] * dot;
+  }
+}
+
+int main(void)
+{
+  double ts[K], W[K], rhs[K], x[K], y[K], col[K], e[K];
+  for (int k = 0, f = 0; k < K; k++) {
+    f += k % 13 == 5 ? 4 : 1; /* gaps of 3 frames */
+    ts[k] = 0.5 * f;
+    W[k] = k % 7 == 3 ? 0 : 1 + 0.5 * sin(k); /* gap-filled states carry no data */
+    rhs[k] = cos(0.3 * k) + 0.01 * k;
+  }
+  for (int order = 2; order <= 3; order++) {
+    /* the prior's rows: zero on a polynomial of degree order - 1, the
+     * order-th derivative x sqrt(hbar) on one of degree order */
+    double c[4], worst0 = 0, worst1 = 0;
+    for (size_t k = 0; k + (size_t)order + 1 <= K; k++) {
+      elfm_spline_prior_coef(ts, order, k, c);
+      double lo = 0, hi = 0;
+      for (int i = 0; i <= order; i++) {
+        const double t = ts[k + i];
+        lo += c[i] * (order == 2 ? 3 - 2 * t : 1 + t - 0.25 * t * t);
+        hi += c[i] * pow(t, order);
+      }
+      const double hb = (ts[k + order] - ts[k]) / order, fact = order == 2 ? 2 : 6;
+      worst0 = fmax(worst0, fabs(lo));
+      worst1 = fmax(worst1, fabs(hi / sqrt(hb) - fact));
+    }
+    CHECK(worst0 < 1e-9);
+    CHECK(worst1 < 1e-9);
+    for (int im = 0; im < 3; im++) {
+      const double mu = im == 0 ? 1e-3 : im == 1 ? 1 : 1e3;
+      elfm_banded bd;
+      elfm_banded_init(&bd);
+      CHECK(elfm_banded_resize(&bd, K));
+      elfm_banded_build(&bd, W, ts, mu, order);
+      CHECK(elfm_banded_factor(&bd));
+      elfm_banded_solve(&bd, rhs, x);
+      apply_a(W, ts, mu, order, x, y);
+      double res = 0, scale = 0;
+      for (int k = 0; k < K; k++) {
+        res = fmax(res, fabs(y[k] - rhs[k]));
+        scale = fmax(scale, fabs(rhs[k]));
+      }
+      CHECK(res < 1e-8 * scale);
+      /* the band of A^-1 against its columns */
+      elfm_banded_inverse(&bd);
+      double worst = 0, big = 0;
+      for (int q = 0; q < K; q++) {
+        memset(e, 0, sizeof e);
+        e[q] = 1;
+        elfm_banded_solve(&bd, e, col); /* A^-1 e_q: column q */
+        for (int d = 0; d <= order && q - d >= 0; d++) {
+          worst = fmax(worst, fabs(bd.z[d][q - d] - col[q - d]));
+          big = fmax(big, fabs(col[q - d]));
+        }
+      }
+      CHECK(worst < 1e-9 * big);
+      elfm_banded_free(&bd);
+    }
+  }
+  /* no data and no prior on a state: singular, refused */
+  {
+    double Wz[K];
+    memset(Wz, 0, sizeof Wz);
+    elfm_banded bd;
+    elfm_banded_init(&bd);
+    CHECK(elfm_banded_resize(&bd, K));
+    elfm_banded_build(&bd, Wz, ts, 0, 2);
+    CHECK(!elfm_banded_factor(&bd));
+    elfm_banded_free(&bd);
+  }
+  return check_report();
+}

@@ -1,0 +1,165 @@
+/* smooth_banded.c — the smoothing spline's banded algebra (see
+ * smooth_banded.h). Moved out of the Ceres bridge as it was, operation for
+ * operation: the smoothed tracks are the same bits. */
+#include "smooth_banded.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Second divided difference coefficients at interior state k (1..K-2),
+ * scaled by sqrt(hbar): prior row r = sqrt(lambda) * coef . p / sigma_ref. */
+static void accel_coef(const double *ts, size_t k, double c[3])
+{
+  double h0 = ts[k] - ts[k - 1], h1 = ts[k + 1] - ts[k], hb = 0.5 * (h0 + h1);
+  double s = sqrt(hb) / hb;
+  c[0] = s / h0;
+  c[1] = -s * (1 / h0 + 1 / h1);
+  c[2] = s / h1;
+}
+
+/* Third divided difference coefficients over states k .. k+3, times 6 (the
+ * third derivative of the cubic through them) and scaled by sqrt(hbar),
+ * hbar = (t_{k+3} - t_k) / 3: for frames h apart, (-1, 3, -3, 1) / h^3 x
+ * sqrt(h), the analogue of accel_coef one order up. */
+static void jerk_coef(const double *ts, size_t k, double c[4])
+{
+  const double hb = (ts[k + 3] - ts[k]) / 3, s = 6 * sqrt(hb);
+  for (int i = 0; i < 4; i++) {
+    double den = 1;
+    for (int j = 0; j < 4; j++)
+      if (j != i) den *= ts[k + i] - ts[k + j];
+    c[i] = s / den;
+  }
+}
+
+void elfm_spline_prior_coef(const double *ts, int order, size_t k, double c[4])
+{
+  if (order == 3) jerk_coef(ts, k, c);
+  else accel_coef(ts, k + 1, c);
+}
+
+void elfm_banded_init(elfm_banded *bd) { memset(bd, 0, sizeof *bd); }
+
+void elfm_banded_free(elfm_banded *bd)
+{
+  for (int d = 0; d < 4; d++) {
+    free(bd->a[d]);
+    free(bd->l[d]);
+    free(bd->z[d]);
+  }
+  free(bd->D);
+  elfm_banded_init(bd);
+}
+
+int elfm_banded_resize(elfm_banded *bd, size_t K)
+{
+  const size_t n = K + 3;
+  if (n > bd->cap) {
+    double **arr[13];
+    int m = 0;
+    for (int d = 0; d < 4; d++) {
+      arr[m++] = &bd->a[d];
+      arr[m++] = &bd->l[d];
+      arr[m++] = &bd->z[d];
+    }
+    arr[m++] = &bd->D;
+    for (int i = 0; i < m; i++) {
+      double *p = realloc(*arr[i], n * sizeof *p);
+      if (!p) return 0;
+      *arr[i] = p;
+    }
+    bd->cap = n;
+  }
+  bd->K = K;
+  for (int d = 0; d < 4; d++) {
+    memset(bd->a[d], 0, n * sizeof(double));
+    memset(bd->l[d], 0, n * sizeof(double));
+    memset(bd->z[d], 0, n * sizeof(double));
+  }
+  memset(bd->D, 0, n * sizeof(double));
+  return 1;
+}
+
+void elfm_banded_build(elfm_banded *bd, const double *W, const double *ts, double mu, int order)
+{
+  bd->b = order;
+  const size_t K = bd->K;
+  for (size_t k = 0; k < K; k++) {
+    bd->a[0][k] = W[k];
+    for (int d = 1; d < 4; d++) bd->a[d][k] = 0;
+  }
+  const size_t m = (size_t)order + 1;
+  for (size_t k = 0; k + m <= K; k++) { /* rows over states k .. k + order */
+    double c[4];
+    elfm_spline_prior_coef(ts, order, k, c);
+    for (size_t i = 0; i < m; i++)
+      for (size_t d = 0; i + d < m; d++) bd->a[d][k + i] += mu * c[i] * c[i + d];
+  }
+}
+
+int elfm_banded_factor(elfm_banded *bd)
+{
+  const size_t K = bd->K;
+  const int b = bd->b;
+  double **l = bd->l, *D = bd->D;
+  for (size_t k = 0; k < K; k++) {
+    double d = bd->a[0][k];
+    for (int i = 1; i <= b && (size_t)i <= k; i++) d -= l[i][k - i] * l[i][k - i] * D[k - i];
+    if (!(d > 0) || !isfinite(d)) return 0;
+    D[k] = d;
+    for (int j = 1; j <= b; j++) {
+      if (k + (size_t)j >= K) {
+        l[j][k] = 0;
+        continue;
+      }
+      double e = bd->a[j][k];
+      /* L(k+j, m) L(k, m) D(m) over m = k-1 down to k+j-b */
+      for (int i = 1; i + j <= b && (size_t)i <= k; i++) e -= l[i + j][k - i] * l[i][k - i] * D[k - i];
+      l[j][k] = e / d;
+    }
+  }
+  return 1;
+}
+
+void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x)
+{
+  const size_t K = bd->K;
+  const int b = bd->b;
+  double *const *l = bd->l;
+  for (size_t k = 0; k < K; k++) {
+    double y = rhs[k];
+    for (int i = 1; i <= b && (size_t)i <= k; i++) y -= l[i][k - i] * x[k - i];
+    x[k] = y;
+  }
+  for (size_t k = 0; k < K; k++) x[k] /= bd->D[k];
+  for (size_t k = K; k-- > 0;)
+    for (int i = 1; i <= b; i++)
+      if (k + (size_t)i < K) x[k] -= l[i][k] * x[k + i];
+}
+
+/* A^-1(p, q) from the band already computed (p, q >= k + 1): |p - q| < b. */
+static double zat(const elfm_banded *bd, size_t p, size_t q)
+{
+  if (p >= bd->K || q >= bd->K) return 0;
+  return p <= q ? bd->z[q - p][p] : bd->z[p - q][q];
+}
+
+void elfm_banded_inverse(elfm_banded *bd)
+{
+  const int b = bd->b;
+  for (size_t k = bd->K; k-- > 0;) {
+    for (int j = 1; j <= b; j++) {
+      if (k + (size_t)j >= bd->K) {
+        bd->z[j][k] = 0;
+        continue;
+      }
+      double s = 0;
+      for (int i = 1; i <= b; i++) s += bd->l[i][k] * zat(bd, k + i, k + j);
+      bd->z[j][k] = -s;
+    }
+    double z00 = 1 / bd->D[k];
+    for (int i = 1; i <= b; i++) z00 -= bd->l[i][k] * bd->z[i][k];
+    bd->z[0][k] = z00;
+  }
+}

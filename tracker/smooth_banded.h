@@ -1,0 +1,51 @@
+/* smooth_banded.h — private to tracker/: the smoothing spline's banded
+ * algebra, in C so that the Ceres bridge (smooth.cc) holds only what needs
+ * Ceres. The spline has one state per frame of a track's span; its prior
+ * penalises the second (order 2) or third (order 3) divided difference of
+ * the states, so A = diag(W) + mu x the prior's rows is banded with
+ * bandwidth b = order (pentadiagonal or heptadiagonal). A banded LDL^T
+ * solves it and the selected (Takahashi) inverse gives A^-1 on the band,
+ * the hat matrix's trace for GCV and the posterior variances, all in
+ * O(K). Not public: callers use elfm_smooth.h. */
+#ifndef ELFM_SMOOTH_BANDED_H
+#define ELFM_SMOOTH_BANDED_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The prior's row over states k .. k + order of the state times ts (ms):
+ * order 2, the second divided difference centred on k + 1 (3 coefficients);
+ * order 3, the third over four states times 6 (4); both scaled by
+ * sqrt(hbar), hbar the mean spacing, so that the penalty is lambda x the
+ * integral of the squared derivative. The robust fit's prior residuals use
+ * the same rows. */
+void elfm_spline_prior_coef(const double *ts, int order, size_t k, double c[4]);
+
+/* Diagonal d of A, L and A^-1: a[d], l[d] (l[d][k] = L(k+d, k)) and z[d]
+ * (z[d][k] = A^-1(k, k+d)), each K + 3 long; D the LDL^T pivots. */
+typedef struct elfm_banded {
+  size_t K, cap;
+  int b;
+  double *a[4], *l[4], *z[4], *D;
+} elfm_banded;
+
+void elfm_banded_init(elfm_banded *bd);
+void elfm_banded_free(elfm_banded *bd);
+/* K states, every array zeroed; 0 when out of memory. */
+int elfm_banded_resize(elfm_banded *bd, size_t K);
+/* A = diag(W) + mu x the prior's rows over the state times ts. */
+void elfm_banded_build(elfm_banded *bd, const double *W, const double *ts, double mu, int order);
+/* LDL^T in place; 0 when A is not positive definite (or not finite). */
+int elfm_banded_factor(elfm_banded *bd);
+/* x = A^-1 rhs (after factor); x has K entries. */
+void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x);
+/* A^-1 on the band into z (after factor), from the last row up. */
+void elfm_banded_inverse(elfm_banded *bd);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
