@@ -1,6 +1,6 @@
 /* smooth_banded.h — private to tracker/: the smoothing spline's banded
- * algebra, in C so that the Ceres bridge (smooth.cc) holds only what needs
- * Ceres. The spline has one state per frame of a track's span; its prior
+ * algebra, in C: the Ceres bridge (smooth.cc) is the project's one C++
+ * file, for what needs Ceres, not for plain arithmetic. The spline has one state per frame of a track's span; its prior
  * penalises the second (order 2) or third (order 3) divided difference of
  * the states, so A = diag(W) + mu x the prior's rows is banded with
  * bandwidth b = order (pentadiagonal or heptadiagonal). A banded LDL^T
