@@ -1,12 +1,13 @@
 /* smooth_banded.h — private to tracker/: the smoothing spline's banded
  * algebra, in C: the Ceres bridge (smooth.cc) is the project's one C++
- * file, for what needs Ceres, not for plain arithmetic. The spline has one state per frame of a track's span; its prior
- * penalises the second (order 2) or third (order 3) divided difference of
- * the states, so A = diag(W) + mu x the prior's rows is banded with
- * bandwidth b = order (pentadiagonal or heptadiagonal). A banded LDL^T
- * solves it and the selected (Takahashi) inverse gives A^-1 on the band,
- * the hat matrix's trace for GCV and the posterior variances, all in
- * O(K). Not public: callers use elfm_smooth.h. */
+ * file, for what needs Ceres, not for plain arithmetic. The spline has
+ * one state per frame of a track's span; its prior penalises the second
+ * (order 2) or third (order 3) divided difference of the states, so
+ * A = diag(W) + mu x the prior's rows is banded with bandwidth b = order
+ * (pentadiagonal or heptadiagonal). A banded LDL^T solves it and the
+ * selected (Takahashi) inverse gives A^-1 on the band, the hat matrix's
+ * trace for GCV and the posterior variances, all in O(K). Not public:
+ * callers use elfm_smooth.h. */
 #ifndef ELFM_SMOOTH_BANDED_H
 #define ELFM_SMOOTH_BANDED_H
 
