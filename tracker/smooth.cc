@@ -262,62 +262,19 @@ struct SplineSetup {
   int order = 2;                    // penalised derivative: 2 acceleration, 3 jerk
 };
 
-// Per-axis weighted fit at lambda; returns RSS (whitened, weighted) and
-// trace of the hat matrix summed over axes. Fills p (K x 3) when given.
-bool spline_linear(const Data &d, const SplineSetup &ss, const std::vector<double> &w,
-                   double lambda, Banded &bd, double *rss, double *edf, std::vector<double> *p)
+// The linear fit and GCV are C (smooth_banded.c): this views the data there.
+elfm_spline_problem spline_problem(const Data &d, const SplineSetup &ss)
 {
-  const size_t K = ss.ts.size();
-  std::vector<double> W(K), b(K), x;
-  *rss = 0;
-  *edf = 0;
-  if (!elfm_banded_resize(&bd.w, K)) return false;
-  if (p) p->assign(3 * K, 0.0);
-  for (int a = 0; a < 3; a++) {
-    std::fill(W.begin(), W.end(), 0.0);
-    std::fill(b.begin(), b.end(), 0.0);
-    for (size_t i = 0; i < d.n; i++) {
-      double wi = w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
-      W[ss.state_of[i]] += wi;
-      b[ss.state_of[i]] += wi * d.x[3 * i + a];
-    }
-    elfm_banded_build(&bd.w, W.data(), ss.ts.data(), lambda / (ss.sig_ref[a] * ss.sig_ref[a]),
-                      ss.order);
-    if (!elfm_banded_factor(&bd.w)) return false;
-    x.assign(K, 0.0);
-    elfm_banded_solve(&bd.w, b.data(), x.data());
-    elfm_banded_inverse(&bd.w);
-    for (size_t i = 0; i < d.n; i++) {
-      double r = (x[ss.state_of[i]] - d.x[3 * i + a]) / d.sig[3 * i + a];
-      *rss += w[i] * r * r;
-    }
-    for (size_t k = 0; k < K; k++) *edf += bd.w.z[0][k] * W[k];
-    if (p)
-      for (size_t k = 0; k < K; k++) (*p)[3 * k + a] = x[k];
-  }
-  return true;
-}
-
-// GCV over the grid 10^-4 .. 10^8 ms^3 (half decades): the span from "follows
-// every frame" to "straight line" for 1 kHz frames and sub-um noise. gamma:
-// the price per effective parameter (elfm_smooth_options.gcv_gamma).
-double gcv_lambda(const Data &d, const SplineSetup &ss, const std::vector<double> &w, double gamma)
-{
-  Banded bd;
-  double best = 1.0, best_g = std::numeric_limits<double>::infinity();
-  const double nobs = 3.0 * (double)d.n;
-  for (int e = -8; e <= 16; e++) {
-    double lam = std::pow(10.0, 0.5 * e), rss, edf;
-    if (!spline_linear(d, ss, w, lam, bd, &rss, &edf, nullptr)) continue;
-    const double dof = nobs - gamma * edf;
-    if (dof < 0.5) continue;
-    double g = nobs * rss / (dof * dof);
-    if (g < best_g * (1 - 1e-9)) {
-      best_g = g;
-      best = lam;
-    }
-  }
-  return best;
+  elfm_spline_problem sp;
+  sp.n = d.n;
+  sp.K = ss.ts.size();
+  sp.x = d.x.data();
+  sp.sig = d.sig.data();
+  sp.ts = ss.ts.data();
+  sp.sig_ref = ss.sig_ref;
+  sp.state_of = ss.state_of.data();
+  sp.order = ss.order;
+  return sp;
 }
 
 struct SplineFit {
@@ -388,23 +345,27 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
                 double gcv_gamma, bool sparse, int max_iter, SplineFit *f)
 {
   const size_t K = ss.ts.size();
-  std::vector<double> w(d.n, 1.0);
-  double lam = lambda_given > 0 ? lambda_given : gcv_lambda(d, ss, w, gcv_gamma);
+  const elfm_spline_problem sp = spline_problem(d, ss);
+  std::vector<double> w(d.n, 1.0), work(3 * K + 1);
+  double lam = lambda_given > 0 ? lambda_given : elfm_spline_gcv_lambda(&sp, w.data(), gcv_gamma);
   // Beyond these the banded factorisation loses its digits (condition
   // ~ lambda / (sigma^2 h^3)); the ends are already "interpolate" and "line".
   lam = std::min(std::max(lam, 1e-9), 1e9);
   Banded bd;
   double rss, edf;
-  if (!spline_linear(d, ss, w, lam, bd, &rss, &edf, &f->p)) return false;
+  f->p.assign(3 * K, 0.0);
+  if (!elfm_spline_linear(&sp, w.data(), lam, &bd.w, work.data(), &rss, &edf, f->p.data()))
+    return false;
   if (loss.kind != ELFM_LOSS_NONE) {
     if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
     if (lambda_given <= 0) {  // outliers can bias the GCV choice: choose again without them
-      double lam2 = std::min(std::max(gcv_lambda(d, ss, w, gcv_gamma), 1e-9), 1e9);
+      double lam2 = std::min(std::max(elfm_spline_gcv_lambda(&sp, w.data(), gcv_gamma), 1e-9), 1e9);
       if (lam2 != lam) {
         lam = lam2;
         std::vector<double> w1(d.n, 1.0);
-        if (!spline_linear(d, ss, w1, lam, bd, &rss, &edf, &f->p)) return false;
+        if (!elfm_spline_linear(&sp, w1.data(), lam, &bd.w, work.data(), &rss, &edf, f->p.data()))
+          return false;
         if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
         robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
       }

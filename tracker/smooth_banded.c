@@ -1,5 +1,5 @@
-/* smooth_banded.c — the smoothing spline's banded algebra (see
- * smooth_banded.h). Moved out of the Ceres bridge as it was, operation for
+/* smooth_banded.c — the smoothing spline's banded algebra, its linear fit
+ * and its weight by GCV (see smooth_banded.h). Moved out of the Ceres bridge as it was, operation for
  * operation: the smoothed tracks are the same bits. */
 #include "smooth_banded.h"
 
@@ -162,4 +162,59 @@ void elfm_banded_inverse(elfm_banded *bd)
     for (int i = 1; i <= b; i++) z00 -= bd->l[i][k] * bd->z[i][k];
     bd->z[0][k] = z00;
   }
+}
+
+int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
+                       elfm_banded *bd, double *work, double *rss, double *edf, double *p)
+{
+  const size_t K = sp->K;
+  double *W = work, *b = work + K, *x = work + 2 * K;
+  *rss = 0;
+  *edf = 0;
+  if (!elfm_banded_resize(bd, K)) return 0;
+  if (p) memset(p, 0, 3 * K * sizeof *p);
+  for (int a = 0; a < 3; a++) {
+    memset(W, 0, K * sizeof *W);
+    memset(b, 0, K * sizeof *b);
+    for (size_t i = 0; i < sp->n; i++) {
+      double wi = w[i] / (sp->sig[3 * i + a] * sp->sig[3 * i + a]);
+      W[sp->state_of[i]] += wi;
+      b[sp->state_of[i]] += wi * sp->x[3 * i + a];
+    }
+    elfm_banded_build(bd, W, sp->ts, lambda / (sp->sig_ref[a] * sp->sig_ref[a]), sp->order);
+    if (!elfm_banded_factor(bd)) return 0;
+    elfm_banded_solve(bd, b, x);
+    elfm_banded_inverse(bd);
+    for (size_t i = 0; i < sp->n; i++) {
+      double r = (x[sp->state_of[i]] - sp->x[3 * i + a]) / sp->sig[3 * i + a];
+      *rss += w[i] * r * r;
+    }
+    for (size_t k = 0; k < K; k++) *edf += bd->z[0][k] * W[k];
+    if (p)
+      for (size_t k = 0; k < K; k++) p[3 * k + a] = x[k];
+  }
+  return 1;
+}
+
+double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma)
+{
+  elfm_banded bd;
+  elfm_banded_init(&bd);
+  double *work = malloc((3 * sp->K + 1) * sizeof *work);
+  double best = 1.0, best_g = INFINITY;
+  const double nobs = 3.0 * (double)sp->n;
+  for (int e = -8; work && e <= 16; e++) {
+    double lam = pow(10.0, 0.5 * e), rss, edf;
+    if (!elfm_spline_linear(sp, w, lam, &bd, work, &rss, &edf, NULL)) continue;
+    const double dof = nobs - gamma * edf;
+    if (dof < 0.5) continue;
+    double g = nobs * rss / (dof * dof);
+    if (g < best_g * (1 - 1e-9)) {
+      best_g = g;
+      best = lam;
+    }
+  }
+  free(work);
+  elfm_banded_free(&bd);
+  return best;
 }

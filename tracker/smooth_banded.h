@@ -46,6 +46,32 @@ void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x);
 /* A^-1 on the band into z (after factor), from the last row up. */
 void elfm_banded_inverse(elfm_banded *bd);
 
+/* ---- The spline's linear fit, and its weight by GCV ----
+ * n data points x (n x 3, um) with sigmas sig (n x 3) on K states at times
+ * ts (ms), point i on state state_of[i]; the prior of `order` scaled per
+ * axis by 1 / sig_ref[a]^2. */
+typedef struct elfm_spline_problem {
+  size_t n, K;
+  const double *x, *sig, *ts, *sig_ref;
+  const size_t *state_of;
+  int order;
+} elfm_spline_problem;
+
+/* Per axis, the fit at lambda with point weights w (n): the states into p
+ * (K x 3, when not NULL), the whitened weighted residual sum of squares
+ * into *rss and the hat matrix's trace summed over the axes into *edf.
+ * bd is the workspace (its band of A^-1 is the last axis's afterwards);
+ * work holds 3 K doubles. 0 when A is not positive definite or no memory. */
+int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
+                       elfm_banded *bd, double *work, double *rss, double *edf, double *p);
+
+/* The weight by GCV over the grid 10^-4 .. 10^8 ms^3 in half decades (the
+ * span from "follows every frame" to "straight line" for 1 kHz frames and
+ * sub-um noise), each effective parameter priced gamma (1: classical):
+ * the lambda minimising 3n RSS / (3n - gamma edf)^2; 1 when none can be
+ * computed. */
+double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma);
+
 #ifdef __cplusplus
 }
 #endif
