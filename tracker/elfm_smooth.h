@@ -150,7 +150,8 @@ typedef struct elfm_smooth_info {
   double bic[5];                /* by elfm_motion_model index; NaN where not fitted */
   double sigma_um[3];           /* noise per axis used (estimated or median given) */
   double accel_um_per_ms2[3];   /* CONST_ACCEL: the fitted acceleration; else 0 */
-  int n_outliers;               /* points with robust weight < 1/2 */
+  int n_outliers;               /* points beyond twice the loss scale (where Huber's weight
+                                   falls below 1/2), whichever the loss */
 } elfm_smooth_info;
 
 /* Fit n points (t_us non-decreasing; xyz_um n x 3; sigma_um n x 3 or NULL

@@ -83,7 +83,7 @@ typedef struct elfm_track {
   elfm_motion_model model;    /* the model the smoother chose */
   double spline_weight_ms3;   /* chosen spline weight (SPLINE only) */
   double edf;                 /* effective parameters per axis */
-  int n_outliers;             /* points the robust loss down-weighted below 1/2 */
+  int n_outliers;             /* points beyond twice the loss scale (elfm_smooth.h) */
   /* A piece of a long track (elfm_link_take_piece): partial = 1, and only
    * the frames in [write_from_frame, write_to_frame) are its own, written
    * to tracks.csv, ISBI and TrackMate; its points outside them are the
