@@ -22,6 +22,18 @@ static void track_defaults(track_opts *o)
   elfm_smooth_options_default(&o->smooth);
   o->max_det = 10000;
   o->max_outlier_frac = 1.0 / 3;
+  /* The smoother's robust loss: Cauchy, not the library's Huber. A ghost
+   * joined to a track, or a detection of the neighbour at an encounter,
+   * lies many sigmas off: Cauchy's weight falls as 1/r^2 and lets go of
+   * it, Huber's as 1/r and still pulls. Mean alpha, Huber -> Cauchy (with
+   * outliers counted alike, beyond twice the scale): flow 100 ms seeds
+   * 1-20 0.8391 -> 0.8417 and held-out 21-32 0.8367 -> 0.8400 (all 32
+   * seeds up), flow 1 s 1-8 0.7692 -> 0.7715 (all up), stage 0.8685 ->
+   * 0.8772, blink 0.9288 -> 0.9308, blink_moving 0.8369 -> 0.8378, worm
+   * 0.5 s (20 seeds) 0.9167 -> 0.9199 (16 up, 12 down of 28 with the
+   * held-out 25-32: 0.9213 -> 0.9225), worm 200 ms 0.9505 the same
+   * (docs/tracker.md "Smoother"). */
+  o->smooth.loss = ELFM_LOSS_CAUCHY;
   /* Long tracks in bounded memory: a live track holds at most 1024 + 256
    * points (~0.2 MB with the array's spare room), smoothed in pieces with
    * 128 points of context on each side. Worm 20 s (10,000 frames, 12
@@ -355,7 +367,9 @@ static void usage(FILE *f)
     "                       predict with it and tracks far from it are dropped);\n"
     "                       free: smoothing spline for all\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
-    "  --model auto|cv|ca|spline, --loss huber|cauchy|none, --spline-weight-ms3 W\n"
+    "  --model auto|cv|ca|spline, --spline-weight-ms3 W\n"
+    "  --loss L             robust loss of the smoother, scale 3 sigma: cauchy (the\n"
+    "                       default), huber or none\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
     "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral 5;\n"
     "                       1 classical); a track the robust fit would reject at G is\n"
