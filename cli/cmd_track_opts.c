@@ -37,9 +37,11 @@ static void track_defaults(track_opts *o)
   /* Long tracks in bounded memory: a live track holds at most 1024 + 256
    * points (~0.2 MB with the array's spare room), smoothed in pieces with
    * 128 points of context on each side. Worm 20 s (10,000 frames, 12
-   * neurons, --piece-points 512 / 4096 / 0): alpha 0.67559 / 0.67576 /
-   * 0.67578, peak RSS 89.0 / 116.4 / 118.3 MB (88.3 / - / 93.2 MB at 5 s).
-   * No scene of the tests (<= 1000 frames) reaches 1280 points. */
+   * neurons, Huber loss, --piece-points 512 / 1024 / 4096 / 0): alpha
+   * 0.67559 / 0.67579 / 0.67576 / 0.67578, peak RSS 89.0 / 93.7 / 116.4 /
+   * 118.3 MB (88.3 / 93.6 / - / 93.2 MB at 5 s); with the Cauchy loss,
+   * 1024 / 0: 0.67837 / 0.68033, 91.9 / 116.9 MB. No scene of the tests
+   * (<= 1000 frames) reaches 1280 points. */
   o->piece_points = 1024;
   /* Tracking defaults differ from `recon`'s, measured on the simulated flow
    * scene (docs/tracker.md): ON events only (a moving bead's OFF events form
