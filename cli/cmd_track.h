@@ -78,6 +78,10 @@ typedef struct track_opts {
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
 
+/* track's plain defaults, where they differ from the libraries' and why
+ * (cmd_track_defaults.c), before argv. */
+void track_defaults(track_opts *o);
+
 /* Which of track's options were given on the command line, for the
  * defaults that depend on other options (cmd_track_defaults.c): a default
  * is derived only where its option was not given. */

@@ -1,13 +1,244 @@
-/* cmd_track_defaults.c — eventlfm track's defaults that depend on other
- * options: the representation (the integral's own), the motion (a stage),
- * the window start (windows opened by the LED), the threshold family, and
- * the motion-bias correction the surface implies. Each is taken only when
- * its option was not given (track_given), and each says what it was
- * measured on. The plain defaults and the parsing are in cmd_track_opts.c. */
+/* cmd_track_defaults.c — eventlfm track's defaults: first the plain ones
+ * (track_defaults, where they differ from the libraries'), then those that
+ * depend on other options: the representation (the integral's own), the
+ * motion (a stage), the window start (windows opened by the LED), the
+ * threshold family, and the motion-bias correction the surface implies.
+ * Each of those is taken only when its option was not given (track_given).
+ * Each default says what it was measured on. The parsing is in
+ * cmd_track_opts.c. */
 #include <math.h>
 #include <string.h>
 
 #include "cmd_track.h"
+
+/* track's defaults: where they differ from the libraries', why. */
+void track_defaults(track_opts *o)
+{
+  memset(o, 0, sizeof *o);
+  elfm_recon_options_default(&o->recon);
+  elfm_peaks_options_default(&o->peaks);
+  elfm_link_options_default(&o->link);
+  elfm_smooth_options_default(&o->smooth);
+  o->max_det = 10000;
+  o->max_outlier_frac = 1.0 / 3;
+  /* The smoother's robust loss: Cauchy, not the library's Huber. A ghost
+   * joined to a track, or a detection of the neighbour at an encounter,
+   * lies many sigmas off: Cauchy's weight falls as 1/r^2 and lets go of
+   * it, Huber's as 1/r and still pulls. Mean alpha, Huber -> Cauchy (with
+   * outliers counted alike, beyond twice the scale): flow 100 ms seeds
+   * 1-20 0.8391 -> 0.8417 and held-out 21-32 0.8367 -> 0.8400 (all 32
+   * seeds up), flow 1 s 1-8 0.7692 -> 0.7715 (all up), stage 0.8685 ->
+   * 0.8772, blink 0.9288 -> 0.9308, blink_moving 0.8369 -> 0.8378, worm
+   * 0.5 s (20 seeds) 0.9167 -> 0.9199 (16 up, 12 down of 28 with the
+   * held-out 25-32: 0.9213 -> 0.9225), worm 200 ms 0.9505 the same
+   * (docs/tracker.md "Smoother"). */
+  o->smooth.loss = ELFM_LOSS_CAUCHY;
+  /* Long tracks in bounded memory: a live track holds at most 1024 + 256
+   * points (~0.2 MB with the array's spare room), smoothed in pieces with
+   * 128 points of context on each side. Worm 20 s (10,000 frames, 12
+   * neurons, Huber loss, --piece-points 512 / 1024 / 4096 / 0): alpha
+   * 0.67559 / 0.67579 / 0.67576 / 0.67578, peak RSS 89.0 / 93.7 / 116.4 /
+   * 118.3 MB (88.3 / 93.6 / - / 93.2 MB at 5 s); with the Cauchy loss,
+   * 1024 / 0: 0.67837 / 0.68033, 91.9 / 116.9 MB. No scene of the tests
+   * (<= 1000 frames) reaches 1280 points. */
+  o->piece_points = 1024;
+  /* Tracking defaults differ from `recon`'s, measured on the simulated flow
+   * scene (docs/tracker.md): ON events only (a moving bead's OFF events form
+   * a second peak ~5 um behind it: F1 0.79 -> 0.95), no median (recall
+   * 0.86 -> 0.92 at equal precision), and an absolute threshold of 50 on the
+   * 0..255 time surface (F1 0.88 at 45, 0.86 at 55, 0.65 at 30; the k-sigma
+   * rule alone let ghosts through: precision 0.29). */
+  o->recon.framer.polarity = ELFM_POL_ON;
+  o->recon.median = 0;
+  /* No view-agreement ghost rule (recon's default 0.3): on ON-only frames
+   * it removed most deep beads (flow recall 0.79 -> 0.36, F1 0.87 -> 0.53);
+   * the detector's threshold and the linker reject the ghosts instead. */
+  o->recon.refocus.agree_frac = 0;
+  o->views_rule = 1;
+  o->views_exponent = 0.5;
+  /* Linker distance with z / 1.5, not the scoring's z / 4: the detector
+   * localises z ~2.5x worse than x/y (RMSE 1.1 vs 0.44 um on flow), so z/4
+   * let tracks jump between beads passing 10-20 um apart in z. Flow 100 ms,
+   * seeds 1 / 2: alpha 0.562 -> 0.577 / 0.466 -> 0.544; stage 200 ms 0.626
+   * -> 0.625; worm 200 ms 0.325 -> 0.332 (docs/tracker.md). */
+  o->link.kz = 1.5;
+  /* Weak peaks join a track only within 5 um of its prediction (with the
+   * hysteresis threshold 30 below). Flow 100 ms seeds 1 / 2, against 45
+   * with the track's own gates: F1 0.886 -> 0.891 / 0.907 -> 0.922, alpha
+   * 0.667 -> 0.676 / 0.612 -> 0.635, lateral RMSE <= 0.50 um; stage F1
+   * 0.914 -> 0.929; blink unchanged. At 6 um the RMSE passed 0.5 um, at
+   * 3-4 um tracks broke (docs/tracker.md "Weak gate"). */
+  o->link.weak_gate_um = 5;
+  /* guided search (off by default; docs/tracker.md "Track-guided search") */
+  o->guided_radius_um = 1.5;
+  o->guided_min_points = 10;
+  /* View support 0.3 with the absolute threshold 45 (instead of no test at
+   * 50): scripts/measure_scenes.sh scenes, F1 flow seeds 1 / 2 0.891 ->
+   * 0.897 / 0.922 -> 0.925, stage 0.930 -> 0.945, worm 0.800 -> 0.825;
+   * alpha 0.676 -> 0.677 / 0.634 -> 0.646, 0.669 -> 0.716, 0.290 -> 0.327;
+   * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
+   * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
+  o->view_support = 0.3;
+  /* View fit of every peak, and from the predictions of tracks with no
+   * peak near (8 views must agree there): recon/localize.c and
+   * docs/tracker.md "View fit". Window 5 x 5 px with weights value^P: the
+   * time surface is 255 exp(-age / tau), so P weighs an event by
+   * exp(-P age / tau), and the centroid moves from the trail of the
+   * object's recent events (P = 1) towards their leading edge. Where the
+   * object really is depends on its contrast: along the motion, flow beads
+   * come out -0.36 / -0.14 / 0.00 um from the truth at P = 1 / 2 / 3, stage
+   * beads +0.37 / +0.57 / +0.71 um. P = 3 is best on flow, whose targets
+   * are the strictest (8 seeds: alpha 0.701 / 0.716 / 0.733, lateral RMSE
+   * 0.50 / 0.43 / 0.41 um); P = 1 on stage (alpha 0.71-0.79 -> 0.77-0.87)
+   * and worm (0.39 -> 0.44): docs/tracker.md. 7 x 7 windows were worse on
+   * flow, 3 x 3 on stage and worm. */
+  o->localize_views = 1;
+  elfm_localize_options_default(&o->loc);
+  o->guided_views = 8;
+  /* Stitching a new track of 5 points onto a dark track whose recent path
+   * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
+   * circle and come back onto their own path after gaps no extrapolation
+   * bridges. Flow 100 ms seeds 1 / 2: alpha 0.677 -> 0.697 / 0.646 ->
+   * 0.691, 7 -> 3 / 6 -> 1 spurious tracks; blink unchanged; worm 0.327 ->
+   * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
+   * gave the same to +-0.01. Off in --motion stage (below). */
+  o->link.stitch_points = 5;
+  /* Swap review of gap closings that do not fit, after 8 points of the new
+   * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9 at 6 points:
+   * alpha 0.697, 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the
+   * other six unchanged; stage, blink, worm unchanged; 0.7 as the ratio
+   * swapped wrongly (4 seeds down by 0.01-0.04). Sixth session, 20 flow
+   * seeds, 4 / 6 / 8 / 9 / 10 / 12 points: mean alpha 0.7331 / 0.7355 /
+   * 0.7379 / 0.7379 / 0.7372 / 0.7367 (at 8: seed 1 0.700 -> 0.742, the
+   * crossing docs/tracker.md describes, seed 11 +0.013, three seeds down by
+   * <= 0.006); stage seed 3 0.688 -> 0.707; worm, blink, stage_accel the
+   * same. A longer tail shows which way each bead turned. */
+  o->link.swap_points = 8;
+  /* Encounter review (elfm_link.h step 7): tracks that came within 5 um
+   * (the linker's metric, z / 1.5) are revisited like a gap closing.
+   * Twelfth session, flow 100 ms seeds 1-20: alpha 0.8061 -> 0.8136 (seeds
+   * 2, 7, 12, 16 up by 0.018-0.045, none down); 3 / 4 / 6 / 8 um (before
+   * the 2 x gate cap on the exchange's joins): 0.8084 / 0.8120 / 0.8129 /
+   * 0.8129. Held-out seeds 21-24 the same; flow 500 ms seed 1 0.744 ->
+   * 0.767; stage, worm, blink, blink_moving the same. With the reviews'
+   * join limit (elfm_link_options.review_join_factor, 2 x the gate, on
+   * step 6 too): 0.8184, held-out 0.8100 (docs/tracker.md "Encounter
+   * review"). */
+  o->link.encounter_um = 5;
+  /* Worm seed 5 (200 ms): neurons 4 and 5 at z -57 um, whose images merge,
+   * met at frames 9-11, parted for two frames and crossed at 14-17; the
+   * review of frames 9-11 alone kept the swap, and so did the other two
+   * pairs' reviews: alpha 0.786 -> 0.828 with 4 (3 or more frames change
+   * nothing else measured: worm 200 ms seeds 1-4, 6-12, 150 and 500 ms,
+   * flow seeds 1-24, dense flow and stage the same to the last digit). */
+  o->link.encounter_apart = 4;
+  /* ... and along the heads' circles (elfm_link.h encounter_circle_ratio;
+   * off where circle_points is): flow 1 s seeds 1-8 (docs/tracker.md
+   * "Encounters along circles"). */
+  o->link.encounter_circle_ratio = 0.5;
+  /* ... and, while the objects are at rest, along straight lines through
+   * 20 points (elfm_link.h encounter_line_ratio): worm 500 ms seeds 1-8
+   * and 13-16 alpha 0.9005 -> 0.9116, held-out seeds 17-24 0.8742 ->
+   * 0.8908, no seed down; flow, stage, blink and blink_moving tracks.csv
+   * byte for byte the same (docs/tracker.md "Slow encounters along
+   * straight lines"). */
+  o->link.encounter_line_ratio = 0.5;
+  /* Established tracks (8 points, the short fit's history) are assigned
+   * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
+   * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60
+   * beads (9 runs) 0.605 -> 0.623 (docs/tracker.md "Established tracks
+   * first"). */
+  o->link.priority_points = 8;
+  /* The linker's acceleration fit spans at most 20 um of path (elfm_link.h
+   * short_path_um): fewer of the 8 points for fast beads, whose 8 frames
+   * cover more than a radian of a tight turn. Flow 100 ms seeds 1-20 alpha
+   * 0.8021 -> 0.8033 (15 / 25 / 30 um: 0.7893 / 0.8027 / 0.8005), held-out
+   * 21-24 0.7955 -> 0.8020, 40/60 beads (9 scenes) 0.6273 -> 0.6534;
+   * faster beads (4-8 mm/s, seeds 31-33) 0.4755 -> 0.6390; noise, dim,
+   * haze variants (seeds 31, 32) +0.017 to +0.051 each (docs/tracker.md
+   * "Fast beads"). Off with --motion stage and on the integral
+   * (below). */
+  o->link.short_path_um = 20;
+  /* A track dark for 2 frames or more is predicted along the circle its
+   * last 15 points follow (elfm_link.h circle_points): flow beads circle
+   * (radius 8-20 um at 2.5-4 um/ms) and the deep ones go dark for 10-35
+   * frames, where the short fit's turn missed them by tens of um. Flow
+   * 1 s seeds 1-8 alpha 0.6358 -> 0.7309, held-out 9-12 0.6231 -> 0.6813;
+   * 100 ms seeds 1-20 0.8184 -> 0.8315, held-out 21-32 0.7918 -> 0.8211
+   * (15 points after 2 frames, chosen among 10-30 points after 1-5 frames
+   * on seeds 1-8 and 1-20; docs/tracker.md "Circles through long gaps").
+   * Worm (integral), blink, stage and stage_accel: the same or within
+   * 0.0001; off with --motion stage and --start each-trigger
+   * (cmd_track_defaults.c). With the gaps' own circle
+   * (elfm_link_options.circle_gap_points) and the rate-guided unwrap:
+   * 1 s 0.7486 / 0.6836, 100 ms 0.8398 / 0.8295. */
+  o->link.circle_points = 15;
+  o->link.circle_after = 2;
+  /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
+   * detections' errors are correlated from frame to frame (flow: lag-1
+   * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
+   * takes for motion. Flow 100 ms seeds 1-20: alpha 0.7897 -> 0.7950,
+   * every seed up or the same (1.2 / 1.6 / 2: 0.7945 / 0.7938 / 0.7867);
+   * held-out 21-24 +0.003 to +0.007; worm (integral) seeds 1-4 +0.001 to
+   * +0.004; blink, blink_moving up; stage (no spline) the same. */
+  o->smooth.gcv_gamma = 1.4;
+  /* The spline penalises the jerk, not the acceleration (elfm_smooth.h
+   * spline_order): a flow bead turns at ~0.3 rad/ms, a constant
+   * acceleration the acceleration penalty pulls toward a line. Flow 100 ms
+   * seeds 1-20: alpha 0.7950 -> 0.7964 (14 up, 5 the same, 1 down), lateral
+   * velocity RMSE 0.273 / 0.252 -> 0.264 / 0.236 um/ms; held-out 21-24 +0 to
+   * +0.003; 40/60 beads +0.002; blink, blink_moving the same. Not on the
+   * integral (below). */
+  o->smooth.spline_order = 3;
+  /* Each point's own view-fit scatter in its sigma (elfm_smooth.h,
+   * fit_sd_power): flow 100 ms seeds 1-20 alpha 0.8043 -> 0.8058 (every
+   * seed up or the same; power 0.5 / 1.5 / 2: 0.8054 / 0.8057 / 0.8051),
+   * held-out seeds 21-24 0.8037 -> 0.8054, stage seeds 1-3 0.769 / 0.837 /
+   * 0.750 -> 0.788 / 0.837 / 0.750 (speed error 0.42 / 0.20 / 0.08 % ->
+   * 0.38 / 0.15 / 0.06 %), blink and blink_moving up or the same. */
+  o->smooth.fit_sd_power = 1;
+  /* Gap filling (cmd_track_fill.c): once a track has found its object
+   * again and followed it for swap_points frames, the view fit looks for it
+   * in each kept frame of the gap, from both ends inwards, starting where
+   * the two ends put it, and before the track's first point. Flow 100 ms,
+   * seeds 1-20, mean alpha 0.7379 -> 0.7655 (every seed up, by 0.004 to
+   * 0.046), F1 0.925 -> 0.943 (held-out seeds 21-24: alpha +0.026 to
+   * +0.040), at the cost of the detections'
+   * lateral RMSE 0.41 -> 0.46 um (the deep beads it finds are placed to
+   * ~1 um). 4 views agreeing, not 6: 0.7634 / 0.7599 (3: 0.7667, more
+   * wrong fills); gate 5 um (the weak gate; 3 / 7 / 10 um: 0.7525 /
+   * 0.7678 / 0.7684). A fill must reach 0.15 x the intensity at the
+   * gap's ends: a blinking bead that is off still shows faintly when it
+   * moves (blink_moving's fills had 0.01-0.14 x, flow's 5th percentile
+   * 0.17-0.23); without the floor blink_moving's alpha fell 0.317 ->
+   * 0.137 (docs/tracker.md "Gap filling"). */
+  o->fill_views = 4;
+  o->fill_gate_um = 5;
+  o->fill_max_gap = 50;
+  o->fill_min_ratio = 0.15;
+  /* Where one frame's view fit finds nothing in a gap, three frames centred
+   * on it, each window where the gap's ends put the bead then: a deep
+   * bead's few events add up (cmd_track_fill.c). Flow 100 ms seeds 1-20:
+   * alpha 0.7964 -> 0.8000, every seed up or the same, F1 0.9525 -> 0.9536;
+   * held-out seeds 21-24 +0.002 to +0.004; 5 frames 0.7984 (without the
+   * neighbourhood test, which keeps dense samples' F1). Not on the integral
+   * (below). */
+  o->fill_frames = 3;
+  /* A finished track is followed on past its last point the same way
+   * (cmd_track_fill.c, track_fill_end; tracks of 20 points or more):
+   * flow 100 ms seeds 1-20 alpha 0.8000 -> 0.8021, every seed up or the
+   * same, F1 0.9536 -> 0.9544; 40 / 60 beads alpha 0.6266 -> 0.6273, F1
+   * 0.8667 -> 0.8653 (fills in the tracks of ghosts). Not on the integral
+   * (below). */
+  o->fill_ends = 1;
+  /* The same floor as gap filling's, for the same reason: a bead that has
+   * just gone dark (blinking) still leaves faint ON light in some views,
+   * which the view fit finds. blink_moving seeds 1-4: alpha 0.304 / 0.224 /
+   * 0.426 / 0.236 -> 0.404 / 0.317 / 0.496 / 0.361; flow seeds 1-20 0.7681 ->
+   * 0.7687, flat from 0.15 to 0.4 (docs/tracker.md). */
+  o->guided_min_ratio = 0.15;
+  o->deep_peak_views = 10;
+}
 
 /* The mean age (us) of a window's events under the view fit's pixel
  * weights value^P, on an ON time surface whose value falls with an event's
