@@ -140,8 +140,10 @@ static void usage(FILE *f)
     "                       free: smoothing spline for all\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --spline-weight-ms3 W\n"
-    "  --loss L             robust loss of the smoother, scale 3 sigma: cauchy (the\n"
-    "                       default), huber or none\n"
+    "  --loss L             robust loss of the smoother: cauchy (the default), huber\n"
+    "                       or none\n"
+    "  --loss-scale S       where the loss turns, in sigmas of a point's 3D residual\n"
+    "                       (3; an outlier lies beyond twice it)\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
     "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral 5;\n"
     "                       1 classical); a track the robust fit would reject at G is\n"
@@ -216,7 +218,8 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
-  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE
+  O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
+  O_LSCALE
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -290,6 +293,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"motion", required_argument, 0, O_MOTION},
       {"stage-velocity-um-per-ms", required_argument, 0, O_STAGEV},
       {"model", required_argument, 0, O_MODEL}, {"loss", required_argument, 0, O_LOSS},
+      {"loss-scale", required_argument, 0, O_LSCALE},
       {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
       {"max-outlier-frac", required_argument, 0, O_MAXOUT},
       {"piece-points", required_argument, 0, O_PIECE},
@@ -522,6 +526,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       else if (!strcmp(a, "cauchy")) o.smooth.loss = ELFM_LOSS_CAUCHY;
       else if (!strcmp(a, "none")) o.smooth.loss = ELFM_LOSS_NONE;
       else return cli_message(C, CLI_USAGE, "--loss must be huber, cauchy or none, not '%s'", a);
+      break;
+    case O_LSCALE:
+      if (!cli_parse_double_in(C, "--loss-scale", a, 0, 1, 100, "(0, 100]", &o.smooth.loss_scale))
+        return CLI_USAGE;
       break;
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_GCVG:

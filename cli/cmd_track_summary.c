@@ -216,6 +216,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddStringToObject(par, "model", elfm_motion_model_name(o->smooth.model));
   cJSON_AddStringToObject(par, "loss", o->smooth.loss == ELFM_LOSS_HUBER ? "huber"
                                        : o->smooth.loss == ELFM_LOSS_CAUCHY ? "cauchy" : "none");
+  cJSON_AddNumberToObject(par, "loss_scale", o->smooth.loss_scale);
   if (o->has_stage_v) cJSON_AddItemToObject(par, "stage_velocity_um_per_ms", vec3(o->stage_v));
 
   cJSON *tim = cJSON_AddObjectToObject(j, "timing");

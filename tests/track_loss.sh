@@ -15,7 +15,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-expect_usage_errors "--loss bogus"
+expect_usage_errors "--loss bogus" "--loss-scale 0" "--loss-scale x" "--loss-scale 101"
 simulate_or_skip "$tmp/s" stage 200 3
 score_args="--stage-velocity-um-per-ms 0,2.5,0"
 track_score "$tmp/s" "$tmp/sh" "$tmp/sh.json" --motion stage --loss huber
@@ -24,6 +24,7 @@ a0=$(key "$tmp/sh.json" alpha); a1=$(key "$tmp/sc.json" alpha)
 echo "stage 200 ms seed 3: alpha $a0 with Huber, $a1 with the default (Cauchy)"
 expect_gain "$a0" "$a1" 0.01 "stage: Cauchy gains < 0.01 alpha over Huber ($a0 -> $a1)"
 grep -q '"loss":[[:space:]]*"cauchy"' "$tmp/sc/summary.json" || { echo "FAIL: summary.json loss not cauchy"; fail=$((fail+1)); }
+[ "$(key "$tmp/sc/summary.json" loss_scale)" = 3 ] || { echo "FAIL: summary.json loss_scale not 3"; fail=$((fail+1)); }
 rh=$(key "$tmp/sh/summary.json" tracks_rejected_outliers); rc=$(key "$tmp/sc/summary.json" tracks_rejected_outliers)
 [ -n "$rc" ] && [ -n "$rh" ] && [ "$rc" -le "$rh" ] ||
   { echo "FAIL: Cauchy drops more stage tracks as not one object ($rc) than Huber ($rh)"; fail=$((fail+1)); }
