@@ -92,7 +92,7 @@ typedef struct track_given {
   int fillv, fillk, fille;           /* --fill-views, --fill-frames, --fill-ends */
   int spath, spord, fsdp, fade;      /* --short-path-um, --spline-order, --fit-sd-power,
                                         --motion-fade-um-per-ms */
-  int gcvg;                          /* --gcv-gamma */
+  int gcvg, lscale;                  /* --gcv-gamma, --loss-scale */
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ;                          /* --circle-points */

@@ -143,7 +143,7 @@ static void usage(FILE *f)
     "  --loss L             robust loss of the smoother: cauchy (the default), huber\n"
     "                       or none\n"
     "  --loss-scale S       where the loss turns, in sigmas of a point's 3D residual\n"
-    "                       (3; an outlier lies beyond twice it)\n"
+    "                       (2; integral 3; an outlier lies beyond twice it)\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
     "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral 5;\n"
     "                       1 classical); a track the robust fit would reject at G is\n"
@@ -530,6 +530,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_LSCALE:
       if (!cli_parse_double_in(C, "--loss-scale", a, 0, 1, 100, "(0, 100]", &o.smooth.loss_scale))
         return CLI_USAGE;
+      g.lscale = 1;
       break;
     case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_GCVG:
