@@ -30,6 +30,8 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->box);
   free(p->shift);
   free(p->count);
+  free(p->full_lo);
+  free(p->full_hi);
   free(p->need);
   free(p->need_row_min);
   free(p->need_bits);
@@ -95,13 +97,15 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   /* + 32: the sparse path's AVX2 code reads a row's need and count 8
    * bytes at a time from any voxel on, up to 7 past the end of the row */
   p->count = calloc(nvox + 32, 1);
+  p->full_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_lo);
+  p->full_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_hi);
   if (o.agree_frac > 0.0) {
     p->need = calloc(nvox + 32, 1);
     p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count ||
+  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
@@ -154,6 +158,19 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   }
   p->inv_table[0] = 0.0f;
   for (int n = 1; n < 256; n++) p->inv_table[n] = 1.0f / (float)n;
+  for (size_t r = 0; r < (size_t)p->h * (size_t)nz; r++) {
+    /* Each view samples an interval of the row, so the columns all of
+     * them sample are one interval too; checked, not assumed: a row
+     * where they were not keeps an empty one, and the table for all. */
+    const uint8_t *row = p->count + r * (size_t)p->w;
+    int lo = 0, hi = 0;
+    while (lo < p->w && row[lo] != p->nv) lo++;
+    for (hi = lo; hi < p->w && row[hi] == p->nv; hi++) {}
+    for (int X = hi; X < p->w; X++)
+      if (row[X] == p->nv) lo = hi = 0;
+    p->full_lo[r] = lo;
+    p->full_hi[r] = hi;
+  }
   if (p->need)
     for (size_t i = 0; i < nvox; i++) {
       int n = (int)ceil(o.agree_frac * p->count[i] - 1e-9);

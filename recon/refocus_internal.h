@@ -38,6 +38,11 @@ struct elfm_refocus_plan {
   elfm_refocus_shift *shift;  /* [k * nv + v] */
   uint8_t *count;             /* [k][Y][X]: views sampling */
   float inv_table[256];       /* 1 / n, 0 for n = 0 */
+  /* [k * h + Y]: the columns [full_lo, full_hi) of that plane row that
+   * every view samples (count == nv; one interval, the views' overlap),
+   * empty when none: the sparse path scales them by one constant 1 / nv in
+   * a loop the compiler vectorises, the table only beyond them */
+  int32_t *full_lo, *full_hi;
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
   uint8_t *need_row_min;      /* [k][Y]: least non-zero `need` of the row (255: none) */
   /* [k][Y][b][need_words]: bit b of each voxel's `need`, 63 where no view

@@ -227,11 +227,17 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
     /* while the plane is in cache: the mean over sampling views.
      * 1/count through a 256-entry table: the counts are 2 MB of bytes,
      * a float inverse per voxel would be 8.4 MB of memory traffic */
+    const float inv_all = p->inv_table[p->nv];
     for (size_t i = first_row; i < ws->n_rows; i++) {
       const size_t r = ws->rows[i];
       float *row = vol->data + r * W;
       const uint8_t *cnt = p->count + r * W;
-      for (int X = ws->row_lo[r]; X < ws->row_hi[r]; X++) row[X] *= p->inv_table[cnt[X]];
+      const int lo = ws->row_lo[r], hi = ws->row_hi[r];
+      const int a = p->full_lo[r] > lo ? (p->full_lo[r] < hi ? p->full_lo[r] : hi) : lo;
+      const int b = p->full_hi[r] < hi ? (p->full_hi[r] > a ? p->full_hi[r] : a) : hi;
+      for (int X = lo; X < a; X++) row[X] *= p->inv_table[cnt[X]];
+      for (int X = a; X < b; X++) row[X] *= inv_all;
+      for (int X = b; X < hi; X++) row[X] *= p->inv_table[cnt[X]];
     }
   }
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
