@@ -226,7 +226,11 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
     }
     /* while the plane is in cache: the mean over sampling views.
      * 1/count through a 256-entry table: the counts are 2 MB of bytes,
-     * a float inverse per voxel would be 8.4 MB of memory traffic */
+     * a float inverse per voxel would be 8.4 MB of memory traffic. Where
+     * every view samples (most of a row: full_lo .. full_hi) it is one
+     * constant, in a loop the compiler vectorises: the table's load per
+     * voxel was a sixth of this function under perf (flow, 1 ms time
+     * surface; the refocus 3.5 % faster without it) */
     const float inv_all = p->inv_table[p->nv];
     for (size_t i = first_row; i < ws->n_rows; i++) {
       const size_t r = ws->rows[i];
