@@ -167,9 +167,14 @@ bool invert_small(double *M, int m)
 }
 
 // Reweighted linear fits (IRLS) that start a Ceres solve: at most this
-// many, until no point's weight moves by more than the tolerance.
-const int kIrlsMaxIter = 20;
-const double kIrlsWeightTol = 1e-3;
+// many, until no point's weight moves by more than the tolerance. Each
+// costs a few linear solves (3 x 3, or banded), a Ceres iteration an
+// evaluation of every residual block and a sparse factorisation; and
+// where the loss is far from quadratic Ceres crept (worm 0.5 s seed 1: 62
+// polynomial fits took 23.5 iterations on average, some stopped at the
+// 50 allowed). From IRLS's fit they take 6.0, the spline's one.
+const int kIrlsMaxIter = 200;
+const double kIrlsWeightTol = 1e-5;
 
 // ---- parametric fits -----------------------------------------------------
 
@@ -186,9 +191,9 @@ struct PolyFit {
 // axis (IRLS, the robust weights shared by the axes as the loss shares
 // them), in times scaled to [-1, 1] so that the normal equations stay
 // well conditioned for long tracks. Why: Ceres started at p = 0 (the
-// mean, at rest) and spent its iterations, each evaluating every point,
-// getting to where a few 3 x 3 solves put it: bench_smooth, 1000-point
-// track, 4.9 -> 2.8 ms (constant velocity), 6.7 -> 3.4 ms (acceleration).
+// mean, at rest) and spent its iterations getting to where the 3 x 3
+// solves put it: bench_smooth, 1000-point track, 4.9 -> 1.2 ms (constant
+// velocity), 6.8 -> 1.5 ms (acceleration).
 void poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
 {
   const int m = order + 1;
@@ -427,6 +432,31 @@ void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
   }
 }
 
+// Reweighted linear fits at lambda from p (the robust weights shared by the
+// axes, as the loss shares them) until the weights settle: p and w then
+// hold the last fit and the weights at it. The loss's minimum (or
+// another stationary point): each step lowers the robust cost, as both
+// losses are concave in the squared residual.
+bool spline_irls(const Data &d, const SplineSetup &ss, const elfm_spline_problem &sp,
+                 const Loss &loss, double lam, Banded *bd, std::vector<double> &work,
+                 std::vector<double> &w, std::vector<double> &p)
+{
+  double chi2 = 0, rss = 0, edf = 0;
+  int outl = 0;
+  std::vector<double> w0(d.n);
+  robust_weights(d, ss, loss, p, w, &chi2, &outl);
+  for (int it = 0; it < kIrlsMaxIter; it++) {
+    if (!elfm_spline_linear(&sp, w.data(), lam, &bd->w, work.data(), &rss, &edf, p.data()))
+      return false;
+    w0.swap(w);
+    robust_weights(d, ss, loss, p, w, &chi2, &outl);
+    double dw = 0;
+    for (size_t i = 0; i < d.n; i++) dw = std::max(dw, std::fabs(w[i] - w0[i]));
+    if (dw < kIrlsWeightTol) break;
+  }
+  return true;
+}
+
 bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double lambda_given,
                 double gcv_gamma, bool sparse, int max_iter, SplineFit *f)
 {
@@ -445,31 +475,17 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
   if (loss.kind != ELFM_LOSS_NONE) {
     if (lambda_given <= 0) {
       // Outliers can bias the GCV choice: choose again without them. Their
-      // weights come from reweighted linear fits (banded solves, far
-      // cheaper than a Ceres solve), not from a first Ceres solve, and the
-      // one Ceres solve, at the weight chosen, starts from the weighted
-      // fit (it started from the unweighted one). Smoothing time summed
-      // over the seeds: worm 0.5 s 0.58x, flow 1 s 0.78x. The Cauchy loss
-      // has more than one minimum, and 29 of 223 fits (worm 0.5 s seeds
-      // 1-6) ended in another; of the 9 at the same weight, 6 lower. Mean
-      // alpha the same on every scene (worm 0.5 s +0.0002).
-      double chi2 = 0;
-      int outl = 0;
-      std::vector<double> w0(d.n);
-      for (int it = 0; it < kIrlsMaxIter; it++) {
-        w0.swap(w);
-        robust_weights(d, ss, loss, f->p, w, &chi2, &outl);
-        double dw = 0;
-        for (size_t i = 0; i < d.n; i++) dw = std::max(dw, std::fabs(w[i] - w0[i]));
-        if (!elfm_spline_linear(&sp, w.data(), lam, &bd.w, work.data(), &rss, &edf, f->p.data()))
-          return false;
-        if (dw < kIrlsWeightTol) break;
-      }
-      robust_weights(d, ss, loss, f->p, w, &chi2, &outl);
+      // weights come from IRLS at the first weight, not from a first Ceres
+      // solve, and the one Ceres solve, at the weight chosen, starts from
+      // IRLS there (it started from the unweighted linear fit, Ceres
+      // taking 13.4 iterations on worm 0.5 s seed 1; now 1). The same GCV
+      // weight in all 223 fits of worm 0.5 s seeds 1-6; the Cauchy loss
+      // has more than one minimum, and 22 ended in another, 14 of them
+      // lower (by up to 11 %), 8 higher (one by 6.6 %, the rest < 0.1 %).
+      if (!spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p)) return false;
       lam = std::min(std::max(elfm_spline_gcv_lambda(&sp, w.data(), gcv_gamma), 1e-9), 1e9);
-      if (!elfm_spline_linear(&sp, w.data(), lam, &bd.w, work.data(), &rss, &edf, f->p.data()))
-        return false;
     }
+    if (!spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p)) return false;
     if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
   } else {
