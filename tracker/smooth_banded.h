@@ -67,7 +67,8 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
 
 /* The weight by GCV over the grid 10^-4 .. 10^8 ms^3 in half decades (the
  * span from "follows every frame" to "straight line" for 1 kHz frames and
- * sub-um noise), each effective parameter priced gamma (1: classical):
+ * sub-um noise), then refined around the best to 1/16 decade, each
+ * effective parameter priced gamma (1: classical):
  * the lambda minimising 3n RSS / (3n - gamma edf)^2; 1 when none can be
  * computed. */
 double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma);
