@@ -180,8 +180,14 @@ void track_defaults(track_opts *o)
    * takes for motion. Flow 100 ms seeds 1-20: alpha 0.7897 -> 0.7950,
    * every seed up or the same (1.2 / 1.6 / 2: 0.7945 / 0.7938 / 0.7867);
    * held-out 21-24 +0.003 to +0.007; worm (integral) seeds 1-4 +0.001 to
-   * +0.004; blink, blink_moving up; stage (no spline) the same. */
-  o->smooth.gcv_gamma = 1.4;
+   * +0.004; blink, blink_moving up; stage (no spline) the same.
+   * Twenty-third session, GCV's minimum found to 1/16 decade (it was the
+   * best of a half-decade grid), 1.4 -> 1.6: flow 100 ms seeds 1-20
+   * 0.8432 -> 0.8444, held-out 21-32 0.8415 -> 0.8426 (31 of 32 seeds
+   * up), 1 s seeds 1-8 0.7729 -> 0.7736 (8 of 8), blink 0.9341 ->
+   * 0.9351, blink_moving and stage the same (1.2 / 1.8 / 2 / 2.5 on seeds
+   * 1-20: 0.8408 / 0.8446 / 0.8441 / 0.8411; 1.8 raised 24 of 32). */
+  o->smooth.gcv_gamma = 1.6;
   /* The spline penalises the jerk, not the acceleration (elfm_smooth.h
    * spline_order): a flow bead turns at ~0.3 rad/ms, a constant
    * acceleration the acceleration penalty pulls toward a line. Flow 100 ms

@@ -145,7 +145,7 @@ static void usage(FILE *f)
     "  --loss-scale S       where the loss turns, in sigmas of a point's 3D residual\n"
     "                       (2; integral 3; an outlier lies beyond twice it)\n"
     "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
-    "                       effective parameter: n RSS / (n - G edf)^2 (1.4; integral 5;\n"
+    "                       effective parameter: n RSS / (n - G edf)^2 (1.6; integral 5;\n"
     "                       1 classical); a track the robust fit would reject at G is\n"
     "                       smoothed again at 1 and kept or rejected on that fit\n"
     "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"

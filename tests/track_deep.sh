@@ -45,9 +45,9 @@ expect_gain "$r0" "$r1" 0.004 "recall gain < 0.004"
 expect_gain "$p0" "$p1" 0.01 "precision gain < 0.01"
 [ "${nd:-0}" -gt 0 ] || { echo "FAIL: deep_peaks_dropped '$nd'"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" threshold_depth_um)" = 60 ] || { echo "FAIL: default depth not 60"; fail=$((fail+1)); }
-# the ninth session's defaults, recorded with the run
+# the ninth session's defaults (gcv_gamma 1.6 since the twenty-third), recorded with the run
 [ "$(key "$tmp/def/summary.json" priority_points)" = 8 ] || { echo "FAIL: priority_points not 8"; fail=$((fail+1)); }
-[ "$(key "$tmp/def/summary.json" gcv_gamma)" = 1.4 ] || { echo "FAIL: gcv_gamma not 1.4"; fail=$((fail+1)); }
+[ "$(key "$tmp/def/summary.json" gcv_gamma)" = 1.6 ] || { echo "FAIL: gcv_gamma not 1.6"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" spline_order)" = 3 ] || { echo "FAIL: spline_order not 3"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/stage" -q \
   --motion stage --to-us 10000 || { echo "FAIL: track --motion stage"; fail=$((fail+1)); }

@@ -1,6 +1,6 @@
 #!/bin/sh
 # The spline weight on the integral (`eventlfm track --repr integral`): GCV
-# with each effective parameter priced 5 x (--gcv-gamma, 1.4 on time
+# with each effective parameter priced 5 x (--gcv-gamma; 1.6 on time
 # surfaces), because the integral's frames share most of their events and
 # a neuron's placement errors are correlated over many frames; and the
 # refit (cmd_track_volume.c smooth_track): a track that the robust fit at
