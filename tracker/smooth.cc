@@ -437,24 +437,28 @@ void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
 // hold the last fit and the weights at it. The loss's minimum (or
 // another stationary point): each step lowers the robust cost, as both
 // losses are concave in the squared residual.
-bool spline_irls(const Data &d, const SplineSetup &ss, const elfm_spline_problem &sp,
+void spline_irls(const Data &d, const SplineSetup &ss, const elfm_spline_problem &sp,
                  const Loss &loss, double lam, Banded *bd, std::vector<double> &work,
                  std::vector<double> &w, std::vector<double> &p)
 {
   double chi2 = 0, rss = 0, edf = 0;
   int outl = 0;
-  std::vector<double> w0(d.n);
+  std::vector<double> w0(d.n), q(p.size());
   robust_weights(d, ss, loss, p, w, &chi2, &outl);
   for (int it = 0; it < kIrlsMaxIter; it++) {
-    if (!elfm_spline_linear(&sp, w.data(), lam, &bd->w, work.data(), &rss, &edf, p.data()))
-      return false;
+    // A step whose weights leave the system singular (nearly every point
+    // weighed ~0) keeps the last fit: Ceres goes on from there.
+    if (!elfm_spline_linear(&sp, w.data(), lam, &bd->w, work.data(), &rss, &edf, q.data())) {
+      robust_weights(d, ss, loss, p, w, &chi2, &outl);
+      break;
+    }
+    p.swap(q);
     w0.swap(w);
     robust_weights(d, ss, loss, p, w, &chi2, &outl);
     double dw = 0;
     for (size_t i = 0; i < d.n; i++) dw = std::max(dw, std::fabs(w[i] - w0[i]));
     if (dw < kIrlsWeightTol) break;
   }
-  return true;
 }
 
 bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double lambda_given,
@@ -482,10 +486,10 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
       // weight in all 223 fits of worm 0.5 s seeds 1-6; the Cauchy loss
       // has more than one minimum, and 22 ended in another, 14 of them
       // lower (by up to 11 %), 8 higher (one by 6.6 %, the rest < 0.1 %).
-      if (!spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p)) return false;
+      spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p);
       lam = std::min(std::max(elfm_spline_gcv_lambda(&sp, w.data(), gcv_gamma), 1e-9), 1e9);
     }
-    if (!spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p)) return false;
+    spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p);
     if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
   } else {
