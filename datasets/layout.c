@@ -176,8 +176,8 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
   int64_t budget = PLACE_BUDGET;
   for (int k = 0; k < n; k++) {
     sim_object *o = &s->obj[k];
-    int placed = 0;
-    for (int tries = 0; tries < PLACE_TRIES && !placed && budget > 0; tries++) {
+    int placed = 0, tries = 0, too_big = 0;
+    for (; tries < PLACE_TRIES && !placed && budget > 0; tries++) {
       double p[3];
       if (s->motion == SIM_MOTION_STAGE) {
         /* A slab: +-half_width across, one period along the motion. */
@@ -216,6 +216,39 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
         o->axis[1] = sz * sin(ph);
         o->axis[2] = cz;
         unit_perp(o->axis, o->u, o->v);
+      } else if (s->motion == SIM_MOTION_RANDOM) {
+        /* A smooth random path: K sinusoids along random directions with
+         * random periods and phases (a spectral draw of a smooth random
+         * process), each carrying an equal share of the bead's RMS speed v
+         * (|amp_j| omega_j = v sqrt(2 / K)). The speed varies along the
+         * path and the path turns at random: no circle or helix for a
+         * tracker to lean on. The triangle inequality bounds the path
+         * (lateral and axial) by the sum of the modes' extents; a draw
+         * that does not fit the placement volume is drawn again. */
+        const int K = s->random_modes;
+        const double v = sim_uniform_ab(r, s->random_speed_min, s->random_speed_max);
+        double ext_lat = 0, ext_z = 0;
+        for (int j = 0; j < K; j++) {
+          const double w = TWO_PI / sim_uniform_ab(r, s->random_period_min_us, s->random_period_max_us);
+          const double A = v * sqrt(2.0 / K) / w;
+          double cz = sim_uniform_ab(r, -1, 1), ph = TWO_PI * sim_uniform(r);
+          double sz = sqrt(1 - cz * cz);
+          o->mode_amp_um[j][0] = A * sz * cos(ph);
+          o->mode_amp_um[j][1] = A * sz * sin(ph);
+          o->mode_amp_um[j][2] = A * cz;
+          o->mode_omega_rad_per_us[j] = w;
+          o->mode_phase[j] = TWO_PI * sim_uniform(r);
+          ext_lat += A * sz;
+          ext_z += A * fabs(cz);
+        }
+        double lat = s->place_radius_um - ext_lat;
+        double zlo = s->z_min_um + ext_z, zhi = s->z_max_um - ext_z;
+        if (lat < 0 || zhi < zlo) {
+          too_big++;
+          continue;
+        }
+        disk_point(r, lat, &p[0], &p[1]);
+        p[2] = sim_uniform_ab(r, zlo, zhi);
       } else { /* static */
         disk_point(r, s->place_radius_um, &p[0], &p[1]);
         p[2] = sim_uniform_ab(r, s->z_min_um, s->z_max_um);
@@ -224,6 +257,12 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
         memcpy(o->p0, p, sizeof p);
         placed = 1;
       }
+    }
+    if (!placed && too_big == tries) {
+      return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
+                            "key \"motion.speed_mm_per_s\": random paths this fast with periods "
+                            "this long do not fit the placement volume (%d draws)",
+                            tries);
     }
     if (!placed) {
       return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
@@ -322,6 +361,14 @@ void sim_object_position(const elfm_scene *s, int k, double t, double pos[3], in
     double c = o->radius_um * cos(th), sn = o->radius_um * sin(th);
     double ax = o->axial_amp_um * sin(o->axial_omega_rad_per_us * t + o->axial_phase);
     for (int q = 0; q < 3; q++) pos[q] = o->p0[q] + c * o->u[q] + sn * o->v[q] + ax * o->axis[q];
+    return;
+  }
+  case SIM_MOTION_RANDOM: {
+    memcpy(pos, o->p0, 3 * sizeof *pos);
+    for (int j = 0; j < s->random_modes; j++) {
+      const double sn = sin(o->mode_omega_rad_per_us[j] * t + o->mode_phase[j]);
+      for (int q = 0; q < 3; q++) pos[q] += o->mode_amp_um[j][q] * sn;
+    }
     return;
   }
   case SIM_MOTION_WORM: {

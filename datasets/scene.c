@@ -206,9 +206,12 @@ static elfm_status parse_motion(scene_ctx *c, const cJSON *root, elfm_scene *s)
     s->motion = SIM_MOTION_HELIX;
   } else if (!strcmp(type, "worm")) {
     s->motion = SIM_MOTION_WORM;
+  } else if (!strcmp(type, "random")) {
+    s->motion = SIM_MOTION_RANDOM;
   } else {
     return elfm_error_set(c->err, ELFM_ERR_FORMAT, c->src, -1,
-                          "key \"motion.type\": unknown \"%s\" (static, stage, zsweep, helix, worm)",
+                          "key \"motion.type\": unknown \"%s\" (static, stage, zsweep, helix, "
+                          "worm, random)",
                           type);
   }
   /* Placement extent: every motion but zsweep places objects at random. */
@@ -281,6 +284,15 @@ static elfm_status parse_motion(scene_ctx *c, const cJSON *root, elfm_scene *s)
     if ((st = get_range(c, m, P, "axial_period_ms", 0.1, 1e5, &a, &b))) return st;
     s->helix_axial_period_min_us = a * 1e3;
     s->helix_axial_period_max_us = b * 1e3;
+    break;
+  case SIM_MOTION_RANDOM:
+    if ((st = get_range(c, m, P, "speed_mm_per_s", 1e-3, 50, &a, &b))) return st;
+    s->random_speed_min = a * MM_PER_S_TO_UM_PER_US;
+    s->random_speed_max = b * MM_PER_S_TO_UM_PER_US;
+    if ((st = get_range(c, m, P, "period_ms", 0.1, 1e5, &a, &b))) return st;
+    s->random_period_min_us = a * 1e3;
+    s->random_period_max_us = b * 1e3;
+    if ((st = get_intv(c, m, P, "modes", 1, SIM_RANDOM_MODES_MAX, &s->random_modes))) return st;
     break;
   case SIM_MOTION_WORM:
     if ((st = get_num(c, m, P, "crawl_mm_per_s", 0, 10, &a))) return st;

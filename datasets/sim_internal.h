@@ -70,8 +70,12 @@ typedef enum sim_motion_type {
   SIM_MOTION_STAGE,
   SIM_MOTION_ZSWEEP,
   SIM_MOTION_HELIX,
-  SIM_MOTION_WORM
+  SIM_MOTION_WORM,
+  SIM_MOTION_RANDOM
 } sim_motion_type;
+
+/* random motion: most modes per object (motion.modes) */
+#define SIM_RANDOM_MODES_MAX 16
 
 typedef enum sim_illum_type {
   SIM_ILLUM_CONSTANT = 0,
@@ -96,6 +100,9 @@ typedef struct sim_object {
   /* helix: p = c + r (cos(w t + ph) u + sin(w t + ph) v) + A sin(W t + ps) a */
   double axis[3], u[3], v[3];
   double radius_um, omega_rad_per_us, phase, axial_amp_um, axial_omega_rad_per_us, axial_phase;
+  /* random: p = c + sum_j amp_j sin(omega_j t + phase_j), amp_j a 3D vector */
+  double mode_amp_um[SIM_RANDOM_MODES_MAX][3];
+  double mode_omega_rad_per_us[SIM_RANDOM_MODES_MAX], mode_phase[SIM_RANDOM_MODES_MAX];
   /* worm: which worm, and where along its body (um from the tail) */
   int worm;
   double body_s_um;
@@ -137,6 +144,10 @@ struct elfm_scene {
   double helix_speed_min, helix_speed_max;   /* um/us */
   double helix_radius_min_um, helix_radius_max_um, helix_axial_amp_max_um;
   double helix_axial_period_min_us, helix_axial_period_max_us;
+  /* random */
+  int random_modes;
+  double random_speed_min, random_speed_max;  /* RMS speed, um/us */
+  double random_period_min_us, random_period_max_us;
   /* worm */
   double worm_crawl_um_per_us, worm_wave_amp_um, worm_wavelength_um, worm_z_amp_um,
       worm_z_period_us, worm_neuron_s_um[4];

@@ -479,6 +479,87 @@ static void test_truth_motion(void)
   }
 }
 
+/* flow_random: each bead's RMS speed is drawn in 2.5-4 mm/s (the sum of
+ * its modes' shares), its speed varies along the path (no constant-speed
+ * helix), its path is smooth (bounded acceleration) and the same seed
+ * gives the same path. A wrong amplitude (|amp| omega off by sqrt 2, say)
+ * moves the RMS out of its range. */
+static void test_random_motion(void)
+{
+  elfm_scene *s = load("flow_random", NULL, 0);
+  if (!s) return;
+  const int n = elfm_scene_n_objects(s);
+  CHECK(n == 20);
+  int rms_ok = 0, varies = 0, smooth = 0;
+  double rms_lo = 1e9, rms_hi = 0;
+  for (int o = 0; o < n; o++) {
+    /* 20 s, 100 us steps: many periods of 8-30 ms, so the time average is
+     * the RMS speed to a few per cent */
+    double sum2 = 0, vmin = 1e9, vmax = 0, amax = 0, vprev[3] = {0, 0, 0};
+    const int64_t dt = 100, N = 200000;
+    elfm_truth a, b;
+    elfm_scene_truth(s, o, 0, &a);
+    for (int64_t i = 1; i <= N; i++) {
+      elfm_scene_truth(s, o, i * dt, &b);
+      const double v[3] = {(b.x_um - a.x_um) / dt * 1e3, (b.y_um - a.y_um) / dt * 1e3,
+                           (b.z_um - a.z_um) / dt * 1e3}; /* um/ms = mm/s */
+      const double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+      sum2 += sp * sp;
+      vmin = fmin(vmin, sp);
+      vmax = fmax(vmax, sp);
+      if (i > 1) {
+        const double acc = sqrt(pow(v[0] - vprev[0], 2) + pow(v[1] - vprev[1], 2) +
+                                pow(v[2] - vprev[2], 2)) / (dt * 1e-3); /* um/ms^2 */
+        amax = fmax(amax, acc);
+      }
+      memcpy(vprev, v, sizeof v);
+      a = b;
+    }
+    const double rms = sqrt(sum2 / N);
+    rms_lo = fmin(rms_lo, rms);
+    rms_hi = fmax(rms_hi, rms);
+    rms_ok += rms >= 2.5 * 0.9 && rms <= 4.0 * 1.1;
+    varies += vmax > 1.5 * vmin;
+    /* a mode of period 8 ms at the fastest share: A omega^2 ~ 2.3 um/ms^2;
+     * six of them in line at most ~14 */
+    smooth += amax < 15;
+  }
+  CHECK_MSG(rms_ok == n, "flow_random: RMS speeds %.2f-%.2f mm/s, %d of %d in 2.25-4.4", rms_lo,
+            rms_hi, rms_ok, n);
+  CHECK_MSG(varies == n, "flow_random: %d of %d beads change speed by > 1.5x", varies, n);
+  CHECK_MSG(smooth == n, "flow_random: %d of %d paths with acceleration < 15 um/ms^2", smooth, n);
+  /* same seed, same path; another seed, another path */
+  elfm_scene *s2 = load("flow_random", NULL, 0);
+  const char *seed2[] = {"seed=2"};
+  elfm_scene *s3 = load("flow_random", seed2, 1);
+  if (s2 && s3) {
+    elfm_truth a, b, c;
+    elfm_scene_truth(s, 7, 54321, &a);
+    elfm_scene_truth(s2, 7, 54321, &b);
+    elfm_scene_truth(s3, 7, 54321, &c);
+    CHECK(a.x_um == b.x_um && a.y_um == b.y_um && a.z_um == b.z_um);
+    CHECK(a.x_um != c.x_um || a.y_um != c.y_um || a.z_um != c.z_um);
+  }
+  elfm_scene_free(s3);
+  elfm_scene_free(s2);
+  elfm_scene_free(s);
+}
+
+/* A random path too fast for its periods cannot fit the field: a clear
+ * error naming the key, not an endless draw. */
+static void test_random_motion_too_big(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  elfm_scene *s = NULL;
+  CHECK_OK(elfm_scene_load("flow_random", &s, &err), &err);
+  if (!s) return;
+  elfm_status st = elfm_scene_set_param(s, "motion.speed_mm_per_s=[40,50]", &err);
+  CHECK(st != ELFM_OK);
+  CHECK_MSG(strstr(err.message, "motion.speed_mm_per_s") != NULL, "message: %s", err.message);
+  elfm_scene_free(s);
+}
+
 static elfm_status count_sink(void *user, const elfm_event_chunk *c, elfm_error *err)
 {
   (void)err;
@@ -530,6 +611,8 @@ int main(void)
   test_roundtrip_and_seed();
   test_truth_file();
   test_truth_motion();
+  test_random_motion();
+  test_random_motion_too_big();
   test_memory_bounded();
   return check_report();
 }

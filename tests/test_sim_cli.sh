@@ -14,7 +14,8 @@ check() { # check NAME EXPECTED_RC COMMAND...
 }
 mkdir -p "$dir"
 check list 0 "$bin" simulate --list
-[ "$(wc -l <"$dir.out")" -eq 8 ] || { echo "FAIL: --list gave $(wc -l <"$dir.out") scenes"; fail=$((fail+1)); }
+[ "$(wc -l <"$dir.out")" -eq 9 ] || { echo "FAIL: --list gave $(wc -l <"$dir.out") scenes"; fail=$((fail+1)); }
+grep -qx flow_random "$dir.out" || { echo "FAIL: --list lacks flow_random"; fail=$((fail+1)); }
 check run 0 "$bin" simulate blink --out "$dir/blink" --duration-ms 20 --seed 3 --quiet
 for f in events.raw truth.csv calib.json stimulus.csv; do
   [ -s "$dir/blink/$f" ] || { echo "FAIL: blink: no $f"; fail=$((fail+1)); }

@@ -69,9 +69,10 @@ int main(void)
     elfm_scene_free(s);
     n_builtin++;
   }
-  CHECK_EQ_INT(n_builtin, 8);
-  const char *names[] = {"stage", "stage_accel", "zsweep", "flow", "blink", "blink_moving", "worm", "slice"};
-  for (int i = 0; i < 8; i++) {
+  CHECK_EQ_INT(n_builtin, 9);
+  const char *names[] = {"stage", "stage_accel", "zsweep", "flow", "flow_random", "blink",
+                         "blink_moving", "worm", "slice"};
+  for (int i = 0; i < 9; i++) {
     elfm_scene *s = NULL;
     CHECK_OK(elfm_scene_load(names[i], &s, &err), &err);
     elfm_scene_free(s);
