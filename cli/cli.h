@@ -28,6 +28,7 @@ int cmd_simulate(int argc, char **argv);
 int cmd_recon(int argc, char **argv);
 int cmd_track(int argc, char **argv);
 int cmd_score(int argc, char **argv);
+int cmd_traces(int argc, char **argv);
 int cmd_view(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_demo(int argc, char **argv);

@@ -21,6 +21,7 @@ static const struct cmd_entry commands[] = {
   {"simulate", cmd_simulate, "simulate a scene: events.raw, truth.csv, calib.json"},
   {"recon", cmd_recon, "events -> refocused volumes (EXR), MIPs (PNG), summary.json"},
   {"track", cmd_track, "events -> volumes -> detections -> smoothed 3D tracks"},
+  {"traces", cmd_traces, "each object's intensity frame by frame (flashes, spikes)"},
   {"score", cmd_score, "score detections/tracks against simulator truth (SPEC 7)"},
   {"view", cmd_view, "show time-coded 3D tracks in a window, or render a screenshot"},
   {"bench", cmd_bench, "sweep settings on simulated scenes: speed against error"},

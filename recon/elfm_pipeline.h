@@ -97,6 +97,11 @@ typedef struct elfm_recon_options {
   elfm_volume_worker_fn worker;
   void *worker_user;
   elfm_volume_slot_fn on_volume_slot;
+  /* 1: frames only, no refocus (for work that reads the frames alone, such
+   * as elfm_refocus_sample at a few points: `eventlfm traces`). The worker
+   * and the callbacks still get a volume, with the frame's times and the
+   * plan's geometry set and its voxels left as they are. */
+  int no_refocus;
 } elfm_recon_options;
 
 /* The worker threads and batch slots elfm_recon_run will use with `o`

@@ -100,6 +100,13 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
 double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                              int k);
 
+/* The refocused value at sub-voxel position (X, Y, k) (voxel units, e.g.
+ * from elfm_volume_x_vox), trilinear between the 8 voxels around it, each
+ * as elfm_refocus_value_at gives it (0 outside the volume). O(8 views):
+ * an object's intensity in a frame without refocusing the frame. */
+double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, double X, double Y,
+                           double k);
+
 /* Localise a point from its images in the views of `frame` (the Fourier
  * LFM triangulation; recon/localize.c): starting at volume position
  * (x_vox, y_vox, z_vox) (voxel units, fractional), measure each view's

@@ -258,6 +258,24 @@ double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame
   return ns > 0 ? s / ns : 0;
 }
 
+double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, double X, double Y,
+                           double k)
+{
+  /* far outside (or NaN): nothing samples it; the floors below stay in int */
+  if (!(fabs(X) < 1e6 && fabs(Y) < 1e6 && fabs(k) < 1e6)) return 0;
+  const double fx = floor(X), fy = floor(Y), fk = floor(k);
+  const double ax = X - fx, ay = Y - fy, ak = k - fk;
+  const int x0 = (int)fx, y0 = (int)fy, k0 = (int)fk;
+  double s = 0;
+  for (int c = 0; c < 8; c++) {
+    const int dx = c & 1, dy = (c >> 1) & 1, dk = c >> 2;
+    const double w = (dx ? ax : 1 - ax) * (dy ? ay : 1 - ay) * (dk ? ak : 1 - ak);
+    if (w == 0) continue; /* on a voxel: its 7 neighbours need no views' sums */
+    s += w * elfm_refocus_value_at(p, frame, x0 + dx, y0 + dy, k0 + dk);
+  }
+  return s;
+}
+
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)
 {
   return elfm_volume_create(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,

@@ -3,7 +3,7 @@
 # command exits 2.
 bin=$1
 fail=0
-for c in info convert calib simulate recon track score view bench demo; do
+for c in info convert calib simulate recon track traces score view bench demo; do
   out=$("$bin" "$c" --help 2>/dev/null) || { echo "FAIL: $c --help exited non-zero"; fail=$((fail+1)); continue; }
   case "$out" in *usage*|*Usage*) ;; *) echo "FAIL: $c --help printed no usage"; fail=$((fail+1)) ;; esac
 done

@@ -7,6 +7,7 @@
  *   elfm_smooth.h    Ceres-smoothed trajectories (model choice per track)
  *   elfm_tracks.h    track store and writers (CSV, ISBI 2012 XML, TrackMate)
  *   elfm_analysis.h  stage velocity and resolution (FWHM) analysis
+ *   elfm_traces.h    intensity traces per object (tracks, or static clusters of detections)
  *   elfm_score.h     scoring against simulator truth (SPEC §7)
  */
 #ifndef ELFM_TRACKER_H
@@ -19,6 +20,7 @@
 #include "elfm_smooth.h"
 #include "elfm_tracks.h"
 #include "elfm_analysis.h"
+#include "elfm_traces.h"
 #include "elfm_score.h"
 
 #endif

@@ -1,0 +1,59 @@
+#!/bin/sh
+# eventlfm traces on bad input: usage errors exit 2 naming the option; a
+# missing or malformed tracks/detections file exits 1 naming the file (and
+# column or line); a recording cut halfway exits 1 naming the file and byte,
+# and the traces of the frames read before it are kept. Usage: traces_cli.sh BINARY
+bin=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+check() {  # expected-exit-code pattern-in-stderr command...
+  want=$1; pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
+  if [ $rc -ne "$want" ]; then echo "FAIL: exit $rc (want $want): $*"; cat "$tmp/err"; fail=$((fail+1)); return; fi
+  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/err"; then
+    echo "FAIL: stderr lacks '$pat': $*"; cat "$tmp/err"; fail=$((fail+1)); fi
+}
+check 0 "" "$bin" traces --help
+grep -q "detections.csv" "$tmp/out" || { echo "FAIL: --help says nothing of detections.csv"; fail=$((fail+1)); }
+check 2 "required" "$bin" traces
+check 2 "required" "$bin" traces --calib a --events b --out c
+check 2 "required" "$bin" traces --calib a --events b --out c --tracks t --detections d
+check 2 "hold" "$bin" traces --calib a --events b --out c --detections d --hold
+check 2 "cluster-um" "$bin" traces --calib a --events b --out c --detections d --cluster-um 0
+check 2 "cluster-kz" "$bin" traces --calib a --events b --out c --detections d --cluster-kz -1
+check 2 "min-detections" "$bin" traces --calib a --events b --out c --detections d --min-detections 0
+check 2 "dt-us" "$bin" traces --calib a --events b --out c --detections d --dt-us 10
+check 2 "unknown option" "$bin" traces --calib a --events b --out c --detections d --bogus
+
+"$bin" simulate slice --out "$tmp/sim" --duration-ms 150 --quiet >/dev/null 2>&1 || { echo "SKIP: simulate failed"; exit 77; }
+check 0 "" "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/trk" -q
+check 1 "missing.csv" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o1" --tracks "$tmp/missing.csv" --quiet
+printf 'track_id,t_us,x_um,y_um\n1,1000,0,0\n' > "$tmp/noz.csv"
+check 1 "noz.csv:1: no column 'z_um'" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o1" --tracks "$tmp/noz.csv" --quiet
+printf 't_us,x_um,y_um,z_um,intensity\n1000,0,0,0,5\n\n2000,nan,0,0,5\n' > "$tmp/nan.csv"
+check 1 "nan.csv:4:" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o1" --detections "$tmp/nan.csv" --quiet
+: > "$tmp/empty.csv"
+check 1 "empty.csv:1: empty file" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o1" --detections "$tmp/empty.csv" --quiet
+# no detections at all: objects.csv and traces.csv hold the header only
+printf 'frame,t_us,x_um,y_um,z_um,intensity\n' > "$tmp/none.csv"
+check 0 "" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o2" --detections "$tmp/none.csv" --quiet
+[ "$(wc -l < "$tmp/o2/traces.csv")" -eq 1 ] && [ "$(wc -l < "$tmp/o2/objects.csv")" -eq 1 ] ||
+  { echo "FAIL: no objects: expected header-only outputs"; fail=$((fail+1)); }
+# a recording cut inside a word halfway: exit 1 naming file and byte, the
+# rows of the frames before the cut kept (one per object and frame)
+size=$(wc -c < "$tmp/sim/events.raw")
+half=$((size / 2))
+head -c "$half" "$tmp/sim/events.raw" > "$tmp/half.raw"
+if "$bin" info "$tmp/half.raw" >/dev/null 2>&1; then
+  head -c $((half + 1)) "$tmp/sim/events.raw" > "$tmp/half.raw"
+fi
+check 1 "half.raw: byte" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/half.raw" --out "$tmp/o3" --detections "$tmp/trk/detections.csv" --quiet
+objs=$(($(wc -l < "$tmp/o3/objects.csv" 2>/dev/null || echo 1) - 1))
+rows=$(($(wc -l < "$tmp/o3/traces.csv" 2>/dev/null || echo 1) - 1))
+[ "$objs" -gt 0 ] && [ "$rows" -ge $((objs * 40)) ] ||
+  { echo "FAIL: truncated input kept $rows rows for $objs objects (want >= 40 frames each)"; fail=$((fail+1)); }
+# the same frames as track's: with --tracks every track's detections are marked detected
+check 0 "" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o4" --tracks "$tmp/trk/tracks.csv" --hold --quiet
+[ "$fail" -eq 0 ] && echo "traces_cli: all passed"
+exit $((fail > 0))
