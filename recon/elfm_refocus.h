@@ -100,6 +100,11 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
 double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                              int k);
 
+/* Give vol the frame's times (t_us, frame, window, events) and the plan's
+ * geometry, as elfm_refocus_execute does, leaving its voxels as they are
+ * (for a run that reads frames without refocusing them). */
+void elfm_refocus_stamp(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol);
+
 /* The refocused value at sub-voxel position (X, Y, k) (voxel units, e.g.
  * from elfm_volume_x_vox), trilinear between the 8 voxels around it, each
  * as elfm_refocus_value_at gives it (0 outside the volume). O(8 views):

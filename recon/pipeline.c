@@ -248,22 +248,6 @@ static void stats_set_rates(elfm_recon_stats *st, double wall_s)
   }
 }
 
-/* no_refocus: the volume's times and geometry, as a refocus would set them */
-static elfm_status volume_times(const elfm_refocus_plan *plan, const elfm_frame *frame,
-                                elfm_volume *vol)
-{
-  const elfm_calib *c = elfm_refocus_plan_calib(plan);
-  vol->t_us = frame->t_us;
-  vol->frame = frame->index;
-  vol->t_start_us = frame->t_start_us;
-  vol->t_end_us = frame->t_end_us;
-  vol->n_events = frame->n_events;
-  vol->um_per_px = c->um_per_px;
-  vol->z_min_um = c->z_min_um;
-  vol->z_step_um = c->z_step_um;
-  return ELFM_OK;
-}
-
 static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
                             elfm_volume_fn on_volume, void *user, elfm_error *err)
 {
@@ -302,8 +286,12 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
         elfm_median_apply(r->medians[omp_get_thread_num()], s->frame, s->filtered);
         in = s->filtered;
       }
-      s->status = r->opt->no_refocus ? volume_times(plan, in, s->vol)
-                                     : elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
+      if (r->opt->no_refocus) {
+        elfm_refocus_stamp(plan, in, s->vol);
+        s->status = ELFM_OK;
+      } else {
+        s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
+      }
       if (s->status == ELFM_OK && worker)
         s->status = worker(s->vol, in, plan, i, omp_get_thread_num(), worker_user, &s->err);
     }

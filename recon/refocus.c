@@ -432,6 +432,18 @@ static void refocus_dense(const elfm_refocus_plan *p, const elfm_frame *frame, e
   elfm_ghost_threshold_apply(p, vol, NULL, 0);
 }
 
+void elfm_refocus_stamp(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol)
+{
+  vol->t_us = frame->t_us;
+  vol->frame = frame->index;
+  vol->t_start_us = frame->t_start_us;
+  vol->t_end_us = frame->t_end_us;
+  vol->n_events = frame->n_events;
+  vol->um_per_px = p->calib.um_per_px;
+  vol->z_min_um = p->calib.z_min_um;
+  vol->z_step_um = p->calib.z_step_um;
+}
+
 elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_path path,
                                       const elfm_frame *frame, elfm_volume *vol,
                                       elfm_refocus_workspace *ws, elfm_error *err)
@@ -449,14 +461,7 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
   if (path == ELFM_PATH_AUTO)
     path = (double)frame->nnz < p->opt.sparse_max_fill * p->box_area ? ELFM_PATH_SPARSE
                                                                      : ELFM_PATH_DENSE;
-  vol->t_us = frame->t_us;
-  vol->frame = frame->index;
-  vol->t_start_us = frame->t_start_us;
-  vol->t_end_us = frame->t_end_us;
-  vol->n_events = frame->n_events;
-  vol->um_per_px = p->calib.um_per_px;
-  vol->z_min_um = p->calib.z_min_um;
-  vol->z_step_um = p->calib.z_step_um;
+  elfm_refocus_stamp(p, frame, vol);
   ws->last_path = path;
   if (path == ELFM_PATH_SPARSE) return elfm_refocus_sparse(p, frame, vol, ws, err);
   refocus_dense(p, frame, vol, ws);

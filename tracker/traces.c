@@ -210,22 +210,15 @@ elfm_status elfm_trace_objects_from_detections(const elfm_table *dets, double ra
   member *mem = malloc((n ? n : 1) * sizeof *mem);
   cluster *cl = malloc((n ? n : 1) * sizeof *cl);
   trace_point *tmp = malloc((n ? n : 1) * sizeof *tmp);
-  if (!keys || !mem || !cl || !tmp) {
-    free(keys);
-    free(mem);
-    free(cl);
-    free(tmp);
-    return elfm_error_set(err, ELFM_ERR_NOMEM, name, -1, "out of memory (%zu rows)", n);
-  }
+  size_t *first_row = NULL, *rank = NULL;
+  elfm_trace_objects *o = NULL;
+  if (!keys || !mem || !cl || !tmp) goto nomem;
   for (size_t r = 0; r < n; r++) {
     const double v = elfm_table_get(dets, r, cols[4]);
     if (!read_point(dets, r, cols, &tmp[r]) || !isfinite(v)) {
-      free(keys);
-      free(mem);
-      free(cl);
-      free(tmp);
-      return elfm_error_set_line(err, ELFM_ERR_FORMAT, name, row_line(dets, r),
-                                 "t_us, x_um, y_um, z_um and intensity must be finite numbers");
+      st = elfm_error_set_line(err, ELFM_ERR_FORMAT, name, row_line(dets, r),
+                               "t_us, x_um, y_um, z_um and intensity must be finite numbers");
+      goto done;
     }
     tmp[r].detected = 1;
     keys[r] = (det_key){v, r};
@@ -257,26 +250,17 @@ elfm_status elfm_trace_objects_from_detections(const elfm_table *dets, double ra
     cl[best].n++;
     mem[k] = (member){best, keys[k].row};
   }
-  /* Clusters numbered in the order of their first detection in time, so
-   * that the objects' ids do not depend on the brightness ranking. */
-  size_t *first_row = malloc((nc ? nc : 1) * sizeof *first_row);
-  size_t *rank = malloc((nc ? nc : 1) * sizeof *rank);
-  if (!first_row || !rank) {
-    free(first_row);
-    free(rank);
-    free(keys);
-    free(mem);
-    free(cl);
-    free(tmp);
-    return elfm_error_set(err, ELFM_ERR_NOMEM, name, -1, "out of memory (%zu clusters)", nc);
-  }
-  for (size_t c = 0; c < nc; c++) first_row[c] = (size_t)-1;
+  /* Clusters numbered in the order of their first detection in the file
+   * (detections.csv is written frame by frame), so that the objects' ids
+   * do not depend on the brightness ranking; only kept clusters count. */
+  first_row = malloc((nc ? nc : 1) * sizeof *first_row);
+  rank = malloc((nc ? nc : 1) * sizeof *rank);
+  if (!first_row || !rank) goto nomem;
+  for (size_t c = 0; c < nc; c++) first_row[c] = rank[c] = (size_t)-1;
   for (size_t k = 0; k < n; k++)
     if (mem[k].row < first_row[mem[k].cluster]) first_row[mem[k].cluster] = mem[k].row;
-  /* rank clusters by first row; only kept clusters get a rank */
   size_t kept = 0;
-  for (size_t c = 0; c < nc; c++) rank[c] = (size_t)-1;
-  for (size_t done = 0; done < nc; done++) {
+  for (size_t step = 0; step < nc; step++) {
     size_t pick = nc;
     for (size_t c = 0; c < nc; c++)
       if (rank[c] == (size_t)-1 && cl[c].n >= (size_t)min_detections &&
@@ -288,19 +272,9 @@ elfm_status elfm_trace_objects_from_detections(const elfm_table *dets, double ra
   size_t n_keep = 0;
   for (size_t k = 0; k < n; k++)
     if (rank[mem[k].cluster] != (size_t)-1) mem[n_keep++] = (member){rank[mem[k].cluster], mem[k].row};
-  /* a detection's file row is its time order (detections.csv is written
-   * frame by frame) up to ties; sort by cluster, then row, then time */
-  qsort(mem, n_keep, sizeof *mem, cmp_member);
-  elfm_trace_objects *o = objects_alloc(n_keep, kept);
-  if (!o) {
-    free(first_row);
-    free(rank);
-    free(keys);
-    free(mem);
-    free(cl);
-    free(tmp);
-    return elfm_error_set(err, ELFM_ERR_NOMEM, name, -1, "out of memory (%zu rows)", n);
-  }
+  qsort(mem, n_keep, sizeof *mem, cmp_member); /* by cluster, then file row */
+  o = objects_alloc(n_keep, kept);
+  if (!o) goto nomem;
   for (size_t k = 0; k < n_keep; k++) {
     o->pts[k] = tmp[mem[k].row];
     if (k == 0 || mem[k].cluster != mem[k - 1].cluster) {
@@ -331,14 +305,21 @@ elfm_status elfm_trace_objects_from_detections(const elfm_table *dets, double ra
       o->pts[k].z_um = b->mean[2];
     }
   }
+  *out = o;
+  o = NULL;
+  st = ELFM_OK;
+  goto done;
+nomem:
+  st = elfm_error_set(err, ELFM_ERR_NOMEM, name, -1, "out of memory (%zu rows)", n);
+done:
+  elfm_trace_objects_free(o);
   free(first_row);
   free(rank);
   free(keys);
   free(mem);
   free(cl);
   free(tmp);
-  *out = o;
-  return ELFM_OK;
+  return st;
 }
 
 size_t elfm_trace_objects_frame(elfm_trace_objects *o, const elfm_refocus_plan *plan,
