@@ -21,6 +21,9 @@ static void usage(FILE *f)
     "Events -> refocused volumes -> 3D peaks -> linked tracks -> Ceres-smoothed tracks.\n"
     "Writes DIR/detections.csv, tracks.csv (smoothed + raw), tracks_isbi.xml (ISBI 2012),\n"
     "tracks_trackmate.xml (TrackMate) and summary.json. Progress on stderr.\n"
+    "Intensity over time per object (flashes, spikes): eventlfm traces, on these\n"
+    "tracks or, for a static sample whose objects flash far apart in time (a\n"
+    "slice's neurons), on clusters of these detections.\n"
     "\n"
     "recon (the same options as eventlfm recon's):\n");
   cli_recon_options_usage(f, &d.recon);
