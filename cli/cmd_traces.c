@@ -13,6 +13,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include <cjson/cJSON.h>
+
 #include "cli.h"
 #include "cmd_track.h"
 
@@ -51,8 +53,9 @@ static void usage(FILE *f)
           "The events are framed again as `track` frames them (give the same frame\n"
           "options); no volume is refocused (8 voxels x the views per object and frame).\n"
           "Writes DIR/traces.csv (object_id, frame, t_us, x_um, y_um, z_um, intensity,\n"
-          "detected) and DIR/objects.csv (object_id, x_um, y_um, z_um, n_points,\n"
-          "n_detected, first_t_us, last_t_us). Progress on stderr.\n\n"
+          "detected), DIR/objects.csv (object_id, x_um, y_um, z_um, n_points,\n"
+          "n_detected, first_t_us, last_t_us) and DIR/traces_summary.json (inputs,\n"
+          "options, counts, timing). Progress on stderr.\n\n"
           "objects:\n"
           "  --tracks FILE        tracks.csv of `eventlfm track`\n"
           "  --hold               a track's object also before its first point and after\n"
@@ -124,6 +127,55 @@ static int write_objects(const traces_args *a, const elfm_trace_objects *o)
   if (fclose(f) != 0) ok = 0;
   if (!ok) return cli_message("traces", CLI_FAIL, "%s: write failed: %s", path, strerror(errno));
   return CLI_OK;
+}
+
+/* DIR/traces_summary.json: what was read with which options, and what came
+ * out (a name of its own: `track` writes summary.json, often to the same
+ * directory). run_err: the error that cut the run short, or NULL. */
+static int write_summary(const traces_args *a, size_t n_obj, const traces_run *t,
+                         const elfm_recon_stats *s, const elfm_error *run_err)
+{
+  cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
+  cJSON_AddStringToObject(in, "calib", a->calib);
+  cJSON_AddStringToObject(in, "events", a->events);
+  cJSON_AddStringToObject(in, a->tracks ? "tracks" : "detections", a->tracks ? a->tracks : a->dets);
+  if (run_err) {
+    char msg[1200];
+    cJSON_AddStringToObject(root, "input_error", elfm_error_format(run_err, msg, sizeof msg));
+  }
+  cJSON *p = cJSON_AddObjectToObject(root, "parameters");
+  cli_recon_options_json(p, &a->ro);
+  if (a->ro.from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)a->ro.from_us);
+  if (a->ro.to_us != INT64_MAX) cJSON_AddNumberToObject(p, "to_us", (double)a->ro.to_us);
+  cJSON_AddStringToObject(p, "objects", a->tracks ? "tracks" : "detection clusters");
+  if (a->tracks) {
+    cJSON_AddBoolToObject(p, "hold", a->hold);
+  } else {
+    cJSON_AddNumberToObject(p, "cluster_um", a->cluster_um);
+    cJSON_AddNumberToObject(p, "cluster_kz", a->cluster_kz);
+    cJSON_AddNumberToObject(p, "min_detections", a->min_dets);
+  }
+  cJSON *c = cJSON_AddObjectToObject(root, "counts");
+  cJSON_AddNumberToObject(c, "objects", (double)n_obj);
+  cJSON_AddNumberToObject(c, "events", (double)s->events);
+  cJSON_AddNumberToObject(c, "frames", (double)s->frames);
+  cJSON_AddNumberToObject(c, "rows", (double)t->n_rows);
+  cJSON *tm = cJSON_AddObjectToObject(root, "timing");
+  cJSON_AddNumberToObject(tm, "span_s", s->span_s);
+  cJSON_AddNumberToObject(tm, "wall_s", s->wall_s);
+  cJSON_AddNumberToObject(tm, "events_per_s", s->events_per_s);
+  cJSON_AddNumberToObject(tm, "realtime_factor", s->realtime_factor);
+  cJSON_AddNumberToObject(tm, "peak_rss_mb", cli_peak_rss_mb());
+  char *text = cJSON_Print(root);
+  cJSON_Delete(root);
+  char path[4200];
+  snprintf(path, sizeof path, "%s/traces_summary.json", a->out);
+  FILE *f = fopen(path, "w");
+  int ok = f && text && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
+  if (f && fclose(f) != 0) ok = 0;
+  free(text);
+  if (!ok) cli_message("traces", CLI_FAIL, "%s: cannot write: %s", path, strerror(errno));
+  return ok;
 }
 
 int cmd_traces(int argc, char **argv)
@@ -250,6 +302,7 @@ int cmd_traces(int argc, char **argv)
   free(t.slot_plan);
   elfm_trace_objects_free(t.obj);
   if (bad) return cli_message("traces", CLI_FAIL, "%s: write failed: %s", t.path, strerror(errno));
+  if (!write_summary(&a, nobj, &t, &s, st ? &err : NULL)) return CLI_FAIL;
   if (st) return cli_fail("traces", &err);
   if (!a.quiet)
     fprintf(stderr, "traces: %zu objects, %lld frames, %lld rows in %.2f s; %s\n", nobj,

@@ -53,7 +53,15 @@ objs=$(($(wc -l < "$tmp/o3/objects.csv" 2>/dev/null || echo 1) - 1))
 rows=$(($(wc -l < "$tmp/o3/traces.csv" 2>/dev/null || echo 1) - 1))
 [ "$objs" -gt 0 ] && [ "$rows" -ge $((objs * 40)) ] ||
   { echo "FAIL: truncated input kept $rows rows for $objs objects (want >= 40 frames each)"; fail=$((fail+1)); }
+grep -q '"input_error"' "$tmp/o3/traces_summary.json" 2>/dev/null ||
+  { echo "FAIL: traces_summary.json does not record the input error"; fail=$((fail+1)); }
 # the same frames as track's: with --tracks every track's detections are marked detected
-check 0 "" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/o4" --tracks "$tmp/trk/tracks.csv" --hold --quiet
+# into track's own directory: its summary.json stays track's
+cp "$tmp/trk/summary.json" "$tmp/track_summary.json"
+check 0 "" "$bin" traces --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/trk" --tracks "$tmp/trk/tracks.csv" --hold --quiet
+tr -d ' \t\n' < "$tmp/trk/traces_summary.json" 2>/dev/null | grep -q '"objects":"tracks","hold":true' ||
+  { echo "FAIL: traces_summary.json lacks the objects' source"; fail=$((fail+1)); }
+cmp -s "$tmp/trk/summary.json" "$tmp/track_summary.json" ||
+  { echo "FAIL: traces overwrote track's summary.json"; fail=$((fail+1)); }
 [ "$fail" -eq 0 ] && echo "traces_cli: all passed"
 exit $((fail > 0))
