@@ -498,6 +498,80 @@ static elfm_status hook_unused(const elfm_volume *v, void *user, elfm_error *err
   return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "on_volume called beside on_volume_slot");
 }
 
+/* no_refocus: the same frames, in the same order, with the same times, and
+ * volumes that carry the frame's times and the plan's geometry. */
+typedef struct frames_only_ctx {
+  const elfm_calib *cal;
+  int64_t t_us[64], t_end_us[64], n_events[64];
+  int64_t slot_frame[HOOK_SLOTS];
+  int64_t n, next_frame, mismatches;
+  int bad_args;
+} frames_only_ctx;
+
+static elfm_status fo_worker(const elfm_volume *v, const elfm_frame *frame,
+                             const elfm_refocus_plan *plan, int slot, int thread, void *user,
+                             elfm_error *err)
+{
+  (void)plan, (void)thread, (void)err;
+  frames_only_ctx *h = user;
+  if (!frame || slot < 0 || slot >= HOOK_SLOTS || frame->t_us != v->t_us ||
+      frame->index != v->frame || frame->t_end_us != v->t_end_us ||
+      frame->n_events != v->n_events || v->um_per_px != h->cal->um_per_px ||
+      v->z_min_um != h->cal->z_min_um || v->z_step_um != h->cal->z_step_um) {
+#pragma omp atomic write
+    h->bad_args = 1;
+    return ELFM_OK;
+  }
+  h->slot_frame[slot] = v->frame;
+  return ELFM_OK;
+}
+
+static elfm_status fo_ordered(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  (void)err;
+  frames_only_ctx *h = user;
+  if (slot < 0 || slot >= HOOK_SLOTS || h->slot_frame[slot] != v->frame || v->frame != h->next_frame)
+    h->mismatches++;
+  if (v->frame >= 0 && v->frame < 64) {
+    h->t_us[v->frame] = v->t_us;
+    h->t_end_us[v->frame] = v->t_end_us;
+    h->n_events[v->frame] = v->n_events;
+  }
+  h->next_frame = v->frame + 1;
+  h->n++;
+  return ELFM_OK;
+}
+
+static void test_no_refocus(const char *dir, const elfm_calib *cal)
+{
+  elfm_error err;
+  char path[600];
+  snprintf(path, sizeof path, "%s/events.raw", dir);
+  frames_only_ctx run[2];
+  for (int k = 0; k < 2; k++) {
+    elfm_recon_options o;
+    elfm_recon_options_default(&o);
+    o.threads = 2;
+    o.batch = HOOK_SLOTS;
+    o.no_refocus = k;
+    o.worker = fo_worker;
+    o.worker_user = &run[k];
+    o.on_volume_slot = fo_ordered;
+    memset(&run[k], 0, sizeof run[k]);
+    run[k].cal = cal;
+    elfm_recon_stats st;
+    CHECK_OK(elfm_recon_run(path, cal, &o, NULL, &run[k], &st, &err), &err);
+    CHECK_EQ_INT(run[k].n, DUR_US / 1000);
+    CHECK_EQ_INT(run[k].mismatches, 0);
+    CHECK_EQ_INT(run[k].bad_args, 0);
+  }
+  int same = 1;
+  for (int f = 0; f < DUR_US / 1000 && f < 64; f++)
+    same &= run[0].t_us[f] == run[1].t_us[f] && run[0].t_end_us[f] == run[1].t_end_us[f] &&
+            run[0].n_events[f] == run[1].n_events[f] && run[1].n_events[f] > 0;
+  CHECK_MSG(same, "no_refocus: frames differ from the refocusing run's");
+}
+
 static void test_worker_hook(const char *dir, const elfm_calib *cal)
 {
   elfm_error err;
@@ -550,6 +624,7 @@ int main(void)
   if (!mkdtemp(dir)) SKIP("cannot make a temporary directory");
   test_runs(dir, &cal);
   test_worker_hook(dir, &cal);
+  test_no_refocus(dir, &cal);
   test_tiff(dir, &cal);
   test_tiff_mixed_depth(dir);
   char cmd[600];
