@@ -174,6 +174,16 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d);
  * alike. */
 struct cJSON;
 void cli_recon_options_json(struct cJSON *par, const elfm_recon_options *ro);
+/* A summary's start, as recon and traces write it: "input" {calib, key:
+ * path}, "input_error" when run_err (a run cut short by its input: the
+ * counts that follow are of what was read), and "parameters" holding the
+ * shared options and from_us / to_us when given; *par receives it. */
+struct cJSON *cli_summary_start(const char *calib, const char *key, const char *path,
+                                const elfm_error *run_err, const elfm_recon_options *ro,
+                                struct cJSON **par);
+/* Write root as indented JSON and a newline to path, then free root (also
+ * on failure). Errors name the path. */
+elfm_status cli_json_write(struct cJSON *root, const char *path, elfm_error *err);
 
 /* getopt_long's answer for an option that is not the command's (c '?') or
  * lacks its value (c ':', with ':' leading the optstring): the message

@@ -513,6 +513,43 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "ghost_agree_frac", ro->refocus.agree_frac);
 }
 
+cJSON *cli_summary_start(const char *calib, const char *key, const char *path,
+                         const elfm_error *run_err, const elfm_recon_options *ro, cJSON **par)
+{
+  cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
+  cJSON_AddStringToObject(in, "calib", calib);
+  cJSON_AddStringToObject(in, key, path);
+  if (run_err) {
+    char msg[1200];
+    cJSON_AddStringToObject(root, "input_error", elfm_error_format(run_err, msg, sizeof msg));
+  }
+  cJSON *p = cJSON_AddObjectToObject(root, "parameters");
+  cli_recon_options_json(p, ro);
+  if (ro->from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)ro->from_us);
+  if (ro->to_us != INT64_MAX) cJSON_AddNumberToObject(p, "to_us", (double)ro->to_us);
+  *par = p;
+  return root;
+}
+
+elfm_status cli_json_write(cJSON *root, const char *path, elfm_error *err)
+{
+  char *text = cJSON_Print(root);
+  cJSON_Delete(root);
+  if (!text) return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "out of memory (JSON text)");
+  FILE *f = fopen(path, "w");
+  elfm_status st = ELFM_OK;
+  if (!f) {
+    st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
+  } else {
+    fputs(text, f);
+    fputc('\n', f);
+    if (ferror(f) | (fclose(f) != 0))
+      st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
+  }
+  free(text);
+  return st;
+}
+
 void cli_recon_planes(const cli_recon_parse *p, double z_um[3])
 {
   for (int k = 0; k < 3; k++) z_um[k] = p->z_given & (1 << k) ? p->z_um[k] : NAN;

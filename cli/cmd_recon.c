@@ -100,20 +100,12 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
 static int write_summary(const recon_args *a, const recon_out *o, const elfm_calib *cal,
                          const elfm_recon_stats *s, const elfm_error *run_err)
 {
-  cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
-  cJSON_AddStringToObject(in, "calib", a->calib);
-  cJSON_AddStringToObject(in, a->tiff ? "tiff" : "events", a->tiff ? a->tiff : a->events);
-  if (run_err) {
-    char msg[1200];
-    cJSON_AddStringToObject(root, "input_error", elfm_error_format(run_err, msg, sizeof msg));
-  }
-  cJSON *p = cJSON_AddObjectToObject(root, "parameters");
   const elfm_recon_options *r = &a->ro;
-  cli_recon_options_json(p, r);
+  cJSON *p = NULL;
+  cJSON *root = cli_summary_start(a->calib, a->tiff ? "tiff" : "events", a->tiff ? a->tiff : a->events,
+                                  run_err, r, &p);
   cJSON_AddNumberToObject(p, "crop_margin_px", r->refocus.crop_margin_px);
   cJSON_AddNumberToObject(p, "threads", r->threads);
-  if (r->from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)r->from_us);
-  if (r->to_us != INT64_MAX) cJSON_AddNumberToObject(p, "to_us", (double)r->to_us);
   cJSON *g = cJSON_AddObjectToObject(root, "volume");
   cJSON_AddNumberToObject(g, "w", cal->view_w_px);
   cJSON_AddNumberToObject(g, "h", cal->view_h_px);
@@ -140,16 +132,14 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON_AddNumberToObject(t, "volumes_per_s", s->volumes_per_s);
   cJSON_AddNumberToObject(t, "realtime_factor", s->realtime_factor);
   cJSON_AddNumberToObject(t, "peak_rss_mb", cli_peak_rss_mb());
-  char *text = cJSON_Print(root);
-  cJSON_Delete(root);
   char path[4200];
   snprintf(path, sizeof path, "%s/summary.json", o->dir);
-  FILE *f = fopen(path, "w");
-  int ok = f && text && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
-  if (f && fclose(f) != 0) ok = 0;
-  free(text);
-  if (!ok) cli_message("recon", CLI_FAIL, "%s: cannot write: %s", path, strerror(errno));
-  return ok;
+  elfm_error err;
+  if (cli_json_write(root, path, &err) != ELFM_OK) {
+    cli_fail("recon", &err);
+    return 0;
+  }
+  return 1;
 }
 
 int cmd_recon(int argc, char **argv)

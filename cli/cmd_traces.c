@@ -135,18 +135,10 @@ static int write_objects(const traces_args *a, const elfm_trace_objects *o)
 static int write_summary(const traces_args *a, size_t n_obj, const traces_run *t,
                          const elfm_recon_stats *s, const elfm_error *run_err)
 {
-  cJSON *root = cJSON_CreateObject(), *in = cJSON_AddObjectToObject(root, "input");
-  cJSON_AddStringToObject(in, "calib", a->calib);
-  cJSON_AddStringToObject(in, "events", a->events);
-  cJSON_AddStringToObject(in, a->tracks ? "tracks" : "detections", a->tracks ? a->tracks : a->dets);
-  if (run_err) {
-    char msg[1200];
-    cJSON_AddStringToObject(root, "input_error", elfm_error_format(run_err, msg, sizeof msg));
-  }
-  cJSON *p = cJSON_AddObjectToObject(root, "parameters");
-  cli_recon_options_json(p, &a->ro);
-  if (a->ro.from_us != INT64_MIN) cJSON_AddNumberToObject(p, "from_us", (double)a->ro.from_us);
-  if (a->ro.to_us != INT64_MAX) cJSON_AddNumberToObject(p, "to_us", (double)a->ro.to_us);
+  cJSON *p = NULL;
+  cJSON *root = cli_summary_start(a->calib, "events", a->events, run_err, &a->ro, &p);
+  cJSON_AddStringToObject(cJSON_GetObjectItem(root, "input"), a->tracks ? "tracks" : "detections",
+                          a->tracks ? a->tracks : a->dets);
   cJSON_AddStringToObject(p, "objects", a->tracks ? "tracks" : "detection clusters");
   if (a->tracks) {
     cJSON_AddBoolToObject(p, "hold", a->hold);
@@ -166,16 +158,14 @@ static int write_summary(const traces_args *a, size_t n_obj, const traces_run *t
   cJSON_AddNumberToObject(tm, "events_per_s", s->events_per_s);
   cJSON_AddNumberToObject(tm, "realtime_factor", s->realtime_factor);
   cJSON_AddNumberToObject(tm, "peak_rss_mb", cli_peak_rss_mb());
-  char *text = cJSON_Print(root);
-  cJSON_Delete(root);
   char path[4200];
   snprintf(path, sizeof path, "%s/traces_summary.json", a->out);
-  FILE *f = fopen(path, "w");
-  int ok = f && text && fputs(text, f) >= 0 && fputc('\n', f) != EOF;
-  if (f && fclose(f) != 0) ok = 0;
-  free(text);
-  if (!ok) cli_message("traces", CLI_FAIL, "%s: cannot write: %s", path, strerror(errno));
-  return ok;
+  elfm_error err;
+  if (cli_json_write(root, path, &err) != ELFM_OK) {
+    cli_fail("traces", &err);
+    return 0;
+  }
+  return 1;
 }
 
 int cmd_traces(int argc, char **argv)

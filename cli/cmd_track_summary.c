@@ -271,18 +271,5 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     cJSON_AddItemToObject(e, "mean_velocity_um_per_ms", vec3(t->mean_vel_um_per_ms));
     cJSON_AddItemToArray(tr, e);
   }
-  char *text = cJSON_Print(j);
-  cJSON_Delete(j);
-  if (!text) return elfm_error_set(err, ELFM_ERR_NOMEM, path, -1, "cannot build summary.json");
-  FILE *f = fopen(path, "w");
-  elfm_status st = ELFM_OK;
-  if (!f) st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "cannot create: %s", strerror(errno));
-  else {
-    fputs(text, f);
-    fputc('\n', f);
-    if (ferror(f) | (fclose(f) != 0))
-      st = elfm_error_set(err, ELFM_ERR_IO, path, -1, "write failed: %s", strerror(errno));
-  }
-  free(text);
-  return st;
+  return cli_json_write(j, path, err);
 }
