@@ -184,6 +184,8 @@ struct cJSON *cli_summary_start(const char *calib, const char *key, const char *
 /* Write root as indented JSON and a newline to path, then free root (also
  * on failure). Errors name the path. */
 elfm_status cli_json_write(struct cJSON *root, const char *path, elfm_error *err);
+/* The same, the error (if any) shown for command cmd: 1 written, 0 not. */
+int cli_json_save(struct cJSON *root, const char *path, const char *cmd);
 
 /* getopt_long's answer for an option that is not the command's (c '?') or
  * lacks its value (c ':', with ':' leading the optstring): the message

@@ -531,6 +531,14 @@ cJSON *cli_summary_start(const char *calib, const char *key, const char *path,
   return root;
 }
 
+int cli_json_save(cJSON *root, const char *path, const char *cmd)
+{
+  elfm_error err;
+  if (cli_json_write(root, path, &err) == ELFM_OK) return 1;
+  cli_fail(cmd, &err);
+  return 0;
+}
+
 elfm_status cli_json_write(cJSON *root, const char *path, elfm_error *err)
 {
   char *text = cJSON_Print(root);

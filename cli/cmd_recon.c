@@ -134,12 +134,7 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON_AddNumberToObject(t, "peak_rss_mb", cli_peak_rss_mb());
   char path[4200];
   snprintf(path, sizeof path, "%s/summary.json", o->dir);
-  elfm_error err;
-  if (cli_json_write(root, path, &err) != ELFM_OK) {
-    cli_fail("recon", &err);
-    return 0;
-  }
-  return 1;
+  return cli_json_save(root, path, "recon");
 }
 
 int cmd_recon(int argc, char **argv)

@@ -160,12 +160,7 @@ static int write_summary(const traces_args *a, size_t n_obj, const traces_run *t
   cJSON_AddNumberToObject(tm, "peak_rss_mb", cli_peak_rss_mb());
   char path[4200];
   snprintf(path, sizeof path, "%s/traces_summary.json", a->out);
-  elfm_error err;
-  if (cli_json_write(root, path, &err) != ELFM_OK) {
-    cli_fail("traces", &err);
-    return 0;
-  }
-  return 1;
+  return cli_json_save(root, path, "traces");
 }
 
 int cmd_traces(int argc, char **argv)
