@@ -33,7 +33,7 @@ typedef struct elfm_recon_stats {
   int64_t events;          /* events taken in (inside from/to, before the polarity filter) */
   int64_t triggers;        /* external trigger edges inside from/to (e.g. an LED driver's) */
   int64_t frames;          /* volumes delivered to the callback */
-  int64_t frames_sparse, frames_dense; /* refocus path taken */
+  int64_t frames_sparse, frames_dense; /* refocus path taken (neither with no_refocus) */
   int64_t t_first_us, t_last_us; /* first/last event time taken (INT64_MIN/MAX if none) */
   double span_s;           /* recording span processed: windows' end - first window start */
   double wall_s;           /* the whole run */

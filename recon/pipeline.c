@@ -302,8 +302,10 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
         if (err) *err = s->err;
         return s->status;
       }
-      if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
-      else r->st.frames_dense++;
+      if (!r->opt->no_refocus) { /* no_refocus took no path: neither count */
+        if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
+        else r->st.frames_dense++;
+      }
       t0 = now_s();
       elfm_status st = r->opt->on_volume_slot ? r->opt->on_volume_slot(s->vol, i, user, err)
                        : on_volume                ? on_volume(s->vol, user, err)

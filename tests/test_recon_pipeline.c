@@ -562,6 +562,8 @@ static void test_no_refocus(const char *dir, const elfm_calib *cal)
     elfm_recon_stats st;
     CHECK_OK(elfm_recon_run(path, cal, &o, NULL, &run[k], &st, &err), &err);
     CHECK_EQ_INT(run[k].n, DUR_US / 1000);
+    /* frames refocused by either path, or (no_refocus) by none */
+    CHECK_EQ_INT(st.frames_sparse + st.frames_dense, (k ? 0 : DUR_US / 1000));
     CHECK_EQ_INT(run[k].mismatches, 0);
     CHECK_EQ_INT(run[k].bad_args, 0);
   }
