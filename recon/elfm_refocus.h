@@ -93,6 +93,20 @@ const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
 int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                               int k, int *n_sampling);
 
+/* The view support of voxel (X, Y, k) as above, leaving out the views whose
+ * signal another object's image explains: where the voxel's sample point
+ * lies within r_px of the image of one of `others` in that view (n_others
+ * voxel positions X, Y, k, fractional allowed). *n_explained (may be NULL)
+ * = the views with signal left out. Why: a refocusing ghost is a voxel at
+ * which one bright object's images in several views line up, at another
+ * depth; its views with signal are that object's images, and with that
+ * object among `others` they no longer count. Another object beside it
+ * has images of its own, which stay. O(views x n_others). */
+int elfm_refocus_view_support_unexplained(const elfm_refocus_plan *p, const elfm_frame *frame,
+                                          int X, int Y, int k, const double (*others)[3],
+                                          int n_others, double r_px, int *n_sampling,
+                                          int *n_explained);
+
 /* The refocused value of voxel (X, Y, k) from `frame`, as
  * elfm_refocus_execute would write it there without ghost suppression (the
  * mean of the sampling views' bilinear samples); 0 outside the volume.

@@ -249,6 +249,55 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
   return n;
 }
 
+/* Where view v puts the image of a point at voxel (X, Y, k), k fractional:
+ * the sample point of the planes around k, linear between them (the shift
+ * is linear in z), k clamped to the planes. */
+static void view_image_at(const elfm_refocus_plan *p, int v, double X, double Y, double k,
+                          double *u, double *w)
+{
+  if (!(k > 0)) k = 0; /* NaN too */
+  if (k > p->nz - 1) k = p->nz - 1;
+  int k0 = (int)k;
+  if (k0 > p->nz - 2) k0 = p->nz > 1 ? p->nz - 2 : 0;
+  const double a = p->nz > 1 ? k - k0 : 0;
+  const elfm_refocus_shift *s0 = p->shift + (size_t)k0 * p->nv + v;
+  const elfm_refocus_shift *s1 = p->nz > 1 ? s0 + p->nv : s0;
+  *u = X + (1 - a) * (s0->ix + s0->fx) + a * (s1->ix + s1->fx);
+  *w = Y + (1 - a) * (s0->iy + s0->fy) + a * (s1->iy + s1->fy);
+}
+
+int elfm_refocus_view_support_unexplained(const elfm_refocus_plan *p, const elfm_frame *frame,
+                                          int X, int Y, int k, const double (*others)[3],
+                                          int n_others, double r_px, int *n_sampling,
+                                          int *n_explained)
+{
+  int n = 0, ns = 0, ne = 0;
+  const double r2 = r_px * r_px;
+  if (X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz)
+    for (int v = 0; v < p->nv; v++) {
+      const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
+      if (X < sh->xlo || X >= sh->xhi || Y < sh->ylo || Y >= sh->yhi) continue;
+      ns++;
+      float w[4];
+      elfm_refocus_shift_weights(sh, w);
+      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
+      const float *r1 = r0 + p->sw;
+      if (w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1] == 0.0f) continue;
+      const double u = X + sh->ix + sh->fx, uy = Y + sh->iy + sh->fy;
+      int explained = 0;
+      for (int o = 0; o < n_others && !explained; o++) {
+        double uo, wo;
+        view_image_at(p, v, others[o][0], others[o][1], others[o][2], &uo, &wo);
+        explained = (u - uo) * (u - uo) + (uy - wo) * (uy - wo) < r2;
+      }
+      if (explained) ne++;
+      else n++;
+    }
+  if (n_sampling) *n_sampling = ns;
+  if (n_explained) *n_explained = ne;
+  return n;
+}
+
 double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                              int k)
 {

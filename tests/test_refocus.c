@@ -569,6 +569,134 @@ static void test_view_support(const elfm_calib *c)
   elfm_frame_free(f);
 }
 
+/* The voxel nearest (x, y, z) um and its position in voxels (fractional). */
+static void voxel_of(const elfm_refocus_plan *p, const elfm_calib *c, double x, double y,
+                     double z, int ijk[3], double pos[3])
+{
+  int w, h, nz;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  pos[0] = x / c->um_per_px + 0.5 * (w - 1);
+  pos[1] = y / c->um_per_px + 0.5 * (h - 1);
+  pos[2] = (z - c->z_min_um) / c->z_step_um;
+  for (int a = 0; a < 3; a++) ijk[a] = (int)lround(pos[a]);
+}
+
+/* Views a brighter object's images explain (the ghost test of `track`):
+ *  - frame 1, a bright bead S alone (wide images, sigma 2 px): at every
+ *    voxel with signal, with S given and r_px beyond its images' reach,
+ *    every view with signal is explained (n_explained == the plain view
+ *    support, none left), and with no object given none is; the bead's own
+ *    voxel is explained in every view too (an object never keeps itself);
+ *  - frame 2, S and a dimmer bead B at S's depth 8.6 px to its side: B's
+ *    views are all its own (none explained);
+ *  - frame 3, S and B 20 um shallower, placed so that one column of views
+ *    puts their images together: only a few of B's views are explained,
+ *    fewer than half, and the rest pass a 0.3 support test;
+ *  - others at fractional voxels: the shift between planes is linear, so a
+ *    point between planes is placed as the calibration projects it. */
+static void test_view_support_unexplained(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  o.agree_frac = 0.0;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+  int w, h, nz;
+  elfm_refocus_plan_size(p, &w, &h, &nz);
+  const double xs = 10.0, ys = -12.0, zs = 30.0, sig = 2.0, amp = 255.0;
+  /* the images' reach: values >= 1 within sig sqrt(2 ln amp), plus the
+   * bilinear taps' diagonal */
+  const double reach = sig * sqrt(2.0 * log(amp)) + 1.5;
+  int S[3];
+  double Sp[3];
+  voxel_of(p, c, xs, ys, zs, S, Sp);
+  const double others1[1][3] = {{Sp[0], Sp[1], Sp[2]}};
+
+  elfm_frame *f = elfm_frame_create(c->sensor_width_px, c->sensor_height_px, &err);
+  render_views(f, c, xs, ys, zs, amp, sig, 0, 0, 0);
+  size_t n_signal = 0, n_all_explained = 0;
+  for (int k = 0; k < nz; k += 3)
+    for (int y = 0; y < h; y += 2)
+      for (int x = 0; x < w; x += 2) {
+        int ns = 0, ns2 = 0, ne = -1, ne0 = -1;
+        const int n = elfm_refocus_view_support(p, f, x, y, k, &ns);
+        if (n == 0) continue;
+        n_signal++;
+        const int nu = elfm_refocus_view_support_unexplained(p, f, x, y, k, others1, 1, reach,
+                                                             &ns2, &ne);
+        CHECK_EQ_INT(ns2, ns);
+        n_all_explained += nu == 0 && ne == n;
+        CHECK_EQ_INT(elfm_refocus_view_support_unexplained(p, f, x, y, k, others1, 0, reach,
+                                                           NULL, &ne0),
+                     n);
+        CHECK_EQ_INT(ne0, 0);
+      }
+  CHECK_MSG(n_signal > 1000 && n_all_explained == n_signal,
+            "bead alone: %zu of %zu voxels with signal explained in every view", n_all_explained,
+            n_signal);
+  int ns = 0, ne = 0;
+  CHECK_EQ_INT(elfm_refocus_view_support_unexplained(p, f, S[0], S[1], S[2], others1, 1, reach,
+                                                     &ns, &ne),
+               0);
+  CHECK_MSG(ns >= 20 && ne == ns, "bead voxel: %d of %d views explained", ne, ns);
+
+  /* frame 2: B beside S at its depth, 8.6 px away in every view */
+  elfm_frame_clear(f);
+  const double xb = xs + 8.6 * c->um_per_px;
+  render_views(f, c, xs, ys, zs, amp, sig, 0, 0, 0);
+  render_views(f, c, xb, ys, zs, 120.0, 1.3, 0, 0, 0);
+  int B[3];
+  double Bp[3];
+  voxel_of(p, c, xb, ys, zs, B, Bp);
+  const int nb = elfm_refocus_view_support(p, f, B[0], B[1], B[2], &ns);
+  CHECK_MSG(nb >= 20, "bead beside: support %d of %d", nb, ns);
+  CHECK_EQ_INT(elfm_refocus_view_support_unexplained(p, f, B[0], B[1], B[2], others1, 1, 4.0,
+                                                     NULL, &ne),
+               nb);
+  CHECK_EQ_INT(ne, 0);
+
+  /* frame 3: B 20 um shallower where the views of S's column i = +2 see
+   * the two together (the shift of view 14, i = +2, j = 0, carries B onto
+   * S there) */
+  elfm_frame_clear(f);
+  const double dz = -20.0, zb = zs + dz;
+  double u14s, w14s, u14b, w14b;
+  elfm_calib_project(c, 14, xs, ys, zs, &u14s, &w14s);
+  elfm_calib_project(c, 14, xs, ys, zb, &u14b, &w14b);
+  const double xb3 = xs + (u14s - u14b) * c->um_per_px;
+  render_views(f, c, xs, ys, zs, amp, sig, 0, 0, 0);
+  render_views(f, c, xb3, ys, zb, 120.0, 1.3, 0, 0, 0);
+  voxel_of(p, c, xb3, ys, zb, B, Bp);
+  const int n3 = elfm_refocus_view_support(p, f, B[0], B[1], B[2], &ns);
+  const int nu3 =
+      elfm_refocus_view_support_unexplained(p, f, B[0], B[1], B[2], others1, 1, 4.0, NULL, &ne);
+  CHECK_MSG(ne >= 1 && 2 * ne < n3 && nu3 + ne == n3 && nu3 >= 0.3 * ns,
+            "bead 20 um above: %d of %d views explained, %d left of %d sampling", ne, n3, nu3, ns);
+
+  /* between planes: an object half a plane below S's voxel, moved
+   * sideways so that view 14 (i = +2, j = 0) puts its image on the voxel's
+   * sample point there, as the calibration projects it. With r 0.05 px
+   * that view alone is explained: the nearest plane's shift would miss by
+   * half a plane's (0.34 px), view 13 (i = +1) by half of that. */
+  elfm_frame_clear(f);
+  render_views(f, c, xs, ys, zs, amp, sig, 0, 0, 0);
+  const double xv = (S[0] - 0.5 * (w - 1)) * c->um_per_px;
+  const double yv = (S[1] - 0.5 * (h - 1)) * c->um_per_px;
+  const double zk = c->z_min_um + S[2] * c->z_step_um, zh = zk + 0.5 * c->z_step_um;
+  double uk, wk, uh, wh;
+  elfm_calib_project(c, 14, xv, yv, zk, &uk, &wk);
+  elfm_calib_project(c, 14, xv, yv, zh, &uh, &wh);
+  const double othersf[1][3] = {{S[0] + (uk - uh), S[1], S[2] + 0.5}};
+  const int nf = elfm_refocus_view_support(p, f, S[0], S[1], S[2], NULL);
+  const int nuf = elfm_refocus_view_support_unexplained(p, f, S[0], S[1], S[2], othersf, 1, 0.05,
+                                                        NULL, &ne);
+  CHECK_MSG(fabs(uk - uh) > 0.2 && ne == 1 && nuf == nf - 1,
+            "half a plane below, moved %.3f px: %d views explained", uk - uh, ne);
+  elfm_frame_free(f);
+  elfm_refocus_plan_free(p);
+}
+
 /* Another geometry for the sparse agreement code, which packs a row of W
  * voxels into 64-bit words and 256-bit registers (one load per window when
  * W <= 192, two above; two 256-voxel chunks above 256): the central 3 x 3
@@ -608,6 +736,7 @@ int main(void)
   test_uniform_overhang(&c);
   test_ghost_rules(&c);
   test_view_support(&c);
+  test_view_support_unexplained(&c);
   test_bad_input(&c);
   return check_report();
 }
