@@ -36,6 +36,9 @@ typedef struct track_opts {
   double guided_radius_um;
   int guided_min_points;
   double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
+  double explain_brighter; /* ... not counting views a peak over 1 / this times brighter
+                              explains (0 = off; track_detect_worker) */
+  double explain_um;   /* ... within this of its image there (sample um) */
   int localize_views;  /* 1: each peak's position from its images in the views, 0: the peak fit */
   elfm_localize_options loc;
   double localize_near_um; /* the view fit takes out the light of other objects of the
@@ -105,6 +108,9 @@ int track_opts_derive(track_opts *o, const track_given *g);
 /* Neighbours per view fit (localize_near_um): a view's window meets a few
  * images. */
 #define TRACK_NEAR_MAX 16
+/* Brighter peaks that may explain a peak's views (explain_brighter): the
+ * brightest of those whose images can reach it. */
+#define TRACK_EXPLAIN_MAX 16
 
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
@@ -147,6 +153,7 @@ typedef struct track_ctx {
     int n;               /* detections in det */
     double s;            /* peak detection CPU time */
     int rej;             /* peaks dropped by the view-support test */
+    int explained;       /* of them, those a brighter peak's images explained */
     int loc;             /* peaks placed by the view fit */
     int deep_dropped;    /* deep-only peaks too few views agreed on (deep_peak_views) */
   } *sp;
@@ -182,7 +189,9 @@ typedef struct track_ctx {
   size_t n_info, info_cap;
   elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */
   int64_t n_pieces;            /* pieces taken from long live tracks (elfm_link_take_piece) */
-  int64_t n_support_rejected, n_localized, n_guided_views, n_deep_dropped;
+  int64_t n_support_rejected, n_explained, n_localized, n_guided_views, n_deep_dropped;
+  unsigned char *keep;   /* [n_slots][max_det] the view-support test's verdicts */
+  double shift_max_px_per_um; /* the views' largest shift (explain_brighter) */
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,
       last_frame;
   int64_t first_t_us, last_t_us;

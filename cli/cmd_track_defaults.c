@@ -79,6 +79,11 @@ void track_defaults(track_opts *o)
    * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
    * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
   o->view_support = 0.3;
+  /* ... and the views a peak twice as bright explains do not count, when
+   * they are at least half of the peak's (track_detect_worker says why;
+   * docs/tracker.md "Ghosts of bright objects"). */
+  o->explain_brighter = 0.5;
+  o->explain_um = 3.7;
   /* View fit of every peak, and from the predictions of tracks with no
    * peak near (8 views must agree there): recon/localize.c and
    * docs/tracker.md "View fit". Window 5 x 5 px with weights value^P: the

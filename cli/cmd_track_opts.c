@@ -48,6 +48,11 @@ static void usage(FILE *f)
     "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
     "  --view-support F     a peak needs signal in >= F of the views sampling its voxel\n"
     "                       (ghosts: a few views; default 0.3, 0 = off)\n"
+    "  --explain-brighter F  ... not counting the views where a peak over 1/F times\n"
+    "                       brighter has its image within --explain-um R of the\n"
+    "                       peak's, when they are half of its views with signal or\n"
+    "                       more: a bright object's images line up at other depths\n"
+    "                       as ghosts (default 0.5, R 3.7; 0 = off)\n"
     "  --localize views|peak  views (default): each peak's position from its images\n"
     "                       in the views, fitted together; peak: the sub-voxel fit of\n"
     "                       the refocused peak only\n"
@@ -218,7 +223,8 @@ enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE, O_MAXDET,
   O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT,
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
-  O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
+  O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
+  O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
@@ -258,6 +264,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
       {"view-support", required_argument, 0, O_VSUP},
+      {"explain-brighter", required_argument, 0, O_EXPLAIN},
+      {"explain-um", required_argument, 0, O_EXPLAINUM},
       {"localize", required_argument, 0, O_LOC},
       {"localize-window-px", required_argument, 0, O_LOCWIN},
       {"localize-power", required_argument, 0, O_LOCPOW},
@@ -331,6 +339,16 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double(C, "--view-support", a, &o.view_support)) return CLI_USAGE;
       if (!(o.view_support >= 0 && o.view_support <= 1))
         return cli_message(C, CLI_USAGE, "--view-support must be in 0..1");
+      break;
+    case O_EXPLAIN:
+      if (!cli_parse_double(C, "--explain-brighter", a, &o.explain_brighter)) return CLI_USAGE;
+      if (!(o.explain_brighter >= 0 && o.explain_brighter < 1))
+        return cli_message(C, CLI_USAGE, "--explain-brighter must be in 0..1 (below 1)");
+      break;
+    case O_EXPLAINUM:
+      if (!cli_parse_double(C, "--explain-um", a, &o.explain_um)) return CLI_USAGE;
+      if (!(o.explain_um > 0 && o.explain_um <= 100))
+        return cli_message(C, CLI_USAGE, "--explain-um must be in (0, 100]");
       break;
     case O_LOC:
       if (!strcmp(a, "views")) o.localize_views = 1;

@@ -118,6 +118,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "volumes", (double)c->n_frames);
   cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
+  cJSON_AddNumberToObject(cnt, "peaks_explained_by_brighter", (double)c->n_explained);
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
   cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
@@ -143,6 +144,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON *par = cJSON_AddObjectToObject(j, "parameters");
   cli_recon_options_json(par, &o->recon);
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
+  cJSON_AddNumberToObject(par, "explain_brighter", o->explain_brighter);
+  cJSON_AddNumberToObject(par, "explain_um", o->explain_um);
   cJSON_AddStringToObject(par, "localize", o->localize_views ? "views" : "peak");
   cJSON_AddNumberToObject(par, "localize_window_px", o->loc.half_window_px);
   cJSON_AddNumberToObject(par, "localize_power", o->loc.power);

@@ -20,6 +20,11 @@
 #    flow 100 ms seeds 1-20 the rule still gains recall (0.9448 ->
 #    0.9485) for alpha 0.8441 -> 0.8398; 1 s seeds 1-8: 0.9010 -> 0.9070,
 #    alpha 0.7406 -> 0.7486;
+#    Since the ghost test of bright peaks (--explain-brighter, twenty-fifth
+#    session) drops many of the same deep ghosts, seed 21's precision with
+#    --deep-peak-views 0 is 0.978 and the gain 0.004; the three runs keep
+#    the settings of the time without it too. With both, over flow seeds
+#    1-20, --deep-peak-views 10 still gains precision 0.9786 -> 0.9847;
 #  - --motion stage leaves the threshold flat (the stage's velocity got
 #    noisier with the deep tracks);
 #  - bad values are usage errors; summary.json records the defaults.
@@ -32,9 +37,9 @@ fail=0
 expect_usage_errors "--deep-peak-views 1" "--deep-peak-views 300"
 
 simulate_or_skip "$tmp/flow" flow 100 21
-track_score "$tmp/flow" "$tmp/def" "$tmp/def.json" --circle-points 0
-track_score "$tmp/flow" "$tmp/flat" "$tmp/flat.json" --threshold-depth-um 0 --circle-points 0
-track_score "$tmp/flow" "$tmp/any" "$tmp/any.json" --deep-peak-views 0 --circle-points 0
+track_score "$tmp/flow" "$tmp/def" "$tmp/def.json" --circle-points 0 --explain-brighter 0
+track_score "$tmp/flow" "$tmp/flat" "$tmp/flat.json" --threshold-depth-um 0 --circle-points 0 --explain-brighter 0
+track_score "$tmp/flow" "$tmp/any" "$tmp/any.json" --deep-peak-views 0 --circle-points 0 --explain-brighter 0
 a0=$(key "$tmp/flat.json" alpha); a1=$(key "$tmp/def.json" alpha)
 r0=$(key "$tmp/flat.json" recall); r1=$(key "$tmp/def.json" recall)
 p0=$(key "$tmp/any.json" precision); p1=$(key "$tmp/def.json" precision)
