@@ -213,24 +213,39 @@ int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k)
 
 const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p) { return &p->calib; }
 
-/* The views' bilinear samples at voxel (X, Y, k), as the dense path takes
- * them: how many views sample it, how many of those are non-zero, and
- * their sum. */
+/* View v's bilinear sample at voxel (X, Y, k), as the dense path takes it,
+ * into *a; 0 when the view does not sample the voxel. (X, Y, k) must lie
+ * in the volume. */
+static int view_sample(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y, int k,
+                       int v, float *a)
+{
+  const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
+  if (X < sh->xlo || X >= sh->xhi || Y < sh->ylo || Y >= sh->yhi) return 0;
+  float w[4];
+  elfm_refocus_shift_weights(sh, w);
+  const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
+  const float *r1 = r0 + p->sw;
+  *a = w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
+  return 1;
+}
+
+static int in_volume(const elfm_refocus_plan *p, int X, int Y, int k)
+{
+  return X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz;
+}
+
+/* The views' samples at voxel (X, Y, k): how many views sample it, how
+ * many of those are non-zero, and their sum. */
 static void voxel_samples(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y, int k,
                           int *n_sampling, int *n_nonzero, double *sum)
 {
   int n = 0, ns = 0;
   double s = 0;
-  if (X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz)
+  float a;
+  if (in_volume(p, X, Y, k))
     for (int v = 0; v < p->nv; v++) {
-      const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
-      if (X < sh->xlo || X >= sh->xhi || Y < sh->ylo || Y >= sh->yhi) continue;
+      if (!view_sample(p, frame, X, Y, k, v, &a)) continue;
       ns++;
-      float w[4];
-      elfm_refocus_shift_weights(sh, w);
-      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
-      const float *r1 = r0 + p->sw;
-      const float a = w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
       n += a != 0.0f;
       s += a;
     }
@@ -273,16 +288,13 @@ int elfm_refocus_view_support_unexplained(const elfm_refocus_plan *p, const elfm
 {
   int n = 0, ns = 0, ne = 0;
   const double r2 = r_px * r_px;
-  if (X >= 0 && Y >= 0 && k >= 0 && X < p->w && Y < p->h && k < p->nz)
+  float a;
+  if (in_volume(p, X, Y, k))
     for (int v = 0; v < p->nv; v++) {
-      const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
-      if (X < sh->xlo || X >= sh->xhi || Y < sh->ylo || Y >= sh->yhi) continue;
+      if (!view_sample(p, frame, X, Y, k, v, &a)) continue;
       ns++;
-      float w[4];
-      elfm_refocus_shift_weights(sh, w);
-      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
-      const float *r1 = r0 + p->sw;
-      if (w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1] == 0.0f) continue;
+      if (a == 0.0f) continue;
+      const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
       const double u = X + sh->ix + sh->fx, uy = Y + sh->iy + sh->fy;
       int explained = 0;
       for (int o = 0; o < n_others && !explained; o++) {
