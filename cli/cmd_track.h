@@ -286,9 +286,13 @@ double track_median_speed_um_per_ms(const track_ctx *c);
 /* Objects this slow are placed ahead of themselves by the ON time surface
  * and where they are by the integral (docs/tracker.md "Integral frames":
  * worm neurons move 0.1-0.34 um/ms; flow and stage beads 2.5-4, where the
- * integral loses them); static ones (blinking beads) gain nothing from it. */
+ * integral loses them); static ones (blinking beads) gain nothing from it.
+ * Up to 0.5, not 1.0 as before: beads in random flow at 0.5-1 mm/s
+ * (flow_random seed 2, median track speed 0.85 um/ms) were found far less
+ * with the integral (recall 0.570 -> 0.153; docs/tracker.md "Scenes
+ * beyond the built-ins"). */
 #define TRACK_HINT_MIN_SPEED_UM_PER_MS 0.03
-#define TRACK_HINT_MAX_SPEED_UM_PER_MS 1.0
+#define TRACK_HINT_MAX_SPEED_UM_PER_MS 0.5
 /* The notes for pulsed light (trigger edges in the file): --repr lin on the
  * exponential surface only when the tracks move, as blink_moving's at 2.5
  * um/ms, beads at rest (blink) doing better with the default; --start

@@ -92,13 +92,23 @@ done
 # says that the integral is the setting for it (not with the integral on)
 v=$(key "$tmp/exp/summary.json" median_track_speed_um_per_ms)
 echo "worm: median track speed $v um/ms"
-awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 1.0) }' || { echo "FAIL: median speed $v"; fail=$((fail+1)); }
+awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 0.5) }' || { echo "FAIL: median speed $v"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/exp2" --dt-us 2000 \
   2>"$tmp/exp2.err" >/dev/null
 grep -q "note: the tracks move slowly.*--repr integral" "$tmp/exp2.err" || { echo "FAIL: no --repr integral note"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/int2" --dt-us 2000 \
   --repr integral 2>"$tmp/int2.err" >/dev/null
 grep -q "note: the tracks move slowly" "$tmp/int2.err" && { echo "FAIL: the note with --repr integral on"; fail=$((fail+1)); }
+# beads in a slow random flow (0.5-1 mm/s, median track ~0.85 um/ms) are
+# lost by the integral (recall 0.57 -> 0.15 on 100 ms of seed 2): no note
+"$bin" simulate flow_random --out "$tmp/slow" --duration-ms 40 --seed 2 --quiet \
+  --param 'motion.speed_mm_per_s=[0.5,1]' >/dev/null 2>&1 || { echo "FAIL: simulate slow flow"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/slow/calib.json" --events "$tmp/slow/events.raw" --out "$tmp/slowt" \
+  2>"$tmp/slow.err" >/dev/null || { echo "FAIL: track slow flow"; fail=$((fail+1)); }
+vs=$(key "$tmp/slowt/summary.json" median_track_speed_um_per_ms)
+echo "slow random flow: median track speed $vs um/ms"
+awk -v v="$vs" 'BEGIN { exit !(v > 0.5 && v < 1.5) }' || { echo "FAIL: slow flow median speed $vs"; fail=$((fail+1)); }
+grep -q "note: the tracks move slowly" "$tmp/slow.err" && { echo "FAIL: the integral note for beads at $vs um/ms"; fail=$((fail+1)); }
 for cmd in track score; do
   "$bin" $cmd --motion-fade-um-per-ms 0 >/dev/null 2>"$tmp/err"
   [ $? -eq 2 ] && grep -q -- "--motion-fade-um-per-ms" "$tmp/err" ||
