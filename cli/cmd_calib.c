@@ -3,6 +3,7 @@
  * loads and checks a calib.json and prints its summary; `calib refine` is
  * in cmd_calib_refine.c. */
 #include <getopt.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -27,7 +28,8 @@ static void usage(FILE *f)
           "from-optics builds a calibration from the microscope's optics (SPEC 2: exact\n"
           "non-paraxial view angles; views laid out at the nominal spacing around the\n"
           "sensor centre). Defaults are the EventLFM paper's system. refine fits the\n"
-          "views' centres to a recording of beads (eventlfm calib refine --help).\n"
+          "views' centres to a recording of beads (eventlfm calib refine --help). show\n"
+          "lists the views and how much of each one's crop lies on the sensor.\n"
           "  --na X              objective NA (0.75)\n"
           "  --n-medium X        refractive index of the medium (1.0)\n"
           "  --magnification X   objective magnification f_tube/f_obj (20)\n"
@@ -147,6 +149,19 @@ static int from_optics(int argc, char **argv)
   return CLI_OK;
 }
 
+/* The fraction of view v's crop (view_w x view_h px around its centre, the
+ * part the refocus reads) that lies on the sensor. */
+static double on_sensor_frac(const elfm_calib *c, const elfm_view *v)
+{
+  const double x0 = v->cx_px - 0.5 * c->view_w_px, x1 = x0 + c->view_w_px;
+  const double y0 = v->cy_px - 0.5 * c->view_h_px, y1 = y0 + c->view_h_px;
+  const double ox = fmin(x1, c->sensor_width_px) - fmax(x0, 0);
+  const double oy = fmin(y1, c->sensor_height_px) - fmax(y0, 0);
+  if (ox <= 0 || oy <= 0) return 0;
+  const double f = ox * oy / ((double)c->view_w_px * c->view_h_px);
+  return f > 1 - 1e-9 ? 1 : f; /* x1 - x0 may round a hair below the width */
+}
+
 static int show(int argc, char **argv)
 {
   if (argc != 2) {
@@ -164,11 +179,28 @@ static int show(int argc, char **argv)
   printf("sensor %dx%d, %.3f um pixels, %.5f um/px, view %dx%d, z %g..%g step %g (%d planes)\n",
          c.sensor_width_px, c.sensor_height_px, c.pixel_um, c.um_per_px, c.view_w_px,
          c.view_h_px, c.z_min_um, c.z_max_um, c.z_step_um, elfm_calib_n_planes(&c));
+  /* Why the crop's share on the sensor: a grid wider than the sensor (the
+   * paper's 5 x 5 overhangs the EVK4's 720 rows; on a 640 x 480 sensor its
+   * corner views are gone) leaves objects far from the axis seen by fewer
+   * views, and recall falls there (docs/tracker.md "Scenes beyond the
+   * built-ins"). */
+  int whole = 0, part = 0, off = 0, least = -1;
   for (int k = 0; k < c.n_views; k++) {
     const elfm_view *v = &c.views[k];
-    printf("view %2d (i=%+d, j=%+d): centre (%8.2f, %8.2f) px, shift (%+.5f, %+.5f) px/um\n", k,
-           v->i, v->j, v->cx_px, v->cy_px, v->dx_px_per_um, v->dy_px_per_um);
+    const double f = on_sensor_frac(&c, v);
+    printf("view %2d (i=%+d, j=%+d): centre (%8.2f, %8.2f) px, shift (%+.5f, %+.5f) px/um, "
+           "%3.0f %% on the sensor\n",
+           k, v->i, v->j, v->cx_px, v->cy_px, v->dx_px_per_um, v->dy_px_per_um, 100 * f);
+    if (f >= 1) whole++;
+    else if (f <= 0) off++;
+    else {
+      part++;
+      if (least < 0 || f < on_sensor_frac(&c, &c.views[least])) least = k;
+    }
   }
+  printf("%d of %d views wholly on the sensor, %d partly", whole, c.n_views, part);
+  if (part) printf(" (view %d least: %.0f %%)", least, 100 * on_sensor_frac(&c, &c.views[least]));
+  printf(", %d off it\n", off);
   return CLI_OK;
 }
 

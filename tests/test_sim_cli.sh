@@ -59,6 +59,18 @@ awk -v r="$r" -v r0="$r0" 'BEGIN { exit !(r < 0.5 && r0 > 0.9) }' ||
 check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
 check show 0 "$bin" calib show "$dir/c.json"
 grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
+# each view's crop on the sensor: the paper's 5 x 5 on the EVK4 overhangs
+# its 720 rows by 21-22 px top and bottom (rows j = -2, +2 at 85-86 %); on a
+# 640 x 480 sensor the corner views keep 1-2 %; on 320 x 240 most are gone
+for s in "1280x720:15 of 25 views wholly on the sensor, 10 partly (view 0 least: 85 %), 0 off it" \
+         "640x480:9 of 25 views wholly on the sensor, 16 partly (view 0 least: 1 %), 0 off it" \
+         "320x240:1 of 25 views wholly on the sensor, 8 partly (view 6 least: 14 %), 16 off it"; do
+  check "from-optics-${s%%:*}" 0 "$bin" calib from-optics --sensor "${s%%:*}" --out "$dir/s.json"
+  check "show-${s%%:*}" 0 "$bin" calib show "$dir/s.json"
+  grep -qxF "${s#*:}" "$dir.out" || { echo "FAIL: calib show ${s%%:*}: $(tail -n 1 "$dir.out")"; fail=$((fail+1)); }
+done
+grep -q "view 24 .*   0 % on the sensor" "$dir.out" || { echo "FAIL: 320x240 view 24 not off"; fail=$((fail+1)); }
+grep -q "view 12 .* 100 % on the sensor" "$dir.out" || { echo "FAIL: 320x240 centre view not whole"; fail=$((fail+1)); }
 check from-optics-no-out 2 "$bin" calib from-optics
 check from-optics-bad-na 2 "$bin" calib from-optics --na x --out "$dir/c2.json"
 check from-optics-na-range 1 "$bin" calib from-optics --na 1.5 --out "$dir/c2.json"
