@@ -181,6 +181,10 @@ void cli_recon_options_json(struct cJSON *par, const elfm_recon_options *ro);
 struct cJSON *cli_summary_start(const char *calib, const char *key, const char *path,
                                 const elfm_error *run_err, const elfm_recon_options *ro,
                                 struct cJSON **par);
+/* A summary's "timing" object from the driver's stats, as recon and traces
+ * write it: span, wall, the read / frame / refocus / output split, the
+ * rates and the peak resident memory. */
+void cli_summary_timing(struct cJSON *root, const elfm_recon_stats *s);
 /* Write root as indented JSON and a newline to path, then free root (also
  * on failure). Errors name the path. */
 elfm_status cli_json_write(struct cJSON *root, const char *path, elfm_error *err);

@@ -531,6 +531,21 @@ cJSON *cli_summary_start(const char *calib, const char *key, const char *path,
   return root;
 }
 
+void cli_summary_timing(cJSON *root, const elfm_recon_stats *s)
+{
+  cJSON *t = cJSON_AddObjectToObject(root, "timing");
+  cJSON_AddNumberToObject(t, "span_s", s->span_s);
+  cJSON_AddNumberToObject(t, "wall_s", s->wall_s);
+  cJSON_AddNumberToObject(t, "read_s", s->read_s);
+  cJSON_AddNumberToObject(t, "frame_s", s->frame_s);
+  cJSON_AddNumberToObject(t, "refocus_s", s->refocus_s);
+  cJSON_AddNumberToObject(t, "output_s", s->callback_s);
+  cJSON_AddNumberToObject(t, "events_per_s", s->events_per_s);
+  cJSON_AddNumberToObject(t, "volumes_per_s", s->volumes_per_s);
+  cJSON_AddNumberToObject(t, "realtime_factor", s->realtime_factor);
+  cJSON_AddNumberToObject(t, "peak_rss_mb", cli_peak_rss_mb());
+}
+
 int cli_json_save(cJSON *root, const char *path, const char *cmd)
 {
   elfm_error err;

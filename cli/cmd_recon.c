@@ -121,17 +121,7 @@ static int write_summary(const recon_args *a, const recon_out *o, const elfm_cal
   cJSON_AddNumberToObject(c, "volumes_dense", (double)s->frames_dense);
   cJSON_AddNumberToObject(c, "saved_volumes", (double)o->saved_volumes);
   cJSON_AddNumberToObject(c, "saved_mips", (double)o->saved_mips);
-  cJSON *t = cJSON_AddObjectToObject(root, "timing");
-  cJSON_AddNumberToObject(t, "span_s", s->span_s);
-  cJSON_AddNumberToObject(t, "wall_s", s->wall_s);
-  cJSON_AddNumberToObject(t, "read_s", s->read_s);
-  cJSON_AddNumberToObject(t, "frame_s", s->frame_s);
-  cJSON_AddNumberToObject(t, "refocus_s", s->refocus_s);
-  cJSON_AddNumberToObject(t, "output_s", s->callback_s);
-  cJSON_AddNumberToObject(t, "events_per_s", s->events_per_s);
-  cJSON_AddNumberToObject(t, "volumes_per_s", s->volumes_per_s);
-  cJSON_AddNumberToObject(t, "realtime_factor", s->realtime_factor);
-  cJSON_AddNumberToObject(t, "peak_rss_mb", cli_peak_rss_mb());
+  cli_summary_timing(root, s);
   char path[4200];
   snprintf(path, sizeof path, "%s/summary.json", o->dir);
   return cli_json_save(root, path, "recon");

@@ -152,12 +152,7 @@ static int write_summary(const traces_args *a, size_t n_obj, const traces_run *t
   cJSON_AddNumberToObject(c, "events", (double)s->events);
   cJSON_AddNumberToObject(c, "frames", (double)s->frames);
   cJSON_AddNumberToObject(c, "rows", (double)t->n_rows);
-  cJSON *tm = cJSON_AddObjectToObject(root, "timing");
-  cJSON_AddNumberToObject(tm, "span_s", s->span_s);
-  cJSON_AddNumberToObject(tm, "wall_s", s->wall_s);
-  cJSON_AddNumberToObject(tm, "events_per_s", s->events_per_s);
-  cJSON_AddNumberToObject(tm, "realtime_factor", s->realtime_factor);
-  cJSON_AddNumberToObject(tm, "peak_rss_mb", cli_peak_rss_mb());
+  cli_summary_timing(root, s); /* refocus_s: the median filter alone (no_refocus) */
   char path[4200];
   snprintf(path, sizeof path, "%s/traces_summary.json", a->out);
   return cli_json_save(root, path, "traces");
