@@ -5,7 +5,9 @@
 # plain view-support test passes the ghosts a bright bead's images make at
 # other depths, and the detection precision falls (0.83 on 100 ms of seed
 # 2); with the test it comes back without costing recall; with it off no
-# peak is counted as explained. Out-of-range values are usage errors.
+# peak is counted as explained. With 60 beads (seed 1, 50 ms) the ghosts of
+# many beads overlap: the test lifts precision 0.70 -> 0.90 and alpha 0.72
+# -> 0.76 (asked: +0.1 and not lower). Out-of-range values are usage errors.
 # Usage: track_explain.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -27,5 +29,13 @@ awk -v a="$e1" 'BEGIN { exit !(a > 50) }' || { echo "FAIL: only $e1 peaks explai
 expect_gain "$p0" "$p1" 0.08 "precision $p0 -> $p1"
 expect_gain 0.97 "$p1" 0 "precision $p1 with the test, below 0.97"
 expect_gain "$r0" "$r1" -0.01 "recall $r0 -> $r1"
+simulate_or_skip "$tmp/dense" flow 50 1 --param objects.count=60
+track_score "$tmp/dense" "$tmp/doff" "$tmp/doff.json" --explain-brighter 0
+track_score "$tmp/dense" "$tmp/don" "$tmp/don.json"
+p0=$(key "$tmp/doff.json" precision); p1=$(key "$tmp/don.json" precision)
+a0=$(key "$tmp/doff.json" alpha); a1=$(key "$tmp/don.json" alpha)
+echo "60 beads: explain off: precision $p0 alpha $a0; on: precision $p1 alpha $a1"
+expect_gain "$p0" "$p1" 0.1 "60 beads: precision $p0 -> $p1"
+expect_gain "$a0" "$a1" 0 "60 beads: alpha $a0 -> $a1"
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
