@@ -360,9 +360,9 @@ static int explained_support(const track_ctx *c, const elfm_volume *v,
     }
   }
   if (no == 0) return n;
-  int ns = 0, n_expl = 0;
+  int n_expl = 0;
   const int nu = elfm_refocus_view_support_unexplained(plan, frame, X, Y, K,
-                                                       (const double(*)[3])others, no, r_px, &ns,
+                                                       (const double(*)[3])others, no, r_px, NULL,
                                                        &n_expl);
   return 2 * n_expl >= n ? nu : n;
 }
