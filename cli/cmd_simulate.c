@@ -17,7 +17,7 @@ typedef struct simulate_opts {
   int have_seed;
   int64_t seed;
   double duration_ms; /* < 0: the scene's */
-  const char *params[MAX_PARAMS];
+  const char *params[MAX_PARAMS + 1]; /* + the duration */
   int n_params;
   int quiet, no_truth, list;
 } simulate_opts;
@@ -38,7 +38,10 @@ static void usage(FILE *f)
           "                     same seed, same bytes\n"
           "  --duration-ms D    simulated duration (default: the scene's)\n"
           "  --param key=value  override a scene field, e.g. objects.count=100,\n"
-          "                     sensor.shot_noise_hz=0 (repeatable)\n"
+          "                     sensor.shot_noise_hz=0 (repeatable; all are set, then\n"
+          "                     the scene is checked once, so fields that must agree,\n"
+          "                     such as a stage's motion.v0_mm_per_s and v1, change\n"
+          "                     together)\n"
           "  --no-truth         skip truth.csv\n"
           "  --quiet            no progress on stderr\n"
           "  --list             list the built-in scenes\n"
@@ -121,13 +124,14 @@ int cmd_simulate(int argc, char **argv)
   elfm_scene *s = NULL;
   if (elfm_scene_load(o.scene, &s, &err)) return cli_fail("simulate", &err);
   int rc = CLI_OK;
-  for (int i = 0; i < o.n_params && rc == CLI_OK; i++)
-    if (elfm_scene_set_param(s, o.params[i], &err)) rc = cli_fail("simulate", &err);
-  if (rc == CLI_OK && o.duration_ms > 0) {
-    char kv[64];
+  /* every --param and the duration in one edit, checked once: fields that
+   * must agree (a stage's v0 and v1) can then change together */
+  char kv[64];
+  if (o.duration_ms > 0) {
     snprintf(kv, sizeof kv, "duration_ms=%.17g", o.duration_ms);
-    if (elfm_scene_set_param(s, kv, &err)) rc = cli_fail("simulate", &err);
+    o.params[o.n_params++] = kv;
   }
+  if (elfm_scene_set_params(s, o.params, o.n_params, &err)) rc = cli_fail("simulate", &err);
   if (rc == CLI_OK && o.have_seed && elfm_scene_set_seed(s, (uint64_t)o.seed, &err))
     rc = cli_fail("simulate", &err);
   if (rc == CLI_OK) {

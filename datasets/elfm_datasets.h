@@ -56,6 +56,12 @@ const char *elfm_scene_builtin_name(int k);
  * "duration_ms=50". The key must exist in the scene; the whole scene is
  * checked again and the layout rebuilt. On error the scene is unchanged. */
 elfm_status elfm_scene_set_param(elfm_scene *s, const char *key_eq_value, elfm_error *err);
+/* Several at once: every field set, then the scene checked once, so that
+ * fields that must agree can change together (a stage's v0_mm_per_s and
+ * v1_mm_per_s; one at a time, the first edit leaves them disagreeing and
+ * is refused). On error the scene is unchanged. */
+elfm_status elfm_scene_set_params(elfm_scene *s, const char *const *key_eq_values, int n,
+                                  elfm_error *err);
 
 /* Rebuild the random layout and noise streams from `seed` (the scene file's
  * "seed" field is the default). */

@@ -550,9 +550,11 @@ static elfm_status scene_reparse(elfm_scene *s, const char *json, uint64_t seed,
   return ELFM_OK;
 }
 
-elfm_status elfm_scene_set_param(elfm_scene *s, const char *kv, elfm_error *err)
+/* Set one "key.path=value" in the scene's JSON tree `root`: only existing
+ * keys (catches typos); *seed_param = 1 when it is the scene's own "seed". */
+static elfm_status json_set_path(const elfm_scene *s, cJSON *root, const char *kv,
+                                 int *seed_param, elfm_error *err)
 {
-  if (!s || !kv) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "set_param: NULL argument");
   const char *eq = strchr(kv, '=');
   if (!eq || eq == kv || !eq[1])
     return elfm_error_set(err, ELFM_ERR_INVALID, s->source, -1,
@@ -566,13 +568,7 @@ elfm_status elfm_scene_set_param(elfm_scene *s, const char *kv, elfm_error *err)
   const char *val = eq + 1;
   cJSON *value = cJSON_Parse(val);
   if (!value) value = cJSON_CreateString(val); /* bare words are strings: motion.type=helix */
-  cJSON *root = cJSON_Parse(s->json);
-  if (!root || !value) {
-    cJSON_Delete(root);
-    cJSON_Delete(value);
-    return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
-  }
-  /* Walk the dotted path; only existing keys may be set (catches typos). */
+  if (!value) return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
   cJSON *parent = root, *item = NULL;
   char *save = NULL, *tok = strtok_r(key, ".", &save);
   const char *last = NULL;
@@ -587,25 +583,49 @@ elfm_status elfm_scene_set_param(elfm_scene *s, const char *kv, elfm_error *err)
     if (!item) break;
     if (tok) parent = item;
   }
-  elfm_status st;
   if (!item || !last) {
     cJSON_Delete(value);
-    st = elfm_error_set(err, ELFM_ERR_INVALID, s->source, -1,
-                        "parameter \"%.*s\": no such key in the scene", (int)klen, kv);
-  } else {
-    cJSON_ReplaceItemInObjectCaseSensitive(parent, last, value);
+    return elfm_error_set(err, ELFM_ERR_INVALID, s->source, -1,
+                          "parameter \"%.*s\": no such key in the scene", (int)klen, kv);
+  }
+  cJSON_ReplaceItemInObjectCaseSensitive(parent, last, value);
+  if (!strcmp(last, "seed") && parent == root) *seed_param = 1;
+  return ELFM_OK;
+}
+
+elfm_status elfm_scene_set_params(elfm_scene *s, const char *const *kvs, int n, elfm_error *err)
+{
+  if (!s || (n > 0 && !kvs) || n < 0)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "set_params: NULL argument");
+  for (int i = 0; i < n; i++)
+    if (!kvs[i]) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "set_params: NULL argument");
+  if (n == 0) return ELFM_OK;
+  cJSON *root = cJSON_Parse(s->json);
+  if (!root) return elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
+  /* Every edit first, then one check of the whole scene: fields that must
+   * agree (a stage's v0 and v1 without an acceleration, z_min below z_max)
+   * can then change together, which one edit at a time cannot. */
+  int seed_param = 0;
+  elfm_status st = ELFM_OK;
+  for (int i = 0; i < n && st == ELFM_OK; i++) st = json_set_path(s, root, kvs[i], &seed_param, err);
+  if (st == ELFM_OK) {
     char *text = cJSON_PrintUnformatted(root);
     if (!text) st = elfm_error_set(err, ELFM_ERR_NOMEM, s->source, -1, "out of memory");
     else {
-      /* The scene's own "seed" may be the parameter; otherwise keep a seed
+      /* The scene's own "seed" may be a parameter; otherwise keep a seed
        * set earlier through set_seed. */
-      int seed_param = !strcmp(last, "seed") && parent == root;
       st = scene_reparse(s, text, s->seed, !seed_param, err);
       cJSON_free(text);
     }
   }
   cJSON_Delete(root);
   return st;
+}
+
+elfm_status elfm_scene_set_param(elfm_scene *s, const char *kv, elfm_error *err)
+{
+  if (!s || !kv) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "set_param: NULL argument");
+  return elfm_scene_set_params(s, &kv, 1, err);
 }
 
 elfm_status elfm_scene_set_seed(elfm_scene *s, uint64_t seed, elfm_error *err)

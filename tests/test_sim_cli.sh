@@ -56,6 +56,13 @@ r0=$(awk -F, 'NR > 1 && $4 == 1 { if ($1 < 30000) a++; else b++ } END { printf "
 echo "ratchet: ON events second / first 30 ms: $r (threshold sigma 0.03), $r0 (sigma 0)"
 awk -v r="$r" -v r0="$r0" 'BEGIN { exit !(r < 0.5 && r0 > 0.9) }' ||
   { echo "FAIL: ratchet ratios $r, $r0"; fail=$((fail+1)); }
+# fields that must agree change together: a stage at 1 mm/s needs v0 and v1
+# both (one alone is refused: unequal speeds need an acceleration)
+check stage-speed 0 "$bin" simulate stage --out "$dir/st1" --duration-ms 5 --quiet \
+  --param motion.v0_mm_per_s=1 --param motion.v1_mm_per_s=1
+check stage-speed-half 1 "$bin" simulate stage --out "$dir/st2" --duration-ms 5 --quiet \
+  --param motion.v0_mm_per_s=1
+grep -q "accel_mm_per_s2" "$dir.err" || { echo "FAIL: stage-speed-half: $(cat "$dir.err")"; fail=$((fail+1)); }
 check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
 check show 0 "$bin" calib show "$dir/c.json"
 grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
