@@ -539,6 +539,52 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
   *n_io = n;
 }
 
+/* Each detection's distance to the nearest other one of its frame, in the
+ * linker's metric (dz / kz), into nearest_um (0 when alone): sorted by x,
+ * each scans outwards while |dx| can still beat its best. Why: where two
+ * objects come close, tracks may exchange them, and a user without ground
+ * truth needs to know where. With the linker's claims and the gap frames
+ * it points at 92-98 % of the exchanges of beads between tracks in 40-52 %
+ * of the tracks' stretches (flow, flow_random; docs/tracker.md "Where
+ * identities are uncertain"). */
+typedef struct xkey {
+  double x;
+  int i;
+} xkey;
+
+static int cmp_xkey_x(const void *a, const void *b)
+{
+  const double xa = ((const xkey *)a)->x, xb = ((const xkey *)b)->x;
+  return (xa > xb) - (xa < xb);
+}
+
+static elfm_status track_nearest(elfm_detection *det, int n, double kz, elfm_error *err)
+{
+  for (int i = 0; i < n; i++) det[i].nearest_um = 0;
+  if (n < 2) return ELFM_OK;
+  xkey *k = malloc((size_t)n * sizeof *k);
+  if (!k) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (nearest)");
+  for (int i = 0; i < n; i++) k[i] = (xkey){det[i].x_um, i};
+  qsort(k, (size_t)n, sizeof *k, cmp_xkey_x);
+  for (int a = 0; a < n; a++) {
+    const elfm_detection *p = &det[k[a].i];
+    double best2 = INFINITY;
+    for (int dir = -1; dir <= 1; dir += 2)
+      for (int b = a + dir; b >= 0 && b < n; b += dir) {
+        const double dx = k[b].x - k[a].x;
+        if (dx * dx >= best2) break;
+        const elfm_detection *q = &det[k[b].i];
+        const double dy = q->y_um - p->y_um, dz = (q->z_um - p->z_um) / kz;
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        if (d2 < best2) best2 = d2;
+      }
+    /* a twin at the same place: a hair above 0, which means "measured" */
+    det[k[a].i].nearest_um = isfinite(best2) ? fmax(sqrt(best2), 1e-6) : 0;
+  }
+  free(k);
+  return ELFM_OK;
+}
+
 /* Calling thread, frame order: link the slot's detections, write them. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
 {
@@ -584,7 +630,9 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     }
   }
   if (guided_fit) guided_view_fit(c, v, slot, c->pred, np, det, &n);
-  elfm_status st = track_fill_keep(c, c->slot_frame[slot], v->frame, err);
+  elfm_status st = track_nearest(det, n, o->link.kz, err);
+  if (st != ELFM_OK) return st;
+  st = track_fill_keep(c, c->slot_frame[slot], v->frame, err);
   if (st != ELFM_OK) return st;
   st = elfm_link_step(c->lk, v->frame, v->t_us, det, n, err);
   if (st != ELFM_OK) return st;

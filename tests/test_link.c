@@ -760,5 +760,33 @@ int main(void)
     CHECK(elfm_link_create(&ob, &err) == NULL);
   }
 
+  /* claims: two tracks converging on a point, one detection there and one
+   * far away. The shared one lies within both gates (claims 2), the far
+   * one within none (0); on the frames before, each track's own detection
+   * lies in its gate only (1). */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    CHECK(l != NULL);
+    elfm_detection d[2];
+    int ones = 0;
+    for (int f = 0; f < 9 && l; f++) { /* 8 um apart or more: each in its own gate */
+      d[0] = mk(-20 + 2.0 * f, 0, 0);
+      d[1] = mk(20 - 2.0 * f, 0, 0);
+      d[0].claims = d[1].claims = 77; /* set by the step */
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, 2, &err), &err);
+      if (f >= 1) ones += d[0].claims == 1 && d[1].claims == 1;
+      else CHECK(d[0].claims == 0 && d[1].claims == 0); /* no track yet */
+    }
+    CHECK_EQ_INT(ones, 8);
+    if (l) {
+      d[0] = mk(0, 0, 0);    /* 2 um from where each track is expected next */
+      d[1] = mk(0, 60, 0);   /* far from both */
+      CHECK_OK(elfm_link_step(l, 9, T0 + 9000, d, 2, &err), &err);
+      CHECK_EQ_INT(d[0].claims, 2);
+      CHECK_EQ_INT(d[1].claims, 0);
+    }
+    elfm_link_free(l);
+  }
+
   return check_report();
 }

@@ -290,6 +290,14 @@ int main(void)
         c_in = elfm_table_col(tb, "intensity");
     CHECK(c_id == 0 && c_fr == 1 && c_t == 2 && c_x == 3 && c_rx == 6);
     CHECK(c_vx >= 0 && c_in >= 0);
+    /* nearest_um, empty where not measured (these points: 0), and claims,
+     * empty on gap frames (no point there) */
+    const int c_nn = elfm_table_col(tb, "nearest_um"), c_cl = elfm_table_col(tb, "claims");
+    CHECK(c_nn == 19 && c_cl == 20);
+    for (size_t r = 0; r < tb->n_rows; r++) {
+      CHECK(isnan(elfm_table_get(tb, r, c_nn)));
+      CHECK(isnan(elfm_table_get(tb, r, c_cl)) == isnan(elfm_table_get(tb, r, c_rx)));
+    }
     int gaps = 0;
     for (size_t r = 0; r < tb->n_rows; r++) {
       double fr = elfm_table_get(tb, r, c_fr);
@@ -326,9 +334,11 @@ int main(void)
     elfm_detection dd[2];
     memset(dd, 0, sizeof dd);
     dd[0].frame = 3; dd[0].t_us = 4000; dd[0].x_um = 1; dd[0].intensity = 80;
-    dd[0].width_um = 2.5; dd[0].fit_sd_px = 0.125; dd[0].weak = 1;
+    dd[0].width_um = 2.5; dd[0].fit_sd_px = 0.125; dd[0].weak = 1; dd[0].nearest_um = 7.25;
+    dd[0].claims = 2;
     dd[1] = dd[0];
     dd[1].width_um = 0; dd[1].fit_sd_px = 0; dd[1].weak = 0; dd[1].view_fit = 1;
+    dd[1].nearest_um = 0;
     f = fopen(p_det, "w");
     CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
     CHECK_OK(elfm_detections_write(f, p_det, dd, 2, &err), &err);
@@ -344,6 +354,12 @@ int main(void)
       CHECK(elfm_table_get(tb, 0, cv) == 0 && elfm_table_get(tb, 0, ck) == 1);
       CHECK(isnan(elfm_table_get(tb, 1, cw)) && isnan(elfm_table_get(tb, 1, cs)));
       CHECK(elfm_table_get(tb, 1, cv) == 1 && elfm_table_get(tb, 1, ck) == 0);
+      const int cn = elfm_table_col(tb, "nearest_um");
+      CHECK_EQ_INT(cn, 13);
+      CHECK_NEAR(elfm_table_get(tb, 0, cn), 7.25, 1e-9);
+      CHECK(isnan(elfm_table_get(tb, 1, cn)));
+      const int cc = elfm_table_col(tb, "claims");
+      CHECK(cc == 14 && elfm_table_get(tb, 0, cc) == 2 && elfm_table_get(tb, 1, cc) == 2);
     }
     elfm_table_free(tb);
   }

@@ -237,7 +237,9 @@ void elfm_link_free(elfm_linker *l);
 /* Link the detections of one frame. Frames must come in increasing order
  * (gaps in the numbering count as missed frames); t_us must not decrease.
  * det may be modified (lag correction, see options) and its frame/t_us
- * fields are set to `frame`/`t_us`. NaN positions are an ELFM_ERR_NUMERIC. */
+ * fields are set to `frame`/`t_us`, its `claims` to the number of live
+ * tracks that had it within their gate (step 2's candidates, before the
+ * rescue). NaN positions are an ELFM_ERR_NUMERIC. */
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det,
                            int n, elfm_error *err);
 

@@ -50,6 +50,13 @@ typedef struct elfm_detection {
                                 second moment, in the peak's plane, of the values
                                 above half the peak's (a window of +-6 voxels); 0
                                 when not measured (view-fit points) */
+  double nearest_um;         /* how far the nearest other detection of its frame
+                                lies, in the linker's metric (dz / its kz); where
+                                it is small, tracks may exchange objects. 0 when
+                                not measured (set by `eventlfm track`) */
+  int claims;                /* live tracks whose gate held it when it was linked
+                                (elfm_link_step sets it): 2 or more, tracks
+                                competed for it */
 } elfm_detection;
 
 typedef enum elfm_refine_mode {

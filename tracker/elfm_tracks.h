@@ -151,7 +151,9 @@ void elfm_track_store_clear(elfm_track_store *s);
  * `path` used in error messages; write errors are ELFM_ERR_IO. ---- */
 
 /* detections.csv: header then rows
- * frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um */
+ * frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um,
+ * width_um,fit_sd_px,view_fit,weak,nearest_um (width, scatter and nearest
+ * empty when not measured: 0 in the struct) */
 elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err);
 elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d, int n,
                                   elfm_error *err);
@@ -161,7 +163,9 @@ elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detectio
  * raw_z_um (empty on gap frames), vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,
  * intensity (empty on gap frames), sd_x_um,sd_y_um,sd_z_um,
  * sd_vx_um_per_ms,sd_vy_um_per_ms,sd_vz_um_per_ms (empty where undetermined:
- * e.g. the velocity of a one-point track). All fields numeric or empty, so
+ * e.g. the velocity of a one-point track), nearest_um (the real point's
+ * elfm_detection.nearest_um; empty on gap frames and where not measured).
+ * All fields numeric or empty, so
  * elfm_table reads it back; the chosen model goes to summary.json.
  * A track that is not smoothed is an ELFM_ERR_INVALID. */
 elfm_status elfm_tracks_write_csv_header(FILE *f, const char *path, elfm_error *err);

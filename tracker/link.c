@@ -568,8 +568,13 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   }
 
   /* 2. Candidates from the k-d tree over this frame's detections (or all
-   * pairs when brute_force is set): link_candidates.c. */
+   * pairs when brute_force is set): link_candidates.c. Each detection's
+   * claims, for the user: where two tracks competed for one detection their
+   * identities may have been exchanged. */
   if ((st = elfm_link_candidates(l, det, nt, nd, err)) != ELFM_OK) return st;
+  for (size_t j = 0; j < nd; j++) det[j].claims = 0;
+  for (size_t i = 0; i < nt; i++)
+    for (int c = 0; c < l->n_cand[i]; c++) det[l->cand[i * (size_t)o->max_candidates + c].det].claims++;
 
   /* 3. Connected groups (union-find over tracks 0..nt-1, detections
    * nt..nt+nd-1), each solved optimally. */

@@ -356,6 +356,8 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   det->view_fit = 0;
   det->deep_only = 0;
   det->fit_sd_px = 0;
+  det->nearest_um = 0;
+  det->claims = 0;
   det->frame = v->frame;
   det->t_us = v->t_us;
   det->x_um = elfm_volume_x_um(v, x + ox);

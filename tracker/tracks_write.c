@@ -27,7 +27,7 @@ static void put_num(FILE *f, double v, const char *fmt)
 elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err)
 {
   fputs("frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um,"
-        "width_um,fit_sd_px,view_fit,weak\n", f);
+        "width_um,fit_sd_px,view_fit,weak,nearest_um,claims\n", f);
   return io_check(f, path, err);
 }
 
@@ -46,7 +46,9 @@ elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detectio
     /* 0 in the struct means "not measured": written empty */
     put_num(f, d[i].width_um > 0 ? d[i].width_um : NAN, "%.4f");
     put_num(f, d[i].fit_sd_px > 0 ? d[i].fit_sd_px : NAN, "%.4f");
-    fprintf(f, ",%d,%d\n", d[i].view_fit ? 1 : 0, d[i].weak ? 1 : 0);
+    fprintf(f, ",%d,%d", d[i].view_fit ? 1 : 0, d[i].weak ? 1 : 0);
+    put_num(f, d[i].nearest_um > 0 ? d[i].nearest_um : NAN, "%.3f");
+    fprintf(f, ",%d\n", d[i].claims);
   }
   return io_check(f, path, err);
 }
@@ -55,7 +57,7 @@ elfm_status elfm_tracks_write_csv_header(FILE *f, const char *path, elfm_error *
 {
   fputs("track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um,"
         "vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,intensity,sd_x_um,sd_y_um,sd_z_um,"
-        "sd_vx_um_per_ms,sd_vy_um_per_ms,sd_vz_um_per_ms\n", f);
+        "sd_vx_um_per_ms,sd_vy_um_per_ms,sd_vz_um_per_ms,nearest_um,claims\n", f);
   return io_check(f, path, err);
 }
 
@@ -84,7 +86,9 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
     put_num(f, r >= 0 ? t->pts[r].intensity : NAN, "%.6g");
     for (int a = 0; a < 3; a++) put_num(f, sp[a], "%.4f");
     for (int a = 0; a < 3; a++) put_num(f, sv[a], "%.5f");
-    fputc('\n', f);
+    put_num(f, r >= 0 && t->pts[r].nearest_um > 0 ? t->pts[r].nearest_um : NAN, "%.3f");
+    if (r >= 0) fprintf(f, ",%d\n", t->pts[r].claims);
+    else fputs(",\n", f);
   }
   return io_check(f, path, err);
 }
