@@ -185,6 +185,7 @@ static int show(int argc, char **argv)
    * views, and recall falls there (docs/tracker.md "Scenes beyond the
    * built-ins"). */
   int whole = 0, part = 0, off = 0, least = -1;
+  double least_f = 1;
   for (int k = 0; k < c.n_views; k++) {
     const elfm_view *v = &c.views[k];
     const double f = on_sensor_frac(&c, v);
@@ -195,11 +196,14 @@ static int show(int argc, char **argv)
     else if (f <= 0) off++;
     else {
       part++;
-      if (least < 0 || f < on_sensor_frac(&c, &c.views[least])) least = k;
+      if (least < 0 || f < least_f) {
+        least = k;
+        least_f = f;
+      }
     }
   }
   printf("%d of %d views wholly on the sensor, %d partly", whole, c.n_views, part);
-  if (part) printf(" (view %d least: %.0f %%)", least, 100 * on_sensor_frac(&c, &c.views[least]));
+  if (part) printf(" (view %d least: %.0f %%)", least, 100 * least_f);
   printf(", %d off it\n", off);
   return CLI_OK;
 }
