@@ -68,6 +68,7 @@ int cmd_track(int argc, char **argv)
   elfm_calib calib;
   if (elfm_calib_load(o.calib, &calib, &err) != ELFM_OK) return cli_fail(C, &err);
   if (!cli_apply_planes(C, o.planes_um, o.calib, &calib)) return CLI_USAGE;
+  track_plane_step(&o, &calib);
   if (o.smooth.motion_lead_um != 0 || o.smooth.motion_delay_us != 0) {
     /* The motion bias of a fit over the views (elfm_smooth.h): each view's
      * image moves with the object's lateral motion plus its z motion times

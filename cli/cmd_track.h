@@ -56,6 +56,12 @@ typedef struct track_opts {
                           the gap's frame (odd, 1..TRACK_FILL_MAX_FRAMES; 1 = off) */
   int fill_ends;       /* follow a finished track on past its last point the same way */
   int motion_lead_auto; /* 1: the lead from the in-focus peaks' widths (track_motion_lead_um) */
+  double plane_shift_px; /* without --z-step-um: every m-th of the calibration's planes, the
+                            outermost view moving <= this between them (0 = all of them;
+                            track_plane_step) */
+  int plane_every;      /* the m taken (1: the calibration's planes), for summary.json */
+  int thr_defaulted;    /* 1 absolute, 2 hysteresis_low, 4 absolute_min: track's own
+                           defaults, which coarser planes scale (track_plane_step) */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -104,6 +110,21 @@ typedef struct track_given {
 /* Fill in the derived defaults of a parsed *o (g: what was given) and
  * check the guided search's values: CLI_OK, or a usage error (shown). */
 int track_opts_derive(track_opts *o, const track_given *g);
+
+/* Without --z-step-um: take every m-th of *cal's planes, m the largest
+ * whose outermost view moves at most o->plane_shift_px between planes and
+ * that divides the planes' span (so the first and last plane stay); keep
+ * the peak fit's axial window (fit_half_z) as wide in um, and lower the
+ * default absolute thresholds by what the wider sampling costs a peak
+ * (TRACK_AXIAL_SIGMA_UM). Sets o->plane_every. */
+void track_plane_step(track_opts *o, elfm_calib *cal);
+
+/* The refocused peaks' axial sigma on the paper's optics: the median
+ * sigma_z of the peak fits on flow and stage at 2 um planes was 4.6-6 um
+ * (stage 200 ms seeds 1-5, by depth). A bead between planes h apart sits
+ * up to exp(-(h/2)^2 / (2 s^2)) below its peak's height in the nearest
+ * plane. */
+#define TRACK_AXIAL_SIGMA_UM 5.0
 
 /* Neighbours per view fit (localize_near_um): a view's window meets a few
  * images. */

@@ -112,6 +112,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(vol, "um_per_px", c->calib->um_per_px);
   cJSON_AddNumberToObject(vol, "z_min_um", c->calib->z_min_um);
   cJSON_AddNumberToObject(vol, "z_step_um", c->calib->z_step_um);
+  /* every m-th of the calibration's planes (--plane-shift-px; 1: all) */
+  cJSON_AddNumberToObject(vol, "calib_planes_per_plane", o->plane_every);
   cJSON *cnt = cJSON_AddObjectToObject(j, "counts");
   cJSON_AddNumberToObject(cnt, "events", (double)rs->events);
   cJSON_AddNumberToObject(cnt, "triggers", (double)rs->triggers);
@@ -169,6 +171,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "threshold_low", o->peaks.hysteresis_low);
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
+  cJSON_AddNumberToObject(par, "plane_shift_px", o->plane_shift_px);
+  cJSON_AddNumberToObject(par, "fit_half_z", o->peaks.fit_half_z);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
   cJSON_AddNumberToObject(par, "stitch_points", o->link.stitch_points);
   cJSON_AddNumberToObject(par, "stitch_gate_um", o->link.stitch_gate_um);

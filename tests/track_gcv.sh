@@ -18,8 +18,11 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
 simulate_or_skip "$tmp/w" worm 200 10
-track_score "$tmp/w" "$tmp/lo" "$tmp/lo.json" --dt-us 2000 --repr integral --gcv-gamma 1.4
-track_score "$tmp/w" "$tmp/def" "$tmp/def.json" --dt-us 2000 --repr integral
+# On the calibration's planes, where this case was found: on every 2nd plane
+# (the default since the twenty-sixth session) no track of this seed needs
+# the refit.
+track_score "$tmp/w" "$tmp/lo" "$tmp/lo.json" --dt-us 2000 --repr integral --gcv-gamma 1.4 --plane-shift-px 0
+track_score "$tmp/w" "$tmp/def" "$tmp/def.json" --dt-us 2000 --repr integral --plane-shift-px 0
 a0=$(key "$tmp/lo.json" alpha); a1=$(key "$tmp/def.json" alpha)
 echo "worm 200 ms seed 10: alpha $a0 at --gcv-gamma 1.4, $a1 at the integral's default"
 expect_gain "$a0" "$a1" 0.004 "the integral's GCV price gains < 0.004 alpha ($a0 -> $a1)"

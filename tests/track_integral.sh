@@ -74,10 +74,11 @@ for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
           '"tau_bright_us":[[:space:]]*200000'; do
   grep -q "$kv" "$tmp/rec/summary.json" || { echo "FAIL: recon summary.json lacks $kv"; fail=$((fail+1)); }
 done
-# the integral's own defaults, recorded with the run
+# the integral's own defaults, recorded with the run (threshold 25 x 0.9418 on
+# every 2nd plane: track_plane_step)
 for kv in '"repr":[[:space:]]*"integral"' '"polarity":[[:space:]]*"signed"' \
           '"tau_us":[[:space:]]*100000' '"radius_xy_um":[[:space:]]*1.5' \
-          '"threshold_abs":[[:space:]]*25' '"off_weight":[[:space:]]*1' \
+          '"threshold_abs":[[:space:]]*23\.544' '"off_weight":[[:space:]]*1' \
           '"spline_order":[[:space:]]*2' '"integral_start_ms":[[:space:]]*200' \
           '"integral_start_age_ms":[[:space:]]*20' '"localize_power":[[:space:]]*2' \
           '"localize_near_um":[[:space:]]*12' '"tau_bright_us":[[:space:]]*200000'; do

@@ -43,3 +43,4 @@ elfm_add_track_script(track_loss)
 # the slice scene end to end) and the command on bad input.
 elfm_add_test(test_traces test_traces.c TIMEOUT 120)
 elfm_add_track_script(traces_cli)
+elfm_add_track_script(track_planes)
