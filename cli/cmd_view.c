@@ -25,7 +25,10 @@ static const char view_usage[] =
   "  --truth FILE          overlay a simulator truth.csv in grey\n"
   "  --mips DIR            MIP pictures / volumes from elsewhere, e.g. the output of\n"
   "                        eventlfm recon --save-mips (DIR or DIR/mips, DIR/volumes)\n"
-  "  --color MODE          time (default), depth or track\n"
+  "  --color MODE          time (default), depth, track, or shared: each track\n"
+  "                        dimmed, magenta where its detections lay in the gates\n"
+  "                        of 2+ tracks (tracks.csv's claims), where identities\n"
+  "                        are uncertain\n"
   "  --screenshot OUT.png  render one picture off-screen and exit\n"
   "  --at-us T             time cursor for the picture (default: the end)\n"
   "  --size WxH            picture / window size in pixels (default 1280x800)\n"
@@ -38,7 +41,8 @@ static const char view_usage[] =
   "  -h, --help            this text\n"
   "\n"
   "controls: left-drag rotate, right-drag pan, scroll zoom, r reset view,\n"
-  "c colour by time/depth/track, space play/pause, left/right arrows one frame\n"
+  "c colour by time/depth/track/shared, space play/pause, left/right arrows one\n"
+  "frame "
   "(shift: 10), home/end, +/- speed, t truth, d detections, m MIP, h help,\n"
   "q/Esc quit.\n"
   "Needs a display with OpenGL 3.3 (for scripts: xvfb-run -a eventlfm view ...).\n";
@@ -149,8 +153,8 @@ static int view_parse(int argc, char **argv, view_opts *o)
   if (o->input && o->syn_tracks)
     return cli_message("view", CLI_USAGE, "give an input or --synthetic, not both");
   if (o->color && strcmp(o->color, "time") && strcmp(o->color, "depth") &&
-      strcmp(o->color, "track"))
-    return cli_message("view", CLI_USAGE, "--color expects time, depth or track, got '%s'",
+      strcmp(o->color, "track") && strcmp(o->color, "shared"))
+    return cli_message("view", CLI_USAGE, "--color expects time, depth, track or shared, got '%s'",
                        o->color);
   if (o->screenshot && o->bench_frames)
     return cli_message("view", CLI_USAGE, "--screenshot and --bench-frames exclude each other");
@@ -193,9 +197,10 @@ static int view_main(const view_opts *o)
   vo.show_mip = !o->no_mip;
   vo.full_detail = o->full_detail;
   if (o->color)
-    vo.color_mode = !strcmp(o->color, "depth")   ? ELFM_COLOR_DEPTH
-                    : !strcmp(o->color, "track") ? ELFM_COLOR_TRACK
-                                                 : ELFM_COLOR_TIME;
+    vo.color_mode = !strcmp(o->color, "depth")    ? ELFM_COLOR_DEPTH
+                    : !strcmp(o->color, "track")  ? ELFM_COLOR_TRACK
+                    : !strcmp(o->color, "shared") ? ELFM_COLOR_SHARED
+                                                  : ELFM_COLOR_TIME;
   elfm_viewer *v = NULL;
   st = elfm_viewer_create(&vo, data, &v, &err);
   if (st != ELFM_OK) {

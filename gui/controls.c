@@ -21,7 +21,7 @@ void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd)
   const elfm_view_data *d = v->data;
   switch (cmd) {
   case ELFM_CMD_RESET_VIEW: elfm_camera_reset(&v->cam, d->box_min_um, d->box_max_um); break;
-  case ELFM_CMD_CYCLE_COLOR: v->mode = (elfm_color_mode)(((int)v->mode + 1) % 3); break;
+  case ELFM_CMD_CYCLE_COLOR: v->mode = (elfm_color_mode)(((int)v->mode + 1) % 4); break;
   case ELFM_CMD_PLAY_PAUSE:
     if (!v->playing && v->cursor_us >= d->t_max_us) v->cursor_us = d->t_min_us;
     v->playing = !v->playing;

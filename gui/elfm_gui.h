@@ -47,6 +47,12 @@ typedef struct elfm_view_series {
   int64_t *id;       /* n_lines: track_id / truth id */
   float *xyz_um;     /* 3 * n_points */
   int64_t *t_us;     /* n_points */
+  /* n_points, or NULL when the file has no `claims` column (truth, older
+   * runs): 1 where the point's detection lay in the gates of two or more
+   * live tracks when it was linked (tracks.csv's claims >= 2), the
+   * stretches where the linker could have given it to another track
+   * (docs/tracker.md "Where identities are uncertain") */
+  uint8_t *shared;
 } elfm_view_series;
 
 /* One saved MIP picture (PNG) or volume (OpenEXR, projected by the viewer)
@@ -173,7 +179,10 @@ double elfm_nice_step(double span, int n);
 typedef enum elfm_color_mode {
   ELFM_COLOR_TIME = 0,
   ELFM_COLOR_DEPTH = 1,
-  ELFM_COLOR_TRACK = 2
+  ELFM_COLOR_TRACK = 2,
+  /* each track's colour dimmed, and magenta where its detections were
+   * shared (elfm_view_series.shared) */
+  ELFM_COLOR_SHARED = 3
 } elfm_color_mode;
 
 typedef struct elfm_viewer_options {
@@ -210,7 +219,7 @@ void elfm_viewer_set_cursor(elfm_viewer *v, int64_t t_us);
 /* What the keys do (viewer_run.c maps keys to these; docs/viewer.md). */
 typedef enum elfm_viewer_cmd {
   ELFM_CMD_RESET_VIEW,      /* r */
-  ELFM_CMD_CYCLE_COLOR,     /* c: time -> depth -> track -> time */
+  ELFM_CMD_CYCLE_COLOR,     /* c: time -> depth -> track -> shared -> time */
   ELFM_CMD_PLAY_PAUSE,      /* space; from the end, playback starts over */
   ELFM_CMD_STEP_FORWARD,    /* right arrow: one frame (pauses) */
   ELFM_CMD_STEP_BACK,       /* left arrow */

@@ -15,11 +15,15 @@
 
 #include "elfm_gui.h"
 
-/* Vertex of tracks, truth, detections and the box: 5 floats. t is in ms
+/* Vertex of tracks, truth, detections and the box: 6 floats. t is in ms
  * since the data's t_min_us: a float's step is ~1 us up to 16 s and 0.25 ms
  * at one hour, finer than a 1 ms frame for recordings up to ~2 h. key in
- * [0,1] picks a track's colour. */
-#define GUI_VERTEX_FLOATS 5
+ * [0,1] picks a track's colour. shared (0 or 1) marks the segment that ends
+ * at this vertex (ELFM_COLOR_SHARED; series_lod.c). */
+#define GUI_VERTEX_FLOATS 6
+/* u_mode of the lines program beside the public colour modes: one flat
+ * colour (u_color) for the box, truth and detections */
+#define GUI_MODE_FLAT 9
 /* Overlay vertex: x, y in pixels from the top-left, then r, g, b, a. */
 #define GUI_OVERLAY_FLOATS 6
 /* Overlay capacity in vertices, allocated once: ~150 label characters of

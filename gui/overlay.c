@@ -83,21 +83,36 @@ static void colorbar(elfm_viewer *v, int width, int height, int u, int s)
   const elfm_view_data *d = v->data;
   int x0, y0, x1, y1;
   elfm_overlay_colorbar_rect(width, height, &x0, &y0, &x1, &y1);
-  /* 64 bands: finer than the eye separates the turbo map at this size. */
-  const int bands = 64;
+  /* 64 bands: finer than the eye separates the turbo map at this size.
+   * Shared mode: the upper third magenta (the shader's colour), the rest
+   * the map at the shader's 40 % */
+  const int bands = 64, shared = v->mode == ELFM_COLOR_SHARED;
+  const double y_split = y0 + (y1 - y0) / 3.0;
   for (int b = 0; b < bands; b++) {
     double s_top = 1.0 - (double)b / bands, s_bot = 1.0 - (double)(b + 1) / bands;
     float ct[4] = {0, 0, 0, 1}, cb[4] = {0, 0, 0, 1};
     elfm_colormap_rgb(s_top, ct);
     elfm_colormap_rgb(s_bot, cb);
+    if (shared)
+      for (int k = 0; k < 3; k++) {
+        ct[k] *= 0.4f;
+        cb[k] *= 0.4f;
+      }
     double ya = y0 + (double)(y1 - y0) * b / bands, yb = y0 + (double)(y1 - y0) * (b + 1) / bands;
     ov_quad2(v, x0, ya, x1, yb, ct, cb);
   }
+  if (shared) {
+    static const float col_shared[4] = {1.0f, 0.2f, 1.0f, 1.0f};
+    ov_quad(v, x0, y0, x1, y_split, col_shared);
+    ov_text(v, x1 + 7 * u, y0 + (y_split - y0) / 2 - 3.5 * s, s, col_text, "2+");
+    ov_text(v, x1 + 7 * u, (y_split + y1) / 2 - 3.5 * s, s, col_text, "1");
+  }
   const char *title = v->mode == ELFM_COLOR_TIME    ? "T (MS)"
                       : v->mode == ELFM_COLOR_DEPTH ? "Z (UM)"
+                      : shared                      ? "CLAIMS"
                                                     : "BY TRACK";
   ov_text(v, x0, y0 - 14 * u - 7 * s, s, col_text, title);
-  if (v->mode == ELFM_COLOR_TRACK) return;
+  if (v->mode == ELFM_COLOR_TRACK || shared) return;
   double lo = v->mode == ELFM_COLOR_TIME ? d->t_min_us / 1000.0 : d->box_min_um[2];
   double hi = v->mode == ELFM_COLOR_TIME ? d->t_max_us / 1000.0 : d->box_max_um[2];
   for (int k = 0; k <= 4; k++) {
@@ -236,6 +251,8 @@ static void hud(elfm_viewer *v, int height, int u, int s)
   snprintf(txt, sizeof txt, "%s%s", d->truth.n_lines && v->opt.show_truth ? "TRUTH: GREY  " : "",
            d->n_detections && v->opt.show_detections ? "DETECTIONS: WHITE" : "");
   ov_text(v, x, y + 22 * s, s, col_dim, txt);
+  if (v->mode == ELFM_COLOR_SHARED && !d->tracks.shared)
+    ov_text(v, x, y + 55 * s, s, col_text, "NO CLAIMS COLUMN: NOTHING MARKED");
   if (v->opt.visible && v->show_help) {
     ov_text(v, x, y + 33 * s, s, col_dim,
             "DRAG ROTATE  RIGHT-DRAG PAN  SCROLL ZOOM  R RESET  C COLOUR");

@@ -15,6 +15,10 @@
  * polyline, the coarsest level whose error is under GUI_LOD_MAX_ERR_PX on
  * screen (an orthographic projection never lengthens a distance).
  *
+ * A level whose chords would each stand for shared and unshared points
+ * (ELFM_COLOR_SHARED) gets an infinite error: the marked stretch keeps its
+ * ends at every zoom.
+ *
  * When the cursor is inside the recording, a polyline is drawn up to it
  * plus the one segment that crosses it (the fragment shader ends that
  * segment exactly at the cursor). Per frame only the draw lists change.
@@ -79,6 +83,19 @@ static double level_error_um(const elfm_view_series *s, size_t a, size_t n, int 
   return sqrt(worst);
 }
 
+/* 1 when a chord of the level stands for points of both kinds (shared and
+ * not): the points after its first vertex up to its last. */
+static int level_mixes_shared(const elfm_view_series *s, size_t a, size_t n, int level)
+{
+  size_t c = level_count(n, level), stride = (size_t)1 << level;
+  for (size_t j = 0; j + 1 < c; j++) {
+    size_t i0 = a + level_point(j, c, n, stride), i1 = a + level_point(j + 1, c, n, stride);
+    for (size_t i = i0 + 2; i <= i1; i++)
+      if (s->shared[i] != s->shared[i0 + 1]) return 1;
+  }
+  return 0;
+}
+
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
                              float **vertices, elfm_error *err)
 {
@@ -119,9 +136,23 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
       size_t c = level_count(n, l);
       g->lvl_count[l][k] = (GLsizei)c;
       g->lvl_err_um[l][k] = l == 0 ? 0.0f : (float)level_error_um(s, a, n, l);
+      /* A chord over shared and unshared points would mark them all: such
+       * a level is never used for this polyline (a straight track would
+       * otherwise be one magenta chord from end to end) */
+      if (l > 0 && s->shared && level_mixes_shared(s, a, n, l)) g->lvl_err_um[l][k] = INFINITY;
+      size_t prev = a; /* the last vertex's point */
       for (size_t j = 0; j < c; j++) {
         size_t i = a + level_point(j, c, n, stride);
         float *v = buf + q * GUI_VERTEX_FLOATS;
+        /* The segment into this vertex stands for the points after the last
+         * vertex up to this one: shared if any of them was, so a coarse
+         * level still shows a one-point stretch (the shader takes the
+         * segment's last vertex, OpenGL's provoking vertex). */
+        uint8_t sh = 0;
+        if (s->shared)
+          for (size_t p = j == 0 ? i : prev + 1; p <= i; p++) sh |= s->shared[p];
+        prev = i;
+        v[5] = sh;
         v[0] = s->xyz_um[3 * i];
         v[1] = s->xyz_um[3 * i + 1];
         v[2] = s->xyz_um[3 * i + 2];

@@ -1,7 +1,9 @@
 /* shaders.c — the viewer's GLSL 3.30 programs: compiled and linked once.
  *
  *  lines:   tracks, truth, detections and the box. Colour by time, depth,
- *           track or a flat colour (u_mode), per fragment;
+ *           track, shared stretches (magenta over the track's colour at
+ *           40 %; the flag is the segment's last vertex's, `flat`) or a
+ *           flat colour (u_mode, GUI_MODE_FLAT = 9), per fragment;
  *           the time cursor is a uniform the fragment shader compares each
  *           fragment's interpolated time with, so scrubbing never touches
  *           the vertex buffers and a segment ends exactly at the cursor.
@@ -19,13 +21,16 @@ static const char *lines_vs =
   "layout(location = 0) in vec3 a_pos;\n"
   "layout(location = 1) in float a_t;\n"
   "layout(location = 2) in float a_key;\n"
+  "layout(location = 3) in float a_shared;\n"
   "uniform mat4 u_mvp;\n"
   "uniform int u_mode;\n"
   "uniform float u_t0, u_t1, u_z0, u_z1, u_point_size;\n"
   "out float v_t;\n"
   "out float v_s;\n"
+  "flat out float v_shared;\n"
   "void main() {\n"
   "  gl_Position = u_mvp * vec4(a_pos, 1.0);\n"
+  "  v_shared = a_shared;\n"
   "  gl_PointSize = u_point_size;\n"
   "  v_t = a_t;\n"
   "  float s = a_key;\n"
@@ -41,6 +46,7 @@ static const char *lines_fs =
   "#version 330 core\n"
   "in float v_t;\n"
   "in float v_s;\n"
+  "flat in float v_shared;\n"
   "uniform int u_mode;\n"
   "uniform vec4 u_color;\n"
   "uniform float u_cursor, u_trail;\n"
@@ -59,7 +65,10 @@ static const char *lines_fs =
   "}\n"
   "void main() {\n"
   "  if (v_t > u_cursor || (u_trail >= 0.0 && v_t < u_cursor - u_trail)) discard;\n"
-  "  o_color = u_mode == 3 ? u_color : vec4(turbo(v_s), u_color.a);\n"
+  "  if (u_mode == 9) o_color = u_color;\n"
+  "  else if (u_mode == 3) o_color = v_shared > 0.5 ? vec4(1.0, 0.2, 1.0, u_color.a)\n"
+  "                                                : vec4(0.4 * turbo(v_s), u_color.a);\n"
+  "  else o_color = vec4(turbo(v_s), u_color.a);\n"
   "}\n";
 
 static const char *overlay_vs =

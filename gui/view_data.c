@@ -68,6 +68,7 @@ static void series_free(elfm_view_series *s)
   free(s->id);
   free(s->xyz_um);
   free(s->t_us);
+  free(s->shared);
   memset(s, 0, sizeof *s);
 }
 
@@ -110,7 +111,9 @@ static elfm_status series_from_table(const elfm_table *t, const char *id_name,
   s->id = malloc(n_lines * sizeof *s->id);
   s->xyz_um = malloc(3 * n * sizeof *s->xyz_um);
   s->t_us = malloc(n * sizeof *s->t_us);
-  if (!s->first || !s->id || !s->xyz_um || !s->t_us) {
+  const int c_claims = elfm_table_col(t, "claims");
+  if (c_claims >= 0) s->shared = malloc(n);
+  if (!s->first || !s->id || !s->xyz_um || !s->t_us || (c_claims >= 0 && !s->shared)) {
     free(keys);
     series_free(s);
     return elfm_error_set(err, ELFM_ERR_NOMEM, t->path, -1, "out of memory");
@@ -127,6 +130,8 @@ static elfm_status series_from_table(const elfm_table *t, const char *id_name,
     s->xyz_um[3 * k + 1] = (float)elfm_table_get(t, r, c[3]);
     s->xyz_um[3 * k + 2] = (float)elfm_table_get(t, r, c[4]);
     s->t_us[k] = (int64_t)llround(keys[k].t);
+    /* an empty claims (a point gap filling added) is no detection: not shared */
+    if (s->shared) s->shared[k] = elfm_table_get(t, r, c_claims) >= 2;
   }
   s->first[n_lines] = n;
   s->n_lines = n_lines;

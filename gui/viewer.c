@@ -51,7 +51,8 @@ static elfm_status series_upload(elfm_viewer *v, const elfm_view_series *s, gui_
   return ELFM_OK;
 }
 
-/* Attribute layout shared by every 5-float vertex buffer (bound VAO+VBO). */
+/* Attribute layout shared by every vertex buffer of the lines program
+ * (GUI_VERTEX_FLOATS; bound VAO+VBO). */
 static void vertex_layout(void)
 {
   GLsizei stride = GUI_VERTEX_FLOATS * sizeof(float);
@@ -61,6 +62,8 @@ static void vertex_layout(void)
   glVertexAttribPointer(1, 1, GL_FLOAT, GL_FALSE, stride, (void *)(3 * sizeof(float)));
   glEnableVertexAttribArray(2);
   glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, stride, (void *)(4 * sizeof(float)));
+  glEnableVertexAttribArray(3);
+  glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, stride, (void *)(5 * sizeof(float)));
 }
 
 static elfm_status detections_upload(elfm_viewer *v, elfm_error *err)
@@ -80,7 +83,7 @@ static elfm_status detections_upload(elfm_viewer *v, elfm_error *err)
     float *q = buf + i * GUI_VERTEX_FLOATS;
     memcpy(q, d->det_xyz_um + 3 * i, 3 * sizeof *q);
     q[3] = t_ms_of(v, d->det_t_us[i]);
-    q[4] = 0.0f;
+    q[4] = q[5] = 0.0f;
   }
   glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(d->n_detections * GUI_VERTEX_FLOATS * sizeof *buf),
                buf, GL_STATIC_DRAW);
@@ -108,7 +111,7 @@ static elfm_status box_upload(elfm_viewer *v, elfm_error *err)
         q[0] = (float)p[0];
         q[1] = (float)p[1];
         q[2] = (float)p[2];
-        q[3] = q[4] = 0.0f;
+        q[3] = q[4] = q[5] = 0.0f;
         n++;
       }
   }
@@ -339,7 +342,7 @@ void gui_draw(elfm_viewer *v, int width, int height)
   glLineWidth((float)(v->line_width_px * (v->line_width_px > 1 ? scale : 1)));
 
   /* The box: flat, always whole. */
-  glUniform1i(l->u_mode, 3);
+  glUniform1i(l->u_mode, GUI_MODE_FLAT);
   glUniform4f(l->u_color, 0.55f, 0.57f, 0.62f, 1.0f);
   glUniform1f(l->u_cursor, 1e30f);
   glUniform1f(l->u_trail, -1.0f);
@@ -359,7 +362,7 @@ void gui_draw(elfm_viewer *v, int width, int height)
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots
      * (all of them when the cursor is at the end). */
-    glUniform1i(l->u_mode, 3);
+    glUniform1i(l->u_mode, GUI_MODE_FLAT);
     glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
     glUniform1f(l->u_trail, cursor_ms >= 1e29f ? -1.0f : (float)(10.0 * d->frame_dt_us / 1000.0));
     glBindVertexArray(v->det_vao);

@@ -3,7 +3,7 @@
  * GLFW callbacks find the viewer through the window's user pointer (no
  * global state); keys become elfm_viewer_command()s (controls.c). Controls:
  *   left-drag rotate, right-drag (or shift+left-drag) pan, scroll zoom,
- *   r reset camera, c cycle colour (time -> depth -> track), space play/pause,
+ *   r reset camera, c cycle colour (time -> depth -> track -> shared), space play/pause,
  *   left/right arrows one frame (shift: 10 frames), home/end, +/- playback
  *   speed, t truth, d detections, m MIP plane, h key help, q or Esc quit.
  */

@@ -13,6 +13,8 @@
 #include "check.h"
 #include "elfm_recon.h"
 #include "elfm_gui.h"
+/* the levels of detail (gui_series_build; no OpenGL call): tests only */
+#include "gl_internal.h"
 
 static char tmpdir[256];
 
@@ -207,6 +209,23 @@ static void test_load(void)
     CHECK_NEAR(d->box_min_um[0], -11 - 0.05 * 51, 1e-6);
     CHECK_NEAR(d->box_max_um[0], 40 + 0.05 * 51, 1e-6);
     CHECK_NEAR(d->box_min_um[2], 0 - 1.0, 1e-6); /* margin at least 1 um */
+    CHECK(d->tracks.shared == NULL); /* no claims column */
+  }
+  elfm_view_data_free(d);
+
+  /* With tracks.csv's claims (elfm_link_step: live tracks whose gate held
+   * the detection): shared where 2 or more, in the points' time order; a
+   * filled point (claims empty) is not. */
+  write_file("claims.csv", "track_id,frame,t_us,x_um,y_um,z_um,claims\n"
+                           "7,2,3000,5,2,3,1\n7,0,1000,1,2,3,2\n7,1,2000,3,2,3,\n"
+                           "3,0,1000,-10,0,0,3\n3,1,2000,-11,0,0,0\n");
+  CHECK_OK(elfm_view_data_load(tpath("claims.csv"), NULL, &d, &err), &err);
+  if (d) {
+    CHECK(d->tracks.shared != NULL);
+    if (d->tracks.shared) {
+      const uint8_t want[5] = {1, 0, 1, 0, 0}; /* track 3 at 1, 2 ms; track 7 at 1, 2, 3 ms */
+      for (int i = 0; i < 5; i++) CHECK_EQ_INT(d->tracks.shared[i], want[i]);
+    }
   }
   elfm_view_data_free(d);
 
@@ -324,6 +343,61 @@ static void test_load(void)
     CHECK_EQ_INT(d->n_mips, 2);
   }
   elfm_view_data_free(d);
+}
+
+/* The shared flag on the GPU's vertices (series_lod.c): each vertex marks
+ * the segment into it, at every level of detail the OR over the points
+ * that segment stands for, so one shared point stays visible zoomed out. */
+static void test_lod_shared(void)
+{
+  float xyz[3 * 9] = {0};
+  int64_t t[9];
+  uint8_t sh[9] = {0, 0, 0, 0, 0, 1, 0, 0, 0};
+  size_t first[2] = {0, 9};
+  int64_t id[1] = {1};
+  for (int i = 0; i < 9; i++) {
+    t[i] = 1000 * i;
+    xyz[3 * i] = (float)i;
+  }
+  elfm_view_series s = {1, 9, first, id, xyz, t, sh};
+  gui_series_gl g;
+  memset(&g, 0, sizeof g);
+  float *vtx = NULL;
+  elfm_error err;
+  CHECK_OK(gui_series_build(&s, 0, &g, &vtx, &err), &err);
+  if (vtx) {
+    /* level 0: the segment 4 -> 5 (vertex 5) only */
+    for (int i = 0; i < 9; i++)
+      CHECK_EQ_INT((int)vtx[(size_t)(g.lvl_first[0][0] + i) * GUI_VERTEX_FLOATS + 5], i == 5);
+    /* level 2 (points 0, 4, 8): the chord 4 -> 8 */
+    CHECK_EQ_INT(g.lvl_count[2][0], 3);
+    for (int j = 0; j < 3; j++)
+      CHECK_EQ_INT((int)vtx[(size_t)(g.lvl_first[2][0] + j) * GUI_VERTEX_FLOATS + 5], j == 2);
+    /* level 3 (points 0, 8) */
+    CHECK_EQ_INT((int)vtx[(size_t)(g.lvl_first[3][0] + 1) * GUI_VERTEX_FLOATS + 5], 1);
+    CHECK_EQ_INT((int)vtx[(size_t)g.lvl_first[3][0] * GUI_VERTEX_FLOATS + 5], 0);
+    /* but a straight line's coarse chords would mark 4 points for 1: those
+     * levels are never drawn (infinite error), level 0 is exact */
+    CHECK(g.lvl_err_um[0][0] == 0.0f);
+    for (int l = 1; l < GUI_LOD_LEVELS; l++) CHECK(isinf(g.lvl_err_um[l][0]));
+  }
+  free(vtx);
+  gui_series_arrays_free(&g);
+  /* a shared stretch on chord boundaries: levels 1-2 keep it exact */
+  const uint8_t sh2[9] = {0, 0, 0, 0, 0, 1, 1, 1, 1};
+  memcpy(sh, sh2, sizeof sh);
+  memset(&g, 0, sizeof g);
+  CHECK_OK(gui_series_build(&s, 0, &g, &vtx, &err), &err);
+  CHECK(isfinite(g.lvl_err_um[1][0]) && isfinite(g.lvl_err_um[2][0]) && isinf(g.lvl_err_um[3][0]));
+  free(vtx);
+  gui_series_arrays_free(&g);
+  /* without flags: 0 everywhere */
+  s.shared = NULL;
+  memset(&g, 0, sizeof g);
+  CHECK_OK(gui_series_build(&s, 0, &g, &vtx, &err), &err);
+  for (size_t i = 0; vtx && i < g.n_vertices; i++) CHECK_EQ_INT((int)vtx[i * GUI_VERTEX_FLOATS + 5], 0);
+  free(vtx);
+  gui_series_arrays_free(&g);
 }
 
 static void test_load_errors(void)
@@ -503,6 +577,7 @@ int main(void)
   test_font_ticks();
   test_load();
   test_load_errors();
+  test_lod_shared();
   test_synthetic();
   test_png();
   test_no_display();

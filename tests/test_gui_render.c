@@ -143,11 +143,13 @@ static void write_scene(void)
   char *buf = malloc(1 << 20);
   size_t n = 0;
   n += (size_t)sprintf(buf + n, "track_id,frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,"
-                                "raw_z_um,vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,intensity\n");
+                                "raw_z_um,vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,intensity,"
+                                "claims\n");
+  /* A's detections at 40-60 ms lay in two tracks' gates (claims 2) */
   for (int i = 0; i <= 100; i++) {
-    n += (size_t)sprintf(buf + n, "1,%d,%d,%g,%g,%g,,,,0,0,0,1\n", i, i * 1000, a_pos(i, 0),
-                         a_pos(i, 1), a_pos(i, 2));
-    n += (size_t)sprintf(buf + n, "2,%d,%d,%g,%g,%g,,,,0,0,0,1\n", i, i * 1000, b_pos(i, 0),
+    n += (size_t)sprintf(buf + n, "1,%d,%d,%g,%g,%g,,,,0,0,0,1,%d\n", i, i * 1000, a_pos(i, 0),
+                         a_pos(i, 1), a_pos(i, 2), i >= 40 && i <= 60 ? 2 : 1);
+    n += (size_t)sprintf(buf + n, "2,%d,%d,%g,%g,%g,,,,0,0,0,1,1\n", i, i * 1000, b_pos(i, 0),
                          b_pos(i, 1), b_pos(i, 2));
   }
   buf[n] = '\0';
@@ -201,6 +203,33 @@ static const uint8_t *coloured_near(double c, double r, int rad)
       }
     }
   return best;
+}
+
+/* A pixel within +-rad of (c, r) in the shared stretches' magenta (the
+ * shader's 1.0, 0.2, 1.0) */
+static int magenta_near(double c, double r, int rad)
+{
+  for (int dr = -rad; dr <= rad; dr++)
+    for (int dc = -rad; dc <= rad; dc++) {
+      int cc = (int)floor(c) + dc, rr = (int)floor(r) + dr;
+      if (cc < 0 || rr < 0 || cc >= W || rr >= H) continue;
+      const uint8_t *p = px(cc, rr);
+      if (p[0] > 200 && p[1] < 110 && p[2] > 200) return 1;
+    }
+  return 0;
+}
+
+/* A pixel within +-rad of (c, r) brighter than the background */
+static int lit_near(double c, double r, int rad)
+{
+  for (int dr = -rad; dr <= rad; dr++)
+    for (int dc = -rad; dc <= rad; dc++) {
+      int cc = (int)floor(c) + dc, rr = (int)floor(r) + dr;
+      if (cc < 0 || rr < 0 || cc >= W || rr >= H) continue;
+      const uint8_t *p = px(cc, rr);
+      if (p[0] + p[1] + p[2] > 60) return 1;
+    }
+  return 0;
 }
 
 static double hue_of(const uint8_t *p)
@@ -428,6 +457,8 @@ int main(int argc, char **argv)
   elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
   CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TRACK);
   elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
+  CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_SHARED);
+  elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
   CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TIME);
   /* `t` hides the grey truth line, a second `t` shows it again. */
   int grey_on[2];
@@ -492,6 +523,30 @@ int main(int argc, char **argv)
     CHECK_MSG(fabs(hue_of(a1) - hue_of(b1)) > 40, "track hues %.0f and %.0f too close",
               hue_of(a1), hue_of(b1));
   }
+
+  /* 4b. Shared stretches: magenta on A where its detections lay in two
+   * gates (40-60 ms), nowhere else; the MIP (magenta too) hidden. (How
+   * the coarse levels of detail keep a stretch: test_gui_core.) */
+  elfm_viewer_show(v, 1, 1, 0);
+  elfm_viewer_set_color_mode(v, ELFM_COLOR_SHARED);
+  {
+    render(v);
+    int mag[4];
+    const int at_i[4] = {45, 55, 10, 90};
+    for (int k = 0; k < 4; k++) {
+      project(v, a_pos, at_i[k], &c, &r);
+      mag[k] = magenta_near(c, r, 2);
+    }
+    project(v, b_pos, 50, &c, &r);
+    const int mag_b = magenta_near(c, r, 2);
+    CHECK_MSG(mag[0] && mag[1], "shared: A at 45 / 55 ms magenta %d / %d", mag[0], mag[1]);
+    CHECK_MSG(!mag[2] && !mag[3] && !mag_b, "shared: magenta at A 10 / 90 ms %d / %d, B %d",
+              mag[2], mag[3], mag_b);
+    /* A's own colour, dimmed, where it is not shared */
+    project(v, a_pos, 10, &c, &r);
+    CHECK_MSG(lit_near(c, r, 2), "shared: A at 10 ms not drawn");
+  }
+  elfm_viewer_show(v, 1, 1, 1);
 
   /* 5. The MIP plane: magenta over the box floor once the cursor reaches
    * its time (20 ms), absent before it and when switched off. */
