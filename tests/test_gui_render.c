@@ -205,32 +205,21 @@ static const uint8_t *coloured_near(double c, double r, int rad)
   return best;
 }
 
-/* A pixel within +-rad of (c, r) in the shared stretches' magenta (the
- * shader's 1.0, 0.2, 1.0) */
-static int magenta_near(double c, double r, int rad)
+/* A pixel within +-rad of (c, r) that `ok` accepts. */
+static int any_near(double c, double r, int rad, int (*ok)(const uint8_t *p))
 {
   for (int dr = -rad; dr <= rad; dr++)
     for (int dc = -rad; dc <= rad; dc++) {
       int cc = (int)floor(c) + dc, rr = (int)floor(r) + dr;
-      if (cc < 0 || rr < 0 || cc >= W || rr >= H) continue;
-      const uint8_t *p = px(cc, rr);
-      if (p[0] > 200 && p[1] < 110 && p[2] > 200) return 1;
+      if (cc >= 0 && rr >= 0 && cc < W && rr < H && ok(px(cc, rr))) return 1;
     }
   return 0;
 }
 
-/* A pixel within +-rad of (c, r) brighter than the background */
-static int lit_near(double c, double r, int rad)
-{
-  for (int dr = -rad; dr <= rad; dr++)
-    for (int dc = -rad; dc <= rad; dc++) {
-      int cc = (int)floor(c) + dc, rr = (int)floor(r) + dr;
-      if (cc < 0 || rr < 0 || cc >= W || rr >= H) continue;
-      const uint8_t *p = px(cc, rr);
-      if (p[0] + p[1] + p[2] > 60) return 1;
-    }
-  return 0;
-}
+/* the shared stretches' magenta (the shader's 1.0, 0.2, 1.0) */
+static int is_magenta(const uint8_t *p) { return p[0] > 200 && p[1] < 110 && p[2] > 200; }
+/* brighter than the background */
+static int is_lit(const uint8_t *p) { return p[0] + p[1] + p[2] > 60; }
 
 static double hue_of(const uint8_t *p)
 {
@@ -535,16 +524,16 @@ int main(int argc, char **argv)
     const int at_i[4] = {45, 55, 10, 90};
     for (int k = 0; k < 4; k++) {
       project(v, a_pos, at_i[k], &c, &r);
-      mag[k] = magenta_near(c, r, 2);
+      mag[k] = any_near(c, r, 2, is_magenta);
     }
     project(v, b_pos, 50, &c, &r);
-    const int mag_b = magenta_near(c, r, 2);
+    const int mag_b = any_near(c, r, 2, is_magenta);
     CHECK_MSG(mag[0] && mag[1], "shared: A at 45 / 55 ms magenta %d / %d", mag[0], mag[1]);
     CHECK_MSG(!mag[2] && !mag[3] && !mag_b, "shared: magenta at A 10 / 90 ms %d / %d, B %d",
               mag[2], mag[3], mag_b);
     /* A's own colour, dimmed, where it is not shared */
     project(v, a_pos, 10, &c, &r);
-    CHECK_MSG(lit_near(c, r, 2), "shared: A at 10 ms not drawn");
+    CHECK_MSG(any_near(c, r, 2, is_lit), "shared: A at 10 ms not drawn");
   }
   elfm_viewer_show(v, 1, 1, 1);
 
