@@ -131,6 +131,12 @@ int cmd_track(int argc, char **argv)
   if (!o.quiet) {
     o.recon.progress = progress;
     o.recon.progress_user = &c;
+    /* the planes are track's own choice unless given: say which */
+    if (o.plane_every > 1)
+      fprintf(stderr, "eventlfm track: %d planes %g..%g um, %g um apart: every %d%s of %s's "
+              "(--plane-shift-px 0 for all)\n", elfm_calib_n_planes(&calib), calib.z_min_um,
+              calib.z_max_um, calib.z_step_um, o.plane_every,
+              o.plane_every == 2 ? "nd" : o.plane_every == 3 ? "rd" : "th", o.calib);
   }
   double t0 = cli_now_s();
   elfm_recon_stats rs;

@@ -43,6 +43,15 @@ expect fit_half_z "$s" 3
 expect threshold_abs "$s" 45
 expect threshold_low "$s" 30
 
+# The choice is said on stderr (not with every plane).
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say" \
+  2>"$tmp/say.err" >/dev/null || { echo "FAIL: track (not quiet)"; fail=$((fail+1)); }
+grep -q "51 planes -100..100 um, 4 um apart: every 2nd of" "$tmp/say.err" ||
+  { echo "FAIL: stderr does not name the planes: $(head -c 300 "$tmp/say.err")"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say0" \
+  --plane-shift-px 0 2>"$tmp/say0.err" >/dev/null
+grep -q "apart: every" "$tmp/say0.err" && { echo "FAIL: planes named with every plane"; fail=$((fail+1)); }
+
 # Given values stay: the step, and a threshold (the others still scale).
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/step" -q \
   --z-step-um 2 || { echo "FAIL: track --z-step-um 2"; fail=$((fail+1)); }
