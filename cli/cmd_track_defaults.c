@@ -605,7 +605,7 @@ void track_plane_step(track_opts *o, elfm_calib *cal)
     shift = fmax(shift, fabs(cal->views[v].dy_px_per_um));
   }
   const double step = cal->z_step_um;
-  const long span = lround((cal->z_max_um - cal->z_min_um) / step);
+  const long span = elfm_calib_n_planes(cal) - 1; /* steps from the first plane to the last */
   if (!(shift > 0) || span < 2) return;
   int m = (int)floor(o->plane_shift_px / (shift * step) + 1e-9);
   if (m > span) m = (int)span;
