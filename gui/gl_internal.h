@@ -56,6 +56,8 @@ typedef struct gui_series_gl {
   GLsizei *lvl_count[GUI_LOD_LEVELS];   /* [level][line] vertex count */
   float *t_ms;                          /* n_vertices: each vertex's time (cursor cut) */
   float *lvl_err_um[GUI_LOD_LEVELS];    /* [level][line] largest deviation from level 0 */
+  uint8_t *lvl_mixed[GUI_LOD_LEVELS];   /* [level][line] 1: a chord stands for shared and
+                                           unshared points (not drawn in shared mode) */
   GLint *draw_first;                    /* per line, refilled each frame */
   GLsizei *draw_count;
 } gui_series_gl;
@@ -121,14 +123,16 @@ int gui_mip_update(elfm_viewer *v);
 elfm_status gui_png_read_into(const char *path, uint8_t **buf, size_t *cap, int *width,
                               int *height, elfm_error *err);
 
-/* series_lod.c: build all levels of a series into a 5-float vertex array
- * (malloc'ed, the caller uploads then frees it) and g's index arrays;
- * free g's arrays; refill g's draw lists for a zoom and a cursor. */
+/* series_lod.c: build all levels of a series into a vertex array of
+ * GUI_VERTEX_FLOATS (malloc'ed, the caller uploads then frees it) and g's
+ * index arrays; free g's arrays; refill g's draw lists for a zoom, a cursor
+ * and whether shared stretches are shown (ELFM_COLOR_SHARED). */
 elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_series_gl *g,
                              float **vertices, elfm_error *err);
 void gui_series_arrays_free(gui_series_gl *g);
 /* ... and returns the number of vertices the draw lists hold. */
-size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail);
+size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail,
+                          int shared_mode);
 
 /* viewer.c: draw one frame into the bound framebuffer. */
 void gui_draw(elfm_viewer *v, int width, int height);

@@ -15,9 +15,9 @@
  * polyline, the coarsest level whose error is under GUI_LOD_MAX_ERR_PX on
  * screen (an orthographic projection never lengthens a distance).
  *
- * A level whose chords would each stand for shared and unshared points
- * (ELFM_COLOR_SHARED) gets an infinite error: the marked stretch keeps its
- * ends at every zoom.
+ * In shared mode (ELFM_COLOR_SHARED) a level whose chords would stand for
+ * shared and unshared points together is not used: the marked stretch
+ * keeps its ends at every zoom. The other modes do not pay for it.
  *
  * When the cursor is inside the recording, a polyline is drawn up to it
  * plus the one segment that crosses it (the fragment shader ends that
@@ -48,6 +48,8 @@ void gui_series_arrays_free(gui_series_gl *g)
     free(g->lvl_first[l]);
     free(g->lvl_count[l]);
     free(g->lvl_err_um[l]);
+    free(g->lvl_mixed[l]);
+    g->lvl_mixed[l] = NULL;
     g->lvl_first[l] = NULL;
     g->lvl_count[l] = NULL;
     g->lvl_err_um[l] = NULL;
@@ -113,7 +115,8 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
     g->lvl_first[l] = malloc(nl * sizeof *g->lvl_first[l]);
     g->lvl_count[l] = malloc(nl * sizeof *g->lvl_count[l]);
     g->lvl_err_um[l] = malloc(nl * sizeof *g->lvl_err_um[l]);
-    ok &= g->lvl_first[l] && g->lvl_count[l] && g->lvl_err_um[l];
+    g->lvl_mixed[l] = malloc(nl);
+    ok &= g->lvl_first[l] && g->lvl_count[l] && g->lvl_err_um[l] && g->lvl_mixed[l];
   }
   g->t_ms = malloc((total ? total : 1) * sizeof *g->t_ms);
   g->draw_first = malloc(nl * sizeof *g->draw_first);
@@ -136,10 +139,10 @@ elfm_status gui_series_build(const elfm_view_series *s, int64_t t0_us, gui_serie
       size_t c = level_count(n, l);
       g->lvl_count[l][k] = (GLsizei)c;
       g->lvl_err_um[l][k] = l == 0 ? 0.0f : (float)level_error_um(s, a, n, l);
-      /* A chord over shared and unshared points would mark them all: such
-       * a level is never used for this polyline (a straight track would
-       * otherwise be one magenta chord from end to end) */
-      if (l > 0 && s->shared && level_mixes_shared(s, a, n, l)) g->lvl_err_um[l][k] = INFINITY;
+      /* A chord over shared and unshared points would mark them all: in
+       * shared mode such a level is not used for this polyline (a straight
+       * track would otherwise be one magenta chord from end to end) */
+      g->lvl_mixed[l][k] = l > 0 && s->shared && level_mixes_shared(s, a, n, l);
       size_t prev = a; /* the last vertex's point */
       for (size_t j = 0; j < c; j++) {
         size_t i = a + level_point(j, c, n, stride);
@@ -181,7 +184,8 @@ static size_t count_upto(const float *t, size_t n, float cursor)
   return lo;
 }
 
-size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
+size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail,
+                          int shared_mode)
 {
   size_t drawn = 0;
   double max_err_um = GUI_LOD_MAX_ERR_PX / px_per_um;
@@ -189,7 +193,7 @@ size_t gui_series_prepare(gui_series_gl *g, double px_per_um, float cursor_ms, i
     int l = 0;
     if (!full_detail)
       for (l = GUI_LOD_LEVELS - 1; l > 0; l--)
-        if (g->lvl_err_um[l][k] <= max_err_um) break;
+        if (g->lvl_err_um[l][k] <= max_err_um && !(shared_mode && g->lvl_mixed[l][k])) break;
     GLint first = g->lvl_first[l][k];
     GLsizei count = g->lvl_count[l][k];
     if (count > 0 && g->t_ms[first + count - 1] > cursor_ms) {

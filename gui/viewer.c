@@ -290,10 +290,11 @@ size_t elfm_viewer_drawn_vertices(const elfm_viewer *v) { return v->drawn_vertic
 /* One line strip per polyline (glMultiDrawArrays). Drawing all of them with
  * one primitive-restart index list instead measured no faster on llvmpipe
  * and would lose the cut at the cursor (docs/viewer.md). */
-static size_t draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail)
+static size_t draw_series(gui_series_gl *g, double px_per_um, float cursor_ms, int full_detail,
+                          int shared_mode)
 {
   if (!g->n_lines) return 0;
-  size_t drawn = gui_series_prepare(g, px_per_um, cursor_ms, full_detail);
+  size_t drawn = gui_series_prepare(g, px_per_um, cursor_ms, full_detail, shared_mode);
   glBindVertexArray(g->vao);
   glMultiDrawArrays(GL_LINE_STRIP, g->draw_first, g->draw_count, g->n_lines);
   return drawn;
@@ -353,11 +354,12 @@ void gui_draw(elfm_viewer *v, int width, int height)
   v->drawn_vertices = 0;
   if (v->opt.show_truth && v->truth.n_lines) {
     glUniform4f(l->u_color, 0.62f, 0.62f, 0.62f, 0.8f);
-    v->drawn_vertices += draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail);
+    v->drawn_vertices += draw_series(&v->truth, px_per_um, cursor_ms, v->opt.full_detail, 0);
   }
   glUniform1i(l->u_mode, (int)v->mode);
   glUniform4f(l->u_color, 1.0f, 1.0f, 1.0f, 1.0f);
-  v->drawn_vertices += draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail);
+  v->drawn_vertices += draw_series(&v->tracks, px_per_um, cursor_ms, v->opt.full_detail,
+                                   v->mode == ELFM_COLOR_SHARED);
 
   if (v->opt.show_detections && v->n_det) {
     /* Raw detections of the last 10 frames before the cursor, as white dots

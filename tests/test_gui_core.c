@@ -376,10 +376,13 @@ static void test_lod_shared(void)
     /* level 3 (points 0, 8) */
     CHECK_EQ_INT((int)vtx[(size_t)(g.lvl_first[3][0] + 1) * GUI_VERTEX_FLOATS + 5], 1);
     CHECK_EQ_INT((int)vtx[(size_t)g.lvl_first[3][0] * GUI_VERTEX_FLOATS + 5], 0);
-    /* but a straight line's coarse chords would mark 4 points for 1: those
-     * levels are never drawn (infinite error), level 0 is exact */
+    /* but a straight line's coarse chords would mark 4 points for 1: in
+     * shared mode those levels are not drawn (mixed), in the others they
+     * are (this straight line is one chord: 2 vertices) */
     CHECK(g.lvl_err_um[0][0] == 0.0f);
-    for (int l = 1; l < GUI_LOD_LEVELS; l++) CHECK(isinf(g.lvl_err_um[l][0]));
+    for (int l = 1; l < GUI_LOD_LEVELS; l++) CHECK(g.lvl_mixed[l][0] && g.lvl_err_um[l][0] < 1e-6f);
+    CHECK_EQ_INT(gui_series_prepare(&g, 1.0, 1e30f, 0, 1), 9);
+    CHECK_EQ_INT(gui_series_prepare(&g, 1.0, 1e30f, 0, 0), 2);
   }
   free(vtx);
   gui_series_arrays_free(&g);
@@ -388,7 +391,8 @@ static void test_lod_shared(void)
   memcpy(sh, sh2, sizeof sh);
   memset(&g, 0, sizeof g);
   CHECK_OK(gui_series_build(&s, 0, &g, &vtx, &err), &err);
-  CHECK(isfinite(g.lvl_err_um[1][0]) && isfinite(g.lvl_err_um[2][0]) && isinf(g.lvl_err_um[3][0]));
+  CHECK(!g.lvl_mixed[1][0] && !g.lvl_mixed[2][0] && g.lvl_mixed[3][0]);
+  CHECK_EQ_INT(gui_series_prepare(&g, 1.0, 1e30f, 0, 1), 3); /* level 2: 0, 4, 8 */
   free(vtx);
   gui_series_arrays_free(&g);
   /* without flags: 0 everywhere */
