@@ -507,6 +507,17 @@ static void test_png(void)
 
 /* Without a display: a clear ELFM_ERR_DISPLAY from the library, and from the
  * CLI a non-zero exit (not a signal) with a message on stderr. */
+/* A child's stderr, as text ("" when the file is missing). */
+static void read_text(const char *path, char *buf, size_t cap)
+{
+  buf[0] = '\0';
+  FILE *f = fopen(path, "r");
+  if (!f) return;
+  size_t n = fread(buf, 1, cap - 1, f);
+  buf[n] = '\0';
+  fclose(f);
+}
+
 static void test_no_display(void)
 {
   unsetenv("DISPLAY");
@@ -536,13 +547,8 @@ static void test_no_display(void)
   int rc = system(cmd);
   CHECK(WIFEXITED(rc));
   CHECK_EQ_INT(WEXITSTATUS(rc), 1);
-  FILE *f = fopen(tpath("nd.err"), "r");
-  char msg[2048] = "";
-  if (f) {
-    size_t n = fread(msg, 1, sizeof msg - 1, f);
-    msg[n] = '\0';
-    fclose(f);
-  }
+  char msg[2048];
+  read_text(tpath("nd.err"), msg, sizeof msg);
   CHECK_MSG(strstr(msg, "no display") != NULL, "stderr was: %s", msg);
   CHECK(access(tpath("nd.png"), F_OK) != 0);
   /* Usage errors exit 2 before any window. */
@@ -552,17 +558,18 @@ static void test_no_display(void)
   snprintf(cmd, sizeof cmd, "%s view 2>/dev/null", bin);
   rc = system(cmd);
   CHECK(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
+  /* an unknown colour mode names the modes, shared among them */
+  snprintf(cmd, sizeof cmd, "%s view --color purple x.csv 2>%s", bin, tpath("c.err"));
+  rc = system(cmd);
+  CHECK(WIFEXITED(rc) && WEXITSTATUS(rc) == 2);
+  read_text(tpath("c.err"), msg, sizeof msg);
+  CHECK_MSG(strstr(msg, "--color") && strstr(msg, "shared") && strstr(msg, "purple"),
+            "stderr was: %s", msg);
   /* A missing input is a failure naming the file, before any window. */
   snprintf(cmd, sizeof cmd, "%s view %s 2>%s", bin, tpath("missing.csv"), tpath("m.err"));
   rc = system(cmd);
   CHECK(WIFEXITED(rc) && WEXITSTATUS(rc) == 1);
-  f = fopen(tpath("m.err"), "r");
-  msg[0] = '\0';
-  if (f) {
-    size_t n = fread(msg, 1, sizeof msg - 1, f);
-    msg[n] = '\0';
-    fclose(f);
-  }
+  read_text(tpath("m.err"), msg, sizeof msg);
   CHECK_MSG(strstr(msg, "missing.csv") != NULL, "stderr was: %s", msg);
 }
 
