@@ -116,13 +116,15 @@ enum {
   CLI_RO_DT = 0x7000, CLI_RO_STRIDE, CLI_RO_TAU, CLI_RO_REPR, CLI_RO_POLARITY, CLI_RO_MEDIAN,
   CLI_RO_FROM, CLI_RO_TO, CLI_RO_PATH, CLI_RO_GHOST, CLI_RO_GHOST_VALUE, CLI_RO_AGREE,
   CLI_RO_THREADS, CLI_RO_BATCH, CLI_RO_OFF_WEIGHT, CLI_RO_ISTART, CLI_RO_ISTART_AGE,
-  CLI_RO_TAU_BRIGHT, CLI_RO_START, CLI_RO_TRIG_CH, CLI_RO_ZMIN, CLI_RO_ZMAX, CLI_RO_ZSTEP
+  CLI_RO_TAU_BRIGHT, CLI_RO_START, CLI_RO_TRIG_CH, CLI_RO_ZMIN, CLI_RO_ZMAX, CLI_RO_ZSTEP,
+  CLI_RO_BLUR
 };
 #define CLI_RECON_LONG_OPTIONS                                                                 \
   {"dt-us", required_argument, 0, CLI_RO_DT}, {"stride-us", required_argument, 0, CLI_RO_STRIDE}, \
   {"tau-us", required_argument, 0, CLI_RO_TAU}, {"repr", required_argument, 0, CLI_RO_REPR},      \
   {"polarity", required_argument, 0, CLI_RO_POLARITY},                                         \
   {"median", required_argument, 0, CLI_RO_MEDIAN},                                             \
+  {"blur-px", required_argument, 0, CLI_RO_BLUR},                                              \
   {"from-us", required_argument, 0, CLI_RO_FROM}, {"to-us", required_argument, 0, CLI_RO_TO},   \
   {"path", required_argument, 0, CLI_RO_PATH}, {"ghost", required_argument, 0, CLI_RO_GHOST},   \
   {"ghost-value", required_argument, 0, CLI_RO_GHOST_VALUE},                                   \

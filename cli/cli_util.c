@@ -396,6 +396,16 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     ro->median = m;
     return 1;
   }
+  case CLI_RO_BLUR: {
+    int r;
+    if (!cli_parse_int(cmd, "--blur-px", arg, &r)) return 0;
+    if (r < 0 || r > 2) {
+      cli_message(cmd, CLI_USAGE, "--blur-px must be 0, 1 or 2, not '%s'", arg);
+      return 0;
+    }
+    ro->blur_px = r;
+    return 1;
+  }
   case CLI_RO_FROM: return cli_parse_int64(cmd, "--from-us", arg, &ro->from_us);
   case CLI_RO_TO: return cli_parse_int64(cmd, "--to-us", arg, &ro->to_us);
   case CLI_RO_PATH: return cli_parse_refocus_path(cmd, arg, &ro->refocus.path);
@@ -507,6 +517,7 @@ void cli_recon_options_json(cJSON *par, const elfm_recon_options *ro)
   cJSON_AddNumberToObject(par, "integral_start_ms", (double)ro->integral_start_us * 1e-3);
   cJSON_AddNumberToObject(par, "integral_start_age_ms", (double)ro->integral_start_age_us * 1e-3);
   cJSON_AddNumberToObject(par, "median", ro->median);
+  cJSON_AddNumberToObject(par, "blur_px", ro->blur_px);
   cJSON_AddStringToObject(par, "path", cli_refocus_path_name(ro->refocus.path));
   cJSON_AddStringToObject(par, "ghost_threshold", cli_ghost_threshold_name(ro->refocus.threshold));
   cJSON_AddNumberToObject(par, "ghost_threshold_value", ro->refocus.threshold_value);
@@ -630,6 +641,11 @@ void cli_recon_options_usage(FILE *f, const elfm_recon_options *d)
           "                       leaked for A ms (default %g); each is held until its\n"
           "                       pixel's first event\n"
           "  --median N           median filter 0 (off) | 3 | 5 (default %d)\n"
+          "  --blur-px R          binomial blur of each frame after the median, radius 0\n"
+          "                       (off, default) | 1 (3x3) | 2 (5x5): for dim objects\n"
+          "                       (about one event per view per frame), whose events\n"
+          "                       then meet where their images do; track then takes\n"
+          "                       thresholds 8 / 6 / 6 unless given\n"
           "  --from-us T          first event time to use (windows start here)\n"
           "  --to-us T            stop before this event time\n"
           "  --path P             refocus path auto | dense | sparse (default %s)\n"

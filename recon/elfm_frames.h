@@ -244,6 +244,22 @@ void elfm_median_free(elfm_median *m);
  * of each sign is 0 without sorting. Not thread-safe on the same `m`. */
 void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out);
 
+/* ---- blur ---- */
+typedef struct elfm_blur elfm_blur;
+
+/* A binomial blur of radius 1 (3 x 3, [1 2 1] / 4 per axis) or 2 (5 x 5,
+ * [1 4 6 4 1] / 16) for w x h frames, zero outside the sensor; its sum is
+ * kept. Holds a w*h byte mask. Free with elfm_blur_free. Why: a dim
+ * object's views get about one event each per frame, which rarely meet at
+ * the voxel where its images do; spread over the image's size, they do
+ * (recon/blur.c). */
+elfm_status elfm_blur_create(int radius_px, int w, int h, elfm_blur **out, elfm_error *err);
+void elfm_blur_free(elfm_blur *b);
+
+/* out = blur(in): in and out must differ and match the blur's size.
+ * O(listed pixels x (2r+1)^2). Not thread-safe on the same `b`. */
+void elfm_blur_apply(elfm_blur *b, const elfm_frame *in, elfm_frame *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -75,6 +75,8 @@ typedef elfm_status (*elfm_volume_slot_fn)(const elfm_volume *vol, int slot, voi
 typedef struct elfm_recon_options {
   elfm_framer_options framer;   /* dt, stride, representation, tau, polarity, start */
   int median;                   /* 0 (off), 3 (the paper's) or 5 */
+  int blur_px;                  /* 0 (off), 1 or 2: binomial blur after the median
+                                   (elfm_blur; for dim objects) */
   elfm_refocus_options refocus; /* path (auto/dense/sparse), ghost suppression */
   int threads;                  /* 0: OpenMP's default */
   int batch;                    /* frames refocused per parallel batch; 0: 2 x threads */

@@ -38,7 +38,7 @@ void elfm_recon_options_default(elfm_recon_options *o)
 }
 
 typedef struct slot {
-  elfm_frame *frame, *filtered;
+  elfm_frame *frame, *filtered, *blurred;
   elfm_volume *vol;
   elfm_refocus_workspace *ws;
   elfm_status status;
@@ -62,6 +62,7 @@ typedef struct run {
   int threads, nslots;
   slot *slots;
   elfm_median **medians; /* one per thread */
+  elfm_blur **blurs;     /* one per thread (blur_px > 0) */
   source src;
   elfm_recon_stats st;
   int64_t first_window_us;
@@ -73,6 +74,7 @@ static void run_free(run *r)
     for (int i = 0; i < r->nslots; i++) {
       elfm_frame_free(r->slots[i].frame);
       elfm_frame_free(r->slots[i].filtered);
+      elfm_frame_free(r->slots[i].blurred);
       elfm_volume_free(r->slots[i].vol);
       elfm_refocus_workspace_free(r->slots[i].ws);
     }
@@ -80,6 +82,9 @@ static void run_free(run *r)
   if (r->medians)
     for (int i = 0; i < r->threads; i++) elfm_median_free(r->medians[i]);
   free(r->medians);
+  if (r->blurs)
+    for (int i = 0; i < r->threads; i++) elfm_blur_free(r->blurs[i]);
+  free(r->blurs);
   elfm_refocus_plan_free(r->plan);
   elfm_reader_close(r->src.reader);
   elfm_chunk_free(r->src.chunk);
@@ -106,6 +111,8 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   r->opt = opt;
   if (opt->median != 0 && opt->median != 3 && opt->median != 5)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "median %d: use 0, 3 or 5", opt->median);
+  if (opt->blur_px < 0 || opt->blur_px > 2)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "blur %d px: use 0, 1 or 2", opt->blur_px);
   if (opt->from_us >= opt->to_us)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "from_us %lld is not before to_us %lld",
                           (long long)opt->from_us, (long long)opt->to_us);
@@ -121,13 +128,16 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   if (st) return st;
   r->slots = calloc((size_t)r->nslots, sizeof *r->slots);
   r->medians = calloc((size_t)r->threads, sizeof *r->medians);
-  if (!r->slots || !r->medians)
+  r->blurs = calloc((size_t)r->threads, sizeof *r->blurs);
+  if (!r->slots || !r->medians || !r->blurs)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (pipeline)");
   const int sw = calib->sensor_width_px, sh = calib->sensor_height_px;
   for (int i = 0; i < r->nslots; i++) {
     slot *s = &r->slots[i];
     if (!(s->frame = elfm_frame_create(sw, sh, err))) return err ? err->code : ELFM_ERR_NOMEM;
     if (use_median && !(s->filtered = elfm_frame_create(sw, sh, err)))
+      return err ? err->code : ELFM_ERR_NOMEM;
+    if (opt->blur_px > 0 && !(s->blurred = elfm_frame_create(sw, sh, err)))
       return err ? err->code : ELFM_ERR_NOMEM;
     if (!(s->vol = elfm_refocus_volume_create(r->plan, err))) return err ? err->code : ELFM_ERR_NOMEM;
     st = elfm_refocus_workspace_create(r->plan, &s->ws, err);
@@ -136,6 +146,11 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   if (use_median)
     for (int t = 0; t < r->threads; t++) {
       st = elfm_median_create(opt->median, sw, sh, &r->medians[t], err);
+      if (st) return st;
+    }
+  if (opt->blur_px > 0)
+    for (int t = 0; t < r->threads; t++) {
+      st = elfm_blur_create(opt->blur_px, sw, sh, &r->blurs[t], err);
       if (st) return st;
     }
   r->st.t_first_us = INT64_MAX;
@@ -285,6 +300,10 @@ static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
       if (use_median) {
         elfm_median_apply(r->medians[omp_get_thread_num()], s->frame, s->filtered);
         in = s->filtered;
+      }
+      if (s->blurred) {
+        elfm_blur_apply(r->blurs[omp_get_thread_num()], in, s->blurred);
+        in = s->blurred;
       }
       if (r->opt->no_refocus) {
         elfm_refocus_stamp(plan, in, s->vol);

@@ -2,6 +2,7 @@
 elfm_add_test(test_frames test_frames.c)
 elfm_add_test(test_frames_integral test_frames_integral.c)
 elfm_add_test(test_median test_median.c)
+elfm_add_test(test_blur test_blur.c)
 elfm_add_test(test_refocus test_refocus.c)
 elfm_add_test(test_localize test_localize.c)
 elfm_add_test(test_calib_refine test_calib_refine.c TIMEOUT 120)
