@@ -189,6 +189,10 @@ static void test_runs(const char *dir, const elfm_calib *cal)
   o.median = 4;
   CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
   elfm_recon_options_default(&o);
+  o.blur_px = 3;
+  CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "blur 3") != NULL);
+  elfm_recon_options_default(&o);
   o.from_us = 10;
   o.to_us = 5;
   CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
