@@ -54,12 +54,7 @@ void elfm_blur_free(elfm_blur *b)
 
 void elfm_blur_apply(elfm_blur *b, const elfm_frame *in, elfm_frame *out)
 {
-  elfm_frame_clear(out);
-  out->t_us = in->t_us;
-  out->t_start_us = in->t_start_us;
-  out->t_end_us = in->t_end_us;
-  out->index = in->index;
-  out->n_events = in->n_events;
+  elfm_frame_clear_like(out, in);
   if (in->w != b->w || in->h != b->h || out->w != b->w || out->h != b->h) return;
   const int r = b->r, w = b->w, h = b->h;
   for (size_t n = 0; n < in->nnz; n++) {

@@ -107,6 +107,9 @@ void elfm_frame_clear(elfm_frame *f);
 /* Set pixel i (< w*h) to value, listing it if needed. O(nnz) per call when
  * the pixel was zero (it searches the list): for tests and small edits only. */
 void elfm_frame_set(elfm_frame *f, uint32_t i, float value);
+/* Clear dst (O(its nnz)) and give it src's times, index and event count:
+ * the start of a filter's output frame. */
+void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src);
 /* Copy src into dst (same size): dst is cleared first. O(nnz). */
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err);
 

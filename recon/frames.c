@@ -117,23 +117,28 @@ void elfm_frame_set(elfm_frame *f, uint32_t i, float value)
   f->data[i] = value;
 }
 
+void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src)
+{
+  elfm_frame_clear(dst);
+  dst->t_us = src->t_us;
+  dst->t_start_us = src->t_start_us;
+  dst->t_end_us = src->t_end_us;
+  dst->index = src->index;
+  dst->n_events = src->n_events;
+}
+
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err)
 {
   if (dst->w != src->w || dst->h != src->h)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "frame copy: %dx%d into %dx%d",
                           src->w, src->h, dst->w, dst->h);
-  elfm_frame_clear(dst);
+  elfm_frame_clear_like(dst, src);
   for (size_t i = 0; i < src->nnz; i++) {
     uint32_t p = src->idx[i];
     dst->idx[i] = p;
     dst->data[p] = src->data[p];
   }
   dst->nnz = src->nnz;
-  dst->t_us = src->t_us;
-  dst->t_start_us = src->t_start_us;
-  dst->t_end_us = src->t_end_us;
-  dst->index = src->index;
-  dst->n_events = src->n_events;
   return ELFM_OK;
 }
 

@@ -140,12 +140,7 @@ static float median_at(const elfm_median *m, const float *img, int x, int y)
 
 void elfm_median_apply(elfm_median *m, const elfm_frame *in, elfm_frame *out)
 {
-  elfm_frame_clear(out);
-  out->t_us = in->t_us;
-  out->t_start_us = in->t_start_us;
-  out->t_end_us = in->t_end_us;
-  out->index = in->index;
-  out->n_events = in->n_events;
+  elfm_frame_clear_like(out, in);
   if (in->w != m->w || in->h != m->h || out->w != m->w || out->h != m->h) return;
   const int r = m->size / 2, half = (m->size * m->size + 1) / 2;
   /* The listed pixels in row order (a counting sort by row). Each raises

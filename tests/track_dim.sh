@@ -18,27 +18,20 @@ expect_usage_errors "--blur-px 3" "--blur-px -1" "--blur-px x"
 [ $? -eq 2 ] && grep -q -e "--blur-px" "$tmp/err" || { echo "FAIL: recon --blur-px 5 not a usage error"; fail=$((fail+1)); }
 simulate_or_skip "$tmp/sim" flow 60 3 --param 'objects.flux_hz=[3000,4000]'
 
-# expect KEY FILE VALUE: the number KEY in FILE is VALUE (to 1e-3)
-expect() {
-  ex_v=$(key "$2" "$1")
-  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a - b < 1e-3 && b - a < 1e-3) }' ||
-    { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
-}
-
 track_score "$tmp/sim" "$tmp/plain" "$tmp/plain.json"
 track_score "$tmp/sim" "$tmp/blur" "$tmp/blur.json" --blur-px 1
 # without the blur, the dim thresholds alone (the blur's part of the gain)
 track_score "$tmp/sim" "$tmp/low" "$tmp/low.json" --threshold-abs 8 --threshold-low 6 --threshold-min 6
-expect blur_px "$tmp/blur/summary.json" 1
-expect blur_px "$tmp/plain/summary.json" 0
+expect_key blur_px "$tmp/blur/summary.json" 1
+expect_key blur_px "$tmp/plain/summary.json" 0
 # 8 and 6 x exp(-(2^2 - 1^2) / 50) at 4 um planes
-expect threshold_abs "$tmp/blur/summary.json" 7.5341
-expect threshold_low "$tmp/blur/summary.json" 5.6506
-expect threshold_min "$tmp/blur/summary.json" 5.6506
+expect_key threshold_abs "$tmp/blur/summary.json" 7.5341
+expect_key threshold_low "$tmp/blur/summary.json" 5.6506
+expect_key threshold_min "$tmp/blur/summary.json" 5.6506
 # given thresholds stay as given
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/given" -q \
   --blur-px 1 --threshold-abs 20 || { echo "FAIL: track --blur-px 1 --threshold-abs 20"; fail=$((fail+1)); }
-expect threshold_abs "$tmp/given/summary.json" 20
+expect_key threshold_abs "$tmp/given/summary.json" 20
 
 a0=$(key "$tmp/plain.json" alpha); a1=$(key "$tmp/blur.json" alpha); a2=$(key "$tmp/low.json" alpha)
 r0=$(key "$tmp/plain.json" recall); r1=$(key "$tmp/blur.json" recall); r2=$(key "$tmp/low.json" recall)

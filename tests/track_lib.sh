@@ -13,6 +13,14 @@ expect_gain() {
   awk -v a="$1" -v b="$2" -v m="$3" 'BEGIN { exit !(b > a + m) }' || { echo "FAIL: $4"; fail=$((fail+1)); }
 }
 
+# expect_key KEY FILE VALUE: the number KEY in FILE (key, above) is VALUE
+# to 1e-3; otherwise print a failure and count it in $fail.
+expect_key() {
+  ex_v=$(key "$2" "$1")
+  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a - b < 1e-3 && b - a < 1e-3) }' ||
+    { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
+}
+
 # below A F B: true when A < F x B (floating point, by awk).
 below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'

@@ -15,33 +15,26 @@ fail=0
 expect_usage_errors "--plane-shift-px -1" "--plane-shift-px 101" "--plane-shift-px x"
 simulate_or_skip "$tmp/sim" flow 60 3
 
-# expect KEY FILE VALUE: the number KEY in FILE is VALUE (to 1e-3)
-expect() {
-  ex_v=$(key "$2" "$1")
-  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a - b < 1e-3 && b - a < 1e-3) }' ||
-    { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
-}
-
 # The paper's optics, 2 um planes: the outer views move 0.358 px per um,
 # so 4 um (1.43 px) is the coarsest within 1.5 px.
 track_score "$tmp/sim" "$tmp/auto" "$tmp/auto.json"
 track_score "$tmp/sim" "$tmp/all" "$tmp/all.json" --plane-shift-px 0
 s=$tmp/auto/summary.json
-expect nz "$s" 51
-expect z_step_um "$s" 4
-expect calib_planes_per_plane "$s" 2
-expect fit_half_z "$s" 2
+expect_key nz "$s" 51
+expect_key z_step_um "$s" 4
+expect_key calib_planes_per_plane "$s" 2
+expect_key fit_half_z "$s" 2
 # 45, 30 and 30 x exp(-(2^2 - 1^2) / 50)
-expect threshold_abs "$s" 42.3794
-expect threshold_low "$s" 28.2529
-expect threshold_min "$s" 28.2529
+expect_key threshold_abs "$s" 42.3794
+expect_key threshold_low "$s" 28.2529
+expect_key threshold_min "$s" 28.2529
 s=$tmp/all/summary.json
-expect nz "$s" 101
-expect z_step_um "$s" 2
-expect calib_planes_per_plane "$s" 1
-expect fit_half_z "$s" 3
-expect threshold_abs "$s" 45
-expect threshold_low "$s" 30
+expect_key nz "$s" 101
+expect_key z_step_um "$s" 2
+expect_key calib_planes_per_plane "$s" 1
+expect_key fit_half_z "$s" 3
+expect_key threshold_abs "$s" 45
+expect_key threshold_low "$s" 30
 
 # The choice is said on stderr (not with every plane).
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say" \
@@ -55,12 +48,12 @@ grep -q "apart: every" "$tmp/say0.err" && { echo "FAIL: planes named with every 
 # Given values stay: the step, and a threshold (the others still scale).
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/step" -q \
   --z-step-um 2 || { echo "FAIL: track --z-step-um 2"; fail=$((fail+1)); }
-expect nz "$tmp/step/summary.json" 101
-expect threshold_abs "$tmp/step/summary.json" 45
+expect_key nz "$tmp/step/summary.json" 101
+expect_key threshold_abs "$tmp/step/summary.json" 45
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/thr" -q \
   --threshold-abs 45 || { echo "FAIL: track --threshold-abs 45"; fail=$((fail+1)); }
-expect nz "$tmp/thr/summary.json" 51
-expect threshold_abs "$tmp/thr/summary.json" 45
+expect_key nz "$tmp/thr/summary.json" 51
+expect_key threshold_abs "$tmp/thr/summary.json" 45
 
 # Other calibrations of the same sensor (the planes only: the events are
 # the paper's): 1 um planes -> every 4th; a span of 99 steps, which 2
@@ -73,9 +66,9 @@ planes() {
   "$bin" calib from-optics $1 --out "$tmp/c$pl_n.json" >/dev/null 2>&1 ||
     { echo "FAIL: calib from-optics $1"; fail=$((fail+1)); return; }
   "$bin" track --calib "$tmp/c$pl_n.json" --events "$tmp/sim/events.raw" --out "$tmp/p$pl_n" -q || { echo "FAIL: track with calib from-optics $1"; fail=$((fail+1)); return; }
-  expect nz "$tmp/p$pl_n/summary.json" "$2"
-  expect z_step_um "$tmp/p$pl_n/summary.json" "$3"
-  expect calib_planes_per_plane "$tmp/p$pl_n/summary.json" "$4"
+  expect_key nz "$tmp/p$pl_n/summary.json" "$2"
+  expect_key z_step_um "$tmp/p$pl_n/summary.json" "$3"
+  expect_key calib_planes_per_plane "$tmp/p$pl_n/summary.json" "$4"
 }
 pl_n=0
 planes "--z-step-um 1" 51 4 4
