@@ -222,6 +222,14 @@ int cmd_track(int argc, char **argv)
                     "score such a run with --frames run --window-us run (README, blinking "
                     "objects)\n",
             rs.triggers);
+  const double h_med = track_peak_height_median(&c);
+  if (!o.quiet && o.recon.blur_px == 0 && o.peaks.absolute > 0 && c.n_height >= TRACK_WIDTH_MIN_PEAKS &&
+      (o.recon.framer.repr == ELFM_REPR_EXP || o.recon.framer.repr == ELFM_REPR_LIN) &&
+      h_med < TRACK_HINT_DIM_FACTOR * o.peaks.absolute)
+    fprintf(stderr, "eventlfm track: note: the peaks are faint (median height %.0f against the "
+                    "threshold %.0f): for dim objects, about one event per view per frame, "
+                    "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
+            h_med, o.peaks.absolute);
   rc = CLI_OK;
 done:
   track_ctx_free(&c);

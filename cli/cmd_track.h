@@ -77,6 +77,7 @@ typedef struct track_opts {
 #define TRACK_WIDTH_BINS 1000
 #define TRACK_WIDTH_FOCUS_UM 20.0
 #define TRACK_WIDTH_MIN_PEAKS 50
+#define TRACK_HEIGHT_BINS 1024
 #define TRACK_LEAD_PER_WIDTH 1.80
 #define TRACK_LEAD_AT_ZERO_WIDTH_UM (-0.37)
 #define TRACK_LEAD_PER_WIDTH_FIRST_PASS 1.52
@@ -237,6 +238,10 @@ typedef struct track_ctx {
    * TRACK_WIDTH_BIN_UM, for the lead (motion_lead_auto) */
   int64_t width_hist[TRACK_WIDTH_BINS];
   int64_t n_width;
+  /* the peaks' heights (elfm_detection.intensity, not view-fit points) in
+   * bins of 1, for the dim objects' note (TRACK_HINT_DIM_FACTOR) */
+  int64_t height_hist[TRACK_HEIGHT_BINS];
+  int64_t n_height;
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -287,6 +292,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
 /* Count peak d's width into c's histogram when it is a strong in-focus peak
  * (not weak, not a view-fit point, |z| < TRACK_WIDTH_FOCUS_UM). */
 void track_width_add(track_ctx *c, const elfm_detection *d);
+/* Count peak d's height (intensity) into c's histogram unless it is a
+ * view-fit point; the median of those heights (NAN before the first). */
+void track_height_add(track_ctx *c, const elfm_detection *d);
+double track_peak_height_median(const track_ctx *c);
 /* The median width of those peaks, um; NAN before the first. */
 double track_peak_width_median_um(const track_ctx *c);
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
@@ -328,5 +337,13 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * +0.012; at 4.48 / 4.69 / 4.98 +0.039 / +0.069 / +0.033. (Before the path
  * cap, at 5.0-5.3 um per frame: +0.21 to +0.40.) */
 #define TRACK_HINT_MAX_STEP_UM 3.5
+/* Peaks this close to the absolute threshold (median height below this x
+ * it, over at least TRACK_WIDTH_MIN_PEAKS peaks) are dim objects', which
+ * --blur-px 1 finds more of. Median peak height over the threshold on time
+ * surfaces at the defaults: dim flow (a quarter of the flux) seeds 1-2
+ * 1.14 / 1.09, three times the background 1.25 / 1.26; flow, stage, blink,
+ * blink_moving, flow_random, haze, noise, 640 x 480: 2.3-4.5
+ * (docs/tracker.md "Dim objects"). */
+#define TRACK_HINT_DIM_FACTOR 1.6
 
 #endif

@@ -211,6 +211,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "motion_lead_auto", o->motion_lead_auto);
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
+  add_num(par, "peak_height_median", track_peak_height_median(c));
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);

@@ -98,6 +98,23 @@ void track_width_add(track_ctx *c, const elfm_detection *d)
   c->n_width++;
 }
 
+void track_height_add(track_ctx *c, const elfm_detection *d)
+{
+  if (d->view_fit || !(d->intensity >= 0)) return;
+  const double b = floor(d->intensity);
+  c->height_hist[b < TRACK_HEIGHT_BINS - 1 ? (int)b : TRACK_HEIGHT_BINS - 1]++;
+  c->n_height++;
+}
+
+double track_peak_height_median(const track_ctx *c)
+{
+  if (c->n_height == 0) return NAN;
+  int64_t half = (c->n_height + 1) / 2, acc = 0;
+  int b = 0;
+  while (b < TRACK_HEIGHT_BINS - 1 && (acc += c->height_hist[b]) < half) b++;
+  return b + 0.5;
+}
+
 double track_peak_width_median_um(const track_ctx *c)
 {
   if (c->n_width == 0) return NAN;
@@ -649,6 +666,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
     track_width_add(c, &det[j]);
+    track_height_add(c, &det[j]);
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;

@@ -33,6 +33,19 @@ expect_key threshold_min "$tmp/blur/summary.json" 5.6506
   --blur-px 1 --threshold-abs 20 || { echo "FAIL: track --blur-px 1 --threshold-abs 20"; fail=$((fail+1)); }
 expect_key threshold_abs "$tmp/given/summary.json" 20
 
+# Without the blur, track says the peaks are faint and names the option;
+# with it, not (a flow scene of the usual flux: track_planes.sh).
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say" \
+  2>"$tmp/say.err" >/dev/null || { echo "FAIL: track (not quiet)"; fail=$((fail+1)); }
+grep -q "note: the peaks are faint (median height .* against the threshold 42).*--blur-px 1" "$tmp/say.err" ||
+  { echo "FAIL: no faint-peaks note: $(tail -c 400 "$tmp/say.err")"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say1" \
+  --blur-px 1 2>"$tmp/say1.err" >/dev/null
+grep -q "peaks are faint" "$tmp/say1.err" && { echo "FAIL: faint-peaks note with --blur-px 1"; fail=$((fail+1)); }
+h0=$(key "$tmp/plain/summary.json" peak_height_median)
+[ -n "$h0" ] && below "$h0" 1.6 42.38 ||
+  { echo "FAIL: summary.json's median peak height '$h0' not below 1.6 x 42.38"; fail=$((fail+1)); }
+
 a0=$(key "$tmp/plain.json" alpha); a1=$(key "$tmp/blur.json" alpha); a2=$(key "$tmp/low.json" alpha)
 r0=$(key "$tmp/plain.json" recall); r1=$(key "$tmp/blur.json" recall); r2=$(key "$tmp/low.json" recall)
 p1=$(key "$tmp/blur.json" precision)

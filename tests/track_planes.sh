@@ -41,6 +41,8 @@ expect_key threshold_low "$s" 30
   2>"$tmp/say.err" >/dev/null || { echo "FAIL: track (not quiet)"; fail=$((fail+1)); }
 grep -q "51 planes -100..100 um, 4 um apart: every 2nd of" "$tmp/say.err" ||
   { echo "FAIL: stderr does not name the planes: $(head -c 300 "$tmp/say.err")"; fail=$((fail+1)); }
+# the usual flux: no note of faint peaks (track_dim.sh has the dim ones)
+grep -q "peaks are faint" "$tmp/say.err" && { echo "FAIL: faint-peaks note on flow"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say0" \
   --plane-shift-px 0 2>"$tmp/say0.err" >/dev/null
 grep -q "apart: every" "$tmp/say0.err" && { echo "FAIL: planes named with every plane"; fail=$((fail+1)); }
