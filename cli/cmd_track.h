@@ -340,10 +340,11 @@ double track_median_speed_um_per_ms(const track_ctx *c);
 /* Peaks this close to the absolute threshold (median height below this x
  * it, over at least TRACK_WIDTH_MIN_PEAKS peaks) are dim objects', which
  * --blur-px 1 finds more of. Median peak height over the threshold on time
- * surfaces at the defaults: dim flow (a quarter of the flux) seeds 1-2
- * 1.14 / 1.09, three times the background 1.25 / 1.26; flow, stage, blink,
- * blink_moving, flow_random, haze, noise, 640 x 480: 2.3-4.5
- * (docs/tracker.md "Dim objects"). */
-#define TRACK_HINT_DIM_FACTOR 1.6
+ * surfaces at the defaults, where the blur gained: dim flow (a quarter of
+ * the flux) seeds 1-2 1.14 / 1.09, three times the background 1.25 / 1.26,
+ * slow random flow (0.5-1 mm/s) seeds 1-4 1.26-1.95; where it did not (or
+ * lost): flow, stage, blink, blink_moving, flow_random, haze, noise, 640 x
+ * 480 2.3-4.5 (docs/tracker.md "Dim objects"). */
+#define TRACK_HINT_DIM_FACTOR 2.0
 
 #endif
