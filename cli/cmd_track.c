@@ -14,10 +14,29 @@
 
 #include "cmd_track.h"
 
+/* The faint-peaks note (TRACK_HINT_DIM_FACTOR) when it applies and was not
+ * given yet; `so_far`: during the run (on a line of its own). */
+static void dim_note(track_ctx *c, int so_far)
+{
+  const track_opts *o = c->o;
+  const double h_med = track_peak_height_median(c);
+  if (c->dim_noted || o->quiet || o->recon.blur_px != 0 || !(o->peaks.absolute > 0) ||
+      c->n_height < TRACK_WIDTH_MIN_PEAKS ||
+      (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
+      !(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute))
+    return;
+  fprintf(stderr, "%seventlfm track: note: the peaks are faint (median height %.0f against the "
+                  "threshold %.0f%s): for dim objects, about one event per view per frame, "
+                  "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
+          so_far ? "\n" : "", h_med, o->peaks.absolute, so_far ? ", so far" : "");
+  c->dim_noted = 1;
+}
+
 static void progress(const elfm_recon_stats *s, void *user)
 {
-  const track_ctx *c = user;
+  track_ctx *c = user;
   char left[64];
+  if (c->n_height >= TRACK_HINT_DIM_EARLY_PEAKS) dim_note(c, 1);
   fprintf(stderr, "\reventlfm track: %.3f s of recording%s, %" PRId64 " volumes, %.0f volumes/s, "
                   "%zu live tracks   ",
           s->span_s, cli_progress_left(left, sizeof left, s->done_frac, s->wall_s), s->frames,
@@ -222,14 +241,7 @@ int cmd_track(int argc, char **argv)
                     "score such a run with --frames run --window-us run (README, blinking "
                     "objects)\n",
             rs.triggers);
-  const double h_med = track_peak_height_median(&c);
-  if (!o.quiet && o.recon.blur_px == 0 && o.peaks.absolute > 0 && c.n_height >= TRACK_WIDTH_MIN_PEAKS &&
-      (o.recon.framer.repr == ELFM_REPR_EXP || o.recon.framer.repr == ELFM_REPR_LIN) &&
-      h_med < TRACK_HINT_DIM_FACTOR * o.peaks.absolute)
-    fprintf(stderr, "eventlfm track: note: the peaks are faint (median height %.0f against the "
-                    "threshold %.0f): for dim objects, about one event per view per frame, "
-                    "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
-            h_med, o.peaks.absolute);
+  dim_note(&c, 0);
   rc = CLI_OK;
 done:
   track_ctx_free(&c);

@@ -242,6 +242,7 @@ typedef struct track_ctx {
    * bins of 1, for the dim objects' note (TRACK_HINT_DIM_FACTOR) */
   int64_t height_hist[TRACK_HEIGHT_BINS];
   int64_t n_height;
+  int dim_noted;        /* the faint-peaks note was printed (track_dim_note) */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -346,5 +347,8 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * lost): flow, stage, blink, blink_moving, flow_random, haze, noise, 640 x
  * 480 2.3-4.5 (docs/tracker.md "Dim objects"). */
 #define TRACK_HINT_DIM_FACTOR 2.0
+/* The note comes as soon as this many peaks say so (a long recording's user
+ * need not wait for its end), else at the end. */
+#define TRACK_HINT_DIM_EARLY_PEAKS 200
 
 #endif
