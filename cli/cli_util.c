@@ -396,16 +396,7 @@ int cli_parse_recon_option(const char *cmd, int code, const char *arg, cli_recon
     ro->median = m;
     return 1;
   }
-  case CLI_RO_BLUR: {
-    int r;
-    if (!cli_parse_int(cmd, "--blur-px", arg, &r)) return 0;
-    if (r < 0 || r > 2) {
-      cli_message(cmd, CLI_USAGE, "--blur-px must be 0, 1 or 2, not '%s'", arg);
-      return 0;
-    }
-    ro->blur_px = r;
-    return 1;
-  }
+  case CLI_RO_BLUR: return cli_parse_int_in(cmd, "--blur-px", arg, 0, 2, "0, 1 or 2", &ro->blur_px);
   case CLI_RO_FROM: return cli_parse_int64(cmd, "--from-us", arg, &ro->from_us);
   case CLI_RO_TO: return cli_parse_int64(cmd, "--to-us", arg, &ro->to_us);
   case CLI_RO_PATH: return cli_parse_refocus_path(cmd, arg, &ro->refocus.path);
