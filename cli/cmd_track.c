@@ -19,12 +19,12 @@
 static void dim_note(track_ctx *c, int so_far)
 {
   const track_opts *o = c->o;
-  const double h_med = track_peak_height_median(c);
   if (c->dim_noted || o->quiet || o->recon.blur_px != 0 || !(o->peaks.absolute > 0) ||
       c->n_height < TRACK_WIDTH_MIN_PEAKS ||
-      (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
-      !(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute))
+      (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN))
     return;
+  const double h_med = track_peak_height_median(c);
+  if (!(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute)) return;
   fprintf(stderr, "%seventlfm track: note: the peaks are faint (median height %.0f against the "
                   "threshold %.0f%s): for dim objects, about one event per view per frame, "
                   "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",

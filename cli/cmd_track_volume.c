@@ -106,22 +106,25 @@ void track_height_add(track_ctx *c, const elfm_detection *d)
   c->n_height++;
 }
 
+/* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
+static int hist_median_bin(const int64_t *hist, int bins, int64_t n)
+{
+  int64_t half = (n + 1) / 2, acc = 0;
+  int b = 0;
+  while (b < bins - 1 && (acc += hist[b]) < half) b++;
+  return b;
+}
+
 double track_peak_height_median(const track_ctx *c)
 {
   if (c->n_height == 0) return NAN;
-  int64_t half = (c->n_height + 1) / 2, acc = 0;
-  int b = 0;
-  while (b < TRACK_HEIGHT_BINS - 1 && (acc += c->height_hist[b]) < half) b++;
-  return b + 0.5;
+  return hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
 }
 
 double track_peak_width_median_um(const track_ctx *c)
 {
   if (c->n_width == 0) return NAN;
-  int64_t half = (c->n_width + 1) / 2, acc = 0;
-  int b = 0;
-  while (b < TRACK_WIDTH_BINS - 1 && (acc += c->width_hist[b]) < half) b++;
-  return b * TRACK_WIDTH_BIN_UM;
+  return hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
 }
 
 double track_motion_lead_um(const track_ctx *c)
