@@ -24,6 +24,13 @@
 /* u_mode of the lines program beside the public colour modes: one flat
  * colour (u_color) for the box, truth and detections */
 #define GUI_MODE_FLAT 9
+/* ELFM_COLOR_SHARED's colours, in the lines shader and the colour bar
+ * alike: shared stretches magenta, the rest of a track at 40 % of its
+ * colour. GUI_STR puts them (and GUI_MODE_FLAT) into the GLSL text. */
+#define GUI_SHARED_RGB 1.0, 0.2, 1.0
+#define GUI_SHARED_DIM 0.4
+#define GUI_STR_(...) #__VA_ARGS__
+#define GUI_STR(...) GUI_STR_(__VA_ARGS__)
 /* Overlay vertex: x, y in pixels from the top-left, then r, g, b, a. */
 #define GUI_OVERLAY_FLOATS 6
 /* Overlay capacity in vertices, allocated once: ~150 label characters of

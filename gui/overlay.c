@@ -95,14 +95,14 @@ static void colorbar(elfm_viewer *v, int width, int height, int u, int s)
     elfm_colormap_rgb(s_bot, cb);
     if (shared)
       for (int k = 0; k < 3; k++) {
-        ct[k] *= 0.4f;
-        cb[k] *= 0.4f;
+        ct[k] *= (float)GUI_SHARED_DIM;
+        cb[k] *= (float)GUI_SHARED_DIM;
       }
     double ya = y0 + (double)(y1 - y0) * b / bands, yb = y0 + (double)(y1 - y0) * (b + 1) / bands;
     ov_quad2(v, x0, ya, x1, yb, ct, cb);
   }
   if (shared) {
-    static const float col_shared[4] = {1.0f, 0.2f, 1.0f, 1.0f};
+    static const float col_shared[4] = {GUI_SHARED_RGB, 1.0};
     ov_quad(v, x0, y0, x1, y_split, col_shared);
     ov_text(v, x1 + 7 * u, y0 + (y_split - y0) / 2 - 3.5 * s, s, col_text, "2+");
     ov_text(v, x1 + 7 * u, (y_split + y1) / 2 - 3.5 * s, s, col_text, "1");

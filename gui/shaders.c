@@ -65,9 +65,9 @@ static const char *lines_fs =
   "}\n"
   "void main() {\n"
   "  if (v_t > u_cursor || (u_trail >= 0.0 && v_t < u_cursor - u_trail)) discard;\n"
-  "  if (u_mode == 9) o_color = u_color;\n"
-  "  else if (u_mode == 3) o_color = v_shared > 0.5 ? vec4(1.0, 0.2, 1.0, u_color.a)\n"
-  "                                                : vec4(0.4 * turbo(v_s), u_color.a);\n"
+  "  if (u_mode == " GUI_STR(GUI_MODE_FLAT) ") o_color = u_color;\n"
+  "  else if (u_mode == 3) o_color = v_shared > 0.5 ? vec4(" GUI_STR(GUI_SHARED_RGB) ", u_color.a)\n"
+  "                                                : vec4(" GUI_STR(GUI_SHARED_DIM) " * turbo(v_s), u_color.a);\n"
   "  else o_color = vec4(turbo(v_s), u_color.a);\n"
   "}\n";
 
