@@ -9,6 +9,9 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <string.h>
 #include <sys/stat.h>
 
@@ -75,13 +78,57 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
   return close_file(&f, p_tm, err);
 }
 
-int cmd_track(int argc, char **argv)
+/* --blur-px auto: judge the peaks once min_peaks of them are in; 1 when
+ * they are faint (TRACK_HINT_DIM_FACTOR), and the run is to start again
+ * with the blur. */
+static int blur_judge(track_ctx *c, int64_t min_peaks)
+{
+  const track_opts *o = c->o;
+  if (!o->blur_auto || c->blur_decided || c->n_height < min_peaks) return 0;
+  c->blur_decided = 1;
+  const double h = track_peak_height_median(c);
+  c->blur_ratio = h / o->peaks.absolute;
+  c->blur_speed = track_detection_speed_median(c);
+  const int slow = c->n_speed >= TRACK_WIDTH_MIN_PEAKS && c->blur_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
+                   c->blur_speed < TRACK_BLUR_AUTO_SLOW_UM_PER_MS;
+  c->blur_restart = h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
+  return c->blur_restart;
+}
+
+/* The ordered per-volume callback: track_on_volume, then auto's judgement
+ * as soon as TRACK_HINT_DIM_EARLY_PEAKS peaks are in. A faint start stops
+ * the run (an error status that cmd_track knows by c->blur_restart). */
+static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  track_ctx *c = user;
+  const elfm_status st = track_on_volume(v, slot, user, err);
+  if (st == ELFM_OK && blur_judge(c, TRACK_HINT_DIM_EARLY_PEAKS))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "faint peaks: to start again with the blur");
+  return st;
+}
+
+/* The run's result when --blur-px auto found the peaks faint: cmd_track
+ * starts again with --blur-px 1. */
+#define TRACK_RUN_AGAIN_BLURRED 100
+
+static void say_again(const track_ctx *c)
+{
+  if (c->o->quiet) return;
+  fprintf(stderr, "\neventlfm track: the peaks are faint (median height %.0f against the threshold "
+                  "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
+                  "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
+          c->blur_ratio * c->o->peaks.absolute, c->o->peaks.absolute, c->n_height);
+}
+
+/* One run with *po: CLI_OK, CLI_FAIL (said), or TRACK_RUN_AGAIN_BLURRED
+ * with judged[] the peaks' median height over the threshold and their
+ * tracks' median speed (um/ms). *t0_s: the
+ * time the command's first run started (NaN: this one), for the wall time
+ * in summary.json. */
+static int track_run(const track_opts *po, double judged[2], double *t0_s)
 {
   static const char *const C = "track";
-  track_opts o;
-  const int pr = track_opts_parse(argc, argv, &o);
-  if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
-
+  track_opts o = *po;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -125,7 +172,7 @@ int cmd_track(int argc, char **argv)
   }
   o.recon.worker = track_detect_worker;
   o.recon.worker_user = &c;
-  o.recon.on_volume_slot = track_on_volume;
+  o.recon.on_volume_slot = on_volume;
   c.lk = elfm_link_create(&o.link, &err);
   if (!c.lk) { cli_fail(C, &err); goto done; }
   c.fdet = fopen(c.p_det, "w");
@@ -157,10 +204,21 @@ int cmd_track(int argc, char **argv)
               calib.z_max_um, calib.z_step_um, o.plane_every,
               o.plane_every == 2 ? "nd" : o.plane_every == 3 ? "rd" : "th", o.calib);
   }
-  double t0 = cli_now_s();
+  if (isnan(*t0_s)) *t0_s = cli_now_s();
+  const double t0 = *t0_s;
   elfm_recon_stats rs;
   memset(&rs, 0, sizeof rs);
   elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, NULL, &c, &rs, &err);
+  /* --blur-px auto: stopped at faint peaks, or judged at the end (a short
+   * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
+   * again by the second run */
+  if (c.blur_restart || ((st == ELFM_OK || rs.input_error) && blur_judge(&c, TRACK_WIDTH_MIN_PEAKS))) {
+    say_again(&c);
+    judged[0] = c.blur_ratio;
+    judged[1] = c.blur_speed;
+    rc = TRACK_RUN_AGAIN_BLURRED;
+    goto done;
+  }
   if (!o.quiet) fputc('\n', stderr);
   /* An error in the event file (truncated, corrupt) stops reading, but what
    * was read before it is good: finish the tracks, write every output, and
@@ -248,3 +306,28 @@ done:
   return rc;
 }
 
+int cmd_track(int argc, char **argv)
+{
+  track_opts o;
+  int pr = track_opts_parse(argc, argv, &o);
+  if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
+  /* starting again reads the events again: a file, not a pipe */
+  struct stat sb;
+  if (o.blur_auto && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode))) o.blur_auto = 0;
+  double judged[2] = {NAN, NAN}, t0_s = NAN;
+  int rc = track_run(&o, judged, &t0_s);
+  if (rc != TRACK_RUN_AGAIN_BLURRED) return rc;
+#if defined(__GLIBC__)
+  /* The first run's memory back to the system: glibc's worker-thread
+   * arenas kept it, and the second run's peak RSS was 20 MB higher than
+   * --blur-px 1 alone (125 against 104 MB on dim flow 400 ms; 105 with). */
+  malloc_trim(0);
+#endif
+  /* everything as given, and --blur-px 1: the blur's thresholds too */
+  pr = track_opts_parse_blur(argc, argv, 1, &o);
+  if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
+  o.blur_auto_ratio = judged[0];
+  o.blur_auto_speed = judged[1];
+  rc = track_run(&o, judged, &t0_s);
+  return rc == TRACK_RUN_AGAIN_BLURRED ? CLI_FAIL : rc; /* cannot: auto is off now */
+}

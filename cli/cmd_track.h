@@ -62,6 +62,13 @@ typedef struct track_opts {
   int plane_every;      /* the m taken (1: the calibration's planes), for summary.json */
   int thr_defaulted;    /* 1 absolute, 2 hysteresis_low, 4 absolute_min: track's own
                            defaults, which coarser planes scale (track_plane_step) */
+  int blur_auto;        /* --blur-px auto (the default): the run starts without the blur
+                           and starts again with --blur-px 1 when its first peaks are
+                           faint (TRACK_HINT_DIM_FACTOR); 0 where it does not apply
+                           (track_opts_derive) */
+  int blur_auto_chose;  /* 1: this run's blur is auto's choice (the run started again) */
+  double blur_auto_ratio; /* that choice's median peak height over the threshold */
+  double blur_auto_speed; /* ... and its tracks' median speed, um/ms */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -78,6 +85,8 @@ typedef struct track_opts {
 #define TRACK_WIDTH_FOCUS_UM 20.0
 #define TRACK_WIDTH_MIN_PEAKS 50
 #define TRACK_HEIGHT_BINS 1024
+#define TRACK_SPEED_BIN_UM_PER_MS 0.02
+#define TRACK_SPEED_BINS 500
 #define TRACK_LEAD_PER_WIDTH 1.80
 #define TRACK_LEAD_AT_ZERO_WIDTH_UM (-0.37)
 #define TRACK_LEAD_PER_WIDTH_FIRST_PASS 1.52
@@ -87,6 +96,8 @@ typedef struct track_opts {
  * CLI_USAGE already shown on stderr. */
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
+/* The same, as if --blur-px blur_px (0..2) were given last: auto's second run. */
+int track_opts_parse_blur(int argc, char **argv, int blur_px, track_opts *o);
 
 /* track's plain defaults, where they differ from the libraries' and why
  * (cmd_track_defaults.c), before argv. */
@@ -243,6 +254,14 @@ typedef struct track_ctx {
   int64_t height_hist[TRACK_HEIGHT_BINS];
   int64_t n_height;
   int dim_noted;        /* the faint-peaks note was printed (track_dim_note) */
+  /* --blur-px auto: the speeds of the tracks the detections joined (elfm_link_last_speed),
+   * in bins of TRACK_SPEED_BIN_UM_PER_MS, until the judgement */
+  int64_t speed_hist[TRACK_SPEED_BINS];
+  int64_t n_speed;
+  int blur_decided;     /* --blur-px auto: the first peaks have been judged */
+  int blur_restart;     /* ... faint: start again with --blur-px 1 (cmd_track) */
+  double blur_ratio;    /* ... their median height over the threshold */
+  double blur_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -297,6 +316,10 @@ void track_width_add(track_ctx *c, const elfm_detection *d);
  * view-fit point; the median of those heights (NAN before the first). */
 void track_height_add(track_ctx *c, const elfm_detection *d);
 double track_peak_height_median(const track_ctx *c);
+/* Count a detection's track speed (NaN: none yet, not counted); the median
+ * of those speeds, um/ms (NAN before the first). */
+void track_speed_add(track_ctx *c, double v_um_per_ms);
+double track_detection_speed_median(const track_ctx *c);
 /* The median width of those peaks, um; NAN before the first. */
 double track_peak_width_median_um(const track_ctx *c);
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
@@ -340,15 +363,32 @@ double track_median_speed_um_per_ms(const track_ctx *c);
 #define TRACK_HINT_MAX_STEP_UM 3.5
 /* Peaks this close to the absolute threshold (median height below this x
  * it, over at least TRACK_WIDTH_MIN_PEAKS peaks) are dim objects', which
- * --blur-px 1 finds more of. Median peak height over the threshold on time
- * surfaces at the defaults, where the blur gained: dim flow (a quarter of
- * the flux) seeds 1-2 1.14 / 1.09, three times the background 1.25 / 1.26,
- * slow random flow (0.5-1 mm/s) seeds 1-4 1.26-1.95; where it did not (or
- * lost): flow, stage, blink, blink_moving, flow_random, haze, noise, 640 x
- * 480 2.3-4.5 (docs/tracker.md "Dim objects"). */
-#define TRACK_HINT_DIM_FACTOR 2.0
+ * --blur-px 1 finds more of: --blur-px auto (the default) then starts the
+ * run again with it, and with --blur-px 0 a note names it. Median peak
+ * height over the threshold on time surfaces at the defaults, where the
+ * blur gained: dim flow (a quarter of the flux) seeds 1-2 1.14 / 1.09,
+ * three times the background 1.25 / 1.26, slow random flow (0.5-1 mm/s)
+ * seeds 1-4 1.26-1.95, flow at 3/8 and 1/2 of the flux 1.26-1.36 and
+ * 1.52-1.78, flow_random at 1/2 1.40-1.83, blink at 0.3 1.71-2.14; where it
+ * did not (or lost): flow, stage, blink, blink_moving, flow_random, haze,
+ * noise, 640 x 480 2.3-4.5, flow at 3/4 of the flux 2.49-2.87
+ * (docs/tracker.md "Dim objects"). */
+#define TRACK_HINT_DIM_FACTOR 2.15
+/* ... but objects that crawl (worm neurons, 0.1-0.3 um/ms) look faint on a
+ * time surface too, and there the integral is the setting (the slow-tracks
+ * note, TRACK_HINT_MAX_SPEED_UM_PER_MS): the blur's jittery extra tracks
+ * hid it (worm 150 ms at 500 Hz, seed 5, time surface: alpha 0.43 -> 0.48
+ * with the blur, 0.91 with --repr integral; the median track speed read
+ * 0.12 -> 0.56 um/ms). So auto keeps off the blur where the tracks of the
+ * judged peaks move slower than this. Those early speeds (short tracks,
+ * elfm_link_last_speed) read high: worm 0.37-0.73 um/ms (seeds 1-8 and 5 of
+ * the tests, 2 ms frames), slow random flow (0.5-1 mm/s) 1.47-1.61, flow
+ * 3.8-4.2. */
+#define TRACK_BLUR_AUTO_SLOW_UM_PER_MS 1.0
 /* The note comes as soon as this many peaks say so (a long recording's user
- * need not wait for its end), else at the end. */
+ * need not wait for its end), else at the end; --blur-px auto judges the
+ * same peaks (on flow, the first 10-40 frames), so that its second run
+ * repeats little. */
 #define TRACK_HINT_DIM_EARLY_PEAKS 200
 
 #endif

@@ -30,7 +30,17 @@ static void usage(FILE *f)
   fprintf(f,
     "                       (polarity on: OFF events trail moving beads; median 0\n"
     "                       and ghost none: the detector and linker reject ghosts;\n"
-    "                       a batch's volumes are searched for peaks in parallel too)\n"
+    "                       a batch's volumes are searched for peaks in parallel too)\n");
+  fprintf(f,
+    "  --blur-px auto       (default) start without the blur, and when the first %d\n"
+    "                       peaks' median height is below %.2f x the threshold (dim\n"
+    "                       objects) start again with --blur-px 1; on time surfaces\n"
+    "                       without --threshold-abs, events from a file (read again),\n"
+    "                       not with --motion stage (the blur costs a stage's speed)\n"
+    "                       nor where those peaks' tracks move slower than %g um/ms\n"
+    "                       (crawling cells: --repr integral is the setting there)\n",
+    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_BLUR_AUTO_SLOW_UM_PER_MS);
+  fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"
     "                       between planes (1.5: 4 um on the paper's 2 um planes, about\n"
@@ -239,7 +249,7 @@ enum {
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
  * --help was printed; otherwise the usage error already shown. */
-int track_opts_parse(int argc, char **argv, track_opts *out)
+static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
 {
   static const char *const C = "track";
   track_opts o;
@@ -324,8 +334,14 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   int ch;
   while ((ch = getopt_long(argc, argv, ":hq", lo, NULL)) != -1) {
     const char *a = optarg;
+    if (ch == CLI_RO_BLUR && a && !strcmp(a, "auto")) {
+      o.blur_auto = 1;
+      o.recon.blur_px = 0;
+      continue;
+    }
     const int k = cli_parse_recon_option(C, ch, a, &rp);
     if (k == 0) return CLI_USAGE;
+    if (ch == CLI_RO_BLUR) o.blur_auto = 0;
     if (k > 0) continue;
     switch (ch) {
     case 'h': usage(stdout); return TRACK_PARSE_HELP;
@@ -619,8 +635,23 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o.planes_um);
+  if (force_blur_px >= 0) {
+    o.recon.blur_px = force_blur_px;
+    o.blur_auto = 0;
+    o.blur_auto_chose = 1;
+  }
   const int rc = track_opts_derive(&o, &g);
   if (rc != CLI_OK) return rc;
   *out = o;
   return CLI_OK;
+}
+
+int track_opts_parse(int argc, char **argv, track_opts *out)
+{
+  return parse(argc, argv, -1, out);
+}
+
+int track_opts_parse_blur(int argc, char **argv, int blur_px, track_opts *out)
+{
+  return parse(argc, argv, blur_px, out);
 }

@@ -212,6 +212,14 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
   add_num(par, "peak_height_median", track_peak_height_median(c));
+  /* --blur-px auto: whether it was on, and what it judged: the first
+   * peaks' median height over the threshold, their tracks' median speed
+   * (blur_px says what it chose) */
+  cJSON_AddBoolToObject(par, "blur_auto", o->blur_auto || o->blur_auto_chose);
+  add_num(par, "blur_auto_height_ratio",
+          o->blur_auto_chose ? o->blur_auto_ratio : c->blur_decided ? c->blur_ratio : NAN);
+  add_num(par, "blur_auto_track_speed_um_per_ms",
+          o->blur_auto_chose ? o->blur_auto_speed : c->blur_decided ? c->blur_speed : NAN);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);

@@ -106,6 +106,14 @@ void track_height_add(track_ctx *c, const elfm_detection *d)
   c->n_height++;
 }
 
+void track_speed_add(track_ctx *c, double v_um_per_ms)
+{
+  if (!(v_um_per_ms >= 0)) return;  /* NaN: a new track */
+  const double b = floor(v_um_per_ms / TRACK_SPEED_BIN_UM_PER_MS);
+  c->speed_hist[b < TRACK_SPEED_BINS - 1 ? (int)b : TRACK_SPEED_BINS - 1]++;
+  c->n_speed++;
+}
+
 /* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
 static int hist_median_bin(const int64_t *hist, int bins, int64_t n)
 {
@@ -119,6 +127,12 @@ double track_peak_height_median(const track_ctx *c)
 {
   if (c->n_height == 0) return NAN;
   return hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
+}
+
+double track_detection_speed_median(const track_ctx *c)
+{
+  if (c->n_speed == 0) return NAN;
+  return (hist_median_bin(c->speed_hist, TRACK_SPEED_BINS, c->n_speed) + 0.5) * TRACK_SPEED_BIN_UM_PER_MS;
 }
 
 double track_peak_width_median_um(const track_ctx *c)
@@ -670,6 +684,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
     track_width_add(c, &det[j]);
     track_height_add(c, &det[j]);
+    if (o->blur_auto && !c->blur_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;

@@ -7,18 +7,23 @@
 # planes). On simulator truth it finds far more of the dim beads than the
 # defaults (flow 100 ms, objects.flux_hz=[3000,4000], seeds 1-10: recall
 # 0.28 -> 0.54, alpha 0.21 -> 0.38; docs/tracker.md "Dim objects").
+# --blur-px auto, track's default, judges the first 200 peaks (all of them
+# in a shorter run) and, when they are faint, starts again with --blur-px 1:
+# the same outputs as --blur-px 1 given.
 # Usage: track_dim.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-expect_usage_errors "--blur-px 3" "--blur-px -1" "--blur-px x"
-"$bin" recon --blur-px 5 >/dev/null 2>"$tmp/err"
-[ $? -eq 2 ] && grep -q -e "--blur-px" "$tmp/err" || { echo "FAIL: recon --blur-px 5 not a usage error"; fail=$((fail+1)); }
+expect_usage_errors "--blur-px 3" "--blur-px -1" "--blur-px x" "--blur-px autox"
+for v in 5 auto; do
+  "$bin" recon --blur-px $v >/dev/null 2>"$tmp/err"
+  [ $? -eq 2 ] && grep -q -e "--blur-px" "$tmp/err" || { echo "FAIL: recon --blur-px $v not a usage error"; fail=$((fail+1)); }
+done
 simulate_or_skip "$tmp/sim" flow 60 3 --param 'objects.flux_hz=[3000,4000]'
 
-track_score "$tmp/sim" "$tmp/plain" "$tmp/plain.json"
+track_score "$tmp/sim" "$tmp/plain" "$tmp/plain.json" --blur-px 0
 track_score "$tmp/sim" "$tmp/blur" "$tmp/blur.json" --blur-px 1
 # without the blur, the dim thresholds alone (the blur's part of the gain)
 track_score "$tmp/sim" "$tmp/low" "$tmp/low.json" --threshold-abs 8 --threshold-low 6 --threshold-min 6
@@ -36,7 +41,7 @@ expect_key threshold_abs "$tmp/given/summary.json" 20
 # Without the blur, track says the peaks are faint and names the option;
 # with it, not (a flow scene of the usual flux: track_planes.sh).
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say" \
-  2>"$tmp/say.err" >/dev/null || { echo "FAIL: track (not quiet)"; fail=$((fail+1)); }
+  --blur-px 0 2>"$tmp/say.err" >/dev/null || { echo "FAIL: track (not quiet)"; fail=$((fail+1)); }
 grep -q "note: the peaks are faint (median height .* against the threshold 42.*--blur-px 1" "$tmp/say.err" ||
   { echo "FAIL: no faint-peaks note: $(tail -c 400 "$tmp/say.err")"; fail=$((fail+1)); }
 # once: during the run (", so far") once 200 peaks say so, else at the end
@@ -48,6 +53,52 @@ grep -q "peaks are faint" "$tmp/say1.err" && { echo "FAIL: faint-peaks note with
 h0=$(key "$tmp/plain/summary.json" peak_height_median)
 [ -n "$h0" ] && below "$h0" 2 42.38 ||
   { echo "FAIL: summary.json's median peak height '$h0' not below 2 x 42.38"; fail=$((fail+1)); }
+
+# --blur-px auto (the default): faint peaks, so it starts again with the
+# blur, says so once, and writes what --blur-px 1 writes (summary.json
+# aside: wall times, and blur_auto)
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/auto" \
+  2>"$tmp/auto.err" >/dev/null || { echo "FAIL: track (auto)"; fail=$((fail+1)); }
+n_again=$(grep -c "peaks are faint (median height .* against the threshold 42 over the first 2[0-9][0-9]): dim objects; starting again with --blur-px 1" "$tmp/auto.err")
+[ "$n_again" = 1 ] || { echo "FAIL: auto's restart said $n_again times: $(tail -c 400 "$tmp/auto.err")"; fail=$((fail+1)); }
+grep -q "note: the peaks are faint" "$tmp/auto.err" && { echo "FAIL: the faint-peaks note after auto's blur"; fail=$((fail+1)); }
+for f in tracks.csv detections.csv frames.csv tracks_isbi.xml tracks_trackmate.xml; do
+  cmp -s "$tmp/auto/$f" "$tmp/blur/$f" || { echo "FAIL: auto's $f differs from --blur-px 1's"; fail=$((fail+1)); }
+done
+expect_key blur_px "$tmp/auto/summary.json" 1
+[ "$(key "$tmp/auto/summary.json" blur_auto)" = true ] || { echo "FAIL: blur_auto not true"; fail=$((fail+1)); }
+ra=$(key "$tmp/auto/summary.json" blur_auto_height_ratio)
+[ -n "$ra" ] && below "$ra" 1 2.15 || { echo "FAIL: blur_auto_height_ratio '$ra' not below 2.15"; fail=$((fail+1)); }
+[ "$(key "$tmp/blur/summary.json" blur_auto)" = false ] || { echo "FAIL: blur_auto with --blur-px 1"; fail=$((fail+1)); }
+# where auto does not apply: thresholds given, a stage, the integral
+for o in "--threshold-abs 45" "--motion stage" "--repr integral"; do
+  # shellcheck disable=SC2086
+  "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/off" -q $o ||
+    { echo "FAIL: track $o"; fail=$((fail+1)); }
+  [ "$(key "$tmp/off/summary.json" blur_auto)" = false ] || { echo "FAIL: blur_auto with $o"; fail=$((fail+1)); }
+  expect_key blur_px "$tmp/off/summary.json" 0
+done
+# events from a pipe cannot be read again: no auto, and the note instead
+if mkfifo "$tmp/fifo" 2>/dev/null; then
+  cat "$tmp/sim/events.raw" > "$tmp/fifo" &
+  "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/fifo" --out "$tmp/pipe" 2>"$tmp/pipe.err" >/dev/null ||
+    { echo "FAIL: track from a pipe"; fail=$((fail+1)); }
+  wait
+  [ "$(key "$tmp/pipe/summary.json" blur_auto)" = false ] || { echo "FAIL: blur_auto from a pipe"; fail=$((fail+1)); }
+  grep -q "note: the peaks are faint" "$tmp/pipe.err" || { echo "FAIL: no faint-peaks note from a pipe"; fail=$((fail+1)); }
+fi
+# A run too short for 200 peaks is judged at its end (50 peaks or more),
+# then run again: the first 8 ms here
+t_first=$(sed -n 2p "$tmp/plain/frames.csv" | cut -d, -f3)
+t_to=$((t_first + 8000))
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/short" \
+  --to-us "$t_to" 2>"$tmp/short.err" >/dev/null || { echo "FAIL: track --to-us"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/short1" \
+  --to-us "$t_to" --blur-px 1 -q || { echo "FAIL: track --to-us --blur-px 1"; fail=$((fail+1)); }
+n_short=$(sed -n 's/.*over the first \([0-9]*\)): dim objects; starting again.*/\1/p' "$tmp/short.err")
+[ -n "$n_short" ] && [ "$n_short" -ge 50 ] && [ "$n_short" -lt 200 ] ||
+  { echo "FAIL: no restart at the end of a short run ('$n_short' peaks): $(tail -c 400 "$tmp/short.err")"; fail=$((fail+1)); }
+cmp -s "$tmp/short/tracks.csv" "$tmp/short1/tracks.csv" || { echo "FAIL: the short run's tracks.csv differs from --blur-px 1's"; fail=$((fail+1)); }
 
 a0=$(key "$tmp/plain.json" alpha); a1=$(key "$tmp/blur.json" alpha); a2=$(key "$tmp/low.json" alpha)
 r0=$(key "$tmp/plain.json" recall); r1=$(key "$tmp/blur.json" recall); r2=$(key "$tmp/low.json" recall)
