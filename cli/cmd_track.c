@@ -135,6 +135,7 @@ static int track_run(const track_opts *po, double judged[2], double *t0_s)
   if (elfm_calib_load(o.calib, &calib, &err) != ELFM_OK) return cli_fail(C, &err);
   if (!cli_apply_planes(C, o.planes_um, o.calib, &calib)) return CLI_USAGE;
   track_plane_step(&o, &calib);
+  track_views_step(&o, &calib);
   if (o.smooth.motion_lead_um != 0 || o.smooth.motion_delay_us != 0) {
     /* The motion bias of a fit over the views (elfm_smooth.h): each view's
      * image moves with the object's lateral motion plus its z motion times
@@ -203,6 +204,10 @@ static int track_run(const track_opts *po, double judged[2], double *t0_s)
               "(--plane-shift-px 0 for all)\n", elfm_calib_n_planes(&calib), calib.z_min_um,
               calib.z_max_um, calib.z_step_um, o.plane_every,
               o.plane_every == 2 ? "nd" : o.plane_every == 3 ? "rd" : "th", o.calib);
+    if (o.views_scaled)
+      fprintf(stderr, "eventlfm track: %d views: views that must agree scaled from the 25 views' "
+              "defaults to %d (view fit), %d (guided), %d (fill), %d (deep peaks)\n",
+              o.views_scaled, o.loc.min_views, o.guided_views, o.fill_views, o.deep_peak_views);
   }
   if (isnan(*t0_s)) *t0_s = cli_now_s();
   const double t0 = *t0_s;

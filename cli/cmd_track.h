@@ -62,6 +62,10 @@ typedef struct track_opts {
   int plane_every;      /* the m taken (1: the calibration's planes), for summary.json */
   int thr_defaulted;    /* 1 absolute, 2 hysteresis_low, 4 absolute_min: track's own
                            defaults, which coarser planes scale (track_plane_step) */
+  int views_scaled;     /* track_views_step scaled them for this many views (0: not) */
+  int views_defaulted;  /* 1 localize min_views, 2 guided_views, 4 fill_views, 8
+                           deep_peak_views: track's own defaults, which fewer views
+                           than 25 scale (track_views_step) */
   int blur_auto;        /* --blur-px auto (the default): the run starts without the blur
                            and starts again with --blur-px 1 when its first peaks are
                            faint (TRACK_HINT_DIM_FACTOR); 0 where it does not apply
@@ -117,6 +121,8 @@ typedef struct track_given {
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ;                          /* --circle-points */
+  int locmin, gviews, deepv;         /* --localize-min-views, --guided-views,
+                                        --deep-peak-views */
 } track_given;
 
 /* Fill in the derived defaults of a parsed *o (g: what was given) and
@@ -130,6 +136,12 @@ int track_opts_derive(track_opts *o, const track_given *g);
  * default absolute thresholds by what the wider sampling costs a peak
  * (TRACK_AXIAL_SIGMA_UM). Sets o->plane_every. */
 void track_plane_step(track_opts *o, elfm_calib *cal);
+
+/* With fewer views than the paper's 25 (a 3 x 3 lens array): track's
+ * defaults of the views that must agree, ceil(count x n_views / 25), so that
+ * no rule asks for more views than there are (deep_peak_views 10 of 9).
+ * Sets o->views_scaled to the number of views when it scaled. */
+void track_views_step(track_opts *o, const elfm_calib *cal);
 
 /* The refocused peaks' axial sigma on the paper's optics: the median
  * sigma_z of the peak fits on flow and stage at 2 um planes was 4.6-6 um

@@ -405,6 +405,7 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
         return cli_message(C, CLI_USAGE, "--localize-outlier-px must be > 0, not '%s'", a);
       break;
     case O_LOCMIN:
+      g.locmin = 1;
       if (!cli_parse_int(C, "--localize-min-views", a, &o.loc.min_views)) return CLI_USAGE;
       if (o.loc.min_views < 2 || o.loc.min_views > 255)
         return cli_message(C, CLI_USAGE, "--localize-min-views must be 2..255, not '%s'", a);
@@ -422,6 +423,7 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
         return CLI_USAGE;
       break;
     case O_DEEPV:
+      g.deepv = 1;
       if (!parse_views_or_off(C, "--deep-peak-views", a, &o.deep_peak_views)) return CLI_USAGE;
       break;
     case O_PRIO:
@@ -471,6 +473,7 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
         return cli_message(C, CLI_USAGE, "--fill-max-gap must be 1..1000, not '%s'", a);
       break;
     case O_GVIEWS:
+      g.gviews = 1;
       if (!parse_views_or_off(C, "--guided-views", a, &o.guided_views)) return CLI_USAGE;
       break;
     case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;

@@ -215,6 +215,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   /* --blur-px auto: whether it was on, and what it judged: the first
    * peaks' median height over the threshold, their tracks' median speed
    * (blur_px says what it chose) */
+  cJSON_AddNumberToObject(par, "views_scaled_for", o->views_scaled);
   cJSON_AddBoolToObject(par, "blur_auto", o->blur_auto || o->blur_auto_chose);
   add_num(par, "blur_auto_height_ratio",
           o->blur_auto_chose ? o->blur_auto_ratio : c->blur_decided ? c->blur_ratio : NAN);
