@@ -240,6 +240,7 @@ static int track_run(const track_opts *po, double judged[2], double *t0_s)
   if (st == ELFM_OK) st = track_fill_gaps(&c, 1, &err);
   if (st == ELFM_OK) st = elfm_link_finish(c.lk, &err);
   if (st == ELFM_OK) st = track_drain(&c, &err);
+  if (st == ELFM_OK) st = track_stage_flush(&c, &err);
   if (st == ELFM_OK) st = track_det_flush_before(&c, INT64_MAX, &err);
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);
   if (st == ELFM_OK) st = close_file(&c.ftr, c.p_tr, &err);

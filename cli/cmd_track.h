@@ -89,6 +89,14 @@ typedef struct track_opts {
 #define TRACK_WIDTH_FOCUS_UM 20.0
 #define TRACK_WIDTH_MIN_PEAKS 50
 #define TRACK_HEIGHT_BINS 1024
+/* The stage's consensus velocity (track_ctx.stage_*): tracks of at least
+ * TRACK_STAGE_MIN_POINTS points count, TRACK_STAGE_MIN_TRACKS of them make
+ * a consensus, the newest TRACK_STAGE_RING of them keep it; a run that has
+ * held TRACK_STAGE_MAX_PENDING tracks without one decides with what it has. */
+#define TRACK_STAGE_MIN_POINTS 20
+#define TRACK_STAGE_MIN_TRACKS 5
+#define TRACK_STAGE_RING 32
+#define TRACK_STAGE_MAX_PENDING 256
 #define TRACK_SPEED_BIN_UM_PER_MS 0.02
 #define TRACK_SPEED_BINS 500
 #define TRACK_LEAD_PER_WIDTH 1.80
@@ -270,6 +278,16 @@ typedef struct track_ctx {
    * in bins of TRACK_SPEED_BIN_UM_PER_MS, until the judgement */
   int64_t speed_hist[TRACK_SPEED_BINS];
   int64_t n_speed;
+  /* --motion stage without a given velocity: the stage's velocity from the
+   * tracks themselves (track_stage_*, cmd_track_volume.c). Finished tracks
+   * wait in stage_pending until TRACK_STAGE_MIN_TRACKS of them with
+   * TRACK_STAGE_MIN_POINTS points or more give a consensus; from then on
+   * each is tested against the weighted median of the newest
+   * TRACK_STAGE_RING such tracks' mean velocities (a stage may speed up). */
+  elfm_track **stage_pending;
+  size_t n_stage_pending, stage_pending_cap, n_stage_pending_long;
+  double stage_ring[TRACK_STAGE_RING][4]; /* mean vx, vy, vz (um/ms) and points */
+  int n_stage_ring, stage_ring_at, stage_established;
   int blur_decided;     /* --blur-px auto: the first peaks have been judged */
   int blur_restart;     /* ... faint: start again with --blur-px 1 (cmd_track) */
   double blur_ratio;    /* ... their median height over the threshold */
@@ -295,6 +313,9 @@ int track_near_add(const elfm_detection *det, int n, int skip, double x_um, doub
                    double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
 /* Smooth, filter and write the tracks the linker has finished. */
 elfm_status track_drain(track_ctx *c, elfm_error *err);
+/* --motion stage without a given velocity, at the end: decide on the
+ * tracks still waiting for a consensus and write the kept ones. */
+elfm_status track_stage_flush(track_ctx *c, elfm_error *err);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
  * and buffers, before the run; keep the frame of each volume (linking
  * callback, frame order); after each linking step (all = 0) and before
