@@ -107,10 +107,10 @@ static int off_consensus(const elfm_track *t, const double v_c[3])
 }
 
 /* The weighted median of the values x[k * stride] (weights w[k * stride]),
- * n > 0. */
+ * 0 < n <= TRACK_STAGE_RING. */
 static double weighted_median(const double *x, const double *w, int n, int stride)
 {
-  int idx[TRACK_STAGE_RING + TRACK_STAGE_MAX_PENDING];
+  int idx[TRACK_STAGE_RING];
   double tot = 0;
   for (int k = 0; k < n; k++) {
     idx[k] = k;
@@ -128,11 +128,15 @@ static double weighted_median(const double *x, const double *w, int n, int strid
   return x[idx[n - 1] * stride];
 }
 
-/* The consensus: per axis, the weighted median (by points) of the ring's
- * mean velocities. */
-static void stage_consensus(const track_ctx *c, double v[3])
+/* t against the consensus: per axis, the weighted median (by points) of
+ * the ring's mean velocities. No consensus (no long track yet): not off. */
+static int stage_off(const track_ctx *c, const elfm_track *t)
 {
-  for (int a = 0; a < 3; a++) v[a] = weighted_median(&c->stage_ring[0][a], &c->stage_ring[0][3], c->n_stage_ring, 4);
+  if (c->n_stage_ring == 0) return 0;
+  double v[3];
+  for (int a = 0; a < 3; a++)
+    v[a] = weighted_median(&c->stage_ring[0][a], &c->stage_ring[0][3], c->n_stage_ring, 4);
+  return off_consensus(t, v);
 }
 
 static void stage_ring_add(track_ctx *c, const elfm_track *t)
@@ -145,53 +149,40 @@ static void stage_ring_add(track_ctx *c, const elfm_track *t)
   if (c->n_stage_ring < TRACK_STAGE_RING) c->n_stage_ring++;
 }
 
-/* Test t against the consensus, then write it or count it off the stage.
- * A kept track joins the consensus. */
-static elfm_status stage_decide(track_ctx *c, elfm_track *t, elfm_error *err)
+/* A track off the stage: counted, freed. */
+static elfm_status stage_drop(track_ctx *c, elfm_track *t)
 {
-  double v[3];
-  stage_consensus(c, v);
-  if (off_consensus(t, v)) {
-    c->n_rejected_stage++;
-    elfm_track_free(t);
-    return ELFM_OK;
-  }
-  stage_ring_add(c, t);
-  return write_track(c, t, err);
+  c->n_rejected_stage++;
+  elfm_track_free(t);
+  return ELFM_OK;
 }
 
 /* The pending tracks, in their order: the consensus from the long ones
- * among them (all of them kept when none is long), then each decided. */
+ * among them, then each tested and written or dropped. */
 static elfm_status stage_release(track_ctx *c, elfm_error *err)
 {
   for (size_t i = 0; i < c->n_stage_pending; i++) stage_ring_add(c, c->stage_pending[i]);
-  c->n_stage_ring = c->n_stage_ring < TRACK_STAGE_RING ? c->n_stage_ring : TRACK_STAGE_RING;
   elfm_status st = ELFM_OK;
   for (size_t i = 0; i < c->n_stage_pending; i++) {
     elfm_track *t = c->stage_pending[i];
     c->stage_pending[i] = NULL;
     if (st != ELFM_OK) elfm_track_free(t);
-    else if (c->n_stage_ring == 0) st = write_track(c, t, err);
-    else {
-      double v[3];
-      stage_consensus(c, v);
-      if (off_consensus(t, v)) {
-        c->n_rejected_stage++;
-        elfm_track_free(t);
-      } else {
-        st = write_track(c, t, err);
-      }
-    }
+    else if (stage_off(c, t)) stage_drop(c, t);
+    else st = write_track(c, t, err);
   }
   c->n_stage_pending = c->n_stage_pending_long = 0;
   return st;
 }
 
-/* --motion stage without a given velocity: hold t until a consensus,
- * then decide (stage_decide). */
+/* --motion stage without a given velocity: hold t until there is a
+ * consensus; then test it, and a kept long track joins the consensus. */
 static elfm_status stage_hold(track_ctx *c, elfm_track *t, elfm_error *err)
 {
-  if (c->stage_established) return stage_decide(c, t, err);
+  if (c->stage_established) {
+    if (stage_off(c, t)) return stage_drop(c, t);
+    stage_ring_add(c, t);
+    return write_track(c, t, err);
+  }
   if (c->n_stage_pending == c->stage_pending_cap) {
     size_t cap = c->stage_pending_cap ? 2 * c->stage_pending_cap : 32;
     elfm_track **p = realloc(c->stage_pending, cap * sizeof *p);
@@ -226,11 +217,7 @@ static elfm_status finish_track(track_ctx *c, elfm_track *t, elfm_status st, elf
   if (st == ELFM_OK && c->o->motion == MOTION_STAGE) {
     /* with a known velocity, against it; else against the tracks' own */
     if (!c->o->has_stage_v) return stage_hold(c, t, err);
-    if (off_stage(t, c->o->stage_v)) {
-      c->n_rejected_stage++;
-      elfm_track_free(t);
-      return ELFM_OK;
-    }
+    if (off_stage(t, c->o->stage_v)) return stage_drop(c, t);
   }
   if (st != ELFM_OK) {
     elfm_track_free(t);
