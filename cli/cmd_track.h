@@ -284,8 +284,8 @@ typedef struct track_ctx {
    * TRACK_STAGE_MIN_POINTS points or more give a consensus; from then on
    * each is tested against the weighted median of the newest
    * TRACK_STAGE_RING such tracks' mean velocities (a stage may speed up). */
-  elfm_track **stage_pending;
-  size_t n_stage_pending, stage_pending_cap, n_stage_pending_long;
+  elfm_track_store stage_pending;
+  size_t n_stage_pending_long;
   double stage_ring[TRACK_STAGE_RING][4]; /* mean vx, vy, vz (um/ms) and points */
   int n_stage_ring, stage_ring_at, stage_established;
   int blur_decided;     /* --blur-px auto: the first peaks have been judged */

@@ -161,16 +161,18 @@ static elfm_status stage_drop(track_ctx *c, elfm_track *t)
  * among them, then each tested and written or dropped. */
 static elfm_status stage_release(track_ctx *c, elfm_error *err)
 {
-  for (size_t i = 0; i < c->n_stage_pending; i++) stage_ring_add(c, c->stage_pending[i]);
+  elfm_track_store *s = &c->stage_pending;
+  for (size_t i = 0; i < s->n; i++) stage_ring_add(c, s->tracks[i]);
   elfm_status st = ELFM_OK;
-  for (size_t i = 0; i < c->n_stage_pending; i++) {
-    elfm_track *t = c->stage_pending[i];
-    c->stage_pending[i] = NULL;
+  for (size_t i = 0; i < s->n; i++) {
+    elfm_track *t = s->tracks[i];
+    s->tracks[i] = NULL;  /* each is written or freed here */
     if (st != ELFM_OK) elfm_track_free(t);
     else if (stage_off(c, t)) stage_drop(c, t);
     else st = write_track(c, t, err);
   }
-  c->n_stage_pending = c->n_stage_pending_long = 0;
+  s->n = 0;
+  c->n_stage_pending_long = 0;
   return st;
 }
 
@@ -183,19 +185,11 @@ static elfm_status stage_hold(track_ctx *c, elfm_track *t, elfm_error *err)
     stage_ring_add(c, t);
     return write_track(c, t, err);
   }
-  if (c->n_stage_pending == c->stage_pending_cap) {
-    size_t cap = c->stage_pending_cap ? 2 * c->stage_pending_cap : 32;
-    elfm_track **p = realloc(c->stage_pending, cap * sizeof *p);
-    if (!p) {
-      elfm_track_free(t);
-      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (tracks waiting for the stage's velocity)");
-    }
-    c->stage_pending = p;
-    c->stage_pending_cap = cap;
-  }
-  c->stage_pending[c->n_stage_pending++] = t;
-  c->n_stage_pending_long += t->n >= TRACK_STAGE_MIN_POINTS;
-  if (c->n_stage_pending_long < TRACK_STAGE_MIN_TRACKS && c->n_stage_pending < TRACK_STAGE_MAX_PENDING)
+  const int is_long = t->n >= TRACK_STAGE_MIN_POINTS;
+  elfm_status st = elfm_track_store_add(&c->stage_pending, t, err);  /* frees t on failure */
+  if (st != ELFM_OK) return st;
+  c->n_stage_pending_long += is_long;
+  if (c->n_stage_pending_long < TRACK_STAGE_MIN_TRACKS && c->stage_pending.n < TRACK_STAGE_MAX_PENDING)
     return ELFM_OK;
   c->stage_established = 1;
   return stage_release(c, err);
@@ -866,8 +860,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
 
 void track_ctx_free(track_ctx *c)
 {
-  for (size_t i = 0; i < c->n_stage_pending; i++) elfm_track_free(c->stage_pending[i]);
-  free(c->stage_pending);
+  elfm_track_store_clear(&c->stage_pending);
   if (c->fdet) fclose(c->fdet);
   if (c->ftr) fclose(c->ftr);
   if (c->ffr) fclose(c->ffr);
