@@ -284,7 +284,7 @@ int cmd_bench(int argc, char **argv)
       else cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       cli_path_fmt(logp, sizeof logp, "%s/track.log", run);
-      char *targv[10 + BENCH_MAX_ARGS + 1];
+      char *targv[12 + BENCH_MAX_ARGS + 1];
       int na = 0;
       targv[na++] = self;
       targv[na++] = "track";
@@ -300,6 +300,11 @@ int cmd_bench(int argc, char **argv)
         targv[na++] = "--plane-shift-px";
         targv[na++] = "0";
       }
+      /* each row measures its own setting: a setting that dims the peaks
+       * (a median, a short tau) would otherwise make --blur-px auto start
+       * again with the blur, a second change in the row */
+      targv[na++] = "--blur-px";
+      targv[na++] = "0";
       for (int a = 0; sp->args[a]; a++) targv[na++] = (char *)sp->args[a];
       targv[na] = NULL;
       int rc = cli_run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb, &p->cpu_s);
