@@ -78,54 +78,72 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
   return close_file(&f, p_tm, err);
 }
 
-/* --blur-px auto: judge the peaks once min_peaks of them are in; 1 when
- * they are faint (TRACK_HINT_DIM_FACTOR), and the run is to start again
- * with the blur. */
-static int blur_judge(track_ctx *c, int64_t min_peaks)
+/* --blur-px auto and the automatic window: judge the first peaks once
+ * min_peaks of them are in; 1 when the run is to start again, with the
+ * blur (faint peaks whose tracks do not crawl, TRACK_HINT_DIM_FACTOR) or
+ * with half the window (tracks that move TRACK_DT_AUTO_STEP_UM or more per
+ * frame), or both. */
+static int auto_judge(track_ctx *c, int64_t min_peaks)
 {
   const track_opts *o = c->o;
-  if (!o->blur_auto || c->blur_decided || c->n_height < min_peaks) return 0;
-  c->blur_decided = 1;
+  if ((!o->blur_auto && !o->dt_auto) || c->auto_decided || c->n_height < min_peaks) return 0;
+  c->auto_decided = 1;
   const double h = track_peak_height_median(c);
-  c->blur_ratio = h / o->peaks.absolute;
-  c->blur_speed = track_detection_speed_median(c);
-  const int slow = c->n_speed >= TRACK_WIDTH_MIN_PEAKS && c->blur_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
-                   c->blur_speed < TRACK_BLUR_AUTO_SLOW_UM_PER_MS;
-  c->blur_restart = h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
-  return c->blur_restart;
+  c->auto_ratio = h / o->peaks.absolute;
+  c->auto_speed = track_detection_speed_median(c);
+  const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
+  const int slow = have_speed && c->auto_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
+                   c->auto_speed < TRACK_BLUR_AUTO_SLOW_UM_PER_MS;
+  c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
+  const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
+  c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
+  return c->blur_restart || c->dt_restart;
 }
 
 /* The ordered per-volume callback: track_on_volume, then auto's judgement
- * as soon as TRACK_HINT_DIM_EARLY_PEAKS peaks are in. A faint start stops
- * the run (an error status that cmd_track knows by c->blur_restart). */
+ * as soon as TRACK_HINT_DIM_EARLY_PEAKS peaks are in. A run to start again
+ * stops here (an error status that track_run knows by c->*_restart). */
 static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
 {
   track_ctx *c = user;
   const elfm_status st = track_on_volume(v, slot, user, err);
-  if (st == ELFM_OK && blur_judge(c, TRACK_HINT_DIM_EARLY_PEAKS))
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "faint peaks: to start again with the blur");
+  if (st == ELFM_OK && auto_judge(c, TRACK_HINT_DIM_EARLY_PEAKS))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "to start again with auto's choices");
   return st;
 }
 
-/* The run's result when --blur-px auto found the peaks faint: cmd_track
- * starts again with --blur-px 1. */
-#define TRACK_RUN_AGAIN_BLURRED 100
+/* The run's result when it is to start again (track_run's *again says how). */
+#define TRACK_RUN_AGAIN 100
 
-static void say_again(const track_ctx *c)
+/* What the first run chose for the second. */
+typedef struct track_again {
+  int blur_px;     /* -1: as given */
+  int64_t dt_us;   /* -1: as given */
+  double ratio, speed_um_per_ms;
+} track_again;
+
+static void say_again(const track_ctx *c, const track_again *g)
 {
-  if (c->o->quiet) return;
-  fprintf(stderr, "\neventlfm track: the peaks are faint (median height %.0f against the threshold "
-                  "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
-                  "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
-          c->blur_ratio * c->o->peaks.absolute, c->o->peaks.absolute, c->n_height);
+  const track_opts *o = c->o;
+  if (o->quiet) return;
+  fputc('\n', stderr);
+  if (g->blur_px > 0)
+    fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
+                    "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
+                    "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
+            c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->n_height);
+  if (g->dt_us > 0)
+    fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
+                    " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
+                    ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
+            c->auto_speed, c->n_height, c->auto_speed * 1e-3 * (double)o->recon.framer.dt_us, g->dt_us,
+            o->recon.framer.dt_us);
 }
 
-/* One run with *po: CLI_OK, CLI_FAIL (said), or TRACK_RUN_AGAIN_BLURRED
- * with judged[] the peaks' median height over the threshold and their
- * tracks' median speed (um/ms). *t0_s: the
- * time the command's first run started (NaN: this one), for the wall time
- * in summary.json. */
-static int track_run(const track_opts *po, double judged[2], double *t0_s)
+/* One run with *po: CLI_OK, CLI_FAIL (said), or TRACK_RUN_AGAIN with
+ * *again what to start again with. *t0_s: the time the command's first
+ * run started (NaN: this one), for the wall time in summary.json. */
+static int track_run(const track_opts *po, track_again *again, double *t0_s)
 {
   static const char *const C = "track";
   track_opts o = *po;
@@ -214,14 +232,17 @@ static int track_run(const track_opts *po, double judged[2], double *t0_s)
   elfm_recon_stats rs;
   memset(&rs, 0, sizeof rs);
   elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, NULL, &c, &rs, &err);
-  /* --blur-px auto: stopped at faint peaks, or judged at the end (a short
+  /* auto's choices: stopped by on_volume, or judged at the end (a short
    * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
    * again by the second run */
-  if (c.blur_restart || ((st == ELFM_OK || rs.input_error) && blur_judge(&c, TRACK_WIDTH_MIN_PEAKS))) {
-    say_again(&c);
-    judged[0] = c.blur_ratio;
-    judged[1] = c.blur_speed;
-    rc = TRACK_RUN_AGAIN_BLURRED;
+  if (c.blur_restart || c.dt_restart ||
+      ((st == ELFM_OK || rs.input_error) && auto_judge(&c, TRACK_WIDTH_MIN_PEAKS))) {
+    again->blur_px = c.blur_restart ? 1 : -1;
+    again->dt_us = c.dt_restart ? o.recon.framer.dt_us / 2 : -1;
+    again->ratio = c.auto_ratio;
+    again->speed_um_per_ms = c.auto_speed;
+    say_again(&c, again);
+    rc = TRACK_RUN_AGAIN;
     goto done;
   }
   if (!o.quiet) fputc('\n', stderr);
@@ -319,21 +340,25 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if (o.blur_auto && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode))) o.blur_auto = 0;
-  double judged[2] = {NAN, NAN}, t0_s = NAN;
-  int rc = track_run(&o, judged, &t0_s);
-  if (rc != TRACK_RUN_AGAIN_BLURRED) return rc;
+  if ((o.blur_auto || o.dt_auto) && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
+    o.blur_auto = o.dt_auto = 0;
+  const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0);
+  track_again again;
+  double t0_s = NAN;
+  int rc = track_run(&o, &again, &t0_s);
+  if (rc != TRACK_RUN_AGAIN) return rc;
 #if defined(__GLIBC__)
   /* The first run's memory back to the system: glibc's worker-thread
    * arenas kept it, and the second run's peak RSS was 20 MB higher than
    * --blur-px 1 alone (125 against 104 MB on dim flow 400 ms; 105 with). */
   malloc_trim(0);
 #endif
-  /* everything as given, and --blur-px 1: the blur's thresholds too */
-  pr = track_opts_parse_blur(argc, argv, 1, &o);
+  /* everything as given, and auto's choices: the blur's thresholds too */
+  pr = track_opts_parse_again(argc, argv, again.blur_px, again.dt_us, &o);
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
-  o.blur_auto_ratio = judged[0];
-  o.blur_auto_speed = judged[1];
-  rc = track_run(&o, judged, &t0_s);
-  return rc == TRACK_RUN_AGAIN_BLURRED ? CLI_FAIL : rc; /* cannot: auto is off now */
+  o.auto_was = was;
+  o.auto_ratio = again.ratio;
+  o.auto_speed = again.speed_um_per_ms;
+  rc = track_run(&o, &again, &t0_s);
+  return rc == TRACK_RUN_AGAIN ? CLI_FAIL : rc; /* cannot: auto is off now */
 }

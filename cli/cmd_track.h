@@ -70,9 +70,15 @@ typedef struct track_opts {
                            and starts again with --blur-px 1 when its first peaks are
                            faint (TRACK_HINT_DIM_FACTOR); 0 where it does not apply
                            (track_opts_derive) */
-  int blur_auto_chose;  /* 1: this run's blur is auto's choice (the run started again) */
-  double blur_auto_ratio; /* that choice's median peak height over the threshold */
-  double blur_auto_speed; /* ... and its tracks' median speed, um/ms */
+  int dt_auto;          /* the window (--dt-us not given): the run starts at 1 ms and
+                           starts again at half of it when the first peaks' tracks
+                           move TRACK_DT_AUTO_STEP_UM or more per frame; 0 where it
+                           does not apply (track_opts_derive) */
+  int auto_chose;       /* 1: this run is the second, with auto's choices */
+  int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window */
+  double auto_ratio;    /* what the first run judged: median peak height over the
+                           threshold, and the tracks' median speed, um/ms */
+  double auto_speed;
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -108,8 +114,10 @@ typedef struct track_opts {
  * CLI_USAGE already shown on stderr. */
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
-/* The same, as if --blur-px blur_px (0..2) were given last: auto's second run. */
-int track_opts_parse_blur(int argc, char **argv, int blur_px, track_opts *o);
+/* The same, as if --blur-px blur_px (0..2; -1: as given) and --dt-us dt_us
+ * (> 0; -1: as given) were given last: the second run of --blur-px auto and
+ * the automatic window. */
+int track_opts_parse_again(int argc, char **argv, int blur_px, int64_t dt_us, track_opts *o);
 
 /* track's plain defaults, where they differ from the libraries' and why
  * (cmd_track_defaults.c), before argv. */
@@ -274,8 +282,9 @@ typedef struct track_ctx {
   int64_t height_hist[TRACK_HEIGHT_BINS];
   int64_t n_height;
   int dim_noted;        /* the faint-peaks note was printed (track_dim_note) */
-  /* --blur-px auto: the speeds of the tracks the detections joined (elfm_link_last_speed),
-   * in bins of TRACK_SPEED_BIN_UM_PER_MS, until the judgement */
+  /* --blur-px auto and the automatic window: the speeds of the tracks the
+   * detections joined (elfm_link_last_speed), in bins of
+   * TRACK_SPEED_BIN_UM_PER_MS, until the judgement */
   int64_t speed_hist[TRACK_SPEED_BINS];
   int64_t n_speed;
   /* --motion stage without a given velocity: the stage's velocity from the
@@ -288,10 +297,11 @@ typedef struct track_ctx {
   size_t n_stage_pending_long;
   double stage_ring[TRACK_STAGE_RING][4]; /* mean vx, vy, vz (um/ms) and points */
   int n_stage_ring, stage_ring_at, stage_established;
-  int blur_decided;     /* --blur-px auto: the first peaks have been judged */
-  int blur_restart;     /* ... faint: start again with --blur-px 1 (cmd_track) */
-  double blur_ratio;    /* ... their median height over the threshold */
-  double blur_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
+  int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
+  int blur_restart;     /* ... faint: start again with --blur-px 1 */
+  int dt_restart;       /* ... fast: start again with half the window */
+  double auto_ratio;    /* ... their median height over the threshold */
+  double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
 } track_ctx;
 
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
@@ -418,6 +428,17 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * the tests, 2 ms frames), slow random flow (0.5-1 mm/s) 1.47-1.61, flow
  * 3.8-4.2. */
 #define TRACK_BLUR_AUTO_SLOW_UM_PER_MS 1.0
+/* The automatic window: the first run's 1 ms frames are halved when the
+ * judged peaks' tracks move this far per frame or more (their median
+ * early speed x the frame). Beyond the linker's reach between frames
+ * (TRACK_HINT_MAX_STEP_UM) half-length windows gain: flow 100 ms seeds
+ * 1-2, --dt-us 500 against 1000, at 5-6.5 mm/s alpha 0.751 -> 0.866, at
+ * 8-10 mm/s 0.312 -> 0.795; flow_random 0.401 -> 0.559 and 0.288 -> 0.568;
+ * at the usual 2.5-4 mm/s they lose (0.06 on seeds 1-4, "Fast beads").
+ * Early speeds at 1 ms: the usual flow and flow_random (seeds 1-20 each),
+ * blink_moving, 640 x 480, noise, haze, 40 and 60 beads 3.0-4.37 um/ms;
+ * 5-6.5 mm/s 5.79-6.73, 8-10 mm/s 7.49-9.89. */
+#define TRACK_DT_AUTO_STEP_UM 5.0
 /* The note comes as soon as this many peaks say so (a long recording's user
  * need not wait for its end), else at the end; --blur-px auto judges the
  * same peaks (on flow, the first 10-40 frames), so that its second run

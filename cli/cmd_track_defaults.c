@@ -23,6 +23,8 @@ void track_defaults(track_opts *o)
   /* Dim objects: the run judges its first peaks and, if they are faint,
    * starts again with --blur-px 1 (track_opts_derive says where). */
   o->blur_auto = 1;
+  /* Fast objects: ... with windows of half the length (track_opts_derive says where). */
+  o->dt_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -619,6 +621,14 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->blur_auto && (g->thr || !(o->peaks.absolute > 0) || o->motion == MOTION_STAGE ||
                        (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->blur_auto = 0;
+  /* The automatic window on time surfaces with windows on the 1 ms grid:
+   * not on the integral (slow cells, 2 ms frames by choice), windows opened
+   * by a trigger (one per pulse), nor a stage (its linker predicts with
+   * the stage's own motion: 5 mm/s stage speed error 0.10 % at 1 ms). */
+  if (o->dt_auto && ((o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
+                     o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE ||
+                     o->recon.framer.dt_us < 2))
+    o->dt_auto = 0;
   return CLI_OK;
 }
 

@@ -38,8 +38,13 @@ static void usage(FILE *f)
     "                       without --threshold-abs, events from a file (read again),\n"
     "                       not with --motion stage (the blur costs a stage's speed)\n"
     "                       nor where those peaks' tracks move slower than %g um/ms\n"
-    "                       (crawling cells: --repr integral is the setting there)\n",
-    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_BLUR_AUTO_SLOW_UM_PER_MS);
+    "                       (crawling cells: --repr integral is the setting there)\n"
+    "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
+    "                       per frame or more (fast beads) start again with half of\n"
+    "                       it; on time surfaces, not with --start each-trigger nor\n"
+    "                       --motion stage; --dt-us 1000 keeps 1 ms\n",
+    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_BLUR_AUTO_SLOW_UM_PER_MS,
+    TRACK_DT_AUTO_STEP_UM);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"
@@ -249,7 +254,7 @@ enum {
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
  * --help was printed; otherwise the usage error already shown. */
-static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
+static int parse(int argc, char **argv, int force_blur_px, int64_t force_dt_us, track_opts *out)
 {
   static const char *const C = "track";
   track_opts o;
@@ -342,6 +347,7 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
     const int k = cli_parse_recon_option(C, ch, a, &rp);
     if (k == 0) return CLI_USAGE;
     if (ch == CLI_RO_BLUR) o.blur_auto = 0;
+    if (ch == CLI_RO_DT || ch == CLI_RO_STRIDE) o.dt_auto = 0;
     if (k > 0) continue;
     switch (ch) {
     case 'h': usage(stdout); return TRACK_PARSE_HELP;
@@ -636,13 +642,15 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
   if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
+  if (force_blur_px >= 0 || force_dt_us > 0) {
+    /* the second run: auto's choices, and no third */
+    if (force_blur_px >= 0) o.recon.blur_px = force_blur_px;
+    if (force_dt_us > 0) o.recon.framer.dt_us = force_dt_us;
+    o.blur_auto = o.dt_auto = 0;
+    o.auto_chose = 1;
+  }
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o.planes_um);
-  if (force_blur_px >= 0) {
-    o.recon.blur_px = force_blur_px;
-    o.blur_auto = 0;
-    o.blur_auto_chose = 1;
-  }
   const int rc = track_opts_derive(&o, &g);
   if (rc != CLI_OK) return rc;
   *out = o;
@@ -651,10 +659,10 @@ static int parse(int argc, char **argv, int force_blur_px, track_opts *out)
 
 int track_opts_parse(int argc, char **argv, track_opts *out)
 {
-  return parse(argc, argv, -1, out);
+  return parse(argc, argv, -1, -1, out);
 }
 
-int track_opts_parse_blur(int argc, char **argv, int blur_px, track_opts *out)
+int track_opts_parse_again(int argc, char **argv, int blur_px, int64_t dt_us, track_opts *out)
 {
-  return parse(argc, argv, blur_px, out);
+  return parse(argc, argv, blur_px, dt_us, out);
 }

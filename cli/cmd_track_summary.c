@@ -212,15 +212,18 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
   add_num(par, "peak_height_median", track_peak_height_median(c));
-  /* --blur-px auto: whether it was on, and what it judged: the first
-   * peaks' median height over the threshold, their tracks' median speed
-   * (blur_px says what it chose) */
   cJSON_AddNumberToObject(par, "views_scaled_for", o->views_scaled);
-  cJSON_AddBoolToObject(par, "blur_auto", o->blur_auto || o->blur_auto_chose);
-  add_num(par, "blur_auto_height_ratio",
-          o->blur_auto_chose ? o->blur_auto_ratio : c->blur_decided ? c->blur_ratio : NAN);
-  add_num(par, "blur_auto_track_speed_um_per_ms",
-          o->blur_auto_chose ? o->blur_auto_speed : c->blur_decided ? c->blur_speed : NAN);
+  /* --blur-px auto and the automatic window: whether each was on, and
+   * what the first peaks showed, their median height over the threshold
+   * and their tracks' median speed (blur_px and dt_us say what was chosen;
+   * auto_again: this run is the second, with those choices) */
+  const int was = o->auto_chose ? o->auto_was : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0);
+  cJSON_AddBoolToObject(par, "blur_auto", was & 1);
+  cJSON_AddBoolToObject(par, "dt_auto", (was & 2) != 0);
+  cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
+  add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
+  add_num(par, "auto_track_speed_um_per_ms",
+          o->auto_chose ? o->auto_speed : c->auto_decided ? c->auto_speed : NAN);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);

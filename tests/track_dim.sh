@@ -67,8 +67,8 @@ for f in tracks.csv detections.csv frames.csv tracks_isbi.xml tracks_trackmate.x
 done
 expect_key blur_px "$tmp/auto/summary.json" 1
 [ "$(key "$tmp/auto/summary.json" blur_auto)" = true ] || { echo "FAIL: blur_auto not true"; fail=$((fail+1)); }
-ra=$(key "$tmp/auto/summary.json" blur_auto_height_ratio)
-[ -n "$ra" ] && below "$ra" 1 2.15 || { echo "FAIL: blur_auto_height_ratio '$ra' not below 2.15"; fail=$((fail+1)); }
+ra=$(key "$tmp/auto/summary.json" auto_height_ratio)
+[ -n "$ra" ] && below "$ra" 1 2.15 || { echo "FAIL: auto_height_ratio '$ra' not below 2.15"; fail=$((fail+1)); }
 [ "$(key "$tmp/blur/summary.json" blur_auto)" = false ] || { echo "FAIL: blur_auto with --blur-px 1"; fail=$((fail+1)); }
 # where auto does not apply: thresholds given, a stage, the integral
 for o in "--threshold-abs 45" "--motion stage" "--repr integral"; do

@@ -96,7 +96,7 @@ echo "worm: median track speed $v um/ms"
 awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 0.5) }' || { echo "FAIL: median speed $v"; fail=$((fail+1)); }
 # the worm's peaks are faint on the time surface, but its tracks crawl:
 # --blur-px auto leaves the blur off (the integral is the setting)
-r=$(key "$tmp/exp/summary.json" blur_auto_height_ratio); sp=$(key "$tmp/exp/summary.json" blur_auto_track_speed_um_per_ms)
+r=$(key "$tmp/exp/summary.json" auto_height_ratio); sp=$(key "$tmp/exp/summary.json" auto_track_speed_um_per_ms)
 echo "worm: auto judged median height / threshold $r, track speed $sp um/ms"
 [ -n "$r" ] && below "$r" 1 2.15 && [ -n "$sp" ] && below "$sp" 1 1.0 ||
   { echo "FAIL: auto judged '$r' / '$sp'"; fail=$((fail+1)); }
