@@ -78,26 +78,29 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
   return close_file(&f, p_tm, err);
 }
 
-/* --blur-px auto and the automatic window: judge the first peaks once
- * min_peaks of them are in; 1 when the run is to start again, with the
- * blur (faint peaks whose tracks do not crawl, TRACK_HINT_DIM_FACTOR) or
- * with half the window (tracks that move TRACK_DT_AUTO_STEP_UM or more per
- * frame), or both. */
+/* --blur-px auto, the automatic window and representation: judge the
+ * first peaks once min_peaks of them are in; 1 when the run is to start
+ * again: with the integral (their tracks crawl,
+ * TRACK_AUTO_CRAWL_UM_PER_MS), the blur (faint peaks whose tracks do not
+ * crawl, TRACK_HINT_DIM_FACTOR), half the window (tracks that move
+ * TRACK_DT_AUTO_STEP_UM or more per frame), or the last two. */
 static int auto_judge(track_ctx *c, int64_t min_peaks)
 {
   const track_opts *o = c->o;
-  if ((!o->blur_auto && !o->dt_auto) || c->auto_decided || c->n_height < min_peaks) return 0;
+  if ((!o->blur_auto && !o->dt_auto && !o->repr_auto) || c->auto_decided || c->n_height < min_peaks)
+    return 0;
   c->auto_decided = 1;
   const double h = track_peak_height_median(c);
   c->auto_ratio = h / o->peaks.absolute;
   c->auto_speed = track_detection_speed_median(c);
   const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
   const int slow = have_speed && c->auto_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
-                   c->auto_speed < TRACK_BLUR_AUTO_SLOW_UM_PER_MS;
+                   c->auto_speed < TRACK_AUTO_CRAWL_UM_PER_MS;
+  c->repr_restart = o->repr_auto && slow;
   c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
   const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
   c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
-  return c->blur_restart || c->dt_restart;
+  return c->repr_restart || c->blur_restart || c->dt_restart;
 }
 
 /* The ordered per-volume callback: track_on_volume, then auto's judgement
@@ -119,6 +122,7 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
 typedef struct track_again {
   int blur_px;     /* -1: as given */
   int64_t dt_us;   /* -1: as given */
+  int integral;    /* 1: --repr integral */
   double ratio, speed_um_per_ms;
 } track_again;
 
@@ -132,7 +136,14 @@ static void say_again(const track_ctx *c, const track_again *g)
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
                     "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
             c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->n_height);
-  if (g->dt_us > 0)
+  if (g->integral) {
+    char dt[64] = "";
+    if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
+    fprintf(stderr, "eventlfm track: the tracks crawl (median %.2f um/ms over the first %" PRId64
+                    " peaks): cells, whose ON events lead them; starting again with --repr integral%s "
+                    "(--repr exp: keep the time surface; README, docs/tracker.md \"Integral frames\")\n",
+            c->auto_speed, c->n_height, dt);
+  } else if (g->dt_us > 0)
     fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
                     " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
                     ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
@@ -216,6 +227,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   if (!o.quiet) {
     o.recon.progress = progress;
     o.recon.progress_user = &c;
+  }
+  if (!o.quiet && !o.auto_chose) {  /* said once, not again in a second run */
     /* the planes are track's own choice unless given: say which */
     if (o.plane_every > 1)
       fprintf(stderr, "eventlfm track: %d planes %g..%g um, %g um apart: every %d%s of %s's "
@@ -235,10 +248,12 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   /* auto's choices: stopped by on_volume, or judged at the end (a short
    * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
    * again by the second run */
-  if (c.blur_restart || c.dt_restart ||
+  if (c.blur_restart || c.dt_restart || c.repr_restart ||
       ((st == ELFM_OK || rs.input_error) && auto_judge(&c, TRACK_WIDTH_MIN_PEAKS))) {
     again->blur_px = c.blur_restart ? 1 : -1;
-    again->dt_us = c.dt_restart ? o.recon.framer.dt_us / 2 : -1;
+    again->integral = c.repr_restart;
+    /* the integral's windows: the worm's 2 ms (500 Hz) unless given */
+    again->dt_us = c.dt_restart ? o.recon.framer.dt_us / 2 : c.repr_restart && o.dt_auto ? 2000 : -1;
     again->ratio = c.auto_ratio;
     again->speed_um_per_ms = c.auto_speed;
     say_again(&c, again);
@@ -340,9 +355,9 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if ((o.blur_auto || o.dt_auto) && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
-    o.blur_auto = o.dt_auto = 0;
-  const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0);
+  if ((o.blur_auto || o.dt_auto || o.repr_auto) && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
+    o.blur_auto = o.dt_auto = o.repr_auto = 0;
+  const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0);
   track_again again;
   double t0_s = NAN;
   int rc = track_run(&o, &again, &t0_s);
@@ -353,12 +368,38 @@ int cmd_track(int argc, char **argv)
    * --blur-px 1 alone (125 against 104 MB on dim flow 400 ms; 105 with). */
   malloc_trim(0);
 #endif
-  /* everything as given, and auto's choices: the blur's thresholds too */
-  pr = track_opts_parse_again(argc, argv, again.blur_px, again.dt_us, &o);
+  /* The second run is the command with auto's choices given last (so the
+   * choices bring their own defaults: the blur's thresholds, the
+   * integral's), and nothing automatic left. */
+  char dt[32];
+  char **argv2 = malloc(((size_t)argc + 7) * sizeof *argv2);
+  if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
+  int argc2 = 0;
+  for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
+  if (again.integral) {
+    argv2[argc2++] = "--repr";
+    argv2[argc2++] = "integral";
+  }
+  if (again.blur_px > 0) {
+    argv2[argc2++] = "--blur-px";
+    argv2[argc2++] = "1";
+  }
+  if (again.dt_us > 0) {
+    snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
+    argv2[argc2++] = "--dt-us";
+    argv2[argc2++] = dt;
+  }
+  argv2[argc2] = NULL;
+  pr = track_opts_parse(argc2, argv2, &o);
+  if (pr == CLI_OK) {
+    o.blur_auto = o.dt_auto = o.repr_auto = 0;
+    o.auto_chose = 1;
+    o.auto_was = was;
+    o.auto_ratio = again.ratio;
+    o.auto_speed = again.speed_um_per_ms;
+    rc = track_run(&o, &again, &t0_s);
+  }
+  free(argv2);
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
-  o.auto_was = was;
-  o.auto_ratio = again.ratio;
-  o.auto_speed = again.speed_um_per_ms;
-  rc = track_run(&o, &again, &t0_s);
-  return rc == TRACK_RUN_AGAIN ? CLI_FAIL : rc; /* cannot: auto is off now */
+  return rc == TRACK_RUN_AGAIN ? CLI_FAIL : rc; /* cannot: nothing is automatic now */
 }

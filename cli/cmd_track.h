@@ -74,8 +74,13 @@ typedef struct track_opts {
                            starts again at half of it when the first peaks' tracks
                            move TRACK_DT_AUTO_STEP_UM or more per frame; 0 where it
                            does not apply (track_opts_derive) */
+  int repr_auto;        /* the representation (--repr, --tau-us, --polarity, --blur-px
+                           not given): when the first peaks' tracks crawl, start
+                           again with --repr integral (and 2 ms windows when --dt-us
+                           is not given either); 0 where it does not apply */
   int auto_chose;       /* 1: this run is the second, with auto's choices */
-  int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window */
+  int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window,
+                           4 representation */
   double auto_ratio;    /* what the first run judged: median peak height over the
                            threshold, and the tracks' median speed, um/ms */
   double auto_speed;
@@ -114,10 +119,7 @@ typedef struct track_opts {
  * CLI_USAGE already shown on stderr. */
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
-/* The same, as if --blur-px blur_px (0..2; -1: as given) and --dt-us dt_us
- * (> 0; -1: as given) were given last: the second run of --blur-px auto and
- * the automatic window. */
-int track_opts_parse_again(int argc, char **argv, int blur_px, int64_t dt_us, track_opts *o);
+
 
 /* track's plain defaults, where they differ from the libraries' and why
  * (cmd_track_defaults.c), before argv. */
@@ -300,6 +302,7 @@ typedef struct track_ctx {
   int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
+  int repr_restart;     /* ... crawling: start again with the integral */
   double auto_ratio;    /* ... their median height over the threshold */
   double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
 } track_ctx;
@@ -418,16 +421,21 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * (docs/tracker.md "Dim objects"). */
 #define TRACK_HINT_DIM_FACTOR 2.15
 /* ... but objects that crawl (worm neurons, 0.1-0.3 um/ms) look faint on a
- * time surface too, and there the integral is the setting (the slow-tracks
- * note, TRACK_HINT_MAX_SPEED_UM_PER_MS): the blur's jittery extra tracks
- * hid it (worm 150 ms at 500 Hz, seed 5, time surface: alpha 0.43 -> 0.48
- * with the blur, 0.91 with --repr integral; the median track speed read
- * 0.12 -> 0.56 um/ms). So auto keeps off the blur where the tracks of the
- * judged peaks move slower than this. Those early speeds (short tracks,
- * elfm_link_last_speed) read high: worm 0.37-0.73 um/ms (seeds 1-8 and 5 of
- * the tests, 2 ms frames), slow random flow (0.5-1 mm/s) 1.47-1.61, flow
- * 3.8-4.2. */
-#define TRACK_BLUR_AUTO_SLOW_UM_PER_MS 1.0
+ * time surface too, and there the integral is the setting: worm 0.5 s
+ * seeds 1-4, alpha 0.362 on the time surface (the default), 0.874 with
+ * --repr integral, 0.901 with --repr integral --dt-us 2000 (the README's
+ * worm setting); the blur's jittery extra tracks only hid the slow-tracks
+ * note (worm 150 ms seed 5: 0.43 -> 0.48 blurred; the median track speed
+ * read 0.12 -> 0.56 um/ms). So where the judged peaks' tracks move slower
+ * than this (and faster than TRACK_HINT_MIN_SPEED_UM_PER_MS: objects at
+ * rest, blinking beads, read 0.01) the run starts again with the integral
+ * instead (repr_auto), or keeps the time surface without the blur when
+ * that was given. Those early speeds (short tracks, elfm_link_last_speed)
+ * read high: worm 0.37-0.75 um/ms (seeds 1-8 and 5 of the tests, 1 and 2
+ * ms frames), a slow stage (stage_accel's first 200 ms, 0.1-0.6 um/ms,
+ * without --motion stage) 0.51, slow random flow (0.5-1 mm/s, where the
+ * integral loses: recall 0.57 -> 0.15) 1.47-1.61, flow 3.8-4.2. */
+#define TRACK_AUTO_CRAWL_UM_PER_MS 1.0
 /* The automatic window: the first run's 1 ms frames are halved when the
  * judged peaks' tracks move this far per frame or more (their median
  * early speed x the frame). Beyond the linker's reach between frames

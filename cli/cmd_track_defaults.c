@@ -25,6 +25,8 @@ void track_defaults(track_opts *o)
   o->blur_auto = 1;
   /* Fast objects: ... with windows of half the length (track_opts_derive says where). */
   o->dt_auto = 1;
+  /* Crawling cells: ... with the integral (track_opts_derive says where). */
+  o->repr_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -629,6 +631,12 @@ int track_opts_derive(track_opts *o, const track_given *g)
                      o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE ||
                      o->recon.framer.dt_us < 2))
     o->dt_auto = 0;
+  /* The integral for crawling cells, from the default time surface only:
+   * not with thresholds given (the integral's scale differs), windows
+   * opened by a trigger, or a stage (its own motion model). */
+  if (o->repr_auto && (g->thr || o->recon.framer.repr != ELFM_REPR_EXP ||
+                       o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE))
+    o->repr_auto = 0;
   return CLI_OK;
 }
 

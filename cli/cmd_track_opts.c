@@ -43,7 +43,7 @@ static void usage(FILE *f)
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
     "                       --motion stage; --dt-us 1000 keeps 1 ms\n",
-    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_BLUR_AUTO_SLOW_UM_PER_MS,
+    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_AUTO_CRAWL_UM_PER_MS,
     TRACK_DT_AUTO_STEP_UM);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
@@ -254,7 +254,7 @@ enum {
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
  * --help was printed; otherwise the usage error already shown. */
-static int parse(int argc, char **argv, int force_blur_px, int64_t force_dt_us, track_opts *out)
+int track_opts_parse(int argc, char **argv, track_opts *out)
 {
   static const char *const C = "track";
   track_opts o;
@@ -348,6 +348,7 @@ static int parse(int argc, char **argv, int force_blur_px, int64_t force_dt_us, 
     if (k == 0) return CLI_USAGE;
     if (ch == CLI_RO_BLUR) o.blur_auto = 0;
     if (ch == CLI_RO_DT || ch == CLI_RO_STRIDE) o.dt_auto = 0;
+    if (ch == CLI_RO_REPR || ch == CLI_RO_TAU || ch == CLI_RO_POLARITY || ch == CLI_RO_BLUR) o.repr_auto = 0;
     if (k > 0) continue;
     switch (ch) {
     case 'h': usage(stdout); return TRACK_PARSE_HELP;
@@ -642,27 +643,10 @@ static int parse(int argc, char **argv, int force_blur_px, int64_t force_dt_us, 
   if (optind < argc) return cli_message(C, CLI_USAGE, "unexpected argument '%s'", argv[optind]);
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
-  if (force_blur_px >= 0 || force_dt_us > 0) {
-    /* the second run: auto's choices, and no third */
-    if (force_blur_px >= 0) o.recon.blur_px = force_blur_px;
-    if (force_dt_us > 0) o.recon.framer.dt_us = force_dt_us;
-    o.blur_auto = o.dt_auto = 0;
-    o.auto_chose = 1;
-  }
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o.planes_um);
   const int rc = track_opts_derive(&o, &g);
   if (rc != CLI_OK) return rc;
   *out = o;
   return CLI_OK;
-}
-
-int track_opts_parse(int argc, char **argv, track_opts *out)
-{
-  return parse(argc, argv, -1, -1, out);
-}
-
-int track_opts_parse_again(int argc, char **argv, int blur_px, int64_t dt_us, track_opts *out)
-{
-  return parse(argc, argv, blur_px, dt_us, out);
 }

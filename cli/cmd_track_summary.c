@@ -213,13 +213,16 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
   add_num(par, "peak_height_median", track_peak_height_median(c));
   cJSON_AddNumberToObject(par, "views_scaled_for", o->views_scaled);
-  /* --blur-px auto and the automatic window: whether each was on, and
-   * what the first peaks showed, their median height over the threshold
-   * and their tracks' median speed (blur_px and dt_us say what was chosen;
-   * auto_again: this run is the second, with those choices) */
-  const int was = o->auto_chose ? o->auto_was : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0);
+  /* --blur-px auto, the automatic window and representation: whether
+   * each was on, and what the first peaks showed, their median height over
+   * the threshold and their tracks' median speed (blur_px, dt_us and repr
+   * say what was chosen; auto_again: this run is the second, with those
+   * choices) */
+  const int was =
+      o->auto_chose ? o->auto_was : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0) | (o->repr_auto ? 4 : 0);
   cJSON_AddBoolToObject(par, "blur_auto", was & 1);
   cJSON_AddBoolToObject(par, "dt_auto", (was & 2) != 0);
+  cJSON_AddBoolToObject(par, "repr_auto", (was & 4) != 0);
   cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms",

@@ -814,7 +814,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
     track_width_add(c, &det[j]);
     track_height_add(c, &det[j]);
-    if ((o->blur_auto || o->dt_auto) && !c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
+    if ((o->blur_auto || o->dt_auto || o->repr_auto) && !c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;

@@ -58,7 +58,7 @@ run() {  # tag track-options...
   tag=$1; shift
   track_score "$tmp/w" "$tmp/$tag" "$tmp/$tag.json" --dt-us 2000 "$@"
 }
-run exp
+run exp --repr exp
 run int --repr integral
 run int0 --repr integral --integral-start-ms 0
 run intn0 --repr integral --localize-near-um 0
@@ -95,18 +95,36 @@ v=$(key "$tmp/exp/summary.json" median_track_speed_um_per_ms)
 echo "worm: median track speed $v um/ms"
 awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 0.5) }' || { echo "FAIL: median speed $v"; fail=$((fail+1)); }
 # the worm's peaks are faint on the time surface, but its tracks crawl:
-# --blur-px auto leaves the blur off (the integral is the setting)
+# --blur-px auto leaves the blur off (the integral is the setting; the
+# time surface was given here)
 r=$(key "$tmp/exp/summary.json" auto_height_ratio); sp=$(key "$tmp/exp/summary.json" auto_track_speed_um_per_ms)
 echo "worm: auto judged median height / threshold $r, track speed $sp um/ms"
 [ -n "$r" ] && below "$r" 1 2.15 && [ -n "$sp" ] && below "$sp" 1 1.0 ||
   { echo "FAIL: auto judged '$r' / '$sp'"; fail=$((fail+1)); }
 expect_key blur_px "$tmp/exp/summary.json" 0
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/exp2" --dt-us 2000 \
-  2>"$tmp/exp2.err" >/dev/null
+  --repr exp 2>"$tmp/exp2.err" >/dev/null
 grep -q "note: the tracks move slowly.*--repr integral" "$tmp/exp2.err" || { echo "FAIL: no --repr integral note"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/int2" --dt-us 2000 \
   --repr integral 2>"$tmp/int2.err" >/dev/null
 grep -q "note: the tracks move slowly" "$tmp/int2.err" && { echo "FAIL: the note with --repr integral on"; fail=$((fail+1)); }
+# Without --repr (nor --tau-us, --polarity, --blur-px, thresholds), the
+# first 200 peaks' crawling tracks make track start again with the
+# integral, and without --dt-us at 2 ms: the same outputs as those given
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/auto" \
+  2>"$tmp/auto.err" >/dev/null || { echo "FAIL: track (auto) on the worm"; fail=$((fail+1)); }
+n_again=$(grep -c "the tracks crawl (median .* um/ms over the first 2[0-9][0-9] peaks): cells, whose ON events lead them; starting again with --repr integral --dt-us 2000" "$tmp/auto.err")
+[ "$n_again" = 1 ] || { echo "FAIL: the integral's restart said $n_again times: $(tail -c 400 "$tmp/auto.err")"; fail=$((fail+1)); }
+for f in tracks.csv detections.csv frames.csv; do
+  cmp -s "$tmp/auto/$f" "$tmp/int/$f" || { echo "FAIL: auto's $f differs from --repr integral --dt-us 2000's"; fail=$((fail+1)); }
+done
+[ "$(key "$tmp/auto/summary.json" repr_auto)" = true ] && [ "$(key "$tmp/auto/summary.json" auto_again)" = true ] ||
+  { echo "FAIL: repr_auto / auto_again not true"; fail=$((fail+1)); }
+# ... and with --dt-us given, the integral at that window
+"$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/auto1" -q \
+  --dt-us 1000 || { echo "FAIL: track --dt-us 1000 (auto) on the worm"; fail=$((fail+1)); }
+grep -q '"repr":[[:space:]]*"integral"' "$tmp/auto1/summary.json" || { echo "FAIL: not the integral at 1 ms"; fail=$((fail+1)); }
+expect_key dt_us "$tmp/auto1/summary.json" 1000
 # beads in a slow random flow (0.5-1 mm/s, median track ~0.85 um/ms) are
 # lost by the integral (recall 0.57 -> 0.15 on 100 ms of seed 2): no note
 "$bin" simulate flow_random --out "$tmp/slow" --duration-ms 40 --seed 2 --quiet \
@@ -117,6 +135,7 @@ vs=$(key "$tmp/slowt/summary.json" median_track_speed_um_per_ms)
 echo "slow random flow: median track speed $vs um/ms"
 awk -v v="$vs" 'BEGIN { exit !(v > 0.5 && v < 1.5) }' || { echo "FAIL: slow flow median speed $vs"; fail=$((fail+1)); }
 grep -q "note: the tracks move slowly" "$tmp/slow.err" && { echo "FAIL: the integral note for beads at $vs um/ms"; fail=$((fail+1)); }
+grep -q '"repr":[[:space:]]*"exp"' "$tmp/slowt/summary.json" || { echo "FAIL: the slow beads left the time surface"; fail=$((fail+1)); }
 for cmd in track score; do
   "$bin" $cmd --motion-fade-um-per-ms 0 >/dev/null 2>"$tmp/err"
   [ $? -eq 2 ] && grep -q -- "--motion-fade-um-per-ms" "$tmp/err" ||
