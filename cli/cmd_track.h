@@ -431,11 +431,12 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * rest, blinking beads, read 0.01) the run starts again with the integral
  * instead (repr_auto), or keeps the time surface without the blur when
  * that was given. Those early speeds (short tracks, elfm_link_last_speed)
- * read high: worm 0.37-0.75 um/ms (seeds 1-8 and 5 of the tests, 1 and 2
- * ms frames), a slow stage (stage_accel's first 200 ms, 0.1-0.6 um/ms,
- * without --motion stage) 0.51, slow random flow (0.5-1 mm/s, where the
- * integral loses: recall 0.57 -> 0.15) 1.47-1.61, flow 3.8-4.2. */
-#define TRACK_AUTO_CRAWL_UM_PER_MS 1.0
+ * read high: at 1 ms frames worm 0.57-1.01 um/ms (seeds 1-32), a slow
+ * stage (stage_accel's first 200 ms, 0.1-0.6 um/ms, without --motion
+ * stage) 0.51; slow random flow (0.5-1 mm/s, where the integral loses:
+ * recall 0.57 -> 0.15) 1.37-1.61 (seeds 1-16), flow 3.0-4.4. 1.2 lies
+ * between the two. */
+#define TRACK_AUTO_CRAWL_UM_PER_MS 1.2
 /* The automatic window: the first run's 1 ms frames are halved when the
  * judged peaks' tracks move this far per frame or more (their median
  * early speed x the frame). Beyond the linker's reach between frames

@@ -37,14 +37,18 @@ static void usage(FILE *f)
     "                       objects) start again with --blur-px 1; on time surfaces\n"
     "                       without --threshold-abs, events from a file (read again),\n"
     "                       not with --motion stage (the blur costs a stage's speed)\n"
-    "                       nor where those peaks' tracks move slower than %g um/ms\n"
-    "                       (crawling cells: --repr integral is the setting there)\n"
+    "                       nor where those peaks' tracks crawl (below)\n"
+    "  --repr, not given    the time surface, and when those peaks' tracks crawl\n"
+    "                       (%g-%g um/ms: cells, whose ON events lead them) start\n"
+    "                       again with --repr integral, at --dt-us 2000 unless given;\n"
+    "                       not with --tau-us, --polarity, --blur-px, --threshold-abs,\n"
+    "                       --start each-trigger nor --motion stage\n"
     "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
     "                       --motion stage; --dt-us 1000 keeps 1 ms\n",
-    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_AUTO_CRAWL_UM_PER_MS,
-    TRACK_DT_AUTO_STEP_UM);
+    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
+    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_DT_AUTO_STEP_UM);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"

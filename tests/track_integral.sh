@@ -99,7 +99,7 @@ awk -v v="$v" 'BEGIN { exit !(v >= 0.03 && v <= 0.5) }' || { echo "FAIL: median 
 # time surface was given here)
 r=$(key "$tmp/exp/summary.json" auto_height_ratio); sp=$(key "$tmp/exp/summary.json" auto_track_speed_um_per_ms)
 echo "worm: auto judged median height / threshold $r, track speed $sp um/ms"
-[ -n "$r" ] && below "$r" 1 2.15 && [ -n "$sp" ] && below "$sp" 1 1.0 ||
+[ -n "$r" ] && below "$r" 1 2.15 && [ -n "$sp" ] && below "$sp" 1 1.2 ||
   { echo "FAIL: auto judged '$r' / '$sp'"; fail=$((fail+1)); }
 expect_key blur_px "$tmp/exp/summary.json" 0
 "$bin" track --calib "$tmp/w/calib.json" --events "$tmp/w/events.raw" --out "$tmp/exp2" --dt-us 2000 \
