@@ -326,8 +326,15 @@ int track_near_add(const elfm_detection *det, int n, int skip, double x_um, doub
                    double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
 /* Smooth, filter and write the tracks the linker has finished. */
 elfm_status track_drain(track_ctx *c, elfm_error *err);
-/* --motion stage without a given velocity, at the end: decide on the
- * tracks still waiting for a consensus and write the kept ones. */
+/* Write a kept, smoothed track: tracks.csv, the XML scratch, its info
+ * (cmd_track_volume.c). Frees t. */
+elfm_status track_write_track(track_ctx *c, elfm_track *t, elfm_error *err);
+/* --motion stage (cmd_track_stage.c): write t, or leave it out when it does
+ * not move with the stage, or (no velocity given) hold it until the tracks
+ * agree on the stage's velocity. Takes t. */
+elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err);
+/* ... at the end: decide on the tracks still waiting for a consensus and
+ * write the kept ones. */
 elfm_status track_stage_flush(track_ctx *c, elfm_error *err);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
  * and buffers, before the run; keep the frame of each volume (linking

@@ -1,0 +1,147 @@
+/* cmd_track_stage.c — eventlfm track --motion stage: the tracks that do
+ * not move with the stage are left out (tracks.csv, the XML files and the
+ * stage's velocity in summary.json). With --stage-velocity-um-per-ms,
+ * against that velocity; without it, against the tracks' own consensus
+ * (docs/tracker.md "The stage's velocity from its tracks"). */
+#include <math.h>
+#include <stdlib.h>
+
+#include "cmd_track.h"
+
+/* Rigid stage motion: a track moving otherwise than v_ref (more than 25 %
+ * of its speed + 0.1 um/ms off) is not part of the sample (ghosts joined
+ * across gaps, a hot pixel's or noise's track at rest). */
+static int off_stage(const elfm_track *t, const double v_ref[3])
+{
+  double v[3], d2 = 0, s2 = 0;
+  elfm_track_mean_velocity(t, v);
+  for (int a = 0; a < 3; a++) {
+    d2 += (v[a] - v_ref[a]) * (v[a] - v_ref[a]);
+    s2 += v_ref[a] * v_ref[a];
+  }
+  return sqrt(d2) > 0.25 * sqrt(s2) + 0.1;
+}
+
+/* Against the tracks' own consensus v_c instead of a given velocity: the
+ * stage may speed up (stage_accel: 0.1 -> 0.6 um/ms over 200 ms, so tracks
+ * of different spans differ by 2x in mean speed, and the rule above
+ * dropped 1-5 whole tracks of each run, alpha 0.522 -> 0.439). A track is
+ * off when it moves along the stage's direction at under 1/4 or over 4x
+ * the consensus speed (at rest, or against it: a hot pixel's track, a
+ * ghost's), or across it by more than 25 % of that speed + 0.1 um/ms. A
+ * consensus near rest (under 0.05 um/ms) tests nothing. */
+static int off_consensus(const elfm_track *t, const double v_c[3])
+{
+  const double sc = sqrt(v_c[0] * v_c[0] + v_c[1] * v_c[1] + v_c[2] * v_c[2]);
+  if (!(sc >= 0.05)) return 0;
+  double v[3], along = 0, across2 = 0;
+  elfm_track_mean_velocity(t, v);
+  for (int a = 0; a < 3; a++) along += v[a] * v_c[a] / sc;
+  for (int a = 0; a < 3; a++) {
+    const double d = v[a] - along * v_c[a] / sc;
+    across2 += d * d;
+  }
+  return !(along >= 0.25 * sc && along <= 4 * sc) || sqrt(across2) > 0.25 * sc + 0.1;
+}
+
+/* The weighted median of the values x[k * stride] (weights w[k * stride]),
+ * 0 < n <= TRACK_STAGE_RING. */
+static double weighted_median(const double *x, const double *w, int n, int stride)
+{
+  int idx[TRACK_STAGE_RING];
+  double tot = 0;
+  for (int k = 0; k < n; k++) {
+    idx[k] = k;
+    tot += w[k * stride];
+  }
+  for (int i = 1; i < n; i++) /* insertion sort: a few dozen */
+    for (int j = i; j > 0 && x[idx[j - 1] * stride] > x[idx[j] * stride]; j--) {
+      int tmp = idx[j];
+      idx[j] = idx[j - 1];
+      idx[j - 1] = tmp;
+    }
+  double acc = 0;
+  for (int k = 0; k < n; k++)
+    if ((acc += w[idx[k] * stride]) >= 0.5 * tot) return x[idx[k] * stride];
+  return x[idx[n - 1] * stride];
+}
+
+/* t against the consensus: per axis, the weighted median (by points) of
+ * the ring's mean velocities. No consensus (no long track yet): not off. */
+static int stage_off(const track_ctx *c, const elfm_track *t)
+{
+  if (c->n_stage_ring == 0) return 0;
+  double v[3];
+  for (int a = 0; a < 3; a++)
+    v[a] = weighted_median(&c->stage_ring[0][a], &c->stage_ring[0][3], c->n_stage_ring, 4);
+  return off_consensus(t, v);
+}
+
+static void stage_ring_add(track_ctx *c, const elfm_track *t)
+{
+  if (t->n < TRACK_STAGE_MIN_POINTS) return;
+  double *e = c->stage_ring[c->stage_ring_at];
+  elfm_track_mean_velocity(t, e);
+  e[3] = (double)t->n;
+  c->stage_ring_at = (c->stage_ring_at + 1) % TRACK_STAGE_RING;
+  if (c->n_stage_ring < TRACK_STAGE_RING) c->n_stage_ring++;
+}
+
+/* A track off the stage: counted, freed. */
+static elfm_status stage_drop(track_ctx *c, elfm_track *t)
+{
+  c->n_rejected_stage++;
+  elfm_track_free(t);
+  return ELFM_OK;
+}
+
+/* The pending tracks, in their order: the consensus from the long ones
+ * among them, then each tested and written or dropped. */
+static elfm_status stage_release(track_ctx *c, elfm_error *err)
+{
+  elfm_track_store *s = &c->stage_pending;
+  for (size_t i = 0; i < s->n; i++) stage_ring_add(c, s->tracks[i]);
+  elfm_status st = ELFM_OK;
+  for (size_t i = 0; i < s->n; i++) {
+    elfm_track *t = s->tracks[i];
+    s->tracks[i] = NULL;  /* each is written or freed here */
+    if (st != ELFM_OK) elfm_track_free(t);
+    else if (stage_off(c, t)) stage_drop(c, t);
+    else st = track_write_track(c, t, err);
+  }
+  s->n = 0;
+  c->n_stage_pending_long = 0;
+  return st;
+}
+
+/* --motion stage without a given velocity: hold t until there is a
+ * consensus; then test it, and a kept long track joins the consensus. */
+static elfm_status stage_hold(track_ctx *c, elfm_track *t, elfm_error *err)
+{
+  if (c->stage_established) {
+    if (stage_off(c, t)) return stage_drop(c, t);
+    stage_ring_add(c, t);
+    return track_write_track(c, t, err);
+  }
+  const int is_long = t->n >= TRACK_STAGE_MIN_POINTS;
+  elfm_status st = elfm_track_store_add(&c->stage_pending, t, err);  /* frees t on failure */
+  if (st != ELFM_OK) return st;
+  c->n_stage_pending_long += is_long;
+  if (c->n_stage_pending_long < TRACK_STAGE_MIN_TRACKS && c->stage_pending.n < TRACK_STAGE_MAX_PENDING)
+    return ELFM_OK;
+  c->stage_established = 1;
+  return stage_release(c, err);
+}
+
+elfm_status track_stage_flush(track_ctx *c, elfm_error *err)
+{
+  return stage_release(c, err);
+}
+
+elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err)
+{
+  /* with a known velocity, against it; else against the tracks' own */
+  if (!c->o->has_stage_v) return stage_hold(c, t, err);
+  if (off_stage(t, c->o->stage_v)) return stage_drop(c, t);
+  return track_write_track(c, t, err);
+}
