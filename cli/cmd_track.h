@@ -441,7 +441,7 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * read high: at 1 ms frames worm 0.57-1.01 um/ms (seeds 1-32), a slow
  * stage (stage_accel's first 200 ms, 0.1-0.6 um/ms, without --motion
  * stage) 0.51; slow random flow (0.5-1 mm/s, where the integral loses:
- * recall 0.57 -> 0.15) 1.37-1.61 (seeds 1-16), flow 3.0-4.4. 1.2 lies
+ * recall 0.57 -> 0.15) 1.37-1.61 (seeds 1-16), flow and flow_random 3.3-4.3. 1.2 lies
  * between the two. */
 #define TRACK_AUTO_CRAWL_UM_PER_MS 1.2
 /* The automatic window: the first run's 1 ms frames are halved when the
@@ -452,8 +452,8 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * 8-10 mm/s 0.312 -> 0.795; flow_random 0.401 -> 0.559 and 0.288 -> 0.568;
  * at the usual 2.5-4 mm/s they lose (0.06 on seeds 1-4, "Fast beads").
  * Early speeds at 1 ms: the usual flow and flow_random (seeds 1-20 each),
- * blink_moving, 640 x 480, noise, haze, 40 and 60 beads 3.0-4.37 um/ms;
- * 5-6.5 mm/s 5.79-6.73, 8-10 mm/s 7.49-9.89. */
+ * 640 x 480, noise, haze, 40 and 60 beads 3.29-4.37 um/ms (blink_moving 2.5);
+ * 4-5 mm/s 4.95-5.31, 5-6.5 mm/s 5.49-6.73, 8-10 mm/s 7.49-9.99 (seeds 1-4). */
 #define TRACK_DT_AUTO_STEP_UM 5.0
 /* The note comes as soon as this many peaks say so (a long recording's user
  * need not wait for its end), else at the end; --blur-px auto judges the
