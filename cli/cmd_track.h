@@ -286,7 +286,8 @@ typedef struct track_ctx {
   int dim_noted;        /* the faint-peaks note was printed (track_dim_note) */
   /* --blur-px auto and the automatic window: the speeds of the tracks the
    * detections joined (elfm_link_last_speed), in bins of
-   * TRACK_SPEED_BIN_UM_PER_MS, until the judgement */
+   * TRACK_SPEED_BIN_UM_PER_MS, until the judgement; 10 um/ms and more count
+   * in the top bin (a median there reads 9.99: far past any bar it meets) */
   int64_t speed_hist[TRACK_SPEED_BINS];
   int64_t n_speed;
   /* --motion stage without a given velocity: the stage's velocity from the
@@ -453,7 +454,8 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * at the usual 2.5-4 mm/s they lose (0.06 on seeds 1-4, "Fast beads").
  * Early speeds at 1 ms: the usual flow and flow_random (seeds 1-20 each),
  * 640 x 480, noise, haze, 40 and 60 beads 3.29-4.37 um/ms (blink_moving 2.5);
- * 4-5 mm/s 4.95-5.31, 5-6.5 mm/s 5.49-6.73, 8-10 mm/s 7.49-9.99 (seeds 1-4). */
+ * 4-5 mm/s 4.95-5.31, 5-6.5 mm/s 5.49-6.73, 8-10 mm/s 7.49-9.99 (seeds 1-4;
+ * 9.99 is the speed histogram's top bin, TRACK_SPEED_BINS). */
 #define TRACK_DT_AUTO_STEP_UM 5.0
 /* The note comes as soon as this many peaks say so (a long recording's user
  * need not wait for its end), else at the end; --blur-px auto judges the
