@@ -83,35 +83,45 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
  * again: with the integral (their tracks crawl,
  * TRACK_AUTO_CRAWL_UM_PER_MS), the blur (faint peaks whose tracks do not
  * crawl, TRACK_HINT_DIM_FACTOR), half the window (tracks that move
- * TRACK_DT_AUTO_STEP_UM or more per frame), or the last two. */
-static int auto_judge(track_ctx *c, int64_t min_peaks)
+ * TRACK_DT_AUTO_STEP_UM or more per frame), or the last two. And --motion
+ * auto: with --motion stage when the first tracks move as one
+ * (track_rigid_judge), which comes first: a stage turns the others off
+ * (track_opts_derive), so their restart waits for that judgement.
+ * at_end: the run has ended, judge with what there is. */
+static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
 {
   const track_opts *o = c->o;
-  if ((!o->blur_auto && !o->dt_auto && !o->repr_auto) || c->auto_decided || c->n_height < min_peaks)
-    return 0;
-  c->auto_decided = 1;
-  const double h = track_peak_height_median(c);
-  c->auto_ratio = h / o->peaks.absolute;
-  c->auto_speed = track_detection_speed_median(c);
-  const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
-  const int slow = have_speed && c->auto_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
-                   c->auto_speed < TRACK_AUTO_CRAWL_UM_PER_MS;
-  c->repr_restart = o->repr_auto && slow;
-  c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
-  const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
-  c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
+  if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
+  if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
+  if (!c->auto_decided) {
+    if (c->n_height < min_peaks) return 0;
+    c->auto_decided = 1;
+    const double h = track_peak_height_median(c);
+    c->auto_ratio = h / o->peaks.absolute;
+    c->auto_speed = track_detection_speed_median(c);
+    const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
+    const int slow = have_speed && c->auto_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
+                     c->auto_speed < TRACK_AUTO_CRAWL_UM_PER_MS;
+    c->repr_restart = o->repr_auto && slow;
+    c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
+    const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
+    c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
+  }
+  if (o->motion_auto && !c->rigid_decided) return 0;
   return c->repr_restart || c->blur_restart || c->dt_restart;
 }
 
 /* The ordered per-volume callback: track_on_volume, then auto's judgement
  * as soon as TRACK_HINT_DIM_EARLY_PEAKS peaks are in. A run to start again
- * stops here (an error status that track_run knows by c->*_restart). */
+ * stops here (an error status that track_run knows by c->auto_stopped). */
 static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err)
 {
   track_ctx *c = user;
   const elfm_status st = track_on_volume(v, slot, user, err);
-  if (st == ELFM_OK && auto_judge(c, TRACK_HINT_DIM_EARLY_PEAKS))
+  if (st == ELFM_OK && auto_judge(c, TRACK_HINT_DIM_EARLY_PEAKS, 0)) {
+    c->auto_stopped = 1;
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "to start again with auto's choices");
+  }
   return st;
 }
 
@@ -123,7 +133,8 @@ typedef struct track_again {
   int blur_px;     /* -1: as given */
   int64_t dt_us;   /* -1: as given */
   int integral;    /* 1: --repr integral */
-  double ratio, speed_um_per_ms;
+  int stage;       /* 1: --motion stage (and nothing else) */
+  double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms;
 } track_again;
 
 static void say_again(const track_ctx *c, const track_again *g)
@@ -131,6 +142,13 @@ static void say_again(const track_ctx *c, const track_again *g)
   const track_opts *o = c->o;
   if (o->quiet) return;
   fputc('\n', stderr);
+  if (g->stage)
+    fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
+                    "median %.1f %% of that from each frame's median, over the first %" PRId64
+                    " frames): a stage; starting "
+                    "again with --motion stage (--motion per-track: a model for each track; "
+                    "README, docs/tracker.md \"A stage found by its tracks\")\n",
+            c->rigid_speed, 100 * c->rigid_dev, c->n_frames);
   if (g->blur_px > 0)
     fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
@@ -179,6 +197,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 
   track_ctx c;
   memset(&c, 0, sizeof c);
+  c.rigid_dev = c.rigid_speed = NAN;
   c.o = &o;
   c.calib = &calib;
   elfm_frame_times_init(&c.frame_times);
@@ -248,14 +267,20 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   /* auto's choices: stopped by on_volume, or judged at the end (a short
    * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
    * again by the second run */
-  if (c.blur_restart || c.dt_restart || c.repr_restart ||
-      ((st == ELFM_OK || rs.input_error) && auto_judge(&c, TRACK_WIDTH_MIN_PEAKS))) {
-    again->blur_px = c.blur_restart ? 1 : -1;
-    again->integral = c.repr_restart;
+  if (c.auto_stopped || ((st == ELFM_OK || rs.input_error) && auto_judge(&c, TRACK_WIDTH_MIN_PEAKS, 1))) {
+    /* a stage: --motion stage alone (it turns the others off) */
+    const int others = !c.motion_restart;
+    again->stage = c.motion_restart;
+    again->blur_px = others && c.blur_restart ? 1 : -1;
+    again->integral = others && c.repr_restart;
     /* the integral's windows: the worm's 2 ms (500 Hz) unless given */
-    again->dt_us = c.dt_restart ? o.recon.framer.dt_us / 2 : c.repr_restart && o.dt_auto ? 2000 : -1;
-    again->ratio = c.auto_ratio;
-    again->speed_um_per_ms = c.auto_speed;
+    again->dt_us = !others ? -1
+                   : c.dt_restart ? o.recon.framer.dt_us / 2
+                   : c.repr_restart && o.dt_auto ? 2000 : -1;
+    again->ratio = c.auto_decided ? c.auto_ratio : NAN;
+    again->speed_um_per_ms = c.auto_decided ? c.auto_speed : NAN;
+    again->rigid_dev = c.rigid_dev;
+    again->rigid_speed_um_per_ms = c.rigid_speed;
     say_again(&c, again);
     rc = TRACK_RUN_AGAIN;
     goto done;
@@ -355,9 +380,11 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if ((o.blur_auto || o.dt_auto || o.repr_auto) && (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
-    o.blur_auto = o.dt_auto = o.repr_auto = 0;
-  const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0);
+  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto) &&
+      (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
+    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
+  const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0) |
+                  (o.motion_auto ? 8 : 0);
   track_again again;
   double t0_s = NAN;
   int rc = track_run(&o, &again, &t0_s);
@@ -376,6 +403,10 @@ int cmd_track(int argc, char **argv)
   if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
   int argc2 = 0;
   for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
+  if (again.stage) {
+    argv2[argc2++] = "--motion";
+    argv2[argc2++] = "stage";
+  }
   if (again.integral) {
     argv2[argc2++] = "--repr";
     argv2[argc2++] = "integral";
@@ -392,11 +423,13 @@ int cmd_track(int argc, char **argv)
   argv2[argc2] = NULL;
   pr = track_opts_parse(argc2, argv2, &o);
   if (pr == CLI_OK) {
-    o.blur_auto = o.dt_auto = o.repr_auto = 0;
+    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
     o.auto_chose = 1;
     o.auto_was = was;
     o.auto_ratio = again.ratio;
     o.auto_speed = again.speed_um_per_ms;
+    o.auto_rigid_dev = again.rigid_dev;
+    o.auto_rigid_speed = again.rigid_speed_um_per_ms;
     rc = track_run(&o, &again, &t0_s);
   }
   free(argv2);

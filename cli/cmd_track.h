@@ -78,12 +78,16 @@ typedef struct track_opts {
                            not given): when the first peaks' tracks crawl, start
                            again with --repr integral (and 2 ms windows when --dt-us
                            is not given either); 0 where it does not apply */
+  int motion_auto;      /* --motion auto (the default): when the first tracks move as
+                           one (TRACK_RIGID_MAX_DEV), start again with --motion stage;
+                           0 where it does not apply (track_opts_derive) */
   int auto_chose;       /* 1: this run is the second, with auto's choices */
   int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window,
-                           4 representation */
+                           4 representation, 8 motion */
   double auto_ratio;    /* what the first run judged: median peak height over the
                            threshold, and the tracks' median speed, um/ms */
   double auto_speed;
+  double auto_rigid_dev, auto_rigid_speed; /* what the first run judged of the motion */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -108,6 +112,25 @@ typedef struct track_opts {
 #define TRACK_STAGE_MIN_TRACKS 5
 #define TRACK_STAGE_RING 32
 #define TRACK_STAGE_MAX_PENDING 256
+/* --motion auto's test for rigid motion (track_rigid_*, cmd_track_stage.c):
+ * in each frame, the detections whose tracks have TRACK_RIGID_MIN_POINTS
+ * points or more, if there are TRACK_RIGID_MIN_TRACKS of them, each give
+ * their track's velocity's distance from the frame's median velocity over
+ * that median's length (in bins of TRACK_RIGID_BIN). Once
+ * TRACK_RIGID_MIN_SAMPLES are in, the sample moves as one (a stage) when
+ * their median is below TRACK_RIGID_MAX_DEV and the frames' median speed
+ * is TRACK_RIGID_MIN_SPEED_UM_PER_MS or more; a run that has not gathered
+ * that many by frame TRACK_RIGID_MAX_FRAMES (few objects, or objects that
+ * come and go) is not judged. Measured in docs/tracker.md "A stage found
+ * by its tracks". */
+#define TRACK_RIGID_MIN_POINTS 8
+#define TRACK_RIGID_MIN_TRACKS 3
+#define TRACK_RIGID_MIN_SAMPLES 64
+#define TRACK_RIGID_MAX_DEV 0.1
+#define TRACK_RIGID_MIN_SPEED_UM_PER_MS 0.2
+#define TRACK_RIGID_MAX_FRAMES 200
+#define TRACK_RIGID_BIN 0.005
+#define TRACK_RIGID_BINS 400
 #define TRACK_SPEED_BIN_UM_PER_MS 0.02
 #define TRACK_SPEED_BINS 500
 #define TRACK_LEAD_PER_WIDTH 1.80
@@ -300,6 +323,20 @@ typedef struct track_ctx {
   size_t n_stage_pending_long;
   double stage_ring[TRACK_STAGE_RING][4]; /* mean vx, vy, vz (um/ms) and points */
   int n_stage_ring, stage_ring_at, stage_established;
+  /* --motion auto (motion_auto): the velocities of one frame's long tracks
+   * (rigid_v, [max_det][3], then max_det more for a median), and over the frames their distances from
+   * the frame's median (rigid_hist, bins of TRACK_RIGID_BIN) and the
+   * median's speed (rigid_speed_hist, bins of TRACK_SPEED_BIN_UM_PER_MS),
+   * until the judgement */
+  double *rigid_v;
+  int64_t rigid_hist[TRACK_RIGID_BINS];
+  int64_t n_rigid;
+  int64_t rigid_speed_hist[TRACK_SPEED_BINS];
+  int64_t n_rigid_frames;
+  int rigid_decided;    /* judged (or given up: rigid_dev NaN) */
+  int motion_restart;   /* ... moving as one: start again with --motion stage */
+  double rigid_dev, rigid_speed; /* the medians judged (NaN: not judged) */
+  int auto_stopped;     /* the run stopped to start again (cmd_track's on_volume) */
   int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
@@ -337,6 +374,14 @@ elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err);
 /* ... at the end: decide on the tracks still waiting for a consensus and
  * write the kept ones. */
 elfm_status track_stage_flush(track_ctx *c, elfm_error *err);
+/* --motion auto: add one frame's velocities v[0 .. 3n) of long tracks
+ * (TRACK_RIGID_MIN_POINTS; v is c->rigid_v) to the test for rigid motion
+ * (cmd_track_stage.c). */
+void track_rigid_add_frame(track_ctx *c, double *v, int n);
+/* ... and judge it once it can be (at_end: with what there is, at least
+ * TRACK_RIGID_MIN_SAMPLES / 2): sets c->rigid_decided, and returns 1 when
+ * the objects move as one (c->motion_restart). */
+int track_rigid_judge(track_ctx *c, int at_end);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
  * and buffers, before the run; keep the frame of each volume (linking
  * callback, frame order); after each linking step (all = 0) and before

@@ -27,6 +27,8 @@ void track_defaults(track_opts *o)
   o->dt_auto = 1;
   /* Crawling cells: ... with the integral (track_opts_derive says where). */
   o->repr_auto = 1;
+  /* A stage: ... with --motion stage when the first tracks move as one. */
+  o->motion_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -637,6 +639,14 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->repr_auto && (g->thr || o->recon.framer.repr != ELFM_REPR_EXP ||
                        o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE))
     o->repr_auto = 0;
+  /* The test for a stage on time surfaces with windows on the 1 ms grid:
+   * not on the integral (the worm's cells; a stage's beads are best seen
+   * by their ON events, "Integral frames"), not with windows opened by a
+   * trigger (blinking beads), nor where a model was given. */
+  if (o->motion_auto && (o->motion != MOTION_AUTO || o->smooth.model != ELFM_MODEL_AUTO ||
+                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
+                         o->recon.framer.start == ELFM_START_EACH_TRIGGER))
+    o->motion_auto = 0;
   return CLI_OK;
 }
 

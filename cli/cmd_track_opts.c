@@ -166,11 +166,17 @@ static void usage(FILE *f)
     "                       point the same way (default on, with --repr integral off)\n"
     "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
     "smoothing:\n"
-    "  --motion auto|stage|free   auto: model chosen per track (BIC) among constant\n"
-    "                       velocity, constant acceleration and spline; stage: rigid\n"
-    "                       motion (no spline; with a stage velocity, new tracks\n"
-    "                       predict with it and tracks far from it are dropped);\n"
-    "                       free: smoothing spline for all\n"
+    "  --motion auto|per-track|stage|free   per-track: model chosen per track (BIC)\n"
+    "                       among constant velocity, constant acceleration and\n"
+    "                       spline; stage: rigid motion (no spline; tracks that do\n"
+    "                       not move with the stage are dropped; with a stage\n"
+    "                       velocity, new tracks predict with it); free: smoothing\n"
+    "                       spline for all; auto (default): per-track, but when the\n"
+    "                       first tracks move as one (a stage: their velocities lie\n"
+    "                       within 10 %% of each frame's median velocity by the\n"
+    "                       median, at >= 0.2 um/ms) start again with --motion\n"
+    "                       stage; time surfaces only, events from a file, not with\n"
+    "                       --model or --start each-trigger\n"
     "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
     "  --model auto|cv|ca|spline, --spline-weight-ms3 W\n"
     "  --loss L             robust loss of the smoother: cauchy (the default), huber\n"
@@ -566,10 +572,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       else return cli_message(C, CLI_USAGE, "--lag-correct must be on or off, not '%s'", a);
       break;
     case O_MOTION:
-      if (!strcmp(a, "auto")) o.motion = MOTION_AUTO;
+      o.motion_auto = !strcmp(a, "auto");
+      if (!strcmp(a, "auto") || !strcmp(a, "per-track")) o.motion = MOTION_AUTO;
       else if (!strcmp(a, "stage")) o.motion = MOTION_STAGE;
       else if (!strcmp(a, "free")) o.motion = MOTION_FREE;
-      else return cli_message(C, CLI_USAGE, "--motion must be auto, stage or free, not '%s'", a);
+      else return cli_message(C, CLI_USAGE, "--motion must be auto, per-track, stage or free, not '%s'", a);
       break;
     case O_STAGEV:
       if (!parse_vec3(a, o.stage_v))

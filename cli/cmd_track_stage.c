@@ -145,3 +145,61 @@ elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err)
   if (off_stage(t, c->o->stage_v)) return stage_drop(c, t);
   return track_write_track(c, t, err);
 }
+
+/* --motion auto's test for rigid motion (cmd_track.h TRACK_RIGID_*). */
+
+static int cmp_double(const void *a, const void *b)
+{
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
+static int median_bin(const int64_t *hist, int bins, int64_t n)
+{
+  int64_t half = (n + 1) / 2, acc = 0;
+  int b = 0;
+  while (b < bins - 1 && (acc += hist[b]) < half) b++;
+  return b;
+}
+
+void track_rigid_add_frame(track_ctx *c, double *v, int n)
+{
+  if (c->rigid_decided || n < TRACK_RIGID_MIN_TRACKS) return;
+  /* The median velocity, component by component: a few tracks on ghosts
+   * or swapped beads do not move it (a mean would follow them). */
+  double m[3], *col = c->rigid_v + 3 * (size_t)c->o->max_det; /* its scratch column */
+  for (int a = 0; a < 3; a++) {
+    for (int i = 0; i < n; i++) col[i] = v[3 * i + a];
+    qsort(col, (size_t)n, sizeof *col, cmp_double);
+    m[a] = n % 2 ? col[n / 2] : 0.5 * (col[n / 2 - 1] + col[n / 2]);
+  }
+  const double sm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+  for (int i = 0; i < n; i++) {
+    const double *w = v + 3 * i;
+    const double d = sqrt((w[0] - m[0]) * (w[0] - m[0]) + (w[1] - m[1]) * (w[1] - m[1]) +
+                          (w[2] - m[2]) * (w[2] - m[2]));
+    const double b = sm > 0 ? floor(d / sm / TRACK_RIGID_BIN) : TRACK_RIGID_BINS;
+    c->rigid_hist[b < TRACK_RIGID_BINS - 1 ? (int)b : TRACK_RIGID_BINS - 1]++;
+    c->n_rigid++;
+  }
+  const double b = floor(sm / TRACK_SPEED_BIN_UM_PER_MS);
+  c->rigid_speed_hist[b < TRACK_SPEED_BINS - 1 ? (int)b : TRACK_SPEED_BINS - 1]++;
+  c->n_rigid_frames++;
+}
+
+int track_rigid_judge(track_ctx *c, int at_end)
+{
+  if (c->rigid_decided) return c->motion_restart;
+  const int64_t need = at_end ? TRACK_RIGID_MIN_SAMPLES / 2 : TRACK_RIGID_MIN_SAMPLES;
+  if (c->n_rigid < need) {
+    if (at_end || c->n_frames >= TRACK_RIGID_MAX_FRAMES) c->rigid_decided = 1; /* not judged */
+    return 0;
+  }
+  c->rigid_decided = 1;
+  c->rigid_dev = (median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
+  c->rigid_speed = (median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
+                   TRACK_SPEED_BIN_UM_PER_MS;
+  c->motion_restart = c->rigid_dev < TRACK_RIGID_MAX_DEV && c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
+  return c->motion_restart;
+}

@@ -218,12 +218,19 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
    * the threshold and their tracks' median speed (blur_px, dt_us and repr
    * say what was chosen; auto_again: this run is the second, with those
    * choices) */
-  const int was =
-      o->auto_chose ? o->auto_was : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0) | (o->repr_auto ? 4 : 0);
+  const int was = o->auto_chose ? o->auto_was
+                                : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0) | (o->repr_auto ? 4 : 0) |
+                                      (o->motion_auto ? 8 : 0);
   cJSON_AddBoolToObject(par, "blur_auto", was & 1);
   cJSON_AddBoolToObject(par, "dt_auto", (was & 2) != 0);
   cJSON_AddBoolToObject(par, "repr_auto", (was & 4) != 0);
+  cJSON_AddBoolToObject(par, "motion_auto", (was & 8) != 0);
   cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
+  /* --motion auto: the median distance of the long tracks' velocities from
+   * their frame's median velocity, over its length, and that speed (NaN:
+   * not judged; track_rigid_judge) */
+  add_num(par, "auto_rigid_dev", o->auto_chose ? o->auto_rigid_dev : c->rigid_dev);
+  add_num(par, "auto_rigid_speed_um_per_ms", o->auto_chose ? o->auto_rigid_speed : c->rigid_speed);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms",
           o->auto_chose ? o->auto_speed : c->auto_decided ? c->auto_speed : NAN);

@@ -250,6 +250,8 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   }
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
   c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
+  if (o->motion_auto && !(c->rigid_v = malloc((size_t)o->max_det * 4 * sizeof *c->rigid_v)))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan ||
       (o->localize_near_um > 0 && (!c->fitok || !c->near_fit)) ||
       (o->view_support > 0 && !c->keep) || !c->pred || !c->pred_intensity)
@@ -673,13 +675,19 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   /* after linking: the lag correction (when on) has moved the detections,
    * and trail peaks (id -2) and weak peaks that joined no track (-3) are
    * left out */
-  int kept = 0;
+  int kept = 0, n_rigid = 0;
+  double vnow[3];
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
     track_width_add(c, &det[j]);
     track_height_add(c, &det[j]);
     if ((o->blur_auto || o->dt_auto || o->repr_auto) && !c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
+    if (o->motion_auto && !c->rigid_decided &&
+        elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid) >= TRACK_RIGID_MIN_POINTS &&
+        isfinite(c->rigid_v[3 * n_rigid]) && isfinite(c->rigid_v[3 * n_rigid + 1]) &&
+        isfinite(c->rigid_v[3 * n_rigid + 2]))
+      n_rigid++;
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;
     kept++;
@@ -709,6 +717,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
    * trigger edges are not evenly spaced) */
   if ((st = cli_frames_csv_row(c->ffr, c->p_fr, v, kept, err)) != ELFM_OK) return st;
   if ((st = elfm_frame_times_add(&c->frame_times, v->frame, v->t_us, err)) != ELFM_OK) return st;
+  if (o->motion_auto) track_rigid_add_frame(c, c->rigid_v, n_rigid);
   c->n_frames++;
   c->n_det += kept;
   c->last_frame = v->frame;
@@ -742,6 +751,7 @@ void track_ctx_free(track_ctx *c)
   free(c->slot_plan);
   free(c->pred);
   free(c->pred_intensity);
+  free(c->rigid_v);
   elfm_track_xml_free(c->xml);
   free(c->info);
   free(c->det);

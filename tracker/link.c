@@ -131,7 +131,7 @@ void elfm_link_free(elfm_linker *l)
   free(l->det_track);
   free(l->det_local);
   free(l->det_id);
-  free(l->det_speed);
+  free(l->det_vel);
   free(l->cost);
   free(l->row_to_col);
   free(l->rows);
@@ -210,8 +210,32 @@ int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 
 double elfm_link_last_speed(const elfm_linker *l, int i)
 {
-  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_speed || l->det_id[i] < 0) return NAN;
-  return l->det_speed[i];
+  double v[3];
+  if (elfm_link_last_velocity(l, i, v, NULL) < 2) return NAN;
+  return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
+                               double v_long_um_per_ms[3])
+{
+  for (int a = 0; a < 3; a++) {
+    v_um_per_ms[a] = NAN;
+    if (v_long_um_per_ms) v_long_um_per_ms[a] = NAN;
+  }
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return 0;
+  const double *m = l->det_vel + LINK_DET_VEL * (size_t)i;
+  if (!(m[6] >= 2)) return m[6] >= 1 ? 1 : 0;
+  memcpy(v_um_per_ms, m, 3 * sizeof *m);
+  if (v_long_um_per_ms) memcpy(v_long_um_per_ms, m + 3, 3 * sizeof *m);
+  return (size_t)m[6];
+}
+
+/* Detection j joined no track (or a new one): no velocity. */
+static void det_vel_none(elfm_linker *l, size_t j)
+{
+  double *m = l->det_vel + LINK_DET_VEL * j;
+  for (int k = 0; k < 6; k++) m[k] = NAN;
+  m[6] = 0;
 }
 
 int64_t elfm_link_last_track_id(const elfm_linker *l, int i)
@@ -265,7 +289,7 @@ elfm_status elfm_link_reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_e
         !grow((void **)&l->det_track, c, sizeof(int)) ||
         !grow((void **)&l->det_local, c, sizeof(int)) ||
         !grow((void **)&l->det_id, c, sizeof(int64_t)) ||
-        !grow((void **)&l->det_speed, c, sizeof(double)))
+        !grow((void **)&l->det_vel, LINK_DET_VEL * c, sizeof(double)))
       return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
     l->cap_det = c;
   }
@@ -696,7 +720,10 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     }
     l->det_id[j] = l->live[i].t->id;
     const double *v = elfm_link_current_velocity(&l->live[i]);
-    l->det_speed[j] = l->live[i].t->n >= 2 ? sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) : NAN;
+    double *m = l->det_vel + LINK_DET_VEL * (size_t)j;
+    memcpy(m, v, 3 * sizeof *m);
+    memcpy(m + 3, l->live[i].vel_um_per_ms, 3 * sizeof *m);
+    m[6] = (double)l->live[i].t->n;
   }
   if (o->swap_points > 0 && o->encounter_um > 0) {
     st = elfm_link_mark_encounters(l, frame, nt, err);
@@ -707,21 +734,22 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     if (l->det_track[j] >= 0) continue;
     if (det[j].weak) {  /* hysteresis: a weak detection only continues a track */
       l->det_id[j] = -3;
-      l->det_speed[j] = NAN;
+      det_vel_none(l, j);
       continue;
     }
     if (o->trail_us > 0 && in_trail(l, nt_before_births, det, &det[j])) {
       l->det_id[j] = -2;
-      l->det_speed[j] = NAN;
+      det_vel_none(l, j);
       continue;
     }
     st = start_track(l, &det[j], &l->det_id[j], err);
     if (st != ELFM_OK) return st;
-    l->det_speed[j] = NAN;
+    det_vel_none(l, j);
+    l->det_vel[LINK_DET_VEL * j + 6] = 1; /* a new track's first point */
   }
   for (size_t j = nd; j < l->cap_det; j++) {
     l->det_id[j] = -1;
-    l->det_speed[j] = NAN;
+    det_vel_none(l, j);
   }
   if (o->stitch_points > 0) {
     st = elfm_link_stitch(l, frame, nd, err);

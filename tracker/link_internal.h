@@ -54,6 +54,8 @@ typedef struct link_xkey {
   int track;
 } link_xkey;
 
+#define LINK_DET_VEL 7
+
 /* The linker (opaque in elfm_link.h). */
 struct elfm_linker {
   elfm_link_options o;
@@ -76,7 +78,9 @@ struct elfm_linker {
   int *comp_of, *comp_start, *comp_fill, *members; /* grouping */
   int *track_det, *det_track, *det_local;
   int64_t *det_id;
-  double *det_speed;
+  double *det_vel;           /* n_det x LINK_DET_VEL: the joined track's velocity now
+                              * and its long fit's (um/ms; NaN for none or one
+                              * point), and its number of points */
   size_t cap_cost;
   double *cost;
   int *row_to_col;
