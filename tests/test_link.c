@@ -94,41 +94,6 @@ int main(void)
     elfm_link_free(l);  /* frees live tracks (ASan checks) */
   }
 
-  /* 2a. What the linker tells of the track each detection joined (track's
-   * test for a stage reads it): a bead at (0.8, -1.2, 0.4) um/ms, exactly
-   * on its line, then a second bead born beside it. The first frame has no
-   * velocity (a new track: 1 point), later ones the track's, both fits
-   * exact on a line; a detection index past the last is no track. */
-  {
-    elfm_linker *l = elfm_link_create(&o, &err);
-    CHECK(l != NULL);
-    double v[3], vl[3];
-    for (int f = 0; f < 12; f++) {
-      elfm_detection d[2] = {mk(0.8 * f, -1.2 * f, 0.4 * f), mk(30, 30, 0)};
-      const int n = f < 11 ? 1 : 2;
-      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
-      const size_t np = elfm_link_last_velocity(l, 0, v, vl);
-      CHECK_EQ_INT((int)np, f + 1);
-      if (f == 0) {
-        CHECK(isnan(v[0]) && isnan(vl[2]) && isnan(elfm_link_last_speed(l, 0)));
-        continue;
-      }
-      CHECK_NEAR(v[0], 0.8, 1e-6);
-      CHECK_NEAR(v[1], -1.2, 1e-6);
-      CHECK_NEAR(vl[0], 0.8, 1e-6);
-      CHECK_NEAR(vl[1], -1.2, 1e-6);
-      CHECK_NEAR(vl[2], 0.4, 1e-6);
-      CHECK_NEAR(elfm_link_last_speed(l, 0), sqrt(0.64 + 1.44 + 0.16), 1e-6);
-    }
-    /* the newborn: one point, no velocity; past the last detection: none */
-    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 1, v, NULL), 1);
-    CHECK(isnan(v[0]));
-    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 2, v, vl), 0);
-    CHECK(isnan(vl[1]));
-    CHECK_EQ_INT((int)elfm_link_last_velocity(NULL, 0, v, vl), 0);
-    elfm_link_free(l);
-  }
-
   /* 2b. Established tracks first: track T has moved 1 um per frame along
    * x for 10 frames and expects its bead at (10, 0); a one-point track Y
    * was born at (10.6, -7) a frame before, its gate widened to 11 um for

@@ -107,7 +107,7 @@ elfm_status elfm_link_reserve(elfm_linker *l, size_t n_trk, size_t n_det, elfm_e
  * assignment). */
 elfm_status elfm_link_reserve_cost(elfm_linker *l, size_t need, elfm_error *err);
 
-/* link.c: fits and prediction (the turn: link_circle.c). */
+/* link_fit.c: fits (prediction: link_predict.c; the turn: link_circle.c). */
 
 /* Mean intensity of t's points a .. b-1 (0 when the range is empty). */
 double elfm_link_mean_intensity(const elfm_track *t, size_t a, size_t b);

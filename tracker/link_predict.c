@@ -3,7 +3,7 @@
  * track-guided searches): the short fit's next point, the slow line, the
  * circle or the turn through a gap, and its gate; whether the recording's
  * objects are at rest, and then the rest hypothesis of a dark track. The
- * fits themselves are link.c's (elfm_link_fit_velocity) and
+ * fits themselves are link_fit.c's (elfm_link_fit_velocity) and
  * link_circle.c's. */
 #include <math.h>
 
