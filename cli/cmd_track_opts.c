@@ -173,7 +173,7 @@ static void usage(FILE *f)
     "                       velocity, new tracks predict with it); free: smoothing\n"
     "                       spline for all; auto (default): per-track, but when the\n"
     "                       first tracks move as one (a stage: their velocities lie\n"
-    "                       within 10 %% of each frame's median velocity by the\n"
+    "                       within 15 %% of each frame's median velocity by the\n"
     "                       median, at >= 0.2 um/ms) start again with --motion\n"
     "                       stage; time surfaces only, events from a file, not with\n"
     "                       --model or --start each-trigger\n"

@@ -676,7 +676,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
    * and trail peaks (id -2) and weak peaks that joined no track (-3) are
    * left out */
   int kept = 0, n_rigid = 0;
-  double vnow[3];
+  double vnow[3], span_ms;
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
@@ -684,9 +684,10 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     track_height_add(c, &det[j]);
     if ((o->blur_auto || o->dt_auto || o->repr_auto) && !c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
     if (o->motion_auto && !c->rigid_decided &&
-        elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid) >= TRACK_RIGID_MIN_POINTS &&
-        isfinite(c->rigid_v[3 * n_rigid]) && isfinite(c->rigid_v[3 * n_rigid + 1]) &&
-        isfinite(c->rigid_v[3 * n_rigid + 2]))
+        elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid, &span_ms) >=
+            TRACK_RIGID_MIN_POINTS &&
+        span_ms >= TRACK_RIGID_MIN_SPAN_MS && isfinite(c->rigid_v[3 * n_rigid]) &&
+        isfinite(c->rigid_v[3 * n_rigid + 1]) && isfinite(c->rigid_v[3 * n_rigid + 2]))
       n_rigid++;
     st = track_det_emit(c, v->frame, &det[j], err);
     if (st != ELFM_OK) return st;

@@ -110,17 +110,19 @@ int main(void)
   {
     elfm_linker *l = elfm_link_create(&o, &err);
     CHECK(l != NULL);
-    double v[3], vl[3];
-    for (int f = 0; f < 12; f++) {
+    double v[3], vl[3], span;
+    for (int f = 0; f < 25; f++) {
       elfm_detection d[2] = {mk(0.8 * f, -1.2 * f, 0.4 * f), mk(30, 30, 0)};
-      const int n = f < 11 ? 1 : 2;
+      const int n = f < 24 ? 1 : 2;
       CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
-      const size_t np = elfm_link_last_velocity(l, 0, v, vl);
+      const size_t np = elfm_link_last_velocity(l, 0, v, vl, &span);
       CHECK_EQ_INT((int)np, f + 1);
       if (f == 0) {
-        CHECK(isnan(v[0]) && isnan(vl[2]) && isnan(elfm_link_last_speed(l, 0)));
+        CHECK(isnan(v[0]) && isnan(vl[2]) && isnan(span) && isnan(elfm_link_last_speed(l, 0)));
         continue;
       }
+      /* the long fit's points: the last `history` (20), 1 ms apart */
+      CHECK_NEAR(span, f < o.history ? f : o.history - 1, 1e-9);
       CHECK_NEAR(v[0], 0.8, 1e-6);
       CHECK_NEAR(v[1], -1.2, 1e-6);
       CHECK_NEAR(vl[0], 0.8, 1e-6);
@@ -129,11 +131,11 @@ int main(void)
       CHECK_NEAR(elfm_link_last_speed(l, 0), sqrt(0.64 + 1.44 + 0.16), 1e-6);
     }
     /* the newborn: one point, no velocity; past the last detection: none */
-    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 1, v, NULL), 1);
+    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 1, v, NULL, NULL), 1);
     CHECK(isnan(v[0]));
-    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 2, v, vl), 0);
-    CHECK(isnan(vl[1]));
-    CHECK_EQ_INT((int)elfm_link_last_velocity(NULL, 0, v, vl), 0);
+    CHECK_EQ_INT((int)elfm_link_last_velocity(l, 2, v, vl, &span), 0);
+    CHECK(isnan(vl[1]) && isnan(span));
+    CHECK_EQ_INT((int)elfm_link_last_velocity(NULL, 0, v, vl, NULL), 0);
     elfm_link_free(l);
   }
   return check_report();

@@ -1,15 +1,17 @@
 #!/bin/sh
 # --motion auto (the default) finds a stage by its tracks: when the first
-# tracks' velocities (their linker's 20-point fits) lie within 10 % of the
-# frame's median velocity by the median, at 0.2 um/ms or faster, the run
-# starts again with --motion stage. Before, a microscopist who did not say
-# --motion stage got each track's own model: stage 200 ms seeds 1-11, alpha
-# 0.848 -> 0.867 and the SPEC stage error mean 0.53 % -> 0.14 %, max 1.80 %
-# -> 0.23 %; the dim stage 2.3-3.6 % -> 0.2-0.4 %; a 1 mm/s stage alpha
-# 0.561 -> 0.841 (docs/tracker.md "A stage found by its tracks").
+# tracks' velocities (their linker's fits over 20 points, spanning 15 ms or
+# more) lie within 15 % of each frame's median velocity by the median, at
+# 0.2 um/ms or faster, the run starts again with --motion stage. Before, a
+# microscopist who did not say --motion stage got each track's own model:
+# stage 200 ms seeds 1-11, alpha 0.848 -> 0.867 and the SPEC stage error
+# mean 0.53 % -> 0.14 %, max 1.80 % -> 0.23 %; the dim stage 2.3-3.6 % ->
+# 0.2-0.4 %; a 1 mm/s stage alpha 0.561 -> 0.841 (docs/tracker.md "A stage
+# found by its tracks").
 # Checked: the stage's run is byte for byte --motion stage's and says so in
-# summary.json; --motion per-track keeps each track's own model; flow's
-# helices are judged and stay free (their median distance ~1-2 x the speed).
+# summary.json; --motion per-track keeps each track's own model, and so do
+# events from a pipe (not read twice); flow's helices are judged and stay
+# free (their median distance ~1-2 x the speed).
 # Usage: track_motion_auto.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -32,7 +34,7 @@ flag_is "$tmp/a/summary.json" auto_again true
 dev=$(key "$tmp/a/summary.json" auto_rigid_dev)
 e=$(key "$tmp/a.json" stage_velocity_rel_error)
 echo "stage 200 ms seed 3 at the defaults: rigid deviation $dev, stage error $e"
-[ -n "$dev" ] && below "$dev" 1 0.1 || { echo "FAIL: rigid deviation '$dev' not below 0.1"; fail=$((fail+1)); }
+[ -n "$dev" ] && below "$dev" 1 0.15 || { echo "FAIL: rigid deviation '$dev' not below 0.15"; fail=$((fail+1)); }
 [ -n "$e" ] && below "$e" 1 0.01 || { echo "FAIL: stage error '$e' not below 1 %"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/st/calib.json" --events "$tmp/st/events.raw" --out "$tmp/s" -q --motion stage ||
   { echo "FAIL: track --motion stage"; fail=$((fail+1)); }

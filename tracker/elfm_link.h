@@ -343,12 +343,13 @@ elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t kee
 /* Speed (um/ms) of the track detection i of the LAST step joined, from its
  * recent history; NaN for a new track or i out of range. */
 double elfm_link_last_speed(const elfm_linker *l, int i);
-/* The same track's velocity (um/ms) into v_um_per_ms, and (when not NULL)
- * its long constant-velocity fit's over the last `history` points into
- * v_long_um_per_ms (NaN for a new track, one point or i out of range);
- * returns its number of points (0: no track). */
+/* The same track's velocity (um/ms) into v_um_per_ms, and (each when not
+ * NULL) its long constant-velocity fit's over the last `history` points
+ * into v_long_um_per_ms and the time those points span into *long_span_ms
+ * (NaN for a new track, one point or i out of range); returns its number
+ * of points (0: no track). */
 size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
-                               double v_long_um_per_ms[3]);
+                               double v_long_um_per_ms[3], double *long_span_ms);
 
 /* Live tracks right now, and how many tracks were started in total. */
 size_t elfm_link_n_live(const elfm_linker *l);

@@ -211,22 +211,24 @@ int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 double elfm_link_last_speed(const elfm_linker *l, int i)
 {
   double v[3];
-  if (elfm_link_last_velocity(l, i, v, NULL) < 2) return NAN;
+  if (elfm_link_last_velocity(l, i, v, NULL, NULL) < 2) return NAN;
   return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
 size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
-                               double v_long_um_per_ms[3])
+                               double v_long_um_per_ms[3], double *long_span_ms)
 {
   for (int a = 0; a < 3; a++) {
     v_um_per_ms[a] = NAN;
     if (v_long_um_per_ms) v_long_um_per_ms[a] = NAN;
   }
+  if (long_span_ms) *long_span_ms = NAN;
   if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return 0;
   const double *m = l->det_vel + LINK_DET_VEL * (size_t)i;
   if (!(m[6] >= 2)) return m[6] >= 1 ? 1 : 0;
   memcpy(v_um_per_ms, m, 3 * sizeof *m);
   if (v_long_um_per_ms) memcpy(v_long_um_per_ms, m + 3, 3 * sizeof *m);
+  if (long_span_ms) *long_span_ms = m[7];
   return (size_t)m[6];
 }
 
@@ -234,7 +236,7 @@ size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3
 static void det_vel_none(elfm_linker *l, size_t j)
 {
   double *m = l->det_vel + LINK_DET_VEL * j;
-  for (int k = 0; k < 6; k++) m[k] = NAN;
+  for (int k = 0; k < LINK_DET_VEL; k++) m[k] = NAN;
   m[6] = 0;
 }
 
@@ -615,7 +617,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     double *m = l->det_vel + LINK_DET_VEL * (size_t)j;
     memcpy(m, v, 3 * sizeof *m);
     memcpy(m + 3, l->live[i].vel_um_per_ms, 3 * sizeof *m);
-    m[6] = (double)l->live[i].t->n;
+    const elfm_track *t = l->live[i].t;
+    m[6] = (double)t->n;
+    /* the long fit's points: the last `history` (elfm_link_fit_velocity) */
+    const size_t k0 = t->n > (size_t)o->history ? t->n - (size_t)o->history : 0;
+    m[7] = 1e-3 * (double)(t->pts[t->n - 1].t_us - t->pts[k0].t_us);
   }
   if (o->swap_points > 0 && o->encounter_um > 0) {
     st = elfm_link_mark_encounters(l, frame, nt, err);

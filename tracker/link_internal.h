@@ -54,7 +54,7 @@ typedef struct link_xkey {
   int track;
 } link_xkey;
 
-#define LINK_DET_VEL 7
+#define LINK_DET_VEL 8
 
 /* The linker (opaque in elfm_link.h). */
 struct elfm_linker {
@@ -80,7 +80,8 @@ struct elfm_linker {
   int64_t *det_id;
   double *det_vel;           /* n_det x LINK_DET_VEL: the joined track's velocity now
                               * and its long fit's (um/ms; NaN for none or one
-                              * point), and its number of points */
+                              * point), its number of points, and the time its
+                              * long fit spans (ms) */
   size_t cap_cost;
   double *cost;
   int *row_to_col;
