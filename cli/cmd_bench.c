@@ -284,7 +284,7 @@ int cmd_bench(int argc, char **argv)
       else cli_path_fmt(calib, sizeof calib, "%s/calib.json", si->dir);
       cli_path_fmt(ev, sizeof ev, "%s/events.raw", si->dir);
       cli_path_fmt(logp, sizeof logp, "%s/track.log", run);
-      char *targv[12 + BENCH_MAX_ARGS + 1];
+      char *targv[14 + BENCH_MAX_ARGS + 1]; /* 14: the fixed arguments below */
       int na = 0;
       targv[na++] = self;
       targv[na++] = "track";
@@ -305,6 +305,13 @@ int cmd_bench(int argc, char **argv)
        * again with the blur, a second change in the row */
       targv[na++] = "--blur-px";
       targv[na++] = "0";
+      /* ... and a stage's rows smooth as a stage: track's --motion auto
+       * chooses that on a stage after its first ~20 frames, but a setting
+       * that blurs the tracks' velocities could keep a row per-track */
+      if (si->is_stage) {
+        targv[na++] = "--motion";
+        targv[na++] = "stage";
+      }
       for (int a = 0; sp->args[a]; a++) targv[na++] = (char *)sp->args[a];
       targv[na] = NULL;
       int rc = cli_run_child(targv, 0, logp, op.timeout_s, &p->wall_s, &p->peak_rss_mb, &p->cpu_s);

@@ -96,6 +96,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
   if (!c->auto_decided) {
     if (c->n_height < min_peaks) return 0;
     c->auto_decided = 1;
+    c->auto_peaks = c->n_height;
     const double h = track_peak_height_median(c);
     c->auto_ratio = h / o->peaks.absolute;
     c->auto_speed = track_detection_speed_median(c);
@@ -153,19 +154,19 @@ static void say_again(const track_ctx *c, const track_again *g)
     fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
                     "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
-            c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->n_height);
+            c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->auto_peaks);
   if (g->integral) {
     char dt[64] = "";
     if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
     fprintf(stderr, "eventlfm track: the tracks crawl (median %.2f um/ms over the first %" PRId64
                     " peaks): cells, whose ON events lead them; starting again with --repr integral%s "
                     "(--repr exp: keep the time surface; README, docs/tracker.md \"Integral frames\")\n",
-            c->auto_speed, c->n_height, dt);
+            c->auto_speed, c->auto_peaks, dt);
   } else if (g->dt_us > 0)
     fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
                     " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
                     ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
-            c->auto_speed, c->n_height, c->auto_speed * 1e-3 * (double)o->recon.framer.dt_us, g->dt_us,
+            c->auto_speed, c->auto_peaks, c->auto_speed * 1e-3 * (double)o->recon.framer.dt_us, g->dt_us,
             o->recon.framer.dt_us);
 }
 
