@@ -135,7 +135,7 @@ typedef struct track_again {
   int64_t dt_us;   /* -1: as given */
   int integral;    /* 1: --repr integral */
   int stage;       /* 1: --motion stage (and nothing else) */
-  double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms;
+  double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
 } track_again;
 
 static void say_again(const track_ctx *c, const track_again *g)
@@ -145,11 +145,11 @@ static void say_again(const track_ctx *c, const track_again *g)
   fputc('\n', stderr);
   if (g->stage)
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
-                    "median %.1f %% of that from each frame's median, over the first %" PRId64
+                    "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
                     " frames): a stage; starting "
                     "again with --motion stage (--motion per-track: a model for each track; "
                     "README, docs/tracker.md \"A stage found by its tracks\")\n",
-            c->rigid_speed, 100 * c->rigid_dev, c->n_frames);
+            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames);
   if (g->blur_px > 0)
     fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
@@ -198,7 +198,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 
   track_ctx c;
   memset(&c, 0, sizeof c);
-  c.rigid_dev = c.rigid_speed = NAN;
+  c.rigid_dev = c.rigid_speed = c.rigid_abs = NAN;
   c.o = &o;
   c.calib = &calib;
   elfm_frame_times_init(&c.frame_times);
@@ -282,6 +282,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->speed_um_per_ms = c.auto_decided ? c.auto_speed : NAN;
     again->rigid_dev = c.rigid_dev;
     again->rigid_speed_um_per_ms = c.rigid_speed;
+    again->rigid_abs_um_per_ms = c.rigid_abs;
     say_again(&c, again);
     rc = TRACK_RUN_AGAIN;
     goto done;
@@ -431,6 +432,7 @@ int cmd_track(int argc, char **argv)
     o.auto_speed = again.speed_um_per_ms;
     o.auto_rigid_dev = again.rigid_dev;
     o.auto_rigid_speed = again.rigid_speed_um_per_ms;
+    o.auto_rigid_abs = again.rigid_abs_um_per_ms;
     rc = track_run(&o, &again, &t0_s);
   }
   free(argv2);

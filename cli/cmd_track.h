@@ -87,7 +87,8 @@ typedef struct track_opts {
   double auto_ratio;    /* what the first run judged: median peak height over the
                            threshold, and the tracks' median speed, um/ms */
   double auto_speed;
-  double auto_rigid_dev, auto_rigid_speed; /* what the first run judged of the motion */
+  double auto_rigid_dev, auto_rigid_speed, auto_rigid_abs; /* what the first run judged of
+                                                              the motion */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -117,23 +118,27 @@ typedef struct track_opts {
  * points or more and whose long velocity fit (the linker's, over its last
  * 20 points) spans TRACK_RIGID_MIN_SPAN_MS or more, if there are
  * TRACK_RIGID_MIN_TRACKS of them, each give that velocity's distance from
- * the frame's median velocity over that median's length (in bins of
- * TRACK_RIGID_BIN). Once
- * TRACK_RIGID_MIN_SAMPLES are in, the sample moves as one (a stage) when
- * their median is below TRACK_RIGID_MAX_DEV and the frames' median speed
- * is TRACK_RIGID_MIN_SPEED_UM_PER_MS or more; a run that has not gathered
- * that many by frame TRACK_RIGID_MAX_FRAMES (few objects, or objects that
- * come and go) is not judged. 15 % lies between the farthest stage seen
- * (0.5 mm/s: 8 %; 0.2-2.3 % at 1-5 mm/s) and the nearest worm, which
- * crawls as one body (30 %); flows 100 % and more (docs/tracker.md "A
- * stage found by its tracks"). */
+ * the frame's median velocity, in um/ms (bins of
+ * TRACK_RIGID_ABS_BIN_UM_PER_MS) and over that median's length (bins of
+ * TRACK_RIGID_BIN). Once TRACK_RIGID_MIN_SAMPLES are in, the sample moves
+ * as one (a stage) when the frames' median speed is
+ * TRACK_RIGID_MIN_SPEED_UM_PER_MS or more and the median distance is
+ * below TRACK_RIGID_MAX_DEV of it or below TRACK_RIGID_MAX_ABS_UM_PER_MS
+ * (a slow stage's velocities differ by their noise, ~0.02 um/ms); a run
+ * that has not gathered that many by frame TRACK_RIGID_MAX_FRAMES (few
+ * objects, or objects that come and go) is not judged. Stages: 0.3-8 % or
+ * 0.010-0.052 um/ms (0.017-0.024 at 0.15-0.19 um/ms); the nearest worm,
+ * which crawls as one body, 30 % and 0.084 um/ms; flows 100 % and more
+ * (docs/tracker.md "A stage found by its tracks"). */
 #define TRACK_RIGID_MIN_POINTS 8
 #define TRACK_RIGID_MIN_SPAN_MS 15.0
 #define TRACK_RIGID_MIN_TRACKS 3
 #define TRACK_RIGID_MIN_SAMPLES 64
 #define TRACK_RIGID_MAX_DEV 0.15
-#define TRACK_RIGID_MIN_SPEED_UM_PER_MS 0.2
+#define TRACK_RIGID_MIN_SPEED_UM_PER_MS 0.1
 #define TRACK_RIGID_MAX_FRAMES 200
+#define TRACK_RIGID_MAX_ABS_UM_PER_MS 0.045
+#define TRACK_RIGID_ABS_BIN_UM_PER_MS 0.001
 #define TRACK_RIGID_BIN 0.005
 #define TRACK_RIGID_BINS 400
 #define TRACK_SPEED_BIN_UM_PER_MS 0.02
@@ -335,12 +340,14 @@ typedef struct track_ctx {
    * until the judgement */
   double *rigid_v;
   int64_t rigid_hist[TRACK_RIGID_BINS];
+  int64_t rigid_abs_hist[TRACK_RIGID_BINS]; /* the distances themselves, bins of
+                                               TRACK_RIGID_ABS_BIN_UM_PER_MS */
   int64_t n_rigid;
   int64_t rigid_speed_hist[TRACK_SPEED_BINS];
   int64_t n_rigid_frames;
   int rigid_decided;    /* judged (or given up: rigid_dev NaN) */
   int motion_restart;   /* ... moving as one: start again with --motion stage */
-  double rigid_dev, rigid_speed; /* the medians judged (NaN: not judged) */
+  double rigid_dev, rigid_speed, rigid_abs; /* the medians judged (NaN: not judged) */
   int auto_stopped;     /* the run stopped to start again (cmd_track's on_volume) */
   int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
   int blur_restart;     /* ... faint: start again with --blur-px 1 */

@@ -181,6 +181,8 @@ void track_rigid_add_frame(track_ctx *c, double *v, int n)
                           (w[2] - m[2]) * (w[2] - m[2]));
     const double b = sm > 0 ? floor(d / sm / TRACK_RIGID_BIN) : TRACK_RIGID_BINS;
     c->rigid_hist[b < TRACK_RIGID_BINS - 1 ? (int)b : TRACK_RIGID_BINS - 1]++;
+    const double ba = floor(d / TRACK_RIGID_ABS_BIN_UM_PER_MS);
+    c->rigid_abs_hist[ba < TRACK_RIGID_BINS - 1 ? (int)ba : TRACK_RIGID_BINS - 1]++;
     c->n_rigid++;
   }
   const double b = floor(sm / TRACK_SPEED_BIN_UM_PER_MS);
@@ -200,6 +202,9 @@ int track_rigid_judge(track_ctx *c, int at_end)
   c->rigid_dev = (median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
   c->rigid_speed = (median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
                    TRACK_SPEED_BIN_UM_PER_MS;
-  c->motion_restart = c->rigid_dev < TRACK_RIGID_MAX_DEV && c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
+  c->rigid_abs = (median_bin(c->rigid_abs_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) *
+                 TRACK_RIGID_ABS_BIN_UM_PER_MS;
+  c->motion_restart = (c->rigid_dev < TRACK_RIGID_MAX_DEV || c->rigid_abs < TRACK_RIGID_MAX_ABS_UM_PER_MS) &&
+                      c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
   return c->motion_restart;
 }

@@ -231,6 +231,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
    * not judged; track_rigid_judge) */
   add_num(par, "auto_rigid_dev", o->auto_chose ? o->auto_rigid_dev : c->rigid_dev);
   add_num(par, "auto_rigid_speed_um_per_ms", o->auto_chose ? o->auto_rigid_speed : c->rigid_speed);
+  add_num(par, "auto_rigid_abs_um_per_ms", o->auto_chose ? o->auto_rigid_abs : c->rigid_abs);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms",
           o->auto_chose ? o->auto_speed : c->auto_decided ? c->auto_speed : NAN);
