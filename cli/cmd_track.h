@@ -79,8 +79,8 @@ typedef struct track_opts {
                            again with --repr integral (and 2 ms windows when --dt-us
                            is not given either); 0 where it does not apply */
   int motion_auto;      /* --motion auto (the default): when the first tracks move as
-                           one (TRACK_RIGID_MAX_DEV), start again with --motion stage;
-                           0 where it does not apply (track_opts_derive) */
+                           one (TRACK_RIGID_*), start again with --motion stage; 0
+                           where it does not apply (track_opts_derive) */
   int auto_chose;       /* 1: this run is the second, with auto's choices */
   int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window,
                            4 representation, 8 motion */

@@ -227,8 +227,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "motion_auto", (was & 8) != 0);
   cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
   /* --motion auto: the median distance of the long tracks' velocities from
-   * their frame's median velocity, over its length, and that speed (NaN:
-   * not judged; track_rigid_judge) */
+   * their frame's median velocity, over its length and in um/ms, and the
+   * frames' median speed (NaN: not judged; track_rigid_judge) */
   add_num(par, "auto_rigid_dev", o->auto_chose ? o->auto_rigid_dev : c->rigid_dev);
   add_num(par, "auto_rigid_speed_um_per_ms", o->auto_chose ? o->auto_rigid_speed : c->rigid_speed);
   add_num(par, "auto_rigid_abs_um_per_ms", o->auto_chose ? o->auto_rigid_abs : c->rigid_abs);
