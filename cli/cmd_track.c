@@ -18,10 +18,13 @@
 #include "cmd_track.h"
 
 /* The faint-peaks note (TRACK_HINT_DIM_FACTOR) when it applies and was not
- * given yet; `so_far`: during the run (on a line of its own). */
+ * given yet; `so_far`: during the run (on a line of its own). Not while
+ * --blur-px auto has yet to judge, or has judged the peaks faint and the
+ * run waits for the stage test to start again (its message says it). */
 static void dim_note(track_ctx *c, int so_far)
 {
   const track_opts *o = c->o;
+  if (o->blur_auto && (!c->auto_decided || c->blur_restart)) return;
   if (c->dim_noted || o->quiet || o->recon.blur_px != 0 || !(o->peaks.absolute > 0) ||
       c->n_height < TRACK_WIDTH_MIN_PEAKS ||
       (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN))
