@@ -387,6 +387,15 @@ elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err);
 /* ... at the end: decide on the tracks still waiting for a consensus and
  * write the kept ones. */
 elfm_status track_stage_flush(track_ctx *c, elfm_error *err);
+/* The bin of a histogram's median (n > 0 counts in hist[0 .. bins);
+ * cmd_track_volume.c). */
+int track_hist_median_bin(const int64_t *hist, int bins, int64_t n);
+/* Count one in bin b (a value over its bin width, floored, >= 0) of
+ * hist[0 .. bins): beyond the last bin (or NaN) in the last. */
+static inline void track_hist_add(int64_t *hist, int bins, double b)
+{
+  hist[b < bins - 1 ? (int)b : bins - 1]++;
+}
 /* --motion auto: add one frame's velocities v[0 .. 3n) of long tracks
  * (TRACK_RIGID_MIN_POINTS; v is c->rigid_v) to the test for rigid motion
  * (cmd_track_stage.c). */

@@ -154,15 +154,6 @@ static int cmp_double(const void *a, const void *b)
   return (x > y) - (x < y);
 }
 
-/* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
-static int median_bin(const int64_t *hist, int bins, int64_t n)
-{
-  int64_t half = (n + 1) / 2, acc = 0;
-  int b = 0;
-  while (b < bins - 1 && (acc += hist[b]) < half) b++;
-  return b;
-}
-
 void track_rigid_add_frame(track_ctx *c, double *v, int n)
 {
   if (c->rigid_decided || n < TRACK_RIGID_MIN_TRACKS) return;
@@ -180,13 +171,13 @@ void track_rigid_add_frame(track_ctx *c, double *v, int n)
     const double d = sqrt((w[0] - m[0]) * (w[0] - m[0]) + (w[1] - m[1]) * (w[1] - m[1]) +
                           (w[2] - m[2]) * (w[2] - m[2]));
     const double b = sm > 0 ? floor(d / sm / TRACK_RIGID_BIN) : TRACK_RIGID_BINS;
-    c->rigid_hist[b < TRACK_RIGID_BINS - 1 ? (int)b : TRACK_RIGID_BINS - 1]++;
+    track_hist_add(c->rigid_hist, TRACK_RIGID_BINS, b);
     const double ba = floor(d / TRACK_RIGID_ABS_BIN_UM_PER_MS);
-    c->rigid_abs_hist[ba < TRACK_RIGID_BINS - 1 ? (int)ba : TRACK_RIGID_BINS - 1]++;
+    track_hist_add(c->rigid_abs_hist, TRACK_RIGID_BINS, ba);
     c->n_rigid++;
   }
   const double b = floor(sm / TRACK_SPEED_BIN_UM_PER_MS);
-  c->rigid_speed_hist[b < TRACK_SPEED_BINS - 1 ? (int)b : TRACK_SPEED_BINS - 1]++;
+  track_hist_add(c->rigid_speed_hist, TRACK_SPEED_BINS, b);
   c->n_rigid_frames++;
 }
 
@@ -199,10 +190,10 @@ int track_rigid_judge(track_ctx *c, int at_end)
     return 0;
   }
   c->rigid_decided = 1;
-  c->rigid_dev = (median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
-  c->rigid_speed = (median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
+  c->rigid_dev = (track_hist_median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
+  c->rigid_speed = (track_hist_median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
                    TRACK_SPEED_BIN_UM_PER_MS;
-  c->rigid_abs = (median_bin(c->rigid_abs_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) *
+  c->rigid_abs = (track_hist_median_bin(c->rigid_abs_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) *
                  TRACK_RIGID_ABS_BIN_UM_PER_MS;
   c->motion_restart = (c->rigid_dev < TRACK_RIGID_MAX_DEV || c->rigid_abs < TRACK_RIGID_MAX_ABS_UM_PER_MS) &&
                       c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;

@@ -97,7 +97,7 @@ void track_height_add(track_ctx *c, const elfm_detection *d)
 {
   if (d->view_fit || !(d->intensity >= 0)) return;
   const double b = floor(d->intensity);
-  c->height_hist[b < TRACK_HEIGHT_BINS - 1 ? (int)b : TRACK_HEIGHT_BINS - 1]++;
+  track_hist_add(c->height_hist, TRACK_HEIGHT_BINS, b);
   c->n_height++;
 }
 
@@ -105,12 +105,12 @@ void track_speed_add(track_ctx *c, double v_um_per_ms)
 {
   if (!(v_um_per_ms >= 0)) return;  /* NaN: a new track */
   const double b = floor(v_um_per_ms / TRACK_SPEED_BIN_UM_PER_MS);
-  c->speed_hist[b < TRACK_SPEED_BINS - 1 ? (int)b : TRACK_SPEED_BINS - 1]++;
+  track_hist_add(c->speed_hist, TRACK_SPEED_BINS, b);
   c->n_speed++;
 }
 
 /* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
-static int hist_median_bin(const int64_t *hist, int bins, int64_t n)
+int track_hist_median_bin(const int64_t *hist, int bins, int64_t n)
 {
   int64_t half = (n + 1) / 2, acc = 0;
   int b = 0;
@@ -121,19 +121,19 @@ static int hist_median_bin(const int64_t *hist, int bins, int64_t n)
 double track_peak_height_median(const track_ctx *c)
 {
   if (c->n_height == 0) return NAN;
-  return hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
+  return track_hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
 }
 
 double track_detection_speed_median(const track_ctx *c)
 {
   if (c->n_speed == 0) return NAN;
-  return (hist_median_bin(c->speed_hist, TRACK_SPEED_BINS, c->n_speed) + 0.5) * TRACK_SPEED_BIN_UM_PER_MS;
+  return (track_hist_median_bin(c->speed_hist, TRACK_SPEED_BINS, c->n_speed) + 0.5) * TRACK_SPEED_BIN_UM_PER_MS;
 }
 
 double track_peak_width_median_um(const track_ctx *c)
 {
   if (c->n_width == 0) return NAN;
-  return hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
+  return track_hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
 }
 
 double track_motion_lead_um(const track_ctx *c)
