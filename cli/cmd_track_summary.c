@@ -12,10 +12,13 @@
 #define N_SPEED_BINS 5
 static const double speed_edges[N_SPEED_BINS] = {0, 0.05, 0.2, 0.5, 1e300};
 
+/* A 3-vector; a component that is not finite (not known: a spread over
+ * one track) is null, as add_num writes a number that is not. */
 static cJSON *vec3(const double v[3])
 {
   cJSON *a = cJSON_CreateArray();
-  for (int k = 0; k < 3; k++) cJSON_AddItemToArray(a, cJSON_CreateNumber(isfinite(v[k]) ? v[k] : 0));
+  for (int k = 0; k < 3; k++)
+    cJSON_AddItemToArray(a, isfinite(v[k]) ? cJSON_CreateNumber(v[k]) : cJSON_CreateNull());
   return a;
 }
 
@@ -280,6 +283,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
       add_num(st, "speed_sd_um_per_ms", sr.speed_sd_um_per_ms);
       add_num(st, "rel_error", sr.rel_error);
       add_num(st, "speed_rel_error", sr.speed_rel_error);
+      cJSON_AddItemToObject(st, "acceleration_um_per_ms2", vec3(sr.accel_um_per_ms2));
+      cJSON_AddItemToObject(st, "acceleration_sd_um_per_ms2", vec3(sr.accel_sd_um_per_ms2));
     }
   }
   if (o->resolution) cJSON_AddItemToObject(j, "resolution", fwhm_summary(&c->fl));

@@ -111,6 +111,47 @@ int main(void)
   CHECK(r.rel_error > 0.05);
   const double sv0[3] = {0, 0, 0};
   CHECK_EQ_INT(elfm_analysis_stage(&s, sv0, &r, &err), ELFM_ERR_INVALID);
+  /* a stage at constant velocity: no acceleration, within the noise */
+  for (int a = 0; a < 3; a++) CHECK(fabs(r.accel_um_per_ms2[a]) < 2e-4);
+  CHECK(isfinite(r.accel_sd_um_per_ms2[0]));
+  elfm_track_store_clear(&s);
+
+  /* An accelerating stage: v_y = 0.1 + 0.003 t um/ms (t in ms), beads in
+   * view over different 60-120 ms stretches of a 400 ms ramp, at absolute
+   * times near 1e12 us. Each track alone spans little of the ramp; pooled
+   * over all rows the slope is the stage's acceleration. */
+  for (int k = 0; k < 6; k++) {
+    elfm_track *t = elfm_track_create(k, &err);
+    const int f0 = 50 * k, nf = 60 + 12 * k;
+    for (int f = f0; f < f0 + nf; f++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = 1000000000000LL + 1000LL * f;
+      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      double noise = ((double)(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2;
+      d.x_um = 7 * k + noise;
+      d.y_um = 0.1 * f + 0.0015 * f * f - noise;
+      d.z_um = 3 * k;
+      elfm_track_append(t, &d, &err);
+    }
+    CHECK_OK(elfm_track_smooth(t, &so, &err), &err);
+    elfm_track_store_add(&s, t, &err);
+  }
+  CHECK_OK(elfm_analysis_stage(&s, NULL, &r, &err), &err);
+  CHECK_MSG(fabs(r.accel_um_per_ms2[1] - 0.003) < 0.003 * 0.02, "acceleration %g, not 0.003",
+            r.accel_um_per_ms2[1]);
+  CHECK(fabs(r.accel_um_per_ms2[0]) < 2e-4 && fabs(r.accel_um_per_ms2[2]) < 2e-4);
+  CHECK(r.accel_sd_um_per_ms2[1] >= 0 && r.accel_sd_um_per_ms2[1] < 0.003);
+  /* one track: no spread across tracks; one row: no slope */
+  elfm_track_info one;
+  elfm_track_info_get(s.tracks[0], &one);
+  CHECK_OK(elfm_analysis_stage_info(&one, 1, NULL, &r, &err), &err);
+  CHECK(isfinite(r.accel_um_per_ms2[1]) && isnan(r.accel_sd_um_per_ms2[1]));
+  one.n_rows = 1;
+  one.s_tt_ms2 = 0;
+  CHECK_OK(elfm_analysis_stage_info(&one, 1, NULL, &r, &err), &err);
+  CHECK(isnan(r.accel_um_per_ms2[1]));
   elfm_track_store_clear(&s);
   return check_report();
 }

@@ -9,11 +9,41 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include <cjson/cJSON.h>
+
 #include "check.h"
 #include "elfm_datasets.h"
 #include "elfm_tracker.h"
 
 static char tmpdir[] = "/tmp/elfm_e2e_XXXXXX";
+
+/* stage.acceleration_um_per_ms2[1] of a summary.json; NaN when absent. */
+static double summary_stage_accel_y(const char *path)
+{
+  FILE *f = fopen(path, "rb");
+  if (!f) return NAN;
+  size_t cap = 1 << 16, n = 0, got;
+  char *buf = malloc(cap);
+  while (buf && (got = fread(buf + n, 1, cap - n - 1, f)) > 0) {
+    n += got;
+    if (n + 1 == cap) {
+      char *b2 = realloc(buf, cap *= 2);
+      if (!b2) { free(buf); buf = NULL; }
+      buf = b2;
+    }
+  }
+  fclose(f);
+  if (!buf) return NAN;
+  buf[n] = 0;
+  cJSON *j = cJSON_Parse(buf);
+  free(buf);
+  const cJSON *st = cJSON_GetObjectItemCaseSensitive(j, "stage");
+  const cJSON *acc = cJSON_GetObjectItemCaseSensitive(st, "acceleration_um_per_ms2");
+  const cJSON *y = cJSON_GetArrayItem(acc, 1);
+  const double a = cJSON_IsNumber(y) ? y->valuedouble : NAN;
+  cJSON_Delete(j);
+  return a;
+}
 
 static int simulate(const char *scene, int duration_ms, const char *dir)
 {
@@ -265,6 +295,12 @@ int main(int argc, char **argv)
                 100 * fabs(a - 0.0025) / 0.0025);
         CHECK_MSG(fabs(a - 0.0025) / 0.0025 <= 0.05, "acceleration %.6f", a);
         elfm_table_free(t);
+        /* summary.json says the same (its stage section fits the rows
+         * before they are rounded for tracks.csv) */
+        snprintf(p, sizeof p, "%s/out/summary.json", dir);
+        const double as = summary_stage_accel_y(p);
+        fprintf(stderr, "  stage_accel: summary.json's acceleration %.6f um/ms^2\n", as);
+        CHECK_MSG(fabs(as - a) <= 0.01 * fabs(a), "summary's acceleration %.6f against %.6f", as, a);
       }
     } else CHECK(0);
 

@@ -451,6 +451,41 @@ int main(void)
     CHECK_NEAR(a.mean_vel_um_per_ms[0], (300 * 1 + 100 * 3 + 100 * 1) / 500.0, 1e-12);
     CHECK_NEAR(a.mean_lateral_speed_um_per_ms, 1.4, 1e-12);
   }
+  {
+    /* the velocity-in-time sums: a smoothed track's info, folded from
+     * pieces written in turn (elfm_link_take_piece), equals the whole's */
+    elfm_track *w = elfm_track_create(9, &err);
+    for (int f = 0; f < 90; f++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = 1000000000000LL + 1000LL * f;
+      d.x_um = 0.5 * f + 0.01 * f * f;
+      d.y_um = 2 - 0.2 * f;
+      d.z_um = 0.004 * f * f;
+      CHECK_OK(elfm_track_append(w, &d, &err), &err);
+    }
+    elfm_smooth_options so;
+    elfm_smooth_options_default(&so);
+    CHECK_OK(elfm_track_smooth(w, &so, &err), &err);
+    elfm_track_info whole, acc, piece;
+    elfm_track_info_get(w, &whole);
+    CHECK(whole.smoothed && whole.s_tt_ms2 > 0);
+    CHECK_NEAR(whole.s_tv_um[0] / whole.s_tt_ms2, 0.02, 0.002); /* x: a = 2 x 0.01 */
+    const int64_t cuts[4] = {0, 20, 55, INT64_MAX};
+    w->partial = 1;
+    for (int k = 0; k < 3; k++) {
+      w->write_from_frame = cuts[k];
+      w->write_to_frame = cuts[k + 1];
+      elfm_track_info_get(w, &piece);
+      if (k == 0) acc = piece;
+      else elfm_track_info_merge(&acc, &piece);
+    }
+    CHECK_NEAR(acc.mean_t_us, whole.mean_t_us, 1e-3);
+    CHECK_NEAR(acc.s_tt_ms2, whole.s_tt_ms2, 1e-6 * whole.s_tt_ms2);
+    for (int a = 0; a < 3; a++) CHECK_NEAR(acc.s_tv_um[a], whole.s_tv_um[a], 1e-9 + 1e-6 * fabs(whole.s_tv_um[a]));
+    elfm_track_free(w);
+  }
   test_track_xml(dir);
   elfm_track_free(NULL);
   elfm_track_store_clear(&s);

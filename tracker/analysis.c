@@ -16,6 +16,47 @@ elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *sv,
   return st;
 }
 
+/* The acceleration (elfm_stage_result): the rows' sums about each track's
+ * means, moved to the sums about the means of all rows (parallel axes),
+ * give the pooled slope; each long track's own slope its spread. */
+static void stage_accel(const elfm_track_info *ti, size_t nt, elfm_stage_result *r)
+{
+  double n = 0, t_ref = NAN, mt = 0, mv[3] = {0, 0, 0};
+  for (size_t i = 0; i < nt; i++) {
+    if (!ti[i].smoothed || !ti[i].n_rows) continue;
+    if (isnan(t_ref)) t_ref = ti[i].mean_t_us;
+    const double w = (double)ti[i].n_rows;
+    n += w;
+    mt += w * 1e-3 * (ti[i].mean_t_us - t_ref);
+    for (int a = 0; a < 3; a++) mv[a] += w * ti[i].mean_vel_um_per_ms[a];
+  }
+  double stt = 0, stv[3] = {0, 0, 0}, s1[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
+  size_t n_long = 0;
+  if (n > 0) {
+    mt /= n;
+    for (int a = 0; a < 3; a++) mv[a] /= n;
+  }
+  for (size_t i = 0; i < nt; i++) {
+    if (!ti[i].smoothed || !ti[i].n_rows) continue;
+    const double w = (double)ti[i].n_rows, dt = 1e-3 * (ti[i].mean_t_us - t_ref) - mt;
+    stt += ti[i].s_tt_ms2 + w * dt * dt;
+    for (int a = 0; a < 3; a++) stv[a] += ti[i].s_tv_um[a] + w * dt * (ti[i].mean_vel_um_per_ms[a] - mv[a]);
+    if (ti[i].n_rows < ELFM_STAGE_ACCEL_MIN_ROWS || !(ti[i].s_tt_ms2 > 0)) continue;
+    n_long++;
+    for (int a = 0; a < 3; a++) {
+      const double g = ti[i].s_tv_um[a] / ti[i].s_tt_ms2;
+      s1[a] += g;
+      s2[a] += g * g;
+    }
+  }
+  for (int a = 0; a < 3; a++) {
+    r->accel_um_per_ms2[a] = stt > 0 ? stv[a] / stt : NAN;
+    const double m = n_long ? s1[a] / (double)n_long : 0;
+    r->accel_sd_um_per_ms2[a] =
+        n_long > 1 ? sqrt(fmax(0, (s2[a] - (double)n_long * m * m) / (double)(n_long - 1))) : NAN;
+  }
+}
+
 elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const double *sv,
                                      elfm_stage_result *r, elfm_error *err)
 {
@@ -47,6 +88,7 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
                             r->v_um_per_ms[2] * r->v_um_per_ms[2]);
   double msp = sp / (double)n;
   r->speed_sd_um_per_ms = n > 1 ? sqrt(fmax(0, (sp2 - n * msp * msp) / (double)(n - 1))) : NAN;
+  stage_accel(ti, nt, r);
   r->rel_error = r->speed_rel_error = NAN;
   if (sv) {
     double ns = sqrt(sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]);

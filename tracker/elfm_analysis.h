@@ -18,12 +18,19 @@ extern "C" {
 /* Stage: each smoothed track's mean velocity, weighted by its number of real
  * points, averaged over tracks. spread = standard deviation across tracks
  * (unweighted). With a given stage velocity, rel_error = |v_mean - v_stage| /
- * |v_stage| and speed_rel_error = (|v_mean| - |v_stage|) / |v_stage|. */
+ * |v_stage| and speed_rel_error = (|v_mean| - |v_stage|) / |v_stage|.
+ * Acceleration: the slope in time of the smoothed velocity, fitted over
+ * all tracks' rows together (a stage accelerates every bead alike, and a
+ * track's rows alone span little of the ramp); its spread, the standard
+ * deviation of the tracks' own slopes, over tracks of at least
+ * ELFM_STAGE_ACCEL_MIN_ROWS rows (NaN with fewer than 2). */
+#define ELFM_STAGE_ACCEL_MIN_ROWS 20
 typedef struct elfm_stage_result {
   size_t n_tracks;
   double v_um_per_ms[3], v_sd_um_per_ms[3];
   double speed_um_per_ms, speed_sd_um_per_ms;
   double rel_error, speed_rel_error;   /* NaN without a stage velocity */
+  double accel_um_per_ms2[3], accel_sd_um_per_ms2[3]; /* NaN: all rows at one time */
 } elfm_stage_result;
 
 /* Tracks that are not smoothed are skipped; no smoothed track is

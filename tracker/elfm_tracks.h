@@ -126,6 +126,11 @@ typedef struct elfm_track_info {
   double mean_vel_um_per_ms[3];        /* elfm_track_mean_velocity */
   double mean_lateral_speed_um_per_ms; /* mean over the span of |(vx, vy)|; NAN when
                                           not smoothed or not finite */
+  /* Over the same rows, for the velocity's slope in time (the stage's
+   * acceleration, elfm_analysis_stage_info): their mean time, the sum of
+   * (t - mean_t)^2 in ms^2 and of (t - mean_t)(v - mean_vel) in um; 0 when
+   * not smoothed. Pieces fold together exactly (elfm_track_info_merge). */
+  double mean_t_us, s_tt_ms2, s_tv_um[3];
 } elfm_track_info;
 
 /* t's info (of a piece: of its own frames only). */

@@ -121,6 +121,20 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
   o->smoothed = 1;
   for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] /= (double)o->n_rows;
   if (isfinite(lat)) o->mean_lateral_speed_um_per_ms = lat / (double)o->n_rows;
+  if (!t->span_t_us) return;
+  /* times from the first row's, so that 1e12 us absolute times lose nothing */
+  const int64_t t0 = t->span_t_us[0];
+  double st = 0;
+  for (size_t k = 0; k < t->n_span; k++)
+    if (elfm_track_writes_frame(t, t->pts[0].frame + (int64_t)k)) st += 1e-3 * (double)(t->span_t_us[k] - t0);
+  const double mt_ms = st / (double)o->n_rows;
+  o->mean_t_us = (double)t0 + 1e3 * mt_ms;
+  for (size_t k = 0; k < t->n_span; k++) {
+    if (!elfm_track_writes_frame(t, t->pts[0].frame + (int64_t)k)) continue;
+    const double dt = 1e-3 * (double)(t->span_t_us[k] - t0) - mt_ms;
+    o->s_tt_ms2 += dt * dt;
+    for (int a = 0; a < 3; a++) o->s_tv_um[a] += dt * (t->vel_um_per_ms[3 * k + a] - o->mean_vel_um_per_ms[a]);
+  }
 }
 
 void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
@@ -134,6 +148,18 @@ void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
     acc->model_n = p->model_n;
   }
   const double r0 = (double)acc->n_rows, r1 = (double)p->n_rows;
+  if (r0 > 0 && r1 > 0) {
+    /* the two groups' sums about the joint mean (before the means move) */
+    const double dt_ms = 1e-3 * (p->mean_t_us - acc->mean_t_us), f = r0 * r1 / (r0 + r1);
+    acc->s_tt_ms2 += p->s_tt_ms2 + f * dt_ms * dt_ms;
+    for (int a = 0; a < 3; a++)
+      acc->s_tv_um[a] += p->s_tv_um[a] + f * dt_ms * (p->mean_vel_um_per_ms[a] - acc->mean_vel_um_per_ms[a]);
+    acc->mean_t_us += r1 / (r0 + r1) * (p->mean_t_us - acc->mean_t_us);
+  } else if (r1 > 0) {
+    acc->mean_t_us = p->mean_t_us;
+    acc->s_tt_ms2 = p->s_tt_ms2;
+    for (int a = 0; a < 3; a++) acc->s_tv_um[a] = p->s_tv_um[a];
+  }
   if (r0 + r1 > 0) {
     for (int a = 0; a < 3; a++)
       acc->mean_vel_um_per_ms[a] =
