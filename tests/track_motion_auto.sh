@@ -21,6 +21,8 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
+# a value that is none of the four: exit 2, the option named
+expect_usage_errors "--motion rigid" "--motion per_track" "--motion Auto"
 # motion_is FILE VALUE: summary.json's "motion" is VALUE; flag_is FILE KEY
 # true|false: its boolean KEY is that
 motion_is() {
