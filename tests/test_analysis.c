@@ -5,6 +5,19 @@
 #include "check.h"
 #include "elfm_tracker.h"
 
+/* A detection of frame f at t0_us + 1 ms x f, its x_um a uniform noise
+ * in +-0.1 um drawn from *seed (the caller places it). */
+static elfm_detection stage_point(int f, int64_t t0_us, uint64_t *seed)
+{
+  elfm_detection d;
+  memset(&d, 0, sizeof d);
+  d.frame = f;
+  d.t_us = t0_us + 1000LL * f;
+  *seed = *seed * 6364136223846793005ULL + 1442695040888963407ULL;
+  d.x_um = ((double)(*seed >> 11) / 9007199254740992.0 - 0.5) * 0.2;
+  return d;
+}
+
 static void add_blob(elfm_volume *v, double x, double y, double z, double amp, double sxy, double sz)
 {
   for (int k = 0; k < v->nz; k++)
@@ -84,12 +97,8 @@ int main(void)
   for (int k = 0; k < 5; k++) {
     elfm_track *t = elfm_track_create(k, &err);
     for (int f = 0; f < 200; f++) {
-      elfm_detection d;
-      memset(&d, 0, sizeof d);
-      d.frame = f;
-      d.t_us = 5000000000LL + 1000LL * f;
-      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-      double noise = ((double)(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2;
+      elfm_detection d = stage_point(f, 5000000000LL, &seed);
+      const double noise = d.x_um;
       d.x_um = 10 * k + 0.2 * f + noise;
       d.y_um = -0.1 * f;
       d.z_um = 0.05 * f - noise;
@@ -124,12 +133,8 @@ int main(void)
     elfm_track *t = elfm_track_create(k, &err);
     const int f0 = 50 * k, nf = 60 + 12 * k;
     for (int f = f0; f < f0 + nf; f++) {
-      elfm_detection d;
-      memset(&d, 0, sizeof d);
-      d.frame = f;
-      d.t_us = 1000000000000LL + 1000LL * f;
-      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
-      double noise = ((double)(seed >> 11) / 9007199254740992.0 - 0.5) * 0.2;
+      elfm_detection d = stage_point(f, 1000000000000LL, &seed);
+      const double noise = d.x_um;
       d.x_um = 7 * k + noise;
       d.y_um = 0.1 * f + 0.0015 * f * f - noise;
       d.z_um = 3 * k;
