@@ -148,22 +148,15 @@ elfm_status track_stage_filter(track_ctx *c, elfm_track *t, elfm_error *err)
 
 /* --motion auto's test for rigid motion (cmd_track.h TRACK_RIGID_*). */
 
-static int cmp_double(const void *a, const void *b)
-{
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
 void track_rigid_add_frame(track_ctx *c, double *v, int n)
 {
   if (c->rigid_decided || n < TRACK_RIGID_MIN_TRACKS) return;
   /* The median velocity, component by component: a few tracks on ghosts
    * or swapped beads do not move it (a mean would follow them). */
-  double m[3], *col = c->rigid_v + 3 * (size_t)c->o->max_det; /* its scratch column */
+  double m[3], spread, *col = c->rigid_v + 3 * (size_t)c->o->max_det; /* its scratch column */
   for (int a = 0; a < 3; a++) {
     for (int i = 0; i < n; i++) col[i] = v[3 * i + a];
-    qsort(col, (size_t)n, sizeof *col, cmp_double);
-    m[a] = n % 2 ? col[n / 2] : 0.5 * (col[n / 2 - 1] + col[n / 2]);
+    elfm_analysis_median(col, (size_t)n, &m[a], &spread);
   }
   const double sm = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
   for (int i = 0; i < n; i++) {
