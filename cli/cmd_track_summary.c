@@ -74,23 +74,14 @@ static cJSON *fwhm_summary(const fwhm_list *l)
   return r;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-  double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
 double track_median_speed_um_per_ms(const track_ctx *c)
 {
   double *v = c->n_info ? malloc(c->n_info * sizeof *v) : NULL;
   size_t m = 0;
   for (size_t i = 0; v && i < c->n_info; i++)
     if (isfinite(c->info[i].mean_lateral_speed_um_per_ms)) v[m++] = c->info[i].mean_lateral_speed_um_per_ms;
-  double r = NAN;
-  if (m > 0) {
-    qsort(v, m, sizeof *v, cmp_double);
-    r = m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
-  }
+  double r = NAN, spread;
+  if (m > 0) elfm_analysis_median(v, m, &r, &spread);
   free(v);
   return r;
 }

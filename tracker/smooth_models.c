@@ -1,6 +1,7 @@
 /* smooth_models.c — smoothing a whole track over its span (the C side of
  * elfm_smooth.h: frame grid, gap times, storing the result in the track). */
 #include "elfm_smooth.h"
+#include "elfm_analysis.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -53,12 +54,6 @@ void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[
   b[1] = (sb[1] - b[2] * sg[1]) / n;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
 /* The median fit_sd_px over t's points that have one (> 0); 0 when fewer
  * than 3 have. scratch: n doubles. */
 static double fit_sd_median(const elfm_track *t, double *scratch)
@@ -67,8 +62,9 @@ static double fit_sd_median(const elfm_track *t, double *scratch)
   for (size_t i = 0; i < t->n; i++)
     if (t->pts[i].fit_sd_px > 0 && isfinite(t->pts[i].fit_sd_px)) scratch[m++] = t->pts[i].fit_sd_px;
   if (m < 3) return 0;
-  qsort(scratch, m, sizeof *scratch, cmp_double);
-  return m % 2 ? scratch[m / 2] : 0.5 * (scratch[m / 2 - 1] + scratch[m / 2]);
+  double med, spread;
+  elfm_analysis_median(scratch, m, &med, &spread);
+  return med;
 }
 
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err)
