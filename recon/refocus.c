@@ -366,6 +366,15 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
   ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
+  ws->vrow_off = malloc((size_t)p->nv * sizeof *ws->vrow_off);
+  if (ws->vrow_off) {
+    size_t nvr = 0;
+    for (int v = 0; v < p->nv; v++) {
+      ws->vrow_off[v] = nvr;
+      nvr += (size_t)(p->box[v].y1 > p->box[v].y0 ? p->box[v].y1 - p->box[v].y0 : 0) + 1;
+    }
+    ws->vrow = calloc(nvr, sizeof *ws->vrow);
+  }
   int sup_ok = 1;
   if (p->need) {
     /* support bit maps (refocus_agree.c), packed: 25 views x 145 rows x
@@ -402,7 +411,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
     }
   }
   if (!ws->plane_cnt || !ws->row_start || !ws->row_bits || !ws->sorted || !ws->runs || !ws->vals ||
-      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !sup_ok) {
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !ws->vrow_off || !ws->vrow ||
+      !sup_ok) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   }
@@ -433,6 +443,8 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->row_dirty);
   free(ws->rows);
   free(ws->rows_old);
+  free(ws->vrow);
+  free(ws->vrow_off);
   free(ws);
 }
 

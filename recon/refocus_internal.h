@@ -87,6 +87,11 @@ struct elfm_refocus_workspace {
   size_t cap_sorted;
   elfm_refocus_run *runs;
   size_t n_runs, cap_runs;
+  /* view v's runs of box row y are runs[vrow[vrow_off[v] + y - y0] ..
+   * vrow[vrow_off[v] + y - y0 + 1]) (sparse_runs makes them view by view,
+   * row by row), so a plane takes only the rows that reach it */
+  uint32_t *vrow;
+  size_t *vrow_off;           /* [nv] */
   float *vals;
   size_t n_vals, cap_vals;
   /* agreement on (refocus_agree.c): per view, a bit map over its crop box,
