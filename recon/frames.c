@@ -1,8 +1,9 @@
 /* frames.c — the framer: event chunks -> windowed frames (see elfm_frames.h).
  *
  * State: a FIFO of the events of the windows still open (time, pixel,
- * polarity), a per-pixel "listed in this frame" stamp and latest-event time
- * and polarity. A window is closed once an event at or after its end has
+ * polarity); COUNT also a per-pixel "listed in this frame" stamp (EXP and
+ * LIN keep each pixel's latest event in the frame being built). A window
+ * is closed once an event at or after its end has
  * been pushed (times never decrease), or at finish(). Building a frame walks
  * the FIFO entries of its window once, then evaluates each listed pixel once
  * (a table of the decay over integer ages replaces exp() per pixel).
@@ -44,9 +45,7 @@ struct elfm_framer {
   uint32_t *q_pix;
   size_t q_head, q_n, q_cap; /* q_cap a power of two */
   /* per pixel */
-  uint32_t *stamp;           /* == cur_stamp: listed in the frame being built */
-  int64_t *last_t;           /* latest event time in the frame being built */
-  uint8_t *last_p;
+  uint32_t *stamp;           /* == cur_stamp: listed in the COUNT frame being built */
   uint32_t cur_stamp;
   float *decay;              /* decay[age_us] for age 0..dt, or NULL */
   /* INTEGRAL */
@@ -223,8 +222,6 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   f->q_t = malloc(f->q_cap * sizeof *f->q_t);
   f->q_pix = malloc(f->q_cap * sizeof *f->q_pix);
   f->stamp = calloc(n, sizeof *f->stamp);
-  f->last_t = malloc(n * sizeof *f->last_t);
-  f->last_p = malloc(n);
   int table = (o->repr == ELFM_REPR_EXP || o->repr == ELFM_REPR_LIN) &&
               o->dt_us <= ELFM_DECAY_TABLE_MAX_US;
   if (table) f->decay = malloc((size_t)(o->dt_us + 1) * sizeof *f->decay);
@@ -233,7 +230,7 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
     f->px = calloc(n, sizeof *f->px);
     f->act = malloc(n * sizeof *f->act);
   }
-  if (!f->q_t || !f->q_pix || !f->stamp || !f->last_t || !f->last_p || (table && !f->decay) ||
+  if (!f->q_t || !f->q_pix || !f->stamp || (table && !f->decay) ||
       (integral && (!f->px || !f->act))) {
     elfm_framer_free(f);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (framer %d x %d)",
@@ -261,8 +258,6 @@ void elfm_framer_free(elfm_framer *f)
   free(f->q_t);
   free(f->q_pix);
   free(f->stamp);
-  free(f->last_t);
-  free(f->last_p);
   free(f->decay);
   free(f->px);
   free(f->act);
@@ -543,28 +538,46 @@ static size_t framer_window(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *
   const int count = f->opt.repr == ELFM_REPR_COUNT;
   const int sign = f->opt.polarity == ELFM_POL_SIGNED;
   size_t nev = 0;
+  if (count) {
+    for (size_t i = 0; i < f->q_n; i++) {
+      size_t k = (f->q_head + i) & (f->q_cap - 1);
+      int64_t t = f->q_t[k];
+      if (t >= t1) break;
+      if (t < t0) continue; /* only when stride < dt left older events queued */
+      uint32_t pix = f->q_pix[k] & 0x7fffffffu;
+      uint8_t p = (uint8_t)(f->q_pix[k] >> 31);
+      nev++;
+      if (f->stamp[pix] != stamp) {
+        f->stamp[pix] = stamp;
+        out->idx[out->nnz++] = pix;
+      }
+      out->data[pix] += sign && !p ? -1.0f : 1.0f;
+    }
+    return nev;
+  }
+  /* EXP, LIN: each pixel's latest event, kept in the frame itself as its
+   * age t1 - t (>= 1 us, exact in a float up to 2^24 us: dt is at most
+   * 10^7) signed by its polarity, so a pixel is new while its value is 0
+   * (the frame is 0 outside its list). One array read per event where a
+   * stamp, a time and a polarity per pixel were three (12.9 MB on an EVK4;
+   * docs/recon.md "The latest event kept in the frame"). */
+  float *d = out->data;
   for (size_t i = 0; i < f->q_n; i++) {
     size_t k = (f->q_head + i) & (f->q_cap - 1);
     int64_t t = f->q_t[k];
     if (t >= t1) break;
     if (t < t0) continue; /* only when stride < dt left older events queued */
     uint32_t pix = f->q_pix[k] & 0x7fffffffu;
-    uint8_t p = (uint8_t)(f->q_pix[k] >> 31);
+    const float age = (float)(t1 - t);
     nev++;
-    if (f->stamp[pix] != stamp) {
-      f->stamp[pix] = stamp;
-      out->idx[out->nnz++] = pix;
-    }
-    if (count) out->data[pix] += sign && !p ? -1.0f : 1.0f;
-    f->last_t[pix] = t;
-    f->last_p[pix] = p;
+    if (d[pix] == 0.0f) out->idx[out->nnz++] = pix;
+    d[pix] = (f->q_pix[k] >> 31) ? age : -age;
   }
-  if (!count) {
-    for (size_t i = 0; i < out->nnz; i++) {
-      uint32_t pix = out->idx[i];
-      float v = framer_decay(f, t1 - f->last_t[pix]);
-      out->data[pix] = sign && !f->last_p[pix] ? -v : v;
-    }
+  for (size_t i = 0; i < out->nnz; i++) {
+    uint32_t pix = out->idx[i];
+    const float e = d[pix];
+    float v = framer_decay(f, (int64_t)fabsf(e));
+    d[pix] = sign && e < 0 ? -v : v;
   }
   return nev;
 }

@@ -131,6 +131,60 @@ static void test_lin_count_signed(void)
   elfm_frame_free(f);
 }
 
+/* Signed time surfaces: a pixel takes its latest event's age and sign,
+ * whatever came before it in the window (the framer keeps that event in
+ * the frame being built as a signed age: frames.c). */
+static void test_exp_lin_signed(void)
+{
+  elfm_error err;
+  elfm_event_chunk *c = elfm_chunk_create(64, &err);
+  elfm_frame *f = elfm_frame_create(SW, SH, &err);
+  add_event(c, 100, 2, 2, 1);
+  add_event(c, 200, 8, 8, 0);
+  add_event(c, 300, 2, 2, 0);  /* (2, 2): ON, then OFF last */
+  add_event(c, 700, 8, 8, 1);  /* (8, 8): OFF, then ON last */
+  add_event(c, 800, 9, 3, 0);  /* (9, 3): OFF only */
+  add_event(c, 900, 9, 3, 0);
+  add_event(c, 1100, 6, 6, 1); /* closes window [100, 1100) */
+  for (int mode = 0; mode < 2; mode++) {
+    elfm_framer_options o;
+    elfm_framer_options_default(&o);
+    o.tau_us = 800;
+    o.polarity = ELFM_POL_SIGNED;
+    o.repr = mode == 0 ? ELFM_REPR_EXP : ELFM_REPR_LIN;
+    elfm_framer *fr = NULL;
+    CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+    CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+    for (int rep = 0; rep < 2; rep++) { /* the second frame is built on the first's */
+      if (rep == 1) elfm_framer_finish(fr);
+      CHECK_EQ_INT(elfm_framer_next(fr, f), 1);
+      if (rep == 1) { /* [1100, 2100): (6, 6) alone, age 1000; the others cleared */
+        CHECK_EQ_INT(f->nnz, 1);
+        CHECK(px(f, 2, 2) == 0.0f && px(f, 8, 8) == 0.0f && px(f, 9, 3) == 0.0f);
+        CHECK_NEAR(px(f, 6, 6), mode == 0 ? 255.0 * exp(-1000.0 / 800.0) : 0.0, 1e-3);
+        CHECK(frame_consistent(f));
+        break;
+      }
+      CHECK_EQ_INT(f->n_events, 6);
+      CHECK_EQ_INT(f->nnz, 3);
+      const double a22 = 800, a88 = 400, a93 = 200; /* ages at the window's end */
+      if (mode == 0) {
+        CHECK_NEAR(px(f, 2, 2), -255.0 * exp(-a22 / 800.0), 1e-3);
+        CHECK_NEAR(px(f, 8, 8), 255.0 * exp(-a88 / 800.0), 1e-3);
+        CHECK_NEAR(px(f, 9, 3), -255.0 * exp(-a93 / 800.0), 1e-3);
+      } else {
+        CHECK_NEAR(px(f, 2, 2), -255.0 * (1.0 - a22 / 800.0), 1e-3);
+        CHECK_NEAR(px(f, 8, 8), 255.0 * (1.0 - a88 / 800.0), 1e-3);
+        CHECK_NEAR(px(f, 9, 3), -255.0 * (1.0 - a93 / 800.0), 1e-3);
+      }
+      CHECK(frame_consistent(f));
+    }
+    elfm_framer_free(fr);
+  }
+  elfm_chunk_free(c);
+  elfm_frame_free(f);
+}
+
 /* Overlapping windows (stride < dt), and splitting the stream into chunks
  * anywhere gives the same frames. */
 static void test_stride_and_chunking(void)
@@ -379,6 +433,7 @@ int main(void)
 {
   test_exp_windows();
   test_lin_count_signed();
+  test_exp_lin_signed();
   test_stride_and_chunking();
   test_trigger_start();
   test_each_trigger();
