@@ -274,6 +274,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
       add_num(st, "speed_sd_um_per_ms", sr.speed_sd_um_per_ms);
       add_num(st, "rel_error", sr.rel_error);
       add_num(st, "speed_rel_error", sr.speed_rel_error);
+      /* weighted by each track's time spread (elfm_analysis.h): the one to
+       * quote on a slow stage, whose short edge tracks are biased */
+      cJSON_AddItemToObject(st, "velocity_pooled_um_per_ms", vec3(sr.v_pooled_um_per_ms));
+      add_num(st, "rel_error_pooled", sr.rel_error_pooled);
       cJSON_AddItemToObject(st, "acceleration_um_per_ms2", vec3(sr.accel_um_per_ms2));
       cJSON_AddItemToObject(st, "acceleration_sd_um_per_ms2", vec3(sr.accel_sd_um_per_ms2));
     }

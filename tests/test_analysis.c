@@ -123,6 +123,36 @@ int main(void)
   /* a stage at constant velocity: no acceleration, within the noise */
   for (int a = 0; a < 3; a++) CHECK(fabs(r.accel_um_per_ms2[a]) < 2e-4);
   CHECK(isfinite(r.accel_sd_um_per_ms2[0]));
+  /* long tracks alike: the pooled velocity is theirs too */
+  CHECK_OK(elfm_analysis_stage(&s, sv, &r, &err), &err);
+  CHECK(r.rel_error_pooled < 0.01);
+  CHECK(fabs(r.v_pooled_um_per_ms[0] - r.v_um_per_ms[0]) < 1e-3);
+
+  /* A slow stage with a short, biased track (a bead crossing the field
+   * stop's edge: 25 points whose image moves 60 % faster than the stage,
+   * as on stage 0.2 mm/s seed 26): by points it pulls the mean by 2.6 %,
+   * by its time spread the pooled velocity hardly moves. */
+  {
+    elfm_track *t = elfm_track_create(5, &err);
+    for (int f = 60; f < 85; f++) {
+      elfm_detection d = stage_point(f, 5000000000LL, &seed);
+      const double noise = d.x_um;
+      d.x_um = 60 + 0.32 * f + noise;
+      d.y_um = -0.16 * f;
+      d.z_um = 0.08 * f - noise;
+      elfm_track_append(t, &d, &err);
+    }
+    CHECK_OK(elfm_track_smooth(t, &so, &err), &err);
+    elfm_track_store_add(&s, t, &err);
+  }
+  CHECK_OK(elfm_analysis_stage(&s, sv, &r, &err), &err);
+  CHECK_EQ_INT(r.n_tracks, 6);
+  CHECK_MSG(r.rel_error > 0.01, "by points %g", r.rel_error);
+  CHECK_MSG(r.rel_error_pooled < 0.003, "pooled %g", r.rel_error_pooled);
+  CHECK(r.v_pooled_um_per_ms[0] < r.v_um_per_ms[0]);
+  /* no given velocity: no errors, the pooled velocity still */
+  CHECK_OK(elfm_analysis_stage(&s, NULL, &r, &err), &err);
+  CHECK(isnan(r.rel_error_pooled) && isfinite(r.v_pooled_um_per_ms[1]));
   elfm_track_store_clear(&s);
 
   /* An accelerating stage: v_y = 0.1 + 0.003 t um/ms (t in ms), beads in
@@ -157,6 +187,7 @@ int main(void)
   one.s_tt_ms2 = 0;
   CHECK_OK(elfm_analysis_stage_info(&one, 1, NULL, &r, &err), &err);
   CHECK(isnan(r.accel_um_per_ms2[1]));
+  CHECK(isnan(r.v_pooled_um_per_ms[1]) && isfinite(r.v_um_per_ms[1])); /* no time spread */
   elfm_track_store_clear(&s);
   return check_report();
 }

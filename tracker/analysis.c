@@ -61,16 +61,20 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
                                      elfm_stage_result *r, elfm_error *err)
 {
   double sw = 0, m[3] = {0, 0, 0}, um[3] = {0, 0, 0}, uss[3] = {0, 0, 0}, sp = 0, sp2 = 0;
+  double swp = 0, mp[3] = {0, 0, 0};
   size_t n = 0;
   for (size_t i = 0; i < nt; i++) {
     if (!ti[i].smoothed) continue;
     const double *v = ti[i].mean_vel_um_per_ms;
     double w = (double)ti[i].n, speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const double wp = ti[i].s_tt_ms2 > 0 && isfinite(ti[i].s_tt_ms2) ? ti[i].s_tt_ms2 : 0;
     for (int a = 0; a < 3; a++) {
       m[a] += w * v[a];
+      mp[a] += wp * v[a];
       um[a] += v[a];
       uss[a] += v[a] * v[a];
     }
+    swp += wp;
     sp += speed;
     sp2 += speed * speed;
     sw += w;
@@ -80,6 +84,7 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
   r->n_tracks = n;
   for (int a = 0; a < 3; a++) {
     r->v_um_per_ms[a] = m[a] / sw;
+    r->v_pooled_um_per_ms[a] = swp > 0 ? mp[a] / swp : NAN;
     double mu = um[a] / (double)n;
     r->v_sd_um_per_ms[a] = n > 1 ? sqrt(fmax(0, (uss[a] - n * mu * mu) / (double)(n - 1))) : NAN;
   }
@@ -89,14 +94,18 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
   double msp = sp / (double)n;
   r->speed_sd_um_per_ms = n > 1 ? sqrt(fmax(0, (sp2 - n * msp * msp) / (double)(n - 1))) : NAN;
   stage_accel(ti, nt, r);
-  r->rel_error = r->speed_rel_error = NAN;
+  r->rel_error = r->speed_rel_error = r->rel_error_pooled = NAN;
   if (sv) {
     double ns = sqrt(sv[0] * sv[0] + sv[1] * sv[1] + sv[2] * sv[2]);
     if (!(ns > 0) || !isfinite(ns))
       return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stage analysis: stage velocity is zero or not finite");
-    double d2 = 0;
-    for (int a = 0; a < 3; a++) d2 += pow(r->v_um_per_ms[a] - sv[a], 2);
+    double d2 = 0, dp2 = 0;
+    for (int a = 0; a < 3; a++) {
+      d2 += pow(r->v_um_per_ms[a] - sv[a], 2);
+      dp2 += pow(r->v_pooled_um_per_ms[a] - sv[a], 2);
+    }
     r->rel_error = sqrt(d2) / ns;
+    r->rel_error_pooled = sqrt(dp2) / ns; /* NaN when the pooled velocity is */
     r->speed_rel_error = (r->speed_um_per_ms - ns) / ns;
   }
   return ELFM_OK;

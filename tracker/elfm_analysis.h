@@ -23,13 +23,21 @@ extern "C" {
  * all tracks' rows together (a stage accelerates every bead alike, and a
  * track's rows alone span little of the ramp); its spread, the standard
  * deviation of the tracks' own slopes, over tracks of at least
- * ELFM_STAGE_ACCEL_MIN_ROWS rows (NaN with fewer than 2). */
+ * ELFM_STAGE_ACCEL_MIN_ROWS rows (NaN with fewer than 2).
+ * Pooled velocity: each track's mean velocity weighted by the spread of its
+ * rows' times (sum of (t - mean t)^2, the precision of a slope fitted to
+ * it), as one velocity fitted to all tracks with an offset each would be.
+ * A short track then counts little: on a slow stage, a bead crossing the
+ * field stop's edge gives a short, biased one (docs/tracker.md "The stage's
+ * velocity pooled"). NaN when no track spans two times. */
 #define ELFM_STAGE_ACCEL_MIN_ROWS 20
 typedef struct elfm_stage_result {
   size_t n_tracks;
   double v_um_per_ms[3], v_sd_um_per_ms[3];
   double speed_um_per_ms, speed_sd_um_per_ms;
   double rel_error, speed_rel_error;   /* NaN without a stage velocity */
+  double v_pooled_um_per_ms[3];
+  double rel_error_pooled;             /* NaN without a stage velocity */
   double accel_um_per_ms2[3], accel_sd_um_per_ms2[3]; /* NaN: all rows at one time */
 } elfm_stage_result;
 
