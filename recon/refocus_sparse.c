@@ -26,6 +26,9 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 /* Start a call: when the volume is not the one this workspace last wrote
  * sparsely (or was written densely), clear it whole; otherwise keep the
@@ -159,7 +162,8 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
         while (j < b && ws->sorted[j] <= ws->sorted[j - 1] + 1 + gap_px && (int)ws->sorted[j] < bx->x1) j++;
         int len = (int)(ws->sorted[j - 1] - c0 + 1); /* the frame is 0 in the gaps */
         if (!grow((void **)&ws->runs, &ws->cap_runs, ws->n_runs + 1, sizeof *ws->runs) ||
-            !grow((void **)&ws->vals, &ws->cap_vals, ws->n_vals + (size_t)len + 2, sizeof *ws->vals))
+            !grow((void **)&ws->vals, &ws->cap_vals, ws->n_vals + (size_t)len + 2 + ELFM_RUN_PAD,
+                  sizeof *ws->vals))
           return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (runs)");
         elfm_refocus_run *r = &ws->runs[ws->n_runs++];
         r->view = v;
@@ -170,8 +174,8 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
         float *o = ws->vals + ws->n_vals;
         o[0] = 0.0f;
         memcpy(o + 1, row + c0, (size_t)len * sizeof *o);
-        o[len + 1] = 0.0f;
-        ws->n_vals += (size_t)len + 2;
+        for (int z = 1; z <= 1 + ELFM_RUN_PAD; z++) o[len + z] = 0.0f;
+        ws->n_vals += (size_t)len + 2 + ELFM_RUN_PAD;
         i = j;
       }
     }
@@ -255,6 +259,25 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
             const int m = i1 - i0;
             const float *bb = b + i0;
             float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
+#ifdef __SSE2__
+            /* Four voxels at a time, the last group running past the run
+             * onto its padding zeros: those voxels get + 0, their own value.
+             * Not where the run is cut at xhi (the values go on there), nor
+             * past the row's end. The same products and sums in the same
+             * order as the loop below, so the same floats; the loop's
+             * vectorised body with its scalar tail cost more on runs of ~8
+             * (bench_refocus on flow 1 s: 5.16-5.38 -> 4.69-4.91 ms per volume). */
+            const int m4 = (m + 3) & ~3;
+            if (i1 == run->n + 1 && Xs + i0 + m4 <= W) {
+              const __m128 v0 = _mm_set1_ps(w0), v1 = _mm_set1_ps(w1);
+              for (int i = 0; i < m4; i += 4) {
+                const __m128 t = _mm_add_ps(_mm_mul_ps(v0, _mm_loadu_ps(bb + i)),
+                                            _mm_mul_ps(v1, _mm_loadu_ps(bb + i + 1)));
+                _mm_storeu_ps(o + i, _mm_add_ps(_mm_loadu_ps(o + i), t));
+              }
+              continue;
+            }
+#endif
             for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
           }
         }
