@@ -173,6 +173,34 @@ static void say_again(const track_ctx *c, const track_again *g)
             o->recon.framer.dt_us);
 }
 
+/* --motion stage: the stage's velocity in a line, for the microscopist who
+ * checks it (summary.json "stage" has the rest). The pooled velocity, each
+ * track weighted by the spread of its times, is the one quoted: on a slow
+ * stage the short tracks of beads crossing the field stop's edge are
+ * biased (docs/tracker.md "The stage's velocity pooled"). */
+static void say_stage(const track_ctx *c, const track_opts *o, double span_ms)
+{
+  elfm_stage_result sr;
+  elfm_error e;
+  if (!c->n_info || elfm_analysis_stage_info(c->info, c->n_info, o->has_stage_v ? o->stage_v : NULL,
+                                             &sr, &e) != ELFM_OK)
+    return;
+  const double *v = sr.v_pooled_um_per_ms;
+  if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]))) return;
+  fprintf(stderr, "eventlfm track: the stage moves at (%.4f, %.4f, %.4f) um/ms, %.4f mm/s, over "
+                  "%zu tracks (each by the spread of its times; by points %.4f mm/s)",
+          v[0], v[1], v[2], sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]), sr.n_tracks,
+          sr.speed_um_per_ms);
+  if (o->has_stage_v && isfinite(sr.rel_error_pooled))
+    fprintf(stderr, "; %.2f %% from the given velocity", 100 * sr.rel_error_pooled);
+  /* and its acceleration where the speed changes by 5 % or more over the run */
+  const double *a = sr.accel_um_per_ms2, sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+  const double am = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+  if (isfinite(am) && am * span_ms >= 0.05 * sp)
+    fprintf(stderr, "; accelerating at (%.5f, %.5f, %.5f) um/ms^2", a[0], a[1], a[2]);
+  fputc('\n', stderr);
+}
+
 /* One run with *po: CLI_OK, CLI_FAIL (said), or TRACK_RUN_AGAIN with
  * *again what to start again with. *t0_s: the time the command's first
  * run started (NaN: this one), for the wall time in summary.json. */
@@ -338,6 +366,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                     "(%" PRId64 " started) in %.2f s (%.0f volumes/s, realtime factor %.2f) -> %s\n",
             c.n_frames, c.n_det, c.n_info, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
+  if (!o.quiet && o.motion == MOTION_STAGE) say_stage(&c, &o, 1e3 * rs.span_s);
   if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL && o.recon.framer.polarity == ELFM_POL_ON) {
     const double v = c.median_speed_um_per_ms;
     if (v >= TRACK_HINT_MIN_SPEED_UM_PER_MS && v <= TRACK_HINT_MAX_SPEED_UM_PER_MS)

@@ -38,8 +38,15 @@ echo "dim stage 200 ms seed 2: pooled vy $py um/ms"
 awk -v v="$py" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: pooled vy '$py' not within 1 % of 2.5"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/acc" stage_accel 200 1
-"$bin" track --calib "$tmp/acc/calib.json" --events "$tmp/acc/events.raw" --out "$tmp/a" -q --motion stage ||
-  { echo "FAIL: track stage_accel"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/acc/calib.json" --events "$tmp/acc/events.raw" --out "$tmp/a" --motion stage \
+  2> "$tmp/a.err" || { echo "FAIL: track stage_accel"; fail=$((fail+1)); }
 expect_key tracks_rejected_off_stage "$tmp/a/summary.json" 0
+# the stage's velocity said at the end (the pooled one, as in summary.json)
+line=$(tr '\r' '\n' < "$tmp/a.err" | grep "the stage moves at")
+echo "stage_accel: $line"
+[ -n "$line" ] || { echo "FAIL: no stage velocity on stderr"; fail=$((fail+1)); }
+case "$line" in *"accelerating at"*) ;; *) echo "FAIL: stage_accel's acceleration not said"; fail=$((fail+1)) ;; esac
+px=$(tr -d ' \n\t' < "$tmp/a/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
+case "$line" in *"$(printf '%.4f' "$px"),"*) ;; *) echo "FAIL: stderr's vy is not summary.json's $px"; fail=$((fail+1)) ;; esac
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
