@@ -16,12 +16,6 @@
  */
 #include "refocus_internal.h"
 
-/* Plane rows per block of the scatter (elfm_refocus_sparse): the rows'
- * written extents live on the stack. bench_refocus on flow 1 s, 1 thread,
- * ms per volume over 4 alternating runs: 16 rows 5.5-5.6, 32 5.3-5.4, 48
- * 4.87-4.94, 64 4.92-5.01, 96 4.65-4.89, a whole 144-row plane 4.74-4.85. */
-#define SPARSE_BLOCK_ROWS 96
-
 #include <limits.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -29,6 +23,13 @@
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
+
+/* Plane rows per block of the scatter (elfm_refocus_sparse): the rows'
+ * written extents live on the stack. bench_refocus on flow 1 s, 1 thread,
+ * ms per volume over 4 alternating runs (before the groups of four): 16
+ * rows 5.5-5.6, 32 5.3-5.4, 48 4.87-4.94, 64 4.92-5.01, 96 4.65-4.89, a
+ * whole 144-row plane 4.74-4.85. */
+#define SPARSE_BLOCK_ROWS 96
 
 /* Start a call: when the volume is not the one this workspace last wrote
  * sparsely (or was written densely), clear it whole; otherwise keep the
@@ -266,7 +267,7 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
              * past the row's end. The same products and sums in the same
              * order as the loop below, so the same floats; the loop's
              * vectorised body with its scalar tail cost more on runs of ~8
-             * (bench_refocus on flow 1 s: 5.16-5.38 -> 4.69-4.91 ms per volume). */
+             * (bench_refocus on flow 1 s: 4.78-4.82 -> 4.46-4.70 ms per volume). */
             const int m4 = (m + 3) & ~3;
             if (i1 == run->n + 1 && Xs + i0 + m4 <= W) {
               const __m128 v0 = _mm_set1_ps(w0), v1 = _mm_set1_ps(w1);
