@@ -32,6 +32,7 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->count);
   free(p->full_lo);
   free(p->full_hi);
+  free(p->vrow_off);
   free(p->need);
   free(p->need_row_min);
   free(p->need_bits);
@@ -99,13 +100,14 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   p->count = calloc(nvox + 32, 1);
   p->full_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_lo);
   p->full_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_hi);
+  p->vrow_off = calloc((size_t)p->nv, sizeof *p->vrow_off);
   if (o.agree_frac > 0.0) {
     p->need = calloc(nvox + 32, 1);
     p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi ||
+  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
@@ -130,6 +132,8 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     if (b->x1 < b->x0) b->x1 = b->x0;
     if (b->y1 < b->y0) b->y1 = b->y0;
     p->box_area += (double)(b->x1 - b->x0) * (b->y1 - b->y0);
+    p->vrow_off[v] = p->n_vrow;
+    p->n_vrow += (size_t)(b->y1 - b->y0) + 1;
     for (int k = 0; k < nz; k++) {
       double z = c->z_min_um + k * c->z_step_um;
       double ox = vw->cx_px - hw + z * vw->dx_px_per_um;
@@ -366,15 +370,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->row_hi = malloc((size_t)p->nz * p->h * sizeof *ws->row_hi);
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
   ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
-  ws->vrow_off = malloc((size_t)p->nv * sizeof *ws->vrow_off);
-  if (ws->vrow_off) {
-    size_t nvr = 0;
-    for (int v = 0; v < p->nv; v++) {
-      ws->vrow_off[v] = nvr;
-      nvr += (size_t)(p->box[v].y1 > p->box[v].y0 ? p->box[v].y1 - p->box[v].y0 : 0) + 1;
-    }
-    ws->vrow = calloc(nvr, sizeof *ws->vrow);
-  }
+  ws->vrow = calloc(p->n_vrow, sizeof *ws->vrow);
   int sup_ok = 1;
   if (p->need) {
     /* support bit maps (refocus_agree.c), packed: 25 views x 145 rows x
@@ -411,8 +407,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
     }
   }
   if (!ws->plane_cnt || !ws->row_start || !ws->row_bits || !ws->sorted || !ws->runs || !ws->vals ||
-      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !ws->vrow_off || !ws->vrow ||
-      !sup_ok) {
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !ws->vrow || !sup_ok) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   }
@@ -444,7 +439,6 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->rows);
   free(ws->rows_old);
   free(ws->vrow);
-  free(ws->vrow_off);
   free(ws);
 }
 

@@ -43,6 +43,9 @@ struct elfm_refocus_plan {
    * empty when none: the sparse path scales them by one constant 1 / nv in
    * a loop the compiler vectorises, the table only beyond them */
   int32_t *full_lo, *full_hi;
+  /* [nv]: where view v's box rows (and one end mark) start in the sparse
+   * workspace's run index by row (vrow), n_vrow in all */
+  size_t *vrow_off, n_vrow;
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
   uint8_t *need_row_min;      /* [k][Y]: least non-zero `need` of the row (255: none) */
   /* [k][Y][b][need_words]: bit b of each voxel's `need`, 63 where no view
@@ -89,11 +92,10 @@ struct elfm_refocus_workspace {
   size_t cap_sorted;
   elfm_refocus_run *runs;
   size_t n_runs, cap_runs;
-  /* view v's runs of box row y are runs[vrow[vrow_off[v] + y - y0] ..
-   * vrow[vrow_off[v] + y - y0 + 1]) (sparse_runs makes them view by view,
+  /* view v's runs of box row y are runs[vrow[p->vrow_off[v] + y - y0] ..
+   * vrow[p->vrow_off[v] + y - y0 + 1]) (sparse_runs makes them view by view,
    * row by row), so a plane takes only the rows that reach it */
-  uint32_t *vrow;
-  size_t *vrow_off;           /* [nv] */
+  uint32_t *vrow;             /* [p->n_vrow] */
   float *vals;
   size_t n_vals, cap_vals;
   /* agreement on (refocus_agree.c): per view, a bit map over its crop box,

@@ -150,7 +150,7 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   ws->n_vals = 0;
   for (int v = 0; v < p->nv; v++) {
     const elfm_refocus_box *bx = &p->box[v];
-    uint32_t *vr = ws->vrow + ws->vrow_off[v] - bx->y0; /* indexed by box row */
+    uint32_t *vr = ws->vrow + p->vrow_off[v] - bx->y0; /* indexed by box row */
     for (int y = bx->y0; y < bx->y1; y++) {
       vr[y] = (uint32_t)ws->n_runs;
       size_t a = start[y], b = start[y + 1];
@@ -238,7 +238,7 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         if (ra < bx->y0) ra = bx->y0;
         if (rb > bx->y1) rb = bx->y1;
         if (ra >= rb) continue;
-        const uint32_t *vr = ws->vrow + ws->vrow_off[v] - bx->y0;
+        const uint32_t *vr = ws->vrow + p->vrow_off[v] - bx->y0;
         const float gx0 = 1.0f - s->fx, gx1 = s->fx;
         for (uint32_t t = vr[ra]; t < vr[rb]; t++) {
           const elfm_refocus_run *run = &runs[t];
