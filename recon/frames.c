@@ -538,15 +538,14 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
 /* EXP, LIN, COUNT: the events of [t0, t1) only. Returns their number. */
 static size_t framer_window(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *out)
 {
-  if (++f->cur_stamp == 0) { /* wrapped after 2^32 frames: forget old stamps */
-    memset(f->stamp, 0, (size_t)f->w * (size_t)f->h * sizeof *f->stamp);
-    f->cur_stamp = 1;
-  }
-  const uint32_t stamp = f->cur_stamp;
-  const int count = f->opt.repr == ELFM_REPR_COUNT;
   const int sign = f->opt.polarity == ELFM_POL_SIGNED;
   size_t nev = 0;
-  if (count) {
+  if (f->opt.repr == ELFM_REPR_COUNT) {
+    if (++f->cur_stamp == 0) { /* wrapped after 2^32 frames: forget old stamps */
+      memset(f->stamp, 0, (size_t)f->w * (size_t)f->h * sizeof *f->stamp);
+      f->cur_stamp = 1;
+    }
+    const uint32_t stamp = f->cur_stamp;
     for (size_t i = 0; i < f->q_n; i++) {
       size_t k = (f->q_head + i) & (f->q_cap - 1);
       int64_t t = f->q_t[k];
