@@ -3,6 +3,7 @@
  * linking, writing detections, and smoothing, filtering and writing the
  * tracks that ended (see cmd_track.h). */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -164,9 +165,11 @@ static elfm_status fin_push(track_ctx *c, size_t *n, elfm_track *t, elfm_error *
 /* Smooth, filter and write the tracks the linker has finished, and the
  * pieces of long live tracks that are due (--piece-points). Each track
  * is its own single-threaded Ceres problem, so when several finish at once
- * (most of them at the end of the recording) they are smoothed in parallel;
- * filtering and writing stay in the linker's order, so the output does not
- * depend on the thread count. */
+ * at the end of the recording they are smoothed in parallel; during the
+ * run this is called by the driver's delivering thread while the others
+ * refocus (elfm_pipeline.h), and smooths on that thread alone. Filtering
+ * and writing stay in the linker's order, so the output does not depend
+ * on the thread count. */
 elfm_status track_drain(track_ctx *c, elfm_error *err)
 {
   size_t n = 0;
@@ -192,7 +195,7 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
   so_run.frame_times = &c->frame_times;
   so_run.motion_lead_um = track_motion_lead_um(c);
   const elfm_smooth_options *so = &so_run;
-  const int nt = ns > 1 && c->n_threads > 1 ? c->n_threads : 1;
+  const int nt = ns > 1 && c->n_threads > 1 && !omp_in_parallel() ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
   for (size_t i = 0; i < ns; i++)
     c->fin[i].st = smooth_track(c, c->fin[i].t, so, &c->fin[i].refit, &c->fin[i].err);

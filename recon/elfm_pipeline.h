@@ -7,11 +7,14 @@
  *   elfm_recon_options_default(&o);            then change what you need
  *   elfm_recon_run(events_path, &calib, &o, on_volume, user, &stats, &err);
  *
- * The driver reads fixed-size chunks, builds frames sequentially, refocuses
- * batches of frames in parallel (OpenMP; each batch slot owns a frame, a
- * volume and a refocus workspace) and calls `on_volume` IN FRAME ORDER on the
- * calling thread. Memory is fixed by the options (chunk size, batch slots,
- * volume size), independent of the recording's length.
+ * The driver reads fixed-size chunks and builds frames sequentially,
+ * refocuses several frames at once (OpenMP threads; each slot of a ring
+ * owns a frame, a volume and a refocus workspace) and calls `on_volume` IN
+ * FRAME ORDER, one call at a time, while the other threads go on reading
+ * and refocusing the next frames. The calls may come on any of the run's
+ * threads, but never two at once, and each sees what the previous one left:
+ * a callback needs no locks. Memory is fixed by the options (chunk size,
+ * slots, volume size), independent of the recording's length.
  */
 #ifndef ELFM_PIPELINE_H
 #define ELFM_PIPELINE_H
@@ -37,9 +40,9 @@ typedef struct elfm_recon_stats {
   int64_t t_first_us, t_last_us; /* first/last event time taken (INT64_MIN/MAX if none) */
   double span_s;           /* recording span processed: windows' end - first window start */
   double wall_s;           /* the whole run */
-  double read_s, frame_s;  /* reading/decoding, building frames (calling thread) */
-  double refocus_s;        /* wall time of the parallel median + refocus sections (with the worker hook) */
-  double callback_s;       /* time spent in the callback */
+  double read_s, frame_s;  /* reading/decoding, building frames (one thread at a time) */
+  double refocus_s;        /* median + refocus + the worker hook, summed over the threads */
+  double callback_s;       /* time spent in the callback (one thread at a time) */
   double events_per_s, volumes_per_s;
   double realtime_factor;  /* span_s / wall_s: > 1 is faster than real time */
   double done_frac;        /* how far through the input, 0..1: by event time up to
@@ -51,14 +54,16 @@ typedef struct elfm_recon_stats {
                             * outputs before reporting the error */
 } elfm_recon_stats;
 
-/* Called now and then (about every 0.25 s of wall time) on the calling
- * thread with the stats so far; may be NULL. */
+/* Called now and then (about every 0.25 s of wall time) with the stats so
+ * far, right after a callback and on its thread (so it may read what the
+ * callback keeps); may be NULL. */
 typedef void (*elfm_recon_progress_fn)(const elfm_recon_stats *s, void *user);
 
 /* Optional per-volume work done on the worker thread right after the
  * volume is refocused (e.g. peak detection), so that it runs in parallel
- * across the batch. `slot` (0 .. slots-1, see elfm_recon_layout) names the
- * batch slot the volume lives in; `thread` (0 .. threads-1) the worker, so
+ * with other frames'. `slot` (0 .. slots-1, see elfm_recon_layout) names
+ * the ring slot the volume lives in (a slot takes a new frame only after
+ * its volume was delivered); `thread` (0 .. threads-1) the worker, so
  * the hook can use a per-thread workspace and store its output per slot.
  * The same slot is passed to on_volume_slot for this volume afterwards, in
  * frame order. Must not touch state shared with other slots or threads. A
@@ -79,7 +84,8 @@ typedef struct elfm_recon_options {
                                    (elfm_blur; for dim objects) */
   elfm_refocus_options refocus; /* path (auto/dense/sparse), ghost suppression */
   int threads;                  /* 0: OpenMP's default */
-  int batch;                    /* frames refocused per parallel batch; 0: 2 x threads */
+  int batch;                    /* slots: frames in flight (read, refocused or being
+                                   delivered); 0: 2 x threads */
   int64_t from_us, to_us;       /* event time range [from, to); INT64_MIN / INT64_MAX: all.
                                    With from_us set and start FIRST_EVENT, windows start at from_us. */
   size_t chunk_events;          /* events per read; default 65536 */

@@ -1,11 +1,11 @@
 /* pipeline.c — the streaming driver (see elfm_pipeline.h).
  *
- * One loop for both sources (event files through the framer, TIFF stacks
- * page by page): fill a batch of slots with frames on the calling thread,
- * median-filter and refocus the batch in parallel, hand the volumes to the
- * callback in order. The framer and the callback stay sequential (the
- * architecture's rule: parallel across frames, sequential state stays on
- * one thread).
+ * One pipeline for both sources (event files through the framer, TIFF
+ * stacks page by page): read frames into a ring of slots, median-filter and
+ * refocus them in parallel, hand the volumes to the callback in order (see
+ * run_loop). The framer and the callback stay sequential (the
+ * architecture's rule: parallel across frames, sequential state is only
+ * ever touched by one thread at a time, in frame order).
  */
 #include "elfm_pipeline.h"
 
@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 #include <time.h>
 
 static double now_s(void)
@@ -54,6 +55,10 @@ typedef struct source {
   int64_t tiff_page, tiff_frame_us;
   int64_t from_us, to_us;
   int eof;
+  /* The reading stage's own counts (events, triggers, first and last
+   * event, span, read_s, frame_s): only the thread reading writes them,
+   * so they are kept apart from the delivery stage's and merged after. */
+  elfm_recon_stats st;
 } source;
 
 typedef struct run {
@@ -99,8 +104,11 @@ elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *sl
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "threads %d / batch %d out of range",
                           o->threads, o->batch);
   *threads = o->threads > 0 ? o->threads : omp_get_max_threads();
-  /* Two frames per thread: dynamic scheduling evens out frames of different
-   * event counts while keeping the slots' memory (a volume each) small. */
+  /* Two frames per thread: room for the reading and the delivering stage
+   * to run ahead of and behind the refocusing threads (run_loop), while
+   * the slots' memory (a volume each) stays small. More did not help:
+   * `track` on flow 1 s, 2 threads, one run each, 4 / 6 / 8 / 12 slots:
+   * 2.08 / 2.16 / 2.23 / 2.24 s wall, 78 / 95 / 111 / 143 MiB. */
   *slots = o->batch > 0 ? o->batch : 2 * *threads;
   return ELFM_OK;
 }
@@ -153,8 +161,8 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
       st = elfm_blur_create(opt->blur_px, sw, sh, &r->blurs[t], err);
       if (st) return st;
     }
-  r->st.t_first_us = INT64_MAX;
-  r->st.t_last_us = INT64_MIN;
+  r->st.t_first_us = r->src.st.t_first_us = INT64_MAX;
+  r->st.t_last_us = r->src.st.t_last_us = INT64_MIN;
   r->first_window_us = INT64_MIN;
   return ELFM_OK;
 }
@@ -168,7 +176,7 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
   for (;;) {
     double t0 = now_s();
     int ok = elfm_framer_next(s->framer, out);
-    r->st.frame_s += now_s() - t0;
+    s->st.frame_s += now_s() - t0;
     if (ok) {
       if (out->t_start_us >= s->to_us) return ELFM_OK; /* past the range: done */
       *got = 1;
@@ -177,7 +185,7 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
     if (s->eof) return ELFM_OK;
     t0 = now_s();
     elfm_status st = elfm_reader_read(s->reader, s->chunk, err);
-    r->st.read_s += now_s() - t0;
+    s->st.read_s += now_s() - t0;
     if (st) return st;
     elfm_event_chunk *c = s->chunk;
     if (c->n == 0 && c->n_trig == 0) {
@@ -200,15 +208,15 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
     }
     c->n = hi - lo;
     for (size_t k = 0; k < c->n_trig; k++)
-      r->st.triggers += c->trig[k].t_us >= s->from_us && c->trig[k].t_us < s->to_us;
+      s->st.triggers += c->trig[k].t_us >= s->from_us && c->trig[k].t_us < s->to_us;
     if (c->n > 0) {
-      if (c->t_us[0] < r->st.t_first_us) r->st.t_first_us = c->t_us[0];
-      r->st.t_last_us = c->t_us[c->n - 1];
-      r->st.events += (int64_t)c->n;
+      if (c->t_us[0] < s->st.t_first_us) s->st.t_first_us = c->t_us[0];
+      s->st.t_last_us = c->t_us[c->n - 1];
+      s->st.events += (int64_t)c->n;
     }
     t0 = now_s();
     st = elfm_framer_push(s->framer, c, err);
-    r->st.frame_s += now_s() - t0;
+    s->st.frame_s += now_s() - t0;
     if (st) {
       /* name the file: the framer does not know it */
       if (err && !err->file[0])
@@ -224,7 +232,7 @@ static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_erro
   source *s = &r->src;
   double t0 = now_s();
   elfm_status st = elfm_tiff_read(s->tiff, out, got, err);
-  r->st.read_s += now_s() - t0;
+  s->st.read_s += now_s() - t0;
   if (st || !*got) return st;
   out->index = s->tiff_page;
   out->t_start_us = s->tiff_page * s->tiff_frame_us;
@@ -235,16 +243,16 @@ static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_erro
   return ELFM_OK;
 }
 
-/* Wall time so far and the rates it gives (none while it is 0). */
 /* How far through the input (elfm_recon_stats.done_frac): by the file's
- * bytes, or by event time when the run stops at to_us inside the file. */
+ * bytes, or by event time when the run stops at to_us inside the file.
+ * Reads the source: only on the thread reading, or after the run. */
 static double done_frac(const run *r)
 {
   if (!r->src.reader) return -1; /* a TIFF stack: pages, not known ahead */
   double f = elfm_reader_fraction(r->src.reader);
-  const int64_t to = r->opt->to_us, last = r->st.t_last_us;
+  const int64_t to = r->opt->to_us, last = r->src.st.t_last_us;
   if (to != INT64_MAX && last != INT64_MIN) {
-    const int64_t from = r->opt->from_us != INT64_MIN ? r->opt->from_us : r->st.t_first_us;
+    const int64_t from = r->opt->from_us != INT64_MIN ? r->opt->from_us : r->src.st.t_first_us;
     if (to > from && last >= from) {
       const double ft = (double)(last - from) / (double)(to - from);
       if (ft > f) f = ft > 1 ? 1 : ft;
@@ -253,6 +261,19 @@ static double done_frac(const run *r)
   return f;
 }
 
+/* The reading stage's counts into the stats `st` (which has the rest). */
+static void stats_take_source(elfm_recon_stats *st, const elfm_recon_stats *src)
+{
+  st->events = src->events;
+  st->triggers = src->triggers;
+  st->t_first_us = src->t_first_us;
+  st->t_last_us = src->t_last_us;
+  st->span_s = src->span_s;
+  st->read_s = src->read_s;
+  st->frame_s = src->frame_s;
+}
+
+/* Wall time so far and the rates it gives (none while it is 0). */
 static void stats_set_rates(elfm_recon_stats *st, double wall_s)
 {
   st->wall_s = wall_s;
@@ -263,91 +284,243 @@ static void stats_set_rates(elfm_recon_stats *st, double wall_s)
   }
 }
 
+/* The run as a pipeline of three stages over a ring of slots, frame f in
+ * slot f % nslots:
+ *
+ *   read      one frame at a time, in order (the reader and the framer
+ *             carry state from frame to frame);
+ *   refocus   median, blur, refocus and the worker hook, on any number
+ *             of frames at once;
+ *   deliver   the callback, one frame at a time, in order.
+ *
+ * Every thread of the team takes whichever job is ready: the next
+ * delivery first, then the next read, then a refocus, so that the two
+ * sequential stages never wait on the parallel one while it has slack.
+ * Before, a batch of frames was read, then refocused in parallel, then
+ * delivered, and the other threads idled while one read and delivered:
+ * on `track` (flow, 2 threads) reading and delivering were a quarter of
+ * the wall time. The outputs do not change: each frame is read, refocused
+ * and delivered exactly as before, and only the order in which different
+ * frames' work runs does. A slot is read into again only once delivered.
+ *
+ * The shared counters live under one mutex; the jobs run outside it. */
+enum { SLOT_FREE, SLOT_READ, SLOT_BUSY, SLOT_DONE };
+
+typedef struct pipe {
+  mtx_t mu;
+  cnd_t cv;
+  unsigned char *state;         /* [nslots] SLOT_* */
+  int64_t n_read, n_taken;      /* frames read; frames taken to refocus */
+  int64_t n_delivered;          /* frames delivered */
+  int reading, delivering;      /* a thread is in that stage */
+  int src_end;                  /* no more frames: the input's end or error */
+  int stop;                     /* a delivery failed: no more work */
+  elfm_status src_st, st;       /* the input's error; the delivery's */
+  elfm_error src_err, err;
+  elfm_recon_stats src_pub;     /* the reading stage's counts, as of its last frame */
+  double done_pub;              /* and how far through the input */
+  double t_start, t_progress;
+} pipe;
+
+typedef enum { JOB_NONE, JOB_DELIVER, JOB_READ, JOB_REFOCUS, JOB_EXIT } job_kind;
+
+/* The next job for a thread (p->mu held): which, and its frame. */
+static job_kind job_next(const run *r, const pipe *p, int64_t *frame)
+{
+  if (p->stop) return JOB_EXIT;
+  const int ns = r->nslots;
+  if (!p->delivering && p->n_delivered < p->n_read &&
+      p->state[p->n_delivered % ns] == SLOT_DONE) {
+    *frame = p->n_delivered;
+    return JOB_DELIVER;
+  }
+  if (!p->reading && !p->src_end && p->n_read < p->n_delivered + ns) {
+    *frame = p->n_read;
+    return JOB_READ;
+  }
+  if (p->n_taken < p->n_read) {
+    *frame = p->n_taken;
+    return JOB_REFOCUS;
+  }
+  if (p->src_end && !p->reading && p->n_delivered == p->n_read) return JOB_EXIT;
+  return JOB_NONE;
+}
+
+/* Read frame f into its slot; returns 1 when a frame was read. */
+static int job_read(run *r, pipe *p, slot *s)
+{
+  elfm_error e;
+  elfm_error_clear(&e);
+  int got = 1;
+  elfm_status st = r->src.tiff ? source_tiff_next(r, s->frame, &got, &e)
+                               : source_events_next(r, s->frame, &got, &e);
+  if (st) got = 0;
+  if (got) {
+    if (r->first_window_us == INT64_MIN) r->first_window_us = s->frame->t_start_us;
+    double span = (double)(s->frame->t_end_us - r->first_window_us) * 1e-6;
+    if (span > r->src.st.span_s) r->src.st.span_s = span;
+  }
+  const double done = done_frac(r);
+  mtx_lock(&p->mu);
+  if (st) {
+    p->src_st = st;
+    p->src_err = e;
+  }
+  p->src_end = !got;
+  p->src_pub = r->src.st;
+  p->done_pub = done;
+  return got;
+}
+
+static void job_refocus(run *r, slot *s, int i, int thread, elfm_refocus_path path, int use_median)
+{
+  const elfm_refocus_plan *plan = r->plan;
+  const elfm_frame *in = s->frame;
+  if (use_median) {
+    elfm_median_apply(r->medians[thread], s->frame, s->filtered);
+    in = s->filtered;
+  }
+  if (s->blurred) {
+    elfm_blur_apply(r->blurs[thread], in, s->blurred);
+    in = s->blurred;
+  }
+  if (r->opt->no_refocus) {
+    elfm_refocus_stamp(plan, in, s->vol);
+    s->status = ELFM_OK;
+  } else {
+    s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
+  }
+  if (s->status == ELFM_OK && r->opt->worker)
+    s->status = r->opt->worker(s->vol, in, plan, i, thread, r->opt->worker_user, &s->err);
+}
+
+/* Deliver the frame in slot i: its refocus error, or the callback. */
+static elfm_status job_deliver(run *r, slot *s, int i, elfm_volume_fn on_volume, void *user,
+                               elfm_error *e)
+{
+  if (s->status) {
+    *e = s->err;
+    return s->status;
+  }
+  if (!r->opt->no_refocus) { /* no_refocus took no path: neither count */
+    if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
+    else r->st.frames_dense++;
+  }
+  const double t0 = now_s();
+  elfm_status st = r->opt->on_volume_slot ? r->opt->on_volume_slot(s->vol, i, user, e)
+                   : on_volume                ? on_volume(s->vol, user, e)
+                                              : ELFM_OK;
+  r->st.callback_s += now_s() - t0;
+  if (st == ELFM_OK) r->st.frames++;
+  return st;
+}
+
+/* After a delivery (p->mu held): the progress call, every 0.25 s. It runs
+ * on the delivering thread, like the callback, so it may read the state
+ * the callback keeps. */
+static void deliver_progress(run *r, pipe *p)
+{
+  const double now = now_s();
+  if (!r->opt->progress || now - p->t_progress < 0.25) return;
+  p->t_progress = now;
+  elfm_recon_stats st = r->st;
+  stats_take_source(&st, &p->src_pub);
+  stats_set_rates(&st, now - p->t_start);
+  st.done_frac = p->done_pub;
+  r->opt->progress(&st, r->opt->progress_user);
+}
+
+static void pipe_work(run *r, pipe *p, int use_median, elfm_refocus_path path,
+                      elfm_volume_fn on_volume, void *user)
+{
+  const int thread = omp_get_thread_num();
+  const int ns = r->nslots;
+  mtx_lock(&p->mu);
+  for (;;) {
+    int64_t f = 0;
+    const job_kind k = job_next(r, p, &f);
+    if (k == JOB_EXIT) break;
+    if (k == JOB_NONE) {
+      cnd_wait(&p->cv, &p->mu);
+      continue;
+    }
+    const int i = (int)(f % ns);
+    slot *s = &r->slots[i];
+    if (k == JOB_READ) {
+      p->reading = 1;
+      mtx_unlock(&p->mu);
+      const int got = job_read(r, p, s); /* returns with p->mu held */
+      if (got) {
+        p->state[i] = SLOT_READ;
+        p->n_read++;
+      }
+      p->reading = 0;
+    } else if (k == JOB_REFOCUS) {
+      p->state[i] = SLOT_BUSY;
+      p->n_taken++;
+      mtx_unlock(&p->mu);
+      const double t0 = now_s();
+      job_refocus(r, s, i, thread, path, use_median);
+      const double dt = now_s() - t0;
+      mtx_lock(&p->mu);
+      r->st.refocus_s += dt;
+      p->state[i] = SLOT_DONE;
+    } else { /* JOB_DELIVER */
+      p->delivering = 1;
+      mtx_unlock(&p->mu);
+      elfm_error e;
+      elfm_error_clear(&e);
+      const elfm_status st = job_deliver(r, s, i, on_volume, user, &e);
+      mtx_lock(&p->mu);
+      p->delivering = 0;
+      if (st) {
+        p->st = st;
+        p->err = e;
+        p->stop = 1;
+      } else {
+        p->state[i] = SLOT_FREE;
+        p->n_delivered++;
+        deliver_progress(r, p);
+      }
+    }
+    cnd_broadcast(&p->cv);
+  }
+  mtx_unlock(&p->mu);
+}
+
 static elfm_status run_loop(run *r, int use_median, elfm_refocus_path path,
                             elfm_volume_fn on_volume, void *user, elfm_error *err)
 {
-  const double t_start = now_s();
-  double t_progress = t_start;
-  /* A source error (a corrupt block in the file) ends the run, but the
-   * frames completed before it are still refocused and delivered. */
-  elfm_status src_st = ELFM_OK;
-  elfm_error src_err;
-  elfm_error_clear(&src_err);
-  for (;;) {
-    int nb = 0, got = 1;
-    while (nb < r->nslots) {
-      src_st = r->src.tiff ? source_tiff_next(r, r->slots[nb].frame, &got, &src_err)
-                           : source_events_next(r, r->slots[nb].frame, &got, &src_err);
-      if (src_st) {
-        got = 0;
-        break;
-      }
-      if (!got) break;
-      if (r->first_window_us == INT64_MIN) r->first_window_us = r->slots[nb].frame->t_start_us;
-      double span = (double)(r->slots[nb].frame->t_end_us - r->first_window_us) * 1e-6;
-      if (span > r->st.span_s) r->st.span_s = span;
-      nb++;
-    }
-    if (nb == 0) break;
-    double t0 = now_s();
-    const elfm_refocus_plan *plan = r->plan;
-    const elfm_volume_worker_fn worker = r->opt->worker;
-    void *const worker_user = r->opt->worker_user;
-#pragma omp parallel for num_threads(r->threads) schedule(dynamic, 1)
-    for (int i = 0; i < nb; i++) {
-      slot *s = &r->slots[i];
-      const elfm_frame *in = s->frame;
-      if (use_median) {
-        elfm_median_apply(r->medians[omp_get_thread_num()], s->frame, s->filtered);
-        in = s->filtered;
-      }
-      if (s->blurred) {
-        elfm_blur_apply(r->blurs[omp_get_thread_num()], in, s->blurred);
-        in = s->blurred;
-      }
-      if (r->opt->no_refocus) {
-        elfm_refocus_stamp(plan, in, s->vol);
-        s->status = ELFM_OK;
-      } else {
-        s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
-      }
-      if (s->status == ELFM_OK && worker)
-        s->status = worker(s->vol, in, plan, i, omp_get_thread_num(), worker_user, &s->err);
-    }
-    r->st.refocus_s += now_s() - t0;
-    for (int i = 0; i < nb; i++) {
-      slot *s = &r->slots[i];
-      if (s->status) {
-        if (err) *err = s->err;
-        return s->status;
-      }
-      if (!r->opt->no_refocus) { /* no_refocus took no path: neither count */
-        if (elfm_refocus_workspace_last_path(s->ws) == ELFM_PATH_SPARSE) r->st.frames_sparse++;
-        else r->st.frames_dense++;
-      }
-      t0 = now_s();
-      elfm_status st = r->opt->on_volume_slot ? r->opt->on_volume_slot(s->vol, i, user, err)
-                       : on_volume                ? on_volume(s->vol, user, err)
-                                                  : ELFM_OK;
-      r->st.callback_s += now_s() - t0;
-      if (st) return st;
-      r->st.frames++;
-    }
-    double now = now_s();
-    if (r->opt->progress && now - t_progress >= 0.25) {
-      t_progress = now;
-      /* the rates so far (they were only set at the end: the progress
-       * line said 0 volumes/s) */
-      elfm_recon_stats st = r->st;
-      stats_set_rates(&st, now - t_start);
-      st.done_frac = done_frac(r);
-      r->opt->progress(&st, r->opt->progress_user);
-    }
-    if (!got) break;
+  pipe p;
+  memset(&p, 0, sizeof p);
+  p.state = calloc((size_t)r->nslots, 1);
+  if (!p.state) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (pipeline)");
+  if (mtx_init(&p.mu, mtx_plain) != thrd_success) {
+    free(p.state);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "pipeline: cannot create a mutex");
   }
-  if (src_st && err) *err = src_err;
-  r->st.input_error = src_st != ELFM_OK;
-  return src_st;
+  if (cnd_init(&p.cv) != thrd_success) {
+    mtx_destroy(&p.mu);
+    free(p.state);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "pipeline: cannot create a condition");
+  }
+  p.t_start = p.t_progress = now_s();
+#pragma omp parallel num_threads(r->threads)
+  pipe_work(r, &p, use_median, path, on_volume, user);
+  cnd_destroy(&p.cv);
+  mtx_destroy(&p.mu);
+  free(p.state);
+  stats_take_source(&r->st, &r->src.st);
+  /* A delivery's error first: it stopped the run. An input error (a
+   * corrupt block in the file) ended the reading, but the frames read
+   * before it were still refocused and delivered. */
+  if (p.st) {
+    if (err) *err = p.err;
+    return p.st;
+  }
+  if (p.src_st && err) *err = p.src_err;
+  r->st.input_error = p.src_st != ELFM_OK;
+  return p.src_st;
 }
 
 static void run_finish_stats(run *r, double wall_s, elfm_recon_stats *out)

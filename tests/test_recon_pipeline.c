@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <tiffio.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "check.h"
@@ -619,6 +620,79 @@ static void test_worker_hook(const char *dir, const elfm_calib *cal)
   CHECK(elfm_recon_layout(&o, &h.threads, &h.slots, &err) == ELFM_ERR_INVALID);
 }
 
+/* The pipeline overlaps the ordered delivery with other frames' refocus:
+ * with a slow callback (2 ms a volume) and 2 threads, workers run while a
+ * callback does, and yet no two callbacks ever run at once and they come
+ * in frame order. The batch pipeline this replaced never ran a worker
+ * during a callback: there this count was 0. */
+typedef struct overlap_ctx {
+  int in_callback;         /* callbacks running now (atomic) */
+  int n_overlapping;       /* callbacks that found another running */
+  int n_worker_during;     /* worker calls made while a callback ran */
+  int64_t n, next_frame, out_of_order;
+} overlap_ctx;
+
+static elfm_status ov_worker(const elfm_volume *v, const elfm_frame *frame,
+                             const elfm_refocus_plan *plan, int slot, int thread, void *user,
+                             elfm_error *err)
+{
+  (void)v, (void)frame, (void)plan, (void)slot, (void)thread, (void)err;
+  overlap_ctx *h = user;
+  int busy;
+#pragma omp atomic read
+  busy = h->in_callback;
+  if (busy) {
+#pragma omp atomic update
+    h->n_worker_during++;
+  }
+  return ELFM_OK;
+}
+
+static elfm_status ov_ordered(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  (void)slot, (void)err;
+  overlap_ctx *h = user;
+  int was;
+#pragma omp atomic capture
+  was = h->in_callback++;
+  if (was) h->n_overlapping++;
+  if (v->frame != h->next_frame) h->out_of_order++;
+  h->next_frame = v->frame + 1;
+  h->n++;
+  struct timespec ts = {0, 2000000};
+  nanosleep(&ts, NULL);
+#pragma omp atomic update
+  h->in_callback--;
+  return ELFM_OK;
+}
+
+static void test_pipeline_overlap(const char *dir, const elfm_calib *cal)
+{
+  elfm_error err;
+  char path[600];
+  snprintf(path, sizeof path, "%s/events.raw", dir);
+  for (int threads = 1; threads <= 2; threads++) {
+    elfm_recon_options o;
+    elfm_recon_options_default(&o);
+    o.threads = threads;
+    o.worker = ov_worker;
+    o.on_volume_slot = ov_ordered;
+    overlap_ctx h;
+    memset(&h, 0, sizeof h);
+    o.worker_user = &h;
+    elfm_recon_stats st;
+    CHECK_OK(elfm_recon_run(path, cal, &o, NULL, &h, &st, &err), &err);
+    CHECK_EQ_INT(h.n, DUR_US / 1000);
+    CHECK_EQ_INT(h.out_of_order, 0);
+    CHECK_EQ_INT(h.n_overlapping, 0);
+    if (threads == 1) CHECK_EQ_INT(h.n_worker_during, 0);
+    else CHECK_MSG(h.n_worker_during > 0, "2 threads: no worker ran during the %lld callbacks",
+                   (long long)h.n);
+    printf("%d thread%s: %d of %lld worker calls during a callback\n", threads,
+           threads > 1 ? "s" : "", h.n_worker_during, (long long)h.n);
+  }
+}
+
 int main(void)
 {
   elfm_calib cal;
@@ -631,6 +705,7 @@ int main(void)
   test_runs(dir, &cal);
   test_worker_hook(dir, &cal);
   test_no_refocus(dir, &cal);
+  test_pipeline_overlap(dir, &cal);
   test_tiff(dir, &cal);
   test_tiff_mixed_depth(dir);
   char cmd[600];
