@@ -233,6 +233,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   c.o = &o;
   c.calib = &calib;
   elfm_frame_times_init(&c.frame_times);
+  if (mtx_init(&c.fq_mu, mtx_plain) != thrd_success)
+    return cli_message(C, CLI_FAIL, "cannot create a mutex");
+  c.fq_mu_ok = 1;
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
   snprintf(c.p_fr, sizeof c.p_fr, "%s/frames.csv", o.out);
@@ -254,6 +257,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   o.recon.worker = track_detect_worker;
   o.recon.worker_user = &c;
   o.recon.on_volume_slot = on_volume;
+  o.recon.side_work = track_side_work;
+  o.recon.side_user = &c;
   c.lk = elfm_link_create(&o.link, &err);
   if (!c.lk) { cli_fail(C, &err); goto done; }
   c.fdet = fopen(c.p_det, "w");
@@ -333,7 +338,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   }
   if (st == ELFM_OK) st = track_fill_gaps(&c, 1, &err);
   if (st == ELFM_OK) st = elfm_link_finish(c.lk, &err);
-  if (st == ELFM_OK) st = track_drain(&c, &err);
+  if (st == ELFM_OK) st = track_drain(&c, 1, &err);
   if (st == ELFM_OK) st = track_stage_flush(&c, &err);
   if (st == ELFM_OK) st = track_det_flush_before(&c, INT64_MAX, &err);
   if (st == ELFM_OK) st = close_file(&c.fdet, c.p_det, &err);

@@ -7,6 +7,7 @@
 
 #include <stdint.h>
 #include <stdio.h>
+#include <threads.h>
 
 #include "cli.h"
 #include "elfm_tracker.h"
@@ -266,13 +267,13 @@ typedef struct track_ctx {
   double *pred;          /* [max_det][3] track predictions (guided search) */
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
-  struct fin_track {     /* a finished track or a piece being smoothed (drain), */
-    elfm_track *t;
-    elfm_status st;      /* and how its smoothing went */
-    elfm_error err;
-    int refit;           /* 1: smoothed again by classical GCV (smooth_track) */
-  } *fin;
-  size_t fin_cap;
+  /* The finished tracks and pieces to smooth and write, in the linker's
+   * order: fq[fq_head .. fq_n), under fq_mu (cmd_track_volume.c,
+   * track_drain and track_side_work). */
+  struct fin_track **fq;
+  size_t fq_head, fq_n, fq_cap;
+  mtx_t fq_mu;
+  int fq_mu_ok;
   elfm_linker *lk;
   FILE *fdet, *ftr, *ffr;      /* detections.csv, tracks.csv, frames.csv */
   elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
@@ -367,7 +368,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
                                 const elfm_refocus_plan *plan, int slot, int thread, void *user,
                                 elfm_error *err);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
- * write them, smooth and write the tracks that ended. */
+ * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
 /* Append to nb[k ..] the detections of det[0 .. n) but det[skip] (-1: none)
  * within near_um laterally of (x_um, y_um), in geo's voxels (the view fit's
@@ -375,8 +376,13 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
  * TRACK_NEAR_MAX. */
 int track_near_add(const elfm_detection *det, int n, int skip, double x_um, double y_um,
                    double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
-/* Smooth, filter and write the tracks the linker has finished. */
-elfm_status track_drain(track_ctx *c, elfm_error *err);
+/* Queue the tracks the linker has finished; filter and write those at the
+ * queue's head that are smoothed. at_end (after the run): smooth all that
+ * wait first, all threads at once. */
+elfm_status track_drain(track_ctx *c, int at_end, elfm_error *err);
+/* The driver's side work (elfm_recon_options.side_work; user: the
+ * track_ctx): smooth the oldest queued track; 0 when none waits. */
+int track_side_work(void *user, int thread);
 /* Write a kept, smoothed track: tracks.csv, the XML scratch, its info
  * (cmd_track_volume.c). Frees t. */
 elfm_status track_write_track(track_ctx *c, elfm_track *t, elfm_error *err);

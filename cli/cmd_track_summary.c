@@ -251,9 +251,11 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(tim, "volumes_per_s", wall_s > 0 ? (double)c->n_frames / wall_s : NAN);
   add_num(tim, "realtime_factor", wall_s > 0 ? rs->span_s / wall_s : NAN);
   add_num(tim, "peak_rss_mb", cli_peak_rss_mb());
-  /* recon_s: the driver without the ordered callback (linking, writing,
-   * smoothing); it contains peak detection, which runs on the workers.
-   * peaks_s is that detection's time summed over the workers (CPU s). */
+  /* recon_s: the driver's wall time without the ordered callback's
+   * (linking, writing); the driver reads, refocuses, delivers and smooths
+   * at once (elfm_pipeline.h), so the stages' times overlap. parallel_s
+   * (median, refocus and peak detection), peaks_s and smooth_s (every
+   * track's smoothing, wherever it ran) are summed over the threads. */
   add_num(tim, "recon_s", rs->wall_s - rs->callback_s);
   add_num(tim, "read_s", rs->read_s);
   add_num(tim, "frame_s", rs->frame_s);

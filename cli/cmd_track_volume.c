@@ -145,39 +145,131 @@ double track_motion_lead_um(const track_ctx *c)
   return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);
 }
 
-/* Append t to the tracks to smooth (c->fin[*n]); on no memory t is freed. */
-static elfm_status fin_push(track_ctx *c, size_t *n, elfm_track *t, elfm_error *err)
+/* The finished tracks and pieces wait in c->fq, in the linker's order, to
+ * be smoothed and written. Each track is its own single-threaded Ceres
+ * problem, smoothed by whichever thread takes it: during the run, the
+ * driver's threads between their other jobs (track_side_work, through
+ * elfm_recon_options.side_work), so that the delivering thread, which
+ * links every frame, does not also smooth every track; at the end, all the
+ * threads at once (track_drain). The delivering thread writes them, in
+ * order, as soon as the oldest is smoothed: filtering and writing stay in
+ * the linker's order, so the output does not depend on the thread count
+ * or on who smoothed what. Each carries its options and a copy of the
+ * frame times, which the delivering thread goes on changing. */
+enum { FIN_WAIT, FIN_BUSY, FIN_DONE };
+
+struct fin_track {
+  elfm_track *t;
+  elfm_smooth_options so;
+  elfm_frame_times ft;   /* so.frame_times points here */
+  int state;             /* FIN_*, under c->fq_mu */
+  elfm_status st;        /* how its smoothing went */
+  elfm_error err;
+  int refit;             /* 1: smoothed again by classical GCV (smooth_track) */
+  double s;              /* seconds spent smoothing it */
+};
+
+static void fin_free(struct fin_track *f)
 {
-  if (*n == c->fin_cap) {
-    size_t cap = c->fin_cap ? 2 * c->fin_cap : 64;
-    struct fin_track *a = realloc(c->fin, cap * sizeof *a);
+  if (!f) return;
+  elfm_track_free(f->t);
+  elfm_frame_times_free(&f->ft);
+  free(f);
+}
+
+/* A new entry for t, with the run's options as they are now; on no memory
+ * t is freed and NULL returned. */
+static struct fin_track *fin_new(track_ctx *c, elfm_track *t, elfm_error *err)
+{
+  struct fin_track *f = calloc(1, sizeof *f);
+  if (f) {
+    f->t = t;
+    elfm_frame_times_init(&f->ft);
+    if (elfm_frame_times_copy(&f->ft, &c->frame_times, err) != ELFM_OK) {
+      fin_free(f);
+      return NULL;
+    }
+    f->so = c->o->smooth;
+    f->so.frame_times = &f->ft;
+    f->so.motion_lead_um = track_motion_lead_um(c);
+    f->state = FIN_WAIT;
+    return f;
+  }
+  elfm_track_free(t);
+  elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
+  return NULL;
+}
+
+/* Append f to the queue (the delivering thread); on no memory f is freed. */
+static elfm_status fin_push(track_ctx *c, struct fin_track *f, elfm_error *err)
+{
+  mtx_lock(&c->fq_mu);
+  if (c->fq_head > 0 && c->fq_head == c->fq_n) c->fq_head = c->fq_n = 0;
+  if (c->fq_n == c->fq_cap && c->fq_head > 0) { /* the written ones' room back */
+    memmove(c->fq, c->fq + c->fq_head, (c->fq_n - c->fq_head) * sizeof *c->fq);
+    c->fq_n -= c->fq_head;
+    c->fq_head = 0;
+  }
+  if (c->fq_n == c->fq_cap) {
+    const size_t cap = c->fq_cap ? 2 * c->fq_cap : 64;
+    struct fin_track **a = realloc(c->fq, cap * sizeof *a);
     if (!a) {
-      elfm_track_free(t);
+      mtx_unlock(&c->fq_mu);
+      fin_free(f);
       return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (finished tracks)");
     }
-    c->fin = a;
-    c->fin_cap = cap;
+    c->fq = a;
+    c->fq_cap = cap;
   }
-  c->fin[(*n)++].t = t;
+  c->fq[c->fq_n++] = f;
+  mtx_unlock(&c->fq_mu);
   return ELFM_OK;
 }
 
-/* Smooth, filter and write the tracks the linker has finished, and the
- * pieces of long live tracks that are due (--piece-points). Each track
- * is its own single-threaded Ceres problem, so when several finish at once
- * at the end of the recording they are smoothed in parallel; during the
- * run this is called by the driver's delivering thread while the others
- * refocus (elfm_pipeline.h), and smooths on that thread alone. Filtering
- * and writing stay in the linker's order, so the output does not depend
- * on the thread count. */
-elfm_status track_drain(track_ctx *c, elfm_error *err)
+static void fin_smooth(const track_ctx *c, struct fin_track *f)
 {
-  size_t n = 0;
+  const double t0 = cli_now_s();
+  elfm_error_clear(&f->err);
+  f->st = smooth_track(c, f->t, &f->so, &f->refit, &f->err);
+  f->s = cli_now_s() - t0;
+}
+
+/* elfm_recon_options.side_work: smooth the oldest waiting track; 0 when
+ * none waits. */
+int track_side_work(void *user, int thread)
+{
+  (void)thread;
+  track_ctx *c = user;
+  struct fin_track *f = NULL;
+  mtx_lock(&c->fq_mu);
+  for (size_t i = c->fq_head; i < c->fq_n && !f; i++)
+    if (c->fq[i]->state == FIN_WAIT) f = c->fq[i];
+  if (f) f->state = FIN_BUSY;
+  mtx_unlock(&c->fq_mu);
+  if (!f) return 0;
+  fin_smooth(c, f); /* f stays in the queue: only its writer frees it, once DONE */
+  mtx_lock(&c->fq_mu);
+  f->state = FIN_DONE;
+  mtx_unlock(&c->fq_mu);
+  return 1;
+}
+
+/* Queue the tracks the linker has finished, and the pieces of long live
+ * tracks that are due (--piece-points); then write the smoothed ones at
+ * the queue's head. at_end (after the run; no other thread works): smooth
+ * what still waits first, all threads at once. */
+elfm_status track_drain(track_ctx *c, int at_end, elfm_error *err)
+{
   elfm_track *t;
   elfm_status st = ELFM_OK;
   while (st == ELFM_OK && (t = elfm_link_pop_finished(c->lk))) {
-    st = fin_push(c, &n, t, err);
-    if (st == ELFM_OK) st = track_fill_end(c, t, err);
+    st = track_fill_end(c, t, err);
+    if (st != ELFM_OK) {
+      elfm_track_free(t);
+      break;
+    }
+    struct fin_track *f = fin_new(c, t, err);
+    st = f ? fin_push(c, f, err) : ELFM_ERR_NOMEM;
   }
   /* and the old points of long live tracks, as pieces (elfm_link_take_piece) */
   while (st == ELFM_OK && c->o->piece_points > 0) {
@@ -185,30 +277,36 @@ elfm_status track_drain(track_ctx *c, elfm_error *err)
     st = elfm_link_take_piece(c->lk, (size_t)pp, track_piece_keep(pp), track_piece_context(pp), &t,
                               err);
     if (st != ELFM_OK || !t) break;
-    st = fin_push(c, &n, t, err);
+    struct fin_track *f = fin_new(c, t, err);
+    st = f ? fin_push(c, f, err) : ELFM_ERR_NOMEM;
     c->n_pieces++;
   }
-  /* after an error the popped tracks are only freed: no smoothing */
-  const size_t ns = st == ELFM_OK ? n : 0;
-  double t0 = cli_now_s();
-  elfm_smooth_options so_run = c->o->smooth;
-  so_run.frame_times = &c->frame_times;
-  so_run.motion_lead_um = track_motion_lead_um(c);
-  const elfm_smooth_options *so = &so_run;
-  const int nt = ns > 1 && c->n_threads > 1 && !omp_in_parallel() ? c->n_threads : 1;
+  /* after an error the queued tracks are left: track_ctx_free frees them */
+  if (st != ELFM_OK) return st;
+  if (at_end) {
+    const size_t h = c->fq_head, n = c->fq_n - h;
+    const int nt = n > 1 && c->n_threads > 1 ? c->n_threads : 1;
 #pragma omp parallel for num_threads(nt) schedule(dynamic, 1) if (nt > 1)
-  for (size_t i = 0; i < ns; i++)
-    c->fin[i].st = smooth_track(c, c->fin[i].t, so, &c->fin[i].refit, &c->fin[i].err);
-  c->t_smooth += cli_now_s() - t0;
-  for (size_t i = 0; i < n; i++) {
-    struct fin_track *f = &c->fin[i];
-    if (st == ELFM_OK) {
-      c->n_refit_gcv += i < ns && f->refit;
-      if (f->st != ELFM_OK && err) *err = f->err;
-      st = finish_track(c, f->t, f->st, err);
-    } else {
-      elfm_track_free(f->t);
-    }
+    for (size_t i = 0; i < n; i++)
+      if (c->fq[h + i]->state == FIN_WAIT) {
+        fin_smooth(c, c->fq[h + i]);
+        c->fq[h + i]->state = FIN_DONE;
+      }
+  }
+  for (;;) {
+    mtx_lock(&c->fq_mu);
+    struct fin_track *f = c->fq_head < c->fq_n && c->fq[c->fq_head]->state == FIN_DONE
+                              ? c->fq[c->fq_head++]
+                              : NULL;
+    mtx_unlock(&c->fq_mu);
+    if (!f) break;
+    c->t_smooth += f->s;
+    c->n_refit_gcv += f->refit;
+    if (f->st != ELFM_OK && err) *err = f->err;
+    st = finish_track(c, f->t, f->st, err); /* writes or frees the track */
+    f->t = NULL;
+    fin_free(f);
+    if (st != ELFM_OK) break;
   }
   return st;
 }
@@ -726,7 +824,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   c->n_det += kept;
   c->last_frame = v->frame;
   c->last_t_us = v->t_us;
-  if ((st = track_drain(c, err)) != ELFM_OK) return st;
+  if ((st = track_drain(c, 0, err)) != ELFM_OK) return st;
   /* Frame times no track can still ask for: before the earliest point the
    * linker holds, and before what gap filling may yet add (the kept
    * frames, and a new track's open start a whole gap before them). */
@@ -747,7 +845,9 @@ void track_ctx_free(track_ctx *c)
   for (int t = 0; c->pk && t < c->n_threads; t++) elfm_peaks_free(c->pk[t]);
   free(c->pk);
   free(c->sp);
-  free(c->fin);
+  for (size_t i = c->fq_head; i < c->fq_n; i++) fin_free(c->fq[i]);
+  free(c->fq);
+  if (c->fq_mu_ok) mtx_destroy(&c->fq_mu);
   free(c->slot_frame);
   free(c->fitok);
   free(c->keep);

@@ -105,6 +105,16 @@ typedef struct elfm_recon_options {
   elfm_volume_worker_fn worker;
   void *worker_user;
   elfm_volume_slot_fn on_volume_slot;
+  /* Optional work a callback leaves for the run's other threads (NULL:
+   * none), such as `eventlfm track` smoothing the tracks that ended. After
+   * each delivery, a thread with no delivery or read to do calls
+   * side_work(side_user, thread) before it refocuses, until a call returns
+   * 0 (nothing waiting). It runs beside the callback, other side_work calls
+   * and refocusing: it takes its work under its own lock, and the callback
+   * collects the results. What is left when the run ends is the caller's
+   * to finish. */
+  int (*side_work)(void *side_user, int thread);
+  void *side_user;
   /* 1: frames only, no refocus (for work that reads the frames alone, such
    * as elfm_refocus_sample at a few points: `eventlfm traces`). The worker
    * and the callbacks still get a volume, with the frame's times and the

@@ -294,8 +294,10 @@ static void stats_set_rates(elfm_recon_stats *st, double wall_s)
  *   deliver   the callback, one frame at a time, in order.
  *
  * Every thread of the team takes whichever job is ready: the next
- * delivery first, then the next read, then a refocus, so that the two
- * sequential stages never wait on the parallel one while it has slack.
+ * delivery first, then the next read, then the callback's side work (see
+ * elfm_recon_options.side_work), then a refocus, so that the two
+ * sequential stages never wait on the parallel one while it has slack,
+ * and what the callback hands off is done before more frames pile up.
  * Before, a batch of frames was read, then refocused in parallel, then
  * delivered, and the other threads idled while one read and delivered:
  * on `track` (flow, 2 threads) reading and delivering were a quarter of
@@ -317,12 +319,14 @@ typedef struct pipe {
   int stop;                     /* a delivery failed: no more work */
   elfm_status src_st, st;       /* the input's error; the delivery's */
   elfm_error src_err, err;
+  int64_t side_gen;             /* deliveries so far: each may leave side work */
+  int64_t side_empty_gen;       /* side_work found nothing as of this delivery */
   elfm_recon_stats src_pub;     /* the reading stage's counts, as of its last frame */
   double done_pub;              /* and how far through the input */
   double t_start, t_progress;
 } pipe;
 
-typedef enum { JOB_NONE, JOB_DELIVER, JOB_READ, JOB_REFOCUS, JOB_EXIT } job_kind;
+typedef enum { JOB_NONE, JOB_DELIVER, JOB_READ, JOB_SIDE, JOB_REFOCUS, JOB_EXIT } job_kind;
 
 /* The next job for a thread (p->mu held): which, and its frame. */
 static job_kind job_next(const run *r, const pipe *p, int64_t *frame)
@@ -337,6 +341,10 @@ static job_kind job_next(const run *r, const pipe *p, int64_t *frame)
   if (!p->reading && !p->src_end && p->n_read < p->n_delivered + ns) {
     *frame = p->n_read;
     return JOB_READ;
+  }
+  if (r->opt->side_work && p->side_gen != p->side_empty_gen) {
+    *frame = p->side_gen;
+    return JOB_SIDE;
   }
   if (p->n_taken < p->n_read) {
     *frame = p->n_taken;
@@ -444,6 +452,15 @@ static void pipe_work(run *r, pipe *p, int use_median, elfm_refocus_path path,
       cnd_wait(&p->cv, &p->mu);
       continue;
     }
+    if (k == JOB_SIDE) {
+      /* f: the deliveries as of this call; when it finds nothing, no
+       * side work is looked for again until the next delivery */
+      mtx_unlock(&p->mu);
+      const int did = r->opt->side_work(r->opt->side_user, thread);
+      mtx_lock(&p->mu);
+      if (!did && f > p->side_empty_gen) p->side_empty_gen = f;
+      continue;
+    }
     const int i = (int)(f % ns);
     slot *s = &r->slots[i];
     if (k == JOB_READ) {
@@ -480,6 +497,7 @@ static void pipe_work(run *r, pipe *p, int use_median, elfm_refocus_path path,
       } else {
         p->state[i] = SLOT_FREE;
         p->n_delivered++;
+        p->side_gen++;
         deliver_progress(r, p);
       }
     }

@@ -693,6 +693,89 @@ static void test_pipeline_overlap(const char *dir, const elfm_calib *cal)
   }
 }
 
+/* Side work (elfm_recon_options.side_work): each callback posts 3 units;
+ * free threads take them one by one between their other jobs. All are
+ * done by the time the run returns (threads look for side work before
+ * they leave), and with 2 threads some are done while a callback runs. */
+typedef struct side_ctx {
+  int posted, done;      /* units (under omp critical) */
+  int in_callback;       /* a callback runs now (atomic) */
+  int n_during_callback; /* units done while one ran */
+  int threads, bad_thread;
+  int64_t n;
+} side_ctx;
+
+static int side_take(void *user, int thread)
+{
+  side_ctx *h = user;
+  int took = 0;
+  if (thread < 0 || thread >= h->threads) {
+#pragma omp atomic write
+    h->bad_thread = 1;
+  }
+#pragma omp critical(side_units)
+  if (h->done < h->posted) {
+    h->done++;
+    took = 1;
+  }
+  if (!took) return 0;
+  int busy;
+#pragma omp atomic read
+  busy = h->in_callback;
+  if (busy) {
+#pragma omp atomic update
+    h->n_during_callback++;
+  }
+  struct timespec ts = {0, 200000}; /* 0.2 ms of "smoothing" */
+  nanosleep(&ts, NULL);
+  return 1;
+}
+
+static elfm_status side_ordered(const elfm_volume *v, int slot, void *user, elfm_error *err)
+{
+  (void)v, (void)slot, (void)err;
+  side_ctx *h = user;
+#pragma omp atomic write
+  h->in_callback = 1;
+#pragma omp critical(side_units)
+  h->posted += 3;
+  struct timespec ts = {0, 1000000};
+  nanosleep(&ts, NULL);
+  h->n++;
+#pragma omp atomic write
+  h->in_callback = 0;
+  return ELFM_OK;
+}
+
+static void test_side_work(const char *dir, const elfm_calib *cal)
+{
+  elfm_error err;
+  char path[600];
+  snprintf(path, sizeof path, "%s/events.raw", dir);
+  for (int threads = 1; threads <= 2; threads++) {
+    elfm_recon_options o;
+    elfm_recon_options_default(&o);
+    o.threads = threads;
+    o.on_volume_slot = side_ordered;
+    o.side_work = side_take;
+    side_ctx h;
+    memset(&h, 0, sizeof h);
+    h.threads = threads;
+    o.side_user = &h;
+    elfm_recon_stats st;
+    CHECK_OK(elfm_recon_run(path, cal, &o, NULL, &h, &st, &err), &err);
+    CHECK_EQ_INT(h.n, DUR_US / 1000);
+    CHECK_EQ_INT(h.posted, 3 * DUR_US / 1000);
+    CHECK_EQ_INT(h.done, h.posted);
+    CHECK_EQ_INT(h.bad_thread, 0);
+    if (threads == 1) CHECK_EQ_INT(h.n_during_callback, 0);
+    else CHECK_MSG(h.n_during_callback > 0, "2 threads: no side work beside the %lld callbacks",
+                   (long long)h.n);
+    printf("%d thread%s: %d of %d side units done while a callback ran\n", threads,
+           threads > 1 ? "s" : "", h.n_during_callback, h.done);
+  }
+}
+
 int main(void)
 {
   elfm_calib cal;
@@ -706,6 +789,7 @@ int main(void)
   test_worker_hook(dir, &cal);
   test_no_refocus(dir, &cal);
   test_pipeline_overlap(dir, &cal);
+  test_side_work(dir, &cal);
   test_tiff(dir, &cal);
   test_tiff_mixed_depth(dir);
   char cmd[600];

@@ -45,6 +45,9 @@ typedef struct elfm_frame_times {
 
 void elfm_frame_times_init(elfm_frame_times *ft);
 void elfm_frame_times_free(elfm_frame_times *ft);
+/* dst = a copy of src (dst initialised, its old runs freed); NOMEM. */
+elfm_status elfm_frame_times_copy(elfm_frame_times *dst, const elfm_frame_times *src,
+                                  elfm_error *err);
 /* Record frame's time; frames must be added in increasing order, each after
  * the previous one (ELFM_ERR_INVALID otherwise), times increasing. */
 elfm_status elfm_frame_times_add(elfm_frame_times *ft, int64_t frame, int64_t t_us,

@@ -71,6 +71,25 @@ elfm_status elfm_frame_times_add(elfm_frame_times *ft, int64_t frame, int64_t t_
   return ELFM_OK;
 }
 
+elfm_status elfm_frame_times_copy(elfm_frame_times *dst, const elfm_frame_times *src,
+                                  elfm_error *err)
+{
+  elfm_frame_times_free(dst);
+  while (dst->cap < src->n)
+    if (!grow(dst)) {
+      elfm_frame_times_free(dst);
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "frame times: out of memory");
+    }
+  if (src->n) {
+    memcpy(dst->frame, src->frame, src->n * sizeof *dst->frame);
+    memcpy(dst->t_us, src->t_us, src->n * sizeof *dst->t_us);
+    memcpy(dst->step_us, src->step_us, src->n * sizeof *dst->step_us);
+  }
+  dst->n = src->n;
+  dst->last_frame = src->last_frame;
+  return ELFM_OK;
+}
+
 int elfm_frame_times_get(const elfm_frame_times *ft, int64_t frame, int64_t *t_us)
 {
   if (ft->n == 0 || frame < ft->frame[0] || frame > ft->last_frame) return 0;
