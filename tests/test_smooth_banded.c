@@ -109,9 +109,28 @@ int main(void)
       }
     }
     for (int order = 2; order <= 3; order++) {
-      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order};
+      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order, NULL};
       const double l1 = elfm_spline_gcv_lambda(&sp, w, 1), l5 = elfm_spline_gcv_lambda(&sp, w, 5);
       CHECK(l5 >= l1);
+      /* the prior's rows from a table: the same numbers, so the same bits
+       * (the smoother uses the table; without it each build recomputes) */
+      {
+        static double coef[4 * K];
+        elfm_spline_prior_table(ts, K, order, coef);
+        elfm_spline_problem spt = sp;
+        spt.coef = coef;
+        CHECK(elfm_spline_gcv_lambda(&spt, w, 1) == l1);
+        double pa[3 * K], pb[3 * K], ra, rb, ea, eb;
+        elfm_banded b1, b2;
+        elfm_banded_init(&b1);
+        elfm_banded_init(&b2);
+        CHECK(elfm_spline_linear(&sp, w, 3.7, &b1, work, &ra, &ea, pa));
+        CHECK(elfm_spline_linear(&spt, w, 3.7, &b2, work, &rb, &eb, pb));
+        CHECK(ra == rb && ea == eb && memcmp(pa, pb, sizeof pa) == 0);
+        CHECK(memcmp(b1.z[0], b2.z[0], K * sizeof *b1.z[0]) == 0);
+        elfm_banded_free(&b1);
+        elfm_banded_free(&b2);
+      }
       elfm_banded bd;
       elfm_banded_init(&bd);
       double rss, edf, prev_edf = INFINITY, fit = 0;

@@ -349,6 +349,7 @@ struct SplineSetup {
   std::vector<double> ts;           // state times (ms, relative)
   std::vector<int64_t> ts_abs;      // state times (us, absolute)
   std::vector<size_t> state_of;     // data i -> state
+  std::vector<double> coef;         // the prior's rows (elfm_spline_prior_table)
   double sig_ref[3] = {1, 1, 1};
   int order = 2;                    // penalised derivative: 2 acceleration, 3 jerk
 };
@@ -365,6 +366,7 @@ elfm_spline_problem spline_problem(const Data &d, const SplineSetup &ss)
   sp.sig_ref = ss.sig_ref;
   sp.state_of = ss.state_of.data();
   sp.order = ss.order;
+  sp.coef = ss.coef.empty() ? nullptr : ss.coef.data();
   return sp;
 }
 
@@ -504,8 +506,8 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
     for (size_t i = 0; i < d.n; i++)
       W[ss.state_of[i]] += w[i] / (d.sig[3 * i + a] * d.sig[3 * i + a]);
     if (!elfm_banded_resize(&bd.w, K)) return false;
-    elfm_banded_build(&bd.w, W.data(), ss.ts.data(), lam / (ss.sig_ref[a] * ss.sig_ref[a]),
-                      ss.order);
+    elfm_banded_build_table(&bd.w, W.data(), ss.coef.data(), lam / (ss.sig_ref[a] * ss.sig_ref[a]),
+                            ss.order);
     if (!elfm_banded_factor(&bd.w)) return false;
     elfm_banded_inverse(&bd.w);
     f->z0[a].assign(bd.w.z[0], bd.w.z[0] + K + 3);
@@ -693,6 +695,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     ss.order = o->spline_order;
     ss.ts.resize(all.size());
     for (size_t k = 0; k < all.size(); k++) ss.ts[k] = d.tau_of(all[k]);
+    ss.coef.assign(4 * ss.ts.size(), 0.0);
+    elfm_spline_prior_table(ss.ts.data(), ss.ts.size(), ss.order, ss.coef.data());
     ss.state_of.resize(n);
     for (size_t i = 0; i < n; i++)
       ss.state_of[i] =

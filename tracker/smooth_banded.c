@@ -39,6 +39,11 @@ void elfm_spline_prior_coef(const double *ts, int order, size_t k, double c[4])
   else accel_coef(ts, k + 1, c);
 }
 
+void elfm_spline_prior_table(const double *ts, size_t K, int order, double *coef)
+{
+  for (size_t k = 0; k + (size_t)order + 1 <= K; k++) elfm_spline_prior_coef(ts, order, k, coef + 4 * k);
+}
+
 void elfm_banded_init(elfm_banded *bd) { memset(bd, 0, sizeof *bd); }
 
 void elfm_banded_free(elfm_banded *bd)
@@ -81,7 +86,10 @@ int elfm_banded_resize(elfm_banded *bd, size_t K)
   return 1;
 }
 
-void elfm_banded_build(elfm_banded *bd, const double *W, const double *ts, double mu, int order)
+/* The prior's rows from ts, or from coef (elfm_spline_prior_table) when
+ * not NULL. */
+static void banded_build(elfm_banded *bd, const double *W, const double *ts, const double *coef,
+                         double mu, int order)
 {
   bd->b = order;
   const size_t K = bd->K;
@@ -91,11 +99,23 @@ void elfm_banded_build(elfm_banded *bd, const double *W, const double *ts, doubl
   }
   const size_t m = (size_t)order + 1;
   for (size_t k = 0; k + m <= K; k++) { /* rows over states k .. k + order */
-    double c[4];
-    elfm_spline_prior_coef(ts, order, k, c);
+    double cr[4];
+    const double *c = coef ? coef + 4 * k : cr;
+    if (!coef) elfm_spline_prior_coef(ts, order, k, cr);
     for (size_t i = 0; i < m; i++)
       for (size_t d = 0; i + d < m; d++) bd->a[d][k + i] += mu * c[i] * c[i + d];
   }
+}
+
+void elfm_banded_build(elfm_banded *bd, const double *W, const double *ts, double mu, int order)
+{
+  banded_build(bd, W, ts, NULL, mu, order);
+}
+
+void elfm_banded_build_table(elfm_banded *bd, const double *W, const double *coef, double mu,
+                             int order)
+{
+  banded_build(bd, W, NULL, coef, mu, order);
 }
 
 int elfm_banded_factor(elfm_banded *bd)
@@ -181,7 +201,7 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
       W[sp->state_of[i]] += wi;
       b[sp->state_of[i]] += wi * sp->x[3 * i + a];
     }
-    elfm_banded_build(bd, W, sp->ts, lambda / (sp->sig_ref[a] * sp->sig_ref[a]), sp->order);
+    banded_build(bd, W, sp->ts, sp->coef, lambda / (sp->sig_ref[a] * sp->sig_ref[a]), sp->order);
     if (!elfm_banded_factor(bd)) return 0;
     elfm_banded_solve(bd, b, x);
     elfm_banded_inverse(bd);
