@@ -242,7 +242,7 @@ typedef struct track_ctx {
   const elfm_calib *calib;
   /* Peak detection runs on the recon driver's worker threads (the worker
    * hook): one detector workspace per thread, one detection buffer per
-   * batch slot, read back in frame order by the linking callback. */
+   * ring slot, read back in frame order by the linking callback. */
   int n_threads, n_slots;
   elfm_peaks **pk;       /* [n_threads] */
   elfm_detection *det;   /* [n_slots][max_det] */

@@ -73,7 +73,7 @@ typedef void (*elfm_recon_progress_fn)(const elfm_recon_stats *s, void *user);
 typedef elfm_status (*elfm_volume_worker_fn)(const elfm_volume *vol, const elfm_frame *frame,
                                              const elfm_refocus_plan *plan, int slot, int thread,
                                              void *user, elfm_error *err);
-/* The ordered callback with the volume's batch slot (see above). */
+/* The ordered callback with the volume's ring slot (see above). */
 typedef elfm_status (*elfm_volume_slot_fn)(const elfm_volume *vol, int slot, void *user,
                                            elfm_error *err);
 
@@ -122,7 +122,7 @@ typedef struct elfm_recon_options {
   int no_refocus;
 } elfm_recon_options;
 
-/* The worker threads and batch slots elfm_recon_run will use with `o`
+/* The worker threads and ring slots elfm_recon_run will use with `o`
  * (for sizing per-thread workspaces and per-slot outputs of a worker hook).
  * ELFM_ERR_INVALID for out-of-range threads / batch. */
 elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *slots,
