@@ -81,6 +81,13 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
  * the lambda minimising 3n RSS / (3n - gamma edf)^2; 1 when none can be
  * computed. */
 double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma);
+/* The same search started from lam0, walking the grid downhill from its
+ * nearest point instead of scoring all of it: the same weight wherever
+ * GCV's score falls steadily from lam0 to the grid's least (the robust
+ * fit's second choice, near its first). The whole grid when lam0 has no
+ * score. */
+double elfm_spline_gcv_lambda_near(const elfm_spline_problem *sp, const double *w, double gamma,
+                                   double lam0);
 
 #ifdef __cplusplus
 }
