@@ -129,6 +129,9 @@ int main(void)
                     "order %d: from %g the walk ends at %g, the grid at %g", order, starts[q],
                     elfm_spline_gcv_lambda_near(&sp, w, 1, starts[q]), l1);
         CHECK(elfm_spline_gcv_lambda_near(&sp, w, 5, l5 * 100) == l5);
+        /* whole decades, then the walk: the same again */
+        CHECK(elfm_spline_gcv_lambda_coarse(&sp, w, 1) == l1);
+        CHECK(elfm_spline_gcv_lambda_coarse(&sp, w, 5) == l5);
         double pa[3 * K], pb[3 * K], ra, rb, ea, eb;
         elfm_banded b1, b2;
         elfm_banded_init(&b1);

@@ -88,6 +88,10 @@ double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, do
  * score. */
 double elfm_spline_gcv_lambda_near(const elfm_spline_problem *sp, const double *w, double gamma,
                                    double lam0);
+/* The search on whole decades first (13 fits), then
+ * elfm_spline_gcv_lambda_near from the best: the whole grid's weight
+ * wherever its scores fall steadily to their least. */
+double elfm_spline_gcv_lambda_coarse(const elfm_spline_problem *sp, const double *w, double gamma);
 
 #ifdef __cplusplus
 }
