@@ -67,20 +67,6 @@ static void sparse_clear_plane(const elfm_refocus_plan *p, elfm_volume *vol,
   }
 }
 
-/* row[X] *= tab[cnt[X]] for X in [lo, hi): four at a time, the four
- * factors looked up one by one; each product is the scalar loop's. */
-static void scale_by_count(float *row, const uint8_t *cnt, const float *tab, int lo, int hi)
-{
-  int X = lo;
-#ifdef __SSE2__
-  for (; X + 4 <= hi; X += 4) {
-    const __m128 f = _mm_setr_ps(tab[cnt[X]], tab[cnt[X + 1]], tab[cnt[X + 2]], tab[cnt[X + 3]]);
-    _mm_storeu_ps(row + X, _mm_mul_ps(_mm_loadu_ps(row + X), f));
-  }
-#endif
-  for (; X < hi; X++) row[X] *= tab[cnt[X]];
-}
-
 static int grow(void **buf, size_t *cap, size_t need, size_t elem)
 {
   if (need <= *cap) return 1;
@@ -313,9 +299,9 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
         const uint8_t *cnt = p->count + (size_t)r * W;
         const int a = p->full_lo[r] > lo ? (p->full_lo[r] < hi ? p->full_lo[r] : hi) : lo;
         const int b = p->full_hi[r] < hi ? (p->full_hi[r] > a ? p->full_hi[r] : a) : hi;
-        scale_by_count(row, cnt, p->inv_table, lo, a);
+        for (int X = lo; X < a; X++) row[X] *= p->inv_table[cnt[X]];
         for (int X = a; X < b; X++) row[X] *= inv_all;
-        scale_by_count(row, cnt, p->inv_table, b, hi);
+        for (int X = b; X < hi; X++) row[X] *= p->inv_table[cnt[X]];
       }
     }
   }
