@@ -256,9 +256,9 @@ static void gcv_refine(const elfm_spline_problem *sp, const double *w, double ga
 
 static double gcv_grid(int e) { return pow(10.0, 0.5 * e); }
 
-/* How a search starts: every grid point, every other one (whole decades),
- * or the one point nearest a given weight. */
-typedef enum { GCV_ALL, GCV_DECADES, GCV_NEAR } gcv_start;
+/* How a search starts: every grid point, or every other one (whole
+ * decades) and then a walk. */
+typedef enum { GCV_ALL, GCV_DECADES } gcv_start;
 
 /* From the grid's best so far (*best_e), downhill along the grid, first
  * towards smaller weights, else larger, until the score stops falling. */
@@ -278,49 +278,35 @@ static void gcv_walk(const elfm_spline_problem *sp, const double *w, double gamm
 }
 
 static double gcv_search(const elfm_spline_problem *sp, const double *w, double gamma,
-                         gcv_start how, double lam0)
+                         gcv_start how)
 {
   elfm_banded bd;
   elfm_banded_init(&bd);
   double *work = malloc((3 * sp->K + 1) * sizeof *work);
   double best = 1.0, best_g = INFINITY;
   int best_e = 0;
-  if (how == GCV_NEAR) {
-    best_e = (int)lround(2 * log10(lam0));
-    if (best_e < GCV_E_MIN) best_e = GCV_E_MIN;
-    if (best_e > GCV_E_MAX) best_e = GCV_E_MAX;
-    if (work) gcv_try(sp, w, gamma, gcv_grid(best_e), &bd, work, &best, &best_g);
-  } else {
-    for (int e = GCV_E_MIN; work && e <= GCV_E_MAX; e += how == GCV_ALL ? 1 : 2) {
-      const double before = best;
-      gcv_try(sp, w, gamma, gcv_grid(e), &bd, work, &best, &best_g);
-      if (best != before) best_e = e;
-    }
+  for (int e = GCV_E_MIN; work && e <= GCV_E_MAX; e += how == GCV_ALL ? 1 : 2) {
+    const double before = best;
+    gcv_try(sp, w, gamma, gcv_grid(e), &bd, work, &best, &best_g);
+    if (best != before) best_e = e;
   }
   if (work && isfinite(best_g)) {
-    if (how != GCV_ALL) gcv_walk(sp, w, gamma, &bd, work, &best_e, &best, &best_g);
+    if (how == GCV_DECADES) gcv_walk(sp, w, gamma, &bd, work, &best_e, &best, &best_g);
     gcv_refine(sp, w, gamma, &bd, work, &best, &best_g);
   }
   free(work);
   elfm_banded_free(&bd);
-  /* no score where a partial search looked: the whole grid */
-  if (how != GCV_ALL && !isfinite(best_g)) return gcv_search(sp, w, gamma, GCV_ALL, 0);
+  /* no score on the decades: the whole grid */
+  if (how == GCV_DECADES && !isfinite(best_g)) return gcv_search(sp, w, gamma, GCV_ALL);
   return best;
 }
 
 double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma)
 {
-  return gcv_search(sp, w, gamma, GCV_ALL, 0);
+  return gcv_search(sp, w, gamma, GCV_ALL);
 }
 
 double elfm_spline_gcv_lambda_coarse(const elfm_spline_problem *sp, const double *w, double gamma)
 {
-  return gcv_search(sp, w, gamma, GCV_DECADES, 0);
-}
-
-double elfm_spline_gcv_lambda_near(const elfm_spline_problem *sp, const double *w, double gamma,
-                                   double lam0)
-{
-  if (!(lam0 > 0) || !isfinite(lam0)) return gcv_search(sp, w, gamma, GCV_ALL, 0);
-  return gcv_search(sp, w, gamma, GCV_NEAR, lam0);
+  return gcv_search(sp, w, gamma, GCV_DECADES);
 }

@@ -81,16 +81,12 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
  * the lambda minimising 3n RSS / (3n - gamma edf)^2; 1 when none can be
  * computed. */
 double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma);
-/* The same search started from lam0, walking the grid downhill from its
- * nearest point instead of scoring all of it: the same weight wherever
- * GCV's score falls steadily from lam0 to the grid's least (the robust
- * fit's second choice, near its first). The whole grid when lam0 has no
- * score. */
-double elfm_spline_gcv_lambda_near(const elfm_spline_problem *sp, const double *w, double gamma,
-                                   double lam0);
-/* The search on whole decades first (13 fits), then
- * elfm_spline_gcv_lambda_near from the best: the whole grid's weight
- * wherever its scores fall steadily to their least. */
+/* The same search on whole decades first (13 fits), then downhill along
+ * the half-decade grid from their best (first towards smaller weights,
+ * else larger) until the score stops falling, then the same refinement:
+ * the whole grid's weight unless the least lies in a dip narrower than a
+ * decade, or the score is flat (to its rounding) where the two searches
+ * look. The whole grid when no decade has a score. */
 double elfm_spline_gcv_lambda_coarse(const elfm_spline_problem *sp, const double *w, double gamma);
 
 #ifdef __cplusplus
