@@ -472,7 +472,7 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
   // GCV's weight: whole decades first, then downhill on the half-decade
   // grid from the best (elfm_spline_gcv_lambda_coarse): 15-16 fits where
   // the half-decade grid took 25. Checked against the whole grid in the
-  // same runs, both choices: the same weight in 5159 of 5160 on 165
+  // same runs, both choices: the same weight in 5159 of 5160 on 162
   // recordings (docs/tracker.md "The spline's weight in fewer fits"); the
   // other, a 7-point track whose score is flat to 1e-6 beyond 1e7 (a
   // straight line), at 1.8e8 against 3.2e7.
