@@ -1,7 +1,7 @@
 /* cmd_track.h — what the files of `eventlfm track` share (private to it):
  * the options (cmd_track.c parses them), the run's context, the per-volume
- * work the recon driver calls back (cmd_track_volume.c) and the summary
- * (cmd_track_summary.c). */
+ * work the recon driver calls back (cmd_track_volume.c), the finished
+ * tracks' queue (cmd_track_finish.c) and the summary (cmd_track_summary.c). */
 #ifndef ELFM_CMD_TRACK_H
 #define ELFM_CMD_TRACK_H
 
@@ -268,7 +268,7 @@ typedef struct track_ctx {
   double *pred_intensity; /* [max_det] those tracks' last intensity */
   int have_first;
   /* The finished tracks and pieces to smooth and write, in the linker's
-   * order: fq[fq_head .. fq_n), under fq_mu (cmd_track_volume.c,
+   * order: fq[fq_head .. fq_n), under fq_mu (cmd_track_finish.c,
    * track_drain and track_side_work). */
   struct fin_track **fq;
   size_t fq_head, fq_n, fq_cap;
@@ -325,7 +325,7 @@ typedef struct track_ctx {
   int64_t speed_hist[TRACK_SPEED_BINS];
   int64_t n_speed;
   /* --motion stage without a given velocity: the stage's velocity from the
-   * tracks themselves (track_stage_*, cmd_track_volume.c). Finished tracks
+   * tracks themselves (track_stage_*, cmd_track_stage.c). Finished tracks
    * wait in stage_pending until TRACK_STAGE_MIN_TRACKS of them with
    * TRACK_STAGE_MIN_POINTS points or more give a consensus; from then on
    * each is tested against the weighted median of the newest
@@ -378,13 +378,15 @@ int track_near_add(const elfm_detection *det, int n, int skip, double x_um, doub
                    double near_um, const elfm_volume *geo, double nb[TRACK_NEAR_MAX][3], int k);
 /* Queue the tracks the linker has finished; filter and write those at the
  * queue's head that are smoothed. at_end (after the run): smooth all that
- * wait first, all threads at once. */
+ * wait first, all threads at once (cmd_track_finish.c). */
 elfm_status track_drain(track_ctx *c, int at_end, elfm_error *err);
 /* The driver's side work (elfm_recon_options.side_work; user: the
  * track_ctx): smooth the oldest queued track; 0 when none waits. */
 int track_side_work(void *user, int thread);
+/* The queue's tracks and its mutex (track_ctx_free; cmd_track_finish.c). */
+void track_finish_free(track_ctx *c);
 /* Write a kept, smoothed track: tracks.csv, the XML scratch, its info
- * (cmd_track_volume.c). Frees t. */
+ * (cmd_track_finish.c). Frees t. */
 elfm_status track_write_track(track_ctx *c, elfm_track *t, elfm_error *err);
 /* --motion stage (cmd_track_stage.c): write t, or leave it out when it does
  * not move with the stage, or (no velocity given) hold it until the tracks
