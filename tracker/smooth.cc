@@ -398,8 +398,7 @@ bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double
   const double sl = std::sqrt(lambda);
   const double scale[3] = {sl / ss.sig_ref[0], sl / ss.sig_ref[1], sl / ss.sig_ref[2]};
   for (size_t k = 0; k + (size_t)ss.order < K; k++) {  // states k .. k + order
-    double c[4];
-    elfm_spline_prior_coef(ss.ts.data(), ss.order, k, c);
+    const double *c = &ss.coef[4 * k];  // the fit's table (elfm_spline_prior_table)
     if (ss.order == 3)
       prob.AddResidualBlock(new ceres::AutoDiffCostFunction<JerkResidual, 3, 3, 3, 3, 3>(
                                 new JerkResidual{{c[0], c[1], c[2], c[3]}, {scale[0], scale[1], scale[2]}}),
