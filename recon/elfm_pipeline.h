@@ -142,7 +142,11 @@ typedef elfm_status (*elfm_volume_fn)(const elfm_volume *vol, void *user, elfm_e
 
 /* Refocus the events of `events_path` with `calib`. `stats` may be NULL.
  * Errors: the reader's (file + byte offset / line), geometry mismatch
- * between file and calibration (ELFM_ERR_INVALID), options (ELFM_ERR_INVALID). */
+ * between file and calibration (ELFM_ERR_INVALID), options (ELFM_ERR_INVALID).
+ * A reader's error ends the recording where it is: the events decoded
+ * before it are framed as a file ending there would be (its last window
+ * too), every volume is delivered, then the error is returned
+ * (stats->input_error 1); an error past to_us is not one. */
 elfm_status elfm_recon_run(const char *events_path, const elfm_calib *calib,
                            const elfm_recon_options *opt, elfm_volume_fn on_volume, void *user,
                            elfm_recon_stats *stats, elfm_error *err);

@@ -55,6 +55,10 @@ typedef struct source {
   int64_t tiff_page, tiff_frame_us;
   int64_t from_us, to_us;
   int eof;
+  /* A read error met with events decoded before it: they are framed like
+   * the rest, every window they close is made, then this is returned. */
+  elfm_status read_st;
+  elfm_error read_err;
   /* The reading stage's own counts (events, triggers, first and last
    * event, span, read_s, frame_s): only the thread reading writes them,
    * so they are kept apart from the delivery stage's and merged after. */
@@ -182,12 +186,26 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
       *got = 1;
       return ELFM_OK;
     }
-    if (s->eof) return ELFM_OK;
+    if (s->eof) {
+      if (s->read_st && err) *err = s->read_err;
+      return s->read_st;
+    }
     t0 = now_s();
     elfm_status st = elfm_reader_read(s->reader, s->chunk, err);
     s->st.read_s += now_s() - t0;
-    if (st) return st;
     elfm_event_chunk *c = s->chunk;
+    if (st) {
+      /* A truncated or corrupt file: the events before the error are
+       * still the recording's (an acquisition cut short keeps all but
+       * its last word); they end it as its last events would, and the
+       * error comes once their windows are made. Dropped with their
+       * chunk, they were up to 65536 events: seconds of a sparse scene. */
+      if (c->n == 0 && c->n_trig == 0) return st;
+      s->read_st = st;
+      if (err) s->read_err = *err;
+      else elfm_error_set(&s->read_err, st, elfm_reader_path(s->reader), -1, "read failed");
+      s->eof = 1;
+    }
     if (c->n == 0 && c->n_trig == 0) {
       s->eof = 1;
       elfm_framer_finish(s->framer);
@@ -198,7 +216,10 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
     size_t lo = 0, hi = c->n;
     while (lo < hi && c->t_us[lo] < s->from_us) lo++;
     while (hi > lo && c->t_us[hi - 1] >= s->to_us) hi--;
-    if (hi < c->n) s->eof = 1;
+    if (hi < c->n) {
+      s->eof = 1;
+      s->read_st = ELFM_OK; /* an error past to_us is outside the range asked for */
+    }
     if (c->n_trig > 0 && c->trig[c->n_trig - 1].t_us >= s->to_us) s->eof = 1;
     if (lo > 0) { /* only in the first chunk after a seek: shift down */
       memmove(c->t_us, c->t_us + lo, (hi - lo) * sizeof *c->t_us);

@@ -26,6 +26,114 @@ static int exists(const char *rel)
   return access(path, R_OK) == 0;
 }
 
+/* 1 when the two files hold the same bytes */
+static int same_file(const char *a, const char *b)
+{
+  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+  int same = fa && fb;
+  while (same) {
+    char x[4096], y[4096];
+    size_t na = fread(x, 1, sizeof x, fa), nb = fread(y, 1, sizeof y, fb);
+    if (na != nb || memcmp(x, y, na) != 0) same = 0;
+    if (na < sizeof x) break;
+  }
+  if (fa) fclose(fa);
+  if (fb) fclose(fb);
+  return same;
+}
+
+/* counts.<key> of DIR/<rel>/summary.json, -1 when missing */
+static double summary_count(const char *rel, const char *key)
+{
+  char path[800];
+  snprintf(path, sizeof path, "%s/%s/summary.json", dir, rel);
+  FILE *f = fopen(path, "r");
+  char buf[16384];
+  size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
+  if (f) fclose(f);
+  buf[n] = '\0';
+  cJSON *root = cJSON_Parse(buf);
+  cJSON *c = root ? cJSON_GetObjectItem(root, "counts") : NULL;
+  cJSON *k = c ? cJSON_GetObjectItem(c, key) : NULL;
+  double v = cJSON_IsNumber(k) ? k->valuedouble : -1;
+  cJSON_Delete(root);
+  return v;
+}
+
+/* The files are written by the run's threads beside the refocusing (the
+ * callback queues copies): one thread or two, the same bytes in every
+ * file, every volume saved; a file that cannot be written stops the run
+ * with exit 1 naming it; a run cut short by its input still writes the
+ * volumes it made. */
+static void test_saved_files(const char *sim)
+{
+  char args[3000];
+  for (int th = 1; th <= 2; th++) {
+    snprintf(args, sizeof args,
+             "recon --calib %s/calib.json --events %s/events.raw --out %s/w%d --save-volumes "
+             "--save-mips --threads %d --dt-us 1000 --quiet",
+             sim, sim, dir, th, th);
+    CHECK_EQ_INT(run(args), 0);
+  }
+  const double nvol = summary_count("w2", "volumes");
+  CHECK(nvol >= 6);
+  CHECK(summary_count("w1", "volumes") == nvol);
+  CHECK(summary_count("w1", "saved_volumes") == nvol && summary_count("w2", "saved_volumes") == nvol);
+  CHECK(summary_count("w1", "saved_mips") == nvol && summary_count("w2", "saved_mips") == nvol);
+  int differ = 0;
+  for (int k = 0; k < (int)nvol; k++) {
+    char a[800], b[800];
+    snprintf(a, sizeof a, "%s/w1/volumes/vol_%06d.exr", dir, k);
+    snprintf(b, sizeof b, "%s/w2/volumes/vol_%06d.exr", dir, k);
+    differ += !same_file(a, b);
+    snprintf(a, sizeof a, "%s/w1/mips/mip_%06d.png", dir, k);
+    snprintf(b, sizeof b, "%s/w2/mips/mip_%06d.png", dir, k);
+    differ += !same_file(a, b);
+  }
+  CHECK_EQ_INT(differ, 0);
+
+  /* volumes/ is a file: no EXR can be written */
+  char path[800];
+  snprintf(path, sizeof path, "%s/wbad", dir);
+  mkdir(path, 0777);
+  snprintf(path, sizeof path, "%s/wbad/volumes", dir);
+  FILE *f = fopen(path, "w");
+  if (f) fclose(f);
+  snprintf(args, sizeof args,
+           "recon --calib %s/calib.json --events %s/events.raw --out %s/wbad --save-volumes --threads 2 --quiet",
+           sim, sim, dir);
+  CHECK_EQ_INT(run(args), 1);
+  CHECK(file_has("err.txt", "wbad/volumes/vol_000000.exr"));
+  CHECK(file_has("wbad/summary.json", "\"input_error\"") && file_has("wbad/summary.json", "vol_000000.exr"));
+  CHECK(summary_count("wbad", "saved_volumes") == 0);
+  CHECK(exists("wbad/frames.csv"));
+
+  /* cut halfway through the recording, inside a 2-byte word (the
+   * header's length sets the parity): the volumes made before the error
+   * are all written */
+  snprintf(path, sizeof path, "%s/events.raw", sim);
+  struct stat sb;
+  const long half = stat(path, &sb) == 0 ? (long)sb.st_size / 2 : 60000;
+  snprintf(path, sizeof path, "%s/cut2.raw", dir);
+  int rc = 0;
+  for (long cut = half; cut <= half + 1 && rc == 0; cut++) {
+    snprintf(args, sizeof args, "head -c %ld %s/events.raw > %s", cut, sim, path);
+    CHECK(system(args) == 0);
+    snprintf(args, sizeof args,
+             "recon --calib %s/calib.json --events %s --out %s/wcut --save-volumes --threads 2 --quiet",
+             sim, path, dir);
+    rc = run(args);
+  }
+  CHECK_EQ_INT(rc, 1);
+  CHECK(file_has("err.txt", "cut2.raw: byte"));
+  const double made = summary_count("wcut", "volumes");
+  CHECK(made >= 1 && summary_count("wcut", "saved_volumes") == made);
+  char last[64], after[64];
+  snprintf(last, sizeof last, "wcut/volumes/vol_%06d.exr", (int)made - 1);
+  snprintf(after, sizeof after, "wcut/volumes/vol_%06d.exr", (int)made);
+  CHECK(exists(last) && !exists(after));
+}
+
 int main(void)
 {
   char bin[600];
@@ -166,6 +274,7 @@ int main(void)
     CHECK_MSG(strstr(text, "\"input_error\"") && strstr(text, "cut.raw: byte"),
               "summary.json of a truncated input lacks input_error");
   }
+  test_saved_files(sim);
   snprintf(args, sizeof args, "recon --calib %s/calib.json --tiff %s/events.raw --out %s/r3 --quiet", sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
   CHECK(file_has("err.txt", "events.raw"));

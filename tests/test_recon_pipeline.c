@@ -197,30 +197,52 @@ static void test_runs(const char *dir, const elfm_calib *cal)
   o.from_us = 10;
   o.to_us = 5;
   CHECK(elfm_recon_run(path, cal, &o, on_volume, &c2, NULL, &err) == ELFM_ERR_INVALID);
-  /* a truncated recording: the volumes before the damage, then the error */
-  char cut[700];
-  snprintf(cut, sizeof cut, "%s/cut.raw", dir);
-  FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
-  char buf[4096];
-  size_t n, total = 0;
-  while ((n = fread(buf, 1, sizeof buf, in)) > 0 && total < 200000) {
-    fwrite(buf, 1, n, out);
-    total += n;
+  /* A truncated recording: every volume before the damage, then the
+   * error. Of two cuts a byte apart one ends on a word boundary (a shorter
+   * recording, no error) and the other inside a word: that one must give
+   * the same volumes (the events of its last chunk, decoded before the
+   * error, framed to the end as the clean cut's), then the error naming
+   * file and byte. */
+  static collect cc[2];
+  elfm_status sc[2];
+  elfm_error ec[2];
+  elfm_recon_stats stc[2];
+  for (int k = 0; k < 2; k++) {
+    char cut[700];
+    snprintf(cut, sizeof cut, "%s/cut%d.raw", dir, k);
+    FILE *in = fopen(path, "rb"), *out = fopen(cut, "wb");
+    char buf[4096];
+    size_t n, total = 0;
+    const size_t want = 200000 + (size_t)k;
+    while (in && out && total < want && (n = fread(buf, 1, sizeof buf, in)) > 0) {
+      if (n > want - total) n = want - total;
+      fwrite(buf, 1, n, out);
+      total += n;
+    }
+    if (in) fclose(in);
+    if (out) fclose(out);
+    memset(&cc[k], 0, sizeof cc[k]);
+    cc[k].fail_at = -1;
+    elfm_recon_options_default(&o);
+    o.chunk_events = 1 << 20; /* the whole cut in one chunk: the damage is in it */
+    elfm_error_clear(&ec[k]);
+    sc[k] = elfm_recon_run(cut, cal, &o, on_volume, &cc[k], &stc[k], &ec[k]);
   }
-  fputc(0x7f, out); /* half an EVT3 word */
-  fclose(in);
-  fclose(out);
-  memset(&c2, 0, sizeof c2);
-  c2.fail_at = -1;
-  elfm_recon_options_default(&o);
-  elfm_status s = elfm_recon_run(cut, cal, &o, on_volume, &c2, &st, &err);
-  if (s != ELFM_OK) {
-    CHECK(strstr(err.file, "cut.raw") != NULL);
-    CHECK(err.offset >= 0 || err.line > 0);
-  }
+  CHECK_MSG((sc[0] == ELFM_OK) != (sc[1] == ELFM_OK), "cuts a byte apart: %d and %d", sc[0], sc[1]);
+  const int bad = sc[0] != ELFM_OK ? 0 : 1, good = 1 - bad;
+  CHECK(sc[bad] == ELFM_ERR_FORMAT);
+  CHECK(strstr(ec[bad].file, bad ? "cut1.raw" : "cut0.raw") != NULL);
+  CHECK(ec[bad].offset > 0);
   /* the run says the error was its input's, so callers may keep what came */
-  CHECK_EQ_INT(st.input_error, s != ELFM_OK);
-  CHECK(c2.n > 0 && c2.n < c1.n);
+  CHECK_EQ_INT(stc[bad].input_error, 1);
+  CHECK_EQ_INT(stc[good].input_error, 0);
+  CHECK(cc[good].n > 0 && cc[good].n < c1.n);
+  CHECK_EQ_INT(cc[bad].n, cc[good].n);
+  CHECK_EQ_INT(stc[bad].events, stc[good].events);
+  for (int i = 0; i < cc[good].n && i < 256; i++) {
+    CHECK_EQ_INT(cc[bad].frames[i], cc[good].frames[i]);
+    CHECK(cc[bad].sum[i] == cc[good].sum[i]);
+  }
 
   /* EXR round trip and MIP of the kept volume */
   char exr[700], png[700];
