@@ -212,7 +212,7 @@ int cmd_demo(int argc, char **argv)
     cli_path_fmt(from, sizeof from, "%lld", (long long)(t_last - win));
     cli_path_fmt(to, sizeof to, "%lld", (long long)t_last);
     char *rargv[] = {"recon", "--calib", calib, "--events", ev, "--out", mips, "--from-us", from,
-                     "--to-us", to, "--save-mips", NULL};
+                     "--to-us", to, "--save-mips", "--quiet", NULL};
     if (run_sub(cmd_recon, rargv) != CLI_OK) {
       cli_message("demo", CLI_OK, "recon --save-mips failed: no MIP PNGs");
       pics_ok = 0;
