@@ -146,10 +146,9 @@ static int side_work(void *user, int thread)
 }
 
 /* Retire the written jobs at the head of the queue, in frame order: count
- * their files, free their copies; the first failed write's error is
- * returned (its job retired too). With `wait`, the head is waited for
- * until the queue has fewer than `below` jobs (the others' writers hold
- * them; a waiting one is written here first). */
+ * their files, free their copies; a failed write's error is returned (its
+ * job retired too). Until the queue holds fewer than `below` jobs, write
+ * a waiting one here, or else wait for the other threads' writes. */
 static elfm_status jobs_retire(recon_out *o, size_t below, elfm_error *err)
 {
   elfm_status st = ELFM_OK;
@@ -212,8 +211,8 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
 }
 
 /* After the run: write what still waits, all threads at once, and retire
- * every job (a failed write's error in *err when run_st is OK; the files
- * of the others are written all the same). */
+ * every job; the first failed write's error is returned in *err (the
+ * other jobs' files are written all the same). */
 static elfm_status jobs_finish(recon_out *o, int threads, elfm_error *err)
 {
   if (!o->q) return ELFM_OK;
