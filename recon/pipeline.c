@@ -197,10 +197,10 @@ static elfm_status source_events_next(run *r, elfm_frame *out, int *got, elfm_er
     if (st) {
       /* A truncated or corrupt file: the events before the error are
        * still the recording's (an acquisition cut short keeps all but
-       * its last word); they end it as its last events would, and the
-       * error comes once their windows are made. Dropped with their
-       * chunk, they were up to 65536 events: seconds of a sparse scene. */
-      if (c->n == 0 && c->n_trig == 0) return st;
+       * its last word); they end it as its last events would (the last
+       * window made too, as at the end of a file), and the error comes
+       * once their windows are made. Dropped with their chunk, they were
+       * up to 65536 events: seconds of a sparse scene. */
       s->read_st = st;
       if (err) s->read_err = *err;
       else elfm_error_set(&s->read_err, st, elfm_reader_path(s->reader), -1, "read failed");
