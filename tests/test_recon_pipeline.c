@@ -810,7 +810,7 @@ static void test_mip_exact(const char *dir)
     WANT(0, 0, 1, 2.0);  /* x-y: the first of the tied planes */
     WANT(2, 19, 2, 4.0);
     WANT(1, 1, 2, 1.0);  /* the NaN passed over */
-    WANT(1, 9, 0, 3.0);  /* (2, 0): negative, black */
+    WANT(1, 9, 0, 3.0);  /* (row 0, col 2), negative only: black, as every pixel not named */
     for (int r = 0; r < ZP; r++) {
       /* x-z below: row H + k ZP + r, the maximum over Y */
       WANT(H + 0 * ZP + r, 9, 0, 3.0);
