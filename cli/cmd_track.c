@@ -97,6 +97,16 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
   if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
   if (!c->auto_decided) {
+    if (c->n_height < min_peaks && at_end && o->repr_auto &&
+        c->n_height < TRACK_WIDTH_MIN_PEAKS && c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES &&
+        (!o->motion_auto || !c->motion_restart)) {
+      /* too few to judge over a whole recording: the integral (above) */
+      c->auto_decided = 1;
+      c->auto_peaks = c->n_height;
+      c->auto_ratio = c->auto_speed = NAN;
+      c->few_restart = c->repr_restart = 1;
+      return 1;
+    }
     if (c->n_height < min_peaks) return 0;
     c->auto_decided = 1;
     c->auto_peaks = c->n_height;
@@ -138,6 +148,9 @@ typedef struct track_again {
   int64_t dt_us;   /* -1: as given */
   int integral;    /* 1: --repr integral */
   int stage;       /* 1: --motion stage (and nothing else) */
+  int few;         /* 1: the integral because too few peaks were found to judge */
+  int64_t first_det; /* ... the first run's detections then */
+  int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
 } track_again;
 
@@ -158,7 +171,15 @@ static void say_again(const track_ctx *c, const track_again *g)
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
                     "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
             c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->auto_peaks);
-  if (g->integral) {
+  if (g->integral && c->few_restart) {
+    char dt[64] = "";
+    if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
+    fprintf(stderr, "eventlfm track: %" PRId64 " peaks in %" PRId64 " frames, too few to judge: "
+                    "objects too slow (or too faint) for the time surface; starting again with "
+                    "--repr integral%s (--repr exp: keep the time surface; docs/tracker.md \"Too "
+                    "few peaks to judge\")\n",
+            c->auto_peaks, c->n_frames, dt);
+  } else if (g->integral) {
     char dt[64] = "";
     if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
     fprintf(stderr, "eventlfm track: the tracks crawl (median %.2f um/ms over the first %" PRId64
@@ -301,6 +322,16 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   elfm_recon_stats rs;
   memset(&rs, 0, sizeof rs);
   elfm_status st = elfm_recon_run(o.events, &calib, &o.recon, NULL, &c, &rs, &err);
+  if (o.few_check && (st == ELFM_OK || rs.input_error) && c.n_det < o.few_first_det) {
+    /* the integral found less than the time surface did: back to it */
+    again->back_exp = 1; /* the rest as the first run left it */
+    if (!o.quiet)
+      fprintf(stderr, "\neventlfm track: the integral found %" PRId64 " detections, the time "
+                      "surface %" PRId64 ": starting again with --repr exp\n",
+              c.n_det, o.few_first_det);
+    rc = TRACK_RUN_AGAIN;
+    goto done;
+  }
   /* auto's choices: stopped by on_volume, or judged at the end (a short
    * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
    * again by the second run */
@@ -310,6 +341,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->stage = c.motion_restart;
     again->blur_px = others && c.blur_restart ? 1 : -1;
     again->integral = others && c.repr_restart;
+    again->few = others && c.few_restart;
+    again->first_det = c.n_det;
+    again->back_exp = 0;
     /* the integral's windows: the worm's 2 ms (500 Hz) unless given */
     again->dt_us = !others ? -1
                    : c.dt_restart ? o.recon.framer.dt_us / 2
@@ -470,7 +504,29 @@ int cmd_track(int argc, char **argv)
     o.auto_rigid_dev = again.rigid_dev;
     o.auto_rigid_speed = again.rigid_speed_um_per_ms;
     o.auto_rigid_abs = again.rigid_abs_um_per_ms;
+    o.few_check = again.few;
+    o.few_first_det = again.first_det;
     rc = track_run(&o, &again, &t0_s);
+  }
+  if (pr == CLI_OK && rc == TRACK_RUN_AGAIN && again.back_exp) {
+    /* the third run: the time surface, as the first had it, nothing
+     * automatic (the command as given, then --repr exp) */
+    argc2 = 0;
+    for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
+    argv2[argc2++] = "--repr";
+    argv2[argc2++] = "exp";
+    argv2[argc2] = NULL;
+    pr = track_opts_parse(argc2, argv2, &o);
+    if (pr == CLI_OK) {
+      o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
+      o.auto_chose = 1;
+      o.auto_was = was;
+      o.auto_ratio = o.auto_speed = NAN;
+      o.auto_rigid_dev = again.rigid_dev;
+      o.auto_rigid_speed = again.rigid_speed_um_per_ms;
+      o.auto_rigid_abs = again.rigid_abs_um_per_ms;
+      rc = track_run(&o, &again, &t0_s);
+    }
   }
   free(argv2);
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;

@@ -90,6 +90,10 @@ typedef struct track_opts {
   double auto_speed;
   double auto_rigid_dev, auto_rigid_speed, auto_rigid_abs; /* what the first run judged of
                                                               the motion */
+  int few_check;        /* 1: this run is the integral after a time surface with too few
+                           peaks to judge; it goes back to the time surface when it finds
+                           fewer detections than few_first_det, the time surface's */
+  int64_t few_first_det;
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -354,6 +358,7 @@ typedef struct track_ctx {
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
   int repr_restart;     /* ... crawling: start again with the integral */
+  int few_restart;      /* ... hardly any peaks at all: the integral too (TRACK_AUTO_FEW_PEAKS) */
   int64_t auto_peaks;   /* ... how many they were */
   double auto_ratio;    /* ... their median height over the threshold */
   double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
@@ -520,6 +525,17 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * recall 0.57 -> 0.15) 1.37-1.61 (seeds 1-16), flow and flow_random 3.3-4.3. 1.2 lies
  * between the two. */
 #define TRACK_AUTO_CRAWL_UM_PER_MS 1.2
+/* A recording of at least TRACK_AUTO_FEW_MIN_FRAMES windows whose time
+ * surface gave fewer than TRACK_WIDTH_MIN_PEAKS peaks in all (too few to
+ * judge) is run again with the integral too: objects so slow that few of
+ * their pixels fire within one window build up in the integral, which
+ * holds each pixel's brightness. A stage at 0.05 mm/s (13 beads, 0.43 M
+ * events): 1 detection and no track on the time surface, alpha 0.267 and
+ * recall 0.29 on the integral's 2 ms windows; noise alone (1.94 Mev/s, 300
+ * ms) gives no detection either way. When the integral finds fewer
+ * detections than the time surface did (flashing neurons), a third run
+ * goes back to the time surface (docs/tracker.md "Too few peaks to judge"). */
+#define TRACK_AUTO_FEW_MIN_FRAMES 200
 /* The automatic window: the first run's 1 ms frames are halved when the
  * judged peaks' tracks move this far per frame or more (their median
  * early speed x the frame). Beyond the linker's reach between frames

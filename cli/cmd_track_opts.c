@@ -41,14 +41,18 @@ static void usage(FILE *f)
     "  --repr, not given    the time surface, and when those peaks' tracks crawl\n"
     "                       (%g-%g um/ms: cells, whose ON events lead them) start\n"
     "                       again with --repr integral, at --dt-us 2000 unless given;\n"
-    "                       not with --tau-us, --polarity, --blur-px, --threshold-abs,\n"
-    "                       --start each-trigger nor --motion stage\n"
+    "                       also when a recording of %d windows or more gives fewer\n"
+    "                       than %d peaks in all (objects too slow for the time\n"
+    "                       surface), back to the time surface if the integral finds\n"
+    "                       fewer detections; not with --tau-us, --polarity,\n"
+    "                       --blur-px, --threshold-abs, --start each-trigger nor\n"
+    "                       --motion stage\n"
     "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
     "                       --motion stage; --dt-us 1000 keeps 1 ms\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
-    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_DT_AUTO_STEP_UM);
+    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"
