@@ -446,6 +446,20 @@ done:
   return rc;
 }
 
+/* A run after auto's choices: nothing automatic left, and summary.json
+ * says what was automatic (was) and what the first run judged. */
+static void auto_settled(track_opts *o, int was, const track_again *g, double ratio, double speed)
+{
+  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = 0;
+  o->auto_chose = 1;
+  o->auto_was = was;
+  o->auto_ratio = ratio;
+  o->auto_speed = speed;
+  o->auto_rigid_dev = g->rigid_dev;
+  o->auto_rigid_speed = g->rigid_speed_um_per_ms;
+  o->auto_rigid_abs = g->rigid_abs_um_per_ms;
+}
+
 int cmd_track(int argc, char **argv)
 {
   track_opts o;
@@ -496,14 +510,7 @@ int cmd_track(int argc, char **argv)
   argv2[argc2] = NULL;
   pr = track_opts_parse(argc2, argv2, &o);
   if (pr == CLI_OK) {
-    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
-    o.auto_chose = 1;
-    o.auto_was = was;
-    o.auto_ratio = again.ratio;
-    o.auto_speed = again.speed_um_per_ms;
-    o.auto_rigid_dev = again.rigid_dev;
-    o.auto_rigid_speed = again.rigid_speed_um_per_ms;
-    o.auto_rigid_abs = again.rigid_abs_um_per_ms;
+    auto_settled(&o, was, &again, again.ratio, again.speed_um_per_ms);
     o.few_check = again.few;
     o.few_first_det = again.first_det;
     rc = track_run(&o, &again, &t0_s);
@@ -518,13 +525,7 @@ int cmd_track(int argc, char **argv)
     argv2[argc2] = NULL;
     pr = track_opts_parse(argc2, argv2, &o);
     if (pr == CLI_OK) {
-      o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
-      o.auto_chose = 1;
-      o.auto_was = was;
-      o.auto_ratio = o.auto_speed = NAN;
-      o.auto_rigid_dev = again.rigid_dev;
-      o.auto_rigid_speed = again.rigid_speed_um_per_ms;
-      o.auto_rigid_abs = again.rigid_abs_um_per_ms;
+      auto_settled(&o, was, &again, NAN, NAN);
       rc = track_run(&o, &again, &t0_s);
     }
   }

@@ -42,8 +42,8 @@ static int same_file(const char *a, const char *b)
   return same;
 }
 
-/* counts.<key> of DIR/<rel>/summary.json, -1 when missing */
-static double summary_count(const char *rel, const char *key)
+/* DIR/<rel>/summary.json parsed (cJSON_Delete it), NULL when unreadable */
+static cJSON *summary_json(const char *rel)
 {
   char path[800];
   snprintf(path, sizeof path, "%s/%s/summary.json", dir, rel);
@@ -52,7 +52,13 @@ static double summary_count(const char *rel, const char *key)
   size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
   if (f) fclose(f);
   buf[n] = '\0';
-  cJSON *root = cJSON_Parse(buf);
+  return cJSON_Parse(buf);
+}
+
+/* counts.<key> of DIR/<rel>/summary.json, -1 when missing */
+static double summary_count(const char *rel, const char *key)
+{
+  cJSON *root = summary_json(rel);
   cJSON *c = root ? cJSON_GetObjectItem(root, "counts") : NULL;
   cJSON *k = c ? cJSON_GetObjectItem(c, key) : NULL;
   double v = cJSON_IsNumber(k) ? k->valuedouble : -1;
@@ -160,13 +166,7 @@ int main(void)
   CHECK(exists("r/volumes/vol_000000.exr") && exists("r/volumes/vol_000002.exr"));
   CHECK(exists("r/mips/mip_000000.png"));
   char path[700];
-  snprintf(path, sizeof path, "%s/r/summary.json", dir);
-  FILE *f = fopen(path, "r");
-  char buf[16384];
-  size_t n = f ? fread(buf, 1, sizeof buf - 1, f) : 0;
-  if (f) fclose(f);
-  buf[n] = '\0';
-  cJSON *root = cJSON_Parse(buf);
+  cJSON *root = summary_json("r");
   CHECK(root != NULL);
   if (root) {
     cJSON *c = cJSON_GetObjectItem(root, "counts"), *t = cJSON_GetObjectItem(root, "timing");
