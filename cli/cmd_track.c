@@ -97,10 +97,10 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
   if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
   if (!c->auto_decided) {
-    if (c->n_height < min_peaks && at_end && o->repr_auto &&
-        c->n_height < TRACK_WIDTH_MIN_PEAKS && c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES &&
-        (!o->motion_auto || !c->motion_restart)) {
-      /* too few to judge over a whole recording: the integral (above) */
+    if (at_end && o->repr_auto && c->n_height < TRACK_WIDTH_MIN_PEAKS &&
+        c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES) {
+      /* too few to judge over a whole recording: the integral
+       * (TRACK_AUTO_FEW_MIN_FRAMES); a stage would have been found above */
       c->auto_decided = 1;
       c->auto_peaks = c->n_height;
       c->auto_ratio = c->auto_speed = NAN;

@@ -358,7 +358,7 @@ typedef struct track_ctx {
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
   int repr_restart;     /* ... crawling: start again with the integral */
-  int few_restart;      /* ... hardly any peaks at all: the integral too (TRACK_AUTO_FEW_PEAKS) */
+  int few_restart;      /* ... too few peaks to judge: the integral too (TRACK_AUTO_FEW_MIN_FRAMES) */
   int64_t auto_peaks;   /* ... how many they were */
   double auto_ratio;    /* ... their median height over the threshold */
   double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
