@@ -7,6 +7,7 @@ elfm_add_test(test_refocus test_refocus.c)
 elfm_add_test(test_localize test_localize.c)
 elfm_add_test(test_calib_refine test_calib_refine.c TIMEOUT 120)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)
+elfm_add_test(test_mip_png test_mip_png.c TIMEOUT 60)
 target_link_libraries(test_recon_pipeline PRIVATE TIFF::TIFF)  # writes a mixed-depth stack
 elfm_add_test(test_recon_sim test_recon_sim.c)
 elfm_add_test(test_recon_cli test_recon_cli.c)

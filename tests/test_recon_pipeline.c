@@ -764,85 +764,6 @@ static void test_pipeline_stages(const char *dir, const elfm_calib *cal)
   }
 }
 
-/* The MIP's every pixel on a small volume whose projections are known:
- * a tie between planes (the first wins), a NaN voxel (never wins), a
- * negative one (black), the volume's maximum in the last columns (the
- * row maxima's tail past the groups of 8), with the scale from the volume
- * and given. Colours: plane 0 blue, 1 green, 2 red (3 planes), brightness
- * value / scale rounded. */
-static void test_mip_exact(const char *dir)
-{
-  elfm_error err;
-  const int W = 20, H = 3, NZ = 3, ZP = 2;
-  elfm_volume *v = elfm_volume_create(W, H, NZ, 1.0, 0.0, 1.0, &err);
-  CHECK(v != NULL);
-  if (!v) return;
-#define VOX(X, Y, k) v->data[((size_t)(k) * H + (Y)) * W + (X)]
-  VOX(0, 0, 1) = 2.0f;
-  VOX(0, 0, 2) = 2.0f;  /* tie with plane 1 */
-  VOX(19, 2, 2) = 4.0f; /* the volume's maximum */
-  VOX(1, 1, 0) = NAN;
-  VOX(1, 1, 2) = 1.0f;
-  VOX(2, 0, 0) = -5.0f;
-  VOX(9, 1, 0) = 3.0f;
-#undef VOX
-  char png[600];
-  snprintf(png, sizeof png, "%s/mip_exact.png", dir);
-  for (int pass = 0; pass < 2; pass++) {
-    const double scale = pass ? 8.0 : 0.0; /* 0: the volume's maximum, 4 */
-    const double s = pass ? 8.0 : 4.0;
-    CHECK_OK(elfm_volume_write_mip_png(v, png, scale, ZP, &err), &err);
-    png_image im;
-    memset(&im, 0, sizeof im);
-    im.version = PNG_IMAGE_VERSION;
-    CHECK(png_image_begin_read_from_file(&im, png));
-    const int IW = W + NZ * ZP, IH = H + NZ * ZP;
-    CHECK_EQ_INT(im.width, (unsigned)IW);
-    CHECK_EQ_INT(im.height, (unsigned)IH);
-    im.format = PNG_FORMAT_RGB;
-    uint8_t *rgb = malloc(PNG_IMAGE_SIZE(im));
-    CHECK(rgb && png_image_finish_read(&im, NULL, rgb, 0, NULL));
-    if (!rgb) break;
-    /* expected: [row][col] = plane (0 blue, 1 green, 2 red) and value */
-    int *want_k = calloc((size_t)IW * IH, sizeof *want_k);
-    double *want_v = calloc((size_t)IW * IH, sizeof *want_v);
-#define WANT(row, col, k, val) (want_k[(row) * IW + (col)] = (k), want_v[(row) * IW + (col)] = (val))
-    WANT(0, 0, 1, 2.0);  /* x-y: the first of the tied planes */
-    WANT(2, 19, 2, 4.0);
-    WANT(1, 1, 2, 1.0);  /* the NaN passed over */
-    WANT(1, 9, 0, 3.0);  /* (row 0, col 2), negative only: black, as every pixel not named */
-    for (int r = 0; r < ZP; r++) {
-      /* x-z below: row H + k ZP + r, the maximum over Y */
-      WANT(H + 0 * ZP + r, 9, 0, 3.0);
-      WANT(H + 1 * ZP + r, 0, 1, 2.0);
-      WANT(H + 2 * ZP + r, 0, 2, 2.0);
-      WANT(H + 2 * ZP + r, 1, 2, 1.0);
-      WANT(H + 2 * ZP + r, 19, 2, 4.0);
-      /* y-z right: column W + k ZP + r, the maximum over X */
-      WANT(1, W + 0 * ZP + r, 0, 3.0);
-      WANT(0, W + 1 * ZP + r, 1, 2.0);
-      WANT(0, W + 2 * ZP + r, 2, 2.0);
-      WANT(1, W + 2 * ZP + r, 2, 1.0);
-      WANT(2, W + 2 * ZP + r, 2, 4.0);
-    }
-#undef WANT
-    int bad = 0;
-    for (int i = 0; i < IW * IH; i++) {
-      const int q = (int)lround(255.0 * want_v[i] / s);
-      const int e[3] = {want_k[i] == 2 ? q : 0, want_k[i] == 1 ? q : 0, want_k[i] == 0 ? q : 0};
-      for (int c = 0; c < 3; c++)
-        if (rgb[3 * i + c] != e[c] && bad++ < 5)
-          fprintf(stderr, "MIP pixel (row %d, col %d) channel %d: %d, expected %d (scale %g)\n",
-                  i / IW, i % IW, c, rgb[3 * i + c], e[c], scale);
-    }
-    CHECK(bad == 0);
-    free(want_k);
-    free(want_v);
-    free(rgb);
-  }
-  elfm_volume_free(v);
-}
-
 int main(void)
 {
   elfm_calib cal;
@@ -858,7 +779,6 @@ int main(void)
   test_pipeline_stages(dir, &cal);
   test_tiff(dir, &cal);
   test_tiff_mixed_depth(dir);
-  test_mip_exact(dir);
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
