@@ -120,12 +120,16 @@ int cmd_info(int argc, char **argv)
   }
   info_stats s;
   memset(&s, 0, sizeof s);
-  int rc = CLI_OK;
   int tty = isatty(STDERR_FILENO);
   double t_start = cli_now_s(), t_report = t_start + 2.0;
+  /* A read error (a truncated or corrupt file) ends the reading; the
+   * events decoded before it are still described (an acquisition cut
+   * short: how much of it there is), then the error, exit 1. */
+  int damaged = 0;
   for (;;) {
     if (elfm_reader_read(r, c, &err) != ELFM_OK) {
-      rc = cli_fail("info", &err);
+      damaged = 1;
+      if (c->n || c->n_trig) accumulate(&s, c);
       break;
     }
     if (!c->n && !c->n_trig) break;
@@ -142,9 +146,11 @@ int cmd_info(int argc, char **argv)
   int w = elfm_reader_width(r), h = elfm_reader_height(r);
   elfm_reader_close(r);
   elfm_chunk_free(c);
-  if (rc != CLI_OK) return rc;
+  if (damaged && s.events == 0) return cli_fail("info", &err);
   if (s.events == 0)
     return cli_message("info", CLI_FAIL, "%s: no events (%s header without data)", o.path, fmt);
+  char damage[1200] = "";
+  if (damaged) elfm_error_format(&err, damage, sizeof damage);
 
   int64_t dur = s.t_last - s.t_first;
   /* Mean over the span; a span under 1 ms counts as 1 ms. */
@@ -171,6 +177,7 @@ int cmd_info(int argc, char **argv)
     cJSON_AddNumberToObject(j, "mean_rate_per_ms", mean_per_ms);
     add_int(j, "peak_rate_per_ms", s.peak);
     add_int(j, "triggers", s.trig);
+    if (damaged) cJSON_AddStringToObject(j, "error", damage); /* the figures are up to it */
     char *text = cJSON_PrintUnformatted(j);
     cJSON_Delete(j);
     if (!text) return cli_message("info", CLI_FAIL, "out of memory");
@@ -190,6 +197,7 @@ int cmd_info(int argc, char **argv)
     printf("peak rate   %" PRId64 " events/ms\n", s.peak);
     printf("triggers    %" PRId64 "\n", s.trig);
     if (backward) printf("time steps back %" PRId64 "\n", backward);
+    if (damaged) printf("damaged     %s (the figures above are up to it)\n", damage);
   }
-  return CLI_OK;
+  return damaged ? cli_fail("info", &err) : CLI_OK;
 }

@@ -65,6 +65,22 @@ n=$(($(wc -l < "$tmp/part.csv") - 1))
 expect 1 "late_error.csv:302:" "$bin" convert "$tmp/late_error.csv" "$tmp/partial.raw" --geometry 640x480
 expect 0 "" "$bin" info --json "$tmp/partial.raw"
 grep -q '"events":300' "$tmp/out" || { echo "FAIL: partial output does not hold the 300 good events"; cat "$tmp/out"; fail=$((fail+1)); }
+# A recording cut short: info describes the events before the damage (the
+# same count as the file cut on the word boundary), names the byte, exit 1.
+sz=$(wc -c < "$tmp/good.raw")
+head -c $((sz - 1)) "$tmp/good.raw" > "$tmp/cut1.raw"
+head -c $((sz - 2)) "$tmp/good.raw" > "$tmp/cut2.raw"
+for f in cut1 cut2; do "$bin" info --json "$tmp/$f.raw" > "$tmp/$f.json" 2> "$tmp/$f.err"; echo $? > "$tmp/$f.rc"; done
+bad=cut1; good=cut2
+[ "$(cat "$tmp/cut1.rc")" = 0 ] && { bad=cut2; good=cut1; }
+[ "$(cat "$tmp/$good.rc")" = 0 ] && [ "$(cat "$tmp/$bad.rc")" = 1 ] ||
+  { echo "FAIL: cuts a byte apart exited $(cat "$tmp/cut1.rc") and $(cat "$tmp/cut2.rc"), wanted 0 and 1"; fail=$((fail+1)); }
+grep -q "$bad.raw: byte [0-9]*: file ends inside" "$tmp/$bad.err" ||
+  { echo "FAIL: info on $bad.raw does not name the byte:"; cat "$tmp/$bad.err"; fail=$((fail+1)); }
+nb=$(sed -n 's/.*"events":\([0-9]*\).*/\1/p' "$tmp/$bad.json")
+ng=$(sed -n 's/.*"events":\([0-9]*\).*/\1/p' "$tmp/$good.json")
+[ -n "$nb" ] && [ "$nb" = "$ng" ] && grep -q '"error":' "$tmp/$bad.json" ||
+  { echo "FAIL: info on a cut recording: '$nb' events with an error key, the clean cut '$ng'"; fail=$((fail+1)); }
 
 # The shared recordings: info --json figures equal reference.jsonl, and
 # they survive convert to EVT3.
