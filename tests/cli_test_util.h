@@ -31,4 +31,21 @@ static inline int cli_file_has(const char *dir, const char *name, const char *te
   return strstr(buf, text) != NULL;
 }
 
+/* 1 when files a and b both exist and hold the same bytes (outputs of two
+ * runs that must not differ). */
+static inline int cli_same_file(const char *a, const char *b)
+{
+  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+  int same = fa && fb;
+  while (same) {
+    char x[4096], y[4096];
+    size_t na = fread(x, 1, sizeof x, fa), nb = fread(y, 1, sizeof y, fb);
+    if (na != nb || memcmp(x, y, na) != 0) same = 0;
+    if (na < sizeof x) break;
+  }
+  if (fa) fclose(fa);
+  if (fb) fclose(fb);
+  return same;
+}
+
 #endif

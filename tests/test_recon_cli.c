@@ -26,22 +26,6 @@ static int exists(const char *rel)
   return access(path, R_OK) == 0;
 }
 
-/* 1 when the two files hold the same bytes */
-static int same_file(const char *a, const char *b)
-{
-  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
-  int same = fa && fb;
-  while (same) {
-    char x[4096], y[4096];
-    size_t na = fread(x, 1, sizeof x, fa), nb = fread(y, 1, sizeof y, fb);
-    if (na != nb || memcmp(x, y, na) != 0) same = 0;
-    if (na < sizeof x) break;
-  }
-  if (fa) fclose(fa);
-  if (fb) fclose(fb);
-  return same;
-}
-
 /* DIR/<rel>/summary.json parsed (cJSON_Delete it), NULL when unreadable */
 static cJSON *summary_json(const char *rel)
 {
@@ -91,10 +75,10 @@ static void test_saved_files(const char *sim)
     char a[800], b[800];
     snprintf(a, sizeof a, "%s/w1/volumes/vol_%06d.exr", dir, k);
     snprintf(b, sizeof b, "%s/w2/volumes/vol_%06d.exr", dir, k);
-    differ += !same_file(a, b);
+    differ += !cli_same_file(a, b);
     snprintf(a, sizeof a, "%s/w1/mips/mip_%06d.png", dir, k);
     snprintf(b, sizeof b, "%s/w2/mips/mip_%06d.png", dir, k);
-    differ += !same_file(a, b);
+    differ += !cli_same_file(a, b);
   }
   CHECK_EQ_INT(differ, 0);
 

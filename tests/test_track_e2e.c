@@ -12,6 +12,7 @@
 #include <cjson/cJSON.h>
 
 #include "check.h"
+#include "cli_test_util.h"
 #include "elfm_datasets.h"
 #include "elfm_tracker.h"
 
@@ -84,21 +85,6 @@ static int track_to(const char *dir, const char *out, int threads, const char *e
 
 static int track(const char *dir, const char *extra) { return track_to(dir, "out", 2, extra); }
 
-/* 1 if the two files have the same bytes (and both exist). */
-static int same_file(const char *a, const char *b)
-{
-  FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
-  int same = fa && fb;
-  while (same) {
-    int ca = getc(fa), cb = getc(fb);
-    if (ca != cb) same = 0;
-    if (ca == EOF || cb == EOF) break;
-  }
-  if (fa) fclose(fa);
-  if (fb) fclose(fb);
-  return same;
-}
-
 /* Peaks are detected on the worker threads: the detections and tracks must
  * not depend on the thread count (1, 2 and 3 threads: 3 gives batches of 6
  * slots shared unevenly between 2 cores). */
@@ -116,7 +102,7 @@ static void check_thread_independence(const char *dir)
       char a[1400], b[1400];
       snprintf(a, sizeof a, "%s/out/%s", dir, files[f]);
       snprintf(b, sizeof b, "%s/%s/%s", dir, outs[k], files[f]);
-      CHECK_MSG(same_file(a, b), "%s differs between 2 and %d threads", files[f], threads[k]);
+      CHECK_MSG(cli_same_file(a, b), "%s differs between 2 and %d threads", files[f], threads[k]);
     }
   }
 }
