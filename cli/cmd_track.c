@@ -236,7 +236,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   if (!cli_apply_planes(C, o.planes_um, o.calib, &calib)) return CLI_USAGE;
   track_plane_step(&o, &calib);
   track_views_step(&o, &calib);
-  if (o.smooth.motion_lead_um != 0 || o.smooth.motion_delay_us != 0) {
+  if (o.smooth.motion_lead_um != 0 || o.smooth.motion_delay_us != 0 || o.smooth.motion_slow_lead_ms != 0) {
     /* The motion bias of a fit over the views (elfm_smooth.h): each view's
      * image moves with the object's lateral motion plus its z motion times
      * the view's disparity. Flow 100 ms, mean alpha over seeds 1-8: 0.7486

@@ -174,6 +174,7 @@ typedef struct track_given {
   int spath, spord, fsdp, fade;      /* --short-path-um, --spline-order, --fit-sd-power,
                                         --motion-fade-um-per-ms */
   int gcvg, lscale;                  /* --gcv-gamma, --loss-scale */
+  int mslow, mslows;                 /* --motion-slow-lead-ms, --motion-slow-um-per-ms */
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ;                          /* --circle-points */

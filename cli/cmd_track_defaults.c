@@ -587,6 +587,25 @@ int track_opts_derive(track_opts *o, const track_given *g)
       o->smooth.motion_lead_um = 1.25;
       o->motion_lead_auto = 1;
     }
+    /* Slow beads lead further than lead - delay x |w| says: the error of
+     * the raw detections along the motion, binned by speed (lateral
+     * movers, |z| < 40 um, flow 150 ms at 0.6-5 mm/s, seeds 1-2), follows
+     * that line from 2.5 to 5 um/ms and bends above it below ~3 um/ms, by
+     * +0.38 um at 0.9 um/ms, +0.30 at 1.4, +0.22 at 1.9, +0.15 at 2.25:
+     * 0.17 ms x (3 um/ms - |w|). 0.5 ms windows and tau 2 ms bend alike
+     * (+0.52 / +0.44 um at 0.9 um/ms); so does the stage at 0.5-1 um/ms.
+     * Mean alpha, off -> on: flow 100 ms seeds 1-8 0.8744 -> 0.8763, held-out
+     * 9-20 0.8356 -> 0.8374, flow_random 1-10 0.6383 -> 0.6406, flow at
+     * 0.6-2.5 mm/s (8 held-out runs) 0.7699 -> 0.7938, stage and stage_accel
+     * (16 runs, 0.5-3.5 mm/s) 0.8055 -> 0.8373, blink_moving 1-4 0.8423 ->
+     * 0.8538 (docs/tracker.md "The lead of
+     * slow beads"). A lead or delay given (eventlfm score's regression on a
+     * scene like the sample) stands for the whole line: the bend is then
+     * off unless given too. */
+    if (!g->mlead && !g->mdelay) {
+      if (!g->mslow) o->smooth.motion_slow_lead_ms = 0.17;
+      if (!g->mslows) o->smooth.motion_slow_um_per_ms = 3.0;
+    }
   } else if (bias_default && integral) {
     /* The integral places a crawling neuron ahead of itself too, by a
      * lead: `eventlfm score --calib --motion-fade-um-per-ms 0.05` on the

@@ -221,6 +221,10 @@ static void usage(FILE *f)
     "                       leaves the other at its default\n"
     "  --motion-fade-um-per-ms F  below this speed the lead fades out (the direction\n"
     "                       of motion is noise): 0.5; integral and --motion stage 0.05\n"
+    "  --motion-slow-lead-ms E, --motion-slow-um-per-ms S  below S the lead grows by\n"
+    "                       E x (S - speed): slow beads lead further on the ON time\n"
+    "                       surface. Default E 0.17, S 3 with the default A and D;\n"
+    "                       0 when --motion-lead-um or --motion-delay-us is given\n"
     "analysis:\n"
     "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
     "  -q, --quiet          no progress\n"
@@ -261,7 +265,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT
 };
@@ -318,6 +322,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"spline-order", required_argument, 0, O_SPORD},
       {"fit-sd-power", required_argument, 0, O_FSDP},
       {"motion-fade-um-per-ms", required_argument, 0, O_MFADE},
+      {"motion-slow-lead-ms", required_argument, 0, O_MSLOW},
+      {"motion-slow-um-per-ms", required_argument, 0, O_MSLOWS},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
@@ -623,6 +629,18 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
                                &o.smooth.motion_lead_fade_um_per_ms))
         return CLI_USAGE;
       g.fade = 1;
+      break;
+    case O_MSLOW:
+      if (!cli_parse_double_in(C, "--motion-slow-lead-ms", a, 0, 0, 10, "0..10",
+                               &o.smooth.motion_slow_lead_ms))
+        return CLI_USAGE;
+      g.mslow = 1;
+      break;
+    case O_MSLOWS:
+      if (!cli_parse_double_in(C, "--motion-slow-um-per-ms", a, 0, 0, 100, "0..100",
+                               &o.smooth.motion_slow_um_per_ms))
+        return CLI_USAGE;
+      g.mslows = 1;
       break;
     case O_FSDP:
       if (!cli_parse_double_in(C, "--fit-sd-power", a, 0, 0, 4, "0..4", &o.smooth.fit_sd_power))

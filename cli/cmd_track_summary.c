@@ -231,6 +231,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
           o->auto_chose ? o->auto_speed : c->auto_decided ? c->auto_speed : NAN);
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
+  cJSON_AddNumberToObject(par, "motion_slow_lead_ms", o->smooth.motion_slow_lead_ms);
+  cJSON_AddNumberToObject(par, "motion_slow_um_per_ms", o->smooth.motion_slow_um_per_ms);
   cJSON_AddNumberToObject(par, "view_fit_sigma_factor", o->smooth.view_fit_sigma_factor);
   cJSON_AddNumberToObject(par, "fit_sd_power", o->smooth.fit_sd_power);
   cJSON_AddNumberToObject(par, "gcv_gamma", o->smooth.gcv_gamma);

@@ -709,6 +709,52 @@ int main(void)
     CHECK_NEAR(bv[0], 0, 1e-12);
     CHECK_NEAR(bv[1], 0, 1e-12);
     CHECK(bl[0] == 0 && bl[1] == 0 && bl[2] == 0);
+    /* Slow images lead further: lead + 0.17 ms x (3 um/ms - |w|) below 3
+     * um/ms, nothing above; below the fade speed that fades with the lead
+     * (a bead at rest is not moved). Lateral motion at sqrt(5) um/ms: lead
+     * 0.8 + 0.17 (3 - sqrt 5); at 4 um/ms the line alone. */
+    elfm_smooth_options os = ol;
+    os.motion_slow_lead_ms = 0.17;
+    os.motion_slow_um_per_ms = 3;
+    elfm_motion_bias(&os, vl, bl);
+    const double fs = (0.8 + 0.17 * (3 - s5)) / s5 - 0.3;
+    CHECK_NEAR(bl[0], 2 * fs, 1e-12);
+    CHECK_NEAR(bl[1], -fs, 1e-12);
+    double v4[3] = {0, 4, 0}, b4[3], b4l[3];
+    elfm_motion_bias(&os, v4, b4);
+    elfm_motion_bias(&ol, v4, b4l);
+    CHECK_NEAR(b4[1], b4l[1], 1e-12);
+    CHECK_NEAR(b4[1], 0.8 - 1.2, 1e-12);
+    double v01[3] = {0.1, 0, 0}, b01[3];
+    elfm_motion_bias(&os, v01, b01); /* fade 0.5: (0.8 + 0.17 x 2.9) x 0.1 / 0.5 - 0.03 */
+    CHECK_NEAR(b01[0], (0.8 + 0.17 * 2.9) * 0.2 - 0.03, 1e-12);
+    /* the views' model sums each image's own bend: at 3 um/ms in z the
+     * outer images move at 0.9 and 1.27 um/ms, each with its extra lead */
+    elfm_smooth_options osv = ov;
+    osv.motion_slow_lead_ms = 0.17;
+    osv.motion_slow_um_per_ms = 3;
+    elfm_motion_bias(&osv, vz, bv);
+    const double g1 = 0.3, g2 = 0.3 * sqrt(2.0);
+    const double sl = 4 * g1 * (0.8 + 0.17 * (3 - 3 * g1)) + 4 * g2 * (0.8 + 0.17 * (3 - 3 * g2));
+    CHECK_NEAR(bv[2], (sl - 0.9 * sgg) / sgg, 1e-9);
+    /* alone (lead and delay 0) it still applies; out of range is an error */
+    elfm_smooth_options o0 = os;
+    o0.motion_lead_um = o0.motion_delay_us = 0;
+    elfm_motion_bias(&o0, v4, b4);
+    CHECK(b4[1] == 0);
+    elfm_motion_bias(&o0, vl, bl);
+    CHECK_NEAR(bl[0], 2 * 0.17 * (3 - s5) / s5, 1e-12);
+    elfm_track *tr = elfm_track_create(8, &err);
+    elfm_detection dr;
+    memset(&dr, 0, sizeof dr);
+    CHECK_OK(elfm_track_append(tr, &dr, &err), &err);
+    o0.motion_slow_lead_ms = -1;
+    CHECK_EQ_INT(elfm_track_smooth(tr, &o0, &err), ELFM_ERR_INVALID);
+    CHECK(strstr(err.message, "slow lead") != NULL);
+    o0.motion_slow_lead_ms = 0.17;
+    o0.motion_slow_um_per_ms = NAN;
+    CHECK_EQ_INT(elfm_track_smooth(tr, &o0, &err), ELFM_ERR_INVALID);
+    elfm_track_free(tr);
     /* off: zeros whatever the views */
     ov.motion_lead_um = ov.motion_delay_us = 0;
     elfm_motion_bias(&ov, vz, bv);

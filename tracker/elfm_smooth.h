@@ -129,6 +129,16 @@ typedef struct elfm_smooth_options {
    * whose smoothed velocity still has a direction lower it (`track --repr
    * integral`: 0.05, worm neurons at 0.05-0.3 um/ms). */
   double motion_lead_fade_um_per_ms;
+  /* Slower images lead further than the line above says: below
+   * motion_slow_um_per_ms the lead grows by motion_slow_lead_ms x (that
+   * speed - |w|) um (it fades with the lead below the fade speed). Why: on
+   * the ON time surface the error along the motion, binned by speed, bends
+   * away from lead - delay x |w| below ~3 um/ms, by 0.35-0.5 um at 1 um/ms,
+   * for 0.5 and 1 ms windows and tau 1 and 2 ms alike (docs/tracker.md "The
+   * lead of slow beads"). 0 = off (the default; track: 0.17 ms below 3
+   * um/ms with its own lead and delay). */
+  double motion_slow_lead_ms;
+  double motion_slow_um_per_ms;
   int motion_n_views;                       /* 0: lateral model only */
   double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
   /* elfm_track_smooth only: the run's frame times (elfm_tracks.h; borrowed,

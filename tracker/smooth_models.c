@@ -9,8 +9,9 @@
 /* b(w) of one image moving at (wx, wy) um/ms (elfm_smooth.h). */
 static double image_bias_factor(const elfm_smooth_options *o, double wx, double wy)
 {
-  return o->motion_lead_um / fmax(hypot(wx, wy), o->motion_lead_fade_um_per_ms) -
-         o->motion_delay_us * 1e-3;
+  const double sp = hypot(wx, wy);
+  const double lead = o->motion_lead_um + o->motion_slow_lead_ms * fmax(0.0, o->motion_slow_um_per_ms - sp);
+  return lead / fmax(sp, o->motion_lead_fade_um_per_ms) - o->motion_delay_us * 1e-3;
 }
 
 void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
@@ -25,7 +26,7 @@ void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
 void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[3])
 {
   b[0] = b[1] = b[2] = 0;
-  if (o->motion_lead_um == 0 && o->motion_delay_us == 0) return;
+  if (o->motion_lead_um == 0 && o->motion_delay_us == 0 && o->motion_slow_lead_ms == 0) return;
   if (o->motion_n_views <= 0) {
     double f = image_bias_factor(o, v[0], v[1]);
     b[0] = f * v[0];
@@ -79,6 +80,11 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: motion lead fade speed %g um/ms is not in (0, 100]",
                           o->motion_lead_fade_um_per_ms);
+  if (!(o->motion_slow_lead_ms >= 0 && o->motion_slow_lead_ms <= 10) ||
+      !(o->motion_slow_um_per_ms >= 0 && o->motion_slow_um_per_ms <= 100))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "smooth: slow lead %g ms below %g um/ms is out of range "
+                          "(0..10 ms, 0..100 um/ms)", o->motion_slow_lead_ms, o->motion_slow_um_per_ms);
   if (!(o->fit_sd_power >= 0 && o->fit_sd_power <= 4))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: fit_sd_power %g is not in [0, 4]", o->fit_sd_power);
@@ -176,7 +182,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   elfm_smooth_info info;
   st = elfm_smooth_fit(o, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
   if (st != ELFM_OK) goto fail;
-  if ((o->motion_lead_um != 0 || o->motion_delay_us != 0) && n >= 3 &&
+  if ((o->motion_lead_um != 0 || o->motion_delay_us != 0 || o->motion_slow_lead_ms != 0) && n >= 3 &&
       info.model != ELFM_MODEL_STATIC) {
     /* Second fit on the points moved by the motion bias (elfm_smooth.h).
      * The velocity comes from the first fit, not from neighbouring
