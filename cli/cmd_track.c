@@ -94,8 +94,28 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
 static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
 {
   const track_opts *o = c->o;
+  if (o->start_auto && !c->auto_decided && track_pulsed(c)) {
+    /* Pulsed light (the frames with the trigger's edges hold most of the
+     * events): one window per pulse, whatever the objects do, which turns
+     * the other choices off (track_opts_derive); judged before the test
+     * for a stage, whose beads under pulsed light (blink_moving) track
+     * best on --repr lin's windows. Moving objects (their tracks' median
+     * speed, once there are enough) get --repr lin when the surface was
+     * not given: the default one decays over the next window, where a
+     * moving bead whose pulse ended late shows again, in the dark. */
+    if (!at_end && c->n_height < min_peaks) return 0; /* the speed of enough peaks */
+    const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
+    c->auto_decided = 1;
+    c->auto_peaks = c->n_height;
+    c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
+    c->auto_speed = track_detection_speed_median(c);
+    c->start_restart = 1;
+    c->lin_restart = o->repr_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
+    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = 0;
+    return 1;
+  }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
-  if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
+  if (!o->blur_auto && !o->dt_auto && !o->repr_auto && !o->start_auto) return 0;
   if (!c->auto_decided) {
     if (at_end && o->repr_auto && c->n_height < TRACK_WIDTH_MIN_PEAKS &&
         c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES) {
@@ -151,6 +171,9 @@ typedef struct track_again {
   int few;         /* 1: the integral because too few peaks were found to judge */
   int64_t first_det; /* ... the first run's detections then */
   int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
+  int each_trigger; /* 1: pulsed light (objects at rest, or the frames' events):
+                       --start each-trigger */
+  int lin;          /* 1: ... and the objects move: --repr lin too */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
 } track_again;
 
@@ -159,6 +182,12 @@ static void say_again(const track_ctx *c, const track_again *g)
   const track_opts *o = c->o;
   if (o->quiet) return;
   fputc('\n', stderr);
+  if (g->each_trigger)
+    fprintf(stderr, "eventlfm track: %" PRId64 " trigger edges so far, and the frames with an edge "
+                    "hold %.0fx the others' events: pulsed light; starting again with %s--start "
+                    "each-trigger, one window per pulse (--start first: keep the grid; score with "
+                    "--frames run --window-us run; README, blinking objects)\n",
+            c->n_triggers, track_pulsed_ratio(c), g->lin ? "--repr lin " : "");
   if (g->stage)
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
                     "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
@@ -229,6 +258,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 {
   static const char *const C = "track";
   track_opts o = *po;
+  again->each_trigger = again->lin = 0;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -344,6 +374,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->few = others && c.few_restart;
     again->first_det = c.n_det;
     again->back_exp = 0;
+    again->each_trigger = c.start_restart;
+    again->lin = c.start_restart && c.lin_restart;
     /* the integral's windows: the worm's 2 ms (500 Hz) unless given */
     again->dt_us = !others ? -1
                    : c.dt_restart ? o.recon.framer.dt_us / 2
@@ -390,6 +422,30 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   /* the outputs are written (empty), but an empty run is not a success */
   if (st == ELFM_OK && cli_check_trigger_start(C, &o.recon.framer, o.events, c.n_frames, rs.triggers))
     goto done;
+  const int pulsed = track_pulsed(&c);
+  if (st == ELFM_OK && o.start_auto && pulsed && c.n_info > 0) {
+    /* Pulsed light found only now (the first peaks were judged before the
+     * frames showed it, or a settled run): one window per pulse (docs/
+     * tracker.md "Windows opened by the LED", "The LED's windows by
+     * default"). The run's files are written again. */
+    again->each_trigger = 1;
+    again->lin = o.repr_auto && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
+    if (!o.auto_chose) { /* what this first run judged, for summary.json */
+      again->ratio = c.auto_decided ? c.auto_ratio : NAN;
+      again->speed_um_per_ms = c.auto_decided ? c.auto_speed : NAN;
+      again->rigid_dev = c.rigid_dev;
+      again->rigid_speed_um_per_ms = c.rigid_speed;
+      again->rigid_abs_um_per_ms = c.rigid_abs;
+    }
+    if (!o.quiet)
+      fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
+                      "(the frames with an edge hold %.0fx the others'): pulsed light; starting again "
+                      "with %s--start each-trigger, one window per pulse (--start first: keep the grid; "
+                      "score with --frames run --window-us run; README, blinking objects)\n",
+              c.n_triggers, track_pulsed_ratio(&c), again->lin ? "--repr lin " : "");
+    rc = TRACK_RUN_AGAIN;
+    goto done;
+  }
   if (st != ELFM_OK) {
     cli_fail(C, &err);
     /* what was found before the error is not lost: the detections gap
@@ -467,67 +523,75 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto) &&
+  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto || o.start_auto) &&
       (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
-    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = 0;
+    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = o.start_auto = 0;
   const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0) |
-                  (o.motion_auto ? 8 : 0);
+                  (o.motion_auto ? 8 : 0) | (o.start_auto ? 16 : 0);
   track_again again;
   double t0_s = NAN;
   int rc = track_run(&o, &again, &t0_s);
   if (rc != TRACK_RUN_AGAIN) return rc;
-#if defined(__GLIBC__)
-  /* The first run's memory back to the system: glibc's worker-thread
-   * arenas kept it, and the second run's peak RSS was 20 MB higher than
-   * --blur-px 1 alone (125 against 104 MB on dim flow 400 ms; 105 with). */
-  malloc_trim(0);
-#endif
-  /* The second run is the command with auto's choices given last (so the
-   * choices bring their own defaults: the blur's thresholds, the
-   * integral's), and nothing automatic left. */
+  /* Each further run is the command with the choices so far given last (so
+   * the choices bring their own defaults: the blur's thresholds, the
+   * integral's, each-trigger's), and nothing automatic left but the start
+   * (a finished run may still find pulsed light). At most: auto's choices,
+   * back to the time surface, each-trigger. */
   char dt[32];
-  char **argv2 = malloc(((size_t)argc + 7) * sizeof *argv2);
+  char **argv2 = malloc(((size_t)argc + 11) * sizeof *argv2);
   if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
   int argc2 = 0;
   for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
-  if (again.stage) {
-    argv2[argc2++] = "--motion";
-    argv2[argc2++] = "stage";
-  }
-  if (again.integral) {
-    argv2[argc2++] = "--repr";
-    argv2[argc2++] = "integral";
-  }
-  if (again.blur_px > 0) {
-    argv2[argc2++] = "--blur-px";
-    argv2[argc2++] = "1";
-  }
-  if (again.dt_us > 0) {
-    snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
-    argv2[argc2++] = "--dt-us";
-    argv2[argc2++] = dt;
-  }
-  argv2[argc2] = NULL;
-  pr = track_opts_parse(argc2, argv2, &o);
-  if (pr == CLI_OK) {
-    auto_settled(&o, was, &again, again.ratio, again.speed_um_per_ms);
-    o.few_check = again.few;
+  pr = CLI_OK;
+  for (int round = 0; rc == TRACK_RUN_AGAIN && pr == CLI_OK && round < 3; round++) {
+#if defined(__GLIBC__)
+    /* The run's memory back to the system: glibc's worker-thread arenas
+     * kept it, and the second run's peak RSS was 20 MB higher than
+     * --blur-px 1 alone (125 against 104 MB on dim flow 400 ms; 105 with). */
+    malloc_trim(0);
+#endif
+    double ratio = again.ratio, speed = again.speed_um_per_ms;
+    if (again.each_trigger) {
+      argv2[argc2++] = "--start";
+      argv2[argc2++] = "each-trigger";
+      if (again.lin) {
+        argv2[argc2++] = "--repr";
+        argv2[argc2++] = "lin";
+      }
+    } else if (again.back_exp) {
+      /* the time surface, as the first run had it: the command as given,
+       * then --repr exp */
+      argc2 = argc;
+      argv2[argc2++] = "--repr";
+      argv2[argc2++] = "exp";
+      ratio = speed = NAN;
+    } else {
+      if (again.stage) {
+        argv2[argc2++] = "--motion";
+        argv2[argc2++] = "stage";
+      }
+      if (again.integral) {
+        argv2[argc2++] = "--repr";
+        argv2[argc2++] = "integral";
+      }
+      if (again.blur_px > 0) {
+        argv2[argc2++] = "--blur-px";
+        argv2[argc2++] = "1";
+      }
+      if (again.dt_us > 0) {
+        snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
+        argv2[argc2++] = "--dt-us";
+        argv2[argc2++] = dt;
+      }
+    }
+    argv2[argc2] = NULL;
+    const int few = !again.each_trigger && !again.back_exp && again.few;
+    pr = track_opts_parse(argc2, argv2, &o);
+    if (pr != CLI_OK) break;
+    auto_settled(&o, was, &again, ratio, speed);
+    o.few_check = few;
     o.few_first_det = again.first_det;
     rc = track_run(&o, &again, &t0_s);
-  }
-  if (pr == CLI_OK && rc == TRACK_RUN_AGAIN && again.back_exp) {
-    /* the third run: the time surface, as the first had it, nothing
-     * automatic (the command as given, then --repr exp) */
-    argc2 = 0;
-    for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
-    argv2[argc2++] = "--repr";
-    argv2[argc2++] = "exp";
-    argv2[argc2] = NULL;
-    pr = track_opts_parse(argc2, argv2, &o);
-    if (pr == CLI_OK) {
-      auto_settled(&o, was, &again, NAN, NAN);
-      rc = track_run(&o, &again, &t0_s);
-    }
   }
   free(argv2);
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;

@@ -82,9 +82,13 @@ typedef struct track_opts {
   int motion_auto;      /* --motion auto (the default): when the first tracks move as
                            one (TRACK_RIGID_*), start again with --motion stage; 0
                            where it does not apply (track_opts_derive) */
+  int start_auto;       /* --start not given: a run under pulsed light (track_pulsed)
+                           starts again with --start each-trigger (and --repr lin
+                           when its objects move); 0 where it does not apply
+                           (track_opts_derive) */
   int auto_chose;       /* 1: this run is the second, with auto's choices */
   int auto_was;         /* ... and what was automatic in the first: 1 blur, 2 window,
-                           4 representation, 8 motion */
+                           4 representation, 8 motion, 16 start */
   double auto_ratio;    /* what the first run judged: median peak height over the
                            threshold, and the tracks' median speed, um/ms */
   double auto_speed;
@@ -360,6 +364,14 @@ typedef struct track_ctx {
   int dt_restart;       /* ... fast: start again with half the window */
   int repr_restart;     /* ... crawling: start again with the integral */
   int few_restart;      /* ... too few peaks to judge: the integral too (TRACK_AUTO_FEW_MIN_FRAMES) */
+  int start_restart;    /* ... under pulsed light: --start each-trigger */
+  int lin_restart;      /* ... and moving: --repr lin too */
+  int64_t n_triggers;   /* trigger edges up to the last volume's end (elfm_volume) */
+  /* The frames' events by whether a trigger edge fell in the frame or the
+   * one before (lit under pulsed light) or not (track_pulsed) */
+  int64_t n_lit_frames, n_dark_frames;
+  double lit_events, dark_events;
+  int prev_had_edge;
   int64_t auto_peaks;   /* ... how many they were */
   double auto_ratio;    /* ... their median height over the threshold */
   double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
@@ -487,6 +499,23 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * um/ms, beads at rest (blink) doing better with the default; --start
  * each-trigger when they do not (README). */
 #define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
+/* Pulsed light (track_opts.start_auto, track_pulsed): at least
+ * TRACK_AUTO_TRIGGER_EDGES rising trigger edges, and the frames with an
+ * edge in them or in the frame before ("lit") hold more than
+ * TRACK_AUTO_PULSED_RATIO times the events of the others, at least
+ * TRACK_AUTO_TRIGGER_EDGES frames of each. Measured at the first
+ * judgement: blink 200 ms seeds 1-12 7-9x, blink_moving (1 ms pulses every
+ * 3 ms, one frame in three dark) seeds 1-8 4-8x; edges every 7 ms that are
+ * not the light's (a camera's or controller's clock) on flow seed 2 1.04x;
+ * a clock at 500 Hz or faster leaves no frame unlit: not pulsed. Objects
+ * whose tracks move at TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS or more get
+ * --repr lin too. */
+#define TRACK_AUTO_TRIGGER_EDGES 4
+#define TRACK_AUTO_PULSED_RATIO 3.0
+int track_pulsed(const track_ctx *c);
+/* lit frames' mean events over the others' (those at least 1); NaN before
+ * one of each */
+double track_pulsed_ratio(const track_ctx *c);
 /* Objects moving further than this between frames (median track speed x
  * frame interval) are tracked better with shorter windows. Flow at 2.5-8
  * mm/s (seeds 1-4 and 31-33), --dt-us 500 against 1000, by the median track

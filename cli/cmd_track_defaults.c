@@ -29,6 +29,8 @@ void track_defaults(track_opts *o)
   o->repr_auto = 1;
   /* A stage: ... with --motion stage when the first tracks move as one. */
   o->motion_auto = 1;
+  /* Pulsed light: ... with --start each-trigger (track_opts_derive says where). */
+  o->start_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -666,6 +668,12 @@ int track_opts_derive(track_opts *o, const track_given *g)
                          (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
                          o->recon.framer.start == ELFM_START_EACH_TRIGGER))
     o->motion_auto = 0;
+  /* Windows opened by the light's pulses (track_pulsed), from the grid on
+   * time surfaces only (cells on the integral, or a stage given, are left
+   * alone). */
+  if (o->start_auto && (o->recon.framer.start != ELFM_START_FIRST_EVENT || o->motion == MOTION_STAGE ||
+                        (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
+    o->start_auto = 0;
   return CLI_OK;
 }
 

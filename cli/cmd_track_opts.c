@@ -50,9 +50,18 @@ static void usage(FILE *f)
     "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
-    "                       --motion stage; --dt-us 1000 keeps 1 ms\n",
+    "                       --motion stage; --dt-us 1000 keeps 1 ms\n"
+    "  --start, not given   the grid from the first event, and under pulsed light\n"
+    "                       (%d rising trigger edges or more, and the frames with an\n"
+    "                       edge, or after one, hold over %g x the others' events)\n"
+    "                       start again with --start each-trigger, one window per\n"
+    "                       pulse (blinking beads), and --repr lin when the tracks\n"
+    "                       move (%g um/ms or more) where --repr is chosen (above);\n"
+    "                       on time surfaces, not with --motion stage; --start\n"
+    "                       first keeps the grid\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
-    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM);
+    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
+    TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"
@@ -368,6 +377,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     if (k == 0) return CLI_USAGE;
     if (ch == CLI_RO_BLUR) o.blur_auto = 0;
     if (ch == CLI_RO_DT || ch == CLI_RO_STRIDE) o.dt_auto = 0;
+    if (ch == CLI_RO_START) o.start_auto = 0;
     if (ch == CLI_RO_REPR || ch == CLI_RO_TAU || ch == CLI_RO_POLARITY || ch == CLI_RO_BLUR) o.repr_auto = 0;
     if (k > 0) continue;
     switch (ch) {

@@ -47,6 +47,20 @@ double track_peak_height_median(const track_ctx *c)
   return track_hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
 }
 
+double track_pulsed_ratio(const track_ctx *c)
+{
+  if (c->n_lit_frames == 0 || c->n_dark_frames == 0) return NAN;
+  const double lit = c->lit_events / (double)c->n_lit_frames;
+  const double dark = c->dark_events / (double)c->n_dark_frames;
+  return lit / fmax(dark, 1.0);
+}
+
+int track_pulsed(const track_ctx *c)
+{
+  return c->n_triggers >= TRACK_AUTO_TRIGGER_EDGES && c->n_lit_frames >= TRACK_AUTO_TRIGGER_EDGES &&
+         c->n_dark_frames >= TRACK_AUTO_TRIGGER_EDGES && track_pulsed_ratio(c) > TRACK_AUTO_PULSED_RATIO;
+}
+
 double track_detection_speed_median(const track_ctx *c)
 {
   if (c->n_speed == 0) return NAN;
@@ -485,6 +499,18 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     c->first_frame = v->frame;
     c->first_t_us = v->t_us;
   }
+  /* lit: an edge in this frame or the one before (a 1 ms pulse starting
+   * late in a window ends in the next) */
+  const int edge = v->n_triggers > c->n_triggers;
+  if (edge || c->prev_had_edge) {
+    c->n_lit_frames++;
+    c->lit_events += (double)v->n_events;
+  } else {
+    c->n_dark_frames++;
+    c->dark_events += (double)v->n_events;
+  }
+  c->prev_had_edge = edge;
+  c->n_triggers = v->n_triggers;
   elfm_detection *det = c->det + (size_t)slot * o->max_det;
   int n = c->sp[slot].n;
   c->t_peaks += c->sp[slot].s;

@@ -96,6 +96,9 @@ typedef struct elfm_frame {
   int64_t t_start_us, t_end_us; /* the window [t_start, t_end) */
   int64_t index;       /* window number n, 0 for the first window */
   size_t n_events;     /* events that fell into the window (after polarity) */
+  int64_t n_triggers;  /* rising trigger edges (of trigger_channel, or any) from the
+                          recording's start up to the window's end: a caller can tell
+                          pulsed light from the frames alone */
 } elfm_frame;
 
 /* A zero frame of w x h; NULL (err filled) when out of memory.

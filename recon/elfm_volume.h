@@ -28,6 +28,7 @@ typedef struct elfm_volume {
    * n_events 0 (not stored) */
   int64_t t_start_us, t_end_us;
   size_t n_events;
+  int64_t n_triggers;  /* the frame's (elfm_frame): trigger edges up to its end; 0 read back */
   double um_per_px, z_min_um, z_step_um;
 } elfm_volume;
 

@@ -64,6 +64,11 @@ struct elfm_framer {
    * windows'). */
   int64_t *trig_t;
   size_t trig_head, trig_n, trig_cap; /* trig_cap a power of two, or 0 */
+  /* Every start: rising edges not yet counted into a window's end (a ring
+   * like trig_t), and the count so far (elfm_frame.n_triggers). */
+  int64_t *edge_t;
+  size_t edge_head, edge_n, edge_cap;
+  int64_t edges_counted;
   int64_t t_seen;            /* latest event time pushed (any polarity), INT64_MIN */
   int64_t t_last_kept;       /* latest event time kept in the FIFO */
   int have_events, finished;
@@ -105,6 +110,7 @@ void elfm_frame_clear(elfm_frame *f)
   for (size_t i = 0; i < f->nnz; i++) f->data[f->idx[i]] = 0.0f;
   f->nnz = 0;
   f->n_events = 0;
+  f->n_triggers = 0;
 }
 
 void elfm_frame_set(elfm_frame *f, uint32_t i, float value)
@@ -127,6 +133,7 @@ void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src)
   dst->t_end_us = src->t_end_us;
   dst->index = src->index;
   dst->n_events = src->n_events;
+  dst->n_triggers = src->n_triggers;
 }
 
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err)
@@ -265,6 +272,7 @@ void elfm_framer_free(elfm_framer *f)
   free(f->px);
   free(f->act);
   free(f->trig_t);
+  free(f->edge_t);
   free(f);
 }
 
@@ -375,18 +383,20 @@ static int framer_grow(elfm_framer *f)
   return 1;
 }
 
-static int framer_grow_trig(elfm_framer *f)
+/* Double a ring of int64 times (trig_t, edge_t), its oldest first. */
+static int ring_grow(int64_t **ring, size_t *head, size_t n, size_t *cap)
 {
-  size_t cap = f->trig_cap ? 2 * f->trig_cap : 64;
-  int64_t *t = malloc(cap * sizeof *t);
+  size_t c2 = *cap ? 2 * *cap : 64;
+  int64_t *t = malloc(c2 * sizeof *t);
   if (!t) return 0;
-  for (size_t i = 0; i < f->trig_n; i++) t[i] = f->trig_t[(f->trig_head + i) & (f->trig_cap - 1)];
-  free(f->trig_t);
-  f->trig_t = t;
-  f->trig_cap = cap;
-  f->trig_head = 0;
+  for (size_t i = 0; i < n; i++) t[i] = (*ring)[(*head + i) & (*cap - 1)];
+  free(*ring);
+  *ring = t;
+  *cap = c2;
+  *head = 0;
   return 1;
 }
+
 
 elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err)
 {
@@ -399,6 +409,13 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
         break;
       }
   }
+  for (size_t i = 0; i < c->n_trig; i++) {
+    if (c->trig[i].value != 1 || (ch >= 0 && c->trig[i].channel != ch)) continue;
+    if (f->edge_n == f->edge_cap && !ring_grow(&f->edge_t, &f->edge_head, f->edge_n, &f->edge_cap))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory counting trigger edges");
+    f->edge_t[(f->edge_head + f->edge_n) & (f->edge_cap - 1)] = c->trig[i].t_us;
+    f->edge_n++;
+  }
   if (each && f->origin_us != INT64_MIN) {
     for (size_t i = 0; i < c->n_trig; i++) {
       const int64_t t = c->trig[i].t_us;
@@ -409,7 +426,7 @@ elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_err
       if (f->trig_n > 0 && t < f->trig_t[(f->trig_head + f->trig_n - 1) & (f->trig_cap - 1)])
         return elfm_error_set(err, ELFM_ERR_FORMAT, NULL, -1,
                               "trigger edge at %lld us is before the previous edge", (long long)t);
-      if (f->trig_n == f->trig_cap && !framer_grow_trig(f))
+      if (f->trig_n == f->trig_cap && !ring_grow(&f->trig_t, &f->trig_head, f->trig_n, &f->trig_cap))
         return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory holding trigger edges");
       f->trig_t[(f->trig_head + f->trig_n) & (f->trig_cap - 1)] = t;
       f->trig_n++;
@@ -614,6 +631,13 @@ int elfm_framer_next(elfm_framer *f, elfm_frame *out)
                                                  : framer_window(f, t0, t1, out);
   const int count = f->opt.repr == ELFM_REPR_COUNT;
   out->n_events = nev;
+  /* edges come in time order, so those before t1 are all pushed by now */
+  while (f->edge_n > 0 && f->edge_t[f->edge_head] < t1) {
+    f->edge_head = (f->edge_head + 1) & (f->edge_cap - 1);
+    f->edge_n--;
+    f->edges_counted++;
+  }
+  out->n_triggers = f->edges_counted;
   out->t_start_us = t0;
   out->t_end_us = t1;
   out->t_us = count ? t0 + (t1 - t0) / 2 : t1;

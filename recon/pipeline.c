@@ -260,6 +260,7 @@ static elfm_status source_tiff_next(run *r, elfm_frame *out, int *got, elfm_erro
   out->t_end_us = out->t_start_us + s->tiff_frame_us;
   out->t_us = out->t_start_us + s->tiff_frame_us / 2; /* an exposure: its centre */
   out->n_events = 0;
+  out->n_triggers = 0;
   s->tiff_page++;
   return ELFM_OK;
 }

@@ -506,6 +506,7 @@ void elfm_refocus_stamp(const elfm_refocus_plan *p, const elfm_frame *frame, elf
   vol->t_start_us = frame->t_start_us;
   vol->t_end_us = frame->t_end_us;
   vol->n_events = frame->n_events;
+  vol->n_triggers = frame->n_triggers;
   vol->um_per_px = p->calib.um_per_px;
   vol->z_min_um = p->calib.z_min_um;
   vol->z_step_um = p->calib.z_step_um;

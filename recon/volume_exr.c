@@ -175,6 +175,7 @@ elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error
   v->t_us = (int64_t)t_us;
   v->t_start_us = v->t_end_us = v->t_us;
   v->n_events = 0;
+  v->n_triggers = 0;
   v->frame = frame;
   int32_t lines = 1;
   EXR_TRY(exr_get_scanlines_per_chunk(ctxt, 0, &lines), "chunk size");

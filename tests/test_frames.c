@@ -287,6 +287,56 @@ static void test_trigger_start(void)
   elfm_frame_free(f);
 }
 
+/* elfm_frame.n_triggers: the rising edges (of the trigger channel, or
+ * any) from the start up to each window's end, on the grid from the first
+ * event, whatever the chunks: the frames alone tell pulsed light (track's
+ * automatic --start each-trigger). Edges at 1500 (rising), 1800 (falling),
+ * 2500 (rising, channel 1), 4000 (rising, on a window boundary: the next
+ * window's) and 4200 (rising). */
+static void test_trigger_count(void)
+{
+  elfm_error err;
+  const elfm_trigger trig[5] = {{.t_us = 1500, .value = 1}, {.t_us = 1800, .value = 0},
+                                {.t_us = 2500, .channel = 1, .value = 1},
+                                {.t_us = 4000, .value = 1}, {.t_us = 4200, .value = 1}};
+  for (int ch = -1; ch <= 0; ch++) {
+    for (int split = 0; split < 2; split++) {
+      elfm_framer_options o;
+      elfm_framer_options_default(&o);
+      o.trigger_channel = ch;
+      elfm_framer *fr = NULL;
+      CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
+      elfm_event_chunk *c = elfm_chunk_create(16, &err);
+      elfm_frame *f = elfm_frame_create(SW, SH, &err);
+      /* all in one chunk, or the edges and events in two, the first
+       * chunk ending at 2000 us */
+      for (int part = 0; part < 1 + split; part++) {
+        c->n = 0;
+        c->n_trig = 0;
+        for (int k = 0; k < 5; k++)
+          if (!split || (part == 0) == (trig[k].t_us < 2000)) c->trig[c->n_trig++] = trig[k];
+        for (int64_t t = 0; t < 5000; t += 250)
+          if (!split || (part == 0) == (t < 2000)) add_event(c, t, 1 + (int)(t / 1000), 1, 1);
+        CHECK_OK(elfm_framer_push(fr, c, &err), &err);
+      }
+      elfm_framer_finish(fr);
+      /* windows [0,1000) .. [4000,5000) */
+      const int64_t any[5] = {0, 1, 2, 2, 4}, ch0[5] = {0, 1, 1, 1, 3};
+      int n = 0;
+      while (elfm_framer_next(fr, f) == 1 && n < 5) {
+        CHECK_EQ_INT(f->t_start_us, 1000 * n);
+        const int64_t want = ch < 0 ? any[n] : ch0[n];
+        CHECK_EQ_INT(f->n_triggers, want);
+        n++;
+      }
+      CHECK_EQ_INT(n, 5);
+      elfm_framer_free(fr);
+      elfm_chunk_free(c);
+      elfm_frame_free(f);
+    }
+  }
+}
+
 /* ELFM_START_EACH_TRIGGER: every rising edge restarts the grid. Pulses at
  * 2500 (origin), 5300 and 5800 (two edges inside one window), an OFF edge
  * at 3500 that changes nothing, and a pulse at 9000 on a window boundary. */
@@ -434,6 +484,7 @@ int main(void)
   test_exp_lin_signed();
   test_stride_and_chunking();
   test_trigger_start();
+  test_trigger_count();
   test_each_trigger();
   test_bad_input();
   return check_report();

@@ -13,8 +13,11 @@
 #    the floor and stitching's straight-line rule, which keeps the bead that
 #    enters on the line another has left off that one's track);
 #  - summary.json counts the file's trigger edges, and without -q `track`
-#    notes that --repr lin suits pulsed light on moving objects (not with
-#    --repr lin itself);
+#    on the grid (--start first) notes that --repr lin suits pulsed light
+#    on moving objects (not with --repr lin itself);
+#  - these runs are on the grid from the first event (--start first, and
+#    the --repr lin one with each-trigger, which track now chooses itself
+#    under pulsed light: test_track_pulsed);
 #  - a bad value is a usage error.
 # Usage: track_blink.sh BINARY
 bin=$1
@@ -31,8 +34,8 @@ blink_score() {
   bs_out=$1; shift
   track_score "$tmp/bm" "$tmp/$bs_out" "$tmp/$bs_out.json" "$@"
 }
-blink_score off --guided-min-ratio 0
-blink_score def
+blink_score off --guided-min-ratio 0 --start first
+blink_score def --start first
 blink_score lin --repr lin
 a0=$(key "$tmp/off.json" alpha); a1=$(key "$tmp/def.json" alpha); a2=$(key "$tmp/lin.json" alpha)
 p0=$(key "$tmp/off.json" precision); p1=$(key "$tmp/def.json" precision); p2=$(key "$tmp/lin.json" precision)
@@ -43,10 +46,10 @@ awk -v a="$a2" -v p="$p2" 'BEGIN { exit !(a > 0.75 && p > 0.95) }' || { echo "FA
 tr=$(key "$tmp/def/summary.json" triggers)
 [ "${tr:-0}" -ge 60 ] || { echo "FAIL: triggers '$tr' (67 edges in 100 ms)"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/note" \
-  --to-us 30000 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note)"; fail=$((fail+1)); }
+  --to-us 30000 --start first 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note)"; fail=$((fail+1)); }
 grep -q "trigger edges.*--repr lin" "$tmp/note.err" || { echo "FAIL: no pulsed-light note"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/note" \
-  --to-us 30000 --repr lin 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note, lin)"; fail=$((fail+1)); }
+  --to-us 30000 --repr lin --start first 2>"$tmp/note.err" >/dev/null || { echo "FAIL: track (note, lin)"; fail=$((fail+1)); }
 grep -q "trigger edges" "$tmp/note.err" && { echo "FAIL: the note with --repr lin"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" guided_min_ratio)" = 0.15 ] || { echo "FAIL: guided_min_ratio not 0.15"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_blink: all passed" || echo "track_blink: $fail failed"

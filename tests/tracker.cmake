@@ -16,6 +16,7 @@ elfm_add_test(test_frame_times test_frame_times.c TIMEOUT 60)
 # End to end (simulate -> eventlfm track -> score): short scenes by default,
 # the long ones (stage_accel, blink, blink_moving, worm) labelled slow.
 elfm_add_test(test_track_e2e test_track_e2e.c TIMEOUT 300)
+elfm_add_test(test_track_pulsed test_track_pulsed.c TIMEOUT 300)
 elfm_add_test(test_track_e2e_slow test_track_e2e.c ARGS slow LABELS slow TIMEOUT 3000)
 # The `eventlfm track` shell tests: tests/NAME.sh BINARY, exit 77 = skipped.
 function(elfm_add_track_script name)
