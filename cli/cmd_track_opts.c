@@ -386,16 +386,16 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_CALIB: o.calib = a; break;
     case O_EVENTS: o.events = a; break;
     case O_OUT: o.out = a; break;
-    case O_THK: g.thr = 1; if (!cli_parse_double(C, "--threshold-k", a, &o.peaks.k_sigma)) return CLI_USAGE; break;
-    case O_THA: g.thr = 1; if (!cli_parse_double(C, "--threshold-abs", a, &o.peaks.absolute)) return CLI_USAGE; break;
-    case O_THDEPTH: g.depth = 1; if (!cli_parse_double(C, "--threshold-depth-um", a, &o.peaks.depth_range_um)) return CLI_USAGE; break;
-    case O_HYST: g.low = 1; if (!cli_parse_double(C, "--threshold-low", a, &o.peaks.hysteresis_low)) return CLI_USAGE; break;
-    case O_VEXP: if (!cli_parse_double(C, "--views-exponent", a, &o.views_exponent)) return CLI_USAGE; break;
+    case O_THK: g.thr = 1; if (!cli_parse_double_in(C, "--threshold-k", a, 0, 0, 1e6, ">= 0 (0: off)", &o.peaks.k_sigma)) return CLI_USAGE; break;
+    case O_THA: g.thr = 1; if (!cli_parse_double_in(C, "--threshold-abs", a, 0, 0, 1e12, ">= 0 (0: off)", &o.peaks.absolute)) return CLI_USAGE; break;
+    case O_THDEPTH: g.depth = 1; if (!cli_parse_double_in(C, "--threshold-depth-um", a, 0, 0, 1e6, ">= 0 (0: off)", &o.peaks.depth_range_um)) return CLI_USAGE; break;
+    case O_HYST: g.low = 1; if (!cli_parse_double_in(C, "--threshold-low", a, 0, 0, 1e12, ">= 0", &o.peaks.hysteresis_low)) return CLI_USAGE; break;
+    case O_VEXP: if (!cli_parse_double_in(C, "--views-exponent", a, 0, 0, 4, "0..4", &o.views_exponent)) return CLI_USAGE; break;
     case O_PLSHIFT:
       if (!cli_parse_double_in(C, "--plane-shift-px", a, 0, 0, 100, "0..100 (0 = every plane)", &o.plane_shift_px))
         return CLI_USAGE;
       break;
-    case O_LINKKZ: if (!cli_parse_double(C, "--link-kz", a, &o.link.kz)) return CLI_USAGE; break;
+    case O_LINKKZ: if (!cli_parse_double_in(C, "--link-kz", a, 0, 1, 100, "> 0 and <= 100", &o.link.kz)) return CLI_USAGE; break;
     case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
     case O_GUIDEDR: if (!cli_parse_double(C, "--guided-radius-um", a, &o.guided_radius_um)) return CLI_USAGE; break;
     case O_GUIDEDM: g.gmp = 1; if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
@@ -514,13 +514,19 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!parse_views_or_off(C, "--guided-views", a, &o.guided_views)) return CLI_USAGE;
       break;
     case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
-    case O_WEAKGATE: if (!cli_parse_double(C, "--weak-gate-um", a, &o.link.weak_gate_um)) return CLI_USAGE; break;
-    case O_RESCUE: if (!cli_parse_double(C, "--rescue-factor", a, &o.link.rescue_gate_factor)) return CLI_USAGE; break;
+    case O_WEAKGATE: if (!cli_parse_double_in(C, "--weak-gate-um", a, 0, 0, 1e4, "0..10000 (0: the gate)", &o.link.weak_gate_um)) return CLI_USAGE; break;
+    case O_RESCUE: if (!cli_parse_double_in(C, "--rescue-factor", a, 0, 0, 100, "0..100 (0: off)", &o.link.rescue_gate_factor)) return CLI_USAGE; break;
     case O_STITCHN:
       if (!cli_parse_int(C, "--stitch-points", a, &o.link.stitch_points)) return CLI_USAGE;
+      if (o.link.stitch_points != 0 && (o.link.stitch_points < 4 || o.link.stitch_points > 100000))
+        return cli_message(C, CLI_USAGE, "--stitch-points must be 0 (off) or 4..100000, not %s", a);
       g.stitch = 1;
       break;
-    case O_SWAPN: if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE; break;
+    case O_SWAPN:
+      if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE;
+      if (o.link.swap_points != 0 && (o.link.swap_points < 4 || o.link.swap_points > 100000))
+        return cli_message(C, CLI_USAGE, "--swap-points must be 0 (off) or 4..100000, not %s", a);
+      break;
     case O_ENCUM:
       if (!cli_parse_double_in(C, "--encounter-um", a, 0, 0, 1e6, ">= 0", &o.link.encounter_um)) return CLI_USAGE;
       break;
@@ -559,20 +565,20 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return CLI_USAGE;
       }
       break;
-    case O_STITCHG: if (!cli_parse_double(C, "--stitch-gate-um", a, &o.link.stitch_gate_um)) return CLI_USAGE; break;
+    case O_STITCHG: if (!cli_parse_double_in(C, "--stitch-gate-um", a, 0, 0, 1e4, "0..10000", &o.link.stitch_gate_um)) return CLI_USAGE; break;
     case O_VIEWSRULE:
       if (!strcmp(a, "on")) o.views_rule = 1;
       else if (!strcmp(a, "off")) o.views_rule = 0;
       else return cli_message(C, CLI_USAGE, "--views-rule must be on or off, not '%s'", a);
       break;
-    case O_THMIN: g.min = 1; if (!cli_parse_double(C, "--threshold-min", a, &o.peaks.absolute_min)) return CLI_USAGE; break;
-    case O_THR: g.thr = 1; if (!cli_parse_double(C, "--threshold-rel", a, &o.peaks.relative)) return CLI_USAGE; break;
+    case O_THMIN: g.min = 1; if (!cli_parse_double_in(C, "--threshold-min", a, 0, 0, 1e12, ">= 0", &o.peaks.absolute_min)) return CLI_USAGE; break;
+    case O_THR: g.thr = 1; if (!cli_parse_double_in(C, "--threshold-rel", a, 0, 0, 1, "0..1 (0: off)", &o.peaks.relative)) return CLI_USAGE; break;
     case O_RXY:
-      if (!cli_parse_double(C, "--radius-xy-um", a, &o.peaks.radius_xy_um)) return CLI_USAGE;
+      if (!cli_parse_double_in(C, "--radius-xy-um", a, 0, 1, 1e4, "> 0", &o.peaks.radius_xy_um)) return CLI_USAGE;
       g.rxy = 1;
       break;
-    case O_RZ: if (!cli_parse_double(C, "--radius-z-um", a, &o.peaks.radius_z_um)) return CLI_USAGE; break;
-    case O_SEP: if (!cli_parse_double(C, "--min-separation-um", a, &o.peaks.min_separation_um)) return CLI_USAGE; break;
+    case O_RZ: if (!cli_parse_double_in(C, "--radius-z-um", a, 0, 1, 1e4, "> 0", &o.peaks.radius_z_um)) return CLI_USAGE; break;
+    case O_SEP: if (!cli_parse_double_in(C, "--min-separation-um", a, 0, 0, 1e4, ">= 0", &o.peaks.min_separation_um)) return CLI_USAGE; break;
     case O_REFINE:
       if (!strcmp(a, "gauss")) o.peaks.refine = ELFM_REFINE_GAUSSIAN;
       else if (!strcmp(a, "quad")) o.peaks.refine = ELFM_REFINE_QUADRATIC;
@@ -583,9 +589,9 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_int(C, "--max-detections", a, &o.max_det)) return CLI_USAGE;
       if (o.max_det < 1 || o.max_det > 10000000) return cli_message(C, CLI_USAGE, "--max-detections must be 1..1e7");
       break;
-    case O_GATE: if (!cli_parse_double(C, "--gate-um", a, &o.link.gate_um)) return CLI_USAGE; break;
-    case O_MAXGAP: if (!cli_parse_int(C, "--max-gap", a, &o.link.max_gap_frames)) return CLI_USAGE; break;
-    case O_MINPTS: g.minpts = 1; if (!cli_parse_int(C, "--min-points", a, &o.link.min_points)) return CLI_USAGE; break;
+    case O_GATE: if (!cli_parse_double_in(C, "--gate-um", a, 0, 1, 1e4, "> 0 and <= 10000", &o.link.gate_um)) return CLI_USAGE; break;
+    case O_MAXGAP: if (!cli_parse_int_in(C, "--max-gap", a, 0, 1000000, "0..1000000 frames", &o.link.max_gap_frames)) return CLI_USAGE; break;
+    case O_MINPTS: g.minpts = 1; if (!cli_parse_int_in(C, "--min-points", a, 1, 1000000, ">= 1", &o.link.min_points)) return CLI_USAGE; break;
     case O_LAG:
       if (!strcmp(a, "on")) o.lag_correct = 1;
       else if (!strcmp(a, "off")) o.lag_correct = 0;
@@ -621,7 +627,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return CLI_USAGE;
       g.lscale = 1;
       break;
-    case O_SPW: if (!cli_parse_double(C, "--spline-weight-ms3", a, &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
+    case O_SPW: if (!cli_parse_double_in(C, "--spline-weight-ms3", a, 0, 0, 1e300, ">= 0 (0: chosen by GCV)", &o.smooth.spline_weight_ms3)) return CLI_USAGE; break;
     case O_GCVG:
       if (!cli_parse_double_in(C, "--gcv-gamma", a, 1, 0, 10, "1..10", &o.smooth.gcv_gamma)) return CLI_USAGE;
       g.gcvg = 1;

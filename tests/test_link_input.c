@@ -44,6 +44,13 @@ int main(void)
     bad = o;
     bad.stitch_points = 3;  /* a young track needs 4 points for its path */
     CHECK(elfm_link_create(&bad, &err) == NULL);
+    /* the message names the option, its value and what it takes */
+    CHECK_MSG(strstr(err.message, "stitch_points = 3 is out of range (0 or >= 4)") != NULL, "%s",
+              err.message);
+    bad = o;
+    bad.rest_speed_um_per_ms = -0.25;
+    CHECK(elfm_link_create(&bad, &err) == NULL);
+    CHECK_MSG(strstr(err.message, "rest_speed_um_per_ms = -0.25") != NULL, "%s", err.message);
     bad = o;
     bad.swap_points = 3;    /* a tail needs 4 points for its fit */
     CHECK(elfm_link_create(&bad, &err) == NULL);

@@ -392,6 +392,8 @@ int main(void)
   o.radius_z_um = -1;
   CHECK(elfm_peaks_create(&o, 10, 10, 10, &err) == NULL);
   CHECK_EQ_INT(err.code, ELFM_ERR_INVALID);
+  /* the message names the option, its value and what it takes */
+  CHECK_MSG(strstr(err.message, "radius_z_um = -1 is out of range (> 0)") != NULL, "%s", err.message);
   elfm_peaks_free(NULL);
   o.radius_z_um = 15;
 

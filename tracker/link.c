@@ -56,42 +56,83 @@ void elfm_link_options_default(elfm_link_options *o)
   o->circle_line_ratio = 0.5;
 }
 
+/* The first option out of range, named with its value and what it takes;
+ * ELFM_OK when all are good. */
+static elfm_status link_options_check(const elfm_link_options *o, elfm_error *err)
+{
+#define LINK_NEED(ok, name, value, what)                                                   \
+  do {                                                                                     \
+    if (!(ok))                                                                             \
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,                               \
+                            "link: option %s = %g is out of range (%s)", name, (double)(value), \
+                            what);                                                         \
+  } while (0)
+  LINK_NEED(o->gate_um > 0 && isfinite(o->gate_um), "gate_um", o->gate_um, "> 0");
+  LINK_NEED(o->gate_growth_um_per_frame >= 0 && isfinite(o->gate_growth_um_per_frame),
+            "gate_growth_um_per_frame", o->gate_growth_um_per_frame, ">= 0");
+  LINK_NEED(o->kz > 0, "kz", o->kz, "> 0");
+  LINK_NEED(o->max_gap_frames >= 0, "max_gap_frames", o->max_gap_frames, ">= 0");
+  LINK_NEED(o->min_points >= 1, "min_points", o->min_points, ">= 1");
+  LINK_NEED(o->history >= 2, "history", o->history, ">= 2");
+  LINK_NEED(o->short_history >= 4, "short_history", o->short_history, ">= 4");
+  LINK_NEED(o->short_gap >= 0, "short_gap", o->short_gap, ">= 0");
+  LINK_NEED(o->gap_cost >= 0, "gap_cost", o->gap_cost, ">= 0");
+  LINK_NEED(o->max_candidates >= 1 && o->max_candidates <= 1024, "max_candidates", o->max_candidates,
+            "1..1024");
+  LINK_NEED(o->lag_tau_us >= 0, "lag_tau_us", o->lag_tau_us, ">= 0");
+  LINK_NEED(isfinite(o->lead_sigmas), "lead_sigmas", o->lead_sigmas, "finite");
+  for (int a = 0; a < 3; a++)
+    LINK_NEED(isfinite(o->prior_velocity_um_per_ms[a]), "prior_velocity_um_per_ms",
+              o->prior_velocity_um_per_ms[a], "finite");
+  LINK_NEED(o->birth_speed_um_per_ms >= 0 && isfinite(o->birth_speed_um_per_ms), "birth_speed_um_per_ms",
+            o->birth_speed_um_per_ms, ">= 0");
+  LINK_NEED(o->speed_gate_frac >= 0, "speed_gate_frac", o->speed_gate_frac, ">= 0");
+  LINK_NEED(o->rescue_gate_factor >= 0 && isfinite(o->rescue_gate_factor), "rescue_gate_factor",
+            o->rescue_gate_factor, ">= 0");
+  LINK_NEED(o->weak_gate_um >= 0 && isfinite(o->weak_gate_um), "weak_gate_um", o->weak_gate_um, ">= 0");
+  LINK_NEED(o->stitch_points == 0 || o->stitch_points >= 4, "stitch_points", o->stitch_points,
+            "0 or >= 4");
+  LINK_NEED(o->stitch_gate_um >= 0 && isfinite(o->stitch_gate_um), "stitch_gate_um", o->stitch_gate_um,
+            ">= 0");
+  LINK_NEED(o->stitch_history >= 1, "stitch_history", o->stitch_history, ">= 1");
+  LINK_NEED(o->stitch_straight_frac >= 0 && isfinite(o->stitch_straight_frac), "stitch_straight_frac",
+            o->stitch_straight_frac, ">= 0");
+  LINK_NEED(o->swap_points == 0 || o->swap_points >= 4, "swap_points", o->swap_points, "0 or >= 4");
+  LINK_NEED(o->swap_ratio > 0 && o->swap_ratio <= 1, "swap_ratio", o->swap_ratio, "> 0 and <= 1");
+  LINK_NEED(o->encounter_um >= 0 && isfinite(o->encounter_um), "encounter_um", o->encounter_um, ">= 0");
+  LINK_NEED(o->encounter_pad >= 0, "encounter_pad", o->encounter_pad, ">= 0");
+  LINK_NEED(o->encounter_apart >= 0, "encounter_apart", o->encounter_apart, ">= 0");
+  LINK_NEED(o->encounter_ratio > 0 && o->encounter_ratio <= 1, "encounter_ratio", o->encounter_ratio,
+            "> 0 and <= 1");
+  LINK_NEED(o->encounter_circle_ratio >= 0 && o->encounter_circle_ratio <= 1, "encounter_circle_ratio",
+            o->encounter_circle_ratio, "0..1");
+  LINK_NEED(o->encounter_line_ratio >= 0 && o->encounter_line_ratio <= 1, "encounter_line_ratio",
+            o->encounter_line_ratio, "0..1");
+  LINK_NEED(o->review_join_factor >= 0 && isfinite(o->review_join_factor), "review_join_factor",
+            o->review_join_factor, ">= 0");
+  LINK_NEED(o->priority_points >= 0, "priority_points", o->priority_points, ">= 0");
+  LINK_NEED(o->short_path_um >= 0 && isfinite(o->short_path_um), "short_path_um", o->short_path_um, ">= 0");
+  LINK_NEED(o->trail_us >= 0 && isfinite(o->trail_us), "trail_us", o->trail_us, ">= 0");
+  LINK_NEED(o->rest_speed_um_per_ms >= 0 && isfinite(o->rest_speed_um_per_ms), "rest_speed_um_per_ms",
+            o->rest_speed_um_per_ms, ">= 0");
+  LINK_NEED(o->circle_points == 0 || o->circle_points >= 6, "circle_points", o->circle_points, "0 or >= 6");
+  LINK_NEED(o->circle_after >= 1, "circle_after", o->circle_after, ">= 1");
+  LINK_NEED(o->circle_min_arc_rad >= 0 && isfinite(o->circle_min_arc_rad), "circle_min_arc_rad",
+            o->circle_min_arc_rad, ">= 0");
+  LINK_NEED(o->circle_max_radius_um > 0, "circle_max_radius_um", o->circle_max_radius_um, "> 0");
+  LINK_NEED(o->circle_line_ratio > 0 && o->circle_line_ratio <= 1, "circle_line_ratio",
+            o->circle_line_ratio, "> 0 and <= 1");
+#undef LINK_NEED
+  return ELFM_OK;
+}
+
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err)
 {
-  if (!o || !(o->gate_um > 0) || !isfinite(o->gate_um) || !(o->gate_growth_um_per_frame >= 0) ||
-      !isfinite(o->gate_growth_um_per_frame) || !(o->kz > 0) || o->max_gap_frames < 0 ||
-      o->min_points < 1 || o->history < 2 || o->short_history < 4 || o->short_gap < 0 || !(o->gap_cost >= 0) || o->max_candidates < 1 ||
-      o->max_candidates > 1024 || !(o->lag_tau_us >= 0) || !isfinite(o->lead_sigmas) ||
-      !isfinite(o->prior_velocity_um_per_ms[0]) || !isfinite(o->prior_velocity_um_per_ms[1]) ||
-      !isfinite(o->prior_velocity_um_per_ms[2]) || !(o->birth_speed_um_per_ms >= 0) || !(o->speed_gate_frac >= 0) ||
-      !(o->rescue_gate_factor >= 0) || !isfinite(o->rescue_gate_factor) ||
-      !(o->weak_gate_um >= 0) || !isfinite(o->weak_gate_um) || o->stitch_points < 0 ||
-      (o->stitch_points > 0 && o->stitch_points < 4) || !(o->stitch_gate_um >= 0) ||
-      !isfinite(o->stitch_gate_um) || o->stitch_history < 1 ||
-      !(o->stitch_straight_frac >= 0) || !isfinite(o->stitch_straight_frac) || o->swap_points < 0 ||
-      (o->swap_points > 0 && o->swap_points < 4) || !(o->swap_ratio > 0) || !(o->swap_ratio <= 1) ||
-      !(o->encounter_um >= 0) || !isfinite(o->encounter_um) || o->encounter_pad < 0 ||
-      o->encounter_apart < 0 ||
-      !(o->encounter_ratio > 0) || !(o->encounter_ratio <= 1) ||
-      !(o->encounter_circle_ratio >= 0) || !(o->encounter_circle_ratio <= 1) ||
-      !(o->encounter_line_ratio >= 0) || !(o->encounter_line_ratio <= 1) ||
-      !(o->review_join_factor >= 0) || !isfinite(o->review_join_factor) ||
-      o->priority_points < 0 || !(o->short_path_um >= 0) || !isfinite(o->short_path_um) ||
-      !isfinite(o->birth_speed_um_per_ms) || !(o->trail_us >= 0) || !isfinite(o->trail_us) ||
-      !(o->rest_speed_um_per_ms >= 0) || !isfinite(o->rest_speed_um_per_ms) ||
-      (o->circle_points != 0 && o->circle_points < 6) || o->circle_after < 1 ||
-      !(o->circle_min_arc_rad >= 0) || !isfinite(o->circle_min_arc_rad) ||
-      !(o->circle_max_radius_um > 0) || !(o->circle_line_ratio > 0) ||
-      !(o->circle_line_ratio <= 1)) {
-    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                   "link: options out of range (gate > 0, kz > 0, max_gap >= 0, min_points >= 1, "
-                   "history >= 2, 1 <= max_candidates <= 1024, stitch and swap points 0 or >= 4, "
-                   "stitch gate and straightness >= 0, 0 < swap ratio <= 1, encounter distance, "
-                   "pad and apart frames >= 0, 0 < encounter ratio <= 1, 0 <= encounter circle and line ratios <= 1, review join factor >= 0, priority points and "
-                   "short path >= 0, rest speed >= 0, circle points 0 or >= 6, circle after >= 1, "
-                   "circle arc >= 0, circle radius > 0, 0 < circle line ratio <= 1)");
+  if (!o) {
+    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: NULL options");
     return NULL;
   }
+  if (link_options_check(o, err) != ELFM_OK) return NULL;
   elfm_linker *l = calloc(1, sizeof *l);
   if (!l) {
     elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");

@@ -57,16 +57,29 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: bad volume size %d x %d x %d", w, h, nz);
     return NULL;
   }
-  if (!(o->radius_xy_um > 0) || !(o->radius_z_um > 0) || !(o->kz > 0) ||
-      !(o->min_separation_um >= 0) || !isfinite(o->absolute) || !isfinite(o->relative) ||
-      !isfinite(o->k_sigma) || !(o->depth_range_um >= 0) || !isfinite(o->depth_range_um) ||
-      !isfinite(o->absolute_min) || !(o->hysteresis_low >= 0) || !isfinite(o->hysteresis_low) || o->relative > 1 || o->fit_half_xy < 0 || o->fit_half_z < 0 ||
-      o->fit_half_xy > 8 || o->fit_half_z > 16 || o->refine < ELFM_REFINE_GAUSSIAN ||
-      o->refine > ELFM_REFINE_NONE) {
-    elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                   "peaks: options out of range (radii and kz > 0, relative <= 1, depth range >= 0, fit half-widths 0..8/16)");
-    return NULL;
-  }
+  /* the first option out of range, named with its value and what it takes */
+  const struct { int ok; const char *name; double value; const char *what; } need[] = {
+    {o->radius_xy_um > 0, "radius_xy_um", o->radius_xy_um, "> 0"},
+    {o->radius_z_um > 0, "radius_z_um", o->radius_z_um, "> 0"},
+    {o->kz > 0, "kz", o->kz, "> 0"},
+    {o->min_separation_um >= 0, "min_separation_um", o->min_separation_um, ">= 0"},
+    {isfinite(o->absolute), "absolute", o->absolute, "finite"},
+    {isfinite(o->relative) && o->relative <= 1, "relative", o->relative, "<= 1"},
+    {isfinite(o->k_sigma), "k_sigma", o->k_sigma, "finite"},
+    {o->depth_range_um >= 0 && isfinite(o->depth_range_um), "depth_range_um", o->depth_range_um, ">= 0"},
+    {isfinite(o->absolute_min), "absolute_min", o->absolute_min, "finite"},
+    {o->hysteresis_low >= 0 && isfinite(o->hysteresis_low), "hysteresis_low", o->hysteresis_low, ">= 0"},
+    {o->fit_half_xy >= 0 && o->fit_half_xy <= 8, "fit_half_xy", o->fit_half_xy, "0..8"},
+    {o->fit_half_z >= 0 && o->fit_half_z <= 16, "fit_half_z", o->fit_half_z, "0..16"},
+    {o->refine >= ELFM_REFINE_GAUSSIAN && o->refine <= ELFM_REFINE_NONE, "refine", (double)o->refine,
+     "an elfm_refine"},
+  };
+  for (size_t k = 0; k < sizeof need / sizeof need[0]; k++)
+    if (!need[k].ok) {
+      elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: option %s = %g is out of range (%s)",
+                     need[k].name, need[k].value, need[k].what);
+      return NULL;
+    }
   if ((double)w * h * nz >= 4294967295.0) {  /* the voxel counts are 32-bit */
     elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "peaks: volume of %d x %d x %d is too large", w, h, nz);
     return NULL;
