@@ -113,6 +113,13 @@ typedef struct track_opts {
 #define TRACK_WIDTH_BINS 1000
 #define TRACK_WIDTH_FOCUS_UM 20.0
 #define TRACK_WIDTH_MIN_PEAKS 50
+/* ... and where fewer than TRACK_WIDTH_MIN_PEAKS lie that close to focus,
+ * the peaks within TRACK_WIDTH_NEAR_UM: the median width hardly changes
+ * out to 40 um (flow 100 ms seeds 1-2 by 10 um of |z|: 0.84-0.87 /
+ * 0.81-0.84 / 0.80 / 0.78-0.79, stage 200 ms seed 4: 1.13 / 1.13 / 1.15),
+ * and the 1.25 um default is a flow bead's lead, not a brighter bead's
+ * (stage seed 11, its beads 20-90 um from focus: alpha 0.71 with it). */
+#define TRACK_WIDTH_NEAR_UM 40.0
 #define TRACK_HEIGHT_BINS 1024
 /* The stage's consensus velocity (track_ctx.stage_*): tracks of at least
  * TRACK_STAGE_MIN_POINTS points count, TRACK_STAGE_MIN_TRACKS of them make
@@ -322,6 +329,8 @@ typedef struct track_ctx {
    * TRACK_WIDTH_BIN_UM, for the lead (motion_lead_auto) */
   int64_t width_hist[TRACK_WIDTH_BINS];
   int64_t n_width;
+  int64_t width_near_hist[TRACK_WIDTH_BINS]; /* within TRACK_WIDTH_NEAR_UM */
+  int64_t n_width_near;
   /* the peaks' heights (elfm_detection.intensity, not view-fit points) in
    * bins of 1, for the dim objects' note (TRACK_HINT_DIM_FACTOR) */
   int64_t height_hist[TRACK_HEIGHT_BINS];

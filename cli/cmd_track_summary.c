@@ -204,6 +204,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "motion_lead_um", track_motion_lead_um(c));
   cJSON_AddBoolToObject(par, "motion_lead_auto", o->motion_lead_auto);
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
+  cJSON_AddNumberToObject(par, "peak_widths_near_focus", (double)c->n_width_near);
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
   add_num(par, "peak_height_median", track_peak_height_median(c));
   cJSON_AddNumberToObject(par, "views_scaled_for", o->views_scaled);

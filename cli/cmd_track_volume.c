@@ -10,9 +10,13 @@
 
 void track_width_add(track_ctx *c, const elfm_detection *d)
 {
-  if (d->weak || d->view_fit || !(d->width_um > 0) || !(fabs(d->z_um) < TRACK_WIDTH_FOCUS_UM)) return;
+  if (d->weak || d->view_fit || !(d->width_um > 0) || !(fabs(d->z_um) < TRACK_WIDTH_NEAR_UM)) return;
   long b = lround(d->width_um / TRACK_WIDTH_BIN_UM);
-  c->width_hist[b < TRACK_WIDTH_BINS ? b : TRACK_WIDTH_BINS - 1]++;
+  if (b >= TRACK_WIDTH_BINS) b = TRACK_WIDTH_BINS - 1;
+  c->width_near_hist[b]++;
+  c->n_width_near++;
+  if (!(fabs(d->z_um) < TRACK_WIDTH_FOCUS_UM)) return;
+  c->width_hist[b]++;
   c->n_width++;
 }
 
@@ -69,13 +73,17 @@ double track_detection_speed_median(const track_ctx *c)
 
 double track_peak_width_median_um(const track_ctx *c)
 {
+  if (c->n_width < TRACK_WIDTH_MIN_PEAKS && c->n_width_near >= TRACK_WIDTH_MIN_PEAKS)
+    return track_hist_median_bin(c->width_near_hist, TRACK_WIDTH_BINS, c->n_width_near) * TRACK_WIDTH_BIN_UM;
   if (c->n_width == 0) return NAN;
   return track_hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
 }
 
 double track_motion_lead_um(const track_ctx *c)
 {
-  if (!c->o->motion_lead_auto || c->n_width < TRACK_WIDTH_MIN_PEAKS) return c->o->smooth.motion_lead_um;
+  if (!c->o->motion_lead_auto ||
+      (c->n_width < TRACK_WIDTH_MIN_PEAKS && c->n_width_near < TRACK_WIDTH_MIN_PEAKS))
+    return c->o->smooth.motion_lead_um;
   const double w_um = track_peak_width_median_um(c);
   if (c->o->motion == MOTION_STAGE) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
   return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);

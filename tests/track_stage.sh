@@ -12,6 +12,10 @@
 # (0.21 / 0.38 / 0.26 with the velocity given); the usual stage, seeds
 # 1-11: mean 0.17 -> 0.14 %, max 0.43 -> 0.23 %; stage_accel unchanged
 # (docs/tracker.md "The stage's velocity from its tracks").
+# A stage whose beads lie 20-90 um from focus (seed 11): fewer than 50
+# peaks within 20 um of focus gave the lead no width, and it stayed at the
+# flow beads' 1.25 um against these brighter beads' ~1.8 (alpha 0.710); the
+# peaks within 40 um give it now (alpha 0.800).
 # Checked: the dim stage seed 2 drops its track running against the stage
 # and is within 1 %; an accelerating stage (0.1 -> 0.6 um/ms in 200 ms),
 # whose tracks differ 2x in mean speed, loses none.
@@ -48,5 +52,14 @@ echo "stage_accel: $line"
 case "$line" in *"accelerating at"*) ;; *) echo "FAIL: stage_accel's acceleration not said"; fail=$((fail+1)) ;; esac
 px=$(tr -d ' \n\t' < "$tmp/a/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
 case "$line" in *"$(printf '%.4f' "$px"),"*) ;; *) echo "FAIL: stderr's vy is not summary.json's $px"; fail=$((fail+1)) ;; esac
+simulate_or_skip "$tmp/s11" stage 200 11
+score_args=""
+track_score "$tmp/s11" "$tmp/s11o" "$tmp/s11.json"
+nf=$(key "$tmp/s11o/summary.json" peak_widths_in_focus); nn=$(key "$tmp/s11o/summary.json" peak_widths_near_focus)
+ld=$(key "$tmp/s11o/summary.json" motion_lead_um); a=$(key "$tmp/s11.json" alpha)
+echo "stage 200 ms seed 11: $nf peaks within 20 um of focus, $nn within 40 um; lead $ld um, alpha $a"
+[ -n "$nf" ] && [ "$nf" -lt 50 ] || { echo "FAIL: seed 11 has $nf in-focus peaks (the case needs < 50)"; fail=$((fail+1)); }
+awk -v l="$ld" 'BEGIN { exit !(l > 1.5 && l < 2.1) }' || { echo "FAIL: lead '$ld' is not the width's"; fail=$((fail+1)); }
+expect_gain 0.77 "$a" 0 "stage seed 11 alpha $a <= 0.77"
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
