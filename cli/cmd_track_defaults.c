@@ -600,10 +600,9 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 9-20 0.8356 -> 0.8374, flow_random 1-10 0.6383 -> 0.6406, flow at
      * 0.6-2.5 mm/s (8 held-out runs) 0.7699 -> 0.7938, stage and stage_accel
      * (16 runs, 0.5-3.5 mm/s) 0.8055 -> 0.8373, blink_moving 1-4 0.8423 ->
-     * 0.8538 (docs/tracker.md "The lead of
-     * slow beads"). A lead or delay given (eventlfm score's regression on a
-     * scene like the sample) stands for the whole line: the bend is then
-     * off unless given too. */
+     * 0.8538 (docs/tracker.md "The lead of slow beads"). A lead or delay
+     * given (eventlfm score's regression on a scene like the sample) stands
+     * for the whole line: the bend is then off unless given too. */
     if (!g->mlead && !g->mdelay) {
       if (!g->mslow) o->smooth.motion_slow_lead_ms = 0.17;
       if (!g->mslows) o->smooth.motion_slow_um_per_ms = 3.0;

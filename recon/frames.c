@@ -397,7 +397,6 @@ static int ring_grow(int64_t **ring, size_t *head, size_t n, size_t *cap)
   return 1;
 }
 
-
 elfm_status elfm_framer_push(elfm_framer *f, const elfm_event_chunk *c, elfm_error *err)
 {
   const int each = f->opt.start == ELFM_START_EACH_TRIGGER;
