@@ -306,7 +306,7 @@ static void test_trigger_count(void)
       o.trigger_channel = ch;
       elfm_framer *fr = NULL;
       CHECK_OK(elfm_framer_create(&o, SW, SH, &fr, &err), &err);
-      elfm_event_chunk *c = elfm_chunk_create(16, &err);
+      elfm_event_chunk *c = elfm_chunk_create(32, &err); /* 20 events */
       elfm_frame *f = elfm_frame_create(SW, SH, &err);
       /* all in one chunk, or the edges and events in two, the first
        * chunk ending at 2000 us */
