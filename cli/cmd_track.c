@@ -480,21 +480,25 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
             c.median_speed_um_per_ms, c.median_speed_um_per_ms * frame_ms, TRACK_HINT_MAX_STEP_UM,
             half_us);
   }
-  if (!o.quiet && rs.triggers >= 4 && o.recon.framer.repr == ELFM_REPR_EXP &&
+  /* the notes for pulsed light when its choices were given (--start,
+   * --repr): only where the frames show it (track_pulsed), not for edges
+   * that are not the light's, such as a frame clock's */
+  if (!o.quiet && pulsed && o.recon.framer.repr == ELFM_REPR_EXP &&
       c.median_speed_um_per_ms >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
-    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges (pulsed "
-                    "light?) and its objects move (median %.2f um/ms): on the exponential "
-                    "surface a pulse that ends late in a window shows again in the next frame; "
-                    "--repr lin keeps each pulse in its own (README, blinking objects)\n",
-            rs.triggers, c.median_speed_um_per_ms);
-  if (!o.quiet && rs.triggers >= 4 && o.recon.framer.start != ELFM_START_EACH_TRIGGER &&
+    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges and the "
+                    "frames with one hold %.0fx the others' events (pulsed light), and its objects "
+                    "move (median %.2f um/ms): on the exponential surface a pulse that ends late "
+                    "in a window shows again in the next frame; --repr lin keeps each pulse in its "
+                    "own (README, blinking objects)\n",
+            rs.triggers, track_pulsed_ratio(&c), c.median_speed_um_per_ms);
+  if (!o.quiet && pulsed && o.recon.framer.start != ELFM_START_EACH_TRIGGER &&
       c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
-    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges (pulsed "
-                    "light?): --start each-trigger opens a window at each rising edge, one pulse "
-                    "to a frame, which a pulse at a random phase against the window grid is not; "
-                    "score such a run with --frames run --window-us run (README, blinking "
-                    "objects)\n",
-            rs.triggers);
+    fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges and the "
+                    "frames with one hold %.0fx the others' events (pulsed light): --start "
+                    "each-trigger opens a window at each rising edge, one pulse to a frame, which "
+                    "a pulse at a random phase against the window grid is not; score such a run "
+                    "with --frames run --window-us run (README, blinking objects)\n",
+            rs.triggers, track_pulsed_ratio(&c));
   dim_note(&c, 0);
   rc = CLI_OK;
 done:
