@@ -177,6 +177,17 @@ typedef struct track_again {
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
 } track_again;
 
+/* What a run judged (its first peaks, the motion), for the next run's
+ * summary.json (auto_settled). */
+static void again_judged(track_again *g, const track_ctx *c)
+{
+  g->ratio = c->auto_decided ? c->auto_ratio : NAN;
+  g->speed_um_per_ms = c->auto_decided ? c->auto_speed : NAN;
+  g->rigid_dev = c->rigid_dev;
+  g->rigid_speed_um_per_ms = c->rigid_speed;
+  g->rigid_abs_um_per_ms = c->rigid_abs;
+}
+
 static void say_again(const track_ctx *c, const track_again *g)
 {
   const track_opts *o = c->o;
@@ -380,11 +391,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->dt_us = !others ? -1
                    : c.dt_restart ? o.recon.framer.dt_us / 2
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
-    again->ratio = c.auto_decided ? c.auto_ratio : NAN;
-    again->speed_um_per_ms = c.auto_decided ? c.auto_speed : NAN;
-    again->rigid_dev = c.rigid_dev;
-    again->rigid_speed_um_per_ms = c.rigid_speed;
-    again->rigid_abs_um_per_ms = c.rigid_abs;
+    again_judged(again, &c);
     say_again(&c, again);
     rc = TRACK_RUN_AGAIN;
     goto done;
@@ -430,13 +437,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * default"). The run's files are written again. */
     again->each_trigger = 1;
     again->lin = o.repr_auto && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
-    if (!o.auto_chose) { /* what this first run judged, for summary.json */
-      again->ratio = c.auto_decided ? c.auto_ratio : NAN;
-      again->speed_um_per_ms = c.auto_decided ? c.auto_speed : NAN;
-      again->rigid_dev = c.rigid_dev;
-      again->rigid_speed_um_per_ms = c.rigid_speed;
-      again->rigid_abs_um_per_ms = c.rigid_abs;
-    }
+    if (!o.auto_chose) again_judged(again, &c); /* the first run's judgement, for summary.json */
     if (!o.quiet)
       fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
                       "(the frames with an edge hold %.0fx the others'): pulsed light; starting again "
