@@ -171,8 +171,7 @@ typedef struct track_again {
   int few;         /* 1: the integral because too few peaks were found to judge */
   int64_t first_det; /* ... the first run's detections then */
   int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
-  int each_trigger; /* 1: pulsed light (objects at rest, or the frames' events):
-                       --start each-trigger */
+  int each_trigger; /* 1: pulsed light (track_pulsed): --start each-trigger */
   int lin;          /* 1: ... and the objects move: --repr lin too */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
 } track_again;
