@@ -152,6 +152,10 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
 {
   track_ctx *c = user;
   const elfm_status st = track_on_volume(v, slot, user, err);
+  if (st == ELFM_OK && c->stage_outrun) {
+    c->auto_stopped = 1;
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "to start again with 1 ms windows");
+  }
   if (st == ELFM_OK && auto_judge(c, TRACK_HINT_DIM_EARLY_PEAKS, 0)) {
     c->auto_stopped = 1;
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "to start again with auto's choices");
@@ -171,6 +175,8 @@ typedef struct track_again {
   int few;         /* 1: the integral because too few peaks were found to judge */
   int64_t first_det; /* ... the first run's detections then */
   int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
+  int stage_back;   /* 1: a slow stage's long windows were outrun (TRACK_STAGE_WATCH_*):
+                       the command with --motion stage, at its 1 ms windows */
   int each_trigger; /* 1: pulsed light (track_pulsed): --start each-trigger */
   int lin;          /* 1: ... and the objects move: --repr lin too */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
@@ -205,6 +211,13 @@ static void say_again(const track_ctx *c, const track_again *g)
                     "again with --motion stage (--motion per-track: a model for each track; "
                     "README, docs/tracker.md \"A stage found by its tracks\")\n",
             c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames);
+  if (g->stage && g->dt_us > 0)
+    fprintf(stderr, "eventlfm track: the stage is slow (%.2f um per %" PRId64 " us window): "
+                    "--dt-us %" PRId64 " --tau-us %" PRId64 " too, %.1f um per window (back to 1 ms "
+                    "if it speeds up; --dt-us %" PRId64 ": keep the window; docs/tracker.md "
+                    "\"Windows for a slow stage\")\n",
+            c->rigid_speed * 1e-3 * (double)o->recon.framer.dt_us, o->recon.framer.dt_us, g->dt_us,
+            g->dt_us, c->rigid_speed * 1e-3 * (double)g->dt_us, o->recon.framer.dt_us);
   if (g->blur_px > 0)
     fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
                     "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
@@ -225,7 +238,7 @@ static void say_again(const track_ctx *c, const track_again *g)
                     " peaks): cells, whose ON events lead them; starting again with --repr integral%s "
                     "(--repr exp: keep the time surface; README, docs/tracker.md \"Integral frames\")\n",
             c->auto_speed, c->auto_peaks, dt);
-  } else if (g->dt_us > 0)
+  } else if (g->dt_us > 0 && !g->stage)
     fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
                     " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
                     ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
@@ -268,7 +281,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 {
   static const char *const C = "track";
   track_opts o = *po;
-  again->each_trigger = again->lin = 0;
+  again->each_trigger = again->lin = again->stage_back = 0;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -372,6 +385,18 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     rc = TRACK_RUN_AGAIN;
     goto done;
   }
+  if (c.stage_outrun) {
+    /* a slow stage's long windows, outrun: back to the first run's 1 ms */
+    again->stage_back = 1;
+    if (!o.quiet)
+      fprintf(stderr, "\neventlfm track: the stage sped up (median %.2f um/ms, %.1f um per %" PRId64
+                      " us window, at frame %" PRId64 "): starting again with --motion stage at 1 ms "
+                      "windows\n",
+              c.stage_outrun_speed, c.stage_outrun_speed * 1e-3 * (double)o.recon.framer.dt_us,
+              o.recon.framer.dt_us, c.n_frames);
+    rc = TRACK_RUN_AGAIN;
+    goto done;
+  }
   /* auto's choices: stopped by on_volume, or judged at the end (a short
    * run, fewer than TRACK_HINT_DIM_EARLY_PEAKS); an input error is met
    * again by the second run */
@@ -386,8 +411,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->back_exp = 0;
     again->each_trigger = c.start_restart;
     again->lin = c.start_restart && c.lin_restart;
-    /* the integral's windows: the worm's 2 ms (500 Hz) unless given */
-    again->dt_us = !others ? -1
+    /* the integral's windows: the worm's 2 ms (500 Hz) unless given; a
+     * slow stage's, longer (track_stage_slow_dt_us) */
+    again->dt_us = !others ? track_stage_slow_dt_us(&c)
                    : c.dt_restart ? o.recon.framer.dt_us / 2
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
     again_judged(again, &c);
@@ -462,7 +488,10 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
             c.n_frames, c.n_det, c.n_info, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
   if (!o.quiet && o.motion == MOTION_STAGE) say_stage(&c, &o, 1e3 * rs.span_s);
-  if (!o.quiet && o.recon.framer.repr != ELFM_REPR_INTEGRAL && o.recon.framer.polarity == ELFM_POL_ON) {
+  /* (not for a slow stage's long windows: chosen for it, "Windows for a
+   * slow stage", where the integral tracked worse) */
+  if (!o.quiet && !o.stage_watch && o.recon.framer.repr != ELFM_REPR_INTEGRAL &&
+      o.recon.framer.polarity == ELFM_POL_ON) {
     const double v = c.median_speed_um_per_ms;
     if (v >= TRACK_HINT_MIN_SPEED_UM_PER_MS && v <= TRACK_HINT_MAX_SPEED_UM_PER_MS)
       fprintf(stderr, "eventlfm track: note: the tracks move slowly (median %.2f um/ms): ON events "
@@ -542,7 +571,8 @@ int cmd_track(int argc, char **argv)
    * (a finished run may still find pulsed light). At most: auto's choices,
    * back to the time surface, each-trigger. */
   char dt[32];
-  char **argv2 = malloc(((size_t)argc + 11) * sizeof *argv2);
+  int stage_watch = 0;
+  char **argv2 = malloc(((size_t)argc + 15) * sizeof *argv2);
   if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
   int argc2 = 0;
   for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
@@ -562,6 +592,13 @@ int cmd_track(int argc, char **argv)
         argv2[argc2++] = "--repr";
         argv2[argc2++] = "lin";
       }
+    } else if (again.stage_back) {
+      /* the slow stage's long windows were outrun: the command as given,
+       * then --motion stage, as a stage found at 1 ms runs */
+      argc2 = argc;
+      argv2[argc2++] = "--motion";
+      argv2[argc2++] = "stage";
+      stage_watch = 0;
     } else if (again.back_exp) {
       /* the time surface, as the first run had it: the command as given,
        * then --repr exp */
@@ -586,6 +623,11 @@ int cmd_track(int argc, char **argv)
         snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
         argv2[argc2++] = "--dt-us";
         argv2[argc2++] = dt;
+        if (again.stage) { /* a slow stage's: the time surface keeps the window's events */
+          argv2[argc2++] = "--tau-us";
+          argv2[argc2++] = dt;
+          stage_watch = 1;
+        }
       }
     }
     argv2[argc2] = NULL;
@@ -595,6 +637,8 @@ int cmd_track(int argc, char **argv)
     auto_settled(&o, was, &again, ratio, speed);
     o.few_check = few;
     o.few_first_det = again.first_det;
+    o.stage_watch = stage_watch;
+    o.stage_back = again.stage_back;
     rc = track_run(&o, &again, &t0_s);
   }
   free(argv2);

@@ -98,6 +98,11 @@ typedef struct track_opts {
                            peaks to judge; it goes back to the time surface when it finds
                            fewer detections than few_first_det, the time surface's */
   int64_t few_first_det;
+  int tau_given;        /* --tau-us was given (a slow stage's windows leave it alone) */
+  int stage_watch;      /* 1: this run's windows were lengthened for a slow stage
+                           (TRACK_STAGE_SLOW_*): it stops when the stage outruns them
+                           (TRACK_STAGE_WATCH_*) */
+  int stage_back;       /* 1: this run is back at 1 ms after such a run stopped */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
@@ -368,6 +373,10 @@ typedef struct track_ctx {
   int motion_restart;   /* ... moving as one: start again with --motion stage */
   double rigid_dev, rigid_speed, rigid_abs; /* the medians judged (NaN: not judged) */
   int auto_stopped;     /* the run stopped to start again (cmd_track's on_volume) */
+  int stage_fast_frames; /* stage_watch: windows in a row where the tracks moved
+                            TRACK_STAGE_WATCH_STEP_UM or more */
+  int stage_outrun;     /* ... TRACK_STAGE_WATCH_FRAMES of them: start again at 1 ms */
+  double stage_outrun_speed; /* the median speed then, um/ms */
   int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
@@ -439,6 +448,13 @@ void track_rigid_add_frame(track_ctx *c, double *v, int n);
  * TRACK_RIGID_MIN_SAMPLES / 2): sets c->rigid_decided, and returns 1 when
  * the objects move as one (c->motion_restart). */
 int track_rigid_judge(track_ctx *c, int at_end);
+/* The first run found a stage: the window (and tau) for its second run,
+ * us, when it is slow (TRACK_STAGE_SLOW_*); -1: keep the first run's. */
+int64_t track_stage_slow_dt_us(const track_ctx *c);
+/* o->stage_watch: one window's speeds s[0 .. n) (um/ms, the tracks' that
+ * joined it; s is scratch); sets c->stage_outrun and returns 1 when the
+ * stage has outrun the windows (TRACK_STAGE_WATCH_*). */
+int track_stage_watch_frame(track_ctx *c, double *s, int n);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
  * and buffers, before the run; keep the frame of each volume (linking
  * callback, frame order); after each linking step (all = 0) and before
@@ -587,6 +603,35 @@ double track_pulsed_ratio(const track_ctx *c);
  * 4-5 mm/s 4.95-5.31, 5-6.5 mm/s 5.49-6.73, 8-10 mm/s 7.49-9.99 (seeds 1-4;
  * 9.99 is the speed histogram's top bin, TRACK_SPEED_BINS). */
 #define TRACK_DT_AUTO_STEP_UM 5.0
+/* A slow stage's windows. A stage found by its tracks (TRACK_RIGID_*),
+ * with neither --dt-us nor --tau-us given, so slow that it takes
+ * TRACK_STAGE_SLOW_MIN_DT_US or more to move TRACK_STAGE_SLOW_STEP_UM,
+ * starts again with windows (and the time surface's tau) that long, at
+ * most TRACK_STAGE_SLOW_MAX_DT_US: a bead that moves 0.2 um in a window
+ * fires few of its pixels in it (stage 0.2 mm/s, 200 ms seeds 1-2: recall
+ * 0.54 / 0.68 at 1 ms). Stage seeds 1-2, alpha by --dt-us and --tau-us
+ * both (1 / 1.5 / 2 / 3 / 5 / 8 / 12 ms): 0.1 mm/s 0.28 / 0.51 / 0.53 /
+ * 0.55 / 0.60 / 0.77 / 0.79 (20 ms 0.74); 0.2 mm/s 0.59 / 0.60 / 0.60 /
+ * 0.76 / 0.81 / 0.85 / 0.86; 0.5 mm/s 0.69 / 0.80 / 0.84 / 0.87 / 0.88 /
+ * 0.84 / 0.71; 1 mm/s 0.86 / 0.89 / 0.89 / 0.89 / 0.87 / 0.71 / 0.57;
+ * 1.5 mm/s 0.90 / 0.90 / 0.89 / 0.88 / 0.83; 2.5 mm/s 0.87 / 0.89 / 0.86 /
+ * 0.85 (its speed 30-45 % off) / 0.59: best near 2.5 um per window, and
+ * beyond ~4 um per window the linker loses the beads (docs/tracker.md
+ * "Windows for a slow stage"). */
+#define TRACK_STAGE_SLOW_STEP_UM 2.5
+#define TRACK_STAGE_SLOW_MIN_DT_US 2000
+#define TRACK_STAGE_SLOW_MAX_DT_US 10000
+/* ... and a stage that speeds up while its windows are long (stage_accel:
+ * 0.1 to 2.5 mm/s) would outrun them: that run watches its tracks, and
+ * when their median speed moves them TRACK_STAGE_WATCH_STEP_UM or more per
+ * window in TRACK_STAGE_WATCH_FRAMES windows in a row, the command starts
+ * again with the first run's 1 ms windows (--motion stage, as before). */
+#define TRACK_STAGE_WATCH_STEP_UM 4.0
+#define TRACK_STAGE_WATCH_FRAMES 3
+/* ... and in such a run a track is off the stage (cmd_track_stage.c) when
+ * it moves along it at under this or over its inverse x the consensus
+ * speed (otherwise 1/4 and 4x: an accelerating stage's tracks differ 2x) */
+#define TRACK_STAGE_WATCH_ALONG_MIN 0.6
 /* The note comes as soon as this many peaks say so (a long recording's user
  * need not wait for its end), else at the end; --blur-px auto judges the
  * same peaks (on flow, the first 10-40 frames), so that its second run

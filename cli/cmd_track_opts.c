@@ -50,7 +50,12 @@ static void usage(FILE *f)
     "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
-    "                       --motion stage; --dt-us 1000 keeps 1 ms\n"
+    "                       --motion stage; --dt-us 1000 keeps 1 ms. A stage found\n"
+    "                       (--motion auto, below) that moves under %g um per 1 ms\n"
+    "                       starts again with windows and --tau-us long enough for\n"
+    "                       %g um (%d..%d us: slow beads fire few of their pixels\n"
+    "                       in 1 ms), and at 1 ms again if it speeds up to %g um per\n"
+    "                       window; not with --tau-us\n"
     "  --start, not given   the grid from the first event, and under pulsed light\n"
     "                       (%d rising trigger edges or more, and the frames with an\n"
     "                       edge, or after one, hold over %g x the others' events)\n"
@@ -61,6 +66,8 @@ static void usage(FILE *f)
     "                       first keeps the grid\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
+    TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
+    TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
     TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
@@ -379,6 +386,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     if (ch == CLI_RO_DT || ch == CLI_RO_STRIDE) o.dt_auto = 0;
     if (ch == CLI_RO_START) o.start_auto = 0;
     if (ch == CLI_RO_REPR || ch == CLI_RO_TAU || ch == CLI_RO_POLARITY || ch == CLI_RO_BLUR) o.repr_auto = 0;
+    if (ch == CLI_RO_TAU) o.tau_given = 1;
     if (k > 0) continue;
     switch (ch) {
     case 'h': usage(stdout); return TRACK_PARSE_HELP;

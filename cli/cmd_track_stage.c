@@ -2,7 +2,9 @@
  * not move with the stage are left out (tracks.csv, the XML files and the
  * stage's velocity in summary.json). With --stage-velocity-um-per-ms,
  * against that velocity; without it, against the tracks' own consensus
- * (docs/tracker.md "The stage's velocity from its tracks"). */
+ * (docs/tracker.md "The stage's velocity from its tracks"). Also the test
+ * for a stage (--motion auto) and a slow stage's windows ("Windows for a
+ * slow stage"). */
 #include <math.h>
 #include <stdlib.h>
 
@@ -30,7 +32,7 @@ static int off_stage(const elfm_track *t, const double v_ref[3])
  * the consensus speed (at rest, or against it: a hot pixel's track, a
  * ghost's), or across it by more than 25 % of that speed + 0.1 um/ms. A
  * consensus near rest (under 0.05 um/ms) tests nothing. */
-static int off_consensus(const elfm_track *t, const double v_c[3])
+static int off_consensus(const elfm_track *t, const double v_c[3], double along_min, double along_max)
 {
   const double sc = sqrt(v_c[0] * v_c[0] + v_c[1] * v_c[1] + v_c[2] * v_c[2]);
   if (!(sc >= 0.05)) return 0;
@@ -41,7 +43,7 @@ static int off_consensus(const elfm_track *t, const double v_c[3])
     const double d = v[a] - along * v_c[a] / sc;
     across2 += d * d;
   }
-  return !(along >= 0.25 * sc && along <= 4 * sc) || sqrt(across2) > 0.25 * sc + 0.1;
+  return !(along >= along_min * sc && along <= along_max * sc) || sqrt(across2) > 0.25 * sc + 0.1;
 }
 
 /* The weighted median of the values x[k * stride] (weights w[k * stride]),
@@ -74,7 +76,16 @@ static int stage_off(const track_ctx *c, const elfm_track *t)
   double v[3];
   for (int a = 0; a < 3; a++)
     v[a] = weighted_median(&c->stage_ring[0][a], &c->stage_ring[0][3], c->n_stage_ring, 4);
-  return off_consensus(t, v);
+  /* A slow stage's long windows (o->stage_watch) hold only while the
+   * stage stays under TRACK_STAGE_WATCH_STEP_UM per window, 1.6x the
+   * TRACK_STAGE_SLOW_STEP_UM it was judged at: its tracks' mean speeds
+   * lie within that of each other, and a track at half the stage's speed
+   * is a deep bead's image cut by the field stop (stage 0.75 mm/s 200 ms
+   * seed 3 at 3.4 ms windows: a bead at z -86 um entering the field at
+   * 0.40 um/ms, 12 of 429 points, put the stage's speed 1.2 % low; left
+   * out, 0.12 %). */
+  if (c->o->stage_watch) return off_consensus(t, v, TRACK_STAGE_WATCH_ALONG_MIN, 1 / TRACK_STAGE_WATCH_ALONG_MIN);
+  return off_consensus(t, v, 0.25, 4);
 }
 
 static void stage_ring_add(track_ctx *c, const elfm_track *t)
@@ -191,4 +202,34 @@ int track_rigid_judge(track_ctx *c, int at_end)
   c->motion_restart = (c->rigid_dev < TRACK_RIGID_MAX_DEV || c->rigid_abs < TRACK_RIGID_MAX_ABS_UM_PER_MS) &&
                       c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
   return c->motion_restart;
+}
+
+int64_t track_stage_slow_dt_us(const track_ctx *c)
+{
+  const track_opts *o = c->o;
+  /* the window and tau are auto's to choose only when neither was given;
+   * dt_auto also says the first run is on a time surface's 1 ms grid
+   * (track_opts_derive) */
+  if (!c->motion_restart || !o->dt_auto || o->tau_given || !(c->rigid_speed > 0)) return -1;
+  const double dt_us = 1e3 * TRACK_STAGE_SLOW_STEP_UM / c->rigid_speed;
+  if (dt_us < TRACK_STAGE_SLOW_MIN_DT_US) return -1;
+  /* in steps of 100 us, for a command line that reads well */
+  return (int64_t)fmin(TRACK_STAGE_SLOW_MAX_DT_US, 100.0 * round(dt_us / 100.0));
+}
+
+int track_stage_watch_frame(track_ctx *c, double *s, int n)
+{
+  if (c->stage_outrun) return 1;
+  if (n < TRACK_RIGID_MIN_TRACKS) return 0; /* too few to say; the count goes on */
+  double med, spread;
+  elfm_analysis_median(s, (size_t)n, &med, &spread);
+  const double frame_ms = 1e-3 * (double)c->o->recon.framer.dt_us;
+  if (!(med * frame_ms >= TRACK_STAGE_WATCH_STEP_UM)) {
+    c->stage_fast_frames = 0;
+    return 0;
+  }
+  if (++c->stage_fast_frames < TRACK_STAGE_WATCH_FRAMES) return 0;
+  c->stage_outrun = 1;
+  c->stage_outrun_speed = med;
+  return 1;
 }

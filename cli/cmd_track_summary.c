@@ -222,6 +222,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "motion_auto", (was & 8) != 0);
   cJSON_AddBoolToObject(par, "start_auto", (was & 16) != 0);
   cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
+  /* a slow stage's windows (dt_us, tau_us): this run's were lengthened, or
+   * they were and the stage outran them (this run is back at 1 ms) */
+  cJSON_AddBoolToObject(par, "stage_slow_windows", o->stage_watch);
+  cJSON_AddBoolToObject(par, "stage_windows_outrun", o->stage_back);
   /* --motion auto: the median distance of the long tracks' velocities from
    * their frame's median velocity, over its length and in um/ms, and the
    * frames' median speed (NaN: not judged; track_rigid_judge) */

@@ -129,7 +129,8 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   }
   c->pred = malloc((size_t)o->max_det * 3 * sizeof *c->pred);
   c->pred_intensity = malloc((size_t)o->max_det * sizeof *c->pred_intensity);
-  if (o->motion_auto && !(c->rigid_v = malloc((size_t)o->max_det * 4 * sizeof *c->rigid_v)))
+  if ((o->motion_auto || o->stage_watch) &&
+      !(c->rigid_v = malloc((size_t)o->max_det * 4 * sizeof *c->rigid_v)))
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan ||
       (o->localize_near_um > 0 && (!c->fitok || !c->near_fit)) ||
@@ -566,11 +567,15 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   /* after linking: the lag correction (when on) has moved the detections,
    * and trail peaks (id -2) and weak peaks that joined no track (-3) are
    * left out */
-  int kept = 0, n_rigid = 0;
+  int kept = 0, n_rigid = 0, n_watch = 0;
   double vnow[3], span_ms;
   for (int j = 0; j < n; j++) {
     int64_t id = elfm_link_last_track_id(c->lk, j);
     if (id == -2 || id == -3) continue;  /* trail; weak joining no track */
+    if (o->stage_watch) { /* a settled run: no test for a stage uses rigid_v */
+      const double sp = elfm_link_last_speed(c->lk, j);
+      if (isfinite(sp)) c->rigid_v[n_watch++] = sp;
+    }
     track_width_add(c, &det[j]);
     track_height_add(c, &det[j]);
     if ((o->blur_auto || o->dt_auto || o->repr_auto) && !c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
@@ -610,6 +615,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   if ((st = cli_frames_csv_row(c->ffr, c->p_fr, v, kept, err)) != ELFM_OK) return st;
   if ((st = elfm_frame_times_add(&c->frame_times, v->frame, v->t_us, err)) != ELFM_OK) return st;
   if (o->motion_auto) track_rigid_add_frame(c, c->rigid_v, n_rigid);
+  if (o->stage_watch) track_stage_watch_frame(c, c->rigid_v, n_watch);
   c->n_frames++;
   c->n_det += kept;
   c->last_frame = v->frame;

@@ -6,7 +6,9 @@
 # slow beads"). Checked against the same run without it
 # (--motion-slow-lead-ms 0), which is the build before: beads in a flow at
 # 0.6-1 mm/s (150 ms, seed 3: alpha 0.689 -> 0.718) and a stage at 1 mm/s
-# (200 ms, seed 1: 0.812 -> 0.867) must each gain 0.01 of alpha. A lead
+# (200 ms, seed 1: 0.812 -> 0.867; at 1 ms, --dt-us 1000, as a stage this
+# slow gets 2.5 ms windows by default, track_stage_slow.sh) must each gain
+# 0.01 of alpha. A lead
 # given (eventlfm score's regression on a scene like the sample) turns the
 # bend off; the options' ranges are checked.
 # Usage: track_slow_lead.sh BINARY
@@ -26,8 +28,8 @@ expect_key motion_slow_lead_ms "$tmp/fa/summary.json" 0.17
 expect_key motion_slow_um_per_ms "$tmp/fa/summary.json" 3
 
 simulate_or_skip "$tmp/s" stage 200 1 --param motion.v0_mm_per_s=1 --param motion.v1_mm_per_s=1
-track_score "$tmp/s" "$tmp/sa" "$tmp/sa.json"
-track_score "$tmp/s" "$tmp/s0" "$tmp/s0.json" --motion-slow-lead-ms 0
+track_score "$tmp/s" "$tmp/sa" "$tmp/sa.json" --dt-us 1000
+track_score "$tmp/s" "$tmp/s0" "$tmp/s0.json" --dt-us 1000 --motion-slow-lead-ms 0
 a=$(key "$tmp/sa.json" alpha); a0=$(key "$tmp/s0.json" alpha)
 echo "stage at 1 mm/s, 200 ms seed 1: alpha $a0 without the slow lead, $a with it"
 expect_gain "$a0" "$a" 0.01 "stage 1 mm/s: alpha $a0 -> $a, not 0.01 better"
