@@ -248,7 +248,8 @@ static void say_again(const track_ctx *c, const track_again *g)
 
 /* --motion stage: the stage's velocity in a line, for the microscopist who
  * checks it (summary.json "stage" has the rest). The pooled velocity, each
- * track weighted by the spread of its times, is the one quoted: on a slow
+ * track weighted by the spread of its times (over its points' scatter,
+ * axis by axis: elfm_analysis.h), is the one quoted: on a slow
  * stage the short tracks of beads crossing the field stop's edge are
  * biased (docs/tracker.md "The stage's velocity pooled"). */
 static void say_stage(const track_ctx *c, const track_opts *o, double span_ms)
@@ -261,7 +262,8 @@ static void say_stage(const track_ctx *c, const track_opts *o, double span_ms)
   const double *v = sr.v_pooled_um_per_ms;
   if (!(isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]))) return;
   fprintf(stderr, "eventlfm track: the stage moves at (%.4f, %.4f, %.4f) um/ms, %.4f mm/s, over "
-                  "%zu tracks (each by the spread of its times; by points %.4f mm/s)",
+                  "%zu tracks (each by the spread of its times over its points' scatter; by points "
+                  "%.4f mm/s)",
           v[0], v[1], v[2], sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]), sr.n_tracks,
           sr.speed_um_per_ms);
   if (o->has_stage_v && isfinite(sr.rel_error_pooled))

@@ -155,6 +155,44 @@ int main(void)
   CHECK(isnan(r.rel_error_pooled) && isfinite(r.v_pooled_um_per_ms[1]));
   elfm_track_store_clear(&s);
 
+  /* Each axis weighed by how well the track's points place it: two tracks
+   * over the same frames, one of a bead in focus (z scatter 0.1 um), one
+   * of a deep bead whose z points scatter 3 um and drift (its z velocity
+   * 0.03 um/ms off, as a bead at |z| 70-87 um on a slow stage's long
+   * windows). By the time spread alone each counts half on z (0.065
+   * um/ms against the stage's 0.05); by its scatter too the deep one's z
+   * hardly counts. x and y, placed alike by both, stay the mean of the two. */
+  for (int k = 0; k < 2; k++) {
+    elfm_track *t = elfm_track_create(k, &err);
+    for (int f = 0; f < 100; f++) {
+      elfm_detection d = stage_point(f, 5000000000LL, &seed);
+      const double noise = d.x_um; /* +-0.1 um */
+      d.x_um = 10 * k + 0.2 * f + noise;
+      d.y_um = -0.1 * f - noise;
+      d.z_um = k == 0 ? 0.05 * f + noise : -70 + 0.08 * f + 30 * noise * ((f % 2) ? 1 : -1);
+      elfm_track_append(t, &d, &err);
+    }
+    CHECK_OK(elfm_track_smooth(t, &so, &err), &err);
+    elfm_track_store_add(&s, t, &err);
+  }
+  CHECK_OK(elfm_analysis_stage(&s, sv, &r, &err), &err);
+  CHECK_MSG(fabs(r.v_pooled_um_per_ms[2] - 0.05) < 0.003, "pooled vz %g, not 0.05", r.v_pooled_um_per_ms[2]);
+  CHECK_MSG(fabs(r.v_um_per_ms[2] - 0.065) < 0.005, "by points vz %g, not 0.065", r.v_um_per_ms[2]);
+  CHECK(fabs(r.v_pooled_um_per_ms[0] - 0.2) < 0.002 && fabs(r.v_pooled_um_per_ms[1] + 0.1) < 0.002);
+  CHECK_MSG(r.rel_error_pooled < 0.02, "pooled error %g", r.rel_error_pooled);
+  /* with fewer than ELFM_STAGE_POOL_MIN_POINTS real points per track, the
+   * time spread alone weighs, as before */
+  {
+    elfm_track_info ti2[2];
+    for (int k = 0; k < 2; k++) {
+      elfm_track_info_get(s.tracks[k], &ti2[k]);
+      ti2[k].n_res = ELFM_STAGE_POOL_MIN_POINTS - 1;
+    }
+    CHECK_OK(elfm_analysis_stage_info(ti2, 2, sv, &r, &err), &err);
+    CHECK_MSG(fabs(r.v_pooled_um_per_ms[2] - 0.065) < 0.005, "spread-pooled vz %g", r.v_pooled_um_per_ms[2]);
+  }
+  elfm_track_store_clear(&s);
+
   /* An accelerating stage: v_y = 0.1 + 0.003 t um/ms (t in ms), beads in
    * view over different 60-120 ms stretches of a 400 ms ramp, at absolute
    * times near 1e12 us. Each track alone spans little of the ramp; pooled

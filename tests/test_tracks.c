@@ -484,6 +484,12 @@ int main(void)
     CHECK_NEAR(acc.mean_t_us, whole.mean_t_us, 1e-3);
     CHECK_NEAR(acc.s_tt_ms2, whole.s_tt_ms2, 1e-6 * whole.s_tt_ms2);
     for (int a = 0; a < 3; a++) CHECK_NEAR(acc.s_tv_um[a], whole.s_tv_um[a], 1e-9 + 1e-6 * fabs(whole.s_tv_um[a]));
+    /* and the points' scatter about the path (the stage's pooled weights) */
+    CHECK(whole.n_res == 90 && acc.n_res == 90);
+    for (int a = 0; a < 3; a++) {
+      CHECK_NEAR(acc.s_res_um[a], whole.s_res_um[a], 1e-9);
+      CHECK_NEAR(acc.s_res2_um2[a], whole.s_res2_um2[a], 1e-9);
+    }
     elfm_track_free(w);
   }
   test_track_xml(dir);

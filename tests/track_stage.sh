@@ -36,7 +36,8 @@ echo "dim stage 200 ms seed 2: $n track(s) off the stage, stage error $e"
 # the summary's velocity is the kept tracks' own
 sp=$(key "$tmp/d/summary.json" speed_um_per_ms)
 awk -v v="$sp" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: summary speed '$sp' not within 1 % of 2.5"; fail=$((fail+1)); }
-# and the pooled velocity (each track by the spread of its times), in y
+# and the pooled velocity (each track by the spread of its times over its
+# points' scatter), in y
 py=$(tr -d ' \n\t' < "$tmp/d/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
 echo "dim stage 200 ms seed 2: pooled vy $py um/ms"
 awk -v v="$py" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: pooled vy '$py' not within 1 % of 2.5"; fail=$((fail+1)); }

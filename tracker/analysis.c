@@ -61,7 +61,7 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
                                      elfm_stage_result *r, elfm_error *err)
 {
   double sw = 0, m[3] = {0, 0, 0}, um[3] = {0, 0, 0}, uss[3] = {0, 0, 0}, sp = 0, sp2 = 0;
-  double swp = 0, mp[3] = {0, 0, 0};
+  double swp = 0, mp[3] = {0, 0, 0}, swv[3] = {0, 0, 0}, mv[3] = {0, 0, 0};
   size_t n = 0;
   for (size_t i = 0; i < nt; i++) {
     if (!ti[i].smoothed) continue;
@@ -75,6 +75,16 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
       uss[a] += v[a] * v[a];
     }
     swp += wp;
+    /* ... and by how well its points place it on each axis (elfm_stage_result) */
+    const double nr = (double)ti[i].n_res;
+    if (wp > 0 && ti[i].n_res >= ELFM_STAGE_POOL_MIN_POINTS)
+      for (int a = 0; a < 3; a++) {
+        const double var = (ti[i].s_res2_um2[a] - ti[i].s_res_um[a] * ti[i].s_res_um[a] / nr) / (nr - 2);
+        if (!isfinite(var)) continue;
+        const double wv = wp / fmax(var, ELFM_STAGE_POOL_MIN_VAR_UM2);
+        swv[a] += wv;
+        mv[a] += wv * v[a];
+      }
     sp += speed;
     sp2 += speed * speed;
     sw += w;
@@ -84,7 +94,7 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
   r->n_tracks = n;
   for (int a = 0; a < 3; a++) {
     r->v_um_per_ms[a] = m[a] / sw;
-    r->v_pooled_um_per_ms[a] = swp > 0 ? mp[a] / swp : NAN;
+    r->v_pooled_um_per_ms[a] = swv[a] > 0 ? mv[a] / swv[a] : swp > 0 ? mp[a] / swp : NAN;
     double mu = um[a] / (double)n;
     r->v_sd_um_per_ms[a] = n > 1 ? sqrt(fmax(0, (uss[a] - n * mu * mu) / (double)(n - 1))) : NAN;
   }

@@ -134,6 +134,13 @@ typedef struct elfm_track_info {
    * (t - mean_t)^2 in ms^2 and of (t - mean_t)(v - mean_vel) in um; 0 when
    * not smoothed. Pieces fold together exactly (elfm_track_info_merge). */
   double mean_t_us, s_tt_ms2, s_tv_um[3];
+  /* The real points' scatter about the smoothed path, per axis: their
+   * number and the sums of (raw - smoothed) and of its square (um, um^2);
+   * 0 when not smoothed. How well the track's points place it, axis by
+   * axis, for the stage's pooled velocity (elfm_analysis_stage_info).
+   * Pieces add up. */
+  size_t n_res;
+  double s_res_um[3], s_res2_um2[3];
 } elfm_track_info;
 
 /* t's info (of a piece: of its own frames only). */

@@ -119,6 +119,19 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
   }
   if (!o->n_rows) return;
   o->smoothed = 1;
+  if (t->pos_um)
+    for (size_t j = 0; j < t->n; j++) {
+      const int64_t k = t->pts[j].frame - t->pts[0].frame;
+      if (!elfm_track_writes_frame(t, t->pts[j].frame) || k < 0 || (size_t)k >= t->n_span) continue;
+      const double r[3] = {t->pts[j].x_um - t->pos_um[3 * k], t->pts[j].y_um - t->pos_um[3 * k + 1],
+                           t->pts[j].z_um - t->pos_um[3 * k + 2]};
+      if (!(isfinite(r[0]) && isfinite(r[1]) && isfinite(r[2]))) continue;
+      for (int a = 0; a < 3; a++) {
+        o->s_res_um[a] += r[a];
+        o->s_res2_um2[a] += r[a] * r[a];
+      }
+      o->n_res++;
+    }
   for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] /= (double)o->n_rows;
   if (isfinite(lat)) o->mean_lateral_speed_um_per_ms = lat / (double)o->n_rows;
   if (!t->span_t_us) return;
@@ -169,6 +182,11 @@ void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
     acc->mean_lateral_speed_um_per_ms = (r0 * l0 + r1 * l1) / (r0 + r1);
   }
   acc->smoothed |= p->smoothed;
+  acc->n_res += p->n_res;
+  for (int a = 0; a < 3; a++) {
+    acc->s_res_um[a] += p->s_res_um[a];
+    acc->s_res2_um2[a] += p->s_res2_um2[a];
+  }
   acc->last_frame = p->last_frame;
   acc->n += p->n;
   acc->n_rows += p->n_rows;
