@@ -111,7 +111,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->auto_speed = track_detection_speed_median(c);
     c->start_restart = 1;
     c->lin_restart = o->repr_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
-    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = 0;
+    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
     return 1;
   }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
@@ -140,9 +140,20 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
     const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
     c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
+    /* slow beads (not cells). Their peaks may look faint too: below
+     * TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS because they move little
+     * in 1 ms, and the longer windows beat the blur (flow at 0.6-1 mm/s:
+     * 0.731 blurred, 0.785 at 1.5 ms); above it because they are dim, and
+     * the blur stays (random flow at 1-2 mm/s, early 2.27-2.55: 0.509
+     * blurred, 0.426 at 1.5 ms) */
+    c->slow_restart = o->dt_auto && !o->tau_given && have_speed && o->recon.framer.dt_us == 1000 &&
+                      c->auto_speed >= TRACK_AUTO_CRAWL_UM_PER_MS &&
+                      c->auto_speed < TRACK_SLOW_BEADS_MAX_UM_PER_MS &&
+                      (!c->blur_restart || c->auto_speed < TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS);
+    if (c->slow_restart) c->blur_restart = 0;
   }
   if (o->motion_auto && !c->rigid_decided) return 0;
-  return c->repr_restart || c->blur_restart || c->dt_restart;
+  return c->repr_restart || c->blur_restart || c->dt_restart || c->slow_restart;
 }
 
 /* The ordered per-volume callback: track_on_volume, then auto's judgement
@@ -173,6 +184,7 @@ typedef struct track_again {
   int integral;    /* 1: --repr integral */
   int stage;       /* 1: --motion stage (and nothing else) */
   int few;         /* 1: the integral because too few peaks were found to judge */
+  int tau_follows; /* 1: --tau-us as long as dt_us too (a slow stage's, slow beads') */
   int64_t first_det; /* ... the first run's detections then */
   int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
   int stage_back;   /* 1: a slow stage's long windows were outrun (TRACK_STAGE_WATCH_*):
@@ -238,7 +250,13 @@ static void say_again(const track_ctx *c, const track_again *g)
                     " peaks): cells, whose ON events lead them; starting again with --repr integral%s "
                     "(--repr exp: keep the time surface; README, docs/tracker.md \"Integral frames\")\n",
             c->auto_speed, c->auto_peaks, dt);
-  } else if (g->dt_us > 0 && !g->stage)
+  } else if (g->dt_us > 0 && !g->stage && g->tau_follows)
+    fprintf(stderr, "eventlfm track: the tracks move slowly for beads (median %.2f um/ms over the "
+                    "first %" PRId64 " peaks): starting again with --dt-us %" PRId64 " --tau-us %" PRId64
+                    ", windows that hold more of each bead's events (--dt-us %" PRId64 ": keep the "
+                    "window; docs/tracker.md \"Windows for slow beads\")\n",
+            c->auto_speed, c->auto_peaks, g->dt_us, g->dt_us, o->recon.framer.dt_us);
+  else if (g->dt_us > 0 && !g->stage)
     fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
                     " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
                     ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
@@ -283,7 +301,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 {
   static const char *const C = "track";
   track_opts o = *po;
-  again->each_trigger = again->lin = again->stage_back = 0;
+  again->each_trigger = again->lin = again->stage_back = again->tau_follows = 0;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -417,7 +435,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * slow stage's, longer (track_stage_slow_dt_us) */
     again->dt_us = !others ? track_stage_slow_dt_us(&c)
                    : c.dt_restart ? o.recon.framer.dt_us / 2
+                   : c.slow_restart ? TRACK_SLOW_BEADS_DT_US
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
+    again->tau_follows = again->dt_us > 0 && (!others || (c.slow_restart && !c.dt_restart));
     again_judged(again, &c);
     say_again(&c, again);
     rc = TRACK_RUN_AGAIN;
@@ -625,10 +645,10 @@ int cmd_track(int argc, char **argv)
         snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
         argv2[argc2++] = "--dt-us";
         argv2[argc2++] = dt;
-        if (again.stage) { /* a slow stage's: the time surface keeps the window's events */
+        if (again.tau_follows) { /* the time surface keeps the window's events */
           argv2[argc2++] = "--tau-us";
           argv2[argc2++] = dt;
-          stage_watch = 1;
+          stage_watch = again.stage; /* a slow stage's, watched */
         }
       }
     }

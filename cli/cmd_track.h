@@ -380,6 +380,7 @@ typedef struct track_ctx {
   int auto_decided;     /* the first peaks have been judged (cmd_track's auto_judge) */
   int blur_restart;     /* ... faint: start again with --blur-px 1 */
   int dt_restart;       /* ... fast: start again with half the window */
+  int slow_restart;     /* ... slow beads: start again with TRACK_SLOW_BEADS_DT_US windows and tau */
   int repr_restart;     /* ... crawling: start again with the integral */
   int few_restart;      /* ... too few peaks to judge: the integral too (TRACK_AUTO_FEW_MIN_FRAMES) */
   int start_restart;    /* ... under pulsed light: --start each-trigger */
@@ -603,6 +604,23 @@ double track_pulsed_ratio(const track_ctx *c);
  * 4-5 mm/s 4.95-5.31, 5-6.5 mm/s 5.49-6.73, 8-10 mm/s 7.49-9.99 (seeds 1-4;
  * 9.99 is the speed histogram's top bin, TRACK_SPEED_BINS). */
 #define TRACK_DT_AUTO_STEP_UM 5.0
+/* Slow beads: where the judged peaks' tracks move at or above
+ * TRACK_AUTO_CRAWL_UM_PER_MS (not cells) but below this (early speeds at 1
+ * ms read ~1.5x the beads' own), on a time surface with neither --dt-us
+ * nor --tau-us given, the run starts again with windows and tau of
+ * TRACK_SLOW_BEADS_DT_US: a bead at 0.3-2 mm/s fires few of its pixels in
+ * 1 ms. Flow at 0.3-0.6 / 0.6-1 / 1-1.5 / 1.5-2 / 2-2.5 mm/s (150 ms, 2-4
+ * seeds; early speeds 1.07-1.43 / 1.33-1.53 / 1.61-1.83 / 2.01-2.31 /
+ * 2.59-2.77), mean alpha at the defaults against --dt-us 1500 --tau-us
+ * 1500: 0.517 / 0.731 / 0.770 / 0.802 / 0.837 against 0.760 / 0.797 /
+ * 0.829 / 0.850 / 0.848 (2 ms: 0.763 / 0.790 / 0.853 / 0.848 / 0.843);
+ * random flow at 1-2 mm/s (early 2.03-2.19) 0.548 against 0.588 (2 ms:
+ * 0.497). At the usual 2.5-4 mm/s (early 3.7-4.2) 1.5 ms loses: flow
+ * seeds 1-4 0.886 -> 0.838, flow_random 0.656 -> 0.445 (docs/tracker.md
+ * "Windows for slow beads"). */
+#define TRACK_SLOW_BEADS_MAX_UM_PER_MS 2.5
+#define TRACK_SLOW_BEADS_DT_US 1500
+#define TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS 2.0
 /* A slow stage's windows. A stage found by its tracks (TRACK_RIGID_*),
  * with neither --dt-us nor --tau-us given, so slow that it takes
  * TRACK_STAGE_SLOW_MIN_DT_US or more to move TRACK_STAGE_SLOW_STEP_UM,

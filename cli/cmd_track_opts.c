@@ -50,7 +50,10 @@ static void usage(FILE *f)
     "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
     "                       per frame or more (fast beads) start again with half of\n"
     "                       it; on time surfaces, not with --start each-trigger nor\n"
-    "                       --motion stage; --dt-us 1000 keeps 1 ms. A stage found\n"
+    "                       --motion stage; --dt-us 1000 keeps 1 ms. Slow beads (%g\n"
+    "                       to %g um/ms: faster than cells) start again with\n"
+    "                       --dt-us %d --tau-us %d (more of each bead's events in a\n"
+    "                       window); not with --tau-us. A stage found\n"
     "                       (--motion auto, below) that moves under %g um per 1 ms\n"
     "                       starts again with windows and --tau-us long enough for\n"
     "                       %g um (%d..%d us: slow beads fire few of their pixels\n"
@@ -66,6 +69,7 @@ static void usage(FILE *f)
     "                       first keeps the grid\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
+    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_SLOW_BEADS_MAX_UM_PER_MS, TRACK_SLOW_BEADS_DT_US, TRACK_SLOW_BEADS_DT_US,
     TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
     TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
     TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
