@@ -37,7 +37,8 @@ static void usage(FILE *f)
     "                       objects) start again with --blur-px 1; on time surfaces\n"
     "                       without --threshold-abs, events from a file (read again),\n"
     "                       not with --motion stage (the blur costs a stage's speed)\n"
-    "                       nor where those peaks' tracks crawl (below)\n"
+    "                       nor where those peaks' tracks crawl (below) or are slow\n"
+    "                       beads under %g um/ms (longer windows instead, --dt-us)\n"
     "  --repr, not given    the time surface, and when those peaks' tracks crawl\n"
     "                       (%g-%g um/ms: cells, whose ON events lead them) start\n"
     "                       again with --repr integral, at --dt-us 2000 unless given;\n"
@@ -67,7 +68,8 @@ static void usage(FILE *f)
     "                       move (%g um/ms or more) where --repr is chosen (above);\n"
     "                       on time surfaces, not with --motion stage; --start\n"
     "                       first keeps the grid\n",
-    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_HINT_MIN_SPEED_UM_PER_MS,
+    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS,
+    TRACK_HINT_MIN_SPEED_UM_PER_MS,
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_SLOW_BEADS_MAX_UM_PER_MS, TRACK_SLOW_BEADS_DT_US, TRACK_SLOW_BEADS_DT_US,
     TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
