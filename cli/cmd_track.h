@@ -639,6 +639,9 @@ double track_pulsed_ratio(const track_ctx *c);
 #define TRACK_STAGE_SLOW_STEP_UM 2.5
 #define TRACK_STAGE_SLOW_MIN_DT_US 2000
 #define TRACK_STAGE_SLOW_MAX_DT_US 10000
+/* ... and a recording judged at its end (shorter than the judgement needs)
+ * keeps at least this many windows: a track needs 5 points */
+#define TRACK_STAGE_SLOW_MIN_WINDOWS 10
 /* ... and a stage that speeds up while its windows are long (stage_accel:
  * 0.1 to 2.5 mm/s) would outrun them: that run watches its tracks, and
  * when their median speed moves them TRACK_STAGE_WATCH_STEP_UM or more per

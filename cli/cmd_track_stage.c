@@ -214,7 +214,14 @@ int64_t track_stage_slow_dt_us(const track_ctx *c)
   const double dt_us = 1e3 * TRACK_STAGE_SLOW_STEP_UM / c->rigid_speed;
   if (dt_us < TRACK_STAGE_SLOW_MIN_DT_US) return -1;
   /* in steps of 100 us, for a command line that reads well */
-  return (int64_t)fmin(TRACK_STAGE_SLOW_MAX_DT_US, 100.0 * round(dt_us / 100.0));
+  int64_t dt = (int64_t)fmin(TRACK_STAGE_SLOW_MAX_DT_US, 100.0 * round(dt_us / 100.0));
+  /* judged at the end of a short recording (not stopped early): at least
+   * TRACK_STAGE_SLOW_MIN_WINDOWS windows in it, or none longer */
+  if (!c->auto_stopped) {
+    const int64_t cap = c->n_frames * o->recon.framer.dt_us / TRACK_STAGE_SLOW_MIN_WINDOWS / 100 * 100;
+    if (dt > cap) dt = cap >= TRACK_STAGE_SLOW_MIN_DT_US ? cap : -1;
+  }
+  return dt;
 }
 
 int track_stage_watch_frame(track_ctx *c, double *s, int n)

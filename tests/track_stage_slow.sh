@@ -10,6 +10,7 @@
 #   (SPEC 7, by points) stay within 1 %;
 # - --dt-us or --tau-us given: the window is the user's;
 # - in such a run, a track at half the stage's speed is off the stage;
+# - a recording judged at its end keeps 10 windows;
 # - a stage that speeds up (stage_accel at 10 mm/s^2, 0.1 -> 2.6 mm/s in
 #   250 ms) outruns the long windows: the run goes back to 1 ms, and writes
 #   what `--motion stage` writes, byte for byte.
@@ -58,6 +59,16 @@ echo "stage at 0.75 mm/s, 200 ms seed 3: --dt-us $(key "$tmp/s3a/summary.json" d
 [ -n "$n" ] && [ "$n" -ge 1 ] || { echo "FAIL: no track off the stage ('$n')"; fail=$((fail+1)); }
 awk -v v="$py" 'BEGIN { exit !(v > 0.75 * 0.995 && v < 0.75 * 1.005) }' ||
   { echo "FAIL: pooled vy '$py' not within 0.5 % of 0.75"; fail=$((fail+1)); }
+
+# a recording too short for the judgement (30 ms at 0.2 mm/s, judged at
+# its end) keeps 10 windows: 3.1 ms, not the 10 ms that left no track
+simulate_or_skip "$tmp/sh" stage 30 1 --param motion.v0_mm_per_s=0.2 --param motion.v1_mm_per_s=0.2
+"$bin" track --calib "$tmp/sh/calib.json" --events "$tmp/sh/events.raw" --out "$tmp/sha" -q ||
+  { echo "FAIL: track stage 30 ms"; fail=$((fail+1)); }
+dt=$(key "$tmp/sha/summary.json" dt_us); nt=$(key "$tmp/sha/summary.json" tracks)
+echo "stage at 0.2 mm/s, 30 ms seed 1: --dt-us $dt, $nt tracks"
+awk -v d="$dt" -v n="$nt" 'BEGIN { exit !(d >= 2000 && d <= 3100 && n >= 1) }' ||
+  { echo "FAIL: 30 ms stage: dt_us '$dt' not 2-3.1 ms or no track ('$nt')"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/acc" stage_accel 250 1 --param motion.accel_mm_per_s2=10
 "$bin" track --calib "$tmp/acc/calib.json" --events "$tmp/acc/events.raw" --out "$tmp/aa" -q ||
