@@ -146,7 +146,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * 0.731 blurred, 0.785 at 1.5 ms); above it because they are dim, and
      * the blur stays (random flow at 1-2 mm/s, early 2.27-2.55: 0.509
      * blurred, 0.426 at 1.5 ms) */
-    c->slow_restart = o->dt_auto && !o->tau_given && have_speed && o->recon.framer.dt_us == 1000 &&
+    c->slow_restart = o->dt_auto && !o->tau_given && have_speed &&
                       c->auto_speed >= TRACK_AUTO_CRAWL_UM_PER_MS &&
                       c->auto_speed < TRACK_SLOW_BEADS_MAX_UM_PER_MS &&
                       (!c->blur_restart || c->auto_speed < TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS);
@@ -437,7 +437,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                    : c.dt_restart ? o.recon.framer.dt_us / 2
                    : c.slow_restart ? TRACK_SLOW_BEADS_DT_US
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
-    again->tau_follows = again->dt_us > 0 && (!others || (c.slow_restart && !c.dt_restart));
+    again->tau_follows = again->dt_us > 0 && (!others || c.slow_restart);
     again_judged(again, &c);
     say_again(&c, again);
     rc = TRACK_RUN_AGAIN;
