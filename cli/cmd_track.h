@@ -453,9 +453,9 @@ int track_rigid_judge(track_ctx *c, int at_end);
  * us, when it is slow (TRACK_STAGE_SLOW_*); -1: keep the first run's. */
 int64_t track_stage_slow_dt_us(const track_ctx *c);
 /* o->stage_watch: one window's speeds s[0 .. n) (um/ms, the tracks' that
- * joined it; s is scratch); sets c->stage_outrun and returns 1 when the
- * stage has outrun the windows (TRACK_STAGE_WATCH_*). */
-int track_stage_watch_frame(track_ctx *c, double *s, int n);
+ * joined it; s is scratch); sets c->stage_outrun once the stage has
+ * outrun the windows (TRACK_STAGE_WATCH_*). */
+void track_stage_watch_frame(track_ctx *c, double *s, int n);
 /* Gap filling (cmd_track_fill.c; off when o->fill_views is 0): the ring
  * and buffers, before the run; keep the frame of each volume (linking
  * callback, frame order); after each linking step (all = 0) and before

@@ -224,19 +224,17 @@ int64_t track_stage_slow_dt_us(const track_ctx *c)
   return dt;
 }
 
-int track_stage_watch_frame(track_ctx *c, double *s, int n)
+void track_stage_watch_frame(track_ctx *c, double *s, int n)
 {
-  if (c->stage_outrun) return 1;
-  if (n < TRACK_RIGID_MIN_TRACKS) return 0; /* too few to say; the count goes on */
+  if (c->stage_outrun || n < TRACK_RIGID_MIN_TRACKS) return; /* too few to say: the count goes on */
   double med, spread;
   elfm_analysis_median(s, (size_t)n, &med, &spread);
   const double frame_ms = 1e-3 * (double)c->o->recon.framer.dt_us;
   if (!(med * frame_ms >= TRACK_STAGE_WATCH_STEP_UM)) {
     c->stage_fast_frames = 0;
-    return 0;
+    return;
   }
-  if (++c->stage_fast_frames < TRACK_STAGE_WATCH_FRAMES) return 0;
+  if (++c->stage_fast_frames < TRACK_STAGE_WATCH_FRAMES) return;
   c->stage_outrun = 1;
   c->stage_outrun_speed = med;
-  return 1;
 }

@@ -37,10 +37,10 @@ extern "C" {
  * bead's on z, whose points scatter over microns. Tracks of fewer than
  * ELFM_STAGE_POOL_MIN_POINTS real points are left out, unless no track has
  * as many (then the spread alone weighs). NaN when no track spans two
- * times. Stage 2.5 mm/s 200 ms seeds 1-11: the velocity's error 0.14 % ->
- * 0.07 % on the mean, 0.30 -> 0.11 % at most; 38 stages at 0.1-1.2 mm/s
- * 0.55 -> 0.33 % and 2.4 -> 1.1 % (docs/tracker.md "The stage's velocity
- * pooled"). */
+ * times. Stage 2.5 mm/s 200 ms seeds 1-11: the velocity's error 0.16 % ->
+ * 0.07 % on the mean, 0.35 -> 0.11 % at most; 38 stages at 0.1-1.2 mm/s
+ * 0.58 -> 0.36 % and 2.55 -> 2.11 % (docs/tracker.md "The stage's
+ * velocity pooled"). */
 #define ELFM_STAGE_ACCEL_MIN_ROWS 20
 #define ELFM_STAGE_POOL_MIN_VAR_UM2 2.5e-3
 #define ELFM_STAGE_POOL_MIN_POINTS 5
