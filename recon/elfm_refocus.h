@@ -93,6 +93,14 @@ const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p);
 int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                               int k, int *n_sampling);
 
+/* The share of the views' crop-box pixels that are non-zero in `frame`
+ * (0..1; a pixel in two boxes counts in each): how crowded the views are.
+ * A ghost is a voxel where the sample points of enough views land on
+ * other objects' images by chance, and that chance grows with this share
+ * (on a time surface, the pixels that fired in the window). 0 for a plan
+ * without boxes. O(frame's listed pixels x views). */
+double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *frame);
+
 /* The view support of voxel (X, Y, k) as above, leaving out the views whose
  * signal another object's image explains: where the voxel's sample point
  * lies within r_px of the image of one of `others` in that view (n_others

@@ -28,6 +28,7 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
 {
   if (!p) return;
   free(p->box);
+  free(p->in_boxes);
   free(p->shift);
   free(p->count);
   free(p->full_lo);
@@ -101,13 +102,14 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   p->full_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_lo);
   p->full_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_hi);
   p->vrow_off = calloc((size_t)p->nv, sizeof *p->vrow_off);
+  p->in_boxes = calloc((size_t)p->sw * (size_t)p->sh, 1);
   if (o.agree_frac > 0.0) {
     p->need = calloc(nvox + 32, 1);
     p->need_row_min = calloc((size_t)p->h * (size_t)nz, 1);
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off ||
+  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off || !p->in_boxes ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
@@ -132,6 +134,11 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     if (b->x1 < b->x0) b->x1 = b->x0;
     if (b->y1 < b->y0) b->y1 = b->y0;
     p->box_area += (double)(b->x1 - b->x0) * (b->y1 - b->y0);
+    for (int y = b->y0; y < b->y1; y++)
+      for (int x = b->x0; x < b->x1; x++) {
+        uint8_t *q = p->in_boxes + (size_t)y * (size_t)p->sw + (size_t)x;
+        if (*q < 255) (*q)++;
+      }
     p->vrow_off[v] = p->n_vrow;
     p->n_vrow += (size_t)(b->y1 - b->y0) + 1;
     for (int k = 0; k < nz; k++) {
@@ -266,6 +273,17 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
   voxel_samples(p, frame, X, Y, k, &ns, &n, &s);
   if (n_sampling) *n_sampling = ns;
   return n;
+}
+
+double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *frame)
+{
+  if (!(p->box_area > 0) || frame->w != p->sw || frame->h != p->sh) return 0;
+  size_t n = 0;
+  for (size_t i = 0; i < frame->nnz; i++) {
+    const uint32_t pix = frame->idx[i];
+    if (frame->data[pix] != 0.0f) n += p->in_boxes[pix];
+  }
+  return (double)n / p->box_area;
 }
 
 /* Where view v puts the image of a point at voxel (X, Y, k), k fractional:

@@ -35,6 +35,8 @@ struct elfm_refocus_plan {
   int w, h, nz, nv, sw, sh;
   double box_area;            /* sum of crop box areas, px */
   elfm_refocus_box *box;      /* [nv] */
+  uint8_t *in_boxes;          /* [sh][sw]: the crop boxes holding the pixel (at most 255),
+                                 for elfm_refocus_occupancy */
   elfm_refocus_shift *shift;  /* [k * nv + v] */
   uint8_t *count;             /* [k][Y][X]: views sampling */
   float inv_table[256];       /* 1 / n, 0 for n = 0 */

@@ -569,6 +569,56 @@ static void test_view_support(const elfm_calib *c)
   elfm_frame_free(f);
 }
 
+/* The views' occupancy (elfm_refocus_occupancy): 0 for an empty frame, 1
+ * for a frame non-zero everywhere (each box's pixels over the boxes' area);
+ * a pixel at a view's centre adds 1 / box area, two such pixels twice
+ * that; a pixel outside every box (the sensor's corner, left of and above
+ * the first view's box), or listed with the value 0, adds nothing; a frame
+ * of another size reads 0. */
+static void fill_frame(elfm_frame *f) /* every pixel 1, listed once */
+{
+  f->nnz = (size_t)f->w * (size_t)f->h;
+  for (size_t i = 0; i < f->nnz; i++) {
+    f->data[i] = 1.0f;
+    f->idx[i] = (uint32_t)i;
+  }
+}
+
+static void test_occupancy(const elfm_calib *c)
+{
+  elfm_error err;
+  elfm_refocus_options o;
+  elfm_refocus_options_default(&o);
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(c, &o, &p, &err), &err);
+  const int W = c->sensor_width_px, H = c->sensor_height_px;
+  elfm_frame *f = elfm_frame_create(W, H, &err);
+  CHECK(elfm_refocus_occupancy(p, f) == 0.0);
+  fill_frame(f);
+  CHECK_MSG(fabs(elfm_refocus_occupancy(p, f) - 1.0) < 1e-12, "full frame: %g",
+            elfm_refocus_occupancy(p, f));
+  elfm_frame_clear(f);
+  const elfm_view *v0 = &c->views[0], *v1 = &c->views[1];
+  const uint32_t a = (uint32_t)lround(v0->cy_px) * (uint32_t)W + (uint32_t)lround(v0->cx_px);
+  const uint32_t b = (uint32_t)lround(v1->cy_px) * (uint32_t)W + (uint32_t)lround(v1->cx_px);
+  elfm_frame_set(f, a, 3.0f);
+  const double one = elfm_refocus_occupancy(p, f);
+  CHECK_MSG(one > 0 && one < 1e-4, "one pixel: %g", one);
+  elfm_frame_set(f, b, 0.5f);
+  CHECK_MSG(fabs(elfm_refocus_occupancy(p, f) - 2 * one) < 1e-15, "two pixels: %g against 2 x %g",
+            elfm_refocus_occupancy(p, f), one);
+  elfm_frame_set(f, 0, 7.0f);        /* the corner */
+  elfm_frame_set(f, a + 1, 0.0f);    /* listed, zero */
+  CHECK_MSG(fabs(elfm_refocus_occupancy(p, f) - 2 * one) < 1e-15, "corner and zero: %g",
+            elfm_refocus_occupancy(p, f));
+  elfm_frame *g = elfm_frame_create(W / 2, H, &err);
+  fill_frame(g);
+  CHECK(elfm_refocus_occupancy(p, g) == 0.0);
+  elfm_frame_free(g);
+  elfm_frame_free(f);
+  elfm_refocus_plan_free(p);
+}
+
 /* The voxel nearest (x, y, z) um and its position in voxels (fractional). */
 static void voxel_of(const elfm_refocus_plan *p, const elfm_calib *c, double x, double y,
                      double z, int ijk[3], double pos[3])
@@ -737,6 +787,7 @@ int main(void)
   test_ghost_rules(&c);
   test_view_support(&c);
   test_view_support_unexplained(&c);
+  test_occupancy(&c);
   test_bad_input(&c);
   return check_report();
 }
