@@ -31,6 +31,8 @@ static void dim_note(track_ctx *c, int so_far)
     return;
   const double h_med = track_peak_height_median(c);
   if (!(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute)) return;
+  /* crowded frames: the faint peaks are ghosts (auto_judge) */
+  if (c->n_frames > 0 && c->occupancy_sum / (double)c->n_frames > TRACK_VSUP_OCC) return;
   fprintf(stderr, "%seventlfm track: note: the peaks are faint (median height %.0f against the "
                   "threshold %.0f%s): for dim objects, about one event per view per frame, "
                   "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
@@ -137,7 +139,17 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     const int slow = have_speed && c->auto_speed >= TRACK_HINT_MIN_SPEED_UM_PER_MS &&
                      c->auto_speed < TRACK_AUTO_CRAWL_UM_PER_MS;
     c->repr_restart = o->repr_auto && slow;
-    c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow;
+    /* Faint peaks in crowded frames are ghosts, not dim objects: a dim
+     * object fires about one pixel per view per frame, and the blur would
+     * spread the crowd's every pixel over nine. Dim flow (a quarter of
+     * the flux) fills 0.3 % of the views' pixels, flow with 80-150 beads
+     * 3.5-6 %, and 9 of those 16 recordings (100 ms, seeds 1-4) were
+     * blurred; flow with 80 beads seed 2, whose first peaks stay faint
+     * with the crowded frames' view support too: alpha 0.461 blurred,
+     * 0.522 not (docs/tracker.md "Crowded frames"). */
+    const double occupancy = c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0;
+    c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow &&
+                      !(occupancy > TRACK_VSUP_OCC);
     const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
     c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
     /* slow beads (not cells). Their peaks may look faint too: below

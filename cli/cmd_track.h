@@ -37,6 +37,8 @@ typedef struct track_opts {
   double guided_radius_um;
   int guided_min_points;
   double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
+  int view_support_auto; /* ... or more in a crowded frame (track_view_support_need; on unless
+                            --view-support is given, on time surfaces without the blur) */
   double explain_brighter; /* ... not counting views a peak over 1 / this times brighter
                               explains (0 = off; track_detect_worker) */
   double explain_um;   /* ... within this of its image there (sample um) */
@@ -230,6 +232,17 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
  * brightest of those whose images can reach it. */
 #define TRACK_EXPLAIN_MAX 16
 
+/* The view support in a crowded frame (view_support_auto): where more than
+ * TRACK_VSUP_OCC of the views' pixels are non-zero, the share of views a
+ * peak needs rises by TRACK_VSUP_PER_OCC per unit of that share, up to
+ * TRACK_VSUP_MAX. Chosen on flow 100 ms with 40-150 beads (seeds 1-4);
+ * the built-in scenes' frames hold 0.1-1.4 % (flow's 20 beads 1.4 %), 40
+ * beads 2.2 %, 60 beads 3.0 %, 80 beads 3.8 %, 100 beads 4.2 %, 150
+ * beads 5.8 % (docs/tracker.md "Crowded frames"). */
+#define TRACK_VSUP_OCC 0.03
+#define TRACK_VSUP_PER_OCC 10.0
+#define TRACK_VSUP_MAX 0.55
+
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
   int64_t frame;         /* the frame held, -1 none */
@@ -274,6 +287,8 @@ typedef struct track_ctx {
     int explained;       /* of them, those a brighter peak's images explained */
     int loc;             /* peaks placed by the view fit */
     int deep_dropped;    /* deep-only peaks too few views agreed on (deep_peak_views) */
+    double occupancy;    /* the frame's elfm_refocus_occupancy (view_support_auto), else 0 */
+    double need;         /* the share of views a peak needed (0: no test) */
   } *sp;
   /* the frame each slot's volume came from and the plan, for the guided
    * view fit in the ordered callback (the driver keeps a batch's frames
@@ -308,6 +323,10 @@ typedef struct track_ctx {
   elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */
   int64_t n_pieces;            /* pieces taken from long live tracks (elfm_link_take_piece) */
   int64_t n_support_rejected, n_explained, n_localized, n_guided_views, n_deep_dropped;
+  /* view_support_auto: the frames' occupancy summed, frames that needed
+   * more than view_support, and the most a frame needed */
+  double occupancy_sum, need_max;
+  int64_t n_need_raised;
   unsigned char *keep;   /* [n_slots][max_det] the view-support test's verdicts */
   double shift_max_px_per_um; /* the views' largest shift (explain_brighter) */
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,
@@ -404,6 +423,10 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err);
 elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
                                 const elfm_refocus_plan *plan, int slot, int thread, void *user,
                                 elfm_error *err);
+/* The share of the views sampling a peak's voxel that must have signal
+ * there, in a frame whose views' pixels are `occupancy` non-zero (0..1):
+ * o->view_support, raised in crowded frames when o->view_support_auto. */
+double track_view_support_need(const track_opts *o, double occupancy);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);

@@ -102,6 +102,7 @@ void track_defaults(track_opts *o)
    * the cost: flow lateral RMSE 0.46-0.50 -> 0.47-0.51 um (more deep beads),
    * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
   o->view_support = 0.3;
+  o->view_support_auto = 1;
   /* ... and the views a peak twice as bright explains do not count, when
    * they are at least half of the peak's (track_detect_worker says why;
    * docs/tracker.md "Ghosts of bright objects"). */
@@ -645,6 +646,14 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->blur_auto && (g->thr || !(o->peaks.absolute > 0) || o->motion == MOTION_STAGE ||
                        (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->blur_auto = 0;
+  /* The crowded frames' view support was measured on time surfaces (a
+   * pixel with signal is one that fired in the window); the blur spreads
+   * each pixel over 9 and the integral shows whole objects, which would
+   * read as crowded. */
+  if (o->view_support_auto && (!(o->view_support > 0) || o->recon.blur_px != 0 ||
+                               (o->recon.framer.repr != ELFM_REPR_EXP &&
+                                o->recon.framer.repr != ELFM_REPR_LIN)))
+    o->view_support_auto = 0;
   /* The automatic window on time surfaces with windows on the 1 ms grid:
    * not on the integral (slow cells, 2 ms frames by choice), windows opened
    * by a trigger (one per pulse), nor a stage (its linker predicts with

@@ -98,7 +98,10 @@ static void usage(FILE *f)
     "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
     "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
     "  --view-support F     a peak needs signal in >= F of the views sampling its voxel\n"
-    "                       (ghosts: a few views; default 0.3, 0 = off)\n"
+    "                       (ghosts: a few views; 0 = off); default auto: 0.3, and\n"
+    "                       in a crowded frame (over 3 %% of the views' pixels with\n"
+    "                       signal) 0.3 + 10 x (that share - 0.03), at most 0.55,\n"
+    "                       on time surfaces without the blur\n"
     "  --explain-brighter F  ... not counting the views where a peak over 1/F times\n"
     "                       brighter has its image within --explain-um R of the\n"
     "                       peak's, when they are half of its views with signal or\n"
@@ -414,9 +417,14 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_GUIDEDR: if (!cli_parse_double(C, "--guided-radius-um", a, &o.guided_radius_um)) return CLI_USAGE; break;
     case O_GUIDEDM: g.gmp = 1; if (!cli_parse_int(C, "--guided-min-points", a, &o.guided_min_points)) return CLI_USAGE; break;
     case O_VSUP:
+      if (strcmp(a, "auto") == 0) {
+        o.view_support_auto = 1;
+        break;
+      }
       if (!cli_parse_double(C, "--view-support", a, &o.view_support)) return CLI_USAGE;
       if (!(o.view_support >= 0 && o.view_support <= 1))
-        return cli_message(C, CLI_USAGE, "--view-support must be in 0..1");
+        return cli_message(C, CLI_USAGE, "--view-support must be in 0..1 or auto");
+      o.view_support_auto = 0;
       break;
     case O_EXPLAIN:
       if (!cli_parse_double(C, "--explain-brighter", a, &o.explain_brighter)) return CLI_USAGE;

@@ -115,6 +115,9 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "detections", (double)c->n_det);
   cJSON_AddNumberToObject(cnt, "peaks_rejected_view_support", (double)c->n_support_rejected);
   cJSON_AddNumberToObject(cnt, "peaks_explained_by_brighter", (double)c->n_explained);
+  /* view_support_auto: how crowded the frames were, how many needed more
+   * views than view_support, the most any needed */
+  cJSON_AddNumberToObject(cnt, "frames_view_support_raised", (double)c->n_need_raised);
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
   cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
@@ -140,6 +143,12 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON *par = cJSON_AddObjectToObject(j, "parameters");
   cli_recon_options_json(par, &o->recon);
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
+  cJSON_AddBoolToObject(par, "view_support_auto", o->view_support_auto);
+  if (o->view_support_auto) {
+    cJSON_AddNumberToObject(par, "view_support_occupancy_mean",
+                            c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0.0);
+    cJSON_AddNumberToObject(par, "view_support_max", c->need_max > 0 ? c->need_max : o->view_support);
+  }
   cJSON_AddNumberToObject(par, "explain_brighter", o->explain_brighter);
   cJSON_AddNumberToObject(par, "explain_um", o->explain_um);
   cJSON_AddStringToObject(par, "localize", o->localize_views ? "views" : "peak");

@@ -278,6 +278,21 @@ static int explained_support(const track_ctx *c, const elfm_volume *v,
   return 2 * n_expl >= n ? nu : n;
 }
 
+double track_view_support_need(const track_opts *o, double occupancy)
+{
+  if (!o->view_support_auto || !(occupancy > TRACK_VSUP_OCC)) return o->view_support;
+  /* The ghosts' views are other objects' images met by chance, and the
+   * more of the views' pixels have signal, the more views such a chance
+   * meeting gathers. Flow 100 ms, seeds 1-4, mean alpha at view support
+   * 0.3 / 0.45: 60 beads (3.0 % of the pixels) 0.691 / 0.675, 80 beads
+   * (3.8 %) 0.524 / 0.535, 100 beads (4.2 %) 0.392 / 0.466, 120 beads
+   * (4.8 %) 0.349 / 0.387 (0.397 at 0.55), 150 beads (5.8 %) 0.266 /
+   * 0.283 (0.286 at 0.55); docs/tracker.md "Crowded frames". */
+  double need = o->view_support + TRACK_VSUP_PER_OCC * (occupancy - TRACK_VSUP_OCC);
+  if (need > TRACK_VSUP_MAX) need = TRACK_VSUP_MAX;
+  return need > o->view_support ? need : o->view_support;
+}
+
 /* Worker thread: detect the peaks of the slot's volume into its buffer,
  * drop the peaks too few views see (the view-support test), then place
  * each from its images in the views (the view fit). */
@@ -293,6 +308,8 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   c->sp[slot].explained = 0;
   c->sp[slot].loc = 0;
   c->sp[slot].deep_dropped = 0;
+  c->sp[slot].occupancy = 0;
+  c->sp[slot].need = 0;
   c->slot_frame[slot] = frame;
   c->slot_plan[slot] = plan;
   if (st == ELFM_OK && c->o->view_support > 0) {
@@ -302,7 +319,12 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
      * than 30 % of their views, against 2.7 % of true peaks (13 % of
      * those deeper than 50 um, whose sparse events miss some views):
      * docs/tracker.md "View support". The voxel is the refined position's
-     * nearest. */
+     * nearest. In a crowded frame more views see other objects' images
+     * by chance, and a peak needs more (track_view_support_need). */
+    if (c->o->view_support_auto || c->o->blur_auto)
+      c->sp[slot].occupancy = elfm_refocus_occupancy(plan, frame);
+    const double share = track_view_support_need(c->o, c->sp[slot].occupancy);
+    c->sp[slot].need = share;
     const int n_peaks = c->sp[slot].n;
     unsigned char *keep = c->keep + (size_t)slot * c->o->max_det;
     for (int i = 0; i < n_peaks; i++) {
@@ -311,7 +333,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       const int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
       int ns = 0;
       int n = elfm_refocus_view_support(plan, frame, X, Y, K, &ns);
-      const double need = c->o->view_support * ns;
+      const double need = share * ns;
       if ((double)n >= need && n > 0 && c->o->explain_brighter > 0) {
         const int nu = explained_support(c, v, plan, frame, det, n_peaks, i, X, Y, K, n);
         if (!((double)nu >= need && nu > 0)) c->sp[slot].explained++;
@@ -527,6 +549,9 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   c->n_explained += c->sp[slot].explained;
   c->n_localized += c->sp[slot].loc;
   c->n_deep_dropped += c->sp[slot].deep_dropped;
+  c->occupancy_sum += c->sp[slot].occupancy;
+  if (c->sp[slot].need > c->o->view_support) c->n_need_raised++;
+  if (c->sp[slot].need > c->need_max) c->need_max = c->sp[slot].need;
   double t1 = cli_now_s();
   /* the linker's predictions, once, for both track-guided searches */
   const int guided_peak = o->guided_low > 0 && o->link.weak_gate_um > 0;
