@@ -39,6 +39,9 @@ typedef struct track_opts {
   double view_support; /* a peak needs signal in this fraction of the views sampling it (0 = off) */
   int view_support_auto; /* ... or more in a crowded frame (track_view_support_need; on unless
                             --view-support is given, on time surfaces without the blur) */
+  int rescue_auto;     /* the linker's rescue reaches less far in a crowded frame
+                          (track_rescue_factor; on unless --rescue-factor is given, where
+                          view_support_auto may be) */
   double explain_brighter; /* ... not counting views a peak over 1 / this times brighter
                               explains (0 = off; track_detect_worker) */
   double explain_um;   /* ... within this of its image there (sample um) */
@@ -242,6 +245,12 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
 #define TRACK_VSUP_OCC 0.03
 #define TRACK_VSUP_PER_OCC 10.0
 #define TRACK_VSUP_MAX 0.55
+/* ... and the linker's rescue round (elfm_link_options.rescue_gate_factor)
+ * reaches TRACK_RESCUE_PER_OCC x gate less far per unit of the share above
+ * TRACK_VSUP_OCC, down to TRACK_RESCUE_MIN x gate (docs/tracker.md
+ * "Crowded frames"). */
+#define TRACK_RESCUE_PER_OCC 100.0
+#define TRACK_RESCUE_MIN 1.0
 
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
@@ -427,6 +436,10 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
  * there, in a frame whose views' pixels are `occupancy` non-zero (0..1):
  * o->view_support, raised in crowded frames when o->view_support_auto. */
 double track_view_support_need(const track_opts *o, double occupancy);
+/* The linker's rescue_gate_factor for a frame whose views' pixels are
+ * `occupancy` non-zero: o->link.rescue_gate_factor, lowered in crowded
+ * frames when o->rescue_auto. */
+double track_rescue_factor(const track_opts *o, double occupancy);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);

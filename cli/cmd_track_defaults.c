@@ -103,6 +103,7 @@ void track_defaults(track_opts *o)
    * stage speed error 0.09 % -> 0.71 % (docs/tracker.md "View support"). */
   o->view_support = 0.3;
   o->view_support_auto = 1;
+  o->rescue_auto = 1;
   /* ... and the views a peak twice as bright explains do not count, when
    * they are at least half of the peak's (track_detect_worker says why;
    * docs/tracker.md "Ghosts of bright objects"). */
@@ -654,6 +655,10 @@ int track_opts_derive(track_opts *o, const track_given *g)
                                (o->recon.framer.repr != ELFM_REPR_EXP &&
                                 o->recon.framer.repr != ELFM_REPR_LIN)))
     o->view_support_auto = 0;
+  if (o->rescue_auto && (!(o->link.rescue_gate_factor > TRACK_RESCUE_MIN) || o->recon.blur_px != 0 ||
+                         (o->recon.framer.repr != ELFM_REPR_EXP &&
+                          o->recon.framer.repr != ELFM_REPR_LIN)))
+    o->rescue_auto = 0;
   /* The automatic window on time surfaces with windows on the 1 ms grid:
    * not on the integral (slow cells, 2 ms frames by choice), windows opened
    * by a trigger (one per pulse), nor a stage (its linker predicts with

@@ -130,7 +130,9 @@ static void usage(FILE *f)
     "  --lead-sigmas K      with --lag-correct: ON events lead a moving object by ~K x\n"
     "                       its width along the motion; move detections back by that\n"
     "  --link-kz K          axial scale of the linker's distance sqrt(dx2+dy2+(dz/K)2) (1.5)\n"
-    "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5; 0 off)\n"
+    "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5, and\n"
+    "                       in a crowded frame (see --view-support) 2.5 - 100 x (that\n"
+    "                       share - 0.03), at least 1: the gate; 0 off)\n"
     "  --stitch-points N    a new track of N points continues a dark one when its points\n"
     "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
     "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
@@ -537,7 +539,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_GUIDED: if (!cli_parse_double(C, "--guided-low", a, &o.guided_low)) return CLI_USAGE; break;
     case O_WEAKGATE: if (!cli_parse_double_in(C, "--weak-gate-um", a, 0, 0, 1e4, "0..10000 (0: the gate)", &o.link.weak_gate_um)) return CLI_USAGE; break;
-    case O_RESCUE: if (!cli_parse_double_in(C, "--rescue-factor", a, 0, 0, 100, "0..100 (0: off)", &o.link.rescue_gate_factor)) return CLI_USAGE; break;
+    case O_RESCUE:
+      if (!cli_parse_double_in(C, "--rescue-factor", a, 0, 0, 100, "0..100 (0: off)", &o.link.rescue_gate_factor))
+        return CLI_USAGE;
+      o.rescue_auto = 0;
+      break;
     case O_STITCHN:
       if (!cli_parse_int(C, "--stitch-points", a, &o.link.stitch_points)) return CLI_USAGE;
       if (o.link.stitch_points != 0 && (o.link.stitch_points < 4 || o.link.stitch_points > 100000))

@@ -234,6 +234,12 @@ typedef struct elfm_linker elfm_linker;
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err);
 void elfm_link_free(elfm_linker *l);
 
+/* Change the rescue round's rescue_gate_factor (>= 0, finite) from the next
+ * elfm_link_step on: a caller that knows how crowded each frame is (more
+ * objects near a track's path, more of them another object's) sets it per
+ * frame. ELFM_ERR_INVALID otherwise, the factor unchanged. */
+elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm_error *err);
+
 /* Link the detections of one frame. Frames must come in increasing order
  * (gaps in the numbering count as missed frames); t_us must not decrease.
  * det may be modified (lag correction, see options) and its frame/t_us

@@ -475,6 +475,15 @@ static int in_trail(const elfm_linker *l, size_t nt, const elfm_detection *det,
   return 0;
 }
 
+elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm_error *err)
+{
+  if (!l || !(factor >= 0 && isfinite(factor)))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: rescue_gate_factor %g is not >= 0",
+                          factor);
+  l->o.rescue_gate_factor = factor;
+  return ELFM_OK;
+}
+
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det, int n,
                            elfm_error *err)
 {
