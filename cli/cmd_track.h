@@ -42,6 +42,7 @@ typedef struct track_opts {
   int rescue_auto;     /* the linker's rescue reaches less far in a crowded frame
                           (track_rescue_factor; on unless --rescue-factor is given, where
                           view_support_auto may be) */
+  int gate_auto;       /* ... and its gate is narrower (track_gate_um; unless --gate-um) */
   double explain_brighter; /* ... not counting views a peak over 1 / this times brighter
                               explains (0 = off; track_detect_worker) */
   double explain_um;   /* ... within this of its image there (sample um) */
@@ -251,6 +252,10 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
  * "Crowded frames"). */
 #define TRACK_RESCUE_PER_OCC 100.0
 #define TRACK_RESCUE_MIN 1.0
+/* ... and its gate (gate_um) TRACK_GATE_PER_OCC_UM um narrower per unit of
+ * that share, down to TRACK_GATE_MIN_UM. */
+#define TRACK_GATE_PER_OCC_UM 200.0
+#define TRACK_GATE_MIN_UM 4.0
 
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
@@ -440,6 +445,9 @@ double track_view_support_need(const track_opts *o, double occupancy);
  * `occupancy` non-zero: o->link.rescue_gate_factor, lowered in crowded
  * frames when o->rescue_auto. */
 double track_rescue_factor(const track_opts *o, double occupancy);
+/* The linker's gate_um for such a frame: o->link.gate_um, narrowed in
+ * crowded frames when o->gate_auto. */
+double track_gate_um(const track_opts *o, double occupancy);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);

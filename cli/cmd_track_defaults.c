@@ -104,6 +104,7 @@ void track_defaults(track_opts *o)
   o->view_support = 0.3;
   o->view_support_auto = 1;
   o->rescue_auto = 1;
+  o->gate_auto = 1;
   /* ... and the views a peak twice as bright explains do not count, when
    * they are at least half of the peak's (track_detect_worker says why;
    * docs/tracker.md "Ghosts of bright objects"). */
@@ -659,6 +660,9 @@ int track_opts_derive(track_opts *o, const track_given *g)
                          (o->recon.framer.repr != ELFM_REPR_EXP &&
                           o->recon.framer.repr != ELFM_REPR_LIN)))
     o->rescue_auto = 0;
+  if (o->gate_auto && (o->recon.blur_px != 0 || (o->recon.framer.repr != ELFM_REPR_EXP &&
+                                                 o->recon.framer.repr != ELFM_REPR_LIN)))
+    o->gate_auto = 0;
   /* The automatic window on time surfaces with windows on the 1 ms grid:
    * not on the integral (slow cells, 2 ms frames by choice), windows opened
    * by a trigger (one per pulse), nor a stage (its linker predicts with

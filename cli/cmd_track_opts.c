@@ -125,8 +125,10 @@ static void usage(FILE *f)
     "                       15)\n"
     "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
     "linking:\n"
-    "  --gate-um G (6), --max-gap N frames (50), --min-points N (5; 3 with --start\n"
-    "                       each-trigger, one point per pulse)\n"
+    "  --gate-um G (6; in a crowded frame, see --view-support, 6 - 200 x (that\n"
+    "                       share - 0.03), at least 4), --max-gap N frames (50),\n"
+    "                       --min-points N (5; 3 with --start each-trigger, one point\n"
+    "                       per pulse)\n"
     "  --lead-sigmas K      with --lag-correct: ON events lead a moving object by ~K x\n"
     "                       its width along the motion; move detections back by that\n"
     "  --link-kz K          axial scale of the linker's distance sqrt(dx2+dy2+(dz/K)2) (1.5)\n"
@@ -617,7 +619,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_int(C, "--max-detections", a, &o.max_det)) return CLI_USAGE;
       if (o.max_det < 1 || o.max_det > 10000000) return cli_message(C, CLI_USAGE, "--max-detections must be 1..1e7");
       break;
-    case O_GATE: if (!cli_parse_double_in(C, "--gate-um", a, 0, 1, 1e4, "> 0 and <= 10000", &o.link.gate_um)) return CLI_USAGE; break;
+    case O_GATE:
+      if (!cli_parse_double_in(C, "--gate-um", a, 0, 1, 1e4, "> 0 and <= 10000", &o.link.gate_um))
+        return CLI_USAGE;
+      o.gate_auto = 0;
+      break;
     case O_MAXGAP: if (!cli_parse_int_in(C, "--max-gap", a, 0, 1000000, "0..1000000 frames", &o.link.max_gap_frames)) return CLI_USAGE; break;
     case O_MINPTS: g.minpts = 1; if (!cli_parse_int_in(C, "--min-points", a, 1, 1000000, ">= 1", &o.link.min_points)) return CLI_USAGE; break;
     case O_LAG:

@@ -145,6 +145,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "view_support", o->view_support);
   cJSON_AddBoolToObject(par, "view_support_auto", o->view_support_auto);
   cJSON_AddBoolToObject(par, "rescue_auto", o->rescue_auto);
+  cJSON_AddBoolToObject(par, "gate_auto", o->gate_auto);
   if (o->view_support_auto) {
     cJSON_AddNumberToObject(par, "view_support_occupancy_mean",
                             c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0.0);

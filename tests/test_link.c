@@ -384,6 +384,33 @@ int main(void)
     CHECK_MSG(n == 1, "factor -1 refused at the return: %d tracks", n);
   }
 
+  /* 5g. The gate set between frames (elfm_link_set_gate_um): a bead at
+   * 3 um/ms along x steps 5 um to the side at frame 40, rescue off. With
+   * the gate at 6 um (6.9 with the speed's share) one track follows it; set
+   * to 4 um (4.9) just before that frame, the step starts a second. 0,
+   * negative and non-finite gates are refused. */
+  for (int narrow = 0; narrow < 2; narrow++) {
+    elfm_link_options og = o;
+    og.rescue_gate_factor = 0;
+    elfm_linker *l = elfm_link_create(&og, &err);
+    CHECK(elfm_link_set_gate_um(l, 0, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(l, -4, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(l, INFINITY, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(NULL, 4, &err) == ELFM_ERR_INVALID);
+    elfm_error_clear(&err);
+    for (int f = 0; f < 60; f++) {
+      if (f == 40 && narrow) CHECK_OK(elfm_link_set_gate_um(l, 4.0, &err), &err);
+      elfm_detection d = mk(3.0 * f, f >= 40 ? 5.0 : 0.0, 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+    CHECK_MSG(n == (narrow ? 2 : 1), "gate %s at the step: %d tracks", narrow ? "4 um" : "6 um", n);
+    elfm_link_free(l);
+  }
+
   /* 5b'. Turn model: a bead circling at 3 um/ms (radius 30 um, 5.7 degrees
    * per ms) is dark for 10 frames; a straight extrapolation leaves it ~9 um
    * off, outside the gate once the rescue round is off; the constant-rate

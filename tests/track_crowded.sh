@@ -3,8 +3,9 @@
 # flow of 100 beads, where over 3 % of the views' pixels fire in each
 # window, the view-support test asks for more views than 0.3 and the
 # detections' precision rises against --view-support 0.3, at a small cost
-# in recall; the linker's rescue reaches less far there, and alpha rises
-# against --rescue-factor 2.5; the faint peaks of those crowded frames
+# in recall; the linker's rescue reaches less far there and its gate is
+# narrower: alpha rises against --gate-um 6, and with that gate against
+# --rescue-factor 2.5 too; the faint peaks of those crowded frames
 # (ghosts) do not turn the blur for dim objects on; the flow scene's 20
 # beads keep 0.3 in every frame. Usage: track_crowded.sh BINARY
 bin=$1
@@ -16,8 +17,9 @@ expect_usage_errors "--view-support x" "--view-support 1.5" "--rescue-factor -1"
 simulate_or_skip "$tmp/dense" flow 40 1 --param objects.count=100
 track_score "$tmp/dense" "$tmp/auto" "$tmp/auto.json"
 track_score "$tmp/dense" "$tmp/fixed" "$tmp/fixed.json" --view-support 0.3
-track_score "$tmp/dense" "$tmp/rescue" "$tmp/rescue.json" --rescue-factor 2.5
-for r in auto fixed rescue; do
+track_score "$tmp/dense" "$tmp/gate" "$tmp/gate.json" --gate-um 6
+track_score "$tmp/dense" "$tmp/rescue" "$tmp/rescue.json" --gate-um 6 --rescue-factor 2.5
+for r in auto fixed rescue gate; do
   echo "100 beads, $r: precision $(key "$tmp/$r.json" precision) recall $(key "$tmp/$r.json" recall)" \
     "F1 $(key "$tmp/$r.json" f1) alpha $(key "$tmp/$r.json" alpha);" \
     "frames raised $(key "$tmp/$r/summary.json" frames_view_support_raised) of $(key "$tmp/$r/summary.json" volumes)," \
@@ -42,7 +44,10 @@ expect_key blur_px "$tmp/auto/summary.json" 0
 # the rescue: on by default, off with --rescue-factor given
 [ "$(key "$tmp/auto/summary.json" rescue_auto)" = true ] || { echo "FAIL: rescue_auto not true"; fail=$((fail+1)); }
 [ "$(key "$tmp/rescue/summary.json" rescue_auto)" = false ] || { echo "FAIL: --rescue-factor 2.5 left rescue_auto on"; fail=$((fail+1)); }
-expect_gain "$(key "$tmp/rescue.json" alpha)" "$(key "$tmp/auto.json" alpha)" 0.03 "alpha not up by 0.03 against --rescue-factor 2.5"
+expect_gain "$(key "$tmp/rescue.json" alpha)" "$(key "$tmp/gate.json" alpha)" 0.03 "alpha at --gate-um 6 not up by 0.03 against --rescue-factor 2.5"
+[ "$(key "$tmp/auto/summary.json" gate_auto)" = true ] || { echo "FAIL: gate_auto not true"; fail=$((fail+1)); }
+[ "$(key "$tmp/gate/summary.json" gate_auto)" = false ] || { echo "FAIL: --gate-um 6 left gate_auto on"; fail=$((fail+1)); }
+expect_gain "$(key "$tmp/gate.json" alpha)" "$(key "$tmp/auto.json" alpha)" 0.01 "alpha not up by 0.01 against --gate-um 6"
 # the flow scene's 20 beads: no frame crowded
 simulate_or_skip "$tmp/flow" flow 40 1
 "$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/flow/run" -q ||

@@ -239,6 +239,8 @@ void elfm_link_free(elfm_linker *l);
  * objects near a track's path, more of them another object's) sets it per
  * frame. ELFM_ERR_INVALID otherwise, the factor unchanged. */
 elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm_error *err);
+/* ... and gate_um (> 0, finite), likewise. */
+elfm_status elfm_link_set_gate_um(elfm_linker *l, double gate_um, elfm_error *err);
 
 /* Link the detections of one frame. Frames must come in increasing order
  * (gaps in the numbering count as missed frames); t_us must not decrease.

@@ -484,6 +484,14 @@ elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm
   return ELFM_OK;
 }
 
+elfm_status elfm_link_set_gate_um(elfm_linker *l, double gate_um, elfm_error *err)
+{
+  if (!l || !(gate_um > 0 && isfinite(gate_um)))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: gate_um %g is not > 0", gate_um);
+  l->o.gate_um = gate_um;
+  return ELFM_OK;
+}
+
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det, int n,
                            elfm_error *err)
 {
