@@ -32,7 +32,7 @@ static void dim_note(track_ctx *c, int so_far)
   const double h_med = track_peak_height_median(c);
   if (!(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute)) return;
   /* crowded frames: the faint peaks are ghosts (auto_judge) */
-  if (c->n_frames > 0 && c->occupancy_sum / (double)c->n_frames > TRACK_VSUP_OCC) return;
+  if (c->n_frames > 0 && c->occupancy_sum / (double)c->n_frames > TRACK_CROWD_OCC) return;
   fprintf(stderr, "%seventlfm track: note: the peaks are faint (median height %.0f against the "
                   "threshold %.0f%s): for dim objects, about one event per view per frame, "
                   "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
@@ -149,7 +149,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * 0.522 not (docs/tracker.md "Crowded frames"). */
     const double occupancy = c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0;
     c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow &&
-                      !(occupancy > TRACK_VSUP_OCC);
+                      !(occupancy > TRACK_CROWD_OCC);
     const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
     c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
     /* slow beads (not cells). Their peaks may look faint too: below

@@ -236,19 +236,19 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
  * brightest of those whose images can reach it. */
 #define TRACK_EXPLAIN_MAX 16
 
-/* The view support in a crowded frame (view_support_auto): where more than
- * TRACK_VSUP_OCC of the views' pixels are non-zero, the share of views a
- * peak needs rises by TRACK_VSUP_PER_OCC per unit of that share, up to
- * TRACK_VSUP_MAX. Chosen on flow 100 ms with 40-150 beads (seeds 1-4);
+/* A crowded frame: more than TRACK_CROWD_OCC of the views' pixels are
+ * non-zero (elfm_refocus_occupancy). There (view_support_auto) the share of
+ * views a peak needs rises by TRACK_VSUP_PER_OCC per unit of that share, up
+ * to TRACK_VSUP_MAX. Chosen on flow 100 ms with 40-150 beads (seeds 1-4);
  * the built-in scenes' frames hold 0.1-1.4 % (flow's 20 beads 1.4 %), 40
  * beads 2.2 %, 60 beads 3.0 %, 80 beads 3.8 %, 100 beads 4.2 %, 150
  * beads 5.8 % (docs/tracker.md "Crowded frames"). */
-#define TRACK_VSUP_OCC 0.03
+#define TRACK_CROWD_OCC 0.03
 #define TRACK_VSUP_PER_OCC 10.0
 #define TRACK_VSUP_MAX 0.55
 /* ... and the linker's rescue round (elfm_link_options.rescue_gate_factor)
  * reaches TRACK_RESCUE_PER_OCC x gate less far per unit of the share above
- * TRACK_VSUP_OCC, down to TRACK_RESCUE_MIN x gate (docs/tracker.md
+ * TRACK_CROWD_OCC, down to TRACK_RESCUE_MIN x gate (docs/tracker.md
  * "Crowded frames"). */
 #define TRACK_RESCUE_PER_OCC 100.0
 #define TRACK_RESCUE_MIN 1.0
@@ -301,7 +301,8 @@ typedef struct track_ctx {
     int explained;       /* of them, those a brighter peak's images explained */
     int loc;             /* peaks placed by the view fit */
     int deep_dropped;    /* deep-only peaks too few views agreed on (deep_peak_views) */
-    double occupancy;    /* the frame's elfm_refocus_occupancy (view_support_auto), else 0 */
+    double occupancy;    /* the frame's elfm_refocus_occupancy (when a crowd rule, *_auto,
+                            is on), else 0 */
     double need;         /* the share of views a peak needed (0: no test) */
   } *sp;
   /* the frame each slot's volume came from and the plan, for the guided

@@ -280,7 +280,7 @@ static int explained_support(const track_ctx *c, const elfm_volume *v,
 
 double track_view_support_need(const track_opts *o, double occupancy)
 {
-  if (!o->view_support_auto || !(occupancy > TRACK_VSUP_OCC)) return o->view_support;
+  if (!o->view_support_auto || !(occupancy > TRACK_CROWD_OCC)) return o->view_support;
   /* The ghosts' views are other objects' images met by chance, and the
    * more of the views' pixels have signal, the more views such a chance
    * meeting gathers. Flow 100 ms, seeds 1-4, mean alpha at view support
@@ -288,7 +288,7 @@ double track_view_support_need(const track_opts *o, double occupancy)
    * (3.8 %) 0.524 / 0.535, 100 beads (4.2 %) 0.392 / 0.466, 120 beads
    * (4.8 %) 0.349 / 0.387 (0.397 at 0.55), 150 beads (5.8 %) 0.266 /
    * 0.283 (0.286 at 0.55); docs/tracker.md "Crowded frames". */
-  double need = o->view_support + TRACK_VSUP_PER_OCC * (occupancy - TRACK_VSUP_OCC);
+  double need = o->view_support + TRACK_VSUP_PER_OCC * (occupancy - TRACK_CROWD_OCC);
   if (need > TRACK_VSUP_MAX) need = TRACK_VSUP_MAX;
   return need > o->view_support ? need : o->view_support;
 }
@@ -296,7 +296,7 @@ double track_view_support_need(const track_opts *o, double occupancy)
 double track_rescue_factor(const track_opts *o, double occupancy)
 {
   const double f = o->link.rescue_gate_factor;
-  if (!o->rescue_auto || !(occupancy > TRACK_VSUP_OCC)) return f;
+  if (!o->rescue_auto || !(occupancy > TRACK_CROWD_OCC)) return f;
   /* In a crowd the detection a track finds 2.5 gates off its path is
    * another object's more often than its own. Flow 100 ms, 80 and 100
    * beads, seeds 1-2, mean alpha with the crowded frames' view support:
@@ -304,14 +304,14 @@ double track_rescue_factor(const track_opts *o, double occupancy)
    * 40 beads 0 lost 0.013. Down to 1.5 or to 1 (no reach beyond the
    * gate), 80-150 beads seeds 1-8: 0.480 / 0.487 (docs/tracker.md
    * "Crowded frames"). */
-  const double g = f - TRACK_RESCUE_PER_OCC * (occupancy - TRACK_VSUP_OCC);
+  const double g = f - TRACK_RESCUE_PER_OCC * (occupancy - TRACK_CROWD_OCC);
   return g > TRACK_RESCUE_MIN ? g : TRACK_RESCUE_MIN;
 }
 
 double track_gate_um(const track_opts *o, double occupancy)
 {
   const double g = o->link.gate_um;
-  if (!o->gate_auto || !(occupancy > TRACK_VSUP_OCC)) return g;
+  if (!o->gate_auto || !(occupancy > TRACK_CROWD_OCC)) return g;
   /* The gate, too, meets other objects in a crowd. Flow 100 ms, seeds
    * 1-8, mean alpha with the crowded frames' view support and rescue,
    * gate 6 um -> 6 - 200 x (occupancy - 0.03) um, at least 4: 60 beads
@@ -319,7 +319,7 @@ double track_gate_um(const track_opts *o, double occupancy)
    * 120 beads 0.477 -> 0.497, 150 beads 0.381 -> 0.399; twice as steep
    * (4 um from 3.5 %) 0.689 / 0.587 / 0.549 / 0.497 / 0.399
    * (docs/tracker.md "Crowded frames"). */
-  const double h = g - TRACK_GATE_PER_OCC_UM * (occupancy - TRACK_VSUP_OCC);
+  const double h = g - TRACK_GATE_PER_OCC_UM * (occupancy - TRACK_CROWD_OCC);
   return h > TRACK_GATE_MIN_UM ? h : (g < TRACK_GATE_MIN_UM ? g : TRACK_GATE_MIN_UM);
 }
 

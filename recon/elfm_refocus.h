@@ -98,7 +98,8 @@ int elfm_refocus_view_support(const elfm_refocus_plan *p, const elfm_frame *fram
  * A ghost is a voxel where the sample points of enough views land on
  * other objects' images by chance, and that chance grows with this share
  * (on a time surface, the pixels that fired in the window). 0 for a plan
- * without boxes. O(frame's listed pixels x views). */
+ * without boxes and for a frame of another size than the plan's sensor.
+ * O(frame's listed pixels): the plan counts each pixel's boxes. */
 double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *frame);
 
 /* The view support of voxel (X, Y, k) as above, leaving out the views whose
