@@ -522,6 +522,26 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
             c.n_frames, c.n_det, c.n_info, elfm_link_n_started(c.lk), wall,
             wall > 0 ? (double)c.n_frames / wall : 0.0, wall > 0 ? rs.span_s / wall : 0.0, o.out);
   if (!o.quiet && o.motion == MOTION_STAGE) say_stage(&c, &o, 1e3 * rs.span_s);
+  /* crowded frames (TRACK_CROWD_OCC), when a tenth of them or more were:
+   * what track did there, and how to fix it instead */
+  if (!o.quiet && c.n_frames > 0 && 10 * c.n_crowded >= c.n_frames &&
+      (o.view_support_auto || o.rescue_auto || o.gate_auto)) {
+    const char *what[3] = {o.view_support_auto ? "a peak needed more of its views" : NULL,
+                           o.rescue_auto ? "the linker's rescue reached less far" : NULL,
+                           o.gate_auto ? "the linker's gate was narrower" : NULL};
+    char list[160] = "";
+    for (int k = 0, m = 0; k < 3; k++)
+      if (what[k]) {
+        strncat(list, m++ ? ", " : "", sizeof list - strlen(list) - 1);
+        strncat(list, what[k], sizeof list - strlen(list) - 1);
+      }
+    fprintf(stderr, "eventlfm track: note: %" PRId64 " of %" PRId64 " frames crowded (over %.0f %% of "
+                    "the views' pixels with signal; %.1f %% on average): there %s (--view-support, "
+                    "--rescue-factor, --gate-um fix them; README, docs/tracker.md \"Crowded "
+                    "frames\")\n",
+            c.n_crowded, c.n_frames, 100 * TRACK_CROWD_OCC, 100 * c.occupancy_sum / (double)c.n_frames,
+            list);
+  }
   /* (not for a slow stage's long windows: chosen for it, "Windows for a
    * slow stage", where the integral tracked worse) */
   if (!o.quiet && !o.stage_watch && o.recon.framer.repr != ELFM_REPR_INTEGRAL &&

@@ -342,6 +342,7 @@ typedef struct track_ctx {
    * more than view_support, and the most a frame needed */
   double occupancy_sum, need_max;
   int64_t n_need_raised;
+  int64_t n_crowded;     /* frames over TRACK_CROWD_OCC (their occupancy measured) */
   unsigned char *keep;   /* [n_slots][max_det] the view-support test's verdicts */
   double shift_max_px_per_um; /* the views' largest shift (explain_brighter) */
   int64_t n_frames, n_det, n_points_kept, n_rejected, n_rejected_stage, n_refit_gcv, first_frame,

@@ -118,6 +118,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   /* view_support_auto: how crowded the frames were, how many needed more
    * views than view_support, the most any needed */
   cJSON_AddNumberToObject(cnt, "frames_view_support_raised", (double)c->n_need_raised);
+  cJSON_AddNumberToObject(cnt, "frames_crowded", (double)c->n_crowded);
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
   cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);

@@ -583,6 +583,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   c->n_localized += c->sp[slot].loc;
   c->n_deep_dropped += c->sp[slot].deep_dropped;
   c->occupancy_sum += c->sp[slot].occupancy;
+  if (c->sp[slot].occupancy > TRACK_CROWD_OCC) c->n_crowded++;
   if (c->sp[slot].need > c->o->view_support) c->n_need_raised++;
   if (c->sp[slot].need > c->need_max) c->need_max = c->sp[slot].need;
   double t1 = cli_now_s();

@@ -6,8 +6,9 @@
 # in recall; the linker's rescue reaches less far there and its gate is
 # narrower: alpha rises against --gate-um 6, and with that gate against
 # --rescue-factor 2.5 too; the faint peaks of those crowded frames
-# (ghosts) do not turn the blur for dim objects on; the flow scene's 20
-# beads keep 0.3 in every frame. Usage: track_crowded.sh BINARY
+# (ghosts) do not turn the blur for dim objects on; stderr notes the crowd;
+# the flow scene's 20 beads keep 0.3 in every frame, without the note.
+# Usage: track_crowded.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
@@ -30,6 +31,10 @@ n=$(key "$tmp/auto/summary.json" volumes)
 raised=$(key "$tmp/auto/summary.json" frames_view_support_raised)
 [ "$(key "$tmp/auto/summary.json" view_support_auto)" = true ] || { echo "FAIL: view_support_auto not true"; fail=$((fail+1)); }
 expect_gain "$n" "$((2 * raised))" 0 "only $raised of $n crowded frames raised the view support"
+expect_gain "$n" "$((2 * $(key "$tmp/auto/summary.json" frames_crowded)))" 0 "frames_crowded not most of $n"
+"$bin" track --calib "$tmp/dense/calib.json" --events "$tmp/dense/events.raw" --out "$tmp/note" \
+  --to-us 10000 2> "$tmp/note.err" || { echo "FAIL: track --to-us 10000"; fail=$((fail+1)); }
+grep -q "frames crowded" "$tmp/note.err" || { echo "FAIL: no note of the crowded frames on stderr"; fail=$((fail+1)); }
 expect_gain 0.4 "$(key "$tmp/auto/summary.json" view_support_max)" 0 "the most a frame needed is not above 0.4"
 [ "$(key "$tmp/fixed/summary.json" view_support_auto)" = false ] || { echo "FAIL: --view-support 0.3 left auto on"; fail=$((fail+1)); }
 expect_key frames_view_support_raised "$tmp/fixed/summary.json" 0
@@ -50,8 +55,10 @@ expect_gain "$(key "$tmp/rescue.json" alpha)" "$(key "$tmp/gate.json" alpha)" 0.
 expect_gain "$(key "$tmp/gate.json" alpha)" "$(key "$tmp/auto.json" alpha)" 0.01 "alpha not up by 0.01 against --gate-um 6"
 # the flow scene's 20 beads: no frame crowded
 simulate_or_skip "$tmp/flow" flow 40 1
-"$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/flow/run" -q ||
-  { echo "FAIL: track flow"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/flow/run" \
+  2> "$tmp/flow.err" || { echo "FAIL: track flow"; fail=$((fail+1)); }
+! grep -q "frames crowded" "$tmp/flow.err" || { echo "FAIL: the 20 beads noted as crowded"; fail=$((fail+1)); }
+expect_key frames_crowded "$tmp/flow/run/summary.json" 0
 echo "20 beads: frames raised $(key "$tmp/flow/run/summary.json" frames_view_support_raised)," \
   "occupancy $(key "$tmp/flow/run/summary.json" view_support_occupancy_mean)"
 expect_key frames_view_support_raised "$tmp/flow/run/summary.json" 0
