@@ -27,32 +27,6 @@ static void drain(elfm_linker *l, elfm_track_store *s)
   while ((t = elfm_link_pop_finished(l))) elfm_track_store_add(s, t, &err);
 }
 
-/* 5b's scene: a bead at 3 um/ms along x, dark for frames 30-39, back 15 um
- * to the side of its line at frame 40. The linker starts with the rescue
- * factor `factor`; just before frame 40 it is set to `at_return` (NaN: not
- * set; a refused value must be refused). Returns the tracks made. */
-static int rescue_return_tracks(const elfm_link_options *o, double factor, double at_return)
-{
-  elfm_error err;
-  elfm_link_options orr = *o;
-  orr.rescue_gate_factor = factor;
-  elfm_linker *l = elfm_link_create(&orr, &err);
-  const int64_t T0 = 1000000000000LL;
-  for (int f = 0; f < 60; f++) {
-    if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
-    if (f == 40 && at_return >= 0) CHECK_OK(elfm_link_set_rescue_gate_factor(l, at_return, &err), &err);
-    if (f == 40 && at_return < 0) CHECK(elfm_link_set_rescue_gate_factor(l, at_return, &err) == ELFM_ERR_INVALID);
-    elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
-    CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
-  }
-  CHECK_OK(elfm_link_finish(l, &err), &err);
-  int n = 0;
-  elfm_track *t;
-  while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
-  elfm_link_free(l);
-  return n;
-}
-
 int main(void)
 {
   elfm_error err;
@@ -358,56 +332,19 @@ int main(void)
    * 6 + 0.5 + 6 x 0.3 x 3 = 11.9 um; rescue gate 2.5 x that). Without the
    * rescue round it comes back as a second track. */
   for (int rescue = 0; rescue < 2; rescue++) {
-    const int n = rescue_return_tracks(&o, rescue ? 2.5 : 0, NAN);
-    CHECK_MSG(n == (rescue ? 1 : 2), "rescue %d: %d tracks", rescue, n);
-  }
-
-  /* 5b''. The rescue's factor set between frames (elfm_link_set_rescue_
-   * gate_factor, as `track` does per crowded frame): the bead of 5b comes
-   * back as one track when the factor is raised from 0 to 2.5 just before
-   * that frame, as two when it is lowered from 2.5 to 0; a negative or
-   * non-finite factor is refused and leaves the factor as it was (2.5 kept
-   * when -1 is refused there: one track). */
-  {
-    elfm_linker *l = elfm_link_create(&o, &err);
-    CHECK(elfm_link_set_rescue_gate_factor(l, -1, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_rescue_gate_factor(l, NAN, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_rescue_gate_factor(l, INFINITY, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_rescue_gate_factor(NULL, 1, &err) == ELFM_ERR_INVALID);
-    elfm_link_free(l);
-    elfm_error_clear(&err);
-    int n = rescue_return_tracks(&o, 0, 2.5);
-    CHECK_MSG(n == 1, "factor raised at the return: %d tracks", n);
-    n = rescue_return_tracks(&o, 2.5, 0);
-    CHECK_MSG(n == 2, "factor lowered at the return: %d tracks", n);
-    n = rescue_return_tracks(&o, 2.5, -1);
-    CHECK_MSG(n == 1, "factor -1 refused at the return: %d tracks", n);
-  }
-
-  /* 5g. The gate set between frames (elfm_link_set_gate_um): a bead at
-   * 3 um/ms along x steps 5 um to the side at frame 40, rescue off. With
-   * the gate at 6 um (6.9 with the speed's share) one track follows it; set
-   * to 4 um (4.9) just before that frame, the step starts a second. 0,
-   * negative and non-finite gates are refused. */
-  for (int narrow = 0; narrow < 2; narrow++) {
-    elfm_link_options og = o;
-    og.rescue_gate_factor = 0;
-    elfm_linker *l = elfm_link_create(&og, &err);
-    CHECK(elfm_link_set_gate_um(l, 0, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_gate_um(l, -4, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_gate_um(l, INFINITY, &err) == ELFM_ERR_INVALID);
-    CHECK(elfm_link_set_gate_um(NULL, 4, &err) == ELFM_ERR_INVALID);
-    elfm_error_clear(&err);
+    elfm_link_options orr = o;
+    orr.rescue_gate_factor = rescue ? 2.5 : 0;
+    elfm_linker *l = elfm_link_create(&orr, &err);
     for (int f = 0; f < 60; f++) {
-      if (f == 40 && narrow) CHECK_OK(elfm_link_set_gate_um(l, 4.0, &err), &err);
-      elfm_detection d = mk(3.0 * f, f >= 40 ? 5.0 : 0.0, 5);
+      if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+      elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
       CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
     }
     CHECK_OK(elfm_link_finish(l, &err), &err);
     int n = 0;
     elfm_track *t;
     while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
-    CHECK_MSG(n == (narrow ? 2 : 1), "gate %s at the step: %d tracks", narrow ? "4 um" : "6 um", n);
+    CHECK_MSG(n == (rescue ? 1 : 2), "rescue %d: %d tracks", rescue, n);
     elfm_link_free(l);
   }
 

@@ -1,7 +1,9 @@
 /* test_link_input.c — the linker's bad input (frames and times that go
  * back, NaN and infinite positions, NULL detections, out-of-range
- * options: each an error code, no crash), its lag correction, and what it
- * tells of the track each detection joined (elfm_link_last_velocity). */
+ * options: each an error code, no crash), the options a caller sets
+ * between frames (elfm_link_set_rescue_gate_factor, elfm_link_set_gate_um),
+ * its lag correction, and what it tells of the track each detection joined
+ * (elfm_link_last_velocity). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +13,32 @@
 #include "link_test_util.h"
 
 static elfm_detection mk(double x, double y, double z) { return link_test_det(x, y, z, 1); }
+
+/* test_link.c 5b's scene (the rescue): a bead at 3 um/ms along x, dark for frames 30-39, back 15 um
+ * to the side of its line at frame 40. The linker starts with the rescue
+ * factor `factor`; just before frame 40 it is set to `at_return` (NaN: not
+ * set; a refused value must be refused). Returns the tracks made. */
+static int rescue_return_tracks(const elfm_link_options *o, double factor, double at_return)
+{
+  elfm_error err;
+  elfm_link_options orr = *o;
+  orr.rescue_gate_factor = factor;
+  elfm_linker *l = elfm_link_create(&orr, &err);
+  const int64_t T0 = 1000000000000LL;
+  for (int f = 0; f < 60; f++) {
+    if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+    if (f == 40 && at_return >= 0) CHECK_OK(elfm_link_set_rescue_gate_factor(l, at_return, &err), &err);
+    if (f == 40 && at_return < 0) CHECK(elfm_link_set_rescue_gate_factor(l, at_return, &err) == ELFM_ERR_INVALID);
+    elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
+    CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+  }
+  CHECK_OK(elfm_link_finish(l, &err), &err);
+  int n = 0;
+  elfm_track *t;
+  while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+  elfm_link_free(l);
+  return n;
+}
 
 int main(void)
 {
@@ -87,6 +115,55 @@ int main(void)
     CHECK(elfm_link_create(&bad, &err) == NULL);
     elfm_link_free(NULL);
     CHECK(elfm_link_pop_finished(NULL) == NULL);
+  }
+
+  /* 1b. The rescue's factor set between frames (elfm_link_set_rescue_
+   * gate_factor, as `track` does per crowded frame): the bead of test_link.c 5b comes
+   * back as one track when the factor is raised from 0 to 2.5 just before
+   * that frame, as two when it is lowered from 2.5 to 0; a negative or
+   * non-finite factor is refused and leaves the factor as it was (2.5 kept
+   * when -1 is refused there: one track). */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    CHECK(elfm_link_set_rescue_gate_factor(l, -1, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_rescue_gate_factor(l, NAN, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_rescue_gate_factor(l, INFINITY, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_rescue_gate_factor(NULL, 1, &err) == ELFM_ERR_INVALID);
+    elfm_link_free(l);
+    elfm_error_clear(&err);
+    int n = rescue_return_tracks(&o, 0, 2.5);
+    CHECK_MSG(n == 1, "factor raised at the return: %d tracks", n);
+    n = rescue_return_tracks(&o, 2.5, 0);
+    CHECK_MSG(n == 2, "factor lowered at the return: %d tracks", n);
+    n = rescue_return_tracks(&o, 2.5, -1);
+    CHECK_MSG(n == 1, "factor -1 refused at the return: %d tracks", n);
+  }
+
+  /* 1c. The gate set between frames (elfm_link_set_gate_um): a bead at
+   * 3 um/ms along x steps 5 um to the side at frame 40, rescue off. With
+   * the gate at 6 um (6.9 with the speed's share) one track follows it; set
+   * to 4 um (4.9) just before that frame, the step starts a second. 0,
+   * negative and non-finite gates are refused. */
+  for (int narrow = 0; narrow < 2; narrow++) {
+    elfm_link_options og = o;
+    og.rescue_gate_factor = 0;
+    elfm_linker *l = elfm_link_create(&og, &err);
+    CHECK(elfm_link_set_gate_um(l, 0, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(l, -4, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(l, INFINITY, &err) == ELFM_ERR_INVALID);
+    CHECK(elfm_link_set_gate_um(NULL, 4, &err) == ELFM_ERR_INVALID);
+    elfm_error_clear(&err);
+    for (int f = 0; f < 60; f++) {
+      if (f == 40 && narrow) CHECK_OK(elfm_link_set_gate_um(l, 4.0, &err), &err);
+      elfm_detection d = mk(3.0 * f, f >= 40 ? 5.0 : 0.0, 5);
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+    }
+    CHECK_OK(elfm_link_finish(l, &err), &err);
+    int n = 0;
+    elfm_track *t;
+    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+    CHECK_MSG(n == (narrow ? 2 : 1), "gate %s at the step: %d tracks", narrow ? "4 um" : "6 um", n);
+    elfm_link_free(l);
   }
 
   /* 2. Lag correction through the linker: detections trail a bead moving at
