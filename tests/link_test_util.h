@@ -74,4 +74,31 @@ static inline void end_linker(elfm_linker *l)
   elfm_link_free(l);
 }
 
+/* test_link.c 5b's scene (the rescue; test_link_input.c 1b too): a bead
+ * at 3 um/ms along x, dark for frames 30-39, back 15 um to the side of its
+ * line at frame 40. The linker starts with the rescue
+ * factor `factor`; just before frame 40 it is set to `at_return` (NaN: not
+ * set; a refused value must be refused). Returns the tracks made. */
+static inline int link_test_rescue_return(const elfm_link_options *o, double factor, double at_return)
+{
+  elfm_error err;
+  elfm_link_options orr = *o;
+  orr.rescue_gate_factor = factor;
+  elfm_linker *l = elfm_link_create(&orr, &err);
+  const int64_t T0 = 1000000000000LL;
+  for (int f = 0; f < 60; f++) {
+    if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
+    if (f == 40 && at_return >= 0) CHECK_OK(elfm_link_set_rescue_gate_factor(l, at_return, &err), &err);
+    if (f == 40 && at_return < 0) CHECK(elfm_link_set_rescue_gate_factor(l, at_return, &err) == ELFM_ERR_INVALID);
+    elfm_detection d = link_test_det(3.0 * f, f >= 40 ? 15.0 : 0.0, 5, 1);
+    CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
+  }
+  CHECK_OK(elfm_link_finish(l, &err), &err);
+  int n = 0;
+  elfm_track *t;
+  while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+  elfm_link_free(l);
+  return n;
+}
+
 #endif

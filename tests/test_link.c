@@ -332,20 +332,8 @@ int main(void)
    * 6 + 0.5 + 6 x 0.3 x 3 = 11.9 um; rescue gate 2.5 x that). Without the
    * rescue round it comes back as a second track. */
   for (int rescue = 0; rescue < 2; rescue++) {
-    elfm_link_options orr = o;
-    orr.rescue_gate_factor = rescue ? 2.5 : 0;
-    elfm_linker *l = elfm_link_create(&orr, &err);
-    for (int f = 0; f < 60; f++) {
-      if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
-      elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
-      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
-    }
-    CHECK_OK(elfm_link_finish(l, &err), &err);
-    int n = 0;
-    elfm_track *t;
-    while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
+    const int n = link_test_rescue_return(&o, rescue ? 2.5 : 0, NAN);
     CHECK_MSG(n == (rescue ? 1 : 2), "rescue %d: %d tracks", rescue, n);
-    elfm_link_free(l);
   }
 
   /* 5b'. Turn model: a bead circling at 3 um/ms (radius 30 um, 5.7 degrees

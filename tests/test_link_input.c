@@ -14,32 +14,6 @@
 
 static elfm_detection mk(double x, double y, double z) { return link_test_det(x, y, z, 1); }
 
-/* test_link.c 5b's scene (the rescue): a bead at 3 um/ms along x, dark for frames 30-39, back 15 um
- * to the side of its line at frame 40. The linker starts with the rescue
- * factor `factor`; just before frame 40 it is set to `at_return` (NaN: not
- * set; a refused value must be refused). Returns the tracks made. */
-static int rescue_return_tracks(const elfm_link_options *o, double factor, double at_return)
-{
-  elfm_error err;
-  elfm_link_options orr = *o;
-  orr.rescue_gate_factor = factor;
-  elfm_linker *l = elfm_link_create(&orr, &err);
-  const int64_t T0 = 1000000000000LL;
-  for (int f = 0; f < 60; f++) {
-    if (f >= 30 && f < 40) { CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err); continue; }
-    if (f == 40 && at_return >= 0) CHECK_OK(elfm_link_set_rescue_gate_factor(l, at_return, &err), &err);
-    if (f == 40 && at_return < 0) CHECK(elfm_link_set_rescue_gate_factor(l, at_return, &err) == ELFM_ERR_INVALID);
-    elfm_detection d = mk(3.0 * f, f >= 40 ? 15.0 : 0.0, 5);
-    CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, 1, &err), &err);
-  }
-  CHECK_OK(elfm_link_finish(l, &err), &err);
-  int n = 0;
-  elfm_track *t;
-  while ((t = elfm_link_pop_finished(l))) { n++; elfm_track_free(t); }
-  elfm_link_free(l);
-  return n;
-}
-
 int main(void)
 {
   elfm_error err;
@@ -131,11 +105,11 @@ int main(void)
     CHECK(elfm_link_set_rescue_gate_factor(NULL, 1, &err) == ELFM_ERR_INVALID);
     elfm_link_free(l);
     elfm_error_clear(&err);
-    int n = rescue_return_tracks(&o, 0, 2.5);
+    int n = link_test_rescue_return(&o, 0, 2.5);
     CHECK_MSG(n == 1, "factor raised at the return: %d tracks", n);
-    n = rescue_return_tracks(&o, 2.5, 0);
+    n = link_test_rescue_return(&o, 2.5, 0);
     CHECK_MSG(n == 2, "factor lowered at the return: %d tracks", n);
-    n = rescue_return_tracks(&o, 2.5, -1);
+    n = link_test_rescue_return(&o, 2.5, -1);
     CHECK_MSG(n == 1, "factor -1 refused at the return: %d tracks", n);
   }
 
