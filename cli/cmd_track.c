@@ -32,7 +32,7 @@ static void dim_note(track_ctx *c, int so_far)
   const double h_med = track_peak_height_median(c);
   if (!(h_med < TRACK_HINT_DIM_FACTOR * o->peaks.absolute)) return;
   /* crowded frames: the faint peaks are ghosts (auto_judge) */
-  if (c->n_frames > 0 && c->occupancy_sum / (double)c->n_frames > TRACK_CROWD_OCC) return;
+  if (track_occupancy_mean(c) > TRACK_CROWD_OCC) return;
   fprintf(stderr, "%seventlfm track: note: the peaks are faint (median height %.0f against the "
                   "threshold %.0f%s): for dim objects, about one event per view per frame, "
                   "--blur-px 1 finds more (README, docs/tracker.md \"Dim objects\")\n",
@@ -147,9 +147,8 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * blurred; flow with 80 beads seed 2, whose first peaks stay faint
      * with the crowded frames' view support too: alpha 0.461 blurred,
      * 0.522 not (docs/tracker.md "Crowded frames"). */
-    const double occupancy = c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0;
     c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow &&
-                      !(occupancy > TRACK_CROWD_OCC);
+                      !(track_occupancy_mean(c) > TRACK_CROWD_OCC);
     const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
     c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
     /* slow beads (not cells). Their peaks may look faint too: below
@@ -539,8 +538,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                     "the views' pixels with signal; %.1f %% on average): there %s (--view-support, "
                     "--rescue-factor, --gate-um fix them; README, docs/tracker.md \"Crowded "
                     "frames\")\n",
-            c.n_crowded, c.n_frames, 100 * TRACK_CROWD_OCC, 100 * c.occupancy_sum / (double)c.n_frames,
-            list);
+            c.n_crowded, c.n_frames, 100 * TRACK_CROWD_OCC, 100 * track_occupancy_mean(&c), list);
   }
   /* (not for a slow stage's long windows: chosen for it, "Windows for a
    * slow stage", where the integral tracked worse) */

@@ -450,6 +450,9 @@ double track_rescue_factor(const track_opts *o, double occupancy);
 /* The linker's gate_um for such a frame: o->link.gate_um, narrowed in
  * crowded frames when o->gate_auto. */
 double track_gate_um(const track_opts *o, double occupancy);
+/* The frames' mean occupancy so far (0 before the first frame, and where
+ * none was measured). */
+double track_occupancy_mean(const track_ctx *c);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);

@@ -648,21 +648,16 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->blur_auto && (g->thr || !(o->peaks.absolute > 0) || o->motion == MOTION_STAGE ||
                        (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->blur_auto = 0;
-  /* The crowded frames' view support was measured on time surfaces (a
-   * pixel with signal is one that fired in the window); the blur spreads
-   * each pixel over 9 and the integral shows whole objects, which would
-   * read as crowded. */
-  if (o->view_support_auto && (!(o->view_support > 0) || o->recon.blur_px != 0 ||
-                               (o->recon.framer.repr != ELFM_REPR_EXP &&
-                                o->recon.framer.repr != ELFM_REPR_LIN)))
-    o->view_support_auto = 0;
-  if (o->rescue_auto && (!(o->link.rescue_gate_factor > TRACK_RESCUE_MIN) || o->recon.blur_px != 0 ||
-                         (o->recon.framer.repr != ELFM_REPR_EXP &&
-                          o->recon.framer.repr != ELFM_REPR_LIN)))
-    o->rescue_auto = 0;
-  if (o->gate_auto && (o->recon.blur_px != 0 || (o->recon.framer.repr != ELFM_REPR_EXP &&
-                                                 o->recon.framer.repr != ELFM_REPR_LIN)))
-    o->gate_auto = 0;
+  /* The crowded frames' rules were measured on time surfaces (a pixel
+   * with signal is one that fired in the window); the blur spreads each
+   * pixel over 9 and the integral shows whole objects, which would read as
+   * crowded. */
+  const int crowd_measured = o->recon.blur_px == 0 && (o->recon.framer.repr == ELFM_REPR_EXP ||
+                                                       o->recon.framer.repr == ELFM_REPR_LIN);
+  /* ... and each rule lowers its setting only from above its floor */
+  if (!crowd_measured || !(o->view_support > 0)) o->view_support_auto = 0;
+  if (!crowd_measured || !(o->link.rescue_gate_factor > TRACK_RESCUE_MIN)) o->rescue_auto = 0;
+  if (!crowd_measured || !(o->link.gate_um > TRACK_GATE_MIN_UM)) o->gate_auto = 0;
   /* The automatic window on time surfaces with windows on the 1 ms grid:
    * not on the integral (slow cells, 2 ms frames by choice), windows opened
    * by a trigger (one per pulse), nor a stage (its linker predicts with

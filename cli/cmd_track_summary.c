@@ -148,8 +148,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "rescue_auto", o->rescue_auto);
   cJSON_AddBoolToObject(par, "gate_auto", o->gate_auto);
   if (o->view_support_auto) {
-    cJSON_AddNumberToObject(par, "view_support_occupancy_mean",
-                            c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0.0);
+    cJSON_AddNumberToObject(par, "view_support_occupancy_mean", track_occupancy_mean(c));
     cJSON_AddNumberToObject(par, "view_support_max", c->need_max > 0 ? c->need_max : o->view_support);
   }
   cJSON_AddNumberToObject(par, "explain_brighter", o->explain_brighter);

@@ -308,6 +308,11 @@ double track_rescue_factor(const track_opts *o, double occupancy)
   return g > TRACK_RESCUE_MIN ? g : TRACK_RESCUE_MIN;
 }
 
+double track_occupancy_mean(const track_ctx *c)
+{
+  return c->n_frames > 0 ? c->occupancy_sum / (double)c->n_frames : 0.0;
+}
+
 double track_gate_um(const track_opts *o, double occupancy)
 {
   const double g = o->link.gate_um;
@@ -320,7 +325,7 @@ double track_gate_um(const track_opts *o, double occupancy)
    * (4 um from 3.5 %) 0.689 / 0.587 / 0.549 / 0.497 / 0.399
    * (docs/tracker.md "Crowded frames"). */
   const double h = g - TRACK_GATE_PER_OCC_UM * (occupancy - TRACK_CROWD_OCC);
-  return h > TRACK_GATE_MIN_UM ? h : (g < TRACK_GATE_MIN_UM ? g : TRACK_GATE_MIN_UM);
+  return h > TRACK_GATE_MIN_UM ? h : TRACK_GATE_MIN_UM;
 }
 
 /* Worker thread: detect the peaks of the slot's volume into its buffer,

@@ -234,10 +234,11 @@ typedef struct elfm_linker elfm_linker;
 elfm_linker *elfm_link_create(const elfm_link_options *o, elfm_error *err);
 void elfm_link_free(elfm_linker *l);
 
-/* Change the rescue round's rescue_gate_factor (>= 0, finite) from the next
- * elfm_link_step on: a caller that knows how crowded each frame is (more
- * objects near a track's path, more of them another object's) sets it per
- * frame. ELFM_ERR_INVALID otherwise, the factor unchanged. */
+/* Change the rescue round's rescue_gate_factor from the next elfm_link_step
+ * on: a caller that knows how crowded each frame is (more objects near a
+ * track's path, more of them another object's) sets it per frame. Checked
+ * as elfm_link_create checks it (>= 0, finite); ELFM_ERR_INVALID otherwise,
+ * the factor unchanged. */
 elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm_error *err);
 /* ... and gate_um (> 0, finite), likewise. */
 elfm_status elfm_link_set_gate_um(elfm_linker *l, double gate_um, elfm_error *err);

@@ -475,21 +475,29 @@ static int in_trail(const elfm_linker *l, size_t nt, const elfm_detection *det,
   return 0;
 }
 
+/* The linker's options become *t when link_options_check (the one that
+ * elfm_link_create applies) takes them; else they stay as they were. */
+static elfm_status link_set_options(elfm_linker *l, const elfm_link_options *t, elfm_error *err)
+{
+  elfm_status st = link_options_check(t, err);
+  if (st == ELFM_OK) l->o = *t;
+  return st;
+}
+
 elfm_status elfm_link_set_rescue_gate_factor(elfm_linker *l, double factor, elfm_error *err)
 {
-  if (!l || !(factor >= 0 && isfinite(factor)))
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: rescue_gate_factor %g is not >= 0",
-                          factor);
-  l->o.rescue_gate_factor = factor;
-  return ELFM_OK;
+  if (!l) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: NULL linker");
+  elfm_link_options t = l->o;
+  t.rescue_gate_factor = factor;
+  return link_set_options(l, &t, err);
 }
 
 elfm_status elfm_link_set_gate_um(elfm_linker *l, double gate_um, elfm_error *err)
 {
-  if (!l || !(gate_um > 0 && isfinite(gate_um)))
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: gate_um %g is not > 0", gate_um);
-  l->o.gate_um = gate_um;
-  return ELFM_OK;
+  if (!l) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "link: NULL linker");
+  elfm_link_options t = l->o;
+  t.gate_um = gate_um;
+  return link_set_options(l, &t, err);
 }
 
 elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_detection *det, int n,
