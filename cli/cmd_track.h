@@ -199,7 +199,7 @@ typedef struct track_given {
   int mslow, mslows;                 /* --motion-slow-lead-ms, --motion-slow-um-per-ms */
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
-  int circ;                          /* --circle-points */
+  int circ, circnext;                /* --circle-points, --circle-next-path-um */
   int locmin, gviews, deepv;         /* --localize-min-views, --guided-views,
                                         --deep-peak-views */
 } track_given;

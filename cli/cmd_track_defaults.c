@@ -205,6 +205,16 @@ void track_defaults(track_opts *o)
    * 1 s 0.7486 / 0.6836, 100 ms 0.8398 / 0.8295. */
   o->link.circle_points = 15;
   o->link.circle_after = 2;
+  /* ... and a track seen in the last frame is predicted along the circle
+   * through its last 45 um of path where that circle has predicted its
+   * points better than the short fit (elfm_link.h circle_next_path_um):
+   * flow at 2 ms frames turns 0.55-0.9 rad per frame, past what the short
+   * fit's parabola follows. Flow 100 ms seeds 1-8 / 9-20 alpha 0.8763 ->
+   * 0.8779 / 0.8374 -> 0.8555, at 2 ms frames 0.737 -> 0.780 / 0.699 ->
+   * 0.749; 30 / 60 um: 0.8717 / 0.8775 and 0.789 / 0.769 on seeds 1-8;
+   * the circle over the 15 circle points instead: 0.8779 / 0.768.
+   * docs/tracker.md "The next frame along a circle". */
+  o->link.circle_next_path_um = 45;
   /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
    * detections' errors are correlated from frame to frame (flow: lag-1
    * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV
@@ -432,6 +442,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * the same); blink the same. */
     o->link.circle_points = 0;
   }
+  if (each_trigger && !g->circnext) o->link.circle_next_path_um = 0;
   if (each_trigger && !g->minpts) {
     /* ... and a track of 5 points is 5 pulses: a deep bead that fades
      * after 4 had no track (blink seed 7, bead 13). A ghost would have to
@@ -533,6 +544,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * circle_points): stage 200 ms with it, alpha 0.870 / 0.909 / 0.826
      * -> 0.847 / 0.909 / 0.826 (seeds 1-3). */
     if (!g->circ) o->link.circle_points = 0;
+    if (!g->circnext) o->link.circle_next_path_um = 0;
     /* Rigid motion has one direction, which the tracks' smoothed velocity
      * gives well even at 0.1 um/ms: the lead need not fade below 0.5 um/ms.
      * stage_accel 300 ms (0.1 -> 2.5 um/ms): fitted acceleration 3.6 % ->

@@ -308,6 +308,81 @@ int main(void)
               err_off);
   }
 
+  /* 3c. The next frame along a circle (circle_next_path_um): beads on
+   * circles of radius 9-13 um at 6 um of path per frame (0.46-0.67 rad per
+   * frame, as flow at 2 ms frames), noisy, short fit over 20 um of path as
+   * in `track`. The linker's predictions for frames 20-59 (the track then
+   * has its circle and its scores) lie nearer the bead with the circle than
+   * from the short fit alone, and each bead stays one track. A bead moving
+   * straight fits no circle: the same predictions and tracks either way. */
+  {
+    double miss_on = 0, miss_off = 0;
+    int n_miss = 0;
+    for (int k = 0; k < 10; k++) {
+      path p;
+      memset(&p, 0, sizeof p);
+      tilted(&p, 0.2 + 0.1 * k, 0.6 * k);
+      const int straight = k == 9;
+      p.r = straight ? 0 : 9 + 0.5 * k;
+      p.v = 6;
+      p.w = (k % 2 ? 1 : -1) * 6.0 / (p.r > 0 ? p.r : 1);
+      p.a0 = 0.5 * k;
+      double miss[2] = {0, 0};
+      int tracks[2] = {0, 0};
+      for (int on = 0; on < 2; on++) {
+        elfm_error err;
+        elfm_link_options o;
+        elfm_link_options_default(&o);
+        o.short_path_um = 20;
+        o.circle_next_path_um = on ? 45 : 0;
+        elfm_linker *l = elfm_link_create(&o, &err);
+        CHECK(l != NULL);
+        if (!l) continue;
+        uint64_t noise = 900 + k;
+        for (int f = 0; f < 60; f++) {
+          elfm_detection d = det_at(&p, f, &noise, 0.3, 1.0);
+          if (f >= 20) {
+            double q[3], want[3];
+            int nq = 0;
+            CHECK_OK(elfm_link_predict(l, f, d.t_us, 1, q, NULL, 1, &nq, &err), &err);
+            CHECK(nq == 1);
+            path_at(&p, (double)f, want);
+            if (nq == 1)
+              miss[on] += sqrt((q[0] - want[0]) * (q[0] - want[0]) +
+                               (q[1] - want[1]) * (q[1] - want[1]) +
+                               (q[2] - want[2]) * (q[2] - want[2]) / 16);
+          }
+          CHECK_OK(elfm_link_step(l, f, d.t_us, &d, 1, &err), &err);
+        }
+        CHECK_OK(elfm_link_finish(l, &err), &err);
+        elfm_track *t;
+        while ((t = elfm_link_pop_finished(l))) {
+          tracks[on]++;
+          elfm_track_free(t);
+        }
+        elfm_link_free(l);
+      }
+      if (straight) {
+        CHECK_MSG(miss[1] == miss[0] && tracks[1] == tracks[0],
+                  "straight bead: miss %g / %g um, %d / %d tracks", miss[1], miss[0], tracks[1],
+                  tracks[0]);
+        continue;
+      }
+      CHECK_MSG(tracks[1] == 1, "circle %d: %d tracks with the next frame's circle", k, tracks[1]);
+      miss_on += miss[1];
+      miss_off += miss[0];
+      n_miss += 40;
+    }
+    if (n_miss) {
+      miss_on /= n_miss;
+      miss_off /= n_miss;
+    }
+    fprintf(stderr, "0.46-0.67 rad per frame: the next frame predicted %.2f um off with its circle, "
+                    "%.2f um from the short fit\n", miss_on, miss_off);
+    CHECK_MSG(n_miss == 9 * 40 && miss_on < 0.7 * miss_off, "circle %.2f um, short fit %.2f um",
+              miss_on, miss_off);
+  }
+
   /* 4. Options: circle points 1-5 and circle_after 0 are out of range. */
   {
     elfm_error err;
@@ -323,6 +398,12 @@ int main(void)
     o.circle_line_ratio = 1.5;
     CHECK(elfm_link_create(&o, &err) == NULL);
     o.circle_line_ratio = 0.5;
+    CHECK(o.circle_next_path_um == 0); /* off unless asked for (track: 45) */
+    o.circle_next_path_um = -1;
+    CHECK(elfm_link_create(&o, &err) == NULL);
+    o.circle_next_path_um = NAN;
+    CHECK(elfm_link_create(&o, &err) == NULL);
+    o.circle_next_path_um = 45;
     elfm_linker *l = elfm_link_create(&o, &err);
     CHECK(l != NULL);
     elfm_link_free(l);

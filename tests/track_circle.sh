@@ -6,8 +6,12 @@
 #    --circle-points 0 (0.869 -> 0.912 when it came);
 #  - summary.json records 15, and 0 with --start each-trigger (blink), the
 #    derived default there;
-#  - 1-5 points, a negative or zero --circle-after, and non-numbers are
-#    usage errors.
+#  - the next frame along the circle (--circle-next-path-um, default 45):
+#    flow 100 ms seed 7 at 2 ms frames (0.55-0.9 rad of turn per frame),
+#    alpha at least 0.05 above --circle-next-path-um 0 (0.636 -> 0.765
+#    when it came); summary.json records 45, and 0 with each-trigger;
+#  - 1-5 points, a negative or zero --circle-after, a negative next-frame
+#    path, and non-numbers are usage errors.
 # Usage: track_circle.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -15,7 +19,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--circle-points 3" "--circle-points -1" "--circle-points x" \
-  "--circle-after 0" "--circle-after y"
+  "--circle-after 0" "--circle-after y" "--circle-next-path-um -1" "--circle-next-path-um z"
 simulate_or_skip "$tmp/f" flow 100 14
 # on the calibration's planes, where this case was found (on every 2nd
 # plane, the default since the twenty-sixth session: 0.879 -> 0.890)
@@ -26,10 +30,18 @@ echo "flow seed 14: alpha $a0 without the circle, $a1 with it"
 expect_gain "$a0" "$a1" 0.02 "the circle gains < 0.02 alpha ($a0 -> $a1)"
 [ "$(key "$tmp/on/summary.json" circle_points)" = 15 ] ||
   { echo "FAIL: circle_points not 15 in summary.json"; fail=$((fail+1)); }
+simulate_or_skip "$tmp/f7" flow 100 7
+track_score "$tmp/f7" "$tmp/n0" "$tmp/n0.json" --dt-us 2000 --circle-next-path-um 0
+track_score "$tmp/f7" "$tmp/n1" "$tmp/n1.json" --dt-us 2000
+a0=$(key "$tmp/n0.json" alpha); a1=$(key "$tmp/n1.json" alpha)
+echo "flow seed 7, 2 ms frames: alpha $a0 without the next frame's circle, $a1 with it"
+expect_gain "$a0" "$a1" 0.05 "the next frame's circle gains < 0.05 alpha ($a0 -> $a1)"
+expect_key circle_next_path_um "$tmp/n1/summary.json" 45
 simulate_or_skip "$tmp/b" blink 60 1
 "$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/bt" \
   --start each-trigger --quiet || { echo "FAIL: track --start each-trigger"; fail=$((fail+1)); }
 [ "$(key "$tmp/bt/summary.json" circle_points)" = 0 ] ||
   { echo "FAIL: circle_points not 0 with --start each-trigger"; fail=$((fail+1)); }
+expect_key circle_next_path_um "$tmp/bt/summary.json" 0
 [ $fail -eq 0 ] && echo "track_circle: all passed" || echo "track_circle: $fail failed"
 [ $fail -eq 0 ]

@@ -96,6 +96,23 @@ typedef struct elfm_link_options {
    * unwrapped by its rate (link_circle.c), which a gap needs: 0.8398,
    * 0.8295, 0.7486, 0.6836. */
   int circle_gap_points;
+  /* The next frame, too, may be predicted along a circle: with
+   * circle_next_path_um > 0, a track seen in the last frame also fits the
+   * circle (same tests as above) through its last real points covering up
+   * to that much path (at least 6 points, at most 64), and both that
+   * circle and the short fit predict the next frame. Each prediction's
+   * squared miss of the point the track then takes (linker metric) is
+   * kept as a mean decaying by 0.3 per point; once 3 points are scored,
+   * the circle predicts wherever its mean is the lower. Why: the short fit
+   * is a parabola through ~20 um of path, and a bead turning half a
+   * radian or more per frame (flow at 2 ms frames, 0.55-0.9 rad per
+   * frame; faster beads) leaves it; a circle through the last turn
+   * follows. On straight or irregular paths the circle is not fitted or
+   * predicts worse, and the short fit stays. Flow 100 ms seeds 1-8 / 9-20
+   * alpha 0.8763 -> 0.8779 / 0.8374 -> 0.8555; at 2 ms frames 0.737 ->
+   * 0.780 / 0.699 -> 0.749 (docs/tracker.md "The next frame along a
+   * circle"). 0 = off (default; track: 45 um where circle_points is on). */
+  double circle_next_path_um;
   double circle_min_arc_rad;
   double circle_max_radius_um;
   double circle_line_ratio;

@@ -116,6 +116,8 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->rest_speed_um_per_ms >= 0 && isfinite(o->rest_speed_um_per_ms), "rest_speed_um_per_ms",
             o->rest_speed_um_per_ms, ">= 0");
   LINK_NEED(o->circle_points == 0 || o->circle_points >= 6, "circle_points", o->circle_points, "0 or >= 6");
+  LINK_NEED(o->circle_next_path_um >= 0 && isfinite(o->circle_next_path_um), "circle_next_path_um",
+            o->circle_next_path_um, ">= 0");
   LINK_NEED(o->circle_after >= 1, "circle_after", o->circle_after, ">= 1");
   LINK_NEED(o->circle_min_arc_rad >= 0 && isfinite(o->circle_min_arc_rad), "circle_min_arc_rad",
             o->circle_min_arc_rad, ">= 0");
@@ -405,6 +407,7 @@ static elfm_status attach(elfm_linker *l, live_track *lt, elfm_detection *d, elf
                                     elfm_link_current_velocity(lt)[1],
                                     elfm_link_current_velocity(lt)[2], l->o.lag_tau_us,
                                     l->o.lead_sigmas);
+  if (lt->pred_circ_ok && d->t_us == lt->pred_t_us) elfm_link_score_predictions(&l->o, lt, d);
   elfm_status st = elfm_track_append(lt->t, d, err);
   if (st != ELFM_OK) return st;
   lt->last_frame = d->frame;

@@ -71,6 +71,28 @@ int elfm_link_fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
   return 1;
 }
 
+/* The first of the points [lo, n) of t that the last path_um of path
+ * (the anisotropic steps between the points, z / kz) reaches back to,
+ * keeping at least min_points (when there are). */
+static size_t path_start(const elfm_track *t, size_t lo, size_t n, double path_um, size_t min_points,
+                         double kz)
+{
+  double path = 0;
+  size_t k = n - 1;
+  while (k > lo) {
+    const elfm_detection *a = &t->pts[k - 1], *b = &t->pts[k];
+    const double dx = b->x_um - a->x_um, dy = b->y_um - a->y_um, dz = (b->z_um - a->z_um) / kz;
+    path += sqrt(dx * dx + dy * dy + dz * dz);
+    if (path > path_um && n - k >= min_points) break;
+    k--;
+  }
+  return k;
+}
+
+/* Points of the next frame's circle (elfm_link_options.circle_next_path_um):
+ * at most this many, whatever the path (a slow track's 45 um). */
+#define CIRCLE_NEXT_MAX_POINTS 64
+
 /* Shared with link_repair.c (link_internal.h). */
 void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
 {
@@ -89,12 +111,18 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
     const size_t c0 = n > (size_t)o->circle_points ? n - (size_t)o->circle_points : 0;
     elfm_link_fit_circle(o, t->pts, c0, n, tr, &lt->circ);
   }
+  lt->circ_next.ok = 0;
+  if (o->circle_next_path_um > 0 && n >= 6) {
+    const size_t lo = n > CIRCLE_NEXT_MAX_POINTS ? n - CIRCLE_NEXT_MAX_POINTS : 0;
+    elfm_link_fit_circle(o, t->pts, path_start(t, lo, n, o->circle_next_path_um, 6, o->kz), n, tr,
+                         &lt->circ_next);
+  }
   size_t k0 = n > (size_t)history ? n - (size_t)history : 0;
   /* with all points at one time, the prior is kept */
   if (n - k0 >= 2) elfm_link_fit_line(t->pts, k0, n, tr, lt->lin_pos, lt->vel_um_per_ms);
   k0 = n > (size_t)short_history ? n - (size_t)short_history : 0;
   if (n - k0 < 4) return;
-  if (o->short_path_um > 0) {
+  if (o->short_path_um > 0)
     /* At most short_path_um of path (the anisotropic steps between the
      * points, z / kz), and at least 4 points: a parabola through a turn is
      * a good prediction only over a fraction of it, and what limits the
@@ -103,16 +131,6 @@ void elfm_link_fit_velocity(live_track *lt, const elfm_link_options *o)
      * points the fit keeps; at 5-8 um/ms, 8 points span 40-55 um, more
      * than a radian of its turn, and the linker lost it between frames
      * (docs/tracker.md "Fast beads"). */
-    double path = 0;
-    size_t k = n - 1;
-    while (k > k0) {
-      const elfm_detection *a = &t->pts[k - 1], *b = &t->pts[k];
-      const double dx = b->x_um - a->x_um, dy = b->y_um - a->y_um, dz = (b->z_um - a->z_um) / o->kz;
-      path += sqrt(dx * dx + dy * dy + dz * dz);
-      if (path > o->short_path_um && n - k >= 4) break;
-      k--;
-    }
-    k0 = k;
-  }
+    k0 = path_start(t, k0, n, o->short_path_um, 4, o->kz);
   lt->has_short = elfm_link_fit_quad(t->pts, k0, n, tr, lt->fit_pos, lt->fit_vel, lt->fit_acc);
 }

@@ -22,7 +22,18 @@ typedef struct live_track {
   double fit_pos[3], fit_vel[3], fit_acc[3]; /* short fit, at the last point's time */
   int has_short;            /* the short fit exists (>= 4 points) */
   elfm_link_circle circ;    /* circle fit over circle_points points (circ.ok: it exists) */
+  elfm_link_circle circ_next; /* circle over circle_next_path_um of path (circ_next.ok) */
   double pred[3];           /* prediction for the current frame */
+  /* The current frame's two predictions when the track was seen in the
+   * last frame and circ_next exists (pred_circ_ok), made for pred_t_us:
+   * the short fit's and circ_next's; the mean squared miss of each on the
+   * track's own points (decaying), over n_scored points
+   * (elfm_link_options.circle_next_path_um). */
+  double pred_short[3], pred_circ[3];
+  int pred_circ_ok;
+  int64_t pred_t_us;
+  double miss2_short, miss2_circ;
+  int n_scored;
   double gate_um;           /* gate for the current frame */
   /* In a recording at rest, a track dark for more than short_gap frames
    * may also have stayed where it was (moving with the prior velocity):
@@ -179,6 +190,8 @@ int elfm_link_fit_circle(const elfm_link_options *o, const elfm_detection *pts, 
 
 /* Position on the circle dt_ms after its reference time. */
 void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double out[3]);
+/* Score the two predictions made for d's frame against d (link_predict.c). */
+void elfm_link_score_predictions(const elfm_link_options *o, live_track *lt, const elfm_detection *d);
 
 /* Can detection d join a track, dark for `missed` frames, whose hypothesis
  * puts it at c[] within gate_um? 1 with *cost = d2 / gate^2 + gap_cost x
