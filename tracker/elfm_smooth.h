@@ -20,7 +20,9 @@
  *   k ln(3 n) (k = 6, 9, or 3 edf); ties go to the simpler model.
  * NOISE. Without per-point sigmas, sigma per axis is estimated from the
  * data: 1.4826 MAD of the normalised second differences of consecutive
- * points (a straight or slowly curving track has none), floored at
+ * points (a straight or slowly curving track has none), at most that of
+ * the fourth differences / 0.6 (a path turning far between frames fills
+ * its second differences; smooth.cc kFourthToSecond), floored at
  * min_sigma_*_um.
  * NUMERICS. Times are taken relative to a reference inside the track (int64
  * difference, then double ms) and positions relative to their mean, so a

@@ -555,7 +555,55 @@ void spline_eval(const SplineFit &f, const SplineSetup &ss, const Data &d, size_
   }
 }
 
-// Robust noise per axis from normalised second differences.
+// The fourth differences' estimate (below) over this ratio caps the second
+// differences'. On noise alone the two agree (white noise: ratio 1; the
+// time surface's errors, correlated from frame to frame: ~0.95), so the cap
+// leaves them be; where it bites, the second differences hold the path's
+// own turn. Flow at 2 ms frames turns 0.55-0.9 rad per frame, and its
+// second differences put the lateral noise at 0.95 um where the fourth put
+// 0.22 um (medians over the tracks, seeds 1-4); the robust loss, whose
+// scale is in these sigmas, then took wrong points (another bead's) at
+// full weight, and the smoothed points lay no nearer the beads than the
+// detections (seeds 1-8: mean distance 0.520 against 0.525 um; 0.452 with
+// the cap; test_smooth_noise 2 has such a case). Flow 100 ms
+// seeds 1-8 / 9-16 at 2 ms frames alpha 0.7801 -> 0.8049 / 0.7490 ->
+// 0.7608 at 0.6 (0.8060 on seeds 1-8 at 0.8); at 1 ms frames seeds 1-20,
+// stage seeds 1-3, worm (integral) seeds 1-4, flow_random seeds 1-12 the
+// same to 0.0002, blink seeds 1-4 -0.0008 (docs/tracker.md "The noise of
+// fast turns").
+constexpr double kFourthToSecond = 0.6;
+
+// Robust noise of axis a from normalised fourth divided differences of
+// consecutive points (any spacing; repeated times skipped): -1 when fewer
+// than 3. A path of constant jerk has none, so a turn enters only by its
+// fourth derivative, (turn per frame)^4 x radius.
+double fourth_difference_sigma(size_t n, const int64_t *t, const double *x, int a)
+{
+  std::vector<double> r;
+  for (size_t i = 0; i + 4 < n; i++) {
+    double c[5], ss = 0, e = 0;
+    bool ok = true;
+    for (int j = 0; j <= 4 && ok; j++) {
+      double p = 1;
+      for (int m = 0; m <= 4; m++)
+        if (m != j) p *= (double)(t[i + j] - t[i + m]);
+      ok = p != 0;
+      c[j] = ok ? 1 / p : 0;
+    }
+    if (!ok) continue;
+    for (int j = 0; j <= 4; j++) {
+      ss += c[j] * c[j];
+      e += c[j] * x[3 * (i + j) + a];
+    }
+    r.push_back(std::fabs(e) / std::sqrt(ss));  // var(e) = sigma^2 ss for independent noise
+  }
+  if (r.size() < 3) return -1;
+  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
+  return 1.4826 * r[r.size() / 2];
+}
+
+// Robust noise per axis from normalised second differences, capped by the
+// fourth differences' (kFourthToSecond).
 void estimate_sigma(const elfm_smooth_options *o, size_t n, const int64_t *t, const double *x,
                     double out[3])
 {
@@ -574,6 +622,8 @@ void estimate_sigma(const elfm_smooth_options *o, size_t n, const int64_t *t, co
     if (r.size() >= 3) {
       std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
       s = 1.4826 * r[r.size() / 2];
+      const double s4 = fourth_difference_sigma(n, t, x, a);
+      if (s4 >= 0 && s4 / kFourthToSecond < s) s = s4 / kFourthToSecond;
     }
     out[a] = std::max(s, floor_[a]);
   }
