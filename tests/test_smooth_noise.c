@@ -1,11 +1,11 @@
 /* test_smooth_noise.c — the smoother's noise estimate
  * (elfm_smooth_estimate_noise, elfm_smooth.h NOISE): on a noisy straight
- * track the second differences' estimate stands (the fourth differences'
- * cap does not bite) and lies near the noise, with gaps and absolute times
- * near 1e12 us; on a bead turning 0.6 rad per frame, whose second
- * differences hold the turn (3x the noise), the capped estimate is under
- * 0.6 x theirs and the fit keeps the turn (nearer the bead than with their
- * estimate); a track too short for fourth differences keeps the second
+ * track, with gaps and absolute times near 1e12 us, the estimate lies near
+ * the noise; on a bead turning 0.6 rad per frame, whose second differences
+ * hold the turn (their estimate 4x the noise), the estimate is under 0.6 x
+ * theirs (capped by the fourth differences') while its slowly swinging z
+ * keeps theirs, and the robust fit with it lies nearer the bead than with
+ * theirs; a track too short for fourth differences keeps the second
  * differences' estimate. */
 #include <math.h>
 #include <stdint.h>
@@ -31,7 +31,8 @@ static double normal(uint64_t *s)
 }
 
 /* n points of a circle of radius r_um in the x-y plane turning w rad per
- * frame (r_um 0: a straight line at 3 um per frame), z a slow line; noise
+ * frame (r_um 0: a straight line at 3 um per frame), z a slow line (on the
+ * circle a swing of 6 um, a quarter of the turn's rate); noise
  * sd_xy / sd_z; frames 1 ms apart, every 9th frame missing when gaps. */
 static void make_track(int n, double r_um, double w, double sd_xy, double sd_z, int gaps,
                        uint64_t seed, int64_t *t, double *x, double *truth)
@@ -107,7 +108,7 @@ int main(void)
   /* 2. A bead on a circle of 9 um turning 0.6 rad per frame, noise 0.3 um
    * laterally: its second differences swing by 9 x 0.36 = 3.2 um, and
    * their estimate alone is > 0.9 um; capped by the fourth differences it
-   * is under 0.6 x that. z, a straight line, as in 1. */
+   * is under 0.6 x that. z, a slow swing, keeps its estimate. */
   make_track(N, 9, 0.6, 0.3, 1.0, 0, 12, t, x, truth);
   /* every 25th point another bead's, 5 um off (a wrong link) */
   for (int i = 7; i < N; i += 25) x[3 * i] += 5;
