@@ -22,7 +22,7 @@
  * data: 1.4826 MAD of the normalised second differences of consecutive
  * points (a straight or slowly curving track has none), at most that of
  * the fourth differences / 0.6 (a path turning far between frames fills
- * its second differences; smooth.cc kFourthToSecond), floored at
+ * its second differences; smooth_noise.c), floored at
  * min_sigma_*_um.
  * NUMERICS. Times are taken relative to a reference inside the track (int64
  * difference, then double ms) and positions relative to their mean, so a

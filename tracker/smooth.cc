@@ -555,80 +555,6 @@ void spline_eval(const SplineFit &f, const SplineSetup &ss, const Data &d, size_
   }
 }
 
-// The fourth differences' estimate (below) over this ratio caps the second
-// differences'. On noise alone the two agree (white noise: ratio 1; the
-// time surface's errors, correlated from frame to frame: ~0.95), so the cap
-// leaves them be; where it bites, the second differences hold the path's
-// own turn. Flow at 2 ms frames turns 0.55-0.9 rad per frame, and its
-// second differences put the lateral noise at 0.95 um where the fourth put
-// 0.22 um (medians over the tracks, seeds 1-4); the robust loss, whose
-// scale is in these sigmas, then took wrong points (another bead's) at
-// full weight, and the smoothed points lay no nearer the beads than the
-// detections (seeds 1-8: mean distance 0.520 against 0.525 um; 0.452 with
-// the cap; test_smooth_noise 2 has such a case). Flow 100 ms
-// seeds 1-8 / 9-16 at 2 ms frames alpha 0.7801 -> 0.8049 / 0.7490 ->
-// 0.7608 at 0.6 (0.8060 on seeds 1-8 at 0.8); at 1 ms frames seeds 1-20,
-// stage seeds 1-3, worm (integral) seeds 1-4, flow_random seeds 1-12 the
-// same to 0.0002, blink seeds 1-4 -0.0008 (docs/tracker.md "The noise of
-// fast turns").
-constexpr double kFourthToSecond = 0.6;
-
-// Robust noise of axis a from normalised fourth divided differences of
-// consecutive points (any spacing; repeated times skipped): -1 when fewer
-// than 3. A path of constant jerk has none, so a turn enters only by its
-// fourth derivative, (turn per frame)^4 x radius.
-double fourth_difference_sigma(size_t n, const int64_t *t, const double *x, int a)
-{
-  std::vector<double> r;
-  for (size_t i = 0; i + 4 < n; i++) {
-    double c[5], ss = 0, e = 0;
-    bool ok = true;
-    for (int j = 0; j <= 4 && ok; j++) {
-      double p = 1;
-      for (int m = 0; m <= 4; m++)
-        if (m != j) p *= (double)(t[i + j] - t[i + m]);
-      ok = p != 0;
-      c[j] = ok ? 1 / p : 0;
-    }
-    if (!ok) continue;
-    for (int j = 0; j <= 4; j++) {
-      ss += c[j] * c[j];
-      e += c[j] * x[3 * (i + j) + a];
-    }
-    r.push_back(std::fabs(e) / std::sqrt(ss));  // var(e) = sigma^2 ss for independent noise
-  }
-  if (r.size() < 3) return -1;
-  std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
-  return 1.4826 * r[r.size() / 2];
-}
-
-// Robust noise per axis from normalised second differences, capped by the
-// fourth differences' (kFourthToSecond).
-void estimate_sigma(const elfm_smooth_options *o, size_t n, const int64_t *t, const double *x,
-                    double out[3])
-{
-  const double floor_[3] = {o->min_sigma_xy_um, o->min_sigma_xy_um, o->min_sigma_z_um};
-  for (int a = 0; a < 3; a++) {
-    std::vector<double> r;
-    for (size_t i = 1; i + 1 < n; i++) {
-      int64_t h0 = t[i] - t[i - 1], h1 = t[i + 1] - t[i];
-      if (h0 <= 0 || h1 <= 0) continue;
-      double rho = (double)h1 / (double)h0;
-      double e = x[3 * (i + 1) + a] - x[3 * i + a] - rho * (x[3 * i + a] - x[3 * (i - 1) + a]);
-      // var(e) = sigma^2 (1 + (1 + rho)^2 + rho^2) for independent noise
-      r.push_back(std::fabs(e) / std::sqrt(1 + (1 + rho) * (1 + rho) + rho * rho));
-    }
-    double s = 0;
-    if (r.size() >= 3) {
-      std::nth_element(r.begin(), r.begin() + r.size() / 2, r.end());
-      s = 1.4826 * r[r.size() / 2];
-      const double s4 = fourth_difference_sigma(n, t, x, a);
-      if (s4 >= 0 && s4 / kFourthToSecond < s) s = s4 / kFourthToSecond;
-    }
-    out[a] = std::max(s, floor_[a]);
-  }
-}
-
 elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
                      const double *xyz, const double *sigma, size_t nq, const int64_t *q,
                      double *pos, double *vel, double *psd, double *vsd, elfm_smooth_info *info,
@@ -691,7 +617,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
       inf.sigma_um[a] = s[n / 2];
     }
   } else {
-    estimate_sigma(o, n, t_us, xyz, inf.sigma_um);
+    elfm_status st = elfm_smooth_estimate_noise(o, n, t_us, xyz, inf.sigma_um, err);
+    if (st != ELFM_OK) return st;
     for (size_t i = 0; i < n; i++)
       for (int a = 0; a < 3; a++) d.sig[3 * i + a] = inf.sigma_um[a];
   }
@@ -840,20 +767,6 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
     return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
   } catch (...) {
     return elfm_error_set(err, ELFM_ERR_NUMERIC, nullptr, -1, "smooth: solver failed");
-  }
-}
-
-elfm_status elfm_smooth_estimate_noise(const elfm_smooth_options *o, size_t n,
-                                       const int64_t *t_us, const double *xyz_um,
-                                       double sigma_um[3], elfm_error *err)
-{
-  if (!o || (n > 0 && (!t_us || !xyz_um)) || !sigma_um)
-    return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: no points");
-  try {
-    estimate_sigma(o, n, t_us, xyz_um, sigma_um);
-    return ELFM_OK;
-  } catch (const std::bad_alloc &) {
-    return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
   }
 }
 
