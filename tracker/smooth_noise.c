@@ -18,10 +18,10 @@
  * detections (seeds 1-8: mean distance 0.520 against 0.525 um; 0.452 with
  * the cap; test_smooth_noise 2 has such a case). Flow 100 ms seeds 1-8 /
  * 9-16 at 2 ms frames alpha 0.7801 -> 0.8049 / 0.7490 -> 0.7608 at 0.6
- * (0.8060 on seeds 1-8 at 0.8); at 1 ms frames seeds 1-20, stage seeds
- * 1-3, worm (integral) seeds 1-4, flow_random seeds 1-12 the same to
- * 0.0002, blink seeds 1-4 -0.0008 (docs/tracker.md "The noise of fast
- * turns"). */
+ * (0.8060 on seeds 1-8 at 0.8); at 1 ms frames seeds 1-20 / 21-32 -0.0002 /
+ * -0.0003, stage seeds 1-3 and worm (integral) seeds 1-4 the same,
+ * flow_random seeds 1-12 +0.0004, blink seeds 1-4 -0.0008 (docs/tracker.md
+ * "The noise of fast turns"). */
 #define FOURTH_TO_SECOND 0.6
 
 static int cmp_double(const void *a, const void *b)
