@@ -215,6 +215,15 @@ void track_defaults(track_opts *o)
    * the circle over the 15 circle points instead: 0.8779 / 0.768.
    * docs/tracker.md "The next frame along a circle". */
   o->link.circle_next_path_um = 45;
+  /* ... and gap filling's walks before a track's birth and past its end
+   * follow the circle through the 8 points at that end
+   * (elfm_link_options.circle_end_points), where the end's quadratic turn
+   * left a circling bead within 2-3 frames (docs/tracker.md "The open
+   * ends along a circle"). Flow 100 ms seeds 1-20 alpha 0.8643 -> 0.8671,
+   * at 2 ms frames (seeds 1-16) 0.7829 -> 0.7957, flow_random 1-12 0.6312
+   * -> 0.6337; 15 / 30 points: 0.8670 / 0.8666, 0.7951 / 0.7952, 0.6332 /
+   * 0.6332. Off where circle_points is. */
+  o->link.circle_end_points = 8;
   /* The spline weight by modified GCV (elfm_smooth.h gcv_gamma): the
    * detections' errors are correlated from frame to frame (flow: lag-1
    * autocorrelation 0.54-0.58 laterally, 0.38 in z), which classical GCV

@@ -299,7 +299,7 @@ elfm_status track_fill_end(track_ctx *c, elfm_track *t, elfm_error *err)
    * 0.8017. */
   if (!c->o->fill_ends || !c->ring.cap || !c->scratch || !t || t->n < 20) return ELFM_OK;
   elfm_link_gap g;
-  elfm_link_track_end(t, c->o->link.short_history, c->o->fill_max_gap, &g);
+  elfm_link_track_end(t, &c->o->link, c->o->fill_max_gap, &g);
   const int m = walk_gap(c, &g);
   elfm_status st = ELFM_OK;
   for (int j = 0; j < m && st == ELFM_OK; j++) st = elfm_track_insert(t, &c->fill_pts[j], err);

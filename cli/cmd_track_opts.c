@@ -173,6 +173,10 @@ static void usage(FILE *f)
     "                       where that circle has predicted the track's points\n"
     "                       better than the short fit (45; 0 off; --motion stage,\n"
     "                       --start each-trigger: 0)\n"
+    "  --circle-end-points N  gap filling's walks before a track's first point and\n"
+    "                       past a finished track's last follow the circle through\n"
+    "                       the N points at that end, when they follow one (8;\n"
+    "                       0 off; needs --circle-points)\n"
     "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
     "                       prediction (default 5; 0 = the track's gate)\n"
     "  --guided-low V       where a track of >= --guided-min-points N (10; 2 with\n"
@@ -299,7 +303,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT
 };
@@ -365,6 +369,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"circle-points", required_argument, 0, O_CIRCN},
       {"circle-after", required_argument, 0, O_CIRCA},
       {"circle-next-path-um", required_argument, 0, O_CIRCNP},
+      {"circle-end-points", required_argument, 0, O_CIRCE},
       {"fill-min-ratio", required_argument, 0, O_FILLR},
       {"guided-radius-um", required_argument, 0, O_GUIDEDR},
       {"guided-min-points", required_argument, 0, O_GUIDEDM},
@@ -537,6 +542,12 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double_in(C, "--circle-next-path-um", a, 0, 0, 10000, "0..10000",
                                &o.link.circle_next_path_um))
         return CLI_USAGE;
+      break;
+    case O_CIRCE:
+      if (!cli_parse_int(C, "--circle-end-points", a, &o.link.circle_end_points)) return CLI_USAGE;
+      if (o.link.circle_end_points != 0 &&
+          (o.link.circle_end_points < 6 || o.link.circle_end_points > 1000))
+        return cli_message(C, CLI_USAGE, "--circle-end-points must be 0 (off) or 6..1000, not %s", a);
       break;
     case O_CIRCA:
       if (!cli_parse_int_in(C, "--circle-after", a, 1, 1000, "1..1000 frames", &o.link.circle_after))

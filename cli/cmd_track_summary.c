@@ -196,6 +196,9 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);
   cJSON_AddNumberToObject(par, "circle_points", o->link.circle_points);
   cJSON_AddNumberToObject(par, "circle_next_path_um", o->link.circle_next_path_um);
+  /* as in effect: the open ends' circle needs circle_points */
+  cJSON_AddNumberToObject(par, "circle_end_points",
+                          o->link.circle_points > 0 ? o->link.circle_end_points : 0);
   cJSON_AddNumberToObject(par, "circle_after", o->link.circle_after);
   cJSON_AddNumberToObject(par, "weak_gate_um", o->link.weak_gate_um);
   cJSON_AddNumberToObject(par, "guided_low", o->guided_low);

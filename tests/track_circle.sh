@@ -9,9 +9,14 @@
 #  - the next frame along the circle (--circle-next-path-um, default 45):
 #    flow 100 ms seed 7 at 2 ms frames (0.55-0.9 rad of turn per frame),
 #    alpha at least 0.05 above --circle-next-path-um 0 (0.636 -> 0.765
-#    when it came); summary.json records 45, and 0 with each-trigger;
+#    when it came), both without the open ends' circle; summary.json
+#    records 45, and 0 with each-trigger;
+#  - the open ends' circle (--circle-end-points, default 8): flow 100 ms
+#    seed 10 at 2 ms frames, gap filling's walks find more points and
+#    alpha is at least 0.015 above --circle-end-points 0 (0.808 -> 0.840
+#    when it came); summary.json records 8, and 0 with each-trigger;
 #  - 1-5 points, a negative or zero --circle-after, a negative next-frame
-#    path, and non-numbers are usage errors.
+#    path, 1-5 end points, and non-numbers are usage errors.
 # Usage: track_circle.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -19,7 +24,8 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--circle-points 3" "--circle-points -1" "--circle-points x" \
-  "--circle-after 0" "--circle-after y" "--circle-next-path-um -1" "--circle-next-path-um z"
+  "--circle-after 0" "--circle-after y" "--circle-next-path-um -1" "--circle-next-path-um z" \
+  "--circle-end-points 5" "--circle-end-points -1" "--circle-end-points q"
 simulate_or_skip "$tmp/f" flow 100 14
 # on the calibration's planes, where this case was found (on every 2nd
 # plane, the default since the twenty-sixth session: 0.879 -> 0.890)
@@ -31,17 +37,30 @@ expect_gain "$a0" "$a1" 0.02 "the circle gains < 0.02 alpha ($a0 -> $a1)"
 [ "$(key "$tmp/on/summary.json" circle_points)" = 15 ] ||
   { echo "FAIL: circle_points not 15 in summary.json"; fail=$((fail+1)); }
 simulate_or_skip "$tmp/f7" flow 100 7
-track_score "$tmp/f7" "$tmp/n0" "$tmp/n0.json" --dt-us 2000 --circle-next-path-um 0
-track_score "$tmp/f7" "$tmp/n1" "$tmp/n1.json" --dt-us 2000
+track_score "$tmp/f7" "$tmp/n0" "$tmp/n0.json" --dt-us 2000 --circle-next-path-um 0 \
+  --circle-end-points 0
+track_score "$tmp/f7" "$tmp/n1" "$tmp/n1.json" --dt-us 2000 --circle-end-points 0
 a0=$(key "$tmp/n0.json" alpha); a1=$(key "$tmp/n1.json" alpha)
 echo "flow seed 7, 2 ms frames: alpha $a0 without the next frame's circle, $a1 with it"
 expect_gain "$a0" "$a1" 0.05 "the next frame's circle gains < 0.05 alpha ($a0 -> $a1)"
 expect_key circle_next_path_um "$tmp/n1/summary.json" 45
+simulate_or_skip "$tmp/f10" flow 100 10
+track_score "$tmp/f10" "$tmp/e0" "$tmp/e0.json" --dt-us 2000 --circle-end-points 0
+track_score "$tmp/f10" "$tmp/e1" "$tmp/e1.json" --dt-us 2000
+a0=$(key "$tmp/e0.json" alpha); a1=$(key "$tmp/e1.json" alpha)
+g0=$(key "$tmp/e0/summary.json" gap_fills); g1=$(key "$tmp/e1/summary.json" gap_fills)
+echo "flow seed 10, 2 ms frames: alpha $a0 without the open ends' circle, $a1 with it;" \
+  "gap fills $g0 -> $g1"
+expect_gain "$a0" "$a1" 0.015 "the open ends' circle gains < 0.015 alpha ($a0 -> $a1)"
+[ "$g1" -gt "$g0" ] 2>/dev/null ||
+  { echo "FAIL: no more gap fills with the open ends' circle ($g0 -> $g1)"; fail=$((fail+1)); }
+expect_key circle_end_points "$tmp/e1/summary.json" 8
 simulate_or_skip "$tmp/b" blink 60 1
 "$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/bt" \
   --start each-trigger --quiet || { echo "FAIL: track --start each-trigger"; fail=$((fail+1)); }
 [ "$(key "$tmp/bt/summary.json" circle_points)" = 0 ] ||
   { echo "FAIL: circle_points not 0 with --start each-trigger"; fail=$((fail+1)); }
 expect_key circle_next_path_um "$tmp/bt/summary.json" 0
+expect_key circle_end_points "$tmp/bt/summary.json" 0
 [ $fail -eq 0 ] && echo "track_circle: all passed" || echo "track_circle: $fail failed"
 [ $fail -eq 0 ]

@@ -96,6 +96,13 @@ typedef struct elfm_link_options {
    * unwrapped by its rate (link_circle.c), which a gap needs: 0.8398,
    * 0.8295, 0.7486, 0.6836. */
   int circle_gap_points;
+  /* With circle_points, the open gaps gap filling walks (the frames before
+   * a track's first point, elfm_link_settled_gaps, and after a finished
+   * track's last, elfm_link_track_end) follow the circle through the
+   * circle_end_points real points at that end (0 = off, the default; else
+   * >= 6), when they follow one, instead of that end's constant-rate turn:
+   * a deep bead lost at a track's end keeps circling. */
+  int circle_end_points;
   /* The next frame, too, may be predicted along a circle: with
    * circle_next_path_um > 0, a track seen in the last frame also fits the
    * circle (same tests as above) through its last real points covering up
@@ -309,7 +316,9 @@ typedef struct elfm_link_gap {
   double p1_um[3], v1_um_per_ms[3], a1_um_per_ms2[3]; /* the tail's fit at frame1 */
   double intensity;             /* mean intensity of up to 3 real points on each side */
   elfm_link_circle circle;      /* with circle_points: the circle through the points on
-                                   both sides (reference time t0_us), when they follow one */
+                                   both sides (reference time t0_us), when they follow one;
+                                   an open gap's, with circle_end_points, through the
+                                   points at its end (t0_us is that end's time) */
 } elfm_link_gap;
 
 /* The gaps the last elfm_link_step settled: of each live track that got a
@@ -324,15 +333,16 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
                                    elfm_link_gap *out, int cap, int *n_out, elfm_error *err);
 
 /* Where the gap's object was at t_us: on the gap's circle when it has one
- * (circle.ok); else the head's and the tail's constant-rate turns
- * (elfm_link_predict), forward from frame0 and backward from frame1,
+ * (circle.ok, open gaps too); else the head's and the tail's constant-rate
+ * turns (elfm_link_predict), forward from frame0 and backward from frame1,
  * blended linearly in time (open_start: the tail's; open_end: the head's). */
 void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3]);
 
 /* The open gap after finished track t's last point (open_end), up to
- * max_gap_frames on, its head fit over the last short_history points: where
- * the object went after the track lost it. */
-void elfm_link_track_end(const elfm_track *t, int short_history, int max_gap_frames,
+ * max_gap_frames on, its head fit over the last o->short_history points
+ * (and its circle, o->circle_end_points): where the object went after the
+ * track lost it. */
+void elfm_link_track_end(const elfm_track *t, const elfm_link_options *o, int max_gap_frames,
                          elfm_link_gap *g);
 
 /* Give live track `track_id` real points d[0 .. n) in frames with no point

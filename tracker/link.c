@@ -51,6 +51,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->circle_points = 0;
   o->circle_after = 2;
   o->circle_gap_points = 4;
+  o->circle_end_points = 0;
   o->circle_min_arc_rad = 1.0;
   o->circle_max_radius_um = 60;
   o->circle_line_ratio = 0.5;
@@ -116,6 +117,8 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->rest_speed_um_per_ms >= 0 && isfinite(o->rest_speed_um_per_ms), "rest_speed_um_per_ms",
             o->rest_speed_um_per_ms, ">= 0");
   LINK_NEED(o->circle_points == 0 || o->circle_points >= 6, "circle_points", o->circle_points, "0 or >= 6");
+  LINK_NEED(o->circle_end_points == 0 || o->circle_end_points >= 6, "circle_end_points",
+            o->circle_end_points, "0 or >= 6");
   LINK_NEED(o->circle_next_path_um >= 0 && isfinite(o->circle_next_path_um), "circle_next_path_um",
             o->circle_next_path_um, ">= 0");
   LINK_NEED(o->circle_after >= 1, "circle_after", o->circle_after, ">= 1");

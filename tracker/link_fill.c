@@ -73,10 +73,15 @@ static void make_gap(const elfm_link_options *o, const elfm_track *t, size_t k, 
 /* The open gap at one end of t (t->n >= 1): before its first point
  * (open_start, the tail's fit over its first h points) or after its last
  * (open_end, the head's fit over its last h points), up to max_gap frames
- * away. */
-static void open_gap(const elfm_track *t, int at_end, size_t h, int max_gap, elfm_link_gap *g)
+ * away; with o->circle_end_points, also the circle through that many
+ * points at that end (reference time: the end point's), which a circling
+ * bead follows where the end's turn leaves it within 2-3 frames
+ * (test_link_fill 3c). */
+static void open_gap(const elfm_link_options *o, const elfm_track *t, int at_end, size_t h,
+                     int max_gap, elfm_link_gap *g)
 {
   const size_t n = t->n;
+  const size_t c = o->circle_points > 0 ? (size_t)o->circle_end_points : 0;
   memset(g, 0, sizeof *g);
   g->track_id = t->id;
   if (at_end) {
@@ -86,6 +91,7 @@ static void open_gap(const elfm_track *t, int at_end, size_t h, int max_gap, elf
     g->frame1 = g->frame0 + max_gap + 1;
     end_fit(t, n > h ? n - h : 0, n, n - 1, g->p0_um, g->v0_um_per_ms, g->a0_um_per_ms2);
     g->intensity = ends_intensity(t, n);
+    if (c) elfm_link_fit_circle(o, t->pts, n > c ? n - c : 0, n, g->t0_us, &g->circle);
   } else {
     g->open_start = 1;
     g->frame1 = t->pts[0].frame;
@@ -93,6 +99,7 @@ static void open_gap(const elfm_track *t, int at_end, size_t h, int max_gap, elf
     g->frame0 = g->frame1 - max_gap - 1;
     end_fit(t, 0, n > h ? h : n, 0, g->p1_um, g->v1_um_per_ms, g->a1_um_per_ms2);
     g->intensity = ends_intensity(t, 0);
+    if (c) elfm_link_fit_circle(o, t->pts, 0, n > c ? c : n, g->t0_us, &g->circle);
   }
 }
 
@@ -111,7 +118,7 @@ elfm_status elfm_link_settled_gaps(const elfm_linker *l, int settle_points, int 
       size_t k = t->n - s;
       if (k > 0 && t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(&l->o, t, k, h, &out[n++]);
       else if (k == 0 && !t->partial)  /* the track's birth (a piece's first point is not) */
-        open_gap(t, 0, h, l->o.max_gap_frames, &out[n++]);
+        open_gap(&l->o, t, 0, h, l->o.max_gap_frames, &out[n++]);
     } else {
       for (size_t k = t->n > s ? t->n - s + 1 : 1; k < t->n && n < cap; k++)
         if (t->pts[k].frame > t->pts[k - 1].frame + 1) make_gap(&l->o, t, k, h, &out[n++]);
@@ -130,24 +137,24 @@ void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3
    * way under the same normal acceleration */
   for (int a = 0; a < 3; a++) vb[a] = -g->v1_um_per_ms[a];
   elfm_link_predict_turn(g->p1_um, vb, g->a1_um_per_ms2, d1, b);
-  if (g->open_start || g->open_end) {
-    memcpy(xyz_um, g->open_start ? b : f, sizeof b);
+  if (g->circle.ok) { /* an open gap's circle has its end's time for reference: d0 <= 0 before */
+    elfm_link_circle_predict(&g->circle, d0, xyz_um);
     return;
   }
-  if (g->circle.ok) {
-    elfm_link_circle_predict(&g->circle, d0, xyz_um);
+  if (g->open_start || g->open_end) {
+    memcpy(xyz_um, g->open_start ? b : f, sizeof b);
     return;
   }
   const double span = d0 + d1, w = span > 0 ? d0 / span : 0.5;
   for (int a = 0; a < 3; a++) xyz_um[a] = (1 - w) * f[a] + w * b[a];
 }
 
-void elfm_link_track_end(const elfm_track *t, int short_history, int max_gap_frames,
+void elfm_link_track_end(const elfm_track *t, const elfm_link_options *o, int max_gap_frames,
                          elfm_link_gap *g)
 {
   memset(g, 0, sizeof *g);
-  if (!t || t->n == 0) return;
-  open_gap(t, 1, short_history > 1 ? (size_t)short_history : 1,
+  if (!t || t->n == 0 || !o) return;
+  open_gap(o, t, 1, o->short_history > 1 ? (size_t)o->short_history : 1,
            max_gap_frames > 0 ? max_gap_frames : 0, g);
 }
 
