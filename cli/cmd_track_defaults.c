@@ -246,6 +246,15 @@ void track_defaults(track_opts *o)
    * +0.003; 40/60 beads +0.002; blink, blink_moving the same. Not on the
    * integral (below). */
   o->smooth.spline_order = 3;
+  /* ... and once fitted, a spline track is fitted again with a prior that
+   * leaves a circle at the track's own turn rate alone, its weight chosen
+   * again (elfm_smooth.h spline_turn): a circling bead's turn is no longer
+   * pulled in, and GCV takes a stiffer spline. Flow 100 ms seeds 1-20
+   * alpha 0.8671 -> 0.8749 (GCV again without the turn: 0.8682; the rate
+   * x 0.7 / 0.85 / 1.2: 0.8702 / 0.8715 / 0.8714; a rate per stretch of 9
+   * frames: 0.8721), docs/tracker.md "Splines along the turn". Order 2
+   * (the integral) has no such prior. */
+  o->smooth.spline_turn = 1;
   /* Each point's own view-fit scatter in its sigma (elfm_smooth.h,
    * fit_sd_power): flow 100 ms seeds 1-20 alpha 0.8043 -> 0.8058 (every
    * seed up or the same; power 0.5 / 1.5 / 2: 0.8054 / 0.8057 / 0.8051),

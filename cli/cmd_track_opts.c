@@ -230,7 +230,10 @@ static void usage(FILE *f)
     "                       1 classical); a track the robust fit would reject at G is\n"
     "                       smoothed again at 1 and kept or rejected on that fit\n"
     "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
-    "                       which leaves turns at constant speed alone (3; integral: 2)\n"
+    "                       which leaves a constant acceleration alone (3; integral: 2)\n"
+    "  --spline-turn on|off  with order 3, fit again with a prior that leaves the\n"
+    "                       track's own turn rate (a circle at that rate) alone, its\n"
+    "                       weight chosen again (on)\n"
     "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
     "                       filling, guided search) count as F x noisier than the\n"
     "                       track's peaks (1.5)\n"
@@ -303,7 +306,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT
 };
@@ -358,6 +361,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"priority-points", required_argument, 0, O_PRIO},
       {"gcv-gamma", required_argument, 0, O_GCVG},
       {"spline-order", required_argument, 0, O_SPORD},
+      {"spline-turn", required_argument, 0, O_SPTURN},
       {"fit-sd-power", required_argument, 0, O_FSDP},
       {"motion-fade-um-per-ms", required_argument, 0, O_MFADE},
       {"motion-slow-lead-ms", required_argument, 0, O_MSLOW},
@@ -696,6 +700,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return CLI_USAGE;
       }
       g.spord = 1;
+      break;
+    case O_SPTURN:
+      if (!strcmp(a, "on")) o.smooth.spline_turn = 1;
+      else if (!strcmp(a, "off")) o.smooth.spline_turn = 0;
+      else return cli_message(C, CLI_USAGE, "--spline-turn must be on or off, not '%s'", a);
       break;
     case O_MFADE:
       if (!cli_parse_double_in(C, "--motion-fade-um-per-ms", a, 0, 1, 100, "> 0 and <= 100",

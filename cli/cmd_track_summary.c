@@ -258,6 +258,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "fit_sd_power", o->smooth.fit_sd_power);
   cJSON_AddNumberToObject(par, "gcv_gamma", o->smooth.gcv_gamma);
   cJSON_AddNumberToObject(par, "spline_order", o->smooth.spline_order);
+  cJSON_AddBoolToObject(par, "spline_turn", o->smooth.spline_turn && o->smooth.spline_order == 3);
   cJSON_AddNumberToObject(par, "spline_weight_ms3", o->smooth.spline_weight_ms3);
   cJSON_AddStringToObject(par, "motion", o->motion == MOTION_STAGE ? "stage"
                                          : o->motion == MOTION_FREE ? "free" : "auto");
@@ -319,6 +320,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     cJSON_AddNumberToObject(e, "points", (double)t->n);
     cJSON_AddStringToObject(e, "model", elfm_motion_model_name(t->model));
     if (t->model == ELFM_MODEL_SPLINE) cJSON_AddNumberToObject(e, "spline_weight_ms3", t->spline_weight_ms3);
+    if (t->model == ELFM_MODEL_SPLINE && t->spline_omega_rad_per_ms > 0)
+      cJSON_AddNumberToObject(e, "spline_turn_rad_per_ms", t->spline_omega_rad_per_ms);
     add_num(e, "edf", t->edf);
     cJSON_AddNumberToObject(e, "outliers", t->n_outliers);
     /* a long track written in pieces (--piece-points): model, weight and

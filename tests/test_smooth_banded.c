@@ -183,5 +183,42 @@ int main(void)
     CHECK(!elfm_banded_factor(&bd));
     elfm_banded_free(&bd);
   }
+  /* The turn rate's rows (elfm_spline_prior_table_omega): on a circle
+   * sampled every h at omega, in a tilted plane, off the origin and at any
+   * phase, every row is 0 (to rounding); the jerk rows are not (they are
+   * omega^3 R sqrt(h) x ~1 there); omega 0 gives the jerk table itself. */
+  {
+    enum { KC = 40 };
+    double tc[KC], cj[4 * KC], cw[4 * KC], c0[4 * KC], p[3][KC];
+    const double h = 1.0, om = 0.3, R = 12;
+    const double e1[3] = {0.8, 0.6, 0}, e2[3] = {-0.36, 0.48, 0.8}, m[3] = {5, -7, 40};
+    for (int k = 0; k < KC; k++) {
+      tc[k] = 1000.0 + h * k;
+      const double a = 0.7 + om * h * k;
+      for (int ax = 0; ax < 3; ax++) p[ax][k] = m[ax] + R * (cos(a) * e1[ax] + sin(a) * e2[ax]);
+    }
+    elfm_spline_prior_table(tc, KC, 3, cj);
+    elfm_spline_prior_table_omega(tc, KC, om, cw);
+    elfm_spline_prior_table_omega(tc, KC, 0, c0);
+    double wmax = 0, d0 = 0;
+    for (int k = 0; k + 4 <= KC; k++)
+      for (int ax = 0; ax < 3; ax++) {
+        double rw = 0;
+        for (int i = 0; i < 4; i++) {
+          rw += cw[4 * k + i] * p[ax][k + i];
+          d0 = fmax(d0, fabs(c0[4 * k + i] - cj[4 * k + i]));
+        }
+        wmax = fmax(wmax, fabs(rw));
+      }
+    double jmax = 0;
+    for (int k = 0; k + 4 <= KC; k++) {
+      double rj = 0;
+      for (int i = 0; i < 4; i++) rj += cj[4 * k + i] * p[0][k + i];
+      jmax = fmax(jmax, fabs(rj));
+    }
+    CHECK_MSG(wmax < 1e-9, "circle rows with its turn rate: %g", wmax);
+    CHECK_MSG(jmax > 0.1, "jerk rows on the circle: %g", jmax);
+    CHECK_MSG(d0 == 0, "omega 0 differs from the jerk table by %g", d0);
+  }
   return check_report();
 }

@@ -16,6 +16,8 @@
  *       chosen by generalised cross-validation (GCV) over a grid
  *       10^-4 .. 10^8 ms^3; its effective degrees of freedom (edf, the trace
  *       of the hat matrix) come from a banded selected inverse.
+ *       With spline_order 3 the prior may also leave a turn rate alone
+ *       (spline_omega_rad_per_ms: p''' + omega^2 p', an L-spline).
  *   AUTO chooses the model with the lowest BIC = sum_i rho(|r_i|^2) +
  *   k ln(3 n) (k = 6, 9, or 3 edf); ties go to the simpler model.
  * NOISE. Without per-point sigmas, sigma per axis is estimated from the
@@ -79,9 +81,27 @@ typedef struct elfm_smooth_options {
   /* What the smoothing spline's prior penalises: 2 (default) the
    * acceleration, integral |a|^2 dt, whose stiff limit is a straight line;
    * 3 the jerk, integral |da/dt|^2 dt, whose stiff limit is a constant
-   * acceleration, so an object turning at constant speed is not pulled
-   * inside its curve. */
+   * acceleration, so an object turning at constant speed is pulled less
+   * inside its curve (not at all with spline_omega_rad_per_ms at its
+   * rate). */
   int spline_order;
+  /* With spline_order 3: the prior penalises p''' + omega^2 p' instead of
+   * p''' (an L-spline), which is 0 on a circle travelled at omega rad per
+   * ms in any plane and position, so such a turn is not pulled in (the
+   * discrete rows use 2 sin(omega h / 2) / h for omega over an interval h,
+   * which makes them 0 on the sampled circle). 0 = off (default). */
+  double spline_omega_rad_per_ms;
+  /* elfm_track_smooth only, with spline_order 3: a track the spline fits
+   * is fitted again with spline_omega_rad_per_ms = the median turn rate of
+   * the first fit's velocity (the angle between the velocities of
+   * neighbouring frames over their interval, where both exceed 0.5 um/ms;
+   * at least 5 of them), its weight chosen again by GCV unless
+   * spline_weight_ms3 is given. Why: a flow bead circles at 0.2-0.4 rad/ms,
+   * and the jerk prior pulls every turn in; the weight GCV can afford
+   * without that pull is larger. Flow 100 ms seeds 1-20 alpha 0.8671 ->
+   * 0.8749 (docs/tracker.md "Splines along the turn"). 0 = off (default;
+   * track: 1). */
+  int spline_turn;
   elfm_smooth_solver solver;
   int max_iterations;           /* Ceres iterations, 50 */
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */

@@ -85,6 +85,8 @@ typedef struct elfm_track {
   int32_t *raw_index;
   elfm_motion_model model;    /* the model the smoother chose */
   double spline_weight_ms3;   /* chosen spline weight (SPLINE only) */
+  double spline_omega_rad_per_ms; /* the turn rate its prior left alone (SPLINE with
+                                     elfm_smooth_options.spline_turn), else 0 */
   double edf;                 /* effective parameters per axis */
   int n_outliers;             /* points beyond twice the loss scale (elfm_smooth.h) */
   /* A piece of a long track (elfm_link_take_piece): partial = 1, and only
@@ -122,7 +124,7 @@ typedef struct elfm_track_info {
   size_t n_rows;              /* frames first_frame .. last_frame written (smoothed) */
   int n_pieces;               /* 1, or the pieces of a long track merged (elfm_track_info_merge) */
   elfm_motion_model model;    /* of a long track: its largest piece's (model_n points), */
-  double spline_weight_ms3, edf; /* as are these */
+  double spline_weight_ms3, spline_omega_rad_per_ms, edf; /* as are these */
   size_t model_n;
   int n_outliers;
   int smoothed;               /* 0: not smoothed; the velocities below are 0 / NAN */

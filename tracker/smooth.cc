@@ -570,6 +570,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
       !(o->min_sigma_xy_um > 0) || !(o->min_sigma_z_um > 0) || !std::isfinite(o->spline_weight_ms3) ||
       !(o->gcv_gamma >= 1) || !std::isfinite(o->gcv_gamma) ||
       (o->spline_order != 2 && o->spline_order != 3) ||
+      !(o->spline_omega_rad_per_ms >= 0 && o->spline_omega_rad_per_ms <= 1e3) ||
       o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC)
     return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: options out of range");
   for (size_t i = 0; i < n; i++) {
@@ -683,7 +684,11 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     ss.ts.resize(all.size());
     for (size_t k = 0; k < all.size(); k++) ss.ts[k] = d.tau_of(all[k]);
     ss.coef.assign(4 * ss.ts.size(), 0.0);
-    elfm_spline_prior_table(ss.ts.data(), ss.ts.size(), ss.order, ss.coef.data());
+    if (ss.order == 3 && o->spline_omega_rad_per_ms > 0)
+      elfm_spline_prior_table_omega(ss.ts.data(), ss.ts.size(), o->spline_omega_rad_per_ms,
+                                    ss.coef.data());
+    else
+      elfm_spline_prior_table(ss.ts.data(), ss.ts.size(), ss.order, ss.coef.data());
     ss.state_of.resize(n);
     for (size_t i = 0; i < n; i++)
       ss.state_of[i] =

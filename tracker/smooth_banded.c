@@ -44,6 +44,18 @@ void elfm_spline_prior_table(const double *ts, size_t K, int order, double *coef
   for (size_t k = 0; k + (size_t)order + 1 <= K; k++) elfm_spline_prior_coef(ts, order, k, coef + 4 * k);
 }
 
+void elfm_spline_prior_table_omega(const double *ts, size_t K, double omega, double *coef)
+{
+  for (size_t k = 0; k + 4 <= K; k++) {
+    double *c = coef + 4 * k;
+    jerk_coef(ts, k, c);
+    const double hb = (ts[k + 3] - ts[k]) / 3, h = ts[k + 2] - ts[k + 1];
+    const double we = 2 * sin(0.5 * omega * h) / h, f = sqrt(hb) * we * we / h;
+    c[1] -= f;
+    c[2] += f;
+  }
+}
+
 void elfm_banded_init(elfm_banded *bd) { memset(bd, 0, sizeof *bd); }
 
 void elfm_banded_free(elfm_banded *bd)

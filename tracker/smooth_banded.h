@@ -30,6 +30,11 @@ void elfm_spline_prior_coef(const double *ts, int order, size_t k, double c[4]);
  * time was 1.2 % of a 2-thread `track` on flow 1 s under perf (the
  * smoothing 16 %). */
 void elfm_spline_prior_table(const double *ts, size_t K, int order, double *coef);
+/* The order-3 table with omega (rad per ms of ts): each row also
+ * penalises omega_eff^2 times the first difference of its middle states,
+ * omega_eff = 2 sin(omega h / 2) / h over that interval h, so that a
+ * sampled circle at omega (any plane, any phase) leaves the rows 0. */
+void elfm_spline_prior_table_omega(const double *ts, size_t K, double omega, double *coef);
 
 /* Diagonal d of A, L and A^-1: a[d], l[d] (l[d][k] = L(k+d, k)) and z[d]
  * (z[d][k] = A^-1(k, k+d)), each K + 3 long; D the LDL^T pivots. */

@@ -68,6 +68,29 @@ static double fit_sd_median(const elfm_track *t, double *scratch)
   return med;
 }
 
+/* The turn rate of a smoothed path (spline_turn, elfm_smooth.h): the
+ * median over its intervals of the angle between the velocities at their
+ * ends over their length (rad per ms), where both speeds exceed 0.5
+ * um/ms (below it the direction is noise); 0 with fewer than 5 such
+ * intervals. A mean would follow the noisy turns of slow stretches. */
+static double turn_rate(const double *vel, const int64_t *t_us, size_t ns, double *scratch)
+{
+  size_t m = 0;
+  for (size_t k = 0; k + 1 < ns; k++) {
+    const double *u = vel + 3 * k, *w = vel + 3 * (k + 1);
+    const double nu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    const double nw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    const double dt_ms = (double)(t_us[k + 1] - t_us[k]) * 1e-3;
+    if (!(nu > 0.5 && nw > 0.5 && dt_ms > 0)) continue;
+    const double c = (u[0] * w[0] + u[1] * w[1] + u[2] * w[2]) / (nu * nw);
+    scratch[m++] = acos(fmin(1.0, fmax(-1.0, c))) / dt_ms;
+  }
+  if (m < 5) return 0;
+  double med, spread;
+  elfm_analysis_median(scratch, m, &med, &spread);
+  return isfinite(med) && med > 0 ? med : 0;
+}
+
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err)
 {
   if (!t || !o || t->n == 0)
@@ -103,7 +126,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   const size_t ns = (size_t)(f1 - f0 + 1);
   int64_t *tq = malloc(ns * sizeof *tq), *td = malloc(n * sizeof *td);
   int32_t *raw = malloc(ns * sizeof *raw);
-  double *xyz = malloc(3 * n * sizeof *xyz), *sig = NULL;
+  double *xyz = malloc(3 * n * sizeof *xyz), *sig = NULL, *omega_scratch = NULL;
   double *pos = malloc(3 * ns * sizeof *pos), *vel = malloc(3 * ns * sizeof *vel),
          *psd = malloc(3 * ns * sizeof *psd), *vsd = malloc(3 * ns * sizeof *vsd);
   elfm_status st = ELFM_OK;
@@ -182,25 +205,39 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   elfm_smooth_info info;
   st = elfm_smooth_fit(o, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
   if (st != ELFM_OK) goto fail;
-  if ((o->motion_lead_um != 0 || o->motion_delay_us != 0 || o->motion_slow_lead_ms != 0) && n >= 3 &&
-      info.model != ELFM_MODEL_STATIC) {
+  const int bias = o->motion_lead_um != 0 || o->motion_delay_us != 0 || o->motion_slow_lead_ms != 0;
+  double omega = 0;
+  if (o->spline_turn && o->spline_order == 3 && info.model == ELFM_MODEL_SPLINE) {
+    if (!(omega_scratch = malloc(ns * sizeof *omega_scratch))) {
+      st = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "smooth: out of memory");
+      goto fail;
+    }
+    omega = turn_rate(vel, tq, ns, omega_scratch);
+  }
+  if ((bias || omega > 0) && n >= 3 && info.model != ELFM_MODEL_STATIC) {
     /* Second fit on the points moved by the motion bias (elfm_smooth.h).
      * The velocity comes from the first fit, not from neighbouring
      * points, whose noise over 1 ms is as large as the bias itself. The
      * model and the spline weight stay those of the first fit: the bias is
      * a smooth function of the motion, so it changes neither choice, and
-     * a second GCV search would double the cost. */
-    for (size_t i = 0; i < n; i++) {
-      double b[3];
-      elfm_motion_bias(o, vel + 3 * (size_t)(t->pts[i].frame - f0), b);
-      for (int a = 0; a < 3; a++) xyz[3 * i + a] -= b[a];
-    }
+     * a second GCV search would double the cost. Except along a turn
+     * (spline_turn): the prior then leaves the track's circle alone, and
+     * the weight that suits the new prior is larger (chosen again). */
+    if (bias)
+      for (size_t i = 0; i < n; i++) {
+        double b[3];
+        elfm_motion_bias(o, vel + 3 * (size_t)(t->pts[i].frame - f0), b);
+        for (int a = 0; a < 3; a++) xyz[3 * i + a] -= b[a];
+      }
     elfm_smooth_options o2 = *o;
     o2.model = info.model;
-    if (info.model == ELFM_MODEL_SPLINE) o2.spline_weight_ms3 = info.spline_weight_ms3;
+    if (info.model == ELFM_MODEL_SPLINE && !(omega > 0)) o2.spline_weight_ms3 = info.spline_weight_ms3;
+    o2.spline_omega_rad_per_ms = omega > 0 ? omega : o->spline_omega_rad_per_ms;
     st = elfm_smooth_fit(&o2, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
     if (st != ELFM_OK) goto fail;
   }
+  free(omega_scratch);
+  omega_scratch = NULL;
   free(t->span_t_us);
   free(t->pos_um);
   free(t->vel_um_per_ms);
@@ -216,6 +253,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   t->raw_index = raw;
   t->model = info.model;
   t->spline_weight_ms3 = info.model == ELFM_MODEL_SPLINE ? info.spline_weight_ms3 : 0;
+  t->spline_omega_rad_per_ms = info.model == ELFM_MODEL_SPLINE ? omega : 0;
   t->edf = info.edf;
   t->n_outliers = info.n_outliers;
   free(td);
@@ -223,6 +261,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   free(sig);
   return ELFM_OK;
 fail:
+  free(omega_scratch);
   free(tq);
   free(td);
   free(raw);

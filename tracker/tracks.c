@@ -104,6 +104,7 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
   }
   o->model = t->model;
   o->spline_weight_ms3 = t->spline_weight_ms3;
+  o->spline_omega_rad_per_ms = t->spline_omega_rad_per_ms;
   o->edf = t->edf;
   o->model_n = o->n;
   o->n_outliers = t->n_outliers;
@@ -157,6 +158,7 @@ void elfm_track_info_merge(elfm_track_info *acc, const elfm_track_info *p)
   if (p->model_n > acc->model_n) { /* the largest piece speaks for the track's model */
     acc->model = p->model;
     acc->spline_weight_ms3 = p->spline_weight_ms3;
+    acc->spline_omega_rad_per_ms = p->spline_omega_rad_per_ms;
     acc->edf = p->edf;
     acc->model_n = p->model_n;
   }
