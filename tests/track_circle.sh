@@ -15,6 +15,11 @@
 #    seed 10 at 2 ms frames, gap filling's walks find more points and
 #    alpha is at least 0.015 above --circle-end-points 0 (0.808 -> 0.840
 #    when it came); summary.json records 8, and 0 with each-trigger;
+#  - the spline along the track's turn (--spline-turn, default on): the
+#    same run, alpha at least 0.01 above --spline-turn off (0.840 -> 0.864
+#    when it came), each spline track's rate in summary.json, 0.1-0.6
+#    rad/ms (flow beads circle at 2.5-4 um/ms on 8-20 um); a value other
+#    than on or off is a usage error;
 #  - 1-5 points, a negative or zero --circle-after, a negative next-frame
 #    path, 1-5 end points, and non-numbers are usage errors.
 # Usage: track_circle.sh BINARY
@@ -25,7 +30,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail=0
 expect_usage_errors "--circle-points 3" "--circle-points -1" "--circle-points x" \
   "--circle-after 0" "--circle-after y" "--circle-next-path-um -1" "--circle-next-path-um z" \
-  "--circle-end-points 5" "--circle-end-points -1" "--circle-end-points q"
+  "--circle-end-points 5" "--circle-end-points -1" "--circle-end-points q" "--spline-turn 1"
 simulate_or_skip "$tmp/f" flow 100 14
 # on the calibration's planes, where this case was found (on every 2nd
 # plane, the default since the twenty-sixth session: 0.879 -> 0.890)
@@ -55,6 +60,16 @@ expect_gain "$a0" "$a1" 0.015 "the open ends' circle gains < 0.015 alpha ($a0 ->
 [ "$g1" -gt "$g0" ] 2>/dev/null ||
   { echo "FAIL: no more gap fills with the open ends' circle ($g0 -> $g1)"; fail=$((fail+1)); }
 expect_key circle_end_points "$tmp/e1/summary.json" 8
+track_score "$tmp/f10" "$tmp/s0" "$tmp/s0.json" --dt-us 2000 --spline-turn off
+a0=$(key "$tmp/s0.json" alpha)
+echo "flow seed 10, 2 ms frames: alpha $a0 without the spline along the turn, $a1 with it"
+expect_gain "$a0" "$a1" 0.01 "the spline along the turn gains < 0.01 alpha ($a0 -> $a1)"
+rates=$(tr ',{}' '\n\n\n' < "$tmp/e1/summary.json" |
+  sed -n 's/^[[:space:]]*"spline_turn_rad_per_ms":[[:space:]]*//p')
+med=$(printf '%s\n' $rates | sort -g | awk '{ v[NR] = $1 } END { if (NR) print v[int((NR + 1) / 2)] }')
+echo "spline tracks' turn rates: $(printf '%s\n' $rates | wc -l) tracks, median $med rad/ms"
+awk -v m="$med" 'BEGIN { exit !(m != "" && m > 0.1 && m < 0.6) }' ||
+  { echo "FAIL: median spline turn rate '$med' not in 0.1..0.6 rad/ms"; fail=$((fail+1)); }
 simulate_or_skip "$tmp/b" blink 60 1
 "$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/bt" \
   --start each-trigger --quiet || { echo "FAIL: track --start each-trigger"; fail=$((fail+1)); }
