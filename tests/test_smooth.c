@@ -103,6 +103,20 @@ static elfm_track *circle_track(int64_t id, int64_t t0, uint64_t seed, int noise
   return t;
 }
 
+/* A bead circling at 3 um/ms (radius 10 um, 0.3 rad per frame) and rising
+ * 0.5 um per frame, 100 frames from t0, with independent errors of 0.3 um
+ * laterally and 1.2 um in z (random stream rng): T, TRUTH, X (tests 9c, 9d). */
+static void noisy_helix(int64_t t0)
+{
+  for (int i = 0; i < 100; i++) {
+    T[i] = t0 + (int64_t)i * 1000;
+    TRUTH[3 * i] = 10 * cos(0.3 * i);
+    TRUTH[3 * i + 1] = 10 * sin(0.3 * i);
+    TRUTH[3 * i + 2] = 0.5 * i;
+    for (int a = 0; a < 3; a++) X[3 * i + a] = TRUTH[3 * i + a] + (a < 2 ? 0.3 : 1.2) * gauss();
+  }
+}
+
 int main(void)
 {
   elfm_error err;
@@ -442,13 +456,7 @@ int main(void)
     double e_ord[2] = {0, 0};
     rng = 33;
     for (int k = 0; k < 16; k++) {
-      for (int i = 0; i < 100; i++) {
-        T[i] = T0 + (int64_t)i * 1000;
-        TRUTH[3 * i] = 10 * cos(0.3 * i);
-        TRUTH[3 * i + 1] = 10 * sin(0.3 * i);
-        TRUTH[3 * i + 2] = 0.5 * i;
-        for (int a = 0; a < 3; a++) X[3 * i + a] = TRUTH[3 * i + a] + (a < 2 ? 0.3 : 1.2) * gauss();
-      }
+      noisy_helix(T0);
       for (int ord = 2; ord <= 3; ord++) {
         elfm_smooth_options og = o;
         og.model = ELFM_MODEL_SPLINE;
@@ -483,13 +491,7 @@ int main(void)
     double e_turn[2] = {0, 0};
     rng = 33;
     for (int k = 0; k < 16; k++) {
-      for (int i = 0; i < 100; i++) {
-        T[i] = T0 + (int64_t)i * 1000;
-        TRUTH[3 * i] = 10 * cos(0.3 * i);
-        TRUTH[3 * i + 1] = 10 * sin(0.3 * i);
-        TRUTH[3 * i + 2] = 0.5 * i;
-        for (int a = 0; a < 3; a++) X[3 * i + a] = TRUTH[3 * i + a] + (a < 2 ? 0.3 : 1.2) * gauss();
-      }
+      noisy_helix(T0);
       for (int w = 0; w < 2; w++) {
         elfm_smooth_options og = o;
         og.model = ELFM_MODEL_SPLINE;
