@@ -98,12 +98,11 @@ typedef struct elfm_smooth_options {
    * at least 5 of them), its weight chosen again by GCV unless
    * spline_weight_ms3 is given; with a motion bias, that fit's velocity
    * then gives the bias once more and the points are fitted again (same
-   * prior and weight). Why: a flow bead circles at 0.2-0.4 rad/ms,
-   * and the jerk prior pulls every turn in; the weight GCV can afford
-   * without that pull is larger. Flow 100 ms seeds 1-20 alpha 0.8671 ->
-   * 0.8749, 0.8768 with the bias once more (docs/tracker.md "Splines
-   * along the turn"). 0 = off (default;
-   * track: 1). */
+   * prior and weight). Why: a flow bead circles at 0.2-0.4 rad/ms, and
+   * the jerk prior pulls every turn in; the weight GCV can afford without
+   * that pull is larger. Flow 100 ms seeds 1-20 alpha 0.8671 -> 0.8749,
+   * 0.8768 with the bias once more (docs/tracker.md "Splines along the
+   * turn"). 0 = off (default; track: 1). */
   int spline_turn;
   elfm_smooth_solver solver;
   int max_iterations;           /* Ceres iterations, 50 */
