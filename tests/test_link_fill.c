@@ -296,6 +296,12 @@ int main(void)
                 worst_off);
     }
     if (l) end_linker(l);
+    /* fewer than 6 end points (but 0) is refused, naming the option */
+    o.circle_end_points = 5;
+    elfm_linker *bad = elfm_link_create(&o, &err);
+    CHECK(bad == NULL && strstr(err.message, "circle_end_points") != NULL);
+    if (bad) end_linker(bad);
+    elfm_error_clear(&err);
   }
 
   /* 4. Filling: points given back land in the gap (and before the first
