@@ -34,6 +34,15 @@ static void circle(double t_ms, double p[3])
   p[2] = 0.5 * t_ms;
 }
 
+/* A flow bead at frame f (ms): circling at 0.3 rad per frame on 12 um while
+ * its depth wobbles 10 um over 50 ms (case 3c). */
+static void wobbling_circle(double f, double p[3])
+{
+  p[0] = 12 * cos(0.3 * f);
+  p[1] = 12 * sin(0.3 * f);
+  p[2] = 10 * sin(2 * M_PI / 50 * f);
+}
+
 /* How far the gap's prediction at t_us lies from p, in the linker's metric. */
 static double gap_miss(const elfm_link_gap *g, int64_t t_us, const double p[3], double kz)
 {
@@ -245,11 +254,12 @@ int main(void)
     o.swap_points = 0;
     elfm_link_options off = o;
     off.circle_end_points = 0;
-    const double R = 12, w = 0.3, A = 10, wz = 2 * M_PI / 50;
     elfm_track *t = elfm_track_create(11, &err);
     CHECK(t != NULL);
     for (int f = 0; f < 40 && t; f++) {
-      elfm_detection d = mk(f, T0 + 1000 * f, R * cos(w * f), R * sin(w * f), A * sin(wz * f));
+      double p[3];
+      wobbling_circle(f, p);
+      elfm_detection d = mk(f, T0 + 1000 * f, p[0], p[1], p[2]);
       CHECK_OK(elfm_track_append(t, &d, &err), &err);
     }
     elfm_link_gap g, g_off;
@@ -258,7 +268,8 @@ int main(void)
     CHECK(g.circle.ok && !g_off.circle.ok);
     double worst = 0, worst_off = 0;
     for (int f = 40; f < 50; f++) {
-      const double p[3] = {R * cos(w * f), R * sin(w * f), A * sin(wz * f)};
+      double p[3];
+      wobbling_circle(f, p);
       worst = fmax(worst, gap_miss(&g, T0 + 1000 * f, p, o.kz));
       worst_off = fmax(worst_off, gap_miss(&g_off, T0 + 1000 * f, p, o.kz));
     }
@@ -271,7 +282,9 @@ int main(void)
     elfm_link_gap gs[4], birth;
     int have_birth = 0;
     for (int f = 0; f < 12 && l; f++) {
-      elfm_detection d = mk(f, T0 + 1000 * f, R * cos(w * f), R * sin(w * f), A * sin(wz * f));
+      double p[3];
+      wobbling_circle(f, p);
+      elfm_detection d = mk(f, T0 + 1000 * f, p[0], p[1], p[2]);
       CHECK_OK(elfm_link_step(l, f, T0 + 1000 * f, &d, 1, &err), &err);
       int ng = 0;
       CHECK_OK(elfm_link_settled_gaps(l, 8, 0, gs, 4, &ng, &err), &err);
@@ -288,7 +301,8 @@ int main(void)
       birth_off.circle.ok = 0;
       worst = worst_off = 0;
       for (int f = -6; f < 0; f++) {
-        const double p[3] = {R * cos(w * f), R * sin(w * f), A * sin(wz * f)};
+        double p[3];
+      wobbling_circle(f, p);
         worst = fmax(worst, gap_miss(&birth, T0 + 1000 * f, p, o.kz));
         worst_off = fmax(worst_off, gap_miss(&birth_off, T0 + 1000 * f, p, o.kz));
       }

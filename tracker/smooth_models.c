@@ -91,6 +91,22 @@ static double turn_rate(const double *vel, const int64_t *t_us, size_t ns, doubl
   return isfinite(med) && med > 0 ? med : 0;
 }
 
+/* xyz (n x 3) = t's points moved by the motion bias of the smoothed
+ * velocity vel (one per frame from t's first) at their frames. */
+static void points_unbiased(const elfm_smooth_options *o, const elfm_track *t, const double *vel,
+                            double *xyz)
+{
+  const int64_t f0 = t->pts[0].frame;
+  for (size_t i = 0; i < t->n; i++) {
+    const elfm_detection *d = &t->pts[i];
+    double b[3];
+    elfm_motion_bias(o, vel + 3 * (size_t)(d->frame - f0), b);
+    xyz[3 * i] = d->x_um - b[0];
+    xyz[3 * i + 1] = d->y_um - b[1];
+    xyz[3 * i + 2] = d->z_um - b[2];
+  }
+}
+
 elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_error *err)
 {
   if (!t || !o || t->n == 0)
@@ -223,12 +239,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
      * a second GCV search would double the cost. Except along a turn
      * (spline_turn): the prior then leaves the track's circle alone, and
      * the weight that suits the new prior is larger (chosen again). */
-    if (bias)
-      for (size_t i = 0; i < n; i++) {
-        double b[3];
-        elfm_motion_bias(o, vel + 3 * (size_t)(t->pts[i].frame - f0), b);
-        for (int a = 0; a < 3; a++) xyz[3 * i + a] -= b[a];
-      }
+    if (bias) points_unbiased(o, t, vel, xyz);
     elfm_smooth_options o2 = *o;
     o2.model = info.model;
     if (info.model == ELFM_MODEL_SPLINE && !(omega > 0)) o2.spline_weight_ms3 = info.spline_weight_ms3;
@@ -241,14 +252,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
        * moved again, the same prior and weight (no third search). Flow
        * 100 ms seeds 1-20 alpha 0.8749 -> 0.8768; the turn rate measured
        * again as well: 0.8769; the weight chosen again: 0.8763. */
-      for (size_t i = 0; i < n; i++) {
-        const elfm_detection *d = &t->pts[i];
-        double b[3];
-        elfm_motion_bias(o, vel + 3 * (size_t)(d->frame - f0), b);
-        xyz[3 * i] = d->x_um - b[0];
-        xyz[3 * i + 1] = d->y_um - b[1];
-        xyz[3 * i + 2] = d->z_um - b[2];
-      }
+      points_unbiased(o, t, vel, xyz);
       o2.spline_weight_ms3 = info.spline_weight_ms3;
       st = elfm_smooth_fit(&o2, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
       if (st != ELFM_OK) goto fail;
