@@ -89,12 +89,17 @@ int elfm_banded_resize(elfm_banded *bd, size_t K)
     bd->cap = n;
   }
   bd->K = K;
+  /* Only the 3 entries past K: build, factor and inverse write every entry
+   * below K that they or solve read (l and z up to the band b, a up to 3),
+   * so zeroing the whole arrays on every linear fit bought nothing; it was
+   * 3-4 % of a one-thread `track` on flow (perf, thirty-eighth session).
+   * The tail stays 0 for whoever copies K + 3 entries (smooth.cc). */
   for (int d = 0; d < 4; d++) {
-    memset(bd->a[d], 0, n * sizeof(double));
-    memset(bd->l[d], 0, n * sizeof(double));
-    memset(bd->z[d], 0, n * sizeof(double));
+    memset(bd->a[d] + K, 0, 3 * sizeof(double));
+    memset(bd->l[d] + K, 0, 3 * sizeof(double));
+    memset(bd->z[d] + K, 0, 3 * sizeof(double));
   }
-  memset(bd->D, 0, n * sizeof(double));
+  memset(bd->D + K, 0, 3 * sizeof(double));
   return 1;
 }
 
@@ -154,6 +159,13 @@ int elfm_banded_factor(elfm_banded *bd)
   return 1;
 }
 
+/* How many of the b rows below row k exist (k + i < K). */
+static int band_below(size_t K, size_t k, int b)
+{
+  const size_t left = K - 1 - k;
+  return left < (size_t)b ? (int)left : b;
+}
+
 void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x)
 {
   const size_t K = bd->K;
@@ -165,34 +177,34 @@ void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x)
     x[k] = y;
   }
   for (size_t k = 0; k < K; k++) x[k] /= bd->D[k];
-  for (size_t k = K; k-- > 0;)
-    for (int i = 1; i <= b; i++)
-      if (k + (size_t)i < K) x[k] -= l[i][k] * x[k + i];
-}
-
-/* A^-1(p, q) from the band already computed (p, q >= k + 1): |p - q| < b. */
-static double zat(const elfm_banded *bd, size_t p, size_t q)
-{
-  if (p >= bd->K || q >= bd->K) return 0;
-  return p <= q ? bd->z[q - p][p] : bd->z[p - q][q];
+  for (size_t k = K; k-- > 0;) {
+    const int m = band_below(K, k, b);
+    for (int i = 1; i <= m; i++) x[k] -= l[i][k] * x[k + i];
+  }
 }
 
 void elfm_banded_inverse(elfm_banded *bd)
 {
+  const size_t K = bd->K;
   const int b = bd->b;
-  for (size_t k = bd->K; k-- > 0;) {
+  double *const *l = bd->l, *const *z = bd->z;
+  for (size_t k = K; k-- > 0;) {
+    /* Rows past K are 0 in L and in A^-1: only the m below k count (the
+     * same sums as over all b, whose extra terms were 0 x 0). */
+    const int m = band_below(K, k, b);
     for (int j = 1; j <= b; j++) {
-      if (k + (size_t)j >= bd->K) {
-        bd->z[j][k] = 0;
+      if (j > m) {
+        z[j][k] = 0;
         continue;
       }
+      /* A^-1(k + i, k + j), both within the band already computed */
       double s = 0;
-      for (int i = 1; i <= b; i++) s += bd->l[i][k] * zat(bd, k + i, k + j);
-      bd->z[j][k] = -s;
+      for (int i = 1; i <= m; i++) s += l[i][k] * (i <= j ? z[j - i][k + i] : z[i - j][k + j]);
+      z[j][k] = -s;
     }
     double z00 = 1 / bd->D[k];
-    for (int i = 1; i <= b; i++) z00 -= bd->l[i][k] * bd->z[i][k];
-    bd->z[0][k] = z00;
+    for (int i = 1; i <= b; i++) z00 -= l[i][k] * z[i][k];
+    z[0][k] = z00;
   }
 }
 
@@ -202,7 +214,7 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
   const size_t K = sp->K;
   double *W = work, *b = work + K, *x = work + 2 * K;
   *rss = 0;
-  *edf = 0;
+  if (edf) *edf = 0;
   if (!elfm_banded_resize(bd, K)) return 0;
   if (p) memset(p, 0, 3 * K * sizeof *p);
   for (int a = 0; a < 3; a++) {
@@ -216,12 +228,13 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
     banded_build(bd, W, sp->ts, sp->coef, lambda / (sp->sig_ref[a] * sp->sig_ref[a]), sp->order);
     if (!elfm_banded_factor(bd)) return 0;
     elfm_banded_solve(bd, b, x);
-    elfm_banded_inverse(bd);
+    if (edf) elfm_banded_inverse(bd);
     for (size_t i = 0; i < sp->n; i++) {
       double r = (x[sp->state_of[i]] - sp->x[3 * i + a]) / sp->sig[3 * i + a];
       *rss += w[i] * r * r;
     }
-    for (size_t k = 0; k < K; k++) *edf += bd->z[0][k] * W[k];
+    if (edf)
+      for (size_t k = 0; k < K; k++) *edf += bd->z[0][k] * W[k];
     if (p)
       for (size_t k = 0; k < K; k++) p[3 * k + a] = x[k];
   }

@@ -46,7 +46,8 @@ typedef struct elfm_banded {
 
 void elfm_banded_init(elfm_banded *bd);
 void elfm_banded_free(elfm_banded *bd);
-/* K states, every array zeroed; 0 when out of memory. */
+/* Room for K states (the 3 entries past K zeroed; build, factor and
+ * inverse write the rest); 0 when out of memory. */
 int elfm_banded_resize(elfm_banded *bd, size_t K);
 /* A = diag(W) + mu x the prior's rows over the state times ts; with
  * _table, the rows from elfm_spline_prior_table (the same numbers). */
@@ -75,7 +76,9 @@ typedef struct elfm_spline_problem {
 /* Per axis, the fit at lambda with point weights w (n): the states into p
  * (K x 3, when not NULL), the whitened weighted residual sum of squares
  * into *rss and the hat matrix's trace summed over the axes into *edf.
- * bd is the workspace (its band of A^-1 is the last axis's afterwards);
+ * edf may be NULL: then A^-1 is not formed (a third of the fit's work),
+ * as reweighting needs only the states. bd is the workspace (its band of
+ * A^-1 is the last axis's afterwards when edf was asked for);
  * work holds 3 K doubles. 0 when A is not positive definite or no memory. */
 int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
                        elfm_banded *bd, double *work, double *rss, double *edf, double *p);
