@@ -62,6 +62,9 @@ typedef struct track_opts {
   int fill_frames;     /* where the one-frame fit fails, fit this many frames centred on
                           the gap's frame (odd, 1..TRACK_FILL_MAX_FRAMES; 1 = off) */
   int fill_ends;       /* follow a finished track on past its last point the same way */
+  double fill_retry_um; /* where the fit from the gap's prediction fails, start it again this
+                           far beside it in x and y, and as far in z as moves the outer
+                           views' images as much (0 = off) */
   int motion_lead_auto; /* 1: the lead from the in-focus peaks' widths (track_motion_lead_um) */
   double plane_shift_px; /* without --z-step-um: every m-th of the calibration's planes, the
                             outermost view moving <= this between them (0 = all of them;
@@ -200,6 +203,7 @@ typedef struct track_given {
   int locpow, near;                  /* --localize-power, --localize-near-um */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ, circnext;                /* --circle-points, --circle-next-path-um */
+  int fretry;                        /* --fill-retry-um */
   int locmin, gviews, deepv;         /* --localize-min-views, --guided-views,
                                         --deep-peak-views */
 } track_given;
@@ -361,10 +365,13 @@ typedef struct track_ctx {
   elfm_link_gap *gaps;
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
+  uint8_t *fill_retried, *fill_keep; /* [ring.cap]: fill_pts[j] from a retry; kept */
   int64_t n_fill_tries, n_filled;
   int64_t n_filled_end;  /* of n_filled, after a finished track's end */
   int64_t n_filled_multi, n_multi_refused; /* fills of the multi-frame fit; ones the
                                               neighbourhood test refused */
+  int64_t n_filled_retry;  /* of n_filled, found from a start beside the prediction */
+  int64_t n_retry_dropped; /* such finds that no neighbouring point confirmed */
   /* the in-focus peaks' widths (elfm_detection.width_um), in bins of
    * TRACK_WIDTH_BIN_UM, for the lead (motion_lead_auto) */
   int64_t width_hist[TRACK_WIDTH_BINS];

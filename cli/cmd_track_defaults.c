@@ -296,6 +296,18 @@ void track_defaults(track_opts *o)
    * 0.8667 -> 0.8653 (fills in the tracks of ghosts). Not on the integral
    * (below). */
   o->fill_ends = 1;
+  /* Where the fit from the gap's prediction finds nothing, the one-frame
+   * fit again from 1.5 um beside it (x, y), then 4.5 um above and below
+   * (z: the outer views' images move as far), the first find within the
+   * gate of the prediction kept if a neighbouring frame's point confirms
+   * it (cmd_track_fill.c). Why: the view fit's windows (5 x 5 px) reach
+   * ~2 um, and the misses it left on flow were deep beads whose
+   * prediction lay 2.5-5.5 um off (quartiles, seeds 1-8). Flow 100 ms
+   * seeds 1-20 alpha 0.8768 -> 0.8814 (19 up), held-out 21-32 0.8590 ->
+   * 0.8638, 1 s seeds 1-12 0.7732 -> 0.7745, random flow 0.6337 ->
+   * 0.6393; 40-60 beads precision 0.943 -> 0.925 at the same alpha;
+   * docs/tracker.md "Fits started beside the prediction". */
+  o->fill_retry_um = 1.5;
   /* The same floor as gap filling's, for the same reason: a bead that has
    * just gone dark (blinking) still leaves faint ON light in some views,
    * which the view fit finds. blink_moving seeds 1-4: alpha 0.304 / 0.224 /
@@ -461,6 +473,12 @@ int track_opts_derive(track_opts *o, const track_given *g)
     o->link.circle_points = 0;
   }
   if (each_trigger && !g->circnext) o->link.circle_next_path_um = 0;
+  if (each_trigger && !g->fretry) {
+    /* Windows opened by the LED: a gap is a dark bead, and more starts
+     * find more of its faint last light or of a neighbour (blink seed 3:
+     * one fill at z 68 um in a dark gap, alpha 0.937 -> 0.927). */
+    o->fill_retry_um = 0;
+  }
   if (each_trigger && !g->minpts) {
     /* ... and a track of 5 points is 5 pulses: a deep bead that fades
      * after 4 had no track (blink seed 7, bead 13). A ghost would have to

@@ -34,7 +34,9 @@ elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
   c->gaps_cap = 1024;
   c->gaps = malloc((size_t)c->gaps_cap * sizeof *c->gaps);
   c->fill_pts = malloc((size_t)r->cap * sizeof *c->fill_pts);
-  if (!r->slot || !c->gaps || !c->fill_pts)
+  c->fill_retried = malloc((size_t)r->cap);
+  c->fill_keep = malloc((size_t)r->cap);
+  if (!r->slot || !c->gaps || !c->fill_pts || !c->fill_retried || !c->fill_keep)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (gap filling)");
   for (int k = 0; k < r->cap; k++) r->slot[k].frame = r->slot[k].det_frame = -1;
   /* our own plan (the same calibration and options as the driver's): the
@@ -110,73 +112,108 @@ static int multi_fit_isolated(const track_ctx *c, const elfm_frame *const *use,
   return hits < 2;
 }
 
-/* The view fit over fill_frames kept frames centred on sl (s: sl made
- * whole), each window placed where the gap's two ends put the object in
- * that frame (elfm_link_gap_predict) and moved back by that shift
- * (elfm_refocus_localize_frames), started at q. A deep bead leaves a few
- * events per frame, too few in one frame for the views to agree, and
- * three frames hold three times as many: from the true position (bench_
- * localize SCENE 8 1000 3 centred, flow seed 1) it finds 0.80 of the beads
- * at 60-80 um against 0.54 in one frame. The forward guided fit could not
- * use this (its frames are all behind the bead, which has moved on: flow
- * alpha fell, docs/tracker.md "Deep beads"); a settled gap has both ends. */
-static int fill_multi(track_ctx *c, const ring_slot *sl, const elfm_frame *s,
-                      const elfm_link_gap *g, const double q[3], elfm_localize_options lo,
-                      elfm_localize_result *res)
+/* The kept frames one gap frame's fits read: sl made whole in c->scratch
+ * and, once a multi-frame fit is wanted, its neighbours in
+ * c->scratch_nbr with where the gap's ends put the object in each
+ * (offsets from sl's). Loaded once for all of the frame's starts
+ * (fill_one). */
+typedef struct {
+  const ring_slot *sl;
+  const elfm_link_gap *g;
+  int multi_ready;                                  /* neighbours loaded */
+  int n;                                            /* frames in use[] */
+  const elfm_frame *use[TRACK_FILL_MAX_FRAMES];     /* [0] = c->scratch */
+  double off[TRACK_FILL_MAX_FRAMES][3];
+  const ring_slot *loaded[TRACK_FILL_MAX_FRAMES - 1];
+} fill_view;
+
+static void fill_view_load(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, fill_view *fv)
 {
+  memset(fv, 0, sizeof *fv);
+  fv->sl = sl;
+  fv->g = g;
+  fv->use[0] = c->scratch;
+  fv->n = 1;
+  slot_load(c->scratch, sl);
+}
+
+static void fill_view_multi(track_ctx *c, fill_view *fv)
+{
+  if (fv->multi_ready) return;
+  fv->multi_ready = 1;
   const frame_ring *r = &c->ring;
   const elfm_volume *geo = &c->geo;
   const int h = c->o->fill_frames / 2;
-  const elfm_frame *use[TRACK_FILL_MAX_FRAMES] = {s};
-  const ring_slot *loaded[TRACK_FILL_MAX_FRAMES - 1] = {NULL};
-  double off[TRACK_FILL_MAX_FRAMES][3] = {{0, 0, 0}};
   double p0[3];
-  int n = 1;
-  elfm_link_gap_predict(g, sl->t_us, p0);
+  elfm_link_gap_predict(fv->g, fv->sl->t_us, p0);
   for (int j = 0; j < 2 * h; j++) {
-    const int64_t f = sl->frame + (j % 2 ? 1 : -1) * (j / 2 + 1);
+    const int64_t f = fv->sl->frame + (j % 2 ? 1 : -1) * (j / 2 + 1);
     const ring_slot *nb = f >= 0 ? &r->slot[f % r->cap] : NULL;
     if (!nb || nb->frame != f) continue; /* before the recording, or no longer kept */
     slot_load(c->scratch_nbr[j], nb);
-    loaded[j] = nb;
+    fv->loaded[j] = nb;
     double p[3];
-    elfm_link_gap_predict(g, nb->t_us, p);
-    off[n][0] = (p[0] - p0[0]) / geo->um_per_px;
-    off[n][1] = (p[1] - p0[1]) / geo->um_per_px;
-    off[n][2] = p[2] - p0[2];
-    use[n++] = c->scratch_nbr[j];
+    elfm_link_gap_predict(fv->g, nb->t_us, p);
+    fv->off[fv->n][0] = (p[0] - p0[0]) / geo->um_per_px;
+    fv->off[fv->n][1] = (p[1] - p0[1]) / geo->um_per_px;
+    fv->off[fv->n][2] = p[2] - p0[2];
+    fv->use[fv->n++] = c->scratch_nbr[j];
   }
+}
+
+static void fill_view_clear(track_ctx *c, fill_view *fv)
+{
+  for (int j = 0; j < TRACK_FILL_MAX_FRAMES - 1; j++)
+    if (fv->loaded[j]) slot_clear(c->scratch_nbr[j], fv->loaded[j]);
+  slot_clear(c->scratch, fv->sl);
+}
+
+/* The view fit over fill_frames kept frames centred on the gap frame
+ * (fill_view_multi), each window placed where the gap's two ends put the
+ * object in that frame (elfm_link_gap_predict) and moved back by that
+ * shift (elfm_refocus_localize_frames), started at q. A deep bead leaves
+ * a few events per frame, too few in one frame for the views to agree,
+ * and three frames hold three times as many: from the true position
+ * (bench_localize SCENE 8 1000 3 centred, flow seed 1) it finds 0.80 of
+ * the beads at 60-80 um against 0.54 in one frame. The forward guided
+ * fit could not use this (its frames are all behind the bead, which has
+ * moved on: flow alpha fell, docs/tracker.md "Deep beads"); a settled gap
+ * has both ends. */
+static int fill_multi(track_ctx *c, fill_view *fv, const double q[3], elfm_localize_options lo,
+                      elfm_localize_result *res)
+{
+  const elfm_volume *geo = &c->geo;
+  fill_view_multi(c, fv);
   /* Two more views must agree than in one frame: the windows hold the
    * clutter of all the frames too. Flow 100 ms seeds 1-20, fill_views 4
    * and + 0 / 2 / 4 views: alpha 0.8014 / 0.8014 / 0.8011, F1 0.9529 /
    * 0.9541 / 0.9544 (without the neighbourhood test). */
   lo.min_views += 2;
-  int ok = n > 1 && elfm_refocus_localize_frames(c->fill_plan, use, (const double (*)[3])off, n,
-                                                 elfm_volume_x_vox(geo, q[0]),
-                                                 elfm_volume_y_vox(geo, q[1]),
-                                                 elfm_volume_z_vox(geo, q[2]), &lo, res);
-  if (ok && !multi_fit_isolated(c, use, (const double (*)[3])off, n, &lo, res)) {
+  int ok = fv->n > 1 &&
+           elfm_refocus_localize_frames(c->fill_plan, fv->use, (const double (*)[3])fv->off, fv->n,
+                                        elfm_volume_x_vox(geo, q[0]), elfm_volume_y_vox(geo, q[1]),
+                                        elfm_volume_z_vox(geo, q[2]), &lo, res);
+  if (ok && !multi_fit_isolated(c, fv->use, (const double (*)[3])fv->off, fv->n, &lo, res)) {
     c->n_multi_refused++;
     ok = 0;
   }
-  for (int j = 0; j < 2 * h; j++)
-    if (loaded[j]) slot_clear(c->scratch_nbr[j], loaded[j]);
   return ok;
 }
 
-/* The view fit in kept frame sl, started at q (um), and where it fails
- * the multi-frame fit (fill_frames > 1); 1 and *d filled when at least
- * fill_views views agree within fill_gate_um of q and it has at least
- * min_intensity (in frame sl itself). */
-static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, const double q[3],
-                    double min_intensity, elfm_detection *d)
+/* The view fit in the gap frame (fv, loaded), started at s0 (um), and
+ * where it fails and `many` is set, the multi-frame fit (fill_frames >
+ * 1); 1 and *d filled when at least fill_views views agree within
+ * fill_gate_um of q (where the gap's ends put the object) and it has at
+ * least min_intensity (in the gap frame itself). */
+static int fill_at(track_ctx *c, fill_view *fv, const double q[3], const double s0[3],
+                   double min_intensity, int many, elfm_detection *d)
 {
   const track_opts *o = c->o;
   const elfm_volume *geo = &c->geo;
-  elfm_frame *s = c->scratch;
+  const ring_slot *sl = fv->sl;
+  const elfm_frame *s = c->scratch;
   elfm_localize_options lo = o->loc;
   lo.min_views = o->fill_views;
-  slot_load(s, sl);
   elfm_localize_result res;
   int multi = 0;
   /* the frame's detections near q have their light taken out of the fit's
@@ -190,11 +227,11 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
   int k_nb = 0;
   const double rn = o->localize_near_um;
   if (rn > 0 && sl->det_frame == sl->frame)
-    k_nb = track_near_add(sl->det, sl->det_n, -1, q[0], q[1], rn, geo, nb, 0);
-  int ok = elfm_refocus_localize_near(c->fill_plan, s, elfm_volume_x_vox(geo, q[0]),
-                                      elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]),
+    k_nb = track_near_add(sl->det, sl->det_n, -1, s0[0], s0[1], rn, geo, nb, 0);
+  int ok = elfm_refocus_localize_near(c->fill_plan, s, elfm_volume_x_vox(geo, s0[0]),
+                                      elfm_volume_y_vox(geo, s0[1]), elfm_volume_z_vox(geo, s0[2]),
                                       (const double(*)[3])nb, k_nb, &lo, &res);
-  if (!ok && o->fill_frames > 1) ok = multi = fill_multi(c, sl, s, g, q, lo, &res);
+  if (!ok && o->fill_frames > 1 && many) ok = multi = fill_multi(c, fv, s0, lo, &res);
   if (ok) {
     const int X = (int)lround(res.x_vox), Y = (int)lround(res.y_vox), K = (int)lround(res.z_vox);
     memset(d, 0, sizeof *d);
@@ -212,9 +249,70 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
     ok = ok && d->intensity >= min_intensity;
     if (ok && multi) c->n_filled_multi++;
   }
-  slot_clear(s, sl);
   return ok;
 }
+
+/* How far in z moves the outer views' images as far as r_um does
+ * laterally: r_um / um_per_px over the largest disparity per axis (px per
+ * um of z). 0 where no view has a disparity. */
+static double retry_z_um(const elfm_calib *cal, double r_um)
+{
+  double g = 0;
+  for (int v = 0; v < cal->n_views; v++)
+    g = fmax(g, fmax(fabs(cal->views[v].dx_px_per_um), fabs(cal->views[v].dy_px_per_um)));
+  return g > 0 ? r_um / cal->um_per_px / g : 0;
+}
+
+/* fill_at from q (with the multi-frame fit), and where it finds nothing,
+ * the one-frame fit from fill_retry_um beside q in +-x and +-y, then
+ * above and below it in z (retry_z_um), in that order; the first find is
+ * kept, judged by the gate from q. Returns 0, 1 (found from q) or 2 (from
+ * a start beside it: walk_gap keeps it only where a point of the next or
+ * the last frame confirms it). Why: the view fit's 5 x 5 px windows
+ * reach about 2 um, and a deep bead's prediction in a gap is often
+ * further off (flow seeds 1-8: the starts of the fits that found nothing
+ * lay 2.5 / 3.9 / 5.5 um from the bead, quartiles, SPEC's distance),
+ * where three frames from its true place find 0.96 of the beads at |z|
+ * 60-70 um and the tracks held 0.77. The first find, not the nearest of
+ * all six (flow seeds 1-20 alpha 0.8797 against 0.8815, both with the
+ * multi-frame fit from every start). One frame only from the starts
+ * beside q: the multi-frame fits there cost 4 % of `track`'s wall time
+ * (flow 1 s, 2 threads) for +0.0006 / +0.0010 alpha on flow seeds 1-20 /
+ * 21-32. docs/tracker.md "Fits started beside the prediction". */
+static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, const double q[3],
+                    double min_intensity, elfm_detection *d)
+{
+  fill_view fv;
+  fill_view_load(c, sl, g, &fv);
+  int found = fill_at(c, &fv, q, q, min_intensity, 1, d);
+  const double r = c->o->fill_retry_um;
+  if (!found && r > 0) {
+    const double rz = retry_z_um(c->calib, r);
+    const double step[6][3] = {{r, 0, 0}, {-r, 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, rz}, {0, 0, -rz}};
+    for (int k = 0; k < (rz > 0 ? 6 : 4) && !found; k++) {
+      const double s0[3] = {q[0] + step[k][0], q[1] + step[k][1], q[2] + step[k][2]};
+      if (fill_at(c, &fv, q, s0, min_intensity, 0, d)) found = 2;
+    }
+  }
+  fill_view_clear(c, &fv);
+  return found;
+}
+
+/* Within FILL_CONFIRM_UM (linker metric, z / link.kz) of a retry's find
+ * lies a point of its gap walk in the next or the last frame (another
+ * find, or the gap's end; elfm_link_fill_confirmed), or the find is
+ * dropped. Why: the finds from a start beside the prediction were on a
+ * bead in 0.58-0.68 of cases (flow 100 ms seeds 1-8 and 1 s seeds 9 and
+ * 11; 0.92 for the fits from the prediction itself), and 0.84 where such
+ * a point lay within 4 um (0.19 where the track had no point in either
+ * frame). Kept without the test, they put more truth points in tracks of
+ * other beads on every one of 12 1 s flow recordings, and alpha fell
+ * there 0.7732 -> 0.7684. 4 um: 1 s / flow 1-20 / 21-32 alpha 0.7745 /
+ * 0.8814 / 0.8638; 3 um 0.7719 / 0.8807 / 0.8617 (with the multi-frame
+ * fit beside q); 5 um 0.7669 / 0.8804 / 0.8646; the points' offsets from
+ * the gap's path compared instead (motion taken out), 3 um: 0.7704 /
+ * 0.8808 / 0.8630. */
+#define FILL_CONFIRM_UM 4.0
 
 /* Look for the gap's object in each kept frame of the gap, into
  * c->fill_pts (returns the count). A closed gap is walked from both ends
@@ -245,7 +343,8 @@ static int walk_gap(track_ctx *c, const elfm_link_gap *g)
     elfm_link_gap_predict(g, sl->t_us, p);
     for (int a = 0; a < 3; a++) q[a] = p[a] + off[side][a];
     elfm_detection d;
-    if (!fill_one(c, sl, g, q, min_i, &d)) {
+    const int found = fill_one(c, sl, g, q, min_i, &d);
+    if (!found) {
       if (open && ++misses >= 2) break;
       continue;
     }
@@ -253,9 +352,23 @@ static int walk_gap(track_ctx *c, const elfm_link_gap *g)
     off[side][0] = d.x_um - p[0];
     off[side][1] = d.y_um - p[1];
     off[side][2] = d.z_um - p[2];
+    c->fill_retried[m] = found == 2;
     c->fill_pts[m++] = d;
   }
-  return m;
+  /* the retries' finds that no neighbouring point confirms are dropped */
+  int n = 0;
+  for (int j = 0; j < m; j++) {
+    const int keep = !c->fill_retried[j] ||
+                     elfm_link_fill_confirmed(g, c->fill_pts, m, j, c->o->link.kz, FILL_CONFIRM_UM);
+    c->fill_keep[j] = (uint8_t)keep;
+  }
+  for (int j = 0; j < m; j++) {
+    if (!c->fill_keep[j]) continue;
+    c->n_filled_retry += c->fill_retried[j];
+    c->fill_pts[n++] = c->fill_pts[j];
+  }
+  c->n_retry_dropped += m - n;
+  return n;
 }
 
 /* Points found count as detections of their frames. */
@@ -377,6 +490,8 @@ void track_fill_free(track_ctx *c)
   memset(r, 0, sizeof *r);
   free(c->gaps);
   free(c->fill_pts);
+  free(c->fill_retried);
+  free(c->fill_keep);
   elfm_frame_free(c->scratch);
   for (int j = 0; j < TRACK_FILL_MAX_FRAMES - 1; j++) elfm_frame_free(c->scratch_nbr[j]);
   elfm_refocus_plan_free(c->fill_plan);

@@ -206,6 +206,14 @@ static void usage(FILE *f)
     "                       1..9; default 3, with --repr integral 1 = off)\n"
     "  --fill-ends on|off   follow a finished track of >= 20 points on past its last\n"
     "                       point the same way (default on, with --repr integral off)\n"
+    "  --fill-retry-um R    where the fit from where the gap's ends put the object\n"
+    "                       finds nothing, start the one-frame fit again R um beside\n"
+    "                       that in x and y, then above and below it in z (by as\n"
+    "                       much as moves the outer views' images R um); a find\n"
+    "                       within the gate of the prediction is kept where a point\n"
+    "                       of the next or the last frame lies within 4 um (default\n"
+    "                       1.5; 0 = off; with --start each-trigger 0: a blinking\n"
+    "                       object's gaps are dark)\n"
     "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
     "smoothing:\n"
     "  --motion auto|per-track|stage|free   per-track: model chosen per track (BIC)\n"
@@ -306,7 +314,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT
 };
@@ -369,6 +377,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
+      {"fill-retry-um", required_argument, 0, O_FILLRT},
       {"short-path-um", required_argument, 0, O_SPATH},
       {"circle-points", required_argument, 0, O_CIRCN},
       {"circle-after", required_argument, 0, O_CIRCA},
@@ -529,6 +538,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!strcmp(a, "on")) o.fill_ends = 1;
       else if (!strcmp(a, "off")) o.fill_ends = 0;
       else return cli_message(C, CLI_USAGE, "--fill-ends must be on or off, not '%s'", a);
+      break;
+    case O_FILLRT:
+      g.fretry = 1;
+      if (!cli_parse_double_in(C, "--fill-retry-um", a, 0, 0, 10, "0..10", &o.fill_retry_um))
+        return CLI_USAGE;
       break;
     case O_SPATH:
       g.spath = 1;

@@ -127,6 +127,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame", (double)c->n_filled_multi);
   cJSON_AddNumberToObject(cnt, "end_fills", (double)c->n_filled_end);
   cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame_refused", (double)c->n_multi_refused);
+  cJSON_AddNumberToObject(cnt, "gap_fills_retried", (double)c->n_filled_retry);
+  cJSON_AddNumberToObject(cnt, "gap_fills_retried_unconfirmed", (double)c->n_retry_dropped);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->n_info);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
@@ -167,6 +169,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "fill_min_ratio", o->fill_min_ratio);
   cJSON_AddNumberToObject(par, "fill_frames", o->fill_frames);
   cJSON_AddBoolToObject(par, "fill_ends", o->fill_ends);
+  cJSON_AddNumberToObject(par, "fill_retry_um", o->fill_retry_um);
   cJSON_AddNumberToObject(par, "threshold_k_sigma", o->peaks.k_sigma);
   cJSON_AddNumberToObject(par, "threshold_abs", o->peaks.absolute);
   cJSON_AddNumberToObject(par, "threshold_rel", o->peaks.relative);

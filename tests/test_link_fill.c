@@ -318,6 +318,46 @@ int main(void)
     elfm_error_clear(&err);
   }
 
+  /* 3d. elfm_link_fill_confirmed: a find is confirmed by a point of the
+   * next or the last frame within r (z / kz), another find or the gap's
+   * end there; not by one two frames away, nor by an open gap's unset end,
+   * nor by itself. */
+  {
+    elfm_link_gap g;
+    memset(&g, 0, sizeof g);
+    g.frame0 = 10;
+    g.frame1 = 20;
+    g.p0_um[0] = 0;   /* the head's fit at frame 10 */
+    g.p1_um[0] = 100; /* the tail's fit at frame 20 */
+    elfm_detection pts[5] = {
+        mk(11, T0 + 11000, 2, 0, 3),   /* 2 um (z 3 / 1.5) from the head's end */
+        mk(14, T0 + 14000, 50, 0, 0),  /* 13 and 15: within 4 um? 3 and 4.5 */
+        mk(13, T0 + 13000, 47, 0, 0),
+        mk(15, T0 + 15000, 54.5, 0, 0),
+        mk(17, T0 + 17000, 70, 0, 0),  /* nothing at 16 or 18 */
+    };
+    const double kz = 1.5;
+    CHECK(elfm_link_fill_confirmed(&g, pts, 5, 0, kz, 4));   /* by the end: sqrt(4 + 4) */
+    CHECK(!elfm_link_fill_confirmed(&g, pts, 5, 0, kz, 2.5));
+    CHECK(elfm_link_fill_confirmed(&g, pts, 5, 1, kz, 4));   /* by frame 13, 3 um */
+    CHECK(!elfm_link_fill_confirmed(&g, pts, 5, 1, kz, 3));  /* 3 is not < 3; 15 is 4.5 */
+    CHECK(elfm_link_fill_confirmed(&g, pts, 5, 2, kz, 4));   /* by frame 14 */
+    CHECK(!elfm_link_fill_confirmed(&g, pts, 5, 3, kz, 4));  /* 4.5 from frame 14 */
+    CHECK(elfm_link_fill_confirmed(&g, pts, 5, 3, kz, 5));
+    CHECK(!elfm_link_fill_confirmed(&g, pts, 5, 4, kz, 100)); /* alone: 16 and 18 empty */
+    /* the end at frame 19 is the tail's (x 100); an open_end gap has none */
+    elfm_detection late = mk(19, T0 + 19000, 99, 0, 0);
+    CHECK(elfm_link_fill_confirmed(&g, &late, 1, 0, kz, 4));
+    g.open_end = 1;
+    CHECK(!elfm_link_fill_confirmed(&g, &late, 1, 0, kz, 4));
+    g.open_start = 1;
+    CHECK(!elfm_link_fill_confirmed(&g, pts, 1, 0, kz, 4)); /* the head's end unset */
+    /* z counts over kz: 3 um in z at kz 1.5 is 2 um */
+    elfm_detection zz[2] = {mk(5, T0 + 5000, 0, 0, 0), mk(6, T0 + 6000, 0, 0, 5.9)};
+    CHECK(elfm_link_fill_confirmed(&g, zz, 2, 0, kz, 4));
+    CHECK(!elfm_link_fill_confirmed(&g, zz, 2, 0, 1.0, 4));
+  }
+
   /* 4. Filling: points given back land in the gap (and before the first
    * point), the linker's next prediction is unchanged, the finished track
    * holds them in order; all = 1 reports the gaps never settled; bad fills

@@ -22,6 +22,9 @@
 # bright peaks (--explain-brighter, twenty-fifth session) the encounter is
 # not reached either (0.7805 either way), so it runs without that too;
 # over flow seeds 1-20 with both the limit still gains: 0.8490 -> 0.8505.
+# Since the fits beside a gap's prediction (--fill-retry-um, thirty-eighth
+# session) seed 23's tracks meet neither case (0.8065 -> 0.8072); without
+# them the case stands as before.
 # Straight lines at rest (--encounter-line-ratio, default 0.5): worm 500 ms
 # seed 1 (--repr integral), neurons 2 and 6 crossing 10 um apart in z and
 # 0.3 um laterally merge for ~30 frames, and neurons 1 and 5 later; the
@@ -68,7 +71,7 @@ compare() {
     { echo "FAIL: $5 not $6 in summary.json"; fail=$((fail+1)); }
 }
 TRACK_ARGS="--circle-next-path-um 0" compare 7 "--encounter-um 0" 0.03 "the encounter review" encounter_um 5
-TRACK_ARGS="--circle-points 0 --explain-brighter 0" \
+TRACK_ARGS="--circle-points 0 --explain-brighter 0 --fill-retry-um 0" \
   compare 23 "--review-join-factor 0" 0.01 "the join limit" review_join_factor 2
 # (on the calibration's planes, where this case was found)
 SCENE=worm TRACK_ARGS="--dt-us 2000 --repr integral --tau-bright-us 100000 --threshold-abs 20 --motion-lead-um 0.1 --plane-shift-px 0" \

@@ -11,7 +11,9 @@
 #    with the frame list, with the guided view fit from 10 points on).
 #  - with each-trigger the guided view fit starts from a track's second
 #    point, one per pulse, and a track needs 3 points, not 5 (alpha 0.921,
-#    recall 1.000, precision 0.974).
+#    recall 1.000, precision 0.974);
+#    gap filling makes no fits beside the gap's prediction (fill_retry_um
+#    0: a blinking bead's gaps are dark).
 #  - frames.csv: the windows tile the recording without gaps or overlaps,
 #    none is longer than dt, and every LED onset in stimulus.csv after the
 #    first opens one.
@@ -58,6 +60,10 @@ expect_gain 0.95 "$p2" 0 "each-trigger precision <= 0.95"
   { echo "FAIL: guided_min_points is not 2 with each-trigger"; fail=$((fail+1)); }
 [ "$(key "$tmp/each/summary.json" min_points)" = 3 ] ||
   { echo "FAIL: min_points is not 3 with each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/each/summary.json" fill_retry_um)" = 0 ] ||
+  { echo "FAIL: fill_retry_um is not 0 with each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/each10/summary.json" gap_fills_retried)" = 0 ] ||
+  { echo "FAIL: gap fills retried with each-trigger"; fail=$((fail+1)); }
 [ "$(key "$tmp/each/summary.json" start)" = '"each-trigger"' ] ||
   { echo "FAIL: summary.json start"; fail=$((fail+1)); }
 

@@ -345,6 +345,16 @@ void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3
 void elfm_link_track_end(const elfm_track *t, const elfm_link_options *o, int max_gap_frames,
                          elfm_link_gap *g);
 
+/* Whether a gap walk's find pts[j] (pts[0 .. m): the walk's finds, any
+ * order) has a neighbour in the next or the last frame within r_um
+ * (lateral, z / kz): another find, or the gap's end there (the head's fit
+ * p0_um at frame0 unless open_start, the tail's p1_um at frame1 unless
+ * open_end). For finds a walk is less sure of (a fit started beside the
+ * prediction): a bead does not jump between frames, and clutter found by
+ * chance has no such neighbour. */
+int elfm_link_fill_confirmed(const elfm_link_gap *g, const elfm_detection *pts, int m, int j,
+                             double kz, double r_um);
+
 /* Give live track `track_id` real points d[0 .. n) in frames with no point
  * yet before its last point (its gaps, or before its first). ELFM_ERR_INVALID
  * when the track is not live or a frame is taken or not before the last. */

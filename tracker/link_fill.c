@@ -13,6 +13,7 @@
  * net gain (docs/tracker.md "Gap filling"). */
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "link_internal.h"
@@ -147,6 +148,28 @@ void elfm_link_gap_predict(const elfm_link_gap *g, int64_t t_us, double xyz_um[3
   }
   const double span = d0 + d1, w = span > 0 ? d0 / span : 0.5;
   for (int a = 0; a < 3; a++) xyz_um[a] = (1 - w) * f[a] + w * b[a];
+}
+
+int elfm_link_fill_confirmed(const elfm_link_gap *g, const elfm_detection *pts, int m, int j,
+                             double kz, double r_um)
+{
+  const double r2 = r_um * r_um;
+  const elfm_detection *a = &pts[j];
+  for (int i = 0; i < m; i++) {
+    if (i == j || llabs(pts[i].frame - a->frame) != 1) continue;
+    const double dx = pts[i].x_um - a->x_um, dy = pts[i].y_um - a->y_um,
+                 dz = (pts[i].z_um - a->z_um) / kz;
+    if (dx * dx + dy * dy + dz * dz < r2) return 1;
+  }
+  for (int e = 0; e < 2; e++) {
+    const int have = e ? !g->open_end && a->frame == g->frame1 - 1
+                       : !g->open_start && a->frame == g->frame0 + 1;
+    if (!have) continue;
+    const double *pe = e ? g->p1_um : g->p0_um;
+    const double dx = pe[0] - a->x_um, dy = pe[1] - a->y_um, dz = (pe[2] - a->z_um) / kz;
+    if (dx * dx + dy * dy + dz * dz < r2) return 1;
+  }
+  return 0;
 }
 
 void elfm_link_track_end(const elfm_track *t, const elfm_link_options *o, int max_gap_frames,
