@@ -277,8 +277,9 @@ static double retry_z_um(const elfm_calib *cal, double r_um)
  * all six (flow seeds 1-20 alpha 0.8797 against 0.8815, both with the
  * multi-frame fit from every start). One frame only from the starts
  * beside q: the multi-frame fits there cost 4 % of `track`'s wall time
- * (flow 1 s, 2 threads) for +0.0006 / +0.0010 alpha on flow seeds 1-20 /
- * 21-32. docs/tracker.md "Fits started beside the prediction". */
+ * (flow 1 s, 2 threads) for +0.0002 / +0.0008 alpha on flow seeds 1-20 /
+ * 21-32 and -0.0016 on 1 s seeds 1-12 (with the confirmation below).
+ * docs/tracker.md "Fits started beside the prediction". */
 static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, const double q[3],
                     double min_intensity, elfm_detection *d)
 {
@@ -305,9 +306,10 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
  * bead in 0.58-0.68 of cases (flow 100 ms seeds 1-8 and 1 s seeds 9 and
  * 11; 0.92 for the fits from the prediction itself), and 0.84 where such
  * a point lay within 4 um (0.19 where the track had no point in either
- * frame). Kept without the test, they put more truth points in tracks of
- * other beads on every one of 12 1 s flow recordings, and alpha fell
- * there 0.7732 -> 0.7684. 4 um: 1 s / flow 1-20 / 21-32 alpha 0.7745 /
+ * frame). Kept without the test (and with the multi-frame fit from each
+ * start), they put more truth points in tracks of other beads on every
+ * one of 12 1 s flow recordings, and alpha fell there 0.7732 -> 0.7684.
+ * 4 um: 1 s / flow 1-20 / 21-32 alpha 0.7745 /
  * 0.8814 / 0.8638; 3 um 0.7719 / 0.8807 / 0.8617 (with the multi-frame
  * fit beside q); 5 um 0.7669 / 0.8804 / 0.8646; the points' offsets from
  * the gap's path compared instead (motion taken out), 3 um: 0.7704 /
