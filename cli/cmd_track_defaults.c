@@ -296,17 +296,12 @@ void track_defaults(track_opts *o)
    * 0.8667 -> 0.8653 (fills in the tracks of ghosts). Not on the integral
    * (below). */
   o->fill_ends = 1;
-  /* Where the fit from the gap's prediction finds nothing, the one-frame
-   * fit again from 1.5 um beside it (x, y), then 4.5 um above and below
-   * (z: the outer views' images move as far), the first find within the
-   * gate of the prediction kept if a neighbouring frame's point confirms
-   * it (cmd_track_fill.c). Why: the view fit's windows (5 x 5 px) reach
-   * ~2 um, and the misses it left on flow were deep beads whose
-   * prediction lay 2.5-5.5 um off (quartiles, seeds 1-8). Flow 100 ms
-   * seeds 1-20 alpha 0.8768 -> 0.8814 (19 up), held-out 21-32 0.8590 ->
-   * 0.8638, 1 s seeds 1-12 0.7732 -> 0.7745, random flow 0.6337 ->
-   * 0.6393; 40-60 beads precision 0.943 -> 0.925 at the same alpha;
-   * docs/tracker.md "Fits started beside the prediction". */
+  /* Where the fit from a gap's prediction finds nothing, the one-frame
+   * fit from 1.5 um beside it, each find confirmed by a neighbouring
+   * frame's point (cmd_track_fill.c, fill_one): flow 100 ms seeds 1-20
+   * alpha 0.8768 -> 0.8814, held-out 21-32 0.8590 -> 0.8638; 40-60 beads
+   * precision 0.943 -> 0.925 at the same alpha (docs/tracker.md "Fits
+   * started beside the prediction"). */
   o->fill_retry_um = 1.5;
   /* The same floor as gap filling's, for the same reason: a bead that has
    * just gone dark (blinking) still leaves faint ON light in some views,
