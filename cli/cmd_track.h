@@ -366,6 +366,7 @@ typedef struct track_ctx {
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
   uint8_t *fill_retried, *fill_keep; /* [ring.cap]: fill_pts[j] from a retry; kept */
+  double fill_retry_z_um;  /* the z step of those retries (fill_one), once per run */
   int64_t n_fill_tries, n_filled;
   int64_t n_filled_end;  /* of n_filled, after a finished track's end */
   int64_t n_filled_multi, n_multi_refused; /* fills of the multi-frame fit; ones the

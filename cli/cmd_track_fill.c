@@ -24,6 +24,17 @@ static int settle_points(const track_opts *o)
   return o->link.swap_points > 0 ? o->link.swap_points : 4;
 }
 
+/* How far in z moves the outer views' images as far as r_um does
+ * laterally: r_um / um_per_px over the largest disparity per axis (px per
+ * um of z). 0 where no view has a disparity. */
+static double retry_z_um(const elfm_calib *cal, double r_um)
+{
+  double g = 0;
+  for (int v = 0; v < cal->n_views; v++)
+    g = fmax(g, fmax(fabs(cal->views[v].dx_px_per_um), fabs(cal->views[v].dy_px_per_um)));
+  return g > 0 ? r_um / cal->um_per_px / g : 0;
+}
+
 elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
 {
   const track_opts *o = c->o;
@@ -39,6 +50,7 @@ elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
   if (!r->slot || !c->gaps || !c->fill_pts || !c->fill_retried || !c->fill_keep)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (gap filling)");
   for (int k = 0; k < r->cap; k++) r->slot[k].frame = r->slot[k].det_frame = -1;
+  c->fill_retry_z_um = retry_z_um(c->calib, o->fill_retry_um);
   /* our own plan (the same calibration and options as the driver's): the
    * last gaps are filled after the driver has freed its own */
   return elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->fill_plan, err);
@@ -252,17 +264,6 @@ static int fill_at(track_ctx *c, fill_view *fv, const double q[3], const double 
   return ok;
 }
 
-/* How far in z moves the outer views' images as far as r_um does
- * laterally: r_um / um_per_px over the largest disparity per axis (px per
- * um of z). 0 where no view has a disparity. */
-static double retry_z_um(const elfm_calib *cal, double r_um)
-{
-  double g = 0;
-  for (int v = 0; v < cal->n_views; v++)
-    g = fmax(g, fmax(fabs(cal->views[v].dx_px_per_um), fabs(cal->views[v].dy_px_per_um)));
-  return g > 0 ? r_um / cal->um_per_px / g : 0;
-}
-
 /* fill_at from q (with the multi-frame fit), and where it finds nothing,
  * the one-frame fit from fill_retry_um beside q in +-x and +-y, then
  * above and below it in z (retry_z_um), in that order; the first find is
@@ -288,7 +289,7 @@ static int fill_one(track_ctx *c, const ring_slot *sl, const elfm_link_gap *g, c
   int found = fill_at(c, &fv, q, q, min_intensity, 1, d);
   const double r = c->o->fill_retry_um;
   if (!found && r > 0) {
-    const double rz = retry_z_um(c->calib, r);
+    const double rz = c->fill_retry_z_um;
     const double step[6][3] = {{r, 0, 0}, {-r, 0, 0}, {0, r, 0}, {0, -r, 0}, {0, 0, rz}, {0, 0, -rz}};
     for (int k = 0; k < (rz > 0 ? 6 : 4) && !found; k++) {
       const double s0[3] = {q[0] + step[k][0], q[1] + step[k][1], q[2] + step[k][2]};
