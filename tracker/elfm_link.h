@@ -38,7 +38,9 @@
  *  6. swap review (optional): a gap closing that does not fit is revisited
  *     a few frames later and the tails of two tracks exchanged when that fits;
  *  7. encounter review (optional, with 6): two tracks that came within
- *     encounter_um of each other are revisited the same way.
+ *     encounter_um of each other are revisited the same way;
+ *  8. twins (optional): a track about to end whose last points another,
+ *     younger track held too continues as that track.
  * Memory: live tracks plus finished tracks not yet popped; per-frame
  * scratch is reused (it grows only when a frame has more objects than any
  * earlier one).
@@ -247,6 +249,20 @@ typedef struct elfm_link_options {
    * established track then took a neighbour's detection, or none, and the
    * two tracks swapped beads). 0 = off: one assignment (default; track: 8). */
   int priority_points;
+  /* Twins (step 8, run in step 1): a track about to end (dark for more
+   * than max_gap_frames) whose last 4 x twin_points real points include
+   * at least twin_points that a younger live track also holds, within
+   * twin_um (anisotropic) in the same frame, is that track's twin: the two
+   * are one object. The ending track takes the younger one's points after
+   * its own last point and goes on with its state (as in step 5); the
+   * younger one's identity ends. Why: the gap filling and the view fit
+   * find a bead for a track that has lost it while a second track, born
+   * on the same bead, holds it; the older one ends and the bead's
+   * trajectory is cut in two (flow 1 s: docs/tracker.md "Twins at a
+   * track's end"). Not with a younger track that has given pieces
+   * (elfm_link_take_piece). 0 = off (default; track: 2 um, 5 points). */
+  double twin_um;
+  int twin_points;
 } elfm_link_options;
 
 void elfm_link_options_default(elfm_link_options *o);
@@ -403,6 +419,8 @@ size_t elfm_link_n_live(const elfm_linker *l);
  * finished ones not yet taken), INT64_MAX when none. */
 int64_t elfm_link_oldest_frame(const elfm_linker *l);
 int64_t elfm_link_n_started(const elfm_linker *l);
+/* Tracks that step 8 continued as a younger twin (elfm_link_options.twin_um). */
+int64_t elfm_link_n_twins(const elfm_linker *l);
 
 /* Id of the track detection i of the LAST step joined (a new track when it
  * matched none), -2 when it was suppressed as a trail, -3 when it was weak

@@ -47,6 +47,8 @@ void elfm_link_options_default(elfm_link_options *o)
   o->encounter_circle_ratio = 0;
   o->encounter_line_ratio = 0;
   o->review_join_factor = 2;
+  o->twin_um = 0;
+  o->twin_points = 5;
   o->rest_speed_um_per_ms = 0.5;
   o->circle_points = 0;
   o->circle_after = 2;
@@ -112,6 +114,8 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->review_join_factor >= 0 && isfinite(o->review_join_factor), "review_join_factor",
             o->review_join_factor, ">= 0");
   LINK_NEED(o->priority_points >= 0, "priority_points", o->priority_points, ">= 0");
+  LINK_NEED(o->twin_um >= 0 && isfinite(o->twin_um), "twin_um", o->twin_um, ">= 0");
+  LINK_NEED(o->twin_points >= 1 && o->twin_points <= 1000, "twin_points", o->twin_points, "1..1000");
   LINK_NEED(o->short_path_um >= 0 && isfinite(o->short_path_um), "short_path_um", o->short_path_um, ">= 0");
   LINK_NEED(o->trail_us >= 0 && isfinite(o->trail_us), "trail_us", o->trail_us, ">= 0");
   LINK_NEED(o->rest_speed_um_per_ms >= 0 && isfinite(o->rest_speed_um_per_ms), "rest_speed_um_per_ms",
@@ -253,6 +257,7 @@ int64_t elfm_link_oldest_frame(const elfm_linker *l)
   return f;
 }
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
+int64_t elfm_link_n_twins(const elfm_linker *l) { return l ? l->n_twins : 0; }
 
 double elfm_link_last_speed(const elfm_linker *l, int i)
 {
@@ -528,7 +533,12 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   const elfm_link_options *o = &l->o;
 
   /* 1. End tracks dark for too long (stable compaction keeps the order
-   * deterministic); predict the others. */
+   * deterministic), unless a younger twin continues them (step 8);
+   * predict the others. */
+  if (o->twin_um > 0) {
+    elfm_status st = elfm_link_join_twins(l, frame, err);
+    if (st != ELFM_OK) return st;
+  }
   size_t w = 0;
   const int at_rest = o->rest_speed_um_per_ms > 0 && elfm_link_objects_at_rest(l);
   for (size_t i = 0; i < l->n_live; i++) {

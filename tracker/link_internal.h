@@ -77,6 +77,7 @@ struct elfm_linker {
   link_encounter *enc;       /* step 7's pending encounters, in the order they began */
   size_t n_enc, cap_enc;
   int64_t next_id, last_frame, last_t_us;
+  int64_t n_twins;           /* tracks step 8 joined to a younger twin */
   int started;
   /* per-frame scratch, grown on demand */
   size_t cap_det, cap_trk;
@@ -240,6 +241,13 @@ void elfm_link_predict_rest(const elfm_link_options *o, live_track *lt, int64_t 
  * since before its first point; the young track is then freed and removed
  * from l->live (order kept). */
 elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_error *err);
+
+/* Step 8, twins (o.twin_um > 0), at the start of a step for `frame`: each
+ * live track that ends in it (dark for more than max_gap_frames) and has a
+ * younger twin (elfm_link_options.twin_um) is joined to it: the twin's
+ * slot carries on with the ending track's points, then the twin's after
+ * them, and the ending track's slot is removed (the order kept). */
+elfm_status elfm_link_join_twins(elfm_linker *l, int64_t frame, elfm_error *err);
 
 /* Step 6, swap review (o.swap_points > 0): each gap closing still to be
  * reviewed whose tail has swap_points points is revisited once; the tails
