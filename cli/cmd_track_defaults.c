@@ -20,17 +20,11 @@ void track_defaults(track_opts *o)
   elfm_link_options_default(&o->link);
   elfm_smooth_options_default(&o->smooth);
   o->max_det = 10000;
-  /* Dim objects: the run judges its first peaks and, if they are faint,
-   * starts again with --blur-px 1 (track_opts_derive says where). */
-  o->blur_auto = 1;
-  /* Fast objects: ... with windows of half the length (track_opts_derive says where). */
-  o->dt_auto = 1;
-  /* Crawling cells: ... with the integral (track_opts_derive says where). */
-  o->repr_auto = 1;
-  /* A stage: ... with --motion stage when the first tracks move as one. */
-  o->motion_auto = 1;
-  /* Pulsed light: ... with --start each-trigger (track_opts_derive says where). */
-  o->start_auto = 1;
+  /* Dim objects, fast objects, crawling cells, a stage, pulsed light: the
+   * run judges its first peaks (a stage: its first tracks moving as one)
+   * and may start again with --blur-px 1, windows of half the length, the
+   * integral, --motion stage or --start each-trigger (track_opts_derive). */
+  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = o->start_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -174,6 +168,13 @@ void track_defaults(track_opts *o)
    * byte for byte the same (docs/tracker.md "Slow encounters along
    * straight lines"). */
   o->link.encounter_line_ratio = 0.5;
+  /* A track about to end whose last 20 points a younger track, born on
+   * them, holds too (within 2 um): one bead in two tracks, and the older
+   * goes on as the younger (elfm_link.h step 8). Flow 1 s seeds 1-20 alpha
+   * 0.7571 -> 0.7599 (8 up, none down); 100 ms flow, stage, worm, blink the
+   * same (docs/tracker.md "Twins at a track's end"). */
+  o->link.twin_um = 2;
+  o->link.twin_points = 5;
   /* Established tracks (8 points, the short fit's history) are assigned
    * before younger ones (elfm_link.h step 3): flow 100 ms seeds 1-20,
    * alpha 0.7846 -> 0.7897; held-out 21-24 0.774 -> 0.783; 40 and 60

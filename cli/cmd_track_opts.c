@@ -154,6 +154,10 @@ static void usage(FILE *f)
     "                       better; the review then waits for 20 points (0.5; 0 = off)\n"
     "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
     "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
+    "  --twin-um D, --twin-points N  a track about to end whose last 4N points\n"
+    "                       include N that a younger track holds too, within D\n"
+    "                       (linker metric) in the same frame, goes on as that\n"
+    "                       track: one object, not two (2; 5; D 0 = off)\n"
     "  --rest-speed-um-per-ms V  while most tracks of >= 4 points move slower than V,\n"
     "                       a track dark for over 6 frames is looked for where it\n"
     "                       was too, not only where its velocity carries it (for\n"
@@ -316,7 +320,7 @@ enum {
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
-  O_LSCALE, O_PLSHIFT
+  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -349,6 +353,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"encounter-circle-ratio", required_argument, 0, O_ENCCR},
       {"encounter-line-ratio", required_argument, 0, O_ENCLR},
       {"review-join-factor", required_argument, 0, O_RJOIN},
+      {"twin-um", required_argument, 0, O_TWIN}, {"twin-points", required_argument, 0, O_TWINN},
       {"weak-gate-um", required_argument, 0, O_WEAKGATE},
       {"guided-low", required_argument, 0, O_GUIDED},
       {"view-support", required_argument, 0, O_VSUP},
@@ -617,6 +622,13 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_RJOIN:
       if (!cli_parse_double_in(C, "--review-join-factor", a, 0, 0, 1e6, ">= 0", &o.link.review_join_factor))
+        return CLI_USAGE;
+      break;
+    case O_TWIN:
+      if (!cli_parse_double_in(C, "--twin-um", a, 0, 0, 1e6, ">= 0", &o.link.twin_um)) return CLI_USAGE;
+      break;
+    case O_TWINN:
+      if (!cli_parse_int_in(C, "--twin-points", a, 1, 1000, "1..1000", &o.link.twin_points))
         return CLI_USAGE;
       break;
     case O_RESTV:

@@ -130,6 +130,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "gap_fills_retried", (double)c->n_filled_retry);
   cJSON_AddNumberToObject(cnt, "gap_fills_retried_unconfirmed", (double)c->n_retry_dropped);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
+  cJSON_AddNumberToObject(cnt, "tracks_joined_twins", (double)elfm_link_n_twins(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->n_info);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
@@ -195,6 +196,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "encounter_circle_ratio", o->link.encounter_circle_ratio);
   cJSON_AddNumberToObject(par, "encounter_line_ratio", o->link.encounter_line_ratio);
   cJSON_AddNumberToObject(par, "review_join_factor", o->link.review_join_factor);
+  cJSON_AddNumberToObject(par, "twin_um", o->link.twin_um);
+  cJSON_AddNumberToObject(par, "twin_points", o->link.twin_points);
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);
   cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);
   cJSON_AddNumberToObject(par, "circle_points", o->link.circle_points);
