@@ -83,6 +83,16 @@ static int straight_and_behind(const elfm_track *d, const double p[3], size_t hi
   return q[0] * c[0] + q[1] * c[1] + q[2] * c[2] < -margin_um;
 }
 
+/* Remove the live slots a repair step emptied (t = NULL: the track went
+ * on in another slot), keeping the others' order (steps 5 and 8). */
+static void drop_removed(elfm_linker *l)
+{
+  size_t w = 0;
+  for (size_t i = 0; i < l->n_live; i++)
+    if (l->live[i].t) l->live[w++] = l->live[i];
+  l->n_live = w;
+}
+
 /* 5. Stitching: a track that has just reached stitch_points real points
  * (young) may be the continuation of a live track dark since before the
  * young one's first point (dormant). The forward gap closing cannot find
@@ -177,10 +187,7 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
     d->review = 0;
     y->t = NULL;  /* removed below, keeping the order */
   }
-  size_t w = 0;
-  for (size_t i = 0; i < nl; i++)
-    if (l->live[i].t) l->live[w++] = l->live[i];
-  l->n_live = w;
+  drop_removed(l);
   return ELFM_OK;
 }
 
@@ -695,9 +702,6 @@ elfm_status elfm_link_join_twins(elfm_linker *l, int64_t frame, elfm_error *err)
     a->t = NULL;  /* not ended: removed below, keeping the order */
     l->n_twins++;
   }
-  size_t w = 0;
-  for (size_t i = 0; i < l->n_live; i++)
-    if (l->live[i].t) l->live[w++] = l->live[i];
-  l->n_live = w;
+  drop_removed(l);
   return st;
 }
