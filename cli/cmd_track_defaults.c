@@ -401,21 +401,21 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 0.896 / 0.892 / 0.941 -> 0.926 / 0.846 / 0.886 / 0.939. */
     o->fill_frames = 1;
   }
-  if (integral && !g->near) {
+  if (!g->near) {
     /* Two neurons of a C. elegans pair, 6-7 um apart at one depth, have
      * images that overlap in every view once out of focus, and each pulls
      * the other's centroid (lateral RMSE 0.84-0.90 um at |z| 45-60 um
-     * against 0.40 um for neurons 14 um apart, worm seeds 1-4). The
-     * integral's image is the object itself, symmetric, so the other's
-     * light can be read mirrored and taken out (recon/localize.c). Worm,
-     * thirteenth session, mean alpha_detections / alpha off -> 12 um:
-     * 200 ms seeds 1-4 0.888 / 0.891 -> 0.900 / 0.899, held-out 5-7
-     * 0.881 / 0.872 -> 0.888 / 0.874, unseen 200 ms seeds 8-12 0.888 /
-     * 0.896 -> 0.898 / 0.908, 150 ms 0.874 / 0.865 -> 0.882 / 0.879,
-     * 500 ms 0.878 / 0.773 -> 0.887 / 0.844. Not on time surfaces, where a
-     * moving object's image is a comet, not symmetric: flow 100 ms seeds
-     * 1-20 alpha 0.818 -> 0.817 (alpha_detections 0.808 -> 0.810), held-out
-     * seeds 21-24 0.810 -> 0.791 (docs/tracker.md "Neighbours taken out"). */
+     * against 0.40 um for neurons 14 um apart, worm seeds 1-4); so do
+     * flow beads passing within a few um. The other's light is read
+     * mirrored and taken out (recon/localize.c). Worm, thirteenth session,
+     * mean alpha_detections / alpha off -> 12 um: 200 ms seeds 1-4 0.888 /
+     * 0.891 -> 0.900 / 0.899, 500 ms 0.878 / 0.773 -> 0.887 / 0.844. On
+     * time surfaces too since the fortieth session (a moving bead's image
+     * is a comet, not symmetric, but the fit still gains): alpha_detections
+     * up on every flow set (100 ms seeds 1-20 / 21-32, 1 s 1-20: +0.005 /
+     * +0.008 / +0.006), alpha 0.8814 / 0.8638 / 0.7599 -> 0.8786 / 0.8746
+     * / 0.7747, stage 0.877 -> 0.897; flow_random 100 ms 1-30 -0.007
+     * (docs/tracker.md "Neighbours taken out on time surfaces too"). */
     o->localize_near_um = 12;
   }
   if (integral && !g->locpow) {
