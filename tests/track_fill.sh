@@ -34,9 +34,10 @@
 #    alpha and recall above --fill-retry-um 0 on seed 21 (0.9257 -> 0.9297,
 #    0.9845 -> 0.9905 when it came), summary.json counts those fills and the
 #    ones no neighbour confirmed, and 0 of each with it off;
-#  - the last two comparisons keep the neighbours' light in the view fits
-#    (--localize-near-um 0, the default before the fortieth session, when
-#    both were chosen): with the neighbours taken out, seed 21 finds its
+#  - the comparisons for --fill-retry-um and --view-fit-sigma keep the
+#    neighbours' light in the view fits (--localize-near-um 0, the default
+#    before the fortieth session, when both were chosen): with the
+#    neighbours taken out, seed 21 finds its
 #    points without them. Over flow 100 ms seeds 1-20 at the new defaults
 #    both still gain: --fill-retry-um 0 0.8743, --view-fit-sigma 1 0.8784,
 #    against 0.8786;

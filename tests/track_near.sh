@@ -2,9 +2,9 @@
 # Neighbours taken out of the view fit on time surfaces (`eventlfm track
 # --localize-near-um`, cli/cmd_track_volume.c and cmd_track_fill.c;
 # recon/localize.c; docs/tracker.md "Neighbours taken out on time surfaces
-# too"), on simulator truth, flow seed 22, 100 ms (held out: no setting was
-# chosen on it). Since the fortieth session the default is 12 um on every
-# representation, not only the integral: where two beads pass within a few
+# too"), on simulator truth, flow seed 22, 100 ms (one of the seeds 21-32
+# the change was measured on). Since the fortieth session the default is
+# 12 um on every representation, not only the integral: where two beads pass within a few
 # um, each one's light is read mirrored through its centre and taken out of
 # the other's windows, so their fits no longer pull together:
 #  - the detections place better than with --localize-near-um 0:
