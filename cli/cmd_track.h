@@ -200,7 +200,7 @@ typedef struct track_given {
                                         --motion-fade-um-per-ms */
   int gcvg, lscale;                  /* --gcv-gamma, --loss-scale */
   int mslow, mslows;                 /* --motion-slow-lead-ms, --motion-slow-um-per-ms */
-  int locpow, near;                  /* --localize-power, --localize-near-um */
+  int locpow;                        /* --localize-power */
   int gmp, minpts;                   /* --guided-min-points, --min-points */
   int circ, circnext;                /* --circle-points, --circle-next-path-um */
   int fretry;                        /* --fill-retry-um */

@@ -120,6 +120,15 @@ void track_defaults(track_opts *o)
   o->localize_views = 1;
   elfm_localize_options_default(&o->loc);
   o->guided_views = 8;
+  /* Neighbours within 12 um: their light, read mirrored through their
+   * centres, is taken out of each fit's windows (recon/localize.c). Worm
+   * pairs 6 um apart pulled each other's fits (thirteenth session, worm
+   * 200 ms alpha_detections 0.888 -> 0.900), and so do flow beads passing
+   * within a few um (fortieth session: flow 100 ms seeds 1-20 lateral /
+   * axial RMSE 0.483 / 1.266 -> 0.471 / 1.199 um, alpha held-out 21-32
+   * 0.8638 -> 0.8746, 1 s 0.7599 -> 0.7747, seeds 1-20 0.8814 -> 0.8786;
+   * docs/tracker.md "Neighbours taken out on time surfaces too"). */
+  o->localize_near_um = 12;
   /* Stitching a new track of 5 points onto a dark track whose recent path
    * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
    * circle and come back onto their own path after gaps no extrapolation
@@ -400,23 +409,6 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 200 ms seeds 1-4 with 3 frames, alpha the same, precision 0.933 /
      * 0.896 / 0.892 / 0.941 -> 0.926 / 0.846 / 0.886 / 0.939. */
     o->fill_frames = 1;
-  }
-  if (!g->near) {
-    /* Two neurons of a C. elegans pair, 6-7 um apart at one depth, have
-     * images that overlap in every view once out of focus, and each pulls
-     * the other's centroid (lateral RMSE 0.84-0.90 um at |z| 45-60 um
-     * against 0.40 um for neurons 14 um apart, worm seeds 1-4); so do
-     * flow beads passing within a few um. The other's light is read
-     * mirrored and taken out (recon/localize.c). Worm, thirteenth session,
-     * mean alpha_detections / alpha off -> 12 um: 200 ms seeds 1-4 0.888 /
-     * 0.891 -> 0.900 / 0.899, 500 ms 0.878 / 0.773 -> 0.887 / 0.844. On
-     * time surfaces too since the fortieth session (a moving bead's image
-     * is a comet, not symmetric, but the fit still gains): alpha_detections
-     * up on every flow set (100 ms seeds 1-20 / 21-32, 1 s 1-20: +0.005 /
-     * +0.008 / +0.006), alpha 0.8814 / 0.8638 / 0.7599 -> 0.8786 / 0.8746
-     * / 0.7747, stage 0.877 -> 0.897; flow_random 100 ms 1-30 -0.007
-     * (docs/tracker.md "Neighbours taken out on time surfaces too"). */
-    o->localize_near_um = 12;
   }
   if (integral && !g->locpow) {
     /* The view fit weighs each pixel by value^3 on a time surface, where

@@ -486,7 +486,6 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
         return cli_message(C, CLI_USAGE, "--localize-power must be 1..8, not '%s'", a);
       break;
     case O_LOCNEAR:
-      g.near = 1;
       if (!cli_parse_double_in(C, "--localize-near-um", a, 0, 0, 1000, "0..1000",
                                &o.localize_near_um))
         return CLI_USAGE;
