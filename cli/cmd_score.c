@@ -29,7 +29,7 @@ static void score_usage(FILE *f)
           "                      [--tracks tracks.csv] [--detections detections.csv]\n"
           "                      [--calib calib.json] [--stage-velocity-um-per-ms vx,vy,vz]\n"
           "                      [--eps-um 4] [--kz 4] [--n-frames N] [--frames FILE|run]\n"
-          "                      [--window-us W|run]\n"
+          "                      [--window-us W|run] [--by-depth UM]\n"
           "                      [--motion-fade-um-per-ms F] [--json]\n"
           "\n"
           "Scores a run against simulator truth (SPEC 7). Distances are anisotropic,\n"
@@ -61,6 +61,11 @@ static void score_usage(FILE *f)
           "beside tracks.csv (the run's accumulation time); with --frames, each frame's own\n"
           "window [t_start_us, t_end_us). Default 0: SPEC 7 as written, an object counts\n"
           "when it is bright at t_us.\n"
+          "--by-depth UM: the detection measures and each band's part of the tracks' alpha\n"
+          "per band of UM um of the truth's |z| as well (a Fourier LFM sees an object less\n"
+          "well out of focus): which depths to trust. A band's alpha_tracks counts its truth\n"
+          "points only; the frames where only a paired track exists belong to no depth\n"
+          "(printed beside, as the alpha they cost).\n"
           "--json prints one JSON object on stdout instead of the table.\n");
 }
 
@@ -125,6 +130,28 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   cJSON_AddNumberToObject(o, "window_us", op->so.window_us);
   cJSON_AddBoolToObject(o, "window_frames", op->so.window_frames);
   cJSON_AddBoolToObject(o, "frame_list", op->frames != NULL);
+  if (r->n_depth_bands > 0) {
+    cJSON_AddNumberToObject(o, "depth_band_um", op->so.depth_band_um);
+    json_num(o, "alpha_tracks_unplaced_cost", r->has_tracks ? r->alpha_tracks_unplaced_cost : NAN);
+    cJSON *arr = cJSON_AddArrayToObject(o, "depth_bands");
+    for (int k = 0; arr && k < r->n_depth_bands; k++) {
+      const elfm_score_band *b = &r->depth_bands[k];
+      if (b->n_truth_points == 0) continue; /* bands nothing lay in */
+      cJSON *e = cJSON_CreateObject();
+      if (!e) break;
+      cJSON_AddNumberToObject(e, "z_lo_um", b->z_lo_um);
+      json_num(e, "z_hi_um", b->z_hi_um); /* null: the last, open band */
+      cJSON_AddNumberToObject(e, "n_truth_points", (double)b->n_truth_points);
+      cJSON_AddNumberToObject(e, "n_true_positives", (double)b->n_true_positives);
+      json_num(e, "recall", b->recall);
+      json_num(e, "rmse_x_um", b->rmse_x_um);
+      json_num(e, "rmse_y_um", b->rmse_y_um);
+      json_num(e, "rmse_z_um", b->rmse_z_um);
+      json_num(e, "alpha_detections", b->alpha_detections);
+      json_num(e, "alpha_tracks", r->has_tracks ? b->alpha_tracks : NAN);
+      cJSON_AddItemToArray(arr, e);
+    }
+  }
   char *text = cJSON_PrintUnformatted(o);
   cJSON_Delete(o);
   if (!text) return cli_message("score", CLI_FAIL, "out of memory");
@@ -180,6 +207,28 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
     printf("  alpha with identities mended %8.4f (every point on its own object's track); of "
            "the truth points\n  %.4f in fragments, %.4f in tracks of other objects\n",
            r->alpha_identities, r->identity_fragments, r->identity_other_tracks);
+  }
+  if (r->n_depth_bands > 0) {
+    printf("by depth (bands of %g um of the truth's |z|; empty bands left out)\n",
+           op->so.depth_band_um);
+    printf("  |z| um        truth   share   recall   RMSE x      y      z   alpha_det%s\n",
+           r->has_tracks ? "  alpha_tracks" : "");
+    for (int k = 0; k < r->n_depth_bands; k++) {
+      const elfm_score_band *b = &r->depth_bands[k];
+      if (b->n_truth_points == 0) continue;
+      char band[40];
+      if (isfinite(b->z_hi_um)) snprintf(band, sizeof band, "%5g-%-5g", b->z_lo_um, b->z_hi_um);
+      else snprintf(band, sizeof band, "%5g+     ", b->z_lo_um);
+      printf("  %s %9lld  %5.1f %%  %7.4f  %6.3f %6.3f %6.3f   %8.4f", band,
+             (long long)b->n_truth_points, 100.0 * (double)b->n_truth_points /
+             (double)r->n_truth_points, b->recall, b->rmse_x_um, b->rmse_y_um, b->rmse_z_um,
+             b->alpha_detections);
+      if (r->has_tracks) printf("  %12.4f", b->alpha_tracks);
+      printf("\n");
+    }
+    if (r->has_tracks)
+      printf("  alpha's cost outside the bands (frames where only a paired track exists) "
+             "%.4f\n", r->alpha_tracks_unplaced_cost);
   }
   if (r->has_stage)
     printf("stage: mean velocity (%.4f, %.4f, %.4f) um/ms, relative error %.4f\n",
@@ -238,7 +287,7 @@ static int uneven_windows(const elfm_table *t)
 int cmd_score(int argc, char **argv)
 {
   enum { OPT_TRUTH = 256, OPT_TRACKS, OPT_DETS, OPT_CALIB, OPT_STAGE, OPT_EPS, OPT_KZ, OPT_JSON,
-         OPT_NFRAMES, OPT_WINDOW, OPT_FADE, OPT_FRAMES };
+         OPT_NFRAMES, OPT_WINDOW, OPT_FADE, OPT_FRAMES, OPT_DEPTH };
   static const struct option longopts[] = {
       {"truth", required_argument, NULL, OPT_TRUTH},
       {"tracks", required_argument, NULL, OPT_TRACKS},
@@ -252,6 +301,7 @@ int cmd_score(int argc, char **argv)
       {"window-us", required_argument, NULL, OPT_WINDOW},
       {"frames", required_argument, NULL, OPT_FRAMES},
       {"motion-fade-um-per-ms", required_argument, NULL, OPT_FADE},
+      {"by-depth", required_argument, NULL, OPT_DEPTH},
       {"help", no_argument, NULL, 'h'},
       {NULL, 0, NULL, 0}};
   struct score_opts op;
@@ -289,6 +339,11 @@ int cmd_score(int argc, char **argv)
       if (!(op.so.kz > 0)) return cli_message("score", CLI_USAGE, "--kz must be positive");
       break;
     case OPT_JSON: op.json = 1; break;
+    case OPT_DEPTH:
+      if (!cli_parse_double_in("score", "--by-depth", optarg, 0, 1, 1000, "> 0 and <= 1000 um",
+                               &op.so.depth_band_um))
+        return CLI_USAGE;
+      break;
     case OPT_NFRAMES:
       if (!cli_parse_int64("score", "--n-frames", optarg, &op.so.n_frames_hint)) return CLI_USAGE;
       if (op.so.n_frames_hint < 1 || op.so.n_frames_hint > 50000000)

@@ -122,6 +122,38 @@ int main(void)
   }
   CHECK_EQ_INT(run("--truth truth.csv --tracks tracks.csv --n-frames 0", out, sizeof out, err,
                    sizeof err), 2);
+  /* --by-depth 2: object 1 (|z| 5, tracked 1 um off) in the band 4-6 um,
+   * object 2 (|z| 3, missed) in 2-4 um; the empty bands left out */
+  rc = run("--truth truth.csv --tracks tracks.csv --json --by-depth 2", out, sizeof out, err,
+           sizeof err);
+  CHECK_EQ_INT(rc, 0);
+  o = cJSON_Parse(out);
+  CHECK(o != NULL);
+  if (o) {
+    const cJSON *bands = cJSON_GetObjectItemCaseSensitive(o, "depth_bands");
+    CHECK_EQ_INT(cJSON_GetArraySize(bands), 2);
+    const cJSON *b0 = cJSON_GetArrayItem(bands, 0), *b1 = cJSON_GetArrayItem(bands, 1);
+    CHECK_NEAR(jnum(b0, "z_lo_um"), 2, 0);
+    CHECK_NEAR(jnum(b0, "recall"), 0.0, 1e-12);
+    CHECK_NEAR(jnum(b0, "alpha_tracks"), 0.0, 1e-12);
+    CHECK_NEAR(jnum(b1, "z_lo_um"), 4, 0);
+    CHECK_NEAR(jnum(b1, "n_truth_points"), 20, 0);
+    CHECK_NEAR(jnum(b1, "rmse_x_um"), 1.0, 1e-9);
+    CHECK_NEAR(jnum(b1, "alpha_tracks"), 0.75, 1e-9);
+    CHECK_NEAR(jnum(o, "alpha_tracks_unplaced_cost"), 0.0, 1e-12);
+    cJSON_Delete(o);
+  }
+  rc = run("--truth truth.csv --tracks tracks.csv --by-depth 2", out, sizeof out, err, sizeof err);
+  CHECK_EQ_INT(rc, 0);
+  CHECK_MSG(strstr(out, "by depth (bands of 2 um") != NULL && strstr(out, "0.7500") != NULL,
+            "stdout: %s", out);
+  /* without it, no bands in the JSON */
+  rc = run("--truth truth.csv --tracks tracks.csv --json", out, sizeof out, err, sizeof err);
+  CHECK_MSG(rc == 0 && strstr(out, "depth_bands") == NULL, "stdout: %s", out);
+  CHECK_EQ_INT(run("--truth truth.csv --tracks tracks.csv --by-depth 0", out, sizeof out, err,
+                   sizeof err), 2);
+  CHECK_EQ_INT(run("--truth truth.csv --tracks tracks.csv --by-depth deep", out, sizeof out, err,
+                   sizeof err), 2);
   /* the readable table */
   rc = run("--truth truth.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
   CHECK_EQ_INT(rc, 0);

@@ -132,6 +132,25 @@
  * apart: they are NaN and only that mean is given (pass it as the lead with
  * delay 0 for that speed).
  *
+ * BY DEPTH (not SPEC §7; depth_band_um > 0). A Fourier LFM sees an object
+ * less well the further it lies from focus (its 25 images widen and dim),
+ * so the measures above are also given per band of the truth point's |z|:
+ * band b holds |z| in [b w, (b + 1) w), the last band everything beyond
+ * (ELFM_SCORE_MAX_DEPTH_BANDS bands in all). Per band: the truth points,
+ * the detections' recall, RMSE x/y/z and alpha_detections over the truth
+ * points of the band (the detection matching above, unchanged), and
+ * alpha_tracks = 1 - (sum of min(d, eps) over the band's truth points) /
+ * (eps x the band's truth points), where d is the distance to the point of
+ * the truth track's paired candidate in that frame (eps when the object is
+ * unpaired, or its candidate has no real point there or none within the
+ * gate): the ISBI alpha's part that the band's points pay. Weighted by
+ * their points, the bands' alpha_tracks average to the alpha above plus the
+ * frames where only a paired candidate exists (eps each in d(X, Y)), which
+ * belong to no truth depth (alpha_tracks_unplaced_cost below). Why: on
+ * simulated flow every bead within 45 um of focus is found and nearly every
+ * miss lies beyond 55 um (docs/tracker.md "Where the information runs
+ * out"); a microscopist needs to know over which depths to trust a track.
+ *
  * STAGE. With a stage velocity v_s (um/ms), the mean velocity vector v_m is
  * the mean of the vx/vy/vz_um_per_ms columns of tracks.csv over its real rows
  * (or, without those columns, of per-track displacement over time), and
@@ -236,12 +255,25 @@ typedef struct elfm_score_options {
    * the lateral speed below which a point is left out of the regression:
    * 0.5 um/ms by default; lower for slow samples (worm neurons: 0.05). */
   double motion_lead_fade_um_per_ms;
+  /* > 0: the measures per band of this many um of |z| as well (BY DEPTH
+   * above); 0 (default): none. Must be finite and >= 0. */
+  double depth_band_um;
 } elfm_score_options;
 
 /* eps 4, kz 4, no bounds, no stage, no frame-count hint, 10 M truth points. */
 void elfm_score_options_default(elfm_score_options *o);
 /* Volume bounds from a calibration (SPEC §3 voxel grid). */
 void elfm_score_options_set_calib(elfm_score_options *o, const elfm_calib *c);
+
+/* One band of |z| (BY DEPTH above). Measures without a point to average
+ * over are NaN. */
+#define ELFM_SCORE_MAX_DEPTH_BANDS 16
+typedef struct elfm_score_band {
+  double z_lo_um, z_hi_um;      /* |z| in [z_lo, z_hi); z_hi INFINITY for the last band */
+  int64_t n_truth_points, n_true_positives;
+  double recall, rmse_x_um, rmse_y_um, rmse_z_um, alpha_detections;
+  double alpha_tracks;          /* NaN without tracks */
+} elfm_score_band;
 
 typedef struct elfm_score_result {
   int n_frames;                 /* frames scored (known + interpolated) */
@@ -267,6 +299,13 @@ typedef struct elfm_score_result {
   int has_stage;
   double mean_v_um_per_ms[3];
   double stage_rel_error;
+  /* BY DEPTH (depth_band_um > 0): n_depth_bands bands, those with no truth
+   * point included; alpha_tracks_unplaced_cost is the eps x candidate-only
+   * frames of the pairs over eps x all truth points (what alpha loses
+   * outside the bands; NaN without tracks) */
+  int n_depth_bands;
+  elfm_score_band depth_bands[ELFM_SCORE_MAX_DEPTH_BANDS];
+  double alpha_tracks_unplaced_cost;
 } elfm_score_result;
 
 /* Score loaded tables. truth is required; tracks and detections may each be

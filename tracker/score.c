@@ -134,6 +134,7 @@ static void motion_finish(const motion_sums *m, elfm_score_result *out)
   out->n_motion_points = m->n;
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
   out->motion_speed_sd_um_per_ms = NAN;
+  out->alpha_tracks_unplaced_cost = NAN;
   if (m->n == 0) return;
   double n = (double)m->n, ms = m->s / n;
   double var_s = fmax(m->ss / n - ms * ms, 0.0);
@@ -151,9 +152,14 @@ static void motion_finish(const motion_sums *m, elfm_score_result *out)
  * joined by gated pairs (d < eps) form components, each solved with the
  * Hungarian solver; the counts, ratios and RMSEs go to out. */
 static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const points_t *dp,
-                                    const gate_t *g, const motion_model *mm,
+                                    const gate_t *g, const motion_model *mm, double band_um,
                                     elfm_score_result *out, elfm_error *err)
 {
+  /* per depth band (elfm_score.h, BY DEPTH): matched pairs, their squared
+   * errors and summed d */
+  int64_t b_tp[ELFM_SCORE_MAX_DEPTH_BANDS] = {0};
+  double b_sx[ELFM_SCORE_MAX_DEPTH_BANDS] = {0}, b_sy[ELFM_SCORE_MAX_DEPTH_BANDS] = {0};
+  double b_sz[ELFM_SCORE_MAX_DEPTH_BANDS] = {0}, b_sd[ELFM_SCORE_MAX_DEPTH_BANDS] = {0};
   /* Group detections per frame, sorted by x. */
   int64_t *off;
   keyed_t *ds;
@@ -247,6 +253,14 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         double dz = dp->z[di] - tr->pt.z[p];
         tp++;
         sd += dist_aniso(g, dx, dy, dz);
+        if (band_um > 0) {
+          const int k = depth_band(tr->pt.z[p], band_um);
+          b_tp[k]++;
+          b_sx[k] += dx * dx;
+          b_sy[k] += dy * dy;
+          b_sz[k] += dz * dz;
+          b_sd[k] += dist_aniso(g, dx, dy, dz);
+        }
         motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
@@ -267,6 +281,16 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
       tr->pt.n ? 1.0 - (sd + g->eps * (double)(tr->pt.n - tp)) / (g->eps * (double)tr->pt.n)
                : NAN;
   motion_finish(&ms, out);
+  for (int k = 0; k < out->n_depth_bands; k++) {
+    elfm_score_band *bd = &out->depth_bands[k];
+    const double n = (double)bd->n_truth_points, m = (double)b_tp[k];
+    bd->n_true_positives = b_tp[k];
+    bd->recall = n > 0 ? m / n : NAN;
+    bd->rmse_x_um = m > 0 ? sqrt(b_sx[k] / m) : NAN;
+    bd->rmse_y_um = m > 0 ? sqrt(b_sy[k] / m) : NAN;
+    bd->rmse_z_um = m > 0 ? sqrt(b_sz[k] / m) : NAN;
+    bd->alpha_detections = n > 0 ? 1.0 - (b_sd[k] + g->eps * (n - m)) / (g->eps * n) : NAN;
+  }
 done:
   free(obj_of);
   elfm_assign_workspace_free(ws);
@@ -366,7 +390,11 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if (!(opt->eps_um > 0) || !(opt->kz > 0) || !isfinite(opt->eps_um) || !isfinite(opt->kz))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "gate eps %g um and kz %g must be positive", opt->eps_um, opt->kz);
+  if (!(opt->depth_band_um >= 0) || !isfinite(opt->depth_band_um))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "depth band %g um must be finite and >= 0", opt->depth_band_um);
   gate_t g = {opt->eps_um, opt->kz};
+  const double band_um = opt->depth_band_um;
 
   int cd[5], ct[9];
   elfm_status s = elfm_score_columns(detections, cd, tracks, ct, err);
@@ -409,9 +437,21 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   mm.lead_only.motion_delay_us = 0.0;
   mm.delay_only.motion_lead_um = 0.0;
   mm.delay_only.motion_delay_us = 1000.0;
-  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mm, out, err)) != ELFM_OK) goto done;
+  if (band_um > 0) {
+    out->n_depth_bands = ELFM_SCORE_MAX_DEPTH_BANDS;
+    for (int k = 0; k < ELFM_SCORE_MAX_DEPTH_BANDS; k++) {
+      elfm_score_band *bd = &out->depth_bands[k];
+      bd->z_lo_um = band_um * k;
+      bd->z_hi_um = k < ELFM_SCORE_MAX_DEPTH_BANDS - 1 ? band_um * (k + 1) : INFINITY;
+      bd->recall = bd->rmse_x_um = bd->rmse_y_um = bd->rmse_z_um = NAN;
+      bd->alpha_detections = bd->alpha_tracks = NAN;
+    }
+    for (int64_t p = 0; p < tr.pt.n; p++) out->depth_bands[depth_band(tr.pt.z[p], band_um)].n_truth_points++;
+  }
+  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mm, band_um, out, err)) != ELFM_OK)
+    goto done;
   if (tracks) {
-    if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
+    if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, band_um, out, err)) != ELFM_OK) goto done;
     if ((s = elfm_score_identities(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
     if (opt->have_stage) score_stage(tracks, ct, opt, out);
   }

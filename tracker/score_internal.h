@@ -34,6 +34,14 @@ static inline double dist_aniso(const gate_t *g, double dx, double dy, double dz
   return sqrt(dx * dx + dy * dy + dzk * dzk);
 }
 
+/* The band of |z| a truth point at z_um falls in (elfm_score.h, BY DEPTH;
+ * band_um > 0): the last band takes everything beyond. */
+static inline int depth_band(double z_um, double band_um)
+{
+  const double k = floor(fabs(z_um) / band_um);
+  return k < ELFM_SCORE_MAX_DEPTH_BANDS - 1 ? (int)k : ELFM_SCORE_MAX_DEPTH_BANDS - 1;
+}
+
 /* A sort key and the row or point it belongs to. */
 typedef struct {
   double key;   /* sort key (id, or x) */
@@ -166,9 +174,10 @@ elfm_status elfm_score_index_by_frame(const points_t *p, int n_frames, int64_t *
 
 /* ---------------------------------------------------------------------- */
 /* score_isbi.c: the ISBI 2012 track measures (elfm_score.h, TRACKS) into
- * out's track fields. */
+ * out's track fields; with band_um > 0 also each depth band's alpha_tracks
+ * (elfm_score.h, BY DEPTH; out's bands already set up). */
 elfm_status elfm_score_isbi_tracks(const truth_t *tr, const cands_t *cd, const gate_t *g,
-                                   elfm_score_result *out, elfm_error *err);
+                                   double band_um, elfm_score_result *out, elfm_error *err);
 /* (4b) The identity diagnostics (elfm_score.h, IDENTITIES) into out's
  * alpha_identities, identity_fragments and identity_other_tracks. */
 elfm_status elfm_score_identities(const truth_t *tr, const cands_t *cd, const gate_t *g,

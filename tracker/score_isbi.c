@@ -61,8 +61,51 @@ typedef struct {
   double cost;     /* d(X, Y) */
 } pair_t;
 
+/* Each depth band's alpha_tracks (elfm_score.h, BY DEPTH), from the pairs
+ * chosen (obj_pair[k]: object k's pair, or -1 for its dummy): every truth
+ * point of a paired object costs its distance to the candidate's point of
+ * the same frame when that is within the gate, eps otherwise. Both lists
+ * are in frame order, so one walk per object. What the pair costs beyond
+ * its truth points (the candidate-only frames) goes to
+ * alpha_tracks_unplaced_cost. */
+static void isbi_depth_bands(const truth_t *tr, const cands_t *cd, const gate_t *g, double band_um,
+                             const pair_t *pairs, const int *obj_pair, elfm_score_result *out)
+{
+  double cost[ELFM_SCORE_MAX_DEPTH_BANDS] = {0}, unplaced = 0;
+  int64_t n_all = 0;
+  for (int k = 0; k < tr->n_obj; k++) {
+    const int64_t p0 = tr->obj_off[k], p1 = tr->obj_off[k + 1];
+    n_all += p1 - p0;
+    if (obj_pair[k] < 0) {
+      for (int64_t p = p0; p < p1; p++) cost[depth_band(tr->pt.z[p], band_um)] += g->eps;
+      continue;
+    }
+    const pair_t *pp = &pairs[obj_pair[k]];
+    int q = cd->off[pp->cand];
+    const int q1 = cd->off[pp->cand + 1];
+    double own = 0;
+    for (int64_t p = p0; p < p1; p++) {
+      const int f = tr->pt.frame[p];
+      while (q < q1 && cd->pt.frame[q] < f) q++;
+      double d = g->eps;
+      if (q < q1 && cd->pt.frame[q] == f) {
+        const double dq = cand_truth_d(g, cd, q, tr, p);
+        if (dq < g->eps) d = dq;
+      }
+      cost[depth_band(tr->pt.z[p], band_um)] += d;
+      own += d;
+    }
+    unplaced += pp->cost - own;
+  }
+  for (int b = 0; b < out->n_depth_bands; b++) {
+    const double n = (double)out->depth_bands[b].n_truth_points;
+    out->depth_bands[b].alpha_tracks = n > 0 ? 1.0 - cost[b] / (g->eps * n) : NAN;
+  }
+  out->alpha_tracks_unplaced_cost = n_all > 0 ? unplaced / (g->eps * (double)n_all) : NAN;
+}
+
 elfm_status elfm_score_isbi_tracks(const truth_t *tr, const cands_t *cd, const gate_t *g,
-                                   elfm_score_result *out, elfm_error *err)
+                                   double band_um, elfm_score_result *out, elfm_error *err)
 {
   elfm_status s = ELFM_OK;
   int n_obj = tr->n_obj, n_c = cd->n_tracks;
@@ -239,6 +282,7 @@ elfm_status elfm_score_isbi_tracks(const truth_t *tr, const cands_t *cd, const g
     out->jaccard_detections = tp + fn + fp ? (double)tp / (double)(tp + fn + fp) : NAN;
     out->rmse_tracks_um = tp ? sqrt(sum_d2 / (double)tp) : NAN;
   }
+  if (band_um > 0) isbi_depth_bands(tr, cd, g, band_um, pairs, obj_pair, out);
 done:
   elfm_assign_workspace_free(ws);
   free(pairs);
@@ -393,7 +437,7 @@ elfm_status elfm_score_identities(const truth_t *tr, const cands_t *cd, const ga
   rl.off[nt] = (int)w;
   rl.n_tracks = nt;
   rl.pt.n = w;
-  if ((s = elfm_score_isbi_tracks(tr, &rl, g, &tmp, err)) != ELFM_OK) goto done;
+  if ((s = elfm_score_isbi_tracks(tr, &rl, g, 0, &tmp, err)) != ELFM_OK) goto done;
   out->alpha_identities = tmp.alpha;
 done:
   free(own);
