@@ -134,7 +134,6 @@ static void motion_finish(const motion_sums *m, elfm_score_result *out)
   out->n_motion_points = m->n;
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
   out->motion_speed_sd_um_per_ms = NAN;
-  out->alpha_tracks_unplaced_cost = NAN;
   if (m->n == 0) return;
   double n = (double)m->n, ms = m->s / n;
   double var_s = fmax(m->ss / n - ms * ms, 0.0);
@@ -375,6 +374,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   out->alpha_identities = out->identity_fragments = out->identity_other_tracks = NAN;
   out->motion_lead_um = out->motion_delay_us = out->motion_along_mean_um = NAN;
   out->motion_speed_sd_um_per_ms = NAN;
+  out->alpha_tracks_unplaced_cost = NAN;
   if (!truth || (!tracks && !detections) || !opt)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "scoring needs truth and tracks or detections");
