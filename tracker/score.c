@@ -250,15 +250,16 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
         int di = (int)ds[da + cols[r2c[a]]].idx;
         double dx = dp->x[di] - tr->pt.x[p], dy = dp->y[di] - tr->pt.y[p];
         double dz = dp->z[di] - tr->pt.z[p];
+        const double d = dist_aniso(g, dx, dy, dz);
         tp++;
-        sd += dist_aniso(g, dx, dy, dz);
+        sd += d;
         if (band_um > 0) {
           const int k = depth_band(tr->pt.z[p], band_um);
           b_tp[k]++;
           b_sx[k] += dx * dx;
           b_sy[k] += dy * dy;
           b_sz[k] += dz * dz;
-          b_sd[k] += dist_aniso(g, dx, dy, dz);
+          b_sd[k] += d;
         }
         motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
@@ -446,10 +447,11 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
       bd->recall = bd->rmse_x_um = bd->rmse_y_um = bd->rmse_z_um = NAN;
       bd->alpha_detections = bd->alpha_tracks = NAN;
     }
-    for (int64_t p = 0; p < tr.pt.n; p++) out->depth_bands[depth_band(tr.pt.z[p], band_um)].n_truth_points++;
+    for (int64_t p = 0; p < tr.pt.n; p++)
+      out->depth_bands[depth_band(tr.pt.z[p], band_um)].n_truth_points++;
   }
-  if ((s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mm, band_um, out, err)) != ELFM_OK)
-    goto done;
+  s = score_detections(&tr, &fr, detections ? &dp : &raw, &g, &mm, band_um, out, err);
+  if (s != ELFM_OK) goto done;
   if (tracks) {
     if ((s = elfm_score_isbi_tracks(&tr, &cand, &g, band_um, out, err)) != ELFM_OK) goto done;
     if ((s = elfm_score_identities(&tr, &cand, &g, out, err)) != ELFM_OK) goto done;
