@@ -569,6 +569,11 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * -> 0.847 / 0.909 / 0.826 (seeds 1-3). */
     if (!g->circ) o->link.circle_points = 0;
     if (!g->circnext) o->link.circle_next_path_um = 0;
+    /* ... nor a turn through a dark gap: straight on at the common
+     * velocity (elfm_link.h straight_gaps says why). Stage 200 ms seeds
+     * 1-9: alpha 0.8872 -> 0.9055, no track dropped for outliers (5
+     * before); docs/tracker.md "Straight gaps on a stage". */
+    o->link.straight_gaps = 1;
     /* Rigid motion has one direction, which the tracks' smoothed velocity
      * gives well even at 0.1 um/ms: the lead need not fade below 0.5 um/ms.
      * stage_accel 300 ms (0.1 -> 2.5 um/ms): fitted acceleration 3.6 % ->
@@ -591,12 +596,17 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * where it is (ON events fire on its leading half) and where it was a
      * little earlier (the weights value^P favour the newest events, not the
      * frame's end): along its lateral motion v the error is lead - delay x
-     * |v|. `eventlfm score --calib`'s regression of the detections' error on
-     * the views' model of that bias (elfm_score.h), flow 100 ms seeds 1-8:
-     * lead 1.16-1.38 um (mean 1.25), delay 392-485 us (mean 431). The
-     * delay is the mean age of the weighted events in the window (below)
-     * + 150-190 us at tau 500 / 1000 / 2000 us and power 1 / 2 / 3 (seeds
-     * 1-4): 150 us, the value at the defaults, is kept. (The sixth session's
+     * |v|. The delay is the mean age of the weighted events in the window
+     * (below) + 20 us. Forty-second session, after the simulator's events
+     * stopped lagging by half a time step (docs/simulator.md "Time steps";
+     * before, `eventlfm score --calib` regressed 392-485 us on flow 100 ms
+     * seeds 1-8 and the offset was 150 us): the regression now gives a mean
+     * of 326 us (age + 45; flow 100 ms seeds 1-20, sd 28 us, its lead 0.13
+     * um above the lead below, which the two trade along the motion), and
+     * alpha over offsets 0 / 10 / 20 / 45 us was 0.8771 / 0.8780 / 0.8782 /
+     * 0.8752 (seeds 1-20), 0.8739 / 0.8746 / 0.8747 / 0.8713 (21-32), flow
+     * 1 s seeds 1-8 at 10 / 20 us 0.7764 / 0.7777 (docs/tracker.md "Delay
+     * after the simulator's time steps"). (The sixth session's
      * 0.8 um and age + 20 us came from a regression on the lateral speed
      * alone, which beads climbing steeply in z bias low; docs/tracker.md
      * "Motion bias".) The lead belongs to the sample (brighter beads lead
@@ -607,7 +617,7 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * 0.837 / 0.750. */
     const double age_us = surface_mean_age_us(o->recon.framer.repr, o->loc.power,
                                               o->recon.framer.tau_us, (double)o->recon.framer.dt_us);
-    if (!g->mdelay) o->smooth.motion_delay_us = age_us + 150.0;
+    if (!g->mdelay) o->smooth.motion_delay_us = age_us + 20.0;
     /* Brighter beads lead further, and their in-focus peaks are wider
      * (the arc of ON events reaches further out): flow 100 ms at 0.5 / 1 /
      * 2 / 4 x the beads' flux, lead (score --calib) against the median

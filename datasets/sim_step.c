@@ -492,7 +492,7 @@ elfm_status sim_step_slice(sim_ws *w, int64_t q, int64_t a, int64_t b, elfm_erro
   const double bg = w->bg;
   for (size_t i = 0; i + 1 < nu; i++) {
     int64_t ta = w->steps[i], tb = w->steps[i + 1];
-    double sdt = (double)(tb - ta), tm = (double)ta + 0.5 * sdt;
+    const double sdt = (double)(tb - ta);
     if (++w->step_id == 0) { /* wrapped after 2^32 steps: forget old marks */
       for (size_t p = 0; p < w->npix; p++) w->px[p].mark = 0;
       w->step_id = 1;
@@ -502,7 +502,14 @@ elfm_status sim_step_slice(sim_ws *w, int64_t q, int64_t a, int64_t b, elfm_erro
     for (size_t k = 0; k < w->n_dyn; k++) {
       int ob = w->dyn_obj[k];
       sim_objslice *o = &w->os[ob];
-      sim_object_position(s, ob, tm, o->pos, NULL);
+      /* Where the object is at the step's end, not its middle: the
+       * photoreceptor's backward-Euler step below reads its input at the
+       * step's end, and so lags a ramp by exactly its time constant at any
+       * step length. Read at the middle, the input was half a step old:
+       * the events lagged by half a step (~100 us on flow, whose steps are
+       * ~200 us; test_sim "step size", docs/simulator.md "Time steps"). The
+       * light (amp_hz) is constant over the step: steps split at its edges. */
+      sim_object_position(s, ob, (double)tb, o->pos, NULL);
       o->amp_hz = object_amp(s, ob, ta, o->pos);
       o->sigma_px = core_sigma_um(w, o->pos[2], s->obj[ob].diameter_um) / w->umpp;
     }

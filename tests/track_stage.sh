@@ -16,21 +16,33 @@
 # peaks within 20 um of focus gave the lead no width, and it stayed at the
 # flow beads' 1.25 um against these brighter beads' ~1.8 (alpha 0.710); the
 # peaks within 40 um give it now (alpha 0.800).
-# Checked: the dim stage seed 2 drops its track running against the stage
-# and is within 1 %; an accelerating stage (0.1 -> 0.6 um/ms in 200 ms),
-# whose tracks differ 2x in mean speed, loses none.
+# Checked: the dim stage seed 3 drops a track that does not move with the
+# stage and is within 1 %; an accelerating stage (0.1 -> 0.6 um/ms in 200
+# ms), whose tracks differ 2x in mean speed, loses none.
+# Forty-second session: the simulator's events no longer lag by half a
+# time step (docs/simulator.md "Time steps"), which changed every scene's
+# events, and with a stage the linker predicts dark tracks straight at the
+# tracks' common velocity (elfm_link.h straight_gaps). Seed 2 was the case
+# (its track running against the stage dropped); it now has no track off
+# the stage (stage error 0.50 %). Now seed 3: 1 track dropped (a bead 83
+# um deep at the field's edge, x 56 um, whose detections in frames 49-56
+# drift across the stage, about -0.6 um/ms in x and -0.7 in z), stage
+# error 0.25 % (0.25 % with the velocity given), summary speed 2.494,
+# pooled vy 2.498 um/ms. Dim stage seeds 1-40: 10 drop 1-2 tracks; all
+# are within 0.65 %. Seed 11 now: 0 peaks within 20 um of focus, 119
+# within 40 um, lead 1.82 um, alpha 0.863.
 # Usage: track_stage.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-simulate_or_skip "$tmp/dim" stage 200 2 --param 'objects.flux_hz=[8000,10000]'
+simulate_or_skip "$tmp/dim" stage 200 3 --param 'objects.flux_hz=[8000,10000]'
 score_args="--stage-velocity-um-per-ms 0,2.5,0"
 track_score "$tmp/dim" "$tmp/d" "$tmp/d.json" --motion stage
 n=$(key "$tmp/d/summary.json" tracks_rejected_off_stage)
 e=$(key "$tmp/d.json" stage_velocity_rel_error)
-echo "dim stage 200 ms seed 2: $n track(s) off the stage, stage error $e"
+echo "dim stage 200 ms seed 3: $n track(s) off the stage, stage error $e"
 [ -n "$n" ] && [ "$n" -ge 1 ] || { echo "FAIL: no track off the stage ('$n')"; fail=$((fail+1)); }
 [ -n "$e" ] && below "$e" 1 0.01 || { echo "FAIL: stage error '$e' not below 1 %"; fail=$((fail+1)); }
 # the summary's velocity is the kept tracks' own
@@ -39,7 +51,7 @@ awk -v v="$sp" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: summa
 # and the pooled velocity (each track by the spread of its times over its
 # points' scatter), in y
 py=$(tr -d ' \n\t' < "$tmp/d/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
-echo "dim stage 200 ms seed 2: pooled vy $py um/ms"
+echo "dim stage 200 ms seed 3: pooled vy $py um/ms"
 awk -v v="$py" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: pooled vy '$py' not within 1 % of 2.5"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/acc" stage_accel 200 1

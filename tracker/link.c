@@ -52,6 +52,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->rest_speed_um_per_ms = 0.5;
   o->circle_points = 0;
   o->circle_after = 2;
+  o->straight_gaps = 0;
   o->circle_gap_points = 4;
   o->circle_end_points = 0;
   o->circle_min_arc_rad = 1.0;
@@ -126,6 +127,7 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->circle_next_path_um >= 0 && isfinite(o->circle_next_path_um), "circle_next_path_um",
             o->circle_next_path_um, ">= 0");
   LINK_NEED(o->circle_after >= 1, "circle_after", o->circle_after, ">= 1");
+  LINK_NEED(o->straight_gaps == 0 || o->straight_gaps == 1, "straight_gaps", o->straight_gaps, "0 or 1");
   LINK_NEED(o->circle_min_arc_rad >= 0 && isfinite(o->circle_min_arc_rad), "circle_min_arc_rad",
             o->circle_min_arc_rad, ">= 0");
   LINK_NEED(o->circle_max_radius_um > 0, "circle_max_radius_um", o->circle_max_radius_um, "> 0");
@@ -186,6 +188,7 @@ void elfm_link_free(elfm_linker *l)
   free(l->row_to_col);
   free(l->rows);
   free(l->xkeys);
+  free(l->vel_scratch);
   free(l->cols);
   elfm_assign_workspace_free(l->aws);
   free(l);
@@ -541,6 +544,11 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   }
   size_t w = 0;
   const int at_rest = o->rest_speed_um_per_ms > 0 && elfm_link_objects_at_rest(l);
+  {
+    elfm_status sc = elfm_link_common_velocity(l, frame, err);
+    if (sc != ELFM_OK) return sc;
+  }
+  const double *cv = l->has_common_vel ? l->common_vel : NULL;
   for (size_t i = 0; i < l->n_live; i++) {
     live_track lt = l->live[i];
     lt.missed = (int)(frame - lt.last_frame - 1);
@@ -549,7 +557,7 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
       if (st != ELFM_OK) return st;
       continue;
     }
-    elfm_link_predict_track(o, &lt, t_us, at_rest);
+    elfm_link_predict_track(o, &lt, t_us, at_rest, cv);
     elfm_link_predict_rest(o, &lt, t_us, at_rest);
     l->live[w++] = lt;
   }
@@ -755,7 +763,7 @@ elfm_status elfm_link_predict(const elfm_linker *l, int64_t frame, int64_t t_us,
     live_track lt = l->live[i];
     lt.missed = (int)(frame - lt.last_frame - 1);
     if (lt.missed < 0 || lt.missed > l->o.max_gap_frames || (int)lt.t->n < min_points) continue;
-    elfm_link_predict_track(&l->o, &lt, t_us, at_rest);
+    elfm_link_predict_track(&l->o, &lt, t_us, at_rest, l->has_common_vel ? l->common_vel : NULL);
     memcpy(xyz_um + 3 * (size_t)n, lt.pred, sizeof lt.pred);
     if (intensity) intensity[n] = elfm_link_mean_intensity(lt.t, lt.t->n > 3 ? lt.t->n - 3 : 0, lt.t->n);
     n++;

@@ -99,6 +99,12 @@ struct elfm_linker {
   int *row_to_col;
   int *rows, *cols;
   link_xkey *xkeys;          /* n_trk: step 7's sweep */
+  /* straight_gaps: the objects' common velocity this frame (um/ms), from
+   * elfm_link_common_velocity; has_common_vel 0 when it could not be told */
+  double common_vel[3];
+  int has_common_vel;
+  double *vel_scratch;       /* its medians' scratch, cap_vel_scratch values */
+  size_t cap_vel_scratch;
   elfm_assign_workspace *aws;
 };
 
@@ -228,7 +234,13 @@ elfm_status elfm_link_candidates(elfm_linker *l, const elfm_detection *det, size
 /* Step 1, predictions (link_predict.c). Fill lt->pred and lt->gate_um
  * for a frame at t_us (lt->missed set); at_rest: elfm_link_objects_at_rest
  * for this frame. */
-void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest);
+void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest,
+                             const double *common_vel);
+/* With straight_gaps: the per-axis median of the long straight fits
+ * (vel_um_per_ms) of the live tracks that have `history` points and were
+ * seen in the frame before `frame`, into l->common_vel; l->has_common_vel
+ * 0 with fewer than 3 such tracks. ELFM_ERR_NOMEM on out of memory. */
+elfm_status elfm_link_common_velocity(elfm_linker *l, int64_t frame, elfm_error *err);
 /* Most live tracks of >= 4 points slower than rest_speed_um_per_ms by
  * their straight-line fit, or none has 4 points yet. */
 int elfm_link_objects_at_rest(const elfm_linker *l);

@@ -6,6 +6,7 @@
  * fits themselves are link_fit.c's (elfm_link_fit_velocity) and
  * link_circle.c's. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "link_internal.h"
@@ -66,7 +67,8 @@ void elfm_link_score_predictions(const elfm_link_options *o, live_track *lt, con
 }
 
 /* Shared with link.c (link_internal.h). */
-void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest)
+void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t t_us, int at_rest,
+                             const double *common_vel)
 {
   double dt_ms = (double)(t_us - lt->last_t_us) * 1e-3;
   /* the next frame: the constant-acceleration fit (it keeps the change
@@ -88,6 +90,13 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
       if (lt->n_scored >= CIRCLE_NEXT_MIN_SCORED && lt->miss2_circ < lt->miss2_short)
         memcpy(lt->pred, lt->pred_circ, sizeof lt->pred);
     }
+  } else if (o->straight_gaps && (common_vel || lt->t->n >= 2)) {
+    /* a stage: straight on, at the velocity every object shares where the
+     * tracks tell it (a short track's own is mostly its points' noise),
+     * else at the track's own (elfm_link_options.straight_gaps) */
+    const double *v = common_vel ? common_vel : lt->vel_um_per_ms;
+    const double *p0 = lt->t->n >= 2 ? lt->lin_pos : lt->last;
+    for (int a = 0; a < 3; a++) lt->pred[a] = p0[a] + v[a] * dt_ms;
   } else if (at_rest && lt->missed >= o->short_gap && seen_densely(lt->t, o->short_history))
     /* Slow objects dark for short_gap frames or more: the long straight
      * fit, not the short one. Over a slow track's 8 points the object
@@ -112,7 +121,41 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
   const double *cv = lt->has_short ? lt->fit_vel : lt->vel_um_per_ms;
   const double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
   lt->gate_um = track_gate_um(o, lt->missed, speed, dt_ms / (lt->missed + 1));
-  if (lt->t->n == 1) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
+  /* a new object's unknown velocity; not where all share one */
+  if (lt->t->n == 1 && !(o->straight_gaps && common_vel)) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* Shared with link.c (link_internal.h). */
+elfm_status elfm_link_common_velocity(elfm_linker *l, int64_t frame, elfm_error *err)
+{
+  l->has_common_vel = 0;
+  if (!l->o.straight_gaps) return ELFM_OK;
+  if (l->n_live > l->cap_vel_scratch) {
+    double *p = realloc(l->vel_scratch, l->n_live * sizeof *p);
+    if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
+    l->vel_scratch = p;
+    l->cap_vel_scratch = l->n_live;
+  }
+  for (int a = 0; a < 3; a++) {
+    size_t n = 0;
+    for (size_t i = 0; i < l->n_live; i++) {
+      const live_track *lt = &l->live[i];
+      if (lt->t->n >= (size_t)l->o.history && lt->last_frame == frame - 1)
+        l->vel_scratch[n++] = lt->vel_um_per_ms[a];
+    }
+    if (n < 3) return ELFM_OK;
+    qsort(l->vel_scratch, n, sizeof *l->vel_scratch, cmp_double);
+    l->common_vel[a] = n % 2 ? l->vel_scratch[n / 2]
+                             : 0.5 * (l->vel_scratch[n / 2 - 1] + l->vel_scratch[n / 2]);
+  }
+  l->has_common_vel = 1;
+  return ELFM_OK;
 }
 
 /* Shared with link.c (link_internal.h). Are the recording's objects at
