@@ -596,17 +596,15 @@ int track_opts_derive(track_opts *o, const track_given *g)
      * where it is (ON events fire on its leading half) and where it was a
      * little earlier (the weights value^P favour the newest events, not the
      * frame's end): along its lateral motion v the error is lead - delay x
-     * |v|. The delay is the mean age of the weighted events in the window
-     * (below) + 20 us. Forty-second session, after the simulator's events
-     * stopped lagging by half a time step (docs/simulator.md "Time steps";
-     * before, `eventlfm score --calib` regressed 392-485 us on flow 100 ms
-     * seeds 1-8 and the offset was 150 us): the regression now gives a mean
-     * of 326 us (age + 45; flow 100 ms seeds 1-20, sd 28 us, its lead 0.13
-     * um above the lead below, which the two trade along the motion), and
-     * alpha over offsets 0 / 10 / 20 / 45 us was 0.8771 / 0.8780 / 0.8782 /
-     * 0.8752 (seeds 1-20), 0.8739 / 0.8746 / 0.8747 / 0.8713 (21-32), flow
-     * 1 s seeds 1-8 at 10 / 20 us 0.7764 / 0.7777 (docs/tracker.md "Delay
-     * after the simulator's time steps"). (The sixth session's
+     * |v|. The delay is the weighted events' mean age in the window (below)
+     * + 20 us; 150 us until the simulator's events stopped lagging by half
+     * a time step (forty-second session, docs/simulator.md "Time steps").
+     * `score --calib` now regresses 326 us (age + 45, flow 100 ms seeds
+     * 1-20) with a lead 0.13 um above the one below, which the two trade
+     * along the motion; alpha over offsets 0 / 10 / 20 / 45 us: 0.8771 /
+     * 0.8780 / 0.8782 / 0.8752 (seeds 1-20), 0.8739 / 0.8746 / 0.8747 /
+     * 0.8713 (21-32) (docs/tracker.md "Delay after the simulator's time
+     * steps"). (The sixth session's
      * 0.8 um and age + 20 us came from a regression on the lateral speed
      * alone, which beads climbing steeply in z bias low; docs/tracker.md
      * "Motion bias".) The lead belongs to the sample (brighter beads lead
