@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "elfm_analysis.h"
 #include "link_internal.h"
 
 /* The gate of a track dark for `missed` frames whose object moves at
@@ -95,8 +96,8 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
      * tracks tell it (a short track's own is mostly its points' noise),
      * else at the track's own (elfm_link_options.straight_gaps) */
     const double *v = common_vel ? common_vel : lt->vel_um_per_ms;
-    const double *p0 = lt->t->n >= 2 ? lt->lin_pos : lt->last;
-    for (int a = 0; a < 3; a++) lt->pred[a] = p0[a] + v[a] * dt_ms;
+    /* lin_pos: the straight fit's end, the one point itself for n = 1 */
+    for (int a = 0; a < 3; a++) lt->pred[a] = lt->lin_pos[a] + v[a] * dt_ms;
   } else if (at_rest && lt->missed >= o->short_gap && seen_densely(lt->t, o->short_history))
     /* Slow objects dark for short_gap frames or more: the long straight
      * fit, not the short one. Over a slow track's 8 points the object
@@ -125,12 +126,6 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
   if (lt->t->n == 1 && !(o->straight_gaps && common_vel)) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-  const double x = *(const double *)a, y = *(const double *)b;
-  return (x > y) - (x < y);
-}
-
 /* Shared with link.c (link_internal.h). */
 elfm_status elfm_link_common_velocity(elfm_linker *l, int64_t frame, elfm_error *err)
 {
@@ -150,9 +145,8 @@ elfm_status elfm_link_common_velocity(elfm_linker *l, int64_t frame, elfm_error 
         l->vel_scratch[n++] = lt->vel_um_per_ms[a];
     }
     if (n < 3) return ELFM_OK;
-    qsort(l->vel_scratch, n, sizeof *l->vel_scratch, cmp_double);
-    l->common_vel[a] = n % 2 ? l->vel_scratch[n / 2]
-                             : 0.5 * (l->vel_scratch[n / 2 - 1] + l->vel_scratch[n / 2]);
+    double spread;
+    elfm_analysis_median(l->vel_scratch, n, &l->common_vel[a], &spread);
   }
   l->has_common_vel = 1;
   return ELFM_OK;
