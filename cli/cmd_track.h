@@ -272,6 +272,8 @@ typedef struct ring_slot {
    * join their frame and detections.csv stays in frame order) */
   int64_t det_frame;     /* the frame det holds, -1 none */
   elfm_detection *det;
+  double *det_vel;       /* [3 det_cap] the velocity of the track each joined
+                            (um/ms), NaN where not known: its motion bias */
   int det_n, det_cap;
 } ring_slot;
 
@@ -528,8 +530,12 @@ void track_fill_free(track_ctx *c);
 /* Write frame `frame`'s detection d to detections.csv: at once without gap
  * filling; with it, held until track_det_flush_before writes the frames
  * before a given one, oldest first (each linking callback: the frames no
- * longer kept; at the end: INT64_MAX, all). */
-elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d, elfm_error *err);
+ * longer kept; at the end: INT64_MAX, all). v_um_per_ms: the velocity of
+ * the track d joined (NULL or NaN: none); d is written less the motion
+ * bias of that velocity (the smoother's model and lead when it is
+ * written), as well as raw. */
+elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d,
+                           const double *v_um_per_ms, elfm_error *err);
 elfm_status track_det_flush_before(track_ctx *c, int64_t frame, elfm_error *err);
 /* Close the context's files, free what it holds (for any state of setup). */
 void track_ctx_free(track_ctx *c);

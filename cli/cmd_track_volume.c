@@ -656,7 +656,9 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
         span_ms >= TRACK_RIGID_MIN_SPAN_MS && isfinite(c->rigid_v[3 * n_rigid]) &&
         isfinite(c->rigid_v[3 * n_rigid + 1]) && isfinite(c->rigid_v[3 * n_rigid + 2]))
       n_rigid++;
-    st = track_det_emit(c, v->frame, &det[j], err);
+    double vj[3];  /* the velocity of the track it joined: its motion bias */
+    const size_t np = elfm_link_last_velocity(c->lk, j, vj, NULL, NULL);
+    st = track_det_emit(c, v->frame, &det[j], np >= 2 ? vj : NULL, err);
     if (st != ELFM_OK) return st;
     kept++;
   }

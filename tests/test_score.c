@@ -536,6 +536,50 @@ int main(void)
     CHECK_NEAR(r.motion_along_mean_um, 0.9 - 0.35 * 2.5, 1e-6);
     elfm_table_free(dm);
 
+    /* track's detections.csv: x/y_um moved back onto the objects, the
+     * measured positions in raw_x_um / raw_y_um. The RMSE is of the moved
+     * positions (0 here), the regression of the raw ones (as above). */
+    bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um\n");
+    for (int f = 0; f < NF; f++)
+      for (int k = 0; k < 5; k++) {
+        double t = frame_t(f), e = 0.9 - 0.35 * sp[k];
+        double x = -30 + 15 * k + sp[k] * dir[k][0] * t * 1e-3,
+               y = -30 + 12 * k + sp[k] * dir[k][1] * t * 1e-3,
+               z = k == 4 ? -20 + 2.0 * t * 1e-3 : 3.0 * k;
+        bprintf(&b, "%d,%.0f,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", f, t, x, y, z,
+                x + e * dir[k][0], y + e * dir[k][1], z);
+      }
+    elfm_table *dr = parse(&b, "detections.csv");
+    r = run(tm, NULL, dr, NULL);
+    CHECK_EQ_INT(r.n_true_positives, 5 * NF);
+    CHECK_NEAR(r.rmse_x_um, 0, 1e-9);
+    CHECK_NEAR(r.rmse_y_um, 0, 1e-9);
+    CHECK_NEAR(r.motion_lead_um, 0.9, 1e-6);
+    CHECK_NEAR(r.motion_delay_us, 350, 1e-3);
+    elfm_table_free(dr);
+    /* one raw column without the other, or a raw value missing: errors
+     * naming the file (and the line) */
+    {
+      elfm_error e1;
+      elfm_error_clear(&e1);
+      elfm_score_options od;
+      elfm_score_options_default(&od);
+      bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um\n0,%.0f,1,1,1,1\n", frame_t(0));
+      elfm_table *d2 = parse(&b, "detections.csv");
+      CHECK(elfm_score_tables(tm, NULL, d2, &od, &r, &e1) == ELFM_ERR_FORMAT);
+      CHECK_MSG(strstr(e1.message, "raw_y_um") != NULL && strstr(e1.file, "detections.csv"), "%s: %s",
+                e1.file, e1.message);
+      elfm_table_free(d2);
+      elfm_error_clear(&e1);
+      bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um\n0,%.0f,1,1,1,1,1\n1,%.0f,1,1,1,,1\n",
+              frame_t(0), frame_t(1));
+      d2 = parse(&b, "detections.csv");
+      CHECK(elfm_score_tables(tm, NULL, d2, &od, &r, &e1) == ELFM_ERR_FORMAT);
+      CHECK_MSG(strstr(e1.message, "raw_x_um") != NULL && e1.line == 3, "%s (line %lld)", e1.message,
+                (long long)e1.line);
+      elfm_table_free(d2);
+    }
+
     /* One speed (every object at 2 um/ms): no regression, the mean only. */
     bprintf(&b, "frame,t_us,x_um,y_um,z_um\n");
     for (int f = 0; f < NF; f++) {

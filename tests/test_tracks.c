@@ -317,7 +317,7 @@ int main(void)
   /* detections.csv */
   f = fopen(p_det, "w");
   CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
-  CHECK_OK(elfm_detections_write(f, p_det, s.tracks[1]->pts, (int)s.tracks[1]->n, &err), &err);
+  CHECK_OK(elfm_detections_write(f, p_det, s.tracks[1]->pts, NULL, (int)s.tracks[1]->n, &err), &err);
   fclose(f);
   tb = NULL;
   CHECK_OK(elfm_table_load_csv(p_det, &tb, &err), &err);
@@ -341,7 +341,7 @@ int main(void)
     dd[1].nearest_um = 0;
     f = fopen(p_det, "w");
     CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
-    CHECK_OK(elfm_detections_write(f, p_det, dd, 2, &err), &err);
+    CHECK_OK(elfm_detections_write(f, p_det, dd, NULL, 2, &err), &err);
     fclose(f);
     tb = NULL;
     CHECK_OK(elfm_table_load_csv(p_det, &tb, &err), &err);
@@ -360,6 +360,28 @@ int main(void)
       CHECK(isnan(elfm_table_get(tb, 1, cn)));
       const int cc = elfm_table_col(tb, "claims");
       CHECK(cc == 14 && elfm_table_get(tb, 0, cc) == 2 && elfm_table_get(tb, 1, cc) == 2);
+      /* no bias given: the raw columns are x/y/z_um */
+      CHECK(elfm_table_col(tb, "raw_x_um") == 15 && elfm_table_col(tb, "raw_z_um") == 17);
+      CHECK_NEAR(elfm_table_get(tb, 0, 15), 1, 1e-9);
+    }
+    elfm_table_free(tb);
+    /* with each one's motion bias: x/y/z_um are moved back by it, the raw
+     * columns keep the detection as measured */
+    const double bias[6] = {0.25, -0.5, 0.125, 0, 0, 0};
+    dd[1].y_um = 3;
+    f = fopen(p_det, "w");
+    CHECK_OK(elfm_detections_write_header(f, p_det, &err), &err);
+    CHECK_OK(elfm_detections_write(f, p_det, dd, bias, 2, &err), &err);
+    fclose(f);
+    tb = NULL;
+    CHECK_OK(elfm_table_load_csv(p_det, &tb, &err), &err);
+    if (tb) {
+      const double want[2][6] = {{0.75, 0.5, -0.125, 1, 0, 0}, {1, 3, 0, 1, 3, 0}};
+      const char *const col[6] = {"x_um", "y_um", "z_um", "raw_x_um", "raw_y_um", "raw_z_um"};
+      for (int r = 0; r < 2; r++)
+        for (int k = 0; k < 6; k++)
+          CHECK_MSG(fabs(elfm_table_get(tb, (size_t)r, elfm_table_col(tb, col[k])) - want[r][k]) < 1e-9,
+                    "row %d %s", r, col[k]);
     }
     elfm_table_free(tb);
   }

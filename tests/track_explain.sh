@@ -44,9 +44,12 @@ expect_gain "$a0" "$a1" 0 "60 beads: alpha $a0 -> $a1"
 # over more detections), equal on most rows; and each track row's value is
 # its raw point's. claims (how many tracks had the detection within their
 # gate when it was linked) is a whole number >= 0 on every row, 2 or more on
-# some (60 beads cross), and each track row's is its point's
+# some (60 beads cross), and each track row's is its point's. Both are of
+# the detections as measured: detections.csv's raw_x/y/z_um (its x/y/z_um
+# are moved back by their track's motion bias)
 awk -F, -v kz=1.5 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
-  $c["nearest_um"] != "" { n++; f[n] = $1; x[n] = $3; y[n] = $4; z[n] = $5; w[n] = $c["nearest_um"] }
+  $c["nearest_um"] != "" { n++; f[n] = $1; x[n] = $c["raw_x_um"]; y[n] = $c["raw_y_um"]; z[n] = $c["raw_z_um"]
+    w[n] = $c["nearest_um"] }
   END {
     for (i = 1; i <= n; i++) {
       b = 1e18
@@ -68,7 +71,8 @@ awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
   { echo "FAIL: claims in detections.csv"; fail=$((fail+1)); }
 awk -F, 'FNR == 1 { for (i = 1; i <= NF; i++) c[FILENAME, $i] = i; next }
   FILENAME == ARGV[1] { if ($c[FILENAME, "nearest_um"] != "") {
-      k = $1 "," $3 "," $4; v[k] = $c[FILENAME, "nearest_um"]; cl[k] = $c[FILENAME, "claims"] }
+      k = $1 "," $c[FILENAME, "raw_x_um"] "," $c[FILENAME, "raw_y_um"]
+      v[k] = $c[FILENAME, "nearest_um"]; cl[k] = $c[FILENAME, "claims"] }
     next }
   $c[FILENAME, "raw_x_um"] != "" && $c[FILENAME, "nearest_um"] != "" {
     k = $2 "," $c[FILENAME, "raw_x_um"] "," $c[FILENAME, "raw_y_um"]; t++

@@ -169,10 +169,14 @@ void elfm_track_store_clear(elfm_track_store *s);
 
 /* detections.csv: header then rows
  * frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um,
- * width_um,fit_sd_px,view_fit,weak,nearest_um (width, scatter and nearest
- * empty when not measured: 0 in the struct) */
+ * width_um,fit_sd_px,view_fit,weak,nearest_um,claims,raw_x_um,raw_y_um,
+ * raw_z_um (width, scatter and nearest empty when not measured: 0 in the
+ * struct). bias_um (3 per detection, NULL: none) is each one's motion bias
+ * (elfm_motion_bias): x/y/z_um are d's position minus it, where the object
+ * was at t_us, and raw_x/y/z_um d's position as measured. */
 elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err);
-elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d, int n,
+elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d,
+                                  const double *bias_um, int n,
                                   elfm_error *err);
 
 /* tracks.csv: header then, per smoothed track, one row per frame of its

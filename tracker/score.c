@@ -261,7 +261,10 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
           b_sz[k] += dz * dz;
           b_sd[k] += d;
         }
-        motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
+        if (dp->raw_x) /* the regression is of the bias as measured */
+          motion_add(&ms, mm, tr, fr, obj_of, p, dp->raw_x[di] - tr->pt.x[p], dp->raw_y[di] - tr->pt.y[p]);
+        else
+          motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;

@@ -27,18 +27,19 @@ static void put_num(FILE *f, double v, const char *fmt)
 elfm_status elfm_detections_write_header(FILE *f, const char *path, elfm_error *err)
 {
   fputs("frame,t_us,x_um,y_um,z_um,intensity,sigma_x_um,sigma_y_um,sigma_z_um,"
-        "width_um,fit_sd_px,view_fit,weak,nearest_um,claims\n", f);
+        "width_um,fit_sd_px,view_fit,weak,nearest_um,claims,raw_x_um,raw_y_um,raw_z_um\n", f);
   return io_check(f, path, err);
 }
 
-elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d, int n,
-                                  elfm_error *err)
+elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detection *d,
+                                  const double *bias_um, int n, elfm_error *err)
 {
   for (int i = 0; i < n; i++) {
+    const double *b = bias_um ? bias_um + 3 * (size_t)i : NULL;
     fprintf(f, "%" PRId64 ",%" PRId64, d[i].frame, d[i].t_us);
-    put_num(f, d[i].x_um, "%.4f");
-    put_num(f, d[i].y_um, "%.4f");
-    put_num(f, d[i].z_um, "%.4f");
+    put_num(f, b ? d[i].x_um - b[0] : d[i].x_um, "%.4f");
+    put_num(f, b ? d[i].y_um - b[1] : d[i].y_um, "%.4f");
+    put_num(f, b ? d[i].z_um - b[2] : d[i].z_um, "%.4f");
     put_num(f, d[i].intensity, "%.6g");
     put_num(f, d[i].sigma_x_um, "%.4f");
     put_num(f, d[i].sigma_y_um, "%.4f");
@@ -48,7 +49,11 @@ elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detectio
     put_num(f, d[i].fit_sd_px > 0 ? d[i].fit_sd_px : NAN, "%.4f");
     fprintf(f, ",%d,%d", d[i].view_fit ? 1 : 0, d[i].weak ? 1 : 0);
     put_num(f, d[i].nearest_um > 0 ? d[i].nearest_um : NAN, "%.3f");
-    fprintf(f, ",%d\n", d[i].claims);
+    fprintf(f, ",%d", d[i].claims);
+    put_num(f, d[i].x_um, "%.4f");
+    put_num(f, d[i].y_um, "%.4f");
+    put_num(f, d[i].z_um, "%.4f");
+    fputc('\n', f);
   }
   return io_check(f, path, err);
 }
