@@ -200,6 +200,8 @@ typedef struct track_again {
   int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
   int stage_back;   /* 1: a slow stage's long windows were outrun (TRACK_STAGE_WATCH_*):
                        the command with --motion stage, at its 1 ms windows */
+  int stage_short;  /* 1: ... were too few for the recording (TRACK_STAGE_SLOW_MIN_WINDOWS):
+                       the command with --motion stage and dt_us, tau following */
   int each_trigger; /* 1: pulsed light (track_pulsed): --start each-trigger */
   int lin;          /* 1: ... and the objects move: --repr lin too */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
@@ -312,7 +314,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
 {
   static const char *const C = "track";
   track_opts o = *po;
-  again->each_trigger = again->lin = again->stage_back = again->tau_follows = 0;
+  again->each_trigger = again->lin = again->stage_back = again->stage_short = again->tau_follows = 0;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -425,6 +427,26 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                       "windows\n",
               c.stage_outrun_speed, c.stage_outrun_speed * 1e-3 * (double)o.recon.framer.dt_us,
               o.recon.framer.dt_us, c.n_frames);
+    rc = TRACK_RUN_AGAIN;
+    goto done;
+  }
+  if (o.stage_watch && st == ELFM_OK && c.n_frames < TRACK_STAGE_SLOW_MIN_WINDOWS && rs.events > 0 &&
+      rs.t_last_us >= rs.t_first_us) {
+    /* A slow stage's long windows were chosen when the stage was found,
+     * before the recording's end was known: when that came within a few
+     * windows, fewer than TRACK_STAGE_SLOW_MIN_WINDOWS of them hold too
+     * few points for a track (stage 0.2 mm/s, 30 ms: 4 windows of 10 ms
+     * and no track on 13 of seeds 1-40). Again with windows of a tenth of
+     * the recording, as a stage judged at its end gets, or at 1 ms when
+     * that is under TRACK_STAGE_SLOW_MIN_DT_US. */
+    const int64_t cap = (rs.t_last_us - rs.t_first_us) / TRACK_STAGE_SLOW_MIN_WINDOWS / 100 * 100;
+    again->stage_short = 1;
+    again->dt_us = cap >= TRACK_STAGE_SLOW_MIN_DT_US ? cap : -1;
+    if (!o.quiet)
+      fprintf(stderr, "\neventlfm track: the recording (%.1f ms) held only %" PRId64 " windows of %" PRId64
+                      " us: starting again with --motion stage at %" PRId64 " us windows\n",
+              1e-3 * (double)(rs.t_last_us - rs.t_first_us), c.n_frames, o.recon.framer.dt_us,
+              again->dt_us > 0 ? cap : (int64_t)1000);
     rc = TRACK_RUN_AGAIN;
     goto done;
   }
@@ -644,6 +666,21 @@ int cmd_track(int argc, char **argv)
         argv2[argc2++] = "--repr";
         argv2[argc2++] = "lin";
       }
+    } else if (again.stage_short) {
+      /* the slow stage's windows were too long for the recording: the
+       * command as given, then --motion stage and shorter ones, watched */
+      argc2 = argc;
+      argv2[argc2++] = "--motion";
+      argv2[argc2++] = "stage";
+      stage_watch = 0; /* at 1 ms: the first run's windows */
+      if (again.dt_us > 0) {
+        snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
+        argv2[argc2++] = "--dt-us";
+        argv2[argc2++] = dt;
+        argv2[argc2++] = "--tau-us";
+        argv2[argc2++] = dt;
+        stage_watch = 1;
+      }
     } else if (again.stage_back) {
       /* the slow stage's long windows were outrun: the command as given,
        * then --motion stage, as a stage found at 1 ms runs */
@@ -691,6 +728,7 @@ int cmd_track(int argc, char **argv)
     o.few_first_det = again.first_det;
     o.stage_watch = stage_watch;
     o.stage_back = again.stage_back;
+    o.stage_short = again.stage_short;
     rc = track_run(&o, &again, &t0_s);
   }
   free(argv2);

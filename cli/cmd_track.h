@@ -112,6 +112,8 @@ typedef struct track_opts {
                            (TRACK_STAGE_SLOW_*): it stops when the stage outruns them
                            (TRACK_STAGE_WATCH_*) */
   int stage_back;       /* 1: this run is back at 1 ms after such a run stopped */
+  int stage_short;      /* 1: this run's windows are shorter after such a run held too
+                           few (TRACK_STAGE_SLOW_MIN_WINDOWS) */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks

@@ -247,6 +247,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
    * they were and the stage outran them (this run is back at 1 ms) */
   cJSON_AddBoolToObject(par, "stage_slow_windows", o->stage_watch);
   cJSON_AddBoolToObject(par, "stage_windows_outrun", o->stage_back);
+  cJSON_AddBoolToObject(par, "stage_windows_too_few", o->stage_short);
   /* --motion auto: the median distance of the long tracks' velocities from
    * their frame's median velocity, over its length and in um/ms, and the
    * frames' median speed (NaN: not judged; track_rigid_judge) */

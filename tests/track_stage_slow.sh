@@ -10,7 +10,8 @@
 #   (SPEC 7, by points) stay within 1 % (0.21 %);
 # - --dt-us or --tau-us given: the window is the user's;
 # - in such a run, a track at half the stage's speed is off the stage;
-# - a recording judged at its end keeps 10 windows;
+# - a recording judged at its end keeps 10 windows, and one judged just
+#   before its end whose long windows were too few starts again with 10;
 # - a stage that speeds up (stage_accel at 10 mm/s^2, 0.1 -> 2.6 mm/s in
 #   250 ms) outruns the long windows: the run goes back to 1 ms, and writes
 #   what `--motion stage` writes, byte for byte.
@@ -83,6 +84,23 @@ dt=$(key "$tmp/sha/summary.json" dt_us); nt=$(key "$tmp/sha/summary.json" tracks
 echo "stage at 0.2 mm/s, 30 ms seed 9: --dt-us $dt, $nt tracks"
 awk -v d="$dt" -v n="$nt" 'BEGIN { exit !(d >= 2000 && d <= 3100 && n >= 1) }' ||
   { echo "FAIL: 30 ms stage: dt_us '$dt' not 2-3.1 ms or no track ('$nt')"; fail=$((fail+1)); }
+
+# ... and one judged a window or two before its end (seed 1: at its 30th
+# window of 31), whose 10 ms windows held 4 frames and no track, starts a
+# third time with windows of a tenth of its span (forty-third session;
+# stage_windows_too_few): 3 ms, 5 tracks. Seeds 1-40: 13 had no track,
+# now none; mean alpha 0.284 -> 0.499.
+simulate_or_skip "$tmp/sj" stage 30 1 --param motion.v0_mm_per_s=0.2 --param motion.v1_mm_per_s=0.2
+"$bin" track --calib "$tmp/sj/calib.json" --events "$tmp/sj/events.raw" --out "$tmp/sja" -q ||
+  { echo "FAIL: track stage 30 ms seed 1"; fail=$((fail+1)); }
+dt=$(key "$tmp/sja/summary.json" dt_us); nt=$(key "$tmp/sja/summary.json" tracks)
+echo "stage at 0.2 mm/s, 30 ms seed 1: --dt-us $dt, $nt tracks, too few windows $(jbool "$tmp/sja/summary.json" stage_windows_too_few)"
+awk -v d="$dt" -v n="$nt" 'BEGIN { exit !(d == 3000 && n >= 3) }' ||
+  { echo "FAIL: 30 ms stage seed 1: dt_us '$dt' not 3 ms or under 3 tracks ('$nt')"; fail=$((fail+1)); }
+[ "$(jbool "$tmp/sja/summary.json" stage_windows_too_few)" = true ] &&
+  [ "$(jbool "$tmp/sja/summary.json" stage_slow_windows)" = true ] &&
+  [ "$(jbool "$tmp/sha/summary.json" stage_windows_too_few)" = false ] ||
+  { echo "FAIL: stage_windows_too_few / stage_slow_windows not as the runs went"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/acc" stage_accel 250 1 --param motion.accel_mm_per_s2=10
 "$bin" track --calib "$tmp/acc/calib.json" --events "$tmp/acc/events.raw" --out "$tmp/aa" -q ||
