@@ -116,6 +116,10 @@ typedef struct track_opts {
                            few (TRACK_STAGE_SLOW_MIN_WINDOWS) */
 } track_opts;
 #define TRACK_FILL_MAX_FRAMES 9
+/* detections.csv's motion bias: the velocity of the line through the
+ * track's points within this many frames of the detection (cmd_track_fill.c
+ * det_bias) */
+#define TRACK_DET_VELOCITY_HALF_FRAMES 3
 /* The lead from the peaks' widths (track_motion_lead_um): widths of peaks
  * within TRACK_WIDTH_FOCUS_UM of focus, binned up to 10 um; at least
  * TRACK_WIDTH_MIN_PEAKS of them, else the fixed default. The lead is
@@ -276,6 +280,7 @@ typedef struct ring_slot {
   elfm_detection *det;
   double *det_vel;       /* [3 det_cap] the velocity of the track each joined
                             (um/ms), NaN where not known: its motion bias */
+  int64_t *det_track;    /* [det_cap] the id of that track, -1 none */
   int det_n, det_cap;
 } ring_slot;
 
@@ -532,12 +537,19 @@ void track_fill_free(track_ctx *c);
 /* Write frame `frame`'s detection d to detections.csv: at once without gap
  * filling; with it, held until track_det_flush_before writes the frames
  * before a given one, oldest first (each linking callback: the frames no
- * longer kept; at the end: INT64_MAX, all). v_um_per_ms: the velocity of
- * the track d joined (NULL or NaN: none); d is written less the motion
- * bias of that velocity (the smoother's model and lead when it is
- * written), as well as raw. */
-elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d,
+ * longer kept; at the end: INT64_MAX, all). track_id, v_um_per_ms: the
+ * track d joined (-1: none) and its velocity when d joined (NULL or NaN:
+ * none); d is written less the motion bias of its track's velocity (the
+ * smoother's model and lead when it is written), as well as raw. That
+ * velocity is the line's through the track's points within
+ * TRACK_DET_VELOCITY_HALF_FRAMES of d when they are known by then (the
+ * track still live, or finished: track_det_velocities), else v_um_per_ms. */
+elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d, int64_t track_id,
                            const double *v_um_per_ms, elfm_error *err);
+/* Finished track t (popped, its end followed): the velocities of its
+ * detections still held, from its points around each (before it is
+ * smoothed and freed). */
+void track_det_velocities(track_ctx *c, const elfm_track *t);
 elfm_status track_det_flush_before(track_ctx *c, int64_t frame, elfm_error *err);
 /* Close the context's files, free what it holds (for any state of setup). */
 void track_ctx_free(track_ctx *c);

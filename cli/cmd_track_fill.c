@@ -393,7 +393,7 @@ static elfm_status emit_fills(track_ctx *c, const elfm_link_gap *g, int m, elfm_
   for (int j = 0; j < m && st == ELFM_OK; j++) {
     double v[3];
     gap_velocity(g, c->fill_pts[j].t_us, v);
-    st = track_det_emit(c, c->fill_pts[j].frame, &c->fill_pts[j], v, err);
+    st = track_det_emit(c, c->fill_pts[j].frame, &c->fill_pts[j], g->track_id, v, err);
   }
   return st;
 }
@@ -451,10 +451,8 @@ elfm_status track_fill_gaps(track_ctx *c, int all, elfm_error *err)
  * a detection made from ON events lies ahead of its object along the
  * motion and shows where it was a little before t_us; the smoother
  * corrects its track's points so, and detections.csv is where each object
- * was, too. Flow 100 ms seeds 1-5, the detections' lateral RMSE 0.51 ->
- * 0.43 um with the smoothed tracks' velocities, 0.42 with the velocity of
- * a line through each track's last 5 points, 0.52 through its last 10
- * (docs/tracker.md "Moving the detections"). */
+ * was, too. Flow 100 ms seeds 1-20, the detections' lateral RMSE 0.509 /
+ * 0.518 -> 0.432 / 0.436 um (docs/tracker.md "Moving the detections"). */
 static void det_bias(const track_ctx *c, const double *v, double *b, int n)
 {
   elfm_smooth_options so = c->o->smooth;
@@ -471,11 +469,50 @@ static void det_bias(const track_ctx *c, const double *v, double *b, int n)
   }
 }
 
-/* Write a slot's detections and empty it. */
+/* Into v, the velocity of the line through t's points around detection d
+ * (elfm_track_local_velocity), when d is one of t's points: a later
+ * review may have given it to another track. v unchanged otherwise. */
+static void det_velocity_on(const elfm_track *t, const elfm_detection *d, double v[3])
+{
+  for (size_t k = t->n; k-- > 0;) {  /* the held frames are the track's last ones */
+    const elfm_detection *p = &t->pts[k];
+    if (p->frame < d->frame) return;
+    if (p->frame == d->frame) {
+      if (p->x_um == d->x_um && p->y_um == d->y_um && p->z_um == d->z_um)
+        elfm_track_local_velocity(t, d->frame, TRACK_DET_VELOCITY_HALF_FRAMES, v);
+      return;
+    }
+  }
+}
+
+void track_det_velocities(track_ctx *c, const elfm_track *t)
+{
+  frame_ring *r = &c->ring;
+  if (!r->cap || !t || !t->n) return;
+  for (int j = 0; j < r->cap; j++) {
+    ring_slot *sl = &r->slot[j];
+    if (sl->det_frame < t->pts[0].frame || sl->det_frame > t->pts[t->n - 1].frame) continue;
+    for (int i = 0; i < sl->det_n; i++)
+      if (sl->det_track[i] == t->id) det_velocity_on(t, &sl->det[i], sl->det_vel + 3 * (size_t)i);
+  }
+}
+
+/* Write a slot's detections and empty it. Why the velocity of a line
+ * through +-3 frames, known only now: the linker's, when the detection
+ * joined, is its short fit's (a parabola through the last 8 points) at
+ * the fit's end, the noisiest point of it, and the bias shrinks as the
+ * speed it is given grows. Flow seeds 1-20: moved by it, the detections
+ * still led by 0.21-0.24 um along the motion (seeds 1-5), lateral RMSE
+ * 0.456 / 0.460 um; by the line's, -0.06 to +0.03 um and 0.432 / 0.436
+ * (+-2 frames 0.431 / 0.436, +-5 0.451 / 0.459). */
 static elfm_status det_write_slot(track_ctx *c, ring_slot *sl, elfm_error *err)
 {
   elfm_status st = ELFM_OK;
   if (sl->det_n > 0) {
+    for (int i = 0; i < sl->det_n; i++) {
+      const elfm_track *t = sl->det_track[i] >= 0 ? elfm_link_live_track(c->lk, sl->det_track[i]) : NULL;
+      if (t) det_velocity_on(t, &sl->det[i], sl->det_vel + 3 * (size_t)i);
+    }
     det_bias(c, sl->det_vel, sl->det_vel, sl->det_n);
     st = elfm_detections_write(c->fdet, c->p_det, sl->det, sl->det_vel, sl->det_n, err);
   }
@@ -484,7 +521,7 @@ static elfm_status det_write_slot(track_ctx *c, ring_slot *sl, elfm_error *err)
   return st;
 }
 
-elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d,
+elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d, int64_t track_id,
                            const double *v_um_per_ms, elfm_error *err)
 {
   frame_ring *r = &c->ring;
@@ -508,10 +545,13 @@ elfm_status track_det_emit(track_ctx *c, int64_t frame, const elfm_detection *d,
     if (p) sl->det = p;
     double *pv = realloc(sl->det_vel, 3 * (size_t)cap * sizeof *pv);
     if (pv) sl->det_vel = pv;
-    if (!p || !pv) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
+    int64_t *pt = realloc(sl->det_track, (size_t)cap * sizeof *pt);
+    if (pt) sl->det_track = pt;
+    if (!p || !pv || !pt) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
     sl->det_cap = cap;
   }
   memcpy(sl->det_vel + 3 * (size_t)sl->det_n, v, sizeof v);
+  sl->det_track[sl->det_n] = track_id;
   sl->det[sl->det_n++] = *d;
   return ELFM_OK;
 }
@@ -540,6 +580,7 @@ void track_fill_free(track_ctx *c)
     free(r->slot[k].val);
     free(r->slot[k].det);
     free(r->slot[k].det_vel);
+    free(r->slot[k].det_track);
   }
   free(r->slot);
   memset(r, 0, sizeof *r);

@@ -206,6 +206,7 @@ elfm_status track_drain(track_ctx *c, int at_end, elfm_error *err)
       elfm_track_free(t);
       break;
     }
+    track_det_velocities(c, t);
     struct fin_track *f = fin_new(c, t, err);
     st = f ? fin_push(c, f, err) : ELFM_ERR_NOMEM;
   }

@@ -658,7 +658,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
       n_rigid++;
     double vj[3];  /* the velocity of the track it joined: its motion bias */
     const size_t np = elfm_link_last_velocity(c->lk, j, vj, NULL, NULL);
-    st = track_det_emit(c, v->frame, &det[j], np >= 2 ? vj : NULL, err);
+    st = track_det_emit(c, v->frame, &det[j], id, np >= 2 ? vj : NULL, err);
     if (st != ELFM_OK) return st;
     kept++;
   }

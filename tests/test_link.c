@@ -91,6 +91,11 @@ int main(void)
     CHECK_EQ_INT(elfm_link_last_track_id(l, 0), idb);
     CHECK_EQ_INT(elfm_link_n_live(l), 2);
     CHECK_EQ_INT(elfm_link_last_track_id(l, 5), -1);
+    /* each live track by its id, read only: A's last point is the 1.0 */
+    const elfm_track *ta = elfm_link_live_track(l, ida);
+    CHECK(ta && ta->id == ida && ta->n == 7 && ta->pts[6].x_um == 1.0);
+    CHECK(elfm_link_live_track(l, idb) && elfm_link_live_track(l, idb) != ta);
+    CHECK(elfm_link_live_track(l, ida + idb + 1) == NULL && elfm_link_live_track(NULL, ida) == NULL);
     elfm_link_free(l);  /* frees live tracks (ASan checks) */
   }
 

@@ -429,6 +429,10 @@ double elfm_link_last_speed(const elfm_linker *l, int i);
 size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
                                double v_long_um_per_ms[3], double *long_span_ms);
 
+/* The live track of that id (read only; valid until the next call that
+ * changes the linker), NULL when none is live. */
+const elfm_track *elfm_link_live_track(const elfm_linker *l, int64_t track_id);
+
 /* Live tracks right now, and how many tracks were started in total. */
 size_t elfm_link_n_live(const elfm_linker *l);
 /* The earliest frame of a point the linker still holds (live tracks and

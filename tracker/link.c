@@ -248,6 +248,13 @@ elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t kee
 
 size_t elfm_link_n_live(const elfm_linker *l) { return l ? l->n_live : 0; }
 
+const elfm_track *elfm_link_live_track(const elfm_linker *l, int64_t track_id)
+{
+  for (size_t i = 0; l && i < l->n_live; i++)
+    if (l->live[i].t->id == track_id) return l->live[i].t;
+  return NULL;
+}
+
 int64_t elfm_link_oldest_frame(const elfm_linker *l)
 {
   int64_t f = INT64_MAX;
