@@ -36,6 +36,7 @@ static void score_usage(FILE *f)
           "d = sqrt(dx^2 + dy^2 + (dz/kz)^2), gate eps. Truth is interpolated at each frame's\n"
           "t_us and counts only while bright and (with --calib) inside the volume.\n"
           "  detections: recall, precision, F1, RMSE x/y/z (um) from per-frame Hungarian matching\n"
+          "              (and of the same pairs as measured, where detections.csv has raw_x/y/z_um)\n"
           "              (without --detections, the tracks' raw points are the detections);\n"
           "              alpha_detections: the ISBI alpha if every matched detection were on\n"
           "              its own object's track (what the detections allow a linker)\n"
@@ -99,6 +100,9 @@ static int print_json(const struct score_opts *op, const elfm_score_result *r)
   json_num(o, "rmse_x_um", r->rmse_x_um);
   json_num(o, "rmse_y_um", r->rmse_y_um);
   json_num(o, "rmse_z_um", r->rmse_z_um);
+  json_num(o, "rmse_raw_x_um", r->rmse_raw_x_um);
+  json_num(o, "rmse_raw_y_um", r->rmse_raw_y_um);
+  json_num(o, "rmse_raw_z_um", r->rmse_raw_z_um);
   json_num(o, "alpha_detections", r->alpha_detections);
   json_num(o, "rmse_tracks_um", r->has_tracks ? r->rmse_tracks_um : NAN);
   json_num(o, "alpha_identities", r->has_tracks ? r->alpha_identities : NAN);
@@ -180,6 +184,10 @@ static void print_table(const struct score_opts *op, const elfm_score_result *r)
   printf("  recall    %8.4f   precision %8.4f   F1 %8.4f\n", r->recall, r->precision, r->f1);
   printf("  RMSE x %8.4f um   y %8.4f um   z %8.4f um\n", r->rmse_x_um, r->rmse_y_um,
          r->rmse_z_um);
+  if (isfinite(r->rmse_raw_x_um))
+    printf("  as measured (raw_x/y/z_um; x/y/z_um are moved back by the motion bias)\n"
+           "  RMSE x %8.4f um   y %8.4f um   z %8.4f um\n", r->rmse_raw_x_um, r->rmse_raw_y_um,
+           r->rmse_raw_z_um);
   printf("  alpha if linked perfectly %8.4f (each matched detection on its own object's "
          "track)\n", r->alpha_detections);
   if (r->n_motion_points > 0) {

@@ -534,6 +534,7 @@ int main(void)
     CHECK_NEAR(r.motion_lead_um, 0.9, 1e-6);
     CHECK_NEAR(r.motion_delay_us, 350, 1e-3);
     CHECK_NEAR(r.motion_along_mean_um, 0.9 - 0.35 * 2.5, 1e-6);
+    CHECK(isnan(r.rmse_raw_x_um) && isnan(r.rmse_raw_z_um)); /* no raw columns */
     elfm_table_free(dm);
 
     /* track's detections.csv: x/y_um moved back onto the objects, the
@@ -556,8 +557,20 @@ int main(void)
     CHECK_NEAR(r.rmse_y_um, 0, 1e-9);
     CHECK_NEAR(r.motion_lead_um, 0.9, 1e-6);
     CHECK_NEAR(r.motion_delay_us, 350, 1e-3);
+    /* ... and the same pairs' RMSE as measured: the offsets e dir */
+    {
+      double ex2 = 0, ey2 = 0;
+      for (int k = 0; k < 5; k++) {
+        const double e = 0.9 - 0.35 * sp[k];
+        ex2 += e * dir[k][0] * e * dir[k][0] / 5;
+        ey2 += e * dir[k][1] * e * dir[k][1] / 5;
+      }
+      CHECK_NEAR(r.rmse_raw_x_um, sqrt(ex2), 1e-9);
+      CHECK_NEAR(r.rmse_raw_y_um, sqrt(ey2), 1e-9);
+      CHECK_NEAR(r.rmse_raw_z_um, 0, 1e-9);
+    }
     elfm_table_free(dr);
-    /* one raw column without the other, or a raw value missing: errors
+    /* raw columns but not all three, or a raw value missing: errors
      * naming the file (and the line) */
     {
       elfm_error e1;
@@ -567,12 +580,12 @@ int main(void)
       bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um\n0,%.0f,1,1,1,1\n", frame_t(0));
       elfm_table *d2 = parse(&b, "detections.csv");
       CHECK(elfm_score_tables(tm, NULL, d2, &od, &r, &e1) == ELFM_ERR_FORMAT);
-      CHECK_MSG(strstr(e1.message, "raw_y_um") != NULL && strstr(e1.file, "detections.csv"), "%s: %s",
+      CHECK_MSG(strstr(e1.message, "all three") != NULL && strstr(e1.file, "detections.csv"), "%s: %s",
                 e1.file, e1.message);
       elfm_table_free(d2);
       elfm_error_clear(&e1);
-      bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um\n0,%.0f,1,1,1,1,1\n1,%.0f,1,1,1,,1\n",
-              frame_t(0), frame_t(1));
+      bprintf(&b, "frame,t_us,x_um,y_um,z_um,raw_x_um,raw_y_um,raw_z_um\n0,%.0f,1,1,1,1,1,1\n"
+              "1,%.0f,1,1,1,,1,1\n", frame_t(0), frame_t(1));
       d2 = parse(&b, "detections.csv");
       CHECK(elfm_score_tables(tm, NULL, d2, &od, &r, &e1) == ELFM_ERR_FORMAT);
       CHECK_MSG(strstr(e1.message, "raw_x_um") != NULL && e1.line == 3, "%s (line %lld)", e1.message,

@@ -43,7 +43,9 @@
  * matching has the largest number of pairs within the gate and, among those,
  * the smallest summed d. Its pairs are the true positives (TP). recall = TP / truth points, precision = TP /
  * detections, F1 = 2 TP / (truth points + detections); RMSE of x, y and z
- * (um, plain differences, no kz) over the TP pairs. Without detections.csv the
+ * (um, plain differences, no kz) over the TP pairs (and, where the file has
+ * raw_x_um, raw_y_um and raw_z_um, all three, the same pairs' at those:
+ * rmse_raw_*). Without detections.csv the
  * real (non-gap-filled) rows of tracks.csv at their raw_* positions are used
  * as the detections.
  * alpha_detections = 1 - (sum of d over the TP pairs + eps x unmatched truth
@@ -283,6 +285,10 @@ typedef struct elfm_score_result {
   int64_t n_truth_points, n_detections, n_true_positives;
   double recall, precision, f1; /* NaN when the denominator is 0 */
   double rmse_x_um, rmse_y_um, rmse_z_um;
+  /* the same pairs' RMSE at the detections' raw_x/y/z_um, where
+   * detections.csv has them (track's: its x/y/z_um are moved back by their
+   * motion bias, the raw columns as measured); NaN otherwise */
+  double rmse_raw_x_um, rmse_raw_y_um, rmse_raw_z_um;
   double alpha_detections;      /* DETECTIONS above; NaN without truth points */
   /* tracks (valid when has_tracks) */
   int has_tracks;

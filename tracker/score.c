@@ -193,7 +193,7 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   if ((s = elfm_assign_workspace_create(0, 0, &ws, err)) != ELFM_OK) goto done;
 
   int64_t tp = 0;
-  double sx = 0, sy = 0, sz = 0, sd = 0;
+  double sx = 0, sy = 0, sz = 0, sd = 0, rx = 0, ry = 0, rz = 0; /* rx..: as measured */
   for (int f = 0; f < fr->n; f++) {
     int64_t ta = tr->fr_off[f];
     int nt = (int)(tr->fr_off[f + 1] - ta);
@@ -261,10 +261,16 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
           b_sz[k] += dz * dz;
           b_sd[k] += d;
         }
-        if (dp->raw_x) /* the regression is of the bias as measured */
-          motion_add(&ms, mm, tr, fr, obj_of, p, dp->raw_x[di] - tr->pt.x[p], dp->raw_y[di] - tr->pt.y[p]);
-        else
+        if (dp->raw_x) { /* the regression is of the bias as measured */
+          const double ex = dp->raw_x[di] - tr->pt.x[p], ey = dp->raw_y[di] - tr->pt.y[p],
+                       ez = dp->raw_z[di] - tr->pt.z[p];
+          motion_add(&ms, mm, tr, fr, obj_of, p, ex, ey);
+          rx += ex * ex;
+          ry += ey * ey;
+          rz += ez * ez;
+        } else {
           motion_add(&ms, mm, tr, fr, obj_of, p, dx, dy);
+        }
         sx += dx * dx;
         sy += dy * dy;
         sz += dz * dz;
@@ -280,6 +286,9 @@ static elfm_status score_detections(const truth_t *tr, const frames_t *fr, const
   out->rmse_x_um = tp ? sqrt(sx / (double)tp) : NAN;
   out->rmse_y_um = tp ? sqrt(sy / (double)tp) : NAN;
   out->rmse_z_um = tp ? sqrt(sz / (double)tp) : NAN;
+  out->rmse_raw_x_um = tp && dp->raw_x ? sqrt(rx / (double)tp) : NAN;
+  out->rmse_raw_y_um = tp && dp->raw_x ? sqrt(ry / (double)tp) : NAN;
+  out->rmse_raw_z_um = tp && dp->raw_x ? sqrt(rz / (double)tp) : NAN;
   out->alpha_detections =
       tr->pt.n ? 1.0 - (sd + g->eps * (double)(tr->pt.n - tp)) / (g->eps * (double)tr->pt.n)
                : NAN;
@@ -372,6 +381,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   memset(out, 0, sizeof *out);
   out->recall = out->precision = out->f1 = NAN;
   out->rmse_x_um = out->rmse_y_um = out->rmse_z_um = NAN;
+  out->rmse_raw_x_um = out->rmse_raw_y_um = out->rmse_raw_z_um = NAN;
   out->alpha_detections = NAN;
   out->alpha = out->beta = out->jaccard_tracks = out->jaccard_detections = NAN;
   out->rmse_tracks_um = out->stage_rel_error = NAN;

@@ -91,10 +91,10 @@ typedef struct {
   int64_t n;         /* points */
   int *frame;        /* frame slot (0..n_frames-1) */
   double *x, *y, *z; /* um */
-  /* detections with raw_x_um / raw_y_um (track's, moved back by their
-   * motion bias): the lateral position as measured, which the motion
-   * regression reads; NULL: x, y are */
-  double *raw_x, *raw_y;
+  /* detections with raw_x_um, raw_y_um, raw_z_um (track's, moved back by
+   * their motion bias): the position as measured, which the motion
+   * regression and the RMSE as measured read; NULL: x, y, z are */
+  double *raw_x, *raw_y, *raw_z;
 } points_t;
 
 /* (2) Truth at the frames. */

@@ -339,6 +339,7 @@ void elfm_score_points_free(points_t *p)
   free(p->z);
   free(p->raw_x);
   free(p->raw_y);
+  free(p->raw_z);
 }
 
 /* Room for cap points (at least 1), contents kept. On failure the arrays
@@ -387,26 +388,27 @@ elfm_status elfm_score_detections_load(points_t *dp, const elfm_table *t, const 
 {
   elfm_status s = points_reserve(dp, t->n_rows, err);
   if (s != ELFM_OK) return s;
-  /* track's detections.csv has the measured positions beside: both columns
-   * or neither, and where given, values on every row */
-  const int crx = elfm_table_col(t, "raw_x_um"), cry = elfm_table_col(t, "raw_y_um");
-  if ((crx >= 0) != (cry >= 0))
+  /* track's detections.csv has the measured positions beside: the three
+   * columns or none, and where given, values on every row */
+  static const char *const raw_names[3] = {"raw_x_um", "raw_y_um", "raw_z_um"};
+  int cr[3], n_raw = 0;
+  for (int a = 0; a < 3; a++) n_raw += (cr[a] = elfm_table_col(t, raw_names[a])) >= 0;
+  if (n_raw != 0 && n_raw != 3)
     return elfm_error_set(err, ELFM_ERR_FORMAT, t->path, -1,
-                          "column %s without %s: both or neither", crx >= 0 ? "raw_x_um" : "raw_y_um",
-                          crx >= 0 ? "raw_y_um" : "raw_x_um");
-  if (crx >= 0) {
+                          "columns raw_x_um, raw_y_um, raw_z_um: all three or none (%d found)", n_raw);
+  if (n_raw) {
     const size_t m = t->n_rows ? t->n_rows : 1;
     dp->raw_x = malloc(m * sizeof *dp->raw_x);
     dp->raw_y = malloc(m * sizeof *dp->raw_y);
-    if (!dp->raw_x || !dp->raw_y) return elfm_score_nomem(err);
+    dp->raw_z = malloc(m * sizeof *dp->raw_z);
+    if (!dp->raw_x || !dp->raw_y || !dp->raw_z) return elfm_score_nomem(err);
   }
   for (size_t r = 0; r < t->n_rows; r++) {
-    double v[3] = {0, 0, 0}, rv[2] = {0, 0};
+    double v[3] = {0, 0, 0}, rv[3] = {0, 0, 0};
     for (int a = 0; a < 3; a++)
       if ((s = get_req(t, r, c[2 + a], det_cols[2 + a], &v[a], err)) != ELFM_OK) return s;
-    if (crx >= 0 && ((s = get_req(t, r, crx, "raw_x_um", &rv[0], err)) != ELFM_OK ||
-                     (s = get_req(t, r, cry, "raw_y_um", &rv[1], err)) != ELFM_OK))
-      return s;
+    for (int a = 0; n_raw && a < 3; a++)
+      if ((s = get_req(t, r, cr[a], raw_names[a], &rv[a], err)) != ELFM_OK) return s;
     const int f = (int)((int64_t)elfm_table_get(t, r, c[0]) - fr->f_min);
     if (isnan(fr->t_us[f])) continue; /* outside the truth's time range */
     dp->frame[dp->n] = f;
@@ -416,6 +418,7 @@ elfm_status elfm_score_detections_load(points_t *dp, const elfm_table *t, const 
     if (dp->raw_x) {
       dp->raw_x[dp->n] = rv[0];
       dp->raw_y[dp->n] = rv[1];
+      dp->raw_z[dp->n] = rv[2];
     }
     dp->n++;
   }
