@@ -140,6 +140,14 @@ typedef struct track_opts {
  * and the 1.25 um default is a flow bead's lead, not a brighter bead's
  * (stage seed 11, its beads 20-90 um from focus: alpha 0.71 with it). */
 #define TRACK_WIDTH_NEAR_UM 40.0
+/* ... and where fewer than TRACK_WIDTH_MIN_PEAKS lie within either, the
+ * in-focus peaks, then those near focus, if TRACK_WIDTH_FEW_PEAKS are in:
+ * a slow stage's long windows are few (0.5 mm/s, 150 ms: 30 windows of 5
+ * ms), and 5 of seeds 1-40 had 17-42 peaks in focus and 29-45 near it.
+ * The flow default they kept, 1.25 um, is 0.5 um short of such a stage's
+ * lead (1.52 x ~1.2 um): alpha 0.71-0.79 against 0.85 on average (docs/
+ * tracker.md "The lead from fewer peaks"). */
+#define TRACK_WIDTH_FEW_PEAKS 20
 #define TRACK_HEIGHT_BINS 1024
 /* The stage's consensus velocity (track_ctx.stage_*): tracks of at least
  * TRACK_STAGE_MIN_POINTS points count, TRACK_STAGE_MIN_TRACKS of them make

@@ -71,9 +71,21 @@ double track_detection_speed_median(const track_ctx *c)
   return (track_hist_median_bin(c->speed_hist, TRACK_SPEED_BINS, c->n_speed) + 0.5) * TRACK_SPEED_BIN_UM_PER_MS;
 }
 
+/* Which peaks give the width: 1 the in-focus ones, 2 those near focus, 0
+ * too few of either (cmd_track.h TRACK_WIDTH_*). */
+static int width_source(const track_ctx *c)
+{
+  if (c->n_width >= TRACK_WIDTH_MIN_PEAKS) return 1;
+  if (c->n_width_near >= TRACK_WIDTH_MIN_PEAKS) return 2;
+  if (c->n_width >= TRACK_WIDTH_FEW_PEAKS) return 1;
+  if (c->n_width_near >= TRACK_WIDTH_FEW_PEAKS) return 2;
+  return 0;
+}
+
 double track_peak_width_median_um(const track_ctx *c)
 {
-  if (c->n_width < TRACK_WIDTH_MIN_PEAKS && c->n_width_near >= TRACK_WIDTH_MIN_PEAKS)
+  const int src = width_source(c);
+  if (src == 2)
     return track_hist_median_bin(c->width_near_hist, TRACK_WIDTH_BINS, c->n_width_near) * TRACK_WIDTH_BIN_UM;
   if (c->n_width == 0) return NAN;
   return track_hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
@@ -81,9 +93,7 @@ double track_peak_width_median_um(const track_ctx *c)
 
 double track_motion_lead_um(const track_ctx *c)
 {
-  if (!c->o->motion_lead_auto ||
-      (c->n_width < TRACK_WIDTH_MIN_PEAKS && c->n_width_near < TRACK_WIDTH_MIN_PEAKS))
-    return c->o->smooth.motion_lead_um;
+  if (!c->o->motion_lead_auto || !width_source(c)) return c->o->smooth.motion_lead_um;
   const double w_um = track_peak_width_median_um(c);
   if (c->o->motion == MOTION_STAGE) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
   return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);
