@@ -94,9 +94,14 @@ void elfm_track_mean_velocity(const elfm_track *t, double v[3])
 int elfm_track_local_velocity(const elfm_track *t, int64_t frame, int half_frames, double v[3])
 {
   if (!t || !t->n || half_frames < 0) return 0;
-  /* the points are in frame order: those within the window are a run */
-  size_t lo = 0;
-  while (lo < t->n && t->pts[lo].frame < frame - half_frames) lo++;
+  /* the points are in frame order: those within the window are a run,
+   * found by bisection (a long track holds thousands) */
+  size_t lo = 0, up = t->n;
+  while (lo < up) {
+    const size_t mid = lo + (up - lo) / 2;
+    if (t->pts[mid].frame < frame - half_frames) lo = mid + 1;
+    else up = mid;
+  }
   size_t hi = lo;
   while (hi < t->n && t->pts[hi].frame <= frame + half_frames) hi++;
   const size_t m = hi - lo;
