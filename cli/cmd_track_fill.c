@@ -470,7 +470,7 @@ static void det_bias(const track_ctx *c, const double *v, double *b, int n)
 }
 
 /* Into v, the velocity of the line through t's points around detection d
- * (elfm_track_local_velocity), when d is one of t's points: a later
+ * (elfm_link_local_velocity), when d is one of t's points: a later
  * review may have given it to another track. v unchanged otherwise. */
 static void det_velocity_on(const elfm_track *t, const elfm_detection *d, double v[3])
 {
@@ -479,7 +479,7 @@ static void det_velocity_on(const elfm_track *t, const elfm_detection *d, double
     if (p->frame < d->frame) return;
     if (p->frame == d->frame) {
       if (p->x_um == d->x_um && p->y_um == d->y_um && p->z_um == d->z_um)
-        elfm_track_local_velocity(t, d->frame, TRACK_DET_VELOCITY_HALF_FRAMES, v);
+        elfm_link_local_velocity(t, d->frame, TRACK_DET_VELOCITY_HALF_FRAMES, v);
       return;
     }
   }

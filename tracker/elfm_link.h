@@ -429,6 +429,13 @@ double elfm_link_last_speed(const elfm_linker *l, int i);
 size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
                                double v_long_um_per_ms[3], double *long_span_ms);
 
+/* The velocity (um/ms) of the line fitted by least squares through t's
+ * real points within half_frames frames of frame (by their t_us); returns
+ * the number of points, 0 (v unchanged) when fewer than 3 or their times
+ * do not differ. */
+int elfm_link_local_velocity(const elfm_track *t, int64_t frame, int half_frames,
+                             double v_um_per_ms[3]);
+
 /* The live track of that id (read only; valid until the next call that
  * changes the linker), NULL when none is live. */
 const elfm_track *elfm_link_live_track(const elfm_linker *l, int64_t track_id);

@@ -115,12 +115,6 @@ elfm_status elfm_track_append(elfm_track *t, const elfm_detection *d, elfm_error
 elfm_status elfm_track_insert(elfm_track *t, const elfm_detection *d, elfm_error *err);
 /* Mean smoothed velocity over the span (um/ms); zeros when not smoothed. */
 void elfm_track_mean_velocity(const elfm_track *t, double v_um_per_ms[3]);
-/* The velocity (um/ms) at frame `frame` of the line fitted by least
- * squares through t's real points within half_frames frames of it (by
- * their t_us); returns the number of points, 0 (v unchanged) when fewer
- * than 3 or their times do not differ. */
-int elfm_track_local_velocity(const elfm_track *t, int64_t frame, int half_frames,
-                              double v_um_per_ms[3]);
 
 /* What a run reports of a finished track once the track itself is freed:
  * summary.json's entry and the stage analysis (elfm_analysis_stage_info). */

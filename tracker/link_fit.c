@@ -71,6 +71,24 @@ int elfm_link_fit_line(const elfm_detection *pts, size_t k0, size_t k1, int64_t 
   return 1;
 }
 
+int elfm_link_local_velocity(const elfm_track *t, int64_t frame, int half_frames, double v[3])
+{
+  if (!t || !t->n || half_frames < 0) return 0;
+  /* the points are in frame order: those within the window are a run,
+   * found by bisection (a long track holds thousands) */
+  size_t lo = 0, up = t->n;
+  while (lo < up) {
+    const size_t mid = lo + (up - lo) / 2;
+    if (t->pts[mid].frame < frame - half_frames) lo = mid + 1;
+    else up = mid;
+  }
+  size_t hi = lo;
+  while (hi < t->n && t->pts[hi].frame <= frame + half_frames) hi++;
+  double pos[3];
+  if (hi - lo < 3 || !elfm_link_fit_line(t->pts, lo, hi, t->pts[lo].t_us, pos, v)) return 0;
+  return (int)(hi - lo);
+}
+
 /* The first of the points [lo, n) of t that the last path_um of path
  * (the anisotropic steps between the points, z / kz) reaches back to,
  * keeping at least min_points (when there are). */

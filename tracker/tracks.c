@@ -91,48 +91,6 @@ void elfm_track_mean_velocity(const elfm_track *t, double v[3])
   for (int a = 0; a < 3; a++) v[a] /= (double)t->n_span;
 }
 
-int elfm_track_local_velocity(const elfm_track *t, int64_t frame, int half_frames, double v[3])
-{
-  if (!t || !t->n || half_frames < 0) return 0;
-  /* the points are in frame order: those within the window are a run,
-   * found by bisection (a long track holds thousands) */
-  size_t lo = 0, up = t->n;
-  while (lo < up) {
-    const size_t mid = lo + (up - lo) / 2;
-    if (t->pts[mid].frame < frame - half_frames) lo = mid + 1;
-    else up = mid;
-  }
-  size_t hi = lo;
-  while (hi < t->n && t->pts[hi].frame <= frame + half_frames) hi++;
-  const size_t m = hi - lo;
-  if (m < 3) return 0;
-  /* times relative to the window's first point: absolute times near 1e12
-   * us would cost the sums their digits */
-  const int64_t t0 = t->pts[lo].t_us;
-  double mt = 0, mp[3] = {0, 0, 0};
-  for (size_t k = lo; k < hi; k++) {
-    const elfm_detection *d = &t->pts[k];
-    mt += 1e-3 * (double)(d->t_us - t0);
-    mp[0] += d->x_um;
-    mp[1] += d->y_um;
-    mp[2] += d->z_um;
-  }
-  mt /= (double)m;
-  for (int a = 0; a < 3; a++) mp[a] /= (double)m;
-  double stt = 0, stp[3] = {0, 0, 0};
-  for (size_t k = lo; k < hi; k++) {
-    const elfm_detection *d = &t->pts[k];
-    const double dt = 1e-3 * (double)(d->t_us - t0) - mt;
-    stt += dt * dt;
-    stp[0] += dt * (d->x_um - mp[0]);
-    stp[1] += dt * (d->y_um - mp[1]);
-    stp[2] += dt * (d->z_um - mp[2]);
-  }
-  if (!(stt > 0)) return 0;
-  for (int a = 0; a < 3; a++) v[a] = stp[a] / stt;
-  return (int)m;
-}
-
 void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
 {
   memset(o, 0, sizeof *o);
