@@ -3,7 +3,8 @@
  * options: each an error code, no crash), the options a caller sets
  * between frames (elfm_link_set_rescue_gate_factor, elfm_link_set_gate_um),
  * its lag correction, and what it tells of the track each detection joined
- * (elfm_link_last_velocity). */
+ * (elfm_link_last_velocity) and of a track's points around a frame
+ * (elfm_link_local_velocity). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -195,6 +196,39 @@ int main(void)
     CHECK(isnan(vl[1]) && isnan(span));
     CHECK_EQ_INT((int)elfm_link_last_velocity(NULL, 0, v, vl, NULL), 0);
     elfm_link_free(l);
+  }
+  /* the line through a track's points around a frame: exact on a line
+   * (x = 1 + 0.5 t_ms, z = -2 t_ms), at times near 1e12 us too; the window
+   * counts frames, not points (frame 14 is a gap); fewer than 3 points, or
+   * one time only: 0, v unchanged */
+  {
+    elfm_track *u = elfm_track_create(9, &err);
+    const int64_t t0 = 1000000000000LL;
+    for (int f = 10; f < 20; f++) {
+      if (f == 14) continue;
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = t0 + 1000 * f + (f % 3) * 37; /* windows not evenly spaced */
+      const double tm = 1e-3 * (double)(d.t_us - t0);
+      d.x_um = 1 + 0.5 * tm;
+      d.y_um = 3;
+      d.z_um = -2 * tm;
+      CHECK_OK(elfm_track_append(u, &d, &err), &err);
+    }
+    double v[3] = {NAN, NAN, NAN};
+    CHECK_EQ_INT(elfm_link_local_velocity(u, 15, 3, v), 6); /* 12, 13, 15-18 */
+    CHECK_NEAR(v[0], 0.5, 1e-9);
+    CHECK_NEAR(v[1], 0, 1e-9);
+    CHECK_NEAR(v[2], -2, 1e-9);
+    CHECK_EQ_INT(elfm_link_local_velocity(u, 10, 3, v), 4); /* the first: one side */
+    CHECK_NEAR(v[2], -2, 1e-9);
+    v[0] = 7;
+    CHECK_EQ_INT(elfm_link_local_velocity(u, 23, 4, v), 0); /* 19 alone */
+    CHECK_EQ_INT(elfm_link_local_velocity(u, 14, 1, v), 0); /* 13 and 15: two */
+    CHECK(v[0] == 7);
+    CHECK_EQ_INT(elfm_link_local_velocity(NULL, 14, 1, v), 0);
+    elfm_track_free(u);
   }
   return check_report();
 }
