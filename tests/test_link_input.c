@@ -229,6 +229,19 @@ int main(void)
     CHECK(v[0] == 7);
     CHECK_EQ_INT(elfm_link_local_velocity(NULL, 14, 1, v), 0);
     elfm_track_free(u);
+    /* three frames at one time (repeated timestamps): no line */
+    u = elfm_track_create(10, &err);
+    for (int f = 1; f <= 3; f++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = t0;
+      d.x_um = f;
+      CHECK_OK(elfm_track_append(u, &d, &err), &err);
+    }
+    CHECK_EQ_INT(elfm_link_local_velocity(u, 2, 1, v), 0);
+    CHECK(v[0] == 7);
+    elfm_track_free(u);
   }
   return check_report();
 }
