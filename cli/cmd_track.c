@@ -440,8 +440,11 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * the recording, as a stage judged at its end gets, or at 1 ms when
      * that is under TRACK_STAGE_SLOW_MIN_DT_US. */
     const int64_t cap = (rs.t_last_us - rs.t_first_us) / TRACK_STAGE_SLOW_MIN_WINDOWS / 100 * 100;
-    again->stage_short = 1;
+    again->stage_short = again->stage = 1; /* --motion stage alone, as the first run chose */
+    again->integral = 0;
+    again->blur_px = -1;
     again->dt_us = cap >= TRACK_STAGE_SLOW_MIN_DT_US ? cap : -1;
+    again->tau_follows = again->dt_us > 0;
     if (!o.quiet)
       fprintf(stderr, "\neventlfm track: the recording (%.1f ms) held only %" PRId64 " windows of %" PRId64
                       " us: starting again with --motion stage at %" PRId64 " us windows\n",
@@ -666,21 +669,6 @@ int cmd_track(int argc, char **argv)
         argv2[argc2++] = "--repr";
         argv2[argc2++] = "lin";
       }
-    } else if (again.stage_short) {
-      /* the slow stage's windows were too long for the recording: the
-       * command as given, then --motion stage and shorter ones, watched */
-      argc2 = argc;
-      argv2[argc2++] = "--motion";
-      argv2[argc2++] = "stage";
-      stage_watch = 0; /* at 1 ms: the first run's windows */
-      if (again.dt_us > 0) {
-        snprintf(dt, sizeof dt, "%" PRId64, again.dt_us);
-        argv2[argc2++] = "--dt-us";
-        argv2[argc2++] = dt;
-        argv2[argc2++] = "--tau-us";
-        argv2[argc2++] = dt;
-        stage_watch = 1;
-      }
     } else if (again.stage_back) {
       /* the slow stage's long windows were outrun: the command as given,
        * then --motion stage, as a stage found at 1 ms runs */
@@ -696,6 +684,13 @@ int cmd_track(int argc, char **argv)
       argv2[argc2++] = "exp";
       ratio = speed = NAN;
     } else {
+      if (again.stage_short) {
+        /* the slow stage's windows were too long for the recording: the
+         * command as given, then --motion stage and the shorter windows
+         * (watched), or the first run's 1 ms */
+        argc2 = argc;
+        stage_watch = 0;
+      }
       if (again.stage) {
         argv2[argc2++] = "--motion";
         argv2[argc2++] = "stage";
