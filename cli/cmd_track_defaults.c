@@ -453,11 +453,9 @@ int track_opts_derive(track_opts *o, const track_given *g)
     o->guided_min_points = 2;
   }
   if (each_trigger && !g->circ) {
-    /* Windows opened by the LED give a track one point per pulse, so 15
-     * points span 45 frames or more, and a track that took another bead's
-     * pulse on the way fits a circle: blink_moving (--repr lin) seeds 1-9
-     * alpha 0.8627 -> 0.8564 with it (seed 1 0.851 -> 0.794, the others
-     * the same); blink the same. */
+    /* 15 points of one per pulse span 45 frames or more, and a track that
+     * took another bead's pulse on the way fits a circle: blink_moving
+     * seeds 1-9 alpha 0.8627 -> 0.8564 with it; blink the same. */
     o->link.circle_points = 0;
   }
   if (each_trigger && !g->circnext) o->link.circle_next_path_um = 0;
@@ -468,14 +466,17 @@ int track_opts_derive(track_opts *o, const track_given *g)
     o->fill_retry_um = 0;
   }
   if (each_trigger && !g->minpts) {
-    /* ... and a track of 5 points is 5 pulses: a deep bead that fades
-     * after 4 had no track (blink seed 7, bead 13). A ghost would have to
-     * come back at one place in 3 pulse frames. 3 points: blink seeds
-     * 1-12 0.935 -> 0.938 (seed 7 0.886 -> 0.925, the others the same,
-     * 180 of 180 beads in one track), blink_moving (--repr lin) seeds 1-9
-     * 0.8502 -> 0.8627 (every seed the same or up). */
-    o->link.min_points = 3;
+    /* ... a track of 5 points is 5 pulses (a deep bead that fades after 4
+     * had none), and of 3 a bead crossing the field's edge in one or two
+     * pulses of blink_moving (7.5 um each) had none: seeds 1-10 missed 41
+     * of 471 beads. With 1: 13 missed, 11 unpaired tracks (4), alpha
+     * 0.8760 -> 0.8813 (2: 0.8795); blink seeds 1-10 the same. And a dark
+     * one-point track is looked for within 3 frames' reach of its point,
+     * not 150 um after 30 frames (docs/tracker.md "A track for every
+     * pulse", "A dark one-point track's reach"). */
+    o->link.min_points = 1;
   }
+  if (each_trigger) o->link.birth_frames = 3;
   if (!(o->guided_low >= 0) || !(o->guided_radius_um > 0) || o->guided_min_points < 1)
     return cli_message(C, CLI_USAGE,
                        "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");

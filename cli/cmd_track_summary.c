@@ -217,6 +217,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "min_separation_um", o->peaks.min_separation_um);
   cJSON_AddNumberToObject(par, "gate_um", o->link.gate_um);
   cJSON_AddNumberToObject(par, "max_gap_frames", o->link.max_gap_frames);
+  cJSON_AddNumberToObject(par, "birth_frames", o->link.birth_frames);
   cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
   cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
   cJSON_AddNumberToObject(par, "piece_points", o->piece_points);

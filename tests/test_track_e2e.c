@@ -321,9 +321,17 @@ int main(int argc, char **argv)
          * on this seed 1 of 42, then 2 of 41. A broken gap closing would
          * split dozens. */
         CHECK_MSG(one >= beads - 2, "%d of %d beads in one track", one, beads);
-        if (b == 0)
+        if (b == 0) {
           CHECK_MSG(r.alpha >= 0.8 && r.recall >= 0.93, "blink_moving alpha %.3f recall %.3f",
                     r.alpha, r.recall);
+          /* every pulse's beads: also those crossing the field's edge in
+           * one or two pulses, a track of one or two points (measured 47
+           * of 48 paired; 40 with 3 points per track, before) */
+          fprintf(stderr, "  blink_moving: %d of %d beads paired\n", r.n_paired_tracks,
+                  r.n_truth_tracks);
+          CHECK_MSG(r.n_paired_tracks >= r.n_truth_tracks - 2, "blink_moving paired %d of %d",
+                    r.n_paired_tracks, r.n_truth_tracks);
+        }
         if (b == 1) {
           CHECK_MSG(r.alpha >= 0.9 && r.recall >= 0.98, "blink alpha %.3f recall %.3f", r.alpha,
                     r.recall);

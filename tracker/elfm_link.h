@@ -19,8 +19,10 @@
  *     (FLANN_INDEX_KDTREE_SINGLE) in the anisotropic metric (z scaled by
  *     1/kz), and each track asks for the detections within its gate:
  *     gate_um + missed x gate_growth_um_per_frame + min(missed, short_gap)
- *     x speed_gate_frac x speed x frame interval (and, at rest, within
- *     that gate of where it was, each detection at its lower cost);
+ *     x speed_gate_frac x speed x frame interval, for a one-point track
+ *     + birth_speed_um_per_ms x its missed + 1 frame intervals (at most
+ *     birth_frames of them); and, at rest, within that gate of where it
+ *     was, each detection at its lower cost;
  *  3. tracks and detections joined by a candidate pair form connected
  *     groups; each group is solved optimally (the Hungarian solver of
  *     elfm_score.h: most pairs, then least total cost; cost = squared
@@ -158,6 +160,14 @@ typedef struct elfm_link_options {
    * birth_speed_um_per_ms x the time since that point (default 5 um/ms, a
    * little above the fastest flow scene's 4 mm/s). */
   double birth_speed_um_per_ms;
+  /* ... for at most birth_frames frame intervals (0 = no limit, the
+   * default; track: 3 under the LED's windows). Past that, a dark one-point
+   * track is looked for within those frames' reach of its point, not over
+   * all it could have reached: after 30 dark frames that was 150 um, most
+   * of the field, and any object in it continued the track (blink_moving,
+   * 1 ms pulses every 3 ms: beads seen once at the field's edge took beads
+   * entering 100 um away). */
+  int birth_frames;
   /* While most live tracks with >= 4 points move slower than this (their
    * straight-line fit; or none has 4 points yet), a track of >= 2 points
    * dark for more than short_gap frames is looked for where it was, too,

@@ -90,6 +90,7 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
               o->prior_velocity_um_per_ms[a], "finite");
   LINK_NEED(o->birth_speed_um_per_ms >= 0 && isfinite(o->birth_speed_um_per_ms), "birth_speed_um_per_ms",
             o->birth_speed_um_per_ms, ">= 0");
+  LINK_NEED(o->birth_frames >= 0, "birth_frames", o->birth_frames, ">= 0");
   LINK_NEED(o->speed_gate_frac >= 0, "speed_gate_frac", o->speed_gate_frac, ">= 0");
   LINK_NEED(o->rescue_gate_factor >= 0 && isfinite(o->rescue_gate_factor), "rescue_gate_factor",
             o->rescue_gate_factor, ">= 0");

@@ -123,7 +123,13 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
   const double speed = sqrt(cv[0] * cv[0] + cv[1] * cv[1] + cv[2] * cv[2]);
   lt->gate_um = track_gate_um(o, lt->missed, speed, dt_ms / (lt->missed + 1));
   /* a new object's unknown velocity; not where all share one */
-  if (lt->t->n == 1 && !(o->straight_gaps && common_vel)) lt->gate_um += o->birth_speed_um_per_ms * dt_ms;
+  if (lt->t->n == 1 && !(o->straight_gaps && common_vel)) {
+    /* over at most birth_frames frame intervals (elfm_link_options) */
+    double birth_ms = dt_ms;
+    if (o->birth_frames > 0 && lt->missed + 1 > o->birth_frames)
+      birth_ms = dt_ms / (lt->missed + 1) * o->birth_frames;
+    lt->gate_um += o->birth_speed_um_per_ms * birth_ms;
+  }
 }
 
 /* Shared with link.c (link_internal.h). */
