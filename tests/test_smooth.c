@@ -134,7 +134,12 @@ int main(void)
     double x1[9] = {1, 2, 3, 2, 2, 7, 3, 2, 11};
     CHECK_OK(elfm_smooth_fit(&o, 1, t1, x1, NULL, 1, t1, P, V, PS, VS, &info, &err), &err);
     CHECK_EQ_INT(info.model, ELFM_MODEL_STATIC);
-    CHECK(P[0] == 1 && P[1] == 2 && P[2] == 3 && V[0] == 0 && isnan(VS[0]) && PS[0] > 0);
+    /* a lone point tells no noise: its uncertainty is undetermined, not
+     * the noise floor's 0.02 um; given a sigma, it is that sigma */
+    CHECK(P[0] == 1 && P[1] == 2 && P[2] == 3 && V[0] == 0 && isnan(VS[0]) && isnan(PS[0]));
+    const double s1[3] = {0.3, 0.3, 1.2};
+    CHECK_OK(elfm_smooth_fit(&o, 1, t1, x1, s1, 1, t1, P, V, PS, VS, &info, &err), &err);
+    CHECK(fabs(PS[0] - 0.3) < 1e-9 && fabs(PS[2] - 1.2) < 1e-9 && isnan(VS[0]));
     CHECK_OK(elfm_smooth_fit(&o, 2, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
     CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_VELOCITY);
     CHECK_NEAR(V[0], 1.0, 1e-6);
@@ -143,6 +148,7 @@ int main(void)
     CHECK_OK(elfm_smooth_fit(&o, 3, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
     CHECK(info.model == ELFM_MODEL_CONST_VELOCITY || info.model == ELFM_MODEL_CONST_ACCEL);
     for (int i = 0; i < 9; i++) CHECK(isfinite(P[i]) && isfinite(V[i]));
+    for (int i = 0; i < 9; i++) CHECK(isnan(PS[i]) && isnan(VS[i])); /* 3 points: noise unknown */
     o.model = ELFM_MODEL_SPLINE;  /* asked for, but 3 points cannot carry it */
     CHECK_OK(elfm_smooth_fit(&o, 3, t1, x1, NULL, 3, t1, P, V, PS, VS, &info, &err), &err);
     CHECK(info.model != ELFM_MODEL_SPLINE);

@@ -150,5 +150,16 @@ int main(void)
     const double want = fmax(s2[a], a == 2 ? o.min_sigma_z_um : o.min_sigma_xy_um);
     CHECK_MSG(fabs(s[a] - want) < 1e-12, "axis %d: %g, second differences %g", a, s[a], want);
   }
+
+  /* 4. Which points tell their own noise (elfm_smooth_noise_known): 3
+   * second differences of distinct times, so 5 points; a repeated time
+   * takes two of them away. */
+  {
+    const int64_t tk[7] = {0, 1000, 2000, 3000, 4000, 5000, 6000};
+    const int64_t tr[7] = {0, 1000, 1000, 2000, 3000, 4000, 5000};
+    CHECK(!elfm_smooth_noise_known(0, tk) && !elfm_smooth_noise_known(1, tk));
+    CHECK(!elfm_smooth_noise_known(4, tk) && elfm_smooth_noise_known(5, tk));
+    CHECK(!elfm_smooth_noise_known(6, tr) && elfm_smooth_noise_known(7, tr));
+  }
   return check_report();
 }

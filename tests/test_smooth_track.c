@@ -3,6 +3,7 @@
  * sigmas (view fits, fit_sd_px), and the motion bias taken off the points
  * (elfm_smooth_options.motion_lead_um / motion_delay_us). Split from
  * test_smooth.c, which tests elfm_smooth_fit itself. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -301,6 +302,37 @@ int main(void)
     ov.motion_n_views = ELFM_MAX_VIEWS + 1;
     CHECK_EQ_INT(elfm_track_smooth(t1, &ov, &err), ELFM_ERR_INVALID);
     elfm_track_free(t1);
+  }
+
+  /* 13. A track too short to tell its noise (elfm_smooth_noise_known):
+   * the tracker's path, with per-point sigmas from the points' fit_sd_px,
+   * reports its uncertainties as NaN (tracks.csv: empty), where the noise
+   * floor's sigmas made them ~0.02 um; with 5 points they are the fit's. */
+  for (int n = 4; n <= 5; n++) {
+    elfm_track *ts = elfm_track_create(20 + n, &err);
+    for (int f = 0; f < n; f++) {
+      elfm_detection d;
+      memset(&d, 0, sizeof d);
+      d.frame = f;
+      d.t_us = T0 + 3000 * f;
+      d.x_um = 7.5 * f + 0.3 * gauss();
+      d.y_um = 0.3 * gauss();
+      d.z_um = -60 + gauss();
+      d.fit_sd_px = 0.05 + 0.01 * f;
+      CHECK_OK(elfm_track_append(ts, &d, &err), &err);
+    }
+    elfm_smooth_options on = o;
+    on.fit_sd_power = 1;
+    CHECK_OK(elfm_track_smooth(ts, &on, &err), &err);
+    int nan = 0, pos_ok = 1;
+    for (size_t i = 0; i < 3 * ts->n_span; i++) {
+      nan += isnan(ts->pos_sd_um[i]) && isnan(ts->vel_sd_um_per_ms[i]);
+      pos_ok &= isfinite(ts->pos_um[i]) && isfinite(ts->vel_um_per_ms[i]);
+    }
+    CHECK(pos_ok);
+    if (n == 4) CHECK_MSG(nan == 3 * n, "%d of %d uncertainties NaN", nan, 3 * n);
+    else CHECK_MSG(nan == 0 && ts->pos_sd_um[0] > 0.02, "%d NaN, sd_x %g", nan, ts->pos_sd_um[0]);
+    elfm_track_free(ts);
   }
   return check_report();
 }

@@ -25,7 +25,9 @@
  * points (a straight or slowly curving track has none), at most that of
  * the fourth differences / 0.6 (a path turning far between frames fills
  * its second differences; smooth_noise.c), floored at
- * min_sigma_*_um.
+ * min_sigma_*_um. With fewer than 3 second differences (under 5 points)
+ * the noise is unknown: the fit uses the floors, and the uncertainties it
+ * reports are NaN (elfm_smooth_noise_known).
  * NUMERICS. Times are taken relative to a reference inside the track (int64
  * difference, then double ms) and positions relative to their mean, so a
  * constant offset in time (absolute times ~1e12 us) or space changes
@@ -199,6 +201,13 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
                             const int64_t *q_t_us, double *pos_um, double *vel_um_per_ms,
                             double *pos_sd_um, double *vel_sd_um_per_ms, elfm_smooth_info *info,
                             elfm_error *err);
+
+/* Whether n points at these times tell their own noise: 3 or more second
+ * differences of distinct times (5 points, or more with repeated times).
+ * Else the estimate below is only its floors (min_sigma_*_um), and
+ * elfm_smooth_fit without sigmas and elfm_track_smooth report the
+ * uncertainties as NaN (undetermined), not as ones that small. */
+int elfm_smooth_noise_known(size_t n, const int64_t *t_us);
 
 /* The noise per axis elfm_smooth_fit estimates when given no sigmas
  * (NOISE above), for a caller that weights some points differently. */

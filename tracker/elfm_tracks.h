@@ -184,7 +184,9 @@ elfm_status elfm_detections_write(FILE *f, const char *path, const elfm_detectio
  * raw_z_um (empty on gap frames), vx_um_per_ms,vy_um_per_ms,vz_um_per_ms,
  * intensity (empty on gap frames), sd_x_um,sd_y_um,sd_z_um,
  * sd_vx_um_per_ms,sd_vy_um_per_ms,sd_vz_um_per_ms (empty where undetermined:
- * e.g. the velocity of a one-point track), nearest_um (the real point's
+ * the velocity of a one-point track, and every uncertainty of a track too
+ * short to tell its own noise, under 5 points: elfm_smooth_noise_known),
+ * nearest_um (the real point's
  * elfm_detection.nearest_um; empty on gap frames and where not measured).
  * All fields numeric or empty, so
  * elfm_table reads it back; the chosen model goes to summary.json.

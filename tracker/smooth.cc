@@ -769,8 +769,16 @@ elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_
                             elfm_error *err)
 {
   try {
-    return fit_impl(o, n, t_us, xyz_um, sigma_um, nq, q_t_us, pos_um, vel_um_per_ms, pos_sd_um,
-                    vel_sd_um_per_ms, info, err);
+    const elfm_status st = fit_impl(o, n, t_us, xyz_um, sigma_um, nq, q_t_us, pos_um, vel_um_per_ms,
+                                    pos_sd_um, vel_sd_um_per_ms, info, err);
+    // Without sigmas from the caller, uncertainties scaled by the noise
+    // floors would claim 0.02 um for a lone point: undetermined instead.
+    if (st == ELFM_OK && !sigma_um && !elfm_smooth_noise_known(n, t_us))
+      for (size_t i = 0; i < 3 * nq; i++) {
+        if (pos_sd_um) pos_sd_um[i] = kNaN;
+        if (vel_sd_um_per_ms) vel_sd_um_per_ms[i] = kNaN;
+      }
+    return st;
   } catch (const std::bad_alloc &) {
     return elfm_error_set(err, ELFM_ERR_NOMEM, nullptr, -1, "smooth: out of memory");
   } catch (...) {

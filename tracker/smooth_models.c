@@ -260,6 +260,10 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   }
   free(omega_scratch);
   omega_scratch = NULL;
+  /* sigmas from the noise floors alone (elfm_smooth_noise_known): the
+   * uncertainties are undetermined, not 0.02 um */
+  if (!elfm_smooth_noise_known(n, td))
+    for (size_t i = 0; i < 3 * ns; i++) psd[i] = vsd[i] = NAN;
   free(t->span_t_us);
   free(t->pos_um);
   free(t->vel_um_per_ms);

@@ -82,6 +82,14 @@ static double fourth_difference_sigma(size_t n, const int64_t *t, const double *
   return m < 3 ? -1 : mad_sigma(r, m);
 }
 
+int elfm_smooth_noise_known(size_t n, const int64_t *t_us)
+{
+  /* the triples second_difference_sigma uses: 3 or more */
+  size_t m = 0;
+  for (size_t i = 1; i + 1 < n && m < 3; i++) m += t_us[i] > t_us[i - 1] && t_us[i + 1] > t_us[i];
+  return m >= 3;
+}
+
 elfm_status elfm_smooth_estimate_noise(const elfm_smooth_options *o, size_t n,
                                        const int64_t *t_us, const double *xyz_um,
                                        double sigma_um[3], elfm_error *err)
