@@ -443,13 +443,11 @@ int track_opts_derive(track_opts *o, const track_given *g)
     o->fill_ends = 0;
   }
   if (each_trigger && !g->gmp) {
-    /* Windows opened by the LED: a bead gets one point per pulse, so 10
-     * points take 10 pulses (250 ms at blink's 2-50 ms gaps) before the
-     * guided view fit looks for it where its track expects it. From 2
-     * points, blink 200 ms seeds 1-12 (docs/tracker.md "Windows opened by
-     * the LED"): mean alpha 0.910 -> 0.935, all but 5 of the 1245 bead-pulses
-     * found (29 before), 179 of 180 beads in one track (175); blink_moving
-     * (--repr lin) seeds 1-9: 0.8460 -> 0.8502. */
+    /* Windows opened by the LED: one point per pulse, so 10 points take
+     * 10 pulses (250 ms at blink's 2-50 ms gaps) before the guided view
+     * fit looks for a bead where its track expects it. From 2: blink 200
+     * ms seeds 1-12 alpha 0.910 -> 0.935, bead-pulses missed 29 -> 5 of
+     * 1245; blink_moving seeds 1-9 0.8460 -> 0.8502 (docs/tracker.md). */
     o->guided_min_points = 2;
   }
   if (each_trigger && !g->circ) {
@@ -469,14 +467,15 @@ int track_opts_derive(track_opts *o, const track_given *g)
     /* ... a track of 5 points is 5 pulses (a deep bead that fades after 4
      * had none), and of 3 a bead crossing the field's edge in one or two
      * pulses of blink_moving (7.5 um each) had none: seeds 1-10 missed 41
-     * of 471 beads. With 1: 13 missed, 11 unpaired tracks (4), alpha
-     * 0.8760 -> 0.8813 (2: 0.8795); blink seeds 1-10 the same. And a dark
-     * one-point track is looked for within 3 frames' reach of its point,
-     * not 150 um after 30 frames (docs/tracker.md "A track for every
-     * pulse", "A dark one-point track's reach"). */
+     * of 471 beads; with 1, 13 (unpaired tracks 4 -> 11), alpha 0.8760 ->
+     * 0.8813; blink seeds 1-10 the same (docs/tracker.md "A track for
+     * every pulse"). */
     o->link.min_points = 1;
   }
-  if (each_trigger) o->link.birth_frames = 3;
+  if (each_trigger) {
+    o->link.birth_frames = 3;  /* a dark one-point track: 3 frames' reach */
+    o->link.straight_gaps = 2; /* a dark track: straight, not its turn */
+  }
   if (!(o->guided_low >= 0) || !(o->guided_radius_um > 0) || o->guided_min_points < 1)
     return cli_message(C, CLI_USAGE,
                        "--guided-low must be >= 0, --guided-radius-um > 0, --guided-min-points >= 1");

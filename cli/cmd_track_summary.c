@@ -201,6 +201,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "priority_points", o->link.priority_points);
   cJSON_AddNumberToObject(par, "short_path_um", o->link.short_path_um);
   cJSON_AddNumberToObject(par, "circle_points", o->link.circle_points);
+  cJSON_AddNumberToObject(par, "straight_gaps", o->link.straight_gaps);
   cJSON_AddNumberToObject(par, "circle_next_path_um", o->link.circle_next_path_um);
   /* as in effect: the open ends' circle needs circle_points */
   cJSON_AddNumberToObject(par, "circle_end_points",

@@ -10,7 +10,10 @@
  *      gate: a bead entering 40 um from it starts a track of its own, where
  *      without straight_gaps the gate had widened at the birth speed
  *      (5 um/ms) and the ghost's track took it;
- *   3. straight_gaps other than 0 or 1 is refused. */
+ *   3. with straight_gaps 2 (under the LED's windows: each track's own
+ *      straight fit, no common velocity) the deep bead is predicted along
+ *      its own line, near its place too;
+ *   4. straight_gaps other than 0, 1 or 2 is refused. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -89,10 +92,11 @@ static void run(int straight, double *miss_um, int *entered_own)
 
 int main(void)
 {
-  double miss_straight, miss_turn;
-  int own_straight, own_turn;
+  double miss_straight, miss_turn, miss_own;
+  int own_straight, own_turn, own_own;
   run(1, &miss_straight, &own_straight);
   run(0, &miss_turn, &own_turn);
+  run(2, &miss_own, &own_own);
   printf("stage: deep bead predicted after %d dark frames %.2f um from its place with "
          "straight_gaps, %.2f um without; a bead entering 40 um from a ghost dark for %d "
          "frames starts its own track: %s / %s\n",
@@ -105,10 +109,14 @@ int main(void)
   CHECK(!own_turn);
 
   /* 3. */
+  printf("straight_gaps 2: the deep bead predicted %.2f um from its place\n", miss_own);
+  CHECK_MSG(miss_own < 3.0, "predicted %.2f um off with straight_gaps 2", miss_own);
+
+  /* 4. */
   elfm_error err;
   elfm_link_options o;
   elfm_link_options_default(&o);
-  o.straight_gaps = 2;
+  o.straight_gaps = 3;
   elfm_linker *l = elfm_link_create(&o, &err);
   CHECK(l == NULL);
   CHECK(err.code == ELFM_ERR_INVALID && strstr(err.message, "straight_gaps") != NULL);

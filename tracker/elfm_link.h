@@ -104,7 +104,14 @@ typedef struct elfm_link_options {
    * was predicted 44 um aside and 55 um shallower than its straight path
    * and took an in-focus bead entering the field there; the joined track,
    * 65 of its 68 points outliers, was dropped with both beads
-   * (docs/tracker.md "Straight gaps on a stage"). */
+   * (docs/tracker.md "Straight gaps on a stage").
+   * straight_gaps = 2: straight on at the track's own straight fit's
+   * velocity, never a common one, for objects that need not share one:
+   * track sets it under the LED's windows, where a track has one point per
+   * pulse and the short fit's turn is the depths' noise as well
+   * (blink_moving: beads were predicted round a circle through a 40-frame
+   * gap onto a bead 150 um on; docs/tracker.md "Straight through the
+   * LED's dark gaps"). */
   int straight_gaps;
   /* With circle_points, a settled gap (elfm_link_settled_gaps) also gets
    * the circle through circle_gap_points real points on each side of it

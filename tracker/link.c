@@ -128,7 +128,8 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->circle_next_path_um >= 0 && isfinite(o->circle_next_path_um), "circle_next_path_um",
             o->circle_next_path_um, ">= 0");
   LINK_NEED(o->circle_after >= 1, "circle_after", o->circle_after, ">= 1");
-  LINK_NEED(o->straight_gaps == 0 || o->straight_gaps == 1, "straight_gaps", o->straight_gaps, "0 or 1");
+  LINK_NEED(o->straight_gaps >= 0 && o->straight_gaps <= 2, "straight_gaps", o->straight_gaps,
+            "0, 1 or 2");
   LINK_NEED(o->circle_min_arc_rad >= 0 && isfinite(o->circle_min_arc_rad), "circle_min_arc_rad",
             o->circle_min_arc_rad, ">= 0");
   LINK_NEED(o->circle_max_radius_um > 0, "circle_max_radius_um", o->circle_max_radius_um, "> 0");

@@ -136,7 +136,7 @@ void elfm_link_predict_track(const elfm_link_options *o, live_track *lt, int64_t
 elfm_status elfm_link_common_velocity(elfm_linker *l, int64_t frame, elfm_error *err)
 {
   l->has_common_vel = 0;
-  if (!l->o.straight_gaps) return ELFM_OK;
+  if (l->o.straight_gaps != 1) return ELFM_OK; /* 2: each track its own */
   if (l->n_live > l->cap_vel_scratch) {
     double *p = realloc(l->vel_scratch, l->n_live * sizeof *p);
     if (!p) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "link: out of memory");
