@@ -38,10 +38,11 @@ void track_defaults(track_opts *o)
   o->plane_shift_px = 1.5;
   o->plane_every = 1;
   o->max_outlier_frac = 1.0 / 3;
+  o->smooth.outlier_min_um = 1.5; /* ... of points also 1.5 um off (elfm_smooth.h) */
   /* The smoother's robust loss: Cauchy, not the library's Huber. A ghost
-   * joined to a track, or a detection of the neighbour at an encounter,
-   * lies many sigmas off: Cauchy's weight falls as 1/r^2 and lets go of
-   * it, Huber's as 1/r and still pulls. Mean alpha, Huber -> Cauchy (with
+   * joined to a track, or the neighbour's detection at an encounter, lies
+   * many sigmas off: Cauchy's weight falls as 1/r^2, Huber's as 1/r and
+   * still pulls. Mean alpha, Huber -> Cauchy (with
    * outliers counted alike, beyond twice the scale): flow 100 ms seeds
    * 1-20 0.8391 -> 0.8417 and held-out 21-32 0.8367 -> 0.8400 (all 32
    * seeds up), flow 1 s 1-8 0.7692 -> 0.7715 (all up), stage 0.8685 ->

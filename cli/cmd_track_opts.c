@@ -254,7 +254,8 @@ static void usage(FILE *f)
     "                       track's median)^P: points whose views agreed less count\n"
     "                       less (1; integral: 0; 0 = off)\n"
     "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
-    "                       their points (default 1/3)\n"
+    "                       their points (default 1/3); --outlier-min-um D: a\n"
+    "                       rejected point also lies D um off the fit, z / 4 (1.5)\n"
     "  --piece-points N     long tracks in bounded memory: once a live track has N +\n"
     "                       N/4 points, its oldest N are smoothed (with N/8 points of\n"
     "                       context on each side) and written, and dropped from\n"
@@ -314,7 +315,7 @@ static int parse_views_or_off(const char *cmd, const char *opt, const char *a, i
 
 enum {
   O_CALIB = 1000, O_EVENTS, O_OUT, O_THK, O_THA, O_THR, O_RXY, O_RZ, O_SEP, O_REFINE, O_MAXDET,
-  O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT,
+  O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT, O_OUTMIN,
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
@@ -408,6 +409,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"loss-scale", required_argument, 0, O_LSCALE},
       {"spline-weight-ms3", required_argument, 0, O_SPW}, {"resolution", no_argument, 0, O_RES},
       {"max-outlier-frac", required_argument, 0, O_MAXOUT},
+      {"outlier-min-um", required_argument, 0, O_OUTMIN},
       {"piece-points", required_argument, 0, O_PIECE},
       {"motion-lead-um", required_argument, 0, O_MLEAD},
       {"motion-delay-us", required_argument, 0, O_MDELAY},
@@ -772,6 +774,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double(C, "--max-outlier-frac", a, &o.max_outlier_frac)) return CLI_USAGE;
       if (!(o.max_outlier_frac >= 0 && o.max_outlier_frac <= 1))
         return cli_message(C, CLI_USAGE, "--max-outlier-frac must be in 0..1");
+      break;
+    case O_OUTMIN:
+      if (!cli_parse_double_in(C, "--outlier-min-um", a, 0, 0, 1e6, "0..1e6", &o.smooth.outlier_min_um))
+        return CLI_USAGE;
       break;
     case O_PIECE:
       if (!cli_parse_int(C, "--piece-points", a, &o.piece_points)) return CLI_USAGE;

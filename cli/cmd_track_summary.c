@@ -221,6 +221,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "birth_frames", o->link.birth_frames);
   cJSON_AddNumberToObject(par, "min_points", o->link.min_points);
   cJSON_AddNumberToObject(par, "max_outlier_frac", o->max_outlier_frac);
+  cJSON_AddNumberToObject(par, "outlier_min_um", o->smooth.outlier_min_um);
   cJSON_AddNumberToObject(par, "piece_points", o->piece_points);
   cJSON_AddBoolToObject(par, "lag_correct", o->lag_correct);
   /* the lead the last tracks were smoothed with (all widths are in by then) */

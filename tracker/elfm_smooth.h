@@ -68,6 +68,14 @@ typedef struct elfm_smooth_options {
   elfm_motion_model model;      /* AUTO by default */
   elfm_robust_loss loss;        /* HUBER */
   double loss_scale;            /* 3 (sigma units of the 3D residual norm) */
+  /* An outlier (elfm_smooth_info.n_outliers) also lies this far from the
+   * fit, um with z counted / 4 (SPEC's distance); 0 (default): no floor.
+   * Why: the noise the points' second differences give is small on a
+   * short track, or where the errors wander together from point to point,
+   * and a bead's own points 0.5 um off then lay 4-5 sigma out; track
+   * dropped whole tracks of one bead as "not one object" (4 of the 6 it
+   * dropped on flow_random, blink_moving; track: 1.5 um). */
+  double outlier_min_um;
   double spline_weight_ms3;     /* lambda; <= 0: chosen by GCV */
   /* GCV's price per effective parameter: lambda minimises
    * n RSS / (n - gcv_gamma x edf)^2, >= 1. 1 (default) is the classical
@@ -187,7 +195,8 @@ typedef struct elfm_smooth_info {
   double sigma_um[3];           /* noise per axis used (estimated or median given) */
   double accel_um_per_ms2[3];   /* CONST_ACCEL: the fitted acceleration; else 0 */
   int n_outliers;               /* points beyond twice the loss scale (where Huber's weight
-                                   falls below 1/2), whichever the loss */
+                                   falls below 1/2), whichever the loss, and farther than
+                                   outlier_min_um from the fit */
 } elfm_smooth_info;
 
 /* Fit n points (t_us non-decreasing; xyz_um n x 3; sigma_um n x 3 or NULL

@@ -23,7 +23,8 @@ const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct Loss {
   elfm_robust_loss kind;
-  double a;  // scale (sigma units of the residual norm)
+  double a;          // scale (sigma units of the residual norm)
+  double min2 = 0;   // outlier_min_um^2 (elfm_smooth.h): an outlier is also this far
   double rho(double s) const {
     if (kind == ELFM_LOSS_HUBER) return s <= a * a ? s : 2 * a * std::sqrt(s) - a * a;
     if (kind == ELFM_LOSS_CAUCHY) return a * a * std::log1p(s / (a * a));
@@ -40,7 +41,9 @@ struct Loss {
   // 1/2 from one scale on, so counting by weight called ~3x more points
   // outliers and the outlier rule (elfm_track.n_outliers) dropped whole
   // tracks: worm 0.5 s, 10 of 359 tracks.
-  bool outlier(double s) const {
+  // d2: the squared distance from the fit, um^2 with z / 4
+  bool outlier(double s, double d2) const {
+    if (d2 <= min2) return false;
     if (kind == ELFM_LOSS_HUBER) return weight(s) < 0.5;
     if (kind == ELFM_LOSS_CAUCHY) return s > 4 * a * a;
     return false;
@@ -290,14 +293,16 @@ void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit 
   f->outliers = 0;
   for (size_t i = 0; i < d.n; i++) {
     double t = d.tau[i], g[3] = {1, t, 0.5 * t * t}, s = 0;
+    double d2 = 0;
     for (int a = 0; a < 3; a++) {
       double pr = f->p[0][a] + f->p[1][a] * t + (order == 2 ? 0.5 * f->p[2][a] * t * t : 0);
-      double r = (pr - d.x[3 * i + a]) / d.sig[3 * i + a];
+      const double e = pr - d.x[3 * i + a], r = e / d.sig[3 * i + a];
       s += r * r;
+      d2 += a == 2 ? e * e / 16 : e * e;
     }
     f->chi2 += loss.rho(s);
     double w = loss.weight(s);
-    f->outliers += loss.outlier(s);
+    f->outliers += loss.outlier(s, d2);
     for (int a = 0; a < 3; a++) {
       double wi = w / (d.sig[3 * i + a] * d.sig[3 * i + a]);
       for (int r = 0; r < m; r++)
@@ -422,14 +427,15 @@ void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
   *chi2 = 0;
   *outliers = 0;
   for (size_t i = 0; i < d.n; i++) {
-    double s = 0;
+    double s = 0, d2 = 0;
     for (int a = 0; a < 3; a++) {
-      double r = (p[3 * ss.state_of[i] + a] - d.x[3 * i + a]) / d.sig[3 * i + a];
+      const double e = p[3 * ss.state_of[i] + a] - d.x[3 * i + a], r = e / d.sig[3 * i + a];
       s += r * r;
+      d2 += a == 2 ? e * e / 16 : e * e;
     }
     *chi2 += loss.rho(s);
     w[i] = loss.weight(s);
-    *outliers += loss.outlier(s);
+    *outliers += loss.outlier(s, d2);
   }
 }
 
@@ -574,7 +580,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
       !(o->gcv_gamma >= 1) || !std::isfinite(o->gcv_gamma) ||
       (o->spline_order != 2 && o->spline_order != 3) ||
       !(o->spline_omega_rad_per_ms >= 0 && o->spline_omega_rad_per_ms <= 1e3) ||
-      o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC)
+      o->model < ELFM_MODEL_AUTO || o->model > ELFM_MODEL_STATIC ||
+      !(o->outlier_min_um >= 0 && o->outlier_min_um <= 1e6))
     return elfm_error_set(err, ELFM_ERR_INVALID, nullptr, -1, "smooth: options out of range");
   for (size_t i = 0; i < n; i++) {
     for (int a = 0; a < 3; a++) {
@@ -628,7 +635,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   }
   size_t distinct = 1;
   for (size_t i = 1; i < n; i++) distinct += t_us[i] != t_us[i - 1];
-  Loss loss{o->loss, o->loss_scale};
+  Loss loss{o->loss, o->loss_scale, o->outlier_min_um * o->outlier_min_um};
   const double lnobs = std::log(3.0 * (double)n);
 
   // ---- static: one time only (or asked for)
