@@ -66,6 +66,9 @@ typedef struct track_opts {
                            far beside it in x and y, and as far in z as moves the outer
                            views' images as much (0 = off) */
   int motion_lead_auto; /* 1: the lead from the in-focus peaks' widths (track_motion_lead_um) */
+  double lead_fast_ms;  /* ... less this x (the judged speed - lead_fast_um_per_ms) um where
+                           the speed the first peaks' tracks moved at is above that (0 = off) */
+  double lead_fast_um_per_ms;
   double plane_shift_px; /* without --z-step-um: every m-th of the calibration's planes, the
                             outermost view moving <= this between them (0 = all of them;
                             track_plane_step) */
@@ -196,6 +199,8 @@ typedef struct track_opts {
  * CLI_USAGE already shown on stderr. */
 #define TRACK_PARSE_HELP (-1)
 int track_opts_parse(int argc, char **argv, track_opts *o);
+/* track --help's text (cmd_track_help.c). */
+void track_usage(FILE *f);
 
 
 /* track's plain defaults, where they differ from the libraries' and why
@@ -225,6 +230,8 @@ typedef struct track_given {
 /* Fill in the derived defaults of a parsed *o (g: what was given) and
  * check the guided search's values: CLI_OK, or a usage error (shown). */
 int track_opts_derive(track_opts *o, const track_given *g);
+/* ... its motion bias's part (cmd_track_bias.c). */
+void track_bias_derive(track_opts *o, const track_given *g);
 
 /* Without --z-step-um: take every m-th of *cal's planes, m the largest
  * whose outermost view moves at most o->plane_shift_px between planes and
@@ -583,6 +590,13 @@ double track_peak_width_median_um(const track_ctx *c);
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
  * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);
+/* The speed the first peaks' tracks moved at (track_detection_speed_median)
+ * as the run judged it, or the first run (auto_chose); NaN: not judged
+ * (the window, representation and blur all given). */
+double track_judged_speed_um_per_ms(const track_ctx *c);
+/* What track_motion_lead_um takes off the widths' lead for a fast
+ * recording (lead_fast_ms), um; 0 where it does not apply. */
+double track_motion_lead_fast_um(const track_ctx *c);
 /* The points a live track keeps past a piece's cut, and the context on
  * each side of a cut, for --piece-points N: N / 4 (at least 64, more than
  * the linker's reviews look back) and N / 8 (at least 16, at most that). */

@@ -1,7 +1,8 @@
-/* cmd_track_opts.c — eventlfm track's options: --help and the parsing.
- * The defaults (where they differ from the libraries', and why: each
- * measured on the simulator), also those that depend on other options, are
- * in cmd_track_defaults.c; the run is in cmd_track.c. */
+/* cmd_track_opts.c — eventlfm track's options: the parsing (--help's
+ * text is in cmd_track_help.c). The defaults (where they differ from the
+ * libraries', and why: each measured on the simulator), also those that
+ * depend on other options, are in cmd_track_defaults.c and, for the motion
+ * bias, cmd_track_bias.c; the run is in cmd_track.c. */
 #include <errno.h>
 #include <getopt.h>
 #include <math.h>
@@ -10,281 +11,6 @@
 #include <string.h>
 
 #include "cmd_track.h"
-
-static void usage(FILE *f)
-{
-  track_opts d;
-  track_defaults(&d);
-  fprintf(f,
-    "usage: eventlfm track --calib calib.json --events FILE --out DIR [options]\n"
-    "\n"
-    "Events -> refocused volumes -> 3D peaks -> linked tracks -> Ceres-smoothed tracks.\n"
-    "Writes DIR/detections.csv (moved back by their track's motion bias + raw),\n"
-    "tracks.csv (smoothed + raw), tracks_isbi.xml (ISBI 2012),\n"
-    "tracks_trackmate.xml (TrackMate) and summary.json. Progress on stderr.\n"
-    "Intensity over time per object (flashes, spikes): eventlfm traces, on these\n"
-    "tracks or, for a static sample whose objects flash far apart in time (a\n"
-    "slice's neurons), on clusters of these detections.\n"
-    "\n"
-    "recon (the same options as eventlfm recon's):\n");
-  cli_recon_options_usage(f, &d.recon);
-  fprintf(f,
-    "                       (polarity on: OFF events trail moving beads; median 0\n"
-    "                       and ghost none: the detector and linker reject ghosts;\n"
-    "                       a batch's volumes are searched for peaks in parallel too)\n");
-  fprintf(f,
-    "  --blur-px auto       (default) start without the blur, and when the first %d\n"
-    "                       peaks' median height is below %.2f x the threshold (dim\n"
-    "                       objects) start again with --blur-px 1; on time surfaces\n"
-    "                       without --threshold-abs, events from a file (read again),\n"
-    "                       not with --motion stage (the blur costs a stage's speed)\n"
-    "                       nor where those peaks' tracks crawl (below) or are slow\n"
-    "                       beads under %g um/ms (longer windows instead, --dt-us)\n"
-    "  --repr, not given    the time surface, and when those peaks' tracks crawl\n"
-    "                       (%g-%g um/ms: cells, whose ON events lead them) start\n"
-    "                       again with --repr integral, at --dt-us 2000 unless given;\n"
-    "                       also when a recording of %d windows or more gives fewer\n"
-    "                       than %d peaks in all (objects too slow for the time\n"
-    "                       surface), back to the time surface if the integral finds\n"
-    "                       fewer detections; not with --tau-us, --polarity,\n"
-    "                       --blur-px, --threshold-abs, --start each-trigger nor\n"
-    "                       --motion stage\n"
-    "  --dt-us, not given   windows of 1 ms, and when those peaks' tracks move %g um\n"
-    "                       per frame or more (fast beads) start again with half of\n"
-    "                       it; on time surfaces, not with --start each-trigger nor\n"
-    "                       --motion stage; --dt-us 1000 keeps 1 ms. Slow beads (%g\n"
-    "                       to %g um/ms: faster than cells) start again with\n"
-    "                       --dt-us %d --tau-us %d (more of each bead's events in a\n"
-    "                       window); not with --tau-us. A stage found\n"
-    "                       (--motion auto, below) that moves under %g um per 1 ms\n"
-    "                       starts again with windows and --tau-us long enough for\n"
-    "                       %g um (%d..%d us: slow beads fire few of their pixels\n"
-    "                       in 1 ms), and at 1 ms again if it speeds up to %g um per\n"
-    "                       window; not with --tau-us\n"
-    "  --start, not given   the grid from the first event, and under pulsed light\n"
-    "                       (%d rising trigger edges or more, and the frames with an\n"
-    "                       edge, or after one, hold over %g x the others' events)\n"
-    "                       start again with --start each-trigger, one window per\n"
-    "                       pulse (blinking beads), and --repr lin when the tracks\n"
-    "                       move (%g um/ms or more) where --repr is chosen (above);\n"
-    "                       on time surfaces, not with --motion stage; --start\n"
-    "                       first keeps the grid\n",
-    TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS,
-    TRACK_HINT_MIN_SPEED_UM_PER_MS,
-    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
-    TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_SLOW_BEADS_MAX_UM_PER_MS, TRACK_SLOW_BEADS_DT_US, TRACK_SLOW_BEADS_DT_US,
-    TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
-    TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
-    TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
-  fprintf(f,
-    "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
-    "                       m the largest that moves the outermost view <= S px\n"
-    "                       between planes (1.5: 4 um on the paper's 2 um planes, about\n"
-    "                       the same accuracy in 0.68 of the time; 0 = every plane);\n"
-    "                       the default thresholds fall by the coarser sampling's cost;\n"
-    "                       use 0 where the sensor cuts off much of the views (640x480)\n"
-    "detection:\n"
-    "  --threshold-k K      k x robust noise sigma (6), --threshold-abs V (45 on time\n"
-    "                       surfaces, 20 on the integral), --threshold-rel F (0.35 of\n"
-    "                       the maximum for counts)\n"
-    "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all\n"
-    "                       depths; default 60 on time surfaces, 0 with --motion stage)\n"
-    "  --threshold-min V    floor of that depth-scaled threshold (default 30)\n"
-    "  --deep-peak-views N  a peak above the depth-scaled threshold only is kept when\n"
-    "                       the view fit from it has >= N views agreeing (10; 0 = no\n"
-    "                       test; needs --localize views, the default)\n"
-    "  --threshold-low V    hysteresis: peaks above V but below the threshold may\n"
-    "                       continue a track, never start one (30 with the default\n"
-    "                       threshold, 0 = off; off on the integral)\n"
-    "  --views-rule on|off  where n of the N views sample a voxel, a peak must exceed\n"
-    "                       the threshold x (N/n)^E, --views-exponent E (default on, 0.5)\n"
-    "  --view-support F     a peak needs signal in >= F of the views sampling its voxel\n"
-    "                       (ghosts: a few views; 0 = off); default auto: 0.3, and\n"
-    "                       in a crowded frame (over 3 %% of the views' pixels with\n"
-    "                       signal) 0.3 + 10 x (that share - 0.03), at most 0.55,\n"
-    "                       on time surfaces without the blur\n"
-    "  --explain-brighter F  ... not counting the views where a peak over 1/F times\n"
-    "                       brighter has its image within --explain-um R of the\n"
-    "                       peak's, when they are half of its views with signal or\n"
-    "                       more: a bright object's images line up at other depths\n"
-    "                       as ghosts (default 0.5, R 3.7; 0 = off)\n"
-    "  --localize views|peak  views (default): each peak's position from its images\n"
-    "                       in the views, fitted together; peak: the sub-voxel fit of\n"
-    "                       the refocused peak only\n"
-    "  --localize-window-px R  each view's window is (2R+1)^2 px (2)\n"
-    "  --localize-power P   pixel weight value^P: higher P follows the newest events,\n"
-    "                       at the object's leading edge (3; 2 with --repr integral;\n"
-    "                       1 is better for bright objects whose ON events lead\n"
-    "                       them, e.g. beads on a stage)\n"
-    "  --localize-outlier-px D  views missing the fit by more are dropped (1.5)\n"
-    "  --localize-min-views N  fewer views with signal: keep the peak fit (6)\n"
-    "  --localize-near-um D the view fit of a peak, or of a track's prediction, takes\n"
-    "                       out the light of the frame's other objects within D um\n"
-    "                       laterally, read mirrored through their centres (12;\n"
-    "                       0 = off)\n"
-    "  --radius-xy-um R, --radius-z-um R   local-maximum box (3, 1.5 with --repr integral;\n"
-    "                       15)\n"
-    "  --min-separation-um D (4), --refine gauss|quad|none, --max-detections N (10000)\n"
-    "linking:\n"
-    "  --gate-um G (6; in a crowded frame, see --view-support, 6 - 200 x (that\n"
-    "                       share - 0.03), at least 4), --max-gap N frames (50),\n"
-    "                       --min-points N (5; 1 with --start each-trigger: one point\n"
-    "                       per pulse, and a bead seen in one pulse has a track)\n"
-    "  --lead-sigmas K      with --lag-correct: ON events lead a moving object by ~K x\n"
-    "                       its width along the motion; move detections back by that\n"
-    "  --link-kz K          axial scale of the linker's distance sqrt(dx2+dy2+(dz/K)2) (1.5)\n"
-    "  --rescue-factor F    unmatched tracks retry leftovers within F x gate (2.5, and\n"
-    "                       in a crowded frame (see --view-support) 2.5 - 100 x (that\n"
-    "                       share - 0.03), at least 1: the gate; 0 off)\n"
-    "  --stitch-points N    a new track of N points continues a dark one when its points\n"
-    "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
-    "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
-    "  --swap-points N      review a gap closing that does not fit when its new tail\n"
-    "                       has N points; exchange tails with a better fit (8; 0 off)\n"
-    "  --encounter-um D     two tracks that came within D (linker metric) are reviewed\n"
-    "                       the same way once both have N points after it (5; 0 off)\n"
-    "  --encounter-pad N    frames before the encounter left out of the heads (1)\n"
-    "  --encounter-apart N  up to N frames apart, then together again, are one\n"
-    "                       encounter (4)\n"
-    "  --encounter-ratio R  exchange when the other way fits R times better (0.5)\n"
-    "  --encounter-circle-ratio R  ... or when the heads' circles (--circle-points)\n"
-    "                       meet the tails the other way R times better (0.5; 0 = off)\n"
-    "  --encounter-line-ratio R  ... or, while the objects are at rest (see\n"
-    "                       --rest-speed-um-per-ms), when straight lines through 20\n"
-    "                       points of each head and tail join the other way R times\n"
-    "                       better; the review then waits for 20 points (0.5; 0 = off)\n"
-    "  --review-join-factor F  the swap and encounter reviews exchange only when the\n"
-    "                       new joins lie within F x the gate, RMS (2; 0 no limit)\n"
-    "  --twin-um D, --twin-points N  a track about to end whose last 4N points\n"
-    "                       include N that a younger track holds too, within D\n"
-    "                       (linker metric) in the same frame, goes on as that\n"
-    "                       track: one object, not two (2; 5; D 0 = off)\n"
-    "  --rest-speed-um-per-ms V  while most tracks of >= 4 points move slower than V,\n"
-    "                       a track dark for over 6 frames is looked for where it\n"
-    "                       was too, not only where its velocity carries it (for\n"
-    "                       blinking objects at rest that velocity is the noise of\n"
-    "                       a few pulses' points) (0.5; 0 off)\n"
-    "  --priority-points N  tracks of >= N points choose their detections before\n"
-    "                       younger ones (8; 0 = one assignment for all)\n"
-    "  --short-path-um L    a track's prediction fits its last 8 points, fewer (>= 4)\n"
-    "                       when they span more than L um of path, as fast objects'\n"
-    "                       do (20; 0 = always 8; --motion stage, --repr integral: 0)\n"
-    "  --circle-points N    a track dark for --circle-after M frames (2) or more is\n"
-    "                       predicted along the circle through its last N points,\n"
-    "                       when they follow one better than a line (15; 0 off;\n"
-    "                       --motion stage, --start each-trigger: 0)\n"
-    "  --circle-next-path-um L  the next frame, too, along the circle through the\n"
-    "                       points of a track's last L um of path (>= 6 points),\n"
-    "                       where that circle has predicted the track's points\n"
-    "                       better than the short fit (45; 0 off; --motion stage,\n"
-    "                       --start each-trigger: 0)\n"
-    "  --circle-end-points N  gap filling's walks before a track's first point and\n"
-    "                       past a finished track's last follow the circle through\n"
-    "                       the N points at that end, when they follow one (8;\n"
-    "                       0 off; needs --circle-points)\n"
-    "  --weak-gate-um D     weak (hysteresis) peaks join a track only within D of its\n"
-    "                       prediction (default 5; 0 = the track's gate)\n"
-    "  --guided-low V       where a track of >= --guided-min-points N (10; 2 with\n"
-    "                       --start each-trigger, one point per pulse) points\n"
-    "                       predicts its bead and no peak lies within the weak gate,\n"
-    "                       take the local maximum above V within --guided-radius-um\n"
-    "                       R (1.5, z x link-kz) as a weak peak (default 0 = off)\n"
-    "  --guided-views N     where a track of >= --guided-min-points points predicts\n"
-    "                       its bead and no peak lies within the weak gate, fit the\n"
-    "                       views from the prediction; a fit with >= N views agreeing\n"
-    "                       and at least --guided-min-ratio F (0.15) x the track's\n"
-    "                       last intensity becomes a weak peak (default 8; 0 = off;\n"
-    "                       the floor keeps it off a blinking bead's faint last light)\n"
-    "  --fill-views N       gap filling: once a track has found its object again\n"
-    "                       (8 points on), fit the views in each kept frame of the\n"
-    "                       gap, and before the track began, from where the gap's\n"
-    "                       two ends put the object; a fit with >= N views agreeing,\n"
-    "                       within --fill-gate-um G (5) of that and at least\n"
-    "                       --fill-min-ratio F (0.15) x the ends' intensity becomes\n"
-    "                       a detection of that track (default 4, with --repr\n"
-    "                       integral 8; 0 = off: better for blinking objects)\n"
-    "  --fill-max-gap N     frames kept for it: gaps up to N are filled (50)\n"
-    "  --fill-frames N      where one frame's fit finds nothing, fit N frames centred\n"
-    "                       on it, each window where the gap's ends put the object\n"
-    "                       then (a dim object's events add up); 2 more views must\n"
-    "                       agree, and not at two of four places beside it (odd,\n"
-    "                       1..9; default 3, with --repr integral 1 = off)\n"
-    "  --fill-ends on|off   follow a finished track of >= 20 points on past its last\n"
-    "                       point the same way (default on, with --repr integral off)\n"
-    "  --fill-retry-um R    where the fit from where the gap's ends put the object\n"
-    "                       finds nothing, start the one-frame fit again R um beside\n"
-    "                       that in x and y, then above and below it in z (by as\n"
-    "                       much as moves the outer views' images R um); a find\n"
-    "                       within the gate of the prediction is kept where a point\n"
-    "                       of the next or the last frame lies within 4 um (default\n"
-    "                       1.5; 0 = off; with --start each-trigger 0: a blinking\n"
-    "                       object's gaps are dark)\n"
-    "  --lag-correct on|off  shift detections forward by the time-surface lag (off)\n"
-    "smoothing:\n"
-    "  --motion auto|per-track|stage|free   per-track: model chosen per track (BIC)\n"
-    "                       among constant velocity, constant acceleration and\n"
-    "                       spline; stage: rigid motion (no spline; tracks that do\n"
-    "                       not move with the stage are dropped; with a stage\n"
-    "                       velocity, new tracks predict with it); free: smoothing\n"
-    "                       spline for all; auto (default): per-track, but when the\n"
-    "                       first tracks move as one (a stage: at >= 0.1 um/ms, their\n"
-    "                       velocities lie within 15 %% or 0.045 um/ms of each\n"
-    "                       frame's median velocity by the median) start again with\n"
-    "                       --motion stage; time surfaces only, events from a file,\n"
-    "                       not with --model or --start each-trigger\n"
-    "  --stage-velocity-um-per-ms vx,vy,vz   known stage velocity (summary compares)\n"
-    "  --model auto|cv|ca|spline, --spline-weight-ms3 W\n"
-    "  --loss L             robust loss of the smoother: cauchy (the default), huber\n"
-    "                       or none\n"
-    "  --loss-scale S       where the loss turns, in sigmas of a point's 3D residual\n"
-    "                       (2; integral 3; an outlier lies beyond twice it)\n"
-    "  --gcv-gamma G        the spline weight (when not given) minimises GCV with G per\n"
-    "                       effective parameter: n RSS / (n - G edf)^2 (1.6; integral 5;\n"
-    "                       1 classical); a track the robust fit would reject at G is\n"
-    "                       smoothed again at 1 and kept or rejected on that fit\n"
-    "  --spline-order N     the spline penalises the acceleration (2) or the jerk (3),\n"
-    "                       which leaves a constant acceleration alone (3; integral: 2)\n"
-    "  --spline-turn on|off  with order 3, fit again with a prior that leaves the\n"
-    "                       track's own turn rate (a circle at that rate) alone, its\n"
-    "                       weight chosen again (on)\n"
-    "  --view-fit-sigma F   points the view fit found where no peak stood out (gap\n"
-    "                       filling, guided search) count as F x noisier than the\n"
-    "                       track's peaks (1.5)\n"
-    "  --fit-sd-power P     each point's sigma also x (its view fit's scatter / the\n"
-    "                       track's median)^P: points whose views agreed less count\n"
-    "                       less (1; integral: 0; 0 = off)\n"
-    "  --max-outlier-frac F drop tracks whose robust fit rejects more than F of\n"
-    "                       their points (default 1/3); --outlier-min-um D: a\n"
-    "                       rejected point also lies D um off the fit, z / 4 (1.5)\n"
-    "  --piece-points N     long tracks in bounded memory: once a live track has N +\n"
-    "                       N/4 points, its oldest N are smoothed (with N/8 points of\n"
-    "                       context on each side) and written, and dropped from\n"
-    "                       memory (1024; 0 = keep whole tracks). The outlier rule\n"
-    "                       then judges each piece\n"
-    "  --motion-lead-um A, --motion-delay-us D   each view's image of a moving object\n"
-    "                       lies A um ahead of it along the image's motion and shows\n"
-    "                       where it was D us before the frame: the smoother moves the\n"
-    "                       points back by the bias that gives the view fit (laterally\n"
-    "                       A - D x speed along the motion) and fits again. ON time\n"
-    "                       surface with the view fit: A 1.80 x the median width of\n"
-    "                       the in-focus peaks - 0.37 um (brighter beads lead further;\n"
-    "                       --motion stage: 1.52 x the width; 1.25 until 50 peaks),\n"
-    "                       D the weighted events' mean age + 20 us\n"
-    "                       (301 us at tau 1 ms); integral: A -0.05, D 0 (worm\n"
-    "                       neurons); else 0, 0 = off. eventlfm score --calib\n"
-    "                       measures A and D on a simulated scene; one given alone\n"
-    "                       leaves the other at its default\n"
-    "  --motion-fade-um-per-ms F  below this speed the lead fades out (the direction\n"
-    "                       of motion is noise): 0.5; integral and --motion stage 0.05\n"
-    "  --motion-slow-lead-ms E, --motion-slow-um-per-ms S  below S the lead grows by\n"
-    "                       E x (S - speed): slow beads lead further on the ON time\n"
-    "                       surface. Default E 0.17, S 3 with the default A and D;\n"
-    "                       0 when --motion-lead-um or --motion-delay-us is given\n"
-    "analysis:\n"
-    "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
-    "  -q, --quiet          no progress\n"
-    "  -h, --help           this text\n");
-}
 
 static int parse_vec3(const char *s, double v[3])
 {
@@ -320,7 +46,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN
 };
@@ -381,6 +107,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"motion-fade-um-per-ms", required_argument, 0, O_MFADE},
       {"motion-slow-lead-ms", required_argument, 0, O_MSLOW},
       {"motion-slow-um-per-ms", required_argument, 0, O_MSLOWS},
+      {"motion-fast-lead-ms", required_argument, 0, O_MFAST},
+      {"motion-fast-um-per-ms", required_argument, 0, O_MFASTS},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
@@ -434,7 +162,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     if (ch == CLI_RO_TAU) o.tau_given = 1;
     if (k > 0) continue;
     switch (ch) {
-    case 'h': usage(stdout); return TRACK_PARSE_HELP;
+    case 'h': track_usage(stdout); return TRACK_PARSE_HELP;
     case 'q': o.quiet = 1; break;
     case O_CALIB: o.calib = a; break;
     case O_EVENTS: o.events = a; break;
@@ -751,6 +479,15 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
                                &o.smooth.motion_slow_um_per_ms))
         return CLI_USAGE;
       g.mslows = 1;
+      break;
+    case O_MFAST:
+      if (!cli_parse_double_in(C, "--motion-fast-lead-ms", a, 0, 0, 10, "0..10", &o.lead_fast_ms))
+        return CLI_USAGE;
+      break;
+    case O_MFASTS:
+      if (!cli_parse_double_in(C, "--motion-fast-um-per-ms", a, 0, 0, 100, "0..100",
+                               &o.lead_fast_um_per_ms))
+        return CLI_USAGE;
       break;
     case O_FSDP:
       if (!cli_parse_double_in(C, "--fit-sd-power", a, 0, 0, 4, "0..4", &o.smooth.fit_sd_power))

@@ -91,12 +91,28 @@ double track_peak_width_median_um(const track_ctx *c)
   return track_hist_median_bin(c->width_hist, TRACK_WIDTH_BINS, c->n_width) * TRACK_WIDTH_BIN_UM;
 }
 
+double track_judged_speed_um_per_ms(const track_ctx *c)
+{
+  if (c->o->auto_chose) return c->o->auto_speed;
+  return c->auto_decided ? c->auto_speed : NAN;
+}
+
+/* A recording whose beads all move fast leads less than its peaks' widths
+ * say: flow at 5-6 mm/s, 0.25 um less (docs/tracker.md "The lead of fast
+ * flows"). Not on a stage (its own lead, not measured there). */
+double track_motion_lead_fast_um(const track_ctx *c)
+{
+  const double v = track_judged_speed_um_per_ms(c);
+  if (!c->o->motion_lead_auto || c->o->motion == MOTION_STAGE || !isfinite(v)) return 0;
+  return c->o->lead_fast_ms * fmax(0.0, v - c->o->lead_fast_um_per_ms);
+}
+
 double track_motion_lead_um(const track_ctx *c)
 {
   if (!c->o->motion_lead_auto || !width_source(c)) return c->o->smooth.motion_lead_um;
   const double w_um = track_peak_width_median_um(c);
   if (c->o->motion == MOTION_STAGE) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
-  return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um);
+  return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um - track_motion_lead_fast_um(c));
 }
 
 static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, elfm_error *err)
