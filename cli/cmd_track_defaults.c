@@ -3,9 +3,9 @@
  * depend on other options: the representation (the integral's own), the
  * motion (a stage), the window start (windows opened by the LED), the
  * threshold family, and the motion-bias correction the surface implies
- * (track_bias_derive, cmd_track_bias.c). Each of those is taken only when its option was not given (track_given).
- * Each default says what it was measured on. The parsing is in
- * cmd_track_opts.c. */
+ * (track_bias_derive, cmd_track_bias.c). Each of those is taken only when
+ * its option was not given (track_given). Each default says what it was
+ * measured on. The parsing is in cmd_track_opts.c. */
 #include <math.h>
 #include <string.h>
 

@@ -99,11 +99,13 @@ double track_judged_speed_um_per_ms(const track_ctx *c)
 
 /* A recording whose beads all move fast leads less than its peaks' widths
  * say: flow at 5-6 mm/s, 0.25 um less (docs/tracker.md "The lead of fast
- * flows"). Not on a stage (its own lead, not measured there). */
+ * flows"). Not on a stage: its own lead (a 5 mm/s stage loses with a
+ * shorter one). */
 double track_motion_lead_fast_um(const track_ctx *c)
 {
   const double v = track_judged_speed_um_per_ms(c);
-  if (!c->o->motion_lead_auto || c->o->motion == MOTION_STAGE || !isfinite(v)) return 0;
+  if (!c->o->motion_lead_auto || !width_source(c) || c->o->motion == MOTION_STAGE || !isfinite(v))
+    return 0;
   return c->o->lead_fast_ms * fmax(0.0, v - c->o->lead_fast_um_per_ms);
 }
 
