@@ -69,6 +69,7 @@ typedef struct track_opts {
   double lead_fast_ms;  /* ... less this x (the judged speed - lead_fast_um_per_ms) um where
                            the speed the first peaks' tracks moved at is above that (0 = off) */
   double lead_fast_um_per_ms;
+  double lead_blur_um;  /* ... and this much shorter on frames blurred (recon.blur_px > 0) */
   double plane_shift_px; /* without --z-step-um: every m-th of the calibration's planes, the
                             outermost view moving <= this between them (0 = all of them;
                             track_plane_step) */
@@ -597,6 +598,8 @@ double track_judged_speed_um_per_ms(const track_ctx *c);
 /* What track_motion_lead_um takes off the widths' lead for a fast
  * recording (lead_fast_ms), um; 0 where it does not apply. */
 double track_motion_lead_fast_um(const track_ctx *c);
+/* ... and for blurred frames (lead_blur_um), um; 0 where it does not apply. */
+double track_motion_lead_blur_um(const track_ctx *c);
 /* The points a live track keeps past a piece's cut, and the context on
  * each side of a cut, for --piece-points N: N / 4 (at least 64, more than
  * the linker's reviews look back) and N / 8 (at least 16, at most that). */

@@ -51,6 +51,14 @@ void track_defaults(track_opts *o)
    * (docs/tracker.md "The lead of fast flows"). */
   o->lead_fast_ms = 0.13;
   o->lead_fast_um_per_ms = 4.5;
+  /* On blurred frames (--blur-px 1, which track chooses for dim beads)
+   * the peaks are as wide but the detections lie further back: the lead
+   * 0.3 um shorter, flow seeds 1-4 with --blur-px 1 0.8665 -> 0.8910, dim
+   * flow (half the flux, blur chosen) seeds 1-8 0.6110 -> 0.6212, held-out
+   * seeds 5-12 with --blur-px 1 0.8267 -> 0.8476; a quarter of the flux
+   * flat (0.3869 -> 0.3845); a stage with the blur loses (0.9049 -> 0.8925,
+   * so not there; docs/tracker.md "The lead on blurred frames"). */
+  o->lead_blur_um = 0.3;
   o->smooth.outlier_min_um = 1.5; /* ... of points also 1.5 um off (elfm_smooth.h) */
   /* The smoother's robust loss: Cauchy, not the library's Huber. A ghost
    * joined to a track, or the neighbour's detection at an encounter, lies

@@ -279,9 +279,11 @@ void track_usage(FILE *f)
     "                       lead less than their widths say): K %.2f, V %.1f; not with\n"
     "                       --motion stage, nor when the window, surface and blur are\n"
     "                       all given (nothing judged)\n"
+    "  --motion-blur-lead-um C  ... and C um shorter on blurred frames (--blur-px,\n"
+    "                       chosen for dim objects): %.2f; not with --motion stage\n"
     "analysis:\n"
     "  --resolution         FWHM of isolated beads (every 10th frame) into summary.json\n"
     "  -q, --quiet          no progress\n"
     "  -h, --help           this text\n",
-    d.lead_fast_ms, d.lead_fast_um_per_ms);
+    d.lead_fast_ms, d.lead_fast_um_per_ms, d.lead_blur_um);
 }

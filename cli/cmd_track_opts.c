@@ -46,7 +46,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN
 };
@@ -109,6 +109,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"motion-slow-um-per-ms", required_argument, 0, O_MSLOWS},
       {"motion-fast-lead-ms", required_argument, 0, O_MFAST},
       {"motion-fast-um-per-ms", required_argument, 0, O_MFASTS},
+      {"motion-blur-lead-um", required_argument, 0, O_MBLUR},
       {"fill-max-gap", required_argument, 0, O_FILLN},
       {"fill-frames", required_argument, 0, O_FILLK},
       {"fill-ends", required_argument, 0, O_FILLE},
@@ -487,6 +488,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_MFASTS:
       if (!cli_parse_double_in(C, "--motion-fast-um-per-ms", a, 0, 0, 100, "0..100",
                                &o.lead_fast_um_per_ms))
+        return CLI_USAGE;
+      break;
+    case O_MBLUR:
+      if (!cli_parse_double_in(C, "--motion-blur-lead-um", a, 0, 0, 10, "0..10", &o.lead_blur_um))
         return CLI_USAGE;
       break;
     case O_FSDP:

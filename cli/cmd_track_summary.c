@@ -230,6 +230,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "motion_fast_lead_ms", o->lead_fast_ms);
   cJSON_AddNumberToObject(par, "motion_fast_um_per_ms", o->lead_fast_um_per_ms);
   cJSON_AddNumberToObject(par, "motion_lead_fast_cut_um", track_motion_lead_fast_um(c));
+  cJSON_AddNumberToObject(par, "motion_blur_lead_um", o->lead_blur_um);
+  cJSON_AddNumberToObject(par, "motion_lead_blur_cut_um", track_motion_lead_blur_um(c));
   cJSON_AddNumberToObject(par, "peak_widths_in_focus", (double)c->n_width);
   cJSON_AddNumberToObject(par, "peak_widths_near_focus", (double)c->n_width_near);
   add_num(par, "peak_width_median_um", track_peak_width_median_um(c));
