@@ -97,28 +97,31 @@ double track_judged_speed_um_per_ms(const track_ctx *c)
   return c->auto_decided ? c->auto_speed : NAN;
 }
 
+/* Whether the lead is the flows' one from the widths (1.80 x width -
+ * 0.37), which the two cuts below shorten: not on a stage (its own lead,
+ * which a shorter one made worse for both), nor where the lead is given
+ * or the widths are too few. */
+static int flow_widths_lead(const track_ctx *c)
+{
+  return c->o->motion_lead_auto && width_source(c) && c->o->motion != MOTION_STAGE;
+}
+
 /* A recording whose beads all move fast leads less than its peaks' widths
  * say: flow at 5-6 mm/s, 0.25 um less (docs/tracker.md "The lead of fast
- * flows"). Not on a stage: its own lead (a 5 mm/s stage loses with a
- * shorter one). */
+ * flows"). */
 double track_motion_lead_fast_um(const track_ctx *c)
 {
   const double v = track_judged_speed_um_per_ms(c);
-  if (!c->o->motion_lead_auto || !width_source(c) || c->o->motion == MOTION_STAGE || !isfinite(v))
-    return 0;
+  if (!flow_widths_lead(c) || !isfinite(v)) return 0;
   return c->o->lead_fast_ms * fmax(0.0, v - c->o->lead_fast_um_per_ms);
 }
 
 /* The blur (--blur-px, chosen for dim objects) leaves the peaks' widths
  * as they were but the detections 0.3 um further back along the motion
- * (docs/tracker.md "The lead on blurred frames"). Not on a stage, where
- * the shorter lead lost. */
+ * (docs/tracker.md "The lead on blurred frames"). */
 double track_motion_lead_blur_um(const track_ctx *c)
 {
-  if (!c->o->motion_lead_auto || !width_source(c) || c->o->motion == MOTION_STAGE ||
-      !(c->o->recon.blur_px > 0))
-    return 0;
-  return c->o->lead_blur_um;
+  return flow_widths_lead(c) && c->o->recon.blur_px > 0 ? c->o->lead_blur_um : 0;
 }
 
 double track_motion_lead_um(const track_ctx *c)
