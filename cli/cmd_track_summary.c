@@ -263,8 +263,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(par, "auto_rigid_speed_um_per_ms", o->auto_chose ? o->auto_rigid_speed : c->rigid_speed);
   add_num(par, "auto_rigid_abs_um_per_ms", o->auto_chose ? o->auto_rigid_abs : c->rigid_abs);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
-  add_num(par, "auto_track_speed_um_per_ms",
-          o->auto_chose ? o->auto_speed : c->auto_decided ? c->auto_speed : NAN);
+  add_num(par, "auto_track_speed_um_per_ms", track_judged_speed_um_per_ms(c));
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "motion_slow_lead_ms", o->smooth.motion_slow_lead_ms);
