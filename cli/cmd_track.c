@@ -112,12 +112,31 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
     c->auto_speed = track_detection_speed_median(c);
     c->start_restart = 1;
-    c->lin_restart = o->repr_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
+    c->lin_restart = o->lin_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
     c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
     return 1;
   }
+  if (o->lin_auto && o->recon.framer.start == ELFM_START_EACH_TRIGGER && !c->auto_decided) {
+    /* The LED's windows given, the surface not: moving objects start
+     * again on --repr lin's windows, as under pulsed light found above
+     * (blink_moving seeds 1-10 with --start each-trigger: alpha 0.511 on
+     * the default surface, docs/tracker.md "Blinking beads on a stage
+     * given"). Objects at rest keep it. */
+    if (!at_end && c->n_height < min_peaks) return 0;
+    c->auto_decided = 1;
+    c->auto_peaks = c->n_height;
+    c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
+    c->auto_speed = track_detection_speed_median(c);
+    c->lin_restart = c->n_speed >= TRACK_WIDTH_MIN_PEAKS &&
+                     c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
+    c->start_restart = c->lin_restart;
+    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
+    return c->lin_restart;
+  }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
-  if (!o->blur_auto && !o->dt_auto && !o->repr_auto && !o->start_auto) return 0;
+  /* the rest judges the first peaks for the blur, the window and the
+   * integral (pulsed light is judged above until a run ends) */
+  if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
   if (!c->auto_decided) {
     if (at_end && o->repr_auto && c->n_height < TRACK_WIDTH_MIN_PEAKS &&
         c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES) {
@@ -223,7 +242,12 @@ static void say_again(const track_ctx *c, const track_again *g)
   const track_opts *o = c->o;
   if (o->quiet) return;
   fputc('\n', stderr);
-  if (g->each_trigger)
+  if (g->each_trigger && o->recon.framer.start == ELFM_START_EACH_TRIGGER)
+    fprintf(stderr, "eventlfm track: the LED's windows given, and the tracks move (median %.2f um/ms): "
+                    "starting again with --repr lin, which drops each event at its window's end "
+                    "(--repr exp: keep the default surface; README, blinking objects that move)\n",
+            c->auto_speed);
+  else if (g->each_trigger)
     fprintf(stderr, "eventlfm track: %" PRId64 " trigger edges so far, and the frames with an edge "
                     "hold %.0fx the others' events: pulsed light; starting again with %s--start "
                     "each-trigger, one window per pulse (--start first: keep the grid; score with "
@@ -519,7 +543,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * tracker.md "Windows opened by the LED", "The LED's windows by
      * default"). The run's files are written again. */
     again->each_trigger = 1;
-    again->lin = o.repr_auto && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
+    again->lin = o.lin_auto && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
     if (!o.auto_chose) again_judged(again, &c); /* the first run's judgement, for summary.json */
     if (!o.quiet)
       fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
@@ -616,7 +640,7 @@ done:
  * says what was automatic (was) and what the first run judged. */
 static void auto_settled(track_opts *o, int was, const track_again *g, double ratio, double speed)
 {
-  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = 0;
+  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = o->lin_auto = 0;
   o->auto_chose = 1;
   o->auto_was = was;
   o->auto_ratio = ratio;
@@ -633,11 +657,11 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto || o.start_auto) &&
+  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto || o.start_auto || o.lin_auto) &&
       (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
-    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = o.start_auto = 0;
+    o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = o.start_auto = o.lin_auto = 0;
   const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0) |
-                  (o.motion_auto ? 8 : 0) | (o.start_auto ? 16 : 0);
+                  (o.motion_auto ? 8 : 0) | (o.start_auto ? 16 : 0) | (o.lin_auto ? 32 : 0);
   track_again again;
   double t0_s = NAN;
   int rc = track_run(&o, &again, &t0_s);

@@ -529,8 +529,11 @@ int track_opts_derive(track_opts *o, const track_given *g)
        * 0.41 / 0.18 / 0.06 % -> 0.44 / 0.27 / 0.58 %, seeds 1-3). Without
        * the view test: F1 0.9445, precision 0.982 -> 0.963; 8 / 12 views:
        * F1 0.9511 / 0.9501, alpha 0.7863 / 0.7762 (docs/tracker.md "Deep
-       * peaks"). */
-      if (!g->depth && o->motion != MOTION_STAGE) {
+       * peaks"). Under the LED's windows on a stage (blinking beads on
+       * it) it stays: blink_moving seeds 1-10 with --motion stage, alpha
+       * 0.866 -> 0.884 (docs/tracker.md "Blinking beads on a stage
+       * given"). */
+      if (!g->depth && (o->motion != MOTION_STAGE || each_trigger)) {
         o->peaks.depth_range_um = 60;
         if (!g->min) o->peaks.absolute_min = 30;
       }
@@ -612,6 +615,9 @@ int track_opts_derive(track_opts *o, const track_given *g)
                      o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE ||
                      o->recon.framer.dt_us < 2))
     o->dt_auto = 0;
+  /* --repr lin under pulsed light (auto_judge), on a stage too: from the
+   * default time surface, thresholds not given */
+  o->lin_auto = o->repr_auto && !g->thr && o->recon.framer.repr == ELFM_REPR_EXP;
   /* The integral for crawling cells, from the default time surface only:
    * not with thresholds given (the integral's scale differs), windows
    * opened by a trigger, or a stage (its own motion model). */
@@ -627,9 +633,13 @@ int track_opts_derive(track_opts *o, const track_given *g)
                          o->recon.framer.start == ELFM_START_EACH_TRIGGER))
     o->motion_auto = 0;
   /* Windows opened by the light's pulses (track_pulsed), from the grid on
-   * time surfaces only (cells on the integral, or a stage given, are left
-   * alone). */
-  if (o->start_auto && (o->recon.framer.start != ELFM_START_FIRST_EVENT || o->motion == MOTION_STAGE ||
+   * time surfaces only (cells on the integral are left alone). With a
+   * stage given too: blinking beads on a stage are what the user of
+   * --motion stage records under an LED, and on the grid's windows they
+   * tracked at half the alpha (blink_moving seeds 1-10 with --motion stage:
+   * 0.490 on the grid, 0.884 on each pulse's lin window, docs/tracker.md
+   * "Blinking beads on a stage given"). */
+  if (o->start_auto && (o->recon.framer.start != ELFM_START_FIRST_EVENT ||
                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->start_auto = 0;
   return CLI_OK;

@@ -59,9 +59,11 @@ void track_usage(FILE *f)
     "                       edge, or after one, hold over %g x the others' events)\n"
     "                       start again with --start each-trigger, one window per\n"
     "                       pulse (blinking beads), and --repr lin when the tracks\n"
-    "                       move (%g um/ms or more) where --repr is chosen (above);\n"
-    "                       on time surfaces, not with --motion stage; --start\n"
-    "                       first keeps the grid\n",
+    "                       move (%g um/ms or more) and neither --repr, --tau-us,\n"
+    "                       --polarity, --blur-px nor thresholds were given; on\n"
+    "                       time surfaces, with --motion stage too; --start first\n"
+    "                       keeps the grid. --start each-trigger given: --repr lin\n"
+    "                       chosen so when the first peaks' tracks move\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS,
     TRACK_HINT_MIN_SPEED_UM_PER_MS,
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_AUTO_FEW_MIN_FRAMES, TRACK_WIDTH_MIN_PEAKS, TRACK_DT_AUTO_STEP_UM,
@@ -81,7 +83,8 @@ void track_usage(FILE *f)
     "                       surfaces, 20 on the integral), --threshold-rel F (0.35 of\n"
     "                       the maximum for counts)\n"
     "  --threshold-depth-um Z  absolute threshold / (1 + (z/Z)^2) (0 = same at all\n"
-    "                       depths; default 60 on time surfaces, 0 with --motion stage)\n"
+    "                       depths; default 60 on time surfaces, 0 with --motion stage\n"
+    "                       but for --start each-trigger)\n"
     "  --threshold-min V    floor of that depth-scaled threshold (default 30)\n"
     "  --deep-peak-views N  a peak above the depth-scaled threshold only is kept when\n"
     "                       the view fit from it has >= N views agreeing (10; 0 = no\n"

@@ -244,12 +244,14 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
    * choices) */
   const int was = o->auto_chose ? o->auto_was
                                 : (o->blur_auto ? 1 : 0) | (o->dt_auto ? 2 : 0) | (o->repr_auto ? 4 : 0) |
-                                      (o->motion_auto ? 8 : 0) | (o->start_auto ? 16 : 0);
+                                      (o->motion_auto ? 8 : 0) | (o->start_auto ? 16 : 0) |
+                                      (o->lin_auto ? 32 : 0);
   cJSON_AddBoolToObject(par, "blur_auto", was & 1);
   cJSON_AddBoolToObject(par, "dt_auto", (was & 2) != 0);
   cJSON_AddBoolToObject(par, "repr_auto", (was & 4) != 0);
   cJSON_AddBoolToObject(par, "motion_auto", (was & 8) != 0);
   cJSON_AddBoolToObject(par, "start_auto", (was & 16) != 0);
+  cJSON_AddBoolToObject(par, "lin_auto", (was & 32) != 0);
   cJSON_AddBoolToObject(par, "auto_again", o->auto_chose);
   /* a slow stage's windows (dt_us, tau_us): this run's were lengthened, or
    * they were and the stage outran them (this run is back at 1 ms) */

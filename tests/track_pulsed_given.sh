@@ -1,0 +1,72 @@
+#!/bin/sh
+# Pulsed light with other choices given (docs/tracker.md "Blinking beads on
+# a stage given"). The LED's windows and --repr lin are chosen by default
+# (track_trigger.sh, test_track_pulsed); these are the runs where the user
+# gave part of it:
+#  - --motion stage on blinking beads that move with a stage
+#    (blink_moving seed 1, 200 ms): the pulsed light is still found, the
+#    run starts again on each pulse's lin window. Before, a stage given
+#    turned that off and the grid's windows tracked at alpha 0.445 (0.855
+#    now, 0.863 with --motion auto); the depth-scaled threshold stays on
+#    under the LED's windows on a stage (recall 0.902 -> 0.943).
+#  - --start each-trigger given, the surface not: moving objects start
+#    again with --repr lin (alpha 0.490 on the default surface, 0.863
+#    now), the same files as the default run; summary.json says lin_auto.
+#    --repr exp given keeps the surface (no second run).
+#  - --motion stage on blinking beads at rest (blink seed 2): each pulse's
+#    window, the default surface (at rest: no lin). The grid gave alpha
+#    0.176; 0.915 now.
+# Usage: track_pulsed_given.sh BINARY
+bin=$1
+. "$(dirname "$0")/track_lib.sh"
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+score_args="--frames run --window-us run"
+
+simulate_or_skip "$tmp/bm" blink_moving 200 1
+track_score "$tmp/bm" "$tmp/st" "$tmp/st.json" --motion stage
+track_score "$tmp/bm" "$tmp/stgrid" "$tmp/stgrid.json" --motion stage --start first
+a_st=$(key "$tmp/st.json" alpha); a_grid=$(key "$tmp/stgrid.json" alpha)
+echo "blink_moving seed 1, --motion stage: alpha $a_grid on the grid (--start first), $a_st found pulsed"
+[ "$(key "$tmp/st/summary.json" start)" = '"each-trigger"' ] ||
+  { echo "FAIL: --motion stage: start is not each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/st/summary.json" repr)" = '"lin"' ] ||
+  { echo "FAIL: --motion stage: repr is not lin"; fail=$((fail+1)); }
+[ "$(key "$tmp/st/summary.json" motion)" = '"stage"' ] ||
+  { echo "FAIL: --motion stage: motion is not stage"; fail=$((fail+1)); }
+expect_key threshold_depth_um "$tmp/st/summary.json" 60
+expect_key threshold_depth_um "$tmp/stgrid/summary.json" 0
+expect_gain 0.82 "$a_st" 0 "--motion stage under pulsed light: alpha $a_st <= 0.82"
+expect_gain "$a_grid" "$a_st" 0.3 "--motion stage: the LED's windows gain < 0.3 alpha"
+
+track_score "$tmp/bm" "$tmp/auto" "$tmp/auto.json"
+"$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/each" \
+  --start each-trigger 2>"$tmp/each.err" >/dev/null || { echo "FAIL: track --start each-trigger"; fail=$((fail+1)); }
+grep -q "the LED's windows given, and the tracks move (median [0-9.]* um/ms): starting again with --repr lin" \
+  "$tmp/each.err" || { echo "FAIL: no 'starting again with --repr lin'"; fail=$((fail+1)); }
+for f in tracks.csv detections.csv frames.csv; do
+  cmp -s "$tmp/auto/$f" "$tmp/each/$f" || { echo "FAIL: --start each-trigger's $f is not the default run's"; fail=$((fail+1)); }
+done
+grep -q '"lin_auto":[[:space:]]*true' "$tmp/each/summary.json" || { echo "FAIL: lin_auto not true"; fail=$((fail+1)); }
+grep -q '"auto_again":[[:space:]]*true' "$tmp/each/summary.json" || { echo "FAIL: auto_again not true"; fail=$((fail+1)); }
+track_score "$tmp/bm" "$tmp/exp" "$tmp/exp.json" --start each-trigger --repr exp
+a_exp=$(key "$tmp/exp.json" alpha); a_auto=$(key "$tmp/auto.json" alpha)
+echo "blink_moving seed 1: alpha $a_exp with --start each-trigger --repr exp, $a_auto with --start each-trigger (lin)"
+[ "$(key "$tmp/exp/summary.json" repr)" = '"exp"' ] || { echo "FAIL: --repr exp given was not kept"; fail=$((fail+1)); }
+grep -q '"auto_again":[[:space:]]*false' "$tmp/exp/summary.json" || { echo "FAIL: --repr exp given ran twice"; fail=$((fail+1)); }
+grep -q '"lin_auto":[[:space:]]*false' "$tmp/exp/summary.json" || { echo "FAIL: lin_auto with --repr exp given"; fail=$((fail+1)); }
+expect_gain "$a_exp" "$a_auto" 0.2 "lin under the LED's windows gains < 0.2 alpha"
+
+simulate_or_skip "$tmp/b" blink 200 2
+track_score "$tmp/b" "$tmp/bst" "$tmp/bst.json" --motion stage
+a_b=$(key "$tmp/bst.json" alpha)
+echo "blink seed 2, --motion stage: alpha $a_b"
+[ "$(key "$tmp/bst/summary.json" start)" = '"each-trigger"' ] ||
+  { echo "FAIL: blink --motion stage: start is not each-trigger"; fail=$((fail+1)); }
+[ "$(key "$tmp/bst/summary.json" repr)" = '"exp"' ] ||
+  { echo "FAIL: blink --motion stage: beads at rest got $(key "$tmp/bst/summary.json" repr)"; fail=$((fail+1)); }
+expect_gain 0.85 "$a_b" 0 "blink --motion stage: alpha $a_b <= 0.85"
+
+[ $fail -eq 0 ] && echo "PASS: track_pulsed_given" || echo "$fail failure(s)"
+exit $((fail > 0))
