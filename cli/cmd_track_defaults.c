@@ -616,8 +616,11 @@ int track_opts_derive(track_opts *o, const track_given *g)
                      o->recon.framer.dt_us < 2))
     o->dt_auto = 0;
   /* --repr lin under pulsed light (auto_judge), on a stage too: from the
-   * default time surface, thresholds not given */
-  o->lin_auto = o->repr_auto && !g->thr && o->recon.framer.repr == ELFM_REPR_EXP;
+   * default time surface, with thresholds given too (lin's values are at
+   * most exp's, by e^-a >= 1 - a, and the LED's windows need lin far more:
+   * blink_moving seeds 1-10 with --threshold-abs 45, alpha 0.570 on exp,
+   * 0.864 on lin) */
+  o->lin_auto = o->repr_auto && o->recon.framer.repr == ELFM_REPR_EXP;
   /* The integral for crawling cells, from the default time surface only:
    * not with thresholds given (the integral's scale differs), windows
    * opened by a trigger, or a stage (its own motion model). */

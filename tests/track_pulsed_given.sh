@@ -12,7 +12,9 @@
 #  - --start each-trigger given, the surface not: moving objects start
 #    again with --repr lin (alpha 0.490 on the default surface, 0.863
 #    now), the same files as the default run; summary.json says lin_auto.
-#    --repr exp given keeps the surface (no second run).
+#    --repr exp given keeps the surface (no second run). A threshold given
+#    does not turn lin off (--threshold-abs 45: alpha 0.557 on exp before,
+#    0.800 now).
 #  - --motion stage on blinking beads at rest (blink seed 2): each pulse's
 #    window, the default surface (at rest: no lin). The grid gave alpha
 #    0.176; 0.915 now.
@@ -57,6 +59,11 @@ echo "blink_moving seed 1: alpha $a_exp with --start each-trigger --repr exp, $a
 grep -q '"auto_again":[[:space:]]*false' "$tmp/exp/summary.json" || { echo "FAIL: --repr exp given ran twice"; fail=$((fail+1)); }
 grep -q '"lin_auto":[[:space:]]*false' "$tmp/exp/summary.json" || { echo "FAIL: lin_auto with --repr exp given"; fail=$((fail+1)); }
 expect_gain "$a_exp" "$a_auto" 0.2 "lin under the LED's windows gains < 0.2 alpha"
+# a threshold given keeps lin's choice (and the pulsed light's)
+track_score "$tmp/bm" "$tmp/thr" "$tmp/thr.json" --threshold-abs 45
+[ "$(key "$tmp/thr/summary.json" repr)" = '"lin"' ] && [ "$(key "$tmp/thr/summary.json" start)" = '"each-trigger"' ] ||
+  { echo "FAIL: --threshold-abs 45: repr $(key "$tmp/thr/summary.json" repr), start $(key "$tmp/thr/summary.json" start)"; fail=$((fail+1)); }
+expect_gain 0.75 "$(key "$tmp/thr.json" alpha)" 0 "--threshold-abs 45 under pulsed light: alpha <= 0.75"
 
 simulate_or_skip "$tmp/b" blink 200 2
 track_score "$tmp/b" "$tmp/bst" "$tmp/bst.json" --motion stage
