@@ -92,10 +92,10 @@ typedef struct track_opts {
                            not given): when the first peaks' tracks crawl, start
                            again with --repr integral (and 2 ms windows when --dt-us
                            is not given either); 0 where it does not apply */
-  int lin_auto;         /* the time surface not given (as repr_auto): under pulsed
+  int lin_auto;         /* --repr, --tau-us, --polarity not given: under pulsed
                            light (start_auto) or --start each-trigger given, moving
-                           objects start again with --repr lin, with a stage or
-                           thresholds given as well */
+                           objects start again with --repr lin, with a stage,
+                           thresholds or the blur given as well */
   int motion_auto;      /* --motion auto (the default): when the first tracks move as
                            one (TRACK_RIGID_*), start again with --motion stage; 0
                            where it does not apply (track_opts_derive) */

@@ -24,7 +24,7 @@ void track_defaults(track_opts *o)
    * run judges its first peaks (a stage: its first tracks moving as one)
    * and may start again with --blur-px 1, windows of half the length, the
    * integral, --motion stage or --start each-trigger (track_opts_derive). */
-  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = o->start_auto = 1;
+  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = o->start_auto = o->lin_auto = 1;
   /* Planes 4 um apart on the paper's optics, not its 2 um: the peaks' axial
    * sigma is 4.6-6 um, and the view fit, not the plane, places each bead in
    * z. 4 um alone, mean alpha against every plane: flow 100 ms seeds 1-20
@@ -616,11 +616,12 @@ int track_opts_derive(track_opts *o, const track_given *g)
                      o->recon.framer.dt_us < 2))
     o->dt_auto = 0;
   /* --repr lin under pulsed light (auto_judge), on a stage too: from the
-   * default time surface, with thresholds given too (lin's values are at
-   * most exp's, by e^-a >= 1 - a, and the LED's windows need lin far more:
-   * blink_moving seeds 1-10 with --threshold-abs 45, alpha 0.570 on exp,
-   * 0.864 on lin) */
-  o->lin_auto = o->repr_auto && o->recon.framer.repr == ELFM_REPR_EXP;
+   * default time surface (track_opts_parse), with thresholds or the blur
+   * given too. lin's values are at most exp's (e^-a >= 1 - a), and the
+   * LED's windows need lin far more: blink_moving seeds 1-10 with
+   * --threshold-abs 45, alpha 0.570 on exp, 0.864 on lin; with --blur-px
+   * 1, 0.222 / 0.885. */
+  if (o->recon.framer.repr != ELFM_REPR_EXP) o->lin_auto = 0;
   /* The integral for crawling cells, from the default time surface only:
    * not with thresholds given (the integral's scale differs), windows
    * opened by a trigger, or a stage (its own motion model). */

@@ -59,9 +59,9 @@ void track_usage(FILE *f)
     "                       edge, or after one, hold over %g x the others' events)\n"
     "                       start again with --start each-trigger, one window per\n"
     "                       pulse (blinking beads), and --repr lin when the tracks\n"
-    "                       move (%g um/ms or more) and neither --repr, --tau-us,\n"
-    "                       --polarity nor --blur-px was given; on time surfaces,\n"
-    "                       with --motion stage too; --start first\n"
+    "                       move (%g um/ms or more) and neither --repr, --tau-us\n"
+    "                       nor --polarity was given; on time surfaces, with\n"
+    "                       --motion stage too; --start first\n"
     "                       keeps the grid. --start each-trigger given: --repr lin\n"
     "                       chosen so when the first peaks' tracks move\n",
     TRACK_HINT_DIM_EARLY_PEAKS, TRACK_HINT_DIM_FACTOR, TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS,

@@ -160,6 +160,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     if (ch == CLI_RO_DT || ch == CLI_RO_STRIDE) o.dt_auto = 0;
     if (ch == CLI_RO_START) o.start_auto = 0;
     if (ch == CLI_RO_REPR || ch == CLI_RO_TAU || ch == CLI_RO_POLARITY || ch == CLI_RO_BLUR) o.repr_auto = 0;
+    if (ch == CLI_RO_REPR || ch == CLI_RO_TAU || ch == CLI_RO_POLARITY) o.lin_auto = 0;
     if (ch == CLI_RO_TAU) o.tau_given = 1;
     if (k > 0) continue;
     switch (ch) {

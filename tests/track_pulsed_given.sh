@@ -13,8 +13,8 @@
 #    again with --repr lin (alpha 0.490 on the default surface, 0.863
 #    now), the same files as the default run; summary.json says lin_auto.
 #    --repr exp given keeps the surface (no second run). A threshold given
-#    does not turn lin off (--threshold-abs 45: alpha 0.557 on exp before,
-#    0.800 now).
+#    or the blur does not turn lin off (--threshold-abs 45: alpha 0.557 on
+#    exp before, 0.800 now; --blur-px 1: 0.253, 0.894).
 #  - --motion stage on blinking beads at rest (blink seed 2): each pulse's
 #    window, the default surface (at rest: no lin). The grid gave alpha
 #    0.176; 0.915 now.
@@ -64,6 +64,11 @@ track_score "$tmp/bm" "$tmp/thr" "$tmp/thr.json" --threshold-abs 45
 [ "$(key "$tmp/thr/summary.json" repr)" = '"lin"' ] && [ "$(key "$tmp/thr/summary.json" start)" = '"each-trigger"' ] ||
   { echo "FAIL: --threshold-abs 45: repr $(key "$tmp/thr/summary.json" repr), start $(key "$tmp/thr/summary.json" start)"; fail=$((fail+1)); }
 expect_gain 0.75 "$(key "$tmp/thr.json" alpha)" 0 "--threshold-abs 45 under pulsed light: alpha <= 0.75"
+# ... and so does the blur given (--blur-px 1: alpha 0.253 on exp before)
+track_score "$tmp/bm" "$tmp/blur" "$tmp/blur.json" --blur-px 1
+[ "$(key "$tmp/blur/summary.json" repr)" = '"lin"' ] ||
+  { echo "FAIL: --blur-px 1: repr $(key "$tmp/blur/summary.json" repr)"; fail=$((fail+1)); }
+expect_gain 0.75 "$(key "$tmp/blur.json" alpha)" 0 "--blur-px 1 under pulsed light: alpha <= 0.75"
 
 simulate_or_skip "$tmp/b" blink 200 2
 track_score "$tmp/b" "$tmp/bst" "$tmp/bst.json" --motion stage
