@@ -450,6 +450,36 @@ int main(void)
     CHECK_OK(elfm_track_append(u, &d, &err), &err);
     elfm_track_info_get(u, &ti);
     CHECK(!ti.smoothed && isnan(ti.mean_lateral_speed_um_per_ms) && ti.first_frame == 3);
+    /* smoothed, one frame: the static fit's velocity 0 is no measurement,
+     * so the info has none and tracks.csv leaves vx..vz (and their sd)
+     * empty; a track of two frames has them */
+    CHECK_OK(elfm_track_smooth(u, &so, &err), &err);
+    CHECK(!elfm_track_velocity_known(u) && u->model == ELFM_MODEL_STATIC);
+    elfm_track_info_get(u, &ti);
+    CHECK(ti.smoothed && isnan(ti.mean_vel_um_per_ms[0]) && isnan(ti.mean_vel_um_per_ms[2]) &&
+          isnan(ti.mean_lateral_speed_um_per_ms) && ti.s_tv_um[0] == 0);
+    {
+      char *buf = NULL;
+      size_t len = 0;
+      FILE *mf = open_memstream(&buf, &len);
+      CHECK(mf != NULL);
+      CHECK_OK(elfm_tracks_write_csv(mf, "mem", u, &err), &err);
+      fclose(mf);
+      /* track_id,frame,t_us,x,y,z,raw x,y,z, then vx,vy,vz empty */
+      int commas = 0;
+      const char *q = buf;
+      for (; *q && commas < 9; q++) commas += *q == ',';
+      CHECK(strncmp(q, ",,,", 3) == 0);
+      free(buf);
+    }
+    d.frame = 4;
+    d.t_us = 4000;
+    d.x_um = 5;
+    CHECK_OK(elfm_track_append(u, &d, &err), &err);
+    CHECK_OK(elfm_track_smooth(u, &so, &err), &err);
+    CHECK(elfm_track_velocity_known(u));
+    elfm_track_info_get(u, &ti);
+    CHECK_NEAR(ti.mean_vel_um_per_ms[0], 1.25, 1e-6); /* 5 um in 4 ms from (t 0, x 0) */
     elfm_track_free(u);
     /* folding pieces: counts add, velocities weigh by rows, and the model
      * is the largest piece's, also when a smaller one comes after it */

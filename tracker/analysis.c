@@ -23,7 +23,7 @@ static void stage_accel(const elfm_track_info *ti, size_t nt, elfm_stage_result 
 {
   double n = 0, t_ref = NAN, mt = 0, mv[3] = {0, 0, 0};
   for (size_t i = 0; i < nt; i++) {
-    if (!ti[i].smoothed || !ti[i].n_rows) continue;
+    if (!ti[i].smoothed || !ti[i].n_rows || !isfinite(ti[i].mean_vel_um_per_ms[0])) continue;
     if (isnan(t_ref)) t_ref = ti[i].mean_t_us;
     const double w = (double)ti[i].n_rows;
     n += w;
@@ -37,7 +37,7 @@ static void stage_accel(const elfm_track_info *ti, size_t nt, elfm_stage_result 
     for (int a = 0; a < 3; a++) mv[a] /= n;
   }
   for (size_t i = 0; i < nt; i++) {
-    if (!ti[i].smoothed || !ti[i].n_rows) continue;
+    if (!ti[i].smoothed || !ti[i].n_rows || !isfinite(ti[i].mean_vel_um_per_ms[0])) continue;
     const double w = (double)ti[i].n_rows, dt = 1e-3 * (ti[i].mean_t_us - t_ref) - mt;
     stt += ti[i].s_tt_ms2 + w * dt * dt;
     for (int a = 0; a < 3; a++) stv[a] += ti[i].s_tv_um[a] + w * dt * (ti[i].mean_vel_um_per_ms[a] - mv[a]);
@@ -64,7 +64,8 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
   double swp = 0, mp[3] = {0, 0, 0}, swv[3] = {0, 0, 0}, mv[3] = {0, 0, 0};
   size_t n = 0;
   for (size_t i = 0; i < nt; i++) {
-    if (!ti[i].smoothed) continue;
+    /* a track of one frame has no measured velocity (elfm_track_velocity_known) */
+    if (!ti[i].smoothed || !isfinite(ti[i].mean_vel_um_per_ms[0])) continue;
     const double *v = ti[i].mean_vel_um_per_ms;
     double w = (double)ti[i].n, speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     const double wp = ti[i].s_tt_ms2 > 0 && isfinite(ti[i].s_tt_ms2) ? ti[i].s_tt_ms2 : 0;
@@ -90,7 +91,7 @@ elfm_status elfm_analysis_stage_info(const elfm_track_info *ti, size_t nt, const
     sw += w;
     n++;
   }
-  if (!n) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stage analysis: no smoothed track");
+  if (!n) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "stage analysis: no smoothed track of more than one frame");
   r->n_tracks = n;
   for (int a = 0; a < 3; a++) {
     r->v_um_per_ms[a] = m[a] / sw;

@@ -16,7 +16,8 @@ extern "C" {
 #endif
 
 /* Stage: each smoothed track's mean velocity, weighted by its number of real
- * points, averaged over tracks. spread = standard deviation across tracks
+ * points, averaged over tracks; a track of one frame, whose velocity is not
+ * measured (elfm_track_velocity_known), is left out. spread = standard deviation across tracks
  * (unweighted). With a given stage velocity, rel_error = |v_mean - v_stage| /
  * |v_stage| and speed_rel_error = (|v_mean| - |v_stage|) / |v_stage|.
  * Acceleration: the slope in time of the smoothed velocity, fitted over
@@ -54,8 +55,8 @@ typedef struct elfm_stage_result {
   double accel_um_per_ms2[3], accel_sd_um_per_ms2[3]; /* NaN: all rows at one time */
 } elfm_stage_result;
 
-/* Tracks that are not smoothed are skipped; no smoothed track is
- * ELFM_ERR_INVALID. stage_v may be NULL. */
+/* Tracks that are not smoothed, or of one frame, are skipped; no track
+ * left is ELFM_ERR_INVALID. stage_v may be NULL. */
 elfm_status elfm_analysis_stage(const elfm_track_store *s, const double *stage_v_um_per_ms,
                                 elfm_stage_result *out, elfm_error *err);
 /* The same from the infos of tracks already freed (elfm_track_info_get). */

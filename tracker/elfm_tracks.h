@@ -105,6 +105,18 @@ static inline int elfm_track_writes_frame(const elfm_track *t, int64_t frame)
   return !t->partial || (frame >= t->write_from_frame && frame < t->write_to_frame);
 }
 
+/* Whether t's smoothed velocity was measured: its span holds more than one
+ * frame. A track of one frame (under the LED's windows, a bead seen in one
+ * pulse) is fitted STATIC, velocity 0; that 0 is the model's, and averaged
+ * with the others it pulls a stage's mean velocity toward rest
+ * (blink_moving seed 1: 8 such tracks of 49, 1.6 % of the speed). So
+ * tracks.csv leaves its velocity empty and elfm_track_info_get reports it
+ * NAN. Pieces of long tracks always span more. */
+static inline int elfm_track_velocity_known(const elfm_track *t)
+{
+  return t->n_span > 1;
+}
+
 /* A new empty track; free with elfm_track_free (NULL is a no-op). */
 elfm_track *elfm_track_create(int64_t id, elfm_error *err);
 void elfm_track_free(elfm_track *t);
@@ -128,9 +140,10 @@ typedef struct elfm_track_info {
   size_t model_n;
   int n_outliers;
   int smoothed;               /* 0: not smoothed; the velocities below are 0 / NAN */
-  double mean_vel_um_per_ms[3];        /* elfm_track_mean_velocity */
+  double mean_vel_um_per_ms[3];        /* elfm_track_mean_velocity; NAN when the track
+                                          spans one frame (elfm_track_velocity_known) */
   double mean_lateral_speed_um_per_ms; /* mean over the span of |(vx, vy)|; NAN when
-                                          not smoothed or not finite */
+                                          not smoothed, not finite or not known */
   /* Over the same rows, for the velocity's slope in time (the stage's
    * acceleration, elfm_analysis_stage_info): their mean time, the sum of
    * (t - mean_t)^2 in ms^2 and of (t - mean_t)(v - mean_vel) in um; 0 when

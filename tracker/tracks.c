@@ -135,6 +135,13 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
     }
   for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] /= (double)o->n_rows;
   if (isfinite(lat)) o->mean_lateral_speed_um_per_ms = lat / (double)o->n_rows;
+  /* One frame: the smoother's static fit says velocity 0, a model's value,
+   * not a measurement (elfm_track_velocity_known) */
+  const int vk = elfm_track_velocity_known(t);
+  if (!vk) {
+    for (int a = 0; a < 3; a++) o->mean_vel_um_per_ms[a] = NAN;
+    o->mean_lateral_speed_um_per_ms = NAN;
+  }
   if (!t->span_t_us) return;
   /* times from the first row's, so that 1e12 us absolute times lose nothing */
   const int64_t t0 = t->span_t_us[0];
@@ -147,7 +154,8 @@ void elfm_track_info_get(const elfm_track *t, elfm_track_info *o)
     if (!elfm_track_writes_frame(t, t->pts[0].frame + (int64_t)k)) continue;
     const double dt = 1e-3 * (double)(t->span_t_us[k] - t0) - mt_ms;
     o->s_tt_ms2 += dt * dt;
-    for (int a = 0; a < 3; a++) o->s_tv_um[a] += dt * (t->vel_um_per_ms[3 * k + a] - o->mean_vel_um_per_ms[a]);
+    if (vk)
+      for (int a = 0; a < 3; a++) o->s_tv_um[a] += dt * (t->vel_um_per_ms[3 * k + a] - o->mean_vel_um_per_ms[a]);
   }
 }
 

@@ -72,6 +72,7 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
     return elfm_error_set(err, ELFM_ERR_INVALID, path, -1,
                           "track %" PRId64 " is empty or not smoothed", t->id);
   const int64_t frame0 = t->pts[0].frame;
+  const int v_known = elfm_track_velocity_known(t);
   for (size_t k = 0; k < t->n_span; k++) {
     if (!elfm_track_writes_frame(t, frame0 + (int64_t)k)) continue; /* a piece's context */
     const double *p = t->pos_um + 3 * k, *v = t->vel_um_per_ms + 3 * k,
@@ -87,10 +88,11 @@ elfm_status elfm_tracks_write_csv(FILE *f, const char *path, const elfm_track *t
     } else {
       fputs(",,,", f);
     }
-    for (int a = 0; a < 3; a++) put_num(f, v[a], "%.5f");
+    /* a track of one frame has no measured velocity (elfm_track_velocity_known) */
+    for (int a = 0; a < 3; a++) put_num(f, v_known ? v[a] : NAN, "%.5f");
     put_num(f, r >= 0 ? t->pts[r].intensity : NAN, "%.6g");
     for (int a = 0; a < 3; a++) put_num(f, sp[a], "%.4f");
-    for (int a = 0; a < 3; a++) put_num(f, sv[a], "%.5f");
+    for (int a = 0; a < 3; a++) put_num(f, v_known ? sv[a] : NAN, "%.5f");
     put_num(f, r >= 0 && t->pts[r].nearest_um > 0 ? t->pts[r].nearest_um : NAN, "%.3f");
     if (r >= 0) fprintf(f, ",%d\n", t->pts[r].claims);
     else fputs(",\n", f);
