@@ -136,7 +136,13 @@ typedef struct track_opts {
  * animals), where the last object's OFF events left each reference above
  * the background. With --motion stage, where most pixels see a bead pass
  * once, TRACK_LEAD_PER_WIDTH_FIRST_PASS x the median (docs/tracker.md
- * "The lead in the sensor's steady state"). */
+ * "The lead in the sensor's steady state"); not under the LED's windows,
+ * whose every pulse ends in OFF events over each bead (track_led_windows).
+ * There the delay is TRACK_LED_DELAY_EXTRA_US longer than the surface's
+ * mean age says: the pulse's onset fires the bead's pixels at the window's
+ * start, older than the even spread of events that age assumes
+ * (docs/tracker.md "The lead under the LED's windows"). */
+#define TRACK_LED_DELAY_EXTRA_US 25.0
 #define TRACK_WIDTH_BIN_UM 0.01
 #define TRACK_WIDTH_BINS 1000
 #define TRACK_WIDTH_FOCUS_UM 20.0
@@ -592,6 +598,12 @@ void track_speed_add(track_ctx *c, double v_um_per_ms);
 double track_detection_speed_median(const track_ctx *c);
 /* The median width of those peaks, um; NAN before the first. */
 double track_peak_width_median_um(const track_ctx *c);
+/* Windows opened by the LED (--start each-trigger, given or chosen): one
+ * pulse each, the objects dark between them. */
+static inline int track_led_windows(const track_opts *o)
+{
+  return o->recon.framer.start == ELFM_START_EACH_TRIGGER;
+}
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
  * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);

@@ -62,7 +62,8 @@ void track_bias_derive(track_opts *o, const track_given *g)
      * 0.837 / 0.750. */
     const double age_us = surface_mean_age_us(o->recon.framer.repr, o->loc.power,
                                               o->recon.framer.tau_us, (double)o->recon.framer.dt_us);
-    if (!g->mdelay) o->smooth.motion_delay_us = age_us + 20.0;
+    if (!g->mdelay)
+      o->smooth.motion_delay_us = age_us + 20.0 + (track_led_windows(o) ? TRACK_LED_DELAY_EXTRA_US : 0.0);
     /* Brighter beads lead further, and their in-focus peaks are wider
      * (the arc of ON events reaches further out): flow 100 ms at 0.5 / 1 /
      * 2 / 4 x the beads' flux, lead (score --calib) against the median

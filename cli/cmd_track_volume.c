@@ -99,11 +99,12 @@ double track_judged_speed_um_per_ms(const track_ctx *c)
 
 /* Whether the lead is the flows' one from the widths (1.80 x width -
  * 0.37), which the two cuts below shorten: not on a stage (its own lead,
- * which a shorter one made worse for both), nor where the lead is given
- * or the widths are too few. */
+ * which a shorter one made worse for both) but under the LED's windows,
+ * nor where the lead is given or the widths are too few. */
 static int flow_widths_lead(const track_ctx *c)
 {
-  return c->o->motion_lead_auto && width_source(c) && c->o->motion != MOTION_STAGE;
+  return c->o->motion_lead_auto && width_source(c) &&
+         (c->o->motion != MOTION_STAGE || track_led_windows(c->o));
 }
 
 /* A recording whose beads all move fast leads less than its peaks' widths
@@ -128,7 +129,7 @@ double track_motion_lead_um(const track_ctx *c)
 {
   if (!c->o->motion_lead_auto || !width_source(c)) return c->o->smooth.motion_lead_um;
   const double w_um = track_peak_width_median_um(c);
-  if (c->o->motion == MOTION_STAGE) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
+  if (c->o->motion == MOTION_STAGE && !track_led_windows(c->o)) return TRACK_LEAD_PER_WIDTH_FIRST_PASS * w_um;
   return fmax(0.0, TRACK_LEAD_AT_ZERO_WIDTH_UM + TRACK_LEAD_PER_WIDTH * w_um - track_motion_lead_fast_um(c) -
                        track_motion_lead_blur_um(c));
 }
