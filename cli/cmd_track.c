@@ -83,6 +83,17 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
   return close_file(&f, p_tm, err);
 }
 
+/* The first peaks judged for the LED's windows (auto_judge): their
+ * height and their tracks' speed, nothing else to start again for. */
+static void judged_for_pulses(track_ctx *c)
+{
+  c->auto_decided = 1;
+  c->auto_peaks = c->n_height;
+  c->auto_ratio = c->n_height ? track_peak_height_median(c) / c->o->peaks.absolute : NAN;
+  c->auto_speed = track_detection_speed_median(c);
+  c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
+}
+
 /* --blur-px auto, the automatic window and representation: judge the
  * first peaks once min_peaks of them are in; 1 when the run is to start
  * again: with the integral (their tracks crawl,
@@ -107,13 +118,9 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * moving bead whose pulse ended late shows again, in the dark. */
     if (!at_end && c->n_height < min_peaks) return 0; /* the speed of enough peaks */
     const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
-    c->auto_decided = 1;
-    c->auto_peaks = c->n_height;
-    c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
-    c->auto_speed = track_detection_speed_median(c);
+    judged_for_pulses(c);
     c->start_restart = 1;
     c->lin_restart = o->lin_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
-    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
     return 1;
   }
   if (o->lin_auto && o->recon.framer.start == ELFM_START_EACH_TRIGGER && !c->auto_decided) {
@@ -123,20 +130,14 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * the default surface, docs/tracker.md "Blinking beads on a stage
      * given"). Objects at rest keep it. */
     if (!at_end && c->n_height < min_peaks) return 0;
-    c->auto_decided = 1;
-    c->auto_peaks = c->n_height;
-    c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
-    c->auto_speed = track_detection_speed_median(c);
+    judged_for_pulses(c);
     c->lin_restart = c->n_speed >= TRACK_WIDTH_MIN_PEAKS &&
                      c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
     c->start_restart = c->lin_restart;
-    c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
     return c->lin_restart;
   }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
-  /* the rest judges the first peaks for the blur, the window and the
-   * integral (pulsed light is judged above until a run ends) */
-  if (!o->blur_auto && !o->dt_auto && !o->repr_auto) return 0;
+  if (!o->blur_auto && !o->dt_auto && !o->repr_auto && !o->start_auto) return 0;
   if (!c->auto_decided) {
     if (at_end && o->repr_auto && c->n_height < TRACK_WIDTH_MIN_PEAKS &&
         c->n_frames >= TRACK_AUTO_FEW_MIN_FRAMES) {

@@ -694,7 +694,10 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     }
     track_width_add(c, &det[j]);
     track_height_add(c, &det[j]);
-    if ((o->blur_auto || o->dt_auto || o->repr_auto || o->start_auto || o->lin_auto) && !c->auto_decided)
+    /* the first peaks' speed: for auto's choices, and for --repr lin under
+     * the LED's windows, found (start_auto) or given */
+    if ((o->blur_auto || o->dt_auto || o->repr_auto ||
+         (o->lin_auto && (o->start_auto || track_led_windows(o)))) && !c->auto_decided)
       track_speed_add(c, elfm_link_last_speed(c->lk, j));
     if (o->motion_auto && !c->rigid_decided &&
         elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid, &span_ms) >=
