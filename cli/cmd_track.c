@@ -123,7 +123,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->lin_restart = o->lin_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
     return 1;
   }
-  if (o->lin_auto && o->recon.framer.start == ELFM_START_EACH_TRIGGER && !c->auto_decided) {
+  if (o->lin_auto && track_led_windows(o) && !c->auto_decided) {
     /* The LED's windows given, the surface not: moving objects start
      * again on --repr lin's windows, as under pulsed light found above
      * (blink_moving seeds 1-10 with --start each-trigger: alpha 0.511 on
@@ -243,7 +243,7 @@ static void say_again(const track_ctx *c, const track_again *g)
   const track_opts *o = c->o;
   if (o->quiet) return;
   fputc('\n', stderr);
-  if (g->each_trigger && o->recon.framer.start == ELFM_START_EACH_TRIGGER)
+  if (g->each_trigger && track_led_windows(o))
     fprintf(stderr, "eventlfm track: the LED's windows given, and the tracks move (median %.2f um/ms): "
                     "starting again with --repr lin, which drops each event at its window's end "
                     "(--repr exp: keep the default surface; README, blinking objects that move)\n",
@@ -622,7 +622,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                     "in a window shows again in the next frame; --repr lin keeps each pulse in its "
                     "own (README, blinking objects)\n",
             rs.triggers, track_pulsed_ratio(&c), c.median_speed_um_per_ms);
-  if (!o.quiet && pulsed && o.recon.framer.start != ELFM_START_EACH_TRIGGER &&
+  if (!o.quiet && pulsed && !track_led_windows(&o) &&
       c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS)
     fprintf(stderr, "eventlfm track: note: the recording has %" PRId64 " trigger edges and the "
                     "frames with one hold %.0fx the others' events (pulsed light): --start "
