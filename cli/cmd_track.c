@@ -231,8 +231,12 @@ typedef struct track_again {
  * summary.json (auto_settled). */
 static void again_judged(track_again *g, const track_ctx *c)
 {
-  g->ratio = c->auto_decided ? c->auto_ratio : NAN;
-  g->speed_um_per_ms = c->auto_decided ? c->auto_speed : NAN;
+  /* a settled run that judged no first peaks (the LED's run, which tests
+   * only for a stage) passes on what the first run judged */
+  if (c->auto_decided || !c->o->auto_chose) {
+    g->ratio = c->auto_decided ? c->auto_ratio : NAN;
+    g->speed_um_per_ms = c->auto_decided ? c->auto_speed : NAN;
+  }
   g->rigid_dev = c->rigid_dev;
   g->rigid_speed_um_per_ms = c->rigid_speed;
   g->rigid_abs_um_per_ms = c->rigid_abs;
@@ -641,7 +645,10 @@ done:
  * says what was automatic (was) and what the first run judged. */
 static void auto_settled(track_opts *o, int was, const track_again *g, double ratio, double speed)
 {
-  o->blur_auto = o->dt_auto = o->repr_auto = o->motion_auto = o->lin_auto = 0;
+  o->blur_auto = o->dt_auto = o->repr_auto = o->lin_auto = 0;
+  /* a run on the LED's windows still tests for a stage, which it could
+   * not do before (the grid's run stopped at pulsed light's first peaks) */
+  o->motion_auto = o->motion_auto && g->each_trigger && (was & 8);
   o->auto_chose = 1;
   o->auto_was = was;
   o->auto_ratio = ratio;

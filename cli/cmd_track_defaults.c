@@ -628,13 +628,13 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->repr_auto && (g->thr || o->recon.framer.repr != ELFM_REPR_EXP ||
                        o->recon.framer.start == ELFM_START_EACH_TRIGGER || o->motion == MOTION_STAGE))
     o->repr_auto = 0;
-  /* The test for a stage on time surfaces with windows on the 1 ms grid:
-   * not on the integral (the worm's cells; a stage's beads are best seen
-   * by their ON events, "Integral frames"), not with windows opened by a
-   * trigger (blinking beads), nor where a model was given. */
+  /* The test for a stage on time surfaces: not on the integral (the
+   * worm's cells; a stage's beads are best seen by their ON events,
+   * "Integral frames"), nor where a model was given. Also on the windows
+   * the LED's pulses open: blinking beads on a stage (docs/tracker.md
+   * "A stage under the LED's pulses"). */
   if (o->motion_auto && (o->motion != MOTION_AUTO || o->smooth.model != ELFM_MODEL_AUTO ||
-                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN) ||
-                         o->recon.framer.start == ELFM_START_EACH_TRIGGER))
+                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->motion_auto = 0;
   /* Windows opened by the light's pulses (track_pulsed), from the grid on
    * time surfaces only (cells on the integral are left alone). With a

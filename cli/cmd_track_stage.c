@@ -10,16 +10,28 @@
 
 #include "cmd_track.h"
 
+/* Whether a track's velocity can be judged against the stage's: not that
+ * of a one-frame track (a bead in one LED pulse), whose static 0 is the
+ * model's (elfm_track_velocity_known; blink_moving seeds 1-10 with the
+ * stage's velocity given lost 8 such beads on seed 1, alpha 0.8838 ->
+ * 0.8817), nor that of a track too short to tell its own noise (under 5
+ * points, elfm_smooth_noise_known; its uncertainties are NaN). On
+ * blink_moving at 1.5 mm/s seeds 1-3, 6 tracks of 2-4 points, 48-84 um
+ * deep and 5 of them at the recording's ends, lay 0.5-4.3 um/ms off in
+ * z and were dropped: alpha 0.8839; kept, 0.8872, and the stage's error
+ * the same on stage seeds 1-9 and the dim stage's 1-12 (docs/tracker.md
+ * "A stage under the LED's pulses"). */
+static int stage_judgeable(const elfm_track *t)
+{
+  return elfm_track_velocity_known(t) && !(t->vel_sd_um_per_ms && isnan(t->vel_sd_um_per_ms[0]));
+}
+
 /* Rigid stage motion: a track moving otherwise than v_ref (more than 25 %
  * of its speed + 0.1 um/ms off) is not part of the sample (ghosts joined
  * across gaps, a hot pixel's or noise's track at rest). */
 static int off_stage(const elfm_track *t, const double v_ref[3])
 {
-  /* a track of one frame (a bead in one LED pulse) has no velocity to
-   * judge: its static 0 is the model's (elfm_track_velocity_known);
-   * blink_moving seeds 1-10 with the stage's velocity given lost 8 such
-   * beads on seed 1, alpha 0.8838 -> 0.8817 */
-  if (!elfm_track_velocity_known(t)) return 0;
+  if (!stage_judgeable(t)) return 0;
   double v[3], d2 = 0, s2 = 0;
   elfm_track_mean_velocity(t, v);
   for (int a = 0; a < 3; a++) {
@@ -40,7 +52,7 @@ static int off_stage(const elfm_track *t, const double v_ref[3])
 static int off_consensus(const elfm_track *t, const double v_c[3], double along_min, double along_max)
 {
   const double sc = sqrt(v_c[0] * v_c[0] + v_c[1] * v_c[1] + v_c[2] * v_c[2]);
-  if (!(sc >= 0.05) || !elfm_track_velocity_known(t)) return 0; /* as off_stage */
+  if (!(sc >= 0.05) || !stage_judgeable(t)) return 0; /* as off_stage */
   double v[3], along = 0, across2 = 0;
   elfm_track_mean_velocity(t, v);
   for (int a = 0; a < 3; a++) along += v[a] * v_c[a] / sc;
@@ -195,7 +207,10 @@ int track_rigid_judge(track_ctx *c, int at_end)
   if (c->rigid_decided) return c->motion_restart;
   const int64_t need = at_end ? TRACK_RIGID_MIN_SAMPLES / 2 : TRACK_RIGID_MIN_SAMPLES;
   if (c->n_rigid < need) {
-    if (at_end || c->n_frames >= TRACK_RIGID_MAX_FRAMES) c->rigid_decided = 1; /* not judged */
+    /* under the LED's windows, frames that hold a pulse: the dark ones
+     * between pulses add no sample */
+    const int64_t frames = track_led_windows(c->o) ? c->n_lit_frames : c->n_frames;
+    if (at_end || frames >= TRACK_RIGID_MAX_FRAMES) c->rigid_decided = 1; /* not judged */
     return 0;
   }
   c->rigid_decided = 1;

@@ -260,10 +260,12 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "stage_windows_too_few", o->stage_short);
   /* --motion auto: the median distance of the long tracks' velocities from
    * their frame's median velocity, over its length and in um/ms, and the
-   * frames' median speed (NaN: not judged; track_rigid_judge) */
-  add_num(par, "auto_rigid_dev", o->auto_chose ? o->auto_rigid_dev : c->rigid_dev);
-  add_num(par, "auto_rigid_speed_um_per_ms", o->auto_chose ? o->auto_rigid_speed : c->rigid_speed);
-  add_num(par, "auto_rigid_abs_um_per_ms", o->auto_chose ? o->auto_rigid_abs : c->rigid_abs);
+   * frames' median speed (NaN: not judged; track_rigid_judge): this run's
+   * judgement (the LED's run tests too), else the run before's */
+  const int rigid_before = o->auto_chose && !isfinite(c->rigid_dev);
+  add_num(par, "auto_rigid_dev", rigid_before ? o->auto_rigid_dev : c->rigid_dev);
+  add_num(par, "auto_rigid_speed_um_per_ms", rigid_before ? o->auto_rigid_speed : c->rigid_speed);
+  add_num(par, "auto_rigid_abs_um_per_ms", rigid_before ? o->auto_rigid_abs : c->rigid_abs);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms", track_judged_speed_um_per_ms(c));
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);

@@ -701,7 +701,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
       track_speed_add(c, elfm_link_last_speed(c->lk, j));
     if (o->motion_auto && !c->rigid_decided &&
         elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid, &span_ms) >=
-            TRACK_RIGID_MIN_POINTS &&
+            (track_led_windows(o) ? TRACK_RIGID_LED_MIN_POINTS : TRACK_RIGID_MIN_POINTS) &&
         span_ms >= TRACK_RIGID_MIN_SPAN_MS && isfinite(c->rigid_v[3 * n_rigid]) &&
         isfinite(c->rigid_v[3 * n_rigid + 1]) && isfinite(c->rigid_v[3 * n_rigid + 2]))
       n_rigid++;
