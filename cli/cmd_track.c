@@ -84,14 +84,20 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
 }
 
 /* The first peaks judged for the LED's windows (auto_judge): their
- * height and their tracks' speed, nothing else to start again for. */
+ * height and their tracks' speed, and nothing else to start again for but
+ * the blur, for faint peaks in frames that are not crowded, as on the grid:
+ * dim blinking beads (blink_moving at a quarter of its flux, seeds 4-6:
+ * alpha 0.254 on the LED's windows, 0.375 blurred; "Dim blinking beads"). */
 static void judged_for_pulses(track_ctx *c)
 {
+  const track_opts *o = c->o;
   c->auto_decided = 1;
   c->auto_peaks = c->n_height;
-  c->auto_ratio = c->n_height ? track_peak_height_median(c) / c->o->peaks.absolute : NAN;
+  c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
   c->auto_speed = track_detection_speed_median(c);
-  c->repr_restart = c->blur_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
+  c->repr_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
+  c->blur_restart = o->blur_auto && c->auto_ratio < TRACK_HINT_DIM_FACTOR &&
+                    !(track_occupancy_mean(c) > TRACK_CROWD_OCC);
 }
 
 /* --blur-px auto, the automatic window and representation: judge the
@@ -120,7 +126,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     const int have_speed = c->n_speed >= TRACK_WIDTH_MIN_PEAKS;
     judged_for_pulses(c);
     c->start_restart = 1;
-    c->lin_restart = o->lin_auto && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
+    c->lin_restart = track_lin_choosable(o) && have_speed && c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
     return 1;
   }
   if (o->lin_auto && track_led_windows(o) && !c->auto_decided) {
@@ -133,8 +139,8 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     judged_for_pulses(c);
     c->lin_restart = c->n_speed >= TRACK_WIDTH_MIN_PEAKS &&
                      c->auto_speed >= TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS;
-    c->start_restart = c->lin_restart;
-    return c->lin_restart;
+    c->start_restart = c->lin_restart || c->blur_restart;
+    return c->start_restart;
   }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
   if (!o->blur_auto && !o->dt_auto && !o->repr_auto && !o->start_auto) return 0;
@@ -548,7 +554,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * tracker.md "Windows opened by the LED", "The LED's windows by
      * default"). The run's files are written again. */
     again->each_trigger = 1;
-    again->lin = o.lin_auto && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
+    again->lin = track_lin_choosable(&o) && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
+    again->blur_px = -1; /* as the run had it */
     if (!o.auto_chose) again_judged(again, &c); /* the first run's judgement, for summary.json */
     if (!o.quiet)
       fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
@@ -681,7 +688,7 @@ int cmd_track(int argc, char **argv)
    * back to the time surface, each-trigger. */
   char dt[32];
   int stage_watch = 0;
-  char **argv2 = malloc(((size_t)argc + 15) * sizeof *argv2);
+  char **argv2 = malloc(((size_t)argc + 24) * sizeof *argv2);
   if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
   int argc2 = 0;
   for (int i = 0; i < argc; i++) argv2[argc2++] = argv[i];
@@ -700,6 +707,10 @@ int cmd_track(int argc, char **argv)
       if (again.lin) {
         argv2[argc2++] = "--repr";
         argv2[argc2++] = "lin";
+      }
+      if (again.blur_px > 0) {
+        argv2[argc2++] = "--blur-px";
+        argv2[argc2++] = "1";
       }
     } else if (again.stage_back) {
       /* the slow stage's long windows were outrun: the command as given,

@@ -168,6 +168,7 @@ typedef struct track_opts {
  * a consensus, the newest TRACK_STAGE_RING of them keep it; a run that has
  * held TRACK_STAGE_MAX_PENDING tracks without one decides with what it has. */
 #define TRACK_STAGE_MIN_POINTS 20
+#define TRACK_STAGE_LED_MIN_POINTS 8
 #define TRACK_STAGE_MIN_TRACKS 5
 #define TRACK_STAGE_RING 32
 #define TRACK_STAGE_MAX_PENDING 256
@@ -188,11 +189,10 @@ typedef struct track_opts {
  * 0.010-0.052 um/ms (0.017-0.024 at 0.15-0.19 um/ms); the nearest worm,
  * which crawls as one body, 30 % and 0.084 um/ms; flows 100 % and more
  * (docs/tracker.md "A stage found by its tracks"). Under the LED's
- * windows a track has a point per pulse, not per frame: 15 ms hold 6
- * pulses 3 ms apart, so TRACK_RIGID_LED_MIN_POINTS (one pulse may be
- * missed), and TRACK_RIGID_MAX_FRAMES counts the frames that hold a pulse
- * (blink_moving at 4 mm/s, seed 4, had 37 samples from 11 frames by
- * frame 200, and was not judged; "A stage under the LED's pulses"). */
+ * windows a track has a point per pulse: 15 ms hold 6 pulses 3 ms apart,
+ * so TRACK_RIGID_LED_MIN_POINTS (one may be missed), and MAX_FRAMES
+ * counts the frames that hold a pulse (blink_moving 4 mm/s seed 4: 37
+ * samples from 11 frames by frame 200; "A stage under the LED's pulses"). */
 #define TRACK_RIGID_MIN_POINTS 8
 #define TRACK_RIGID_LED_MIN_POINTS 5
 #define TRACK_RIGID_MIN_SPAN_MS 15.0
@@ -473,7 +473,7 @@ typedef struct track_ctx {
   /* The frames' events by whether a trigger edge fell in the frame or the
    * one before (lit under pulsed light) or not (track_pulsed) */
   int64_t n_lit_frames, n_dark_frames;
-  double lit_events, dark_events;
+  double lit_events, dark_events, lit_events2, dark_events2; /* ... and their squares */
   int prev_had_edge;
   int64_t auto_peaks;   /* ... how many they were */
   double auto_ratio;    /* ... their median height over the threshold */
@@ -610,6 +610,12 @@ static inline int track_led_windows(const track_opts *o)
 {
   return o->recon.framer.start == ELFM_START_EACH_TRIGGER;
 }
+/* --repr lin is track's to choose: lin_auto, or a settled run's first's
+ * (the grid's blur, say, chosen before pulsed light was found) */
+static inline int track_lin_choosable(const track_opts *o)
+{
+  return o->lin_auto || (o->auto_chose && (o->auto_was & 32));
+}
 /* The lead to smooth with: with motion_lead_auto and enough widths, from
  * their median (above); else the options' lead. */
 double track_motion_lead_um(const track_ctx *c);
@@ -651,18 +657,26 @@ double track_median_speed_um_per_ms(const track_ctx *c);
 #define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
 /* Pulsed light (track_opts.start_auto, track_pulsed): at least
  * TRACK_AUTO_TRIGGER_EDGES rising trigger edges, and the frames with an
- * edge in them or in the frame before ("lit") hold more than
- * TRACK_AUTO_PULSED_RATIO times the events of the others, at least
- * TRACK_AUTO_TRIGGER_EDGES frames of each. Measured at the first
- * judgement: blink 200 ms seeds 1-12 7-9x, blink_moving (1 ms pulses every
- * 3 ms, one frame in three dark) seeds 1-8 4-8x; edges every 7 ms that are
- * not the light's (a camera's or controller's clock) on flow seed 2 1.04x;
- * a clock at 500 Hz or faster leaves no frame unlit: not pulsed. Objects
- * whose tracks move at TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS or more get
- * --repr lin too. */
+ * edge in them or in the frame before ("lit"), at least that many of each
+ * kind, hold more than TRACK_AUTO_PULSED_RATIO times the others' events,
+ * or more than TRACK_AUTO_PULSED_DIM_RATIO times and TRACK_AUTO_PULSED_MIN_Z
+ * standard errors more (so a few lit frames of a scene whose events come
+ * and go do not make it; blink's few lit frames, one full and the next
+ * less so, scatter too much for that test: 1-3). Measured: blink 200 ms
+ * seeds 1-12 7-9x; blink_moving (a pulse each 3 ms) 4-8x, at half and a
+ * quarter of its flux, where the sensor's noise (~2000 events a frame)
+ * weighs more, 2.9-3.9x and 1.9-2.3x (3x alone missed 4 of those 6;
+ * "Dim blinking beads"); a clock's edges each 7 ms on flow seed 2 1.04x,
+ * 0.9 standard errors (its frames scatter ~20 %); a clock at 500 Hz or
+ * faster leaves no frame unlit. Moving objects' tracks
+ * (TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS or more) get --repr lin too. */
 #define TRACK_AUTO_TRIGGER_EDGES 4
 #define TRACK_AUTO_PULSED_RATIO 3.0
+#define TRACK_AUTO_PULSED_DIM_RATIO 1.5
+#define TRACK_AUTO_PULSED_MIN_Z 3.0
 int track_pulsed(const track_ctx *c);
+/* the lit frames' excess of mean events in standard errors (Welch's t) */
+double track_pulsed_z(const track_ctx *c);
 /* lit frames' mean events over the others' (those at least 1); NaN before
  * one of each */
 double track_pulsed_ratio(const track_ctx *c);

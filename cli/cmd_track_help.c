@@ -56,7 +56,8 @@ void track_usage(FILE *f)
     "                       window; not with --tau-us\n"
     "  --start, not given   the grid from the first event, and under pulsed light\n"
     "                       (%d rising trigger edges or more, and the frames with an\n"
-    "                       edge, or after one, hold over %g x the others' events)\n"
+    "                       edge, or after one, hold over %g x the others' events, or\n"
+    "                       over %g x by %g standard errors; faint peaks get the blur)\n"
     "                       start again with --start each-trigger, one window per\n"
     "                       pulse (blinking beads), and --repr lin when the tracks\n"
     "                       move (%g um/ms or more) and neither --repr, --tau-us\n"
@@ -70,7 +71,8 @@ void track_usage(FILE *f)
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_SLOW_BEADS_MAX_UM_PER_MS, TRACK_SLOW_BEADS_DT_US, TRACK_SLOW_BEADS_DT_US,
     TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
     TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
-    TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
+    TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_AUTO_PULSED_DIM_RATIO, TRACK_AUTO_PULSED_MIN_Z,
+    TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"

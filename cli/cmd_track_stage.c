@@ -10,35 +10,55 @@
 
 #include "cmd_track.h"
 
-/* Whether a track's velocity can be judged against the stage's: not that
- * of a one-frame track (a bead in one LED pulse), whose static 0 is the
- * model's (elfm_track_velocity_known; blink_moving seeds 1-10 with the
- * stage's velocity given lost 8 such beads on seed 1, alpha 0.8838 ->
- * 0.8817), nor that of a track too short to tell its own noise (under 5
- * points, elfm_smooth_noise_known; its uncertainties are NaN). On
- * blink_moving at 1.5 mm/s seeds 1-3, 6 tracks of 2-4 points, 48-84 um
- * deep and 5 of them at the recording's ends, lay 0.5-4.3 um/ms off in
- * z and were dropped: alpha 0.8839; kept, 0.8872, and the stage's error
- * the same on stage seeds 1-9 and the dim stage's 1-12 (docs/tracker.md
- * "A stage under the LED's pulses"). */
-static int stage_judgeable(const elfm_track *t)
+/* A track too short to tell its own noise (under 5 points of distinct
+ * times, elfm_smooth_noise_known: its uncertainties are NaN) is judged
+ * only along the stage's motion, which a drift does not fake: at rest or
+ * against the stage (a hot pixel's, a ghost's joined across a dark gap),
+ * or far faster. Its velocity across the stage is its noise's: on
+ * blink_moving at 1.5 mm/s seeds 1-3, 6 such tracks of 2-4 points, 48-84
+ * um deep, 5 at the recording's ends, lay 0.5-4.3 um/ms off in z and were
+ * dropped (alpha 0.8839; 0.8872 kept), while blink_moving seed 12 kept
+ * 2-point ghosts moving against the stage, one in each pulse, and 2-point
+ * tracks at rest across 48 frames: the stage's error by the tracks'
+ * points 18.8 %, 0.46 % tested along (docs/tracker.md "Dim blinking
+ * beads"). A one-frame track (a bead in one LED pulse) has no velocity
+ * at all (elfm_track_velocity_known): its static 0 is the model's. */
+static int noise_known(const elfm_track *t)
 {
-  return elfm_track_velocity_known(t) && !(t->vel_sd_um_per_ms && isnan(t->vel_sd_um_per_ms[0]));
+  return !(t->vel_sd_um_per_ms && isnan(t->vel_sd_um_per_ms[0]));
+}
+
+/* Along and across the direction of v_ref (|v_ref| = s > 0) */
+static void along_across(const double v[3], const double v_ref[3], double s, double *along, double *across)
+{
+  double a = 0, c2 = 0;
+  for (int k = 0; k < 3; k++) a += v[k] * v_ref[k] / s;
+  for (int k = 0; k < 3; k++) c2 += (v[k] - a * v_ref[k] / s) * (v[k] - a * v_ref[k] / s);
+  *along = a;
+  *across = sqrt(c2);
 }
 
 /* Rigid stage motion: a track moving otherwise than v_ref (more than 25 %
  * of its speed + 0.1 um/ms off) is not part of the sample (ghosts joined
- * across gaps, a hot pixel's or noise's track at rest). */
+ * across gaps, a hot pixel's or noise's track at rest); a short one, as
+ * off_consensus's. */
 static int off_stage(const elfm_track *t, const double v_ref[3])
 {
-  if (!stage_judgeable(t)) return 0;
+  if (!elfm_track_velocity_known(t)) return 0;
   double v[3], d2 = 0, s2 = 0;
   elfm_track_mean_velocity(t, v);
   for (int a = 0; a < 3; a++) {
     d2 += (v[a] - v_ref[a]) * (v[a] - v_ref[a]);
     s2 += v_ref[a] * v_ref[a];
   }
-  return sqrt(d2) > 0.25 * sqrt(s2) + 0.1;
+  const double s = sqrt(s2);
+  if (!noise_known(t)) {
+    double along, across;
+    if (!(s >= 0.05)) return 0;
+    along_across(v, v_ref, s, &along, &across);
+    return !(along >= 0.25 * s && along <= 4 * s);
+  }
+  return sqrt(d2) > 0.25 * s + 0.1;
 }
 
 /* Against the tracks' own consensus v_c instead of a given velocity: the
@@ -47,20 +67,26 @@ static int off_stage(const elfm_track *t, const double v_ref[3])
  * dropped 1-5 whole tracks of each run, alpha 0.522 -> 0.439). A track is
  * off when it moves along the stage's direction at under 1/4 or over 4x
  * the consensus speed (at rest, or against it: a hot pixel's track, a
- * ghost's), or across it by more than 25 % of that speed + 0.1 um/ms. A
- * consensus near rest (under 0.05 um/ms) tests nothing. */
+ * ghost's), or, told its noise, across it by more than 25 % of that speed
+ * + 0.1 um/ms. A consensus near rest (under 0.05 um/ms) tests nothing. */
 static int off_consensus(const elfm_track *t, const double v_c[3], double along_min, double along_max)
 {
   const double sc = sqrt(v_c[0] * v_c[0] + v_c[1] * v_c[1] + v_c[2] * v_c[2]);
-  if (!(sc >= 0.05) || !stage_judgeable(t)) return 0; /* as off_stage */
-  double v[3], along = 0, across2 = 0;
+  if (!(sc >= 0.05) || !elfm_track_velocity_known(t)) return 0;
+  double v[3], along, across;
   elfm_track_mean_velocity(t, v);
-  for (int a = 0; a < 3; a++) along += v[a] * v_c[a] / sc;
-  for (int a = 0; a < 3; a++) {
-    const double d = v[a] - along * v_c[a] / sc;
-    across2 += d * d;
-  }
-  return !(along >= along_min * sc && along <= along_max * sc) || sqrt(across2) > 0.25 * sc + 0.1;
+  along_across(v, v_c, sc, &along, &across);
+  return !(along >= along_min * sc && along <= along_max * sc) ||
+         (noise_known(t) && across > 0.25 * sc + 0.1);
+}
+
+/* The points of a track that joins the consensus: under the LED's
+ * windows a point per pulse, and a bead crosses the field in fewer than
+ * TRACK_STAGE_MIN_POINTS (blink_moving at 2.5 mm/s: at most 18), so
+ * there was no consensus and no track was tested */
+static size_t stage_min_points(const track_ctx *c)
+{
+  return track_led_windows(c->o) ? TRACK_STAGE_LED_MIN_POINTS : TRACK_STAGE_MIN_POINTS;
 }
 
 /* The weighted median of the values x[k * stride] (weights w[k * stride]),
@@ -107,7 +133,7 @@ static int stage_off(const track_ctx *c, const elfm_track *t)
 
 static void stage_ring_add(track_ctx *c, const elfm_track *t)
 {
-  if (t->n < TRACK_STAGE_MIN_POINTS) return;
+  if (t->n < stage_min_points(c)) return;
   double *e = c->stage_ring[c->stage_ring_at];
   elfm_track_mean_velocity(t, e);
   e[3] = (double)t->n;
@@ -151,7 +177,7 @@ static elfm_status stage_hold(track_ctx *c, elfm_track *t, elfm_error *err)
     stage_ring_add(c, t);
     return track_write_track(c, t, err);
   }
-  const int is_long = t->n >= TRACK_STAGE_MIN_POINTS;
+  const int is_long = t->n >= stage_min_points(c);
   elfm_status st = elfm_track_store_add(&c->stage_pending, t, err);  /* frees t on failure */
   if (st != ELFM_OK) return st;
   c->n_stage_pending_long += is_long;

@@ -59,10 +59,26 @@ double track_pulsed_ratio(const track_ctx *c)
   return lit / fmax(dark, 1.0);
 }
 
+double track_pulsed_z(const track_ctx *c)
+{
+  if (c->n_lit_frames < 2 || c->n_dark_frames < 2) return NAN;
+  const double nl = (double)c->n_lit_frames, nd = (double)c->n_dark_frames;
+  const double ml = c->lit_events / nl, md = c->dark_events / nd;
+  /* sample variances from the sums: event counts scatter by 2 % or more,
+   * so mean^2 / variance stays under ~1e4, far from the 1e16 where the
+   * difference would cancel; floored at 0 against rounding */
+  const double vl = fmax(0.0, (c->lit_events2 - nl * ml * ml) / (nl - 1));
+  const double vd = fmax(0.0, (c->dark_events2 - nd * md * md) / (nd - 1));
+  const double se = sqrt(vl / nl + vd / nd);
+  return se > 0 ? (ml - md) / se : (ml > md ? INFINITY : 0.0);
+}
+
 int track_pulsed(const track_ctx *c)
 {
   return c->n_triggers >= TRACK_AUTO_TRIGGER_EDGES && c->n_lit_frames >= TRACK_AUTO_TRIGGER_EDGES &&
-         c->n_dark_frames >= TRACK_AUTO_TRIGGER_EDGES && track_pulsed_ratio(c) > TRACK_AUTO_PULSED_RATIO;
+         c->n_dark_frames >= TRACK_AUTO_TRIGGER_EDGES &&
+         (track_pulsed_ratio(c) > TRACK_AUTO_PULSED_RATIO ||
+          (track_pulsed_ratio(c) > TRACK_AUTO_PULSED_DIM_RATIO && track_pulsed_z(c) >= TRACK_AUTO_PULSED_MIN_Z));
 }
 
 double track_detection_speed_median(const track_ctx *c)
@@ -619,9 +635,11 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   if (edge || c->prev_had_edge) {
     c->n_lit_frames++;
     c->lit_events += (double)v->n_events;
+    c->lit_events2 += (double)v->n_events * (double)v->n_events;
   } else {
     c->n_dark_frames++;
     c->dark_events += (double)v->n_events;
+    c->dark_events2 += (double)v->n_events * (double)v->n_events;
   }
   c->prev_had_edge = edge;
   c->n_triggers = v->n_triggers;
@@ -697,7 +715,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     /* the first peaks' speed: for auto's choices, and for --repr lin under
      * the LED's windows, found (start_auto) or given */
     if ((o->blur_auto || o->dt_auto || o->repr_auto ||
-         (o->lin_auto && (o->start_auto || track_led_windows(o)))) && !c->auto_decided)
+         (track_lin_choosable(o) && (o->start_auto || track_led_windows(o)))) && !c->auto_decided)
       track_speed_add(c, elfm_link_last_speed(c->lk, j));
     if (o->motion_auto && !c->rigid_decided &&
         elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid, &span_ms) >=
