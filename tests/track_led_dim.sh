@@ -20,21 +20,18 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
 score_args="--frames run --window-us run"
-is() { # is FILE KEY VALUE (a JSON string value)
-  [ "$(key "$1" "$2")" = "\"$3\"" ] || { echo "FAIL: $2 in $1 is $(key "$1" "$2"), not $3"; fail=$((fail+1)); }
-}
 
 simulate_or_skip "$tmp/h4" blink_moving 200 4 --param 'objects.flux_hz=[12500,17500]'
 track_score "$tmp/h4" "$tmp/a" "$tmp/a.json"
 echo "blink_moving at half the flux, seed 4: start $(key "$tmp/a/summary.json" start), alpha $(key "$tmp/a.json" alpha)"
-is "$tmp/a/summary.json" start each-trigger
-is "$tmp/a/summary.json" repr lin
+expect_string "$tmp/a/summary.json" start each-trigger
+expect_string "$tmp/a/summary.json" repr lin
 expect_gain 0.65 "$(key "$tmp/a.json" alpha)" 0 "half the flux seed 4: alpha <= 0.65 (0.558 on the grid)"
 
 simulate_or_skip "$tmp/q6" blink_moving 200 6 --param 'objects.flux_hz=[6250,8750]'
 track_score "$tmp/q6" "$tmp/b" "$tmp/b.json"
 echo "blink_moving at a quarter of the flux, seed 6: start $(key "$tmp/b/summary.json" start), blur $(key "$tmp/b/summary.json" blur_px), alpha $(key "$tmp/b.json" alpha)"
-is "$tmp/b/summary.json" start each-trigger
+expect_string "$tmp/b/summary.json" start each-trigger
 [ "$(key "$tmp/b/summary.json" blur_px)" = 1 ] || { echo "FAIL: no blur on the quarter flux's faint peaks"; fail=$((fail+1)); }
 expect_gain 0.35 "$(key "$tmp/b.json" alpha)" 0 "a quarter of the flux seed 6: alpha <= 0.35 (0.298 on the grid)"
 
@@ -43,8 +40,8 @@ simulate_or_skip "$tmp/q4" blink_moving 200 4 --param 'objects.flux_hz=[6250,875
   { echo "FAIL: track (a quarter of the flux, seed 4)"; fail=$((fail+1)); }
 grep -q "dim objects; starting again with --blur-px 1" "$tmp/c.err" && grep -q "pulsed light; starting again with --repr lin --start each-trigger" "$tmp/c.err" ||
   { echo "FAIL: seed 4 at a quarter: not the blur first, then --repr lin with the LED's windows"; cat "$tmp/c.err"; fail=$((fail+1)); }
-is "$tmp/c/summary.json" repr lin
-is "$tmp/c/summary.json" start each-trigger
+expect_string "$tmp/c/summary.json" repr lin
+expect_string "$tmp/c/summary.json" start each-trigger
 
 [ $fail -eq 0 ] && echo "PASS: track_led_dim" || echo "$fail failure(s)"
 exit $((fail > 0))

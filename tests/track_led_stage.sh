@@ -32,13 +32,10 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
 score_args="--frames run --window-us run"
-motion_is() {
-  [ "$(key "$1" motion)" = "\"$2\"" ] || { echo "FAIL: motion in $1 is $(key "$1" motion), not $2"; fail=$((fail+1)); }
-}
 
 simulate_or_skip "$tmp/bm" blink_moving 200 1
 track_score "$tmp/bm" "$tmp/auto" "$tmp/auto.json"
-motion_is "$tmp/auto/summary.json" stage
+expect_string "$tmp/auto/summary.json" motion stage
 dev=$(key "$tmp/auto/summary.json" auto_rigid_dev)
 echo "blink_moving seed 1 at the defaults: rigid deviation $dev, alpha $(key "$tmp/auto.json" alpha)"
 [ -n "$dev" ] && [ "$dev" != null ] && below "$dev" 1 0.15 ||
@@ -51,22 +48,22 @@ sp=$(key "$tmp/auto/summary.json" auto_track_speed_um_per_ms)
 for f in tracks.csv detections.csv frames.csv; do
   cmp -s "$tmp/auto/$f" "$tmp/st/$f" || { echo "FAIL: the default run's $f is not --motion stage's"; fail=$((fail+1)); }
 done
-[ "$(key "$tmp/auto/summary.json" start)" = '"each-trigger"' ] && [ "$(key "$tmp/auto/summary.json" repr)" = '"lin"' ] ||
-  { echo "FAIL: start $(key "$tmp/auto/summary.json" start), repr $(key "$tmp/auto/summary.json" repr)"; fail=$((fail+1)); }
+expect_string "$tmp/auto/summary.json" start each-trigger
+expect_string "$tmp/auto/summary.json" repr lin
 # --motion per-track keeps each track's model under the LED too
 "$bin" track --calib "$tmp/bm/calib.json" --events "$tmp/bm/events.raw" --out "$tmp/pt" -q --motion per-track ||
   { echo "FAIL: track --motion per-track"; fail=$((fail+1)); }
-motion_is "$tmp/pt/summary.json" auto
+expect_string "$tmp/pt/summary.json" motion auto
 
 simulate_or_skip "$tmp/b4" blink_moving 200 4 --param motion.v0_mm_per_s=4 --param motion.v1_mm_per_s=4
 track_score "$tmp/b4" "$tmp/a4" "$tmp/a4.json"
-motion_is "$tmp/a4/summary.json" stage
+expect_string "$tmp/a4/summary.json" motion stage
 echo "blink_moving 4 mm/s seed 4: motion $(key "$tmp/a4/summary.json" motion), alpha $(key "$tmp/a4.json" alpha)"
 expect_gain 0.91 "$(key "$tmp/a4.json" alpha)" 0 "blink_moving 4 mm/s seed 4: alpha $(key "$tmp/a4.json" alpha) <= 0.91 (0.901 each track's own)"
 
 simulate_or_skip "$tmp/b15" blink_moving 200 2 --param motion.v0_mm_per_s=1.5 --param motion.v1_mm_per_s=1.5
 track_score "$tmp/b15" "$tmp/a15" "$tmp/a15.json"
-motion_is "$tmp/a15/summary.json" stage
+expect_string "$tmp/a15/summary.json" motion stage
 off=$(key "$tmp/a15/summary.json" tracks_rejected_off_stage)
 echo "blink_moving 1.5 mm/s seed 2: $off tracks off the stage, alpha $(key "$tmp/a15.json" alpha)"
 [ -n "$off" ] && [ "$off" -le 1 ] || { echo "FAIL: $off tracks dropped off the stage (3 when short tracks were judged)"; fail=$((fail+1)); }
@@ -82,7 +79,7 @@ score_args="--frames run --window-us run"
 
 simulate_or_skip "$tmp/b" blink 200 2
 track_score "$tmp/b" "$tmp/rest" "$tmp/rest.json"
-motion_is "$tmp/rest/summary.json" auto
+expect_string "$tmp/rest/summary.json" motion auto
 rs=$(key "$tmp/rest/summary.json" auto_rigid_speed_um_per_ms)
 echo "blink seed 2 (at rest): motion $(key "$tmp/rest/summary.json" motion), judged at $rs um/ms, alpha $(key "$tmp/rest.json" alpha)"
 # judged on the LED's windows (summary.json says so), and slower than a stage

@@ -21,6 +21,12 @@ expect_key() {
     { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
 }
 
+# expect_string FILE KEY VALUE: the JSON string KEY in FILE is "VALUE";
+# otherwise print a failure and count it in $fail.
+expect_string() {
+  [ "$(key "$1" "$2")" = "\"$3\"" ] || { echo "FAIL: $2 in $1 is $(key "$1" "$2"), not $3"; fail=$((fail+1)); }
+}
+
 # below A F B: true when A < F x B (floating point, by awk).
 below() {
   awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'
