@@ -164,9 +164,9 @@ typedef struct track_opts {
 #define TRACK_WIDTH_FEW_PEAKS 20
 #define TRACK_HEIGHT_BINS 1024
 /* The stage's consensus velocity (track_ctx.stage_*): tracks of at least
- * TRACK_STAGE_MIN_POINTS points count, TRACK_STAGE_MIN_TRACKS of them make
- * a consensus, the newest TRACK_STAGE_RING of them keep it; a run that has
- * held TRACK_STAGE_MAX_PENDING tracks without one decides with what it has. */
+ * TRACK_STAGE_MIN_POINTS points (_LED_ under the LED's windows) count,
+ * TRACK_STAGE_MIN_TRACKS make a consensus, the newest TRACK_STAGE_RING keep
+ * it; a run that has held TRACK_STAGE_MAX_PENDING without one decides. */
 #define TRACK_STAGE_MIN_POINTS 20
 #define TRACK_STAGE_LED_MIN_POINTS 8
 #define TRACK_STAGE_MIN_TRACKS 5
