@@ -260,10 +260,12 @@ static void say_again(const track_ctx *c, const track_again *g)
             c->auto_speed);
   else if (g->each_trigger)
     fprintf(stderr, "eventlfm track: %" PRId64 " trigger edges so far, and the frames with an edge "
-                    "hold %.0fx the others' events: pulsed light; starting again with %s--start "
+                    "hold %.0fx the others' events: pulsed light (a peak in %.0f %% of them, %.0f %% "
+                    "of the others); starting again with %s--start "
                     "each-trigger, one window per pulse (--start first: keep the grid; score with "
                     "--frames run --window-us run; README, blinking objects)\n",
-            c->n_triggers, track_pulsed_ratio(c), g->lin ? "--repr lin " : "");
+            c->n_triggers, track_pulsed_ratio(c), track_peaked_pct(c, 1), track_peaked_pct(c, 0),
+            g->lin ? "--repr lin " : "");
   if (g->stage)
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
                     "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
@@ -559,10 +561,12 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     if (!o.auto_chose) again_judged(again, &c); /* the first run's judgement, for summary.json */
     if (!o.quiet)
       fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
-                      "(the frames with an edge hold %.0fx the others'): pulsed light; starting again "
+                      "(the frames with an edge hold %.0fx the others', a peak in %.0f %% of them, "
+                      "%.0f %% of the others): pulsed light; starting again "
                       "with %s--start each-trigger, one window per pulse (--start first: keep the grid; "
                       "score with --frames run --window-us run; README, blinking objects)\n",
-              c.n_triggers, track_pulsed_ratio(&c), again->lin ? "--repr lin " : "");
+              c.n_triggers, track_pulsed_ratio(&c), track_peaked_pct(&c, 1), track_peaked_pct(&c, 0),
+              again->lin ? "--repr lin " : "");
     rc = TRACK_RUN_AGAIN;
     goto done;
   }

@@ -472,9 +472,9 @@ typedef struct track_ctx {
   int64_t n_triggers;   /* trigger edges up to the last volume's end (elfm_volume) */
   /* The frames' events by whether a trigger edge fell in the frame or the
    * one before (lit under pulsed light) or not (track_pulsed) */
-  int64_t n_lit_frames, n_dark_frames;
+  int64_t n_lit_frames, n_dark_frames, n_lit_peaked, n_dark_peaked; /* ..., those with a peak */
   double lit_events, dark_events, lit_events2, dark_events2; /* ... and their squares */
-  int prev_had_edge;
+  int prev_had_edge, cur_lit;
   int64_t auto_peaks;   /* ... how many they were */
   double auto_ratio;    /* ... their median height over the threshold */
   double auto_speed;    /* ... their tracks' median speed, um/ms (track_detection_speed_median) */
@@ -655,28 +655,20 @@ double track_median_speed_um_per_ms(const track_ctx *c);
  * um/ms, beads at rest (blink) doing better with the default; --start
  * each-trigger when they do not (README). */
 #define TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS 0.5
-/* Pulsed light (track_opts.start_auto, track_pulsed): at least
- * TRACK_AUTO_TRIGGER_EDGES rising trigger edges, and the frames with an
- * edge in them or in the frame before ("lit"), at least that many of each
- * kind, hold more than TRACK_AUTO_PULSED_RATIO times the others' events,
- * or more than TRACK_AUTO_PULSED_DIM_RATIO times and TRACK_AUTO_PULSED_MIN_Z
- * standard errors more (so a few lit frames of a scene whose events come
- * and go do not make it; blink's few lit frames, one full and the next
- * less so, scatter too much for that test: 1-3). Measured: blink 200 ms
- * seeds 1-12 7-9x; blink_moving (a pulse each 3 ms) 4-8x, at half and a
- * quarter of its flux, where the sensor's noise (~2000 events a frame)
- * weighs more, 2.9-3.9x and 1.9-2.3x (3x alone missed 4 of those 6;
- * "Dim blinking beads"); a clock's edges each 7 ms on flow seed 2 1.04x,
- * 0.9 standard errors (its frames scatter ~20 %); a clock at 500 Hz or
- * faster leaves no frame unlit. Moving objects' tracks
+/* Pulsed light (track_opts.start_auto, track_pulsed; the rules and what
+ * they were measured on in cmd_track_pulsed.c). Moving objects' tracks
  * (TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS or more) get --repr lin too. */
 #define TRACK_AUTO_TRIGGER_EDGES 4
 #define TRACK_AUTO_PULSED_RATIO 3.0
 #define TRACK_AUTO_PULSED_DIM_RATIO 1.5
 #define TRACK_AUTO_PULSED_MIN_Z 3.0
+#define TRACK_AUTO_PULSED_PEAKED 0.3
+#define TRACK_AUTO_PULSED_PEAKED_OVER 10.0
 int track_pulsed(const track_ctx *c);
-/* the lit frames' excess of mean events in standard errors (Welch's t) */
+/* lit frames' excess of mean events in standard errors (Welch's t); the
+ * percentage of the lit (1) or other (0) frames with a peak */
 double track_pulsed_z(const track_ctx *c);
+double track_peaked_pct(const track_ctx *c, int lit);
 /* lit frames' mean events over the others' (those at least 1); NaN before
  * one of each */
 double track_pulsed_ratio(const track_ctx *c);

@@ -57,7 +57,9 @@ void track_usage(FILE *f)
     "  --start, not given   the grid from the first event, and under pulsed light\n"
     "                       (%d rising trigger edges or more, and the frames with an\n"
     "                       edge, or after one, hold over %g x the others' events, or\n"
-    "                       over %g x by %g standard errors; faint peaks get the blur)\n"
+    "                       over %g x by %g standard errors, or a peak in %g of them\n"
+    "                       and in a %g x smaller share of the others; faint peaks\n"
+    "                       get the blur)\n"
     "                       start again with --start each-trigger, one window per\n"
     "                       pulse (blinking beads), and --repr lin when the tracks\n"
     "                       move (%g um/ms or more) and neither --repr, --tau-us\n"
@@ -72,6 +74,7 @@ void track_usage(FILE *f)
     TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
     TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
     TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_AUTO_PULSED_DIM_RATIO, TRACK_AUTO_PULSED_MIN_Z,
+    TRACK_AUTO_PULSED_PEAKED, TRACK_AUTO_PULSED_PEAKED_OVER,
     TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"

@@ -51,36 +51,6 @@ double track_peak_height_median(const track_ctx *c)
   return track_hist_median_bin(c->height_hist, TRACK_HEIGHT_BINS, c->n_height) + 0.5;
 }
 
-double track_pulsed_ratio(const track_ctx *c)
-{
-  if (c->n_lit_frames == 0 || c->n_dark_frames == 0) return NAN;
-  const double lit = c->lit_events / (double)c->n_lit_frames;
-  const double dark = c->dark_events / (double)c->n_dark_frames;
-  return lit / fmax(dark, 1.0);
-}
-
-double track_pulsed_z(const track_ctx *c)
-{
-  if (c->n_lit_frames < 2 || c->n_dark_frames < 2) return NAN;
-  const double nl = (double)c->n_lit_frames, nd = (double)c->n_dark_frames;
-  const double ml = c->lit_events / nl, md = c->dark_events / nd;
-  /* sample variances from the sums: event counts scatter by 2 % or more,
-   * so mean^2 / variance stays under ~1e4, far from the 1e16 where the
-   * difference would cancel; floored at 0 against rounding */
-  const double vl = fmax(0.0, (c->lit_events2 - nl * ml * ml) / (nl - 1));
-  const double vd = fmax(0.0, (c->dark_events2 - nd * md * md) / (nd - 1));
-  const double se = sqrt(vl / nl + vd / nd);
-  return se > 0 ? (ml - md) / se : (ml > md ? INFINITY : 0.0);
-}
-
-int track_pulsed(const track_ctx *c)
-{
-  return c->n_triggers >= TRACK_AUTO_TRIGGER_EDGES && c->n_lit_frames >= TRACK_AUTO_TRIGGER_EDGES &&
-         c->n_dark_frames >= TRACK_AUTO_TRIGGER_EDGES &&
-         (track_pulsed_ratio(c) > TRACK_AUTO_PULSED_RATIO ||
-          (track_pulsed_ratio(c) > TRACK_AUTO_PULSED_DIM_RATIO && track_pulsed_z(c) >= TRACK_AUTO_PULSED_MIN_Z));
-}
-
 double track_detection_speed_median(const track_ctx *c)
 {
   if (c->n_speed == 0) return NAN;
@@ -632,7 +602,8 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   /* lit: an edge in this frame or the one before (a 1 ms pulse starting
    * late in a window ends in the next) */
   const int edge = v->n_triggers > c->n_triggers;
-  if (edge || c->prev_had_edge) {
+  c->cur_lit = edge || c->prev_had_edge;
+  if (c->cur_lit) {
     c->n_lit_frames++;
     c->lit_events += (double)v->n_events;
     c->lit_events2 += (double)v->n_events * (double)v->n_events;
@@ -758,6 +729,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   if (o->stage_watch) track_stage_watch_frame(c, c->rigid_v, n_watch);
   c->n_frames++;
   c->n_det += kept;
+  if (kept > 0) *(c->cur_lit ? &c->n_lit_peaked : &c->n_dark_peaked) += 1;
   c->last_frame = v->frame;
   c->last_t_us = v->t_us;
   if ((st = track_drain(c, 0, err)) != ELFM_OK) return st;

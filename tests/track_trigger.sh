@@ -98,7 +98,7 @@ grep -q "not evenly spaced.*--frames run" "$tmp/sn.err" || { echo "FAIL: no --fr
 # by default: each-trigger found by track itself, the same files
 "$bin" track --calib "$tmp/b/calib.json" --events "$tmp/b/events.raw" --out "$tmp/auto" \
   2>"$tmp/auto.err" >/dev/null || { echo "FAIL: track (default)"; fail=$((fail+1)); }
-grep -q "frames with an edge hold [0-9]*x the others' events: pulsed light; starting again with --start each-trigger" "$tmp/auto.err" ||
+grep -q "frames with an edge hold [0-9]*x the others' events: pulsed light (a peak in [0-9]* % of them, [0-9]* % of the others); starting again with --start each-trigger" "$tmp/auto.err" ||
   { echo "FAIL: no 'starting again with --start each-trigger'"; fail=$((fail+1)); }
 for f in tracks.csv detections.csv frames.csv; do
   cmp -s "$tmp/auto/$f" "$tmp/each/$f" || { echo "FAIL: default run's $f is not --start each-trigger's"; fail=$((fail+1)); }
