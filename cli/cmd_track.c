@@ -83,6 +83,15 @@ static elfm_status track_write_xml(track_ctx *c, const char *p_isbi, const char 
   return close_file(&f, p_tm, err);
 }
 
+/* Faint first peaks (median height h) in frames that are not crowded:
+ * dim objects, for the blur when it is auto's to choose. Crowded frames'
+ * faint peaks are ghosts, not dim objects (auto_judge). */
+static int faint_uncrowded(const track_ctx *c, double h)
+{
+  return c->o->blur_auto && h < TRACK_HINT_DIM_FACTOR * c->o->peaks.absolute &&
+         !(track_occupancy_mean(c) > TRACK_CROWD_OCC);
+}
+
 /* The first peaks judged for the LED's windows (auto_judge): their
  * height and their tracks' speed, and nothing else to start again for but
  * the blur, for faint peaks in frames that are not crowded, as on the grid:
@@ -93,11 +102,11 @@ static void judged_for_pulses(track_ctx *c)
   const track_opts *o = c->o;
   c->auto_decided = 1;
   c->auto_peaks = c->n_height;
-  c->auto_ratio = c->n_height ? track_peak_height_median(c) / o->peaks.absolute : NAN;
+  const double h = c->n_height ? track_peak_height_median(c) : NAN;
+  c->auto_ratio = h / o->peaks.absolute;
   c->auto_speed = track_detection_speed_median(c);
   c->repr_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
-  c->blur_restart = o->blur_auto && c->auto_ratio < TRACK_HINT_DIM_FACTOR &&
-                    !(track_occupancy_mean(c) > TRACK_CROWD_OCC);
+  c->blur_restart = faint_uncrowded(c, h);
 }
 
 /* --blur-px auto, the automatic window and representation: judge the
@@ -173,8 +182,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
      * blurred; flow with 80 beads seed 2, whose first peaks stay faint
      * with the crowded frames' view support too: alpha 0.461 blurred,
      * 0.522 not (docs/tracker.md "Crowded frames"). */
-    c->blur_restart = o->blur_auto && h < TRACK_HINT_DIM_FACTOR * o->peaks.absolute && !slow &&
-                      !(track_occupancy_mean(c) > TRACK_CROWD_OCC);
+    c->blur_restart = faint_uncrowded(c, h) && !slow;
     const double frame_ms = 1e-3 * (double)o->recon.framer.dt_us;
     c->dt_restart = o->dt_auto && have_speed && c->auto_speed * frame_ms >= TRACK_DT_AUTO_STEP_UM;
     /* slow beads (not cells). Their peaks may look faint too: below
