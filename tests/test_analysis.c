@@ -1,5 +1,6 @@
 /* test_analysis.c — FWHM of isolated beads in a synthetic volume (paper
- * widths 3.9 / 21.0 um), and the stage velocity from smoothed tracks. */
+ * widths 3.9 / 21.0 um), the stage velocity from smoothed tracks, and the
+ * rigid shift between two frames' points. */
 #include <string.h>
 
 #include "check.h"
@@ -28,6 +29,74 @@ static void add_blob(elfm_volume *v, double x, double y, double z, double amp, d
         double e = (dx * dx + dy * dy) / (2 * sxy * sxy) + dz * dz / (2 * sz * sz);
         if (e < 30) v->data[((size_t)k * v->h + j) * v->w + i] += (float)(amp * exp(-e));
       }
+}
+
+/* elfm_analysis_shift_vote: one frame's beads moved by one shift (with
+ * noise), some missing and some new in the other frame; beads moving each
+ * their own way; bad input. */
+static void test_shift_vote(void)
+{
+  elfm_error err;
+  elfm_error_clear(&err);
+  uint64_t seed = 7;
+  double a[12][3], b[14][3], d[3], rms;
+  const double shift[3] = {0.3, 17.9, -2.0}; /* a stage's 3 ms at 6 mm/s, a little z */
+  for (int i = 0; i < 12; i++) {
+    for (int k = 0; k < 3; k++) {
+      seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+      a[i][k] = ((double)(seed >> 11) / 9007199254740992.0 - 0.5) * (k == 2 ? 120 : 100);
+    }
+  }
+  /* b: a's beads 2..11 shifted, +-0.2 um of noise (z +-0.8), in reverse
+   * order; beads 0 and 1 left the field; four new ones came in */
+  int nb = 0;
+  for (int i = 11; i >= 2; i--, nb++)
+    for (int k = 0; k < 3; k++) b[nb][k] = a[i][k] + shift[k] + ((i + k) % 3 - 1) * (k == 2 ? 0.8 : 0.2);
+  const double fresh[4][3] = {{40, 40, 0}, {-45, 30, 30}, {0, -48, -60}, {10, 5, 70}};
+  for (int i = 0; i < 4; i++, nb++)
+    for (int k = 0; k < 3; k++) b[nb][k] = fresh[i][k];
+  int m = 0;
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 2.0, 4.0, &m, d, &rms, &err), &err);
+  CHECK(m == 10);
+  for (int k = 0; k < 3; k++) CHECK(fabs(d[k] - shift[k]) < (k == 2 ? 0.4 : 0.1));
+  CHECK(rms > 0.05 && rms < 0.4);
+  /* the same with b's points shifted back by the vote: d ~ 0 */
+  double b0[14][3];
+  for (int j = 0; j < nb; j++)
+    for (int k = 0; k < 3; k++) b0[j][k] = b[j][k] - d[k];
+  double d0[3];
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 12, &b0[0][0], nb, 2.0, 4.0, &m, d0, NULL, &err), &err);
+  CHECK(m == 10 && fabs(d0[0]) < 1e-9 && fabs(d0[1]) < 1e-9 && fabs(d0[2]) < 1e-9);
+  /* each bead its own way (a flow): no shift carries more than a few */
+  double c[12][3];
+  for (int i = 0; i < 12; i++)
+    for (int k = 0; k < 3; k++) c[i][k] = a[i][k] + 3.5 * cos(1.7 * i + 2.1 * k) * (k == 2 ? 2 : 1);
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 12, &c[0][0], 12, 2.0, 4.0, &m, d, &rms, &err), &err);
+  CHECK(m >= 1 && m <= 4);
+  /* a tighter tolerance takes fewer of the noisy matches */
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 0.1, 4.0, &m, d, &rms, &err), &err);
+  CHECK(m >= 1 && m < 10);
+  /* empty frames: nothing matched, NaN */
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 0, &b[0][0], nb, 2.0, 4.0, &m, d, &rms, &err), &err);
+  CHECK(m == 0 && isnan(d[0]) && isnan(rms));
+  CHECK_OK(elfm_analysis_shift_vote(&a[0][0], 12, NULL, 0, 2.0, 4.0, &m, d, &rms, &err), &err);
+  CHECK(m == 0 && isnan(d[1]));
+  /* bad input */
+  a[3][1] = NAN;
+  CHECK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 2.0, 4.0, &m, d, &rms, &err) ==
+        ELFM_ERR_INVALID);
+  a[3][1] = 0;
+  b[5][2] = INFINITY;
+  CHECK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 2.0, 4.0, &m, d, &rms, &err) ==
+        ELFM_ERR_INVALID);
+  b[5][2] = 0;
+  CHECK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 0.0, 4.0, &m, d, &rms, &err) ==
+        ELFM_ERR_INVALID);
+  CHECK(elfm_analysis_shift_vote(&a[0][0], 12, &b[0][0], nb, 2.0, NAN, &m, d, &rms, &err) ==
+        ELFM_ERR_INVALID);
+  CHECK(elfm_analysis_shift_vote(&a[0][0], -1, &b[0][0], nb, 2.0, 4.0, &m, d, &rms, &err) ==
+        ELFM_ERR_INVALID);
+  CHECK(m == 0);
 }
 
 int main(void)
@@ -260,5 +329,6 @@ int main(void)
   CHECK(isnan(r.accel_um_per_ms2[1]));
   CHECK(isnan(r.v_pooled_um_per_ms[1]) && isfinite(r.v_um_per_ms[1])); /* no time spread */
   elfm_track_store_clear(&s);
+  test_shift_vote();
   return check_report();
 }

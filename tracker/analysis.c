@@ -1,5 +1,5 @@
-/* analysis.c — stage velocity from tracks, FWHM of isolated beads
- * (see elfm_analysis.h). */
+/* analysis.c — stage velocity from tracks, the rigid shift between two
+ * frames' points, FWHM of isolated beads (see elfm_analysis.h). */
 #include "elfm_analysis.h"
 
 #include <math.h>
@@ -200,4 +200,87 @@ void elfm_analysis_median(double *x, size_t n, double *median, double *spread)
   double mad = n % 2 ? x[n / 2] : 0.5 * (x[n / 2 - 1] + x[n / 2]);
   *median = med;
   *spread = 1.4826 * mad;
+}
+
+/* Matches of a + d onto b, each point of b used once; sums the matched
+ * displacements and their squares (z / kz) into sum[0..3) and sum[3..6)
+ * when sum is not NULL. used: nb flags, cleared here. */
+static int shift_matches(const double *a, int na, const double *b, int nb, const double d[3],
+                         double tol2, double kz, unsigned char *used, double sum[6])
+{
+  int m = 0;
+  for (int j = 0; j < nb; j++) used[j] = 0;
+  for (int i = 0; i < na; i++) {
+    const double *p = a + 3 * (size_t)i;
+    for (int j = 0; j < nb; j++) {
+      if (used[j]) continue;
+      const double *q = b + 3 * (size_t)j;
+      const double ex = q[0] - p[0] - d[0], ey = q[1] - p[1] - d[1];
+      const double ez = (q[2] - p[2] - d[2]) / kz;
+      if (ex * ex + ey * ey + ez * ez > tol2) continue;
+      used[j] = 1;
+      m++;
+      if (sum)
+        for (int k = 0; k < 3; k++) {
+          const double e = (q[k] - p[k]) / (k == 2 ? kz : 1.0);
+          sum[k] += q[k] - p[k];
+          sum[3 + k] += e * e;
+        }
+      break;
+    }
+  }
+  return m;
+}
+
+static int all_finite(const double *x, int n3)
+{
+  for (int i = 0; i < n3; i++)
+    if (!isfinite(x[i])) return 0;
+  return 1;
+}
+
+elfm_status elfm_analysis_shift_vote(const double *a_um, int na, const double *b_um, int nb,
+                                     double tol_um, double kz, int *n_matched, double d_um[3],
+                                     double *rms_um, elfm_error *err)
+{
+  *n_matched = 0;
+  d_um[0] = d_um[1] = d_um[2] = NAN;
+  if (rms_um) *rms_um = NAN;
+  if (na < 0 || nb < 0 || !(tol_um > 0) || !(kz > 0) || !isfinite(tol_um) || !isfinite(kz))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "shift vote: %d and %d points, tolerance %g um, kz %g", na, nb, tol_um,
+                          kz);
+  if (!all_finite(a_um, 3 * na) || !all_finite(b_um, 3 * nb))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "shift vote: a point is not finite");
+  if (na == 0 || nb == 0) return ELFM_OK;
+  unsigned char *used = malloc((size_t)nb);
+  if (!used) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "shift vote: out of memory");
+  const double tol2 = tol_um * tol_um;
+  int best = 0, bi = 0, bj = 0;
+  for (int i = 0; i < na; i++)
+    for (int j = 0; j < nb; j++) {
+      const double *p = a_um + 3 * (size_t)i, *q = b_um + 3 * (size_t)j;
+      const double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+      const int m = shift_matches(a_um, na, b_um, nb, d, tol2, kz, used, NULL);
+      if (m > best) {
+        best = m;
+        bi = i;
+        bj = j;
+      }
+    }
+  const double *p = a_um + 3 * (size_t)bi, *q = b_um + 3 * (size_t)bj;
+  const double d[3] = {q[0] - p[0], q[1] - p[1], q[2] - p[2]};
+  double sum[6] = {0, 0, 0, 0, 0, 0};
+  const int m = shift_matches(a_um, na, b_um, nb, d, tol2, kz, used, sum);
+  free(used);
+  if (m == 0) return ELFM_OK;
+  *n_matched = m;
+  double var = 0;
+  for (int k = 0; k < 3; k++) {
+    d_um[k] = sum[k] / m;
+    const double mk = d_um[k] / (k == 2 ? kz : 1.0);
+    var += sum[3 + k] / m - mk * mk;
+  }
+  if (rms_um) *rms_um = sqrt(var > 0 ? var : 0);
+  return ELFM_OK;
 }

@@ -79,6 +79,25 @@ elfm_status elfm_analysis_fwhm(const elfm_volume *v, const elfm_detection *d, in
                                double isolation_um, elfm_fwhm *out, int cap, int *n_out,
                                elfm_error *err);
 
+/* Rigid shift between two frames' points: a stage moves every object by
+ * the same vector, so of the candidate shifts b_j - a_i (every pair) the
+ * stage's carries most points of a onto a point of b. For each candidate,
+ * the points of a are matched in order to the first unused point of b
+ * within tol_um (distance sqrt(dx^2 + dy^2 + (dz / kz)^2)); the candidate
+ * with the most matches wins (the first one on ties), d_um is the mean
+ * displacement of its matched pairs and *rms_um their RMS distance from
+ * it, z / kz (NaN when none; rms_um may be NULL). Points are x, y, z
+ * triples in um. O(na^2 nb^2): meant for a few dozen points a frame.
+ * Non-finite coordinates, na or nb < 0, tol_um or kz not > 0:
+ * ELFM_ERR_INVALID. Why a vote and not tracks: under an LED's pulses a
+ * fast stage carries the beads 10-20 um between two pulses, farther than
+ * the linker's gate, so few tracks grow long enough to show their common
+ * velocity, while the two pulses' detections still overlap by that shift
+ * (docs/tracker.md "A stage found by its frames' shift"). */
+elfm_status elfm_analysis_shift_vote(const double *a_um, int na, const double *b_um, int nb,
+                                     double tol_um, double kz, int *n_matched, double d_um[3],
+                                     double *rms_um, elfm_error *err);
+
 /* Median and spread (1.4826 MAD) of x[0..n-1] (reorders x). NaN when n = 0. */
 void elfm_analysis_median(double *x, size_t n, double *median, double *spread);
 
