@@ -16,6 +16,7 @@
 #include <sys/stat.h>
 
 #include "cmd_track.h"
+#include "cmd_track_again.h"
 
 /* The faint-peaks note (TRACK_HINT_DIM_FACTOR) when it applies and was not
  * given yet; `so_far`: during the run (on a line of its own). Not while
@@ -151,6 +152,13 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->start_restart = c->lin_restart || c->blur_restart;
     return c->start_restart;
   }
+  if (o->motion == MOTION_STAGE && c->votes.vel && !c->votes.judged) {
+    /* --motion stage without a velocity under the LED's windows: the
+     * frames' shift gives it, and the run starts again with new tracks at
+     * it (cmd_track_vote.h) */
+    double s, a, d;
+    if (track_votes_judge(&c->votes, at_end, &s, &a, &d) == 1) return 1;
+  }
   if (o->motion_auto && track_rigid_judge(c, at_end)) return 1;
   if (!o->blur_auto && !o->dt_auto && !o->repr_auto && !o->start_auto) return 0;
   if (!c->auto_decided) {
@@ -222,105 +230,6 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
 /* The run's result when it is to start again (track_run's *again says how). */
 #define TRACK_RUN_AGAIN 100
 
-/* What the first run chose for the second. */
-typedef struct track_again {
-  int blur_px;     /* -1: as given */
-  int64_t dt_us;   /* -1: as given */
-  int integral;    /* 1: --repr integral */
-  int stage;       /* 1: --motion stage (and nothing else) */
-  int few;         /* 1: the integral because too few peaks were found to judge */
-  int tau_follows; /* 1: --tau-us as long as dt_us too (a slow stage's, slow beads') */
-  int64_t first_det; /* ... the first run's detections then */
-  int back_exp;    /* 1: (from that second run) the time surface found more: --repr exp */
-  int stage_back;   /* 1: a slow stage's long windows were outrun (TRACK_STAGE_WATCH_*):
-                       the command with --motion stage, at its 1 ms windows */
-  int stage_short;  /* 1: ... were too few for the recording (TRACK_STAGE_SLOW_MIN_WINDOWS):
-                       the command with --motion stage and dt_us, tau following */
-  int each_trigger; /* 1: pulsed light (track_pulsed): --start each-trigger */
-  int lin;          /* 1: ... and the objects move: --repr lin too */
-  double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
-} track_again;
-
-/* What a run judged (its first peaks, the motion), for the next run's
- * summary.json (auto_settled). */
-static void again_judged(track_again *g, const track_ctx *c)
-{
-  /* a settled run that judged no first peaks (the LED's run, which tests
-   * only for a stage) passes on what the first run judged */
-  if (c->auto_decided || !c->o->auto_chose) {
-    g->ratio = c->auto_decided ? c->auto_ratio : NAN;
-    g->speed_um_per_ms = c->auto_decided ? c->auto_speed : NAN;
-  }
-  g->rigid_dev = c->rigid_dev;
-  g->rigid_speed_um_per_ms = c->rigid_speed;
-  g->rigid_abs_um_per_ms = c->rigid_abs;
-}
-
-static void say_again(const track_ctx *c, const track_again *g)
-{
-  const track_opts *o = c->o;
-  if (o->quiet) return;
-  fputc('\n', stderr);
-  if (g->each_trigger && track_led_windows(o))
-    fprintf(stderr, "eventlfm track: the LED's windows given, and the tracks move (median %.2f um/ms): "
-                    "starting again with --repr lin, which drops each event at its window's end "
-                    "(--repr exp: keep the default surface; README, blinking objects that move)\n",
-            c->auto_speed);
-  else if (g->each_trigger)
-    fprintf(stderr, "eventlfm track: %" PRId64 " trigger edges so far, and the frames with an edge "
-                    "hold %.0fx the others' events: pulsed light (a peak in %.0f %% of them, %.0f %% "
-                    "of the others); starting again with %s--start "
-                    "each-trigger, one window per pulse (--start first: keep the grid; score with "
-                    "--frames run --window-us run; README, blinking objects)\n",
-            c->n_triggers, track_pulsed_ratio(c), track_peaked_pct(c, 1), track_peaked_pct(c, 0),
-            g->lin ? "--repr lin " : "");
-  if (g->stage)
-    fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
-                    "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
-                    " frames): a stage; starting "
-                    "again with --motion stage (--motion per-track: a model for each track; "
-                    "README, docs/tracker.md \"A stage found by its tracks\")\n",
-            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames);
-  if (g->stage && g->dt_us > 0)
-    fprintf(stderr, "eventlfm track: the stage is slow (%.2f um per %" PRId64 " us window): "
-                    "--dt-us %" PRId64 " --tau-us %" PRId64 " too, %.1f um per window (back to 1 ms "
-                    "if it speeds up; --dt-us %" PRId64 ": keep the window; docs/tracker.md "
-                    "\"Windows for a slow stage\")\n",
-            c->rigid_speed * 1e-3 * (double)o->recon.framer.dt_us, o->recon.framer.dt_us, g->dt_us,
-            g->dt_us, c->rigid_speed * 1e-3 * (double)g->dt_us, o->recon.framer.dt_us);
-  if (g->blur_px > 0)
-    fprintf(stderr, "eventlfm track: the peaks are faint (median height %.0f against the threshold "
-                    "%.0f over the first %" PRId64 "): dim objects; starting again with --blur-px 1 "
-                    "(--blur-px 0: no blur; README, docs/tracker.md \"Dim objects\")\n",
-            c->auto_ratio * o->peaks.absolute, o->peaks.absolute, c->auto_peaks);
-  if (g->integral && c->few_restart) {
-    char dt[64] = "";
-    if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
-    fprintf(stderr, "eventlfm track: %" PRId64 " peaks in %" PRId64 " frames, too few to judge: "
-                    "objects too slow (or too faint) for the time surface; starting again with "
-                    "--repr integral%s (--repr exp: keep the time surface; docs/tracker.md \"Too "
-                    "few peaks to judge\")\n",
-            c->auto_peaks, c->n_frames, dt);
-  } else if (g->integral) {
-    char dt[64] = "";
-    if (g->dt_us > 0) snprintf(dt, sizeof dt, " --dt-us %" PRId64, g->dt_us);
-    fprintf(stderr, "eventlfm track: the tracks crawl (median %.2f um/ms over the first %" PRId64
-                    " peaks): cells, whose ON events lead them; starting again with --repr integral%s "
-                    "(--repr exp: keep the time surface; README, docs/tracker.md \"Integral frames\")\n",
-            c->auto_speed, c->auto_peaks, dt);
-  } else if (g->dt_us > 0 && !g->stage && g->tau_follows)
-    fprintf(stderr, "eventlfm track: the tracks move slowly for beads (median %.2f um/ms over the "
-                    "first %" PRId64 " peaks): starting again with --dt-us %" PRId64 " --tau-us %" PRId64
-                    ", windows that hold more of each bead's events (--dt-us %" PRId64 ": keep the "
-                    "window; docs/tracker.md \"Windows for slow beads\")\n",
-            c->auto_speed, c->auto_peaks, g->dt_us, g->dt_us, o->recon.framer.dt_us);
-  else if (g->dt_us > 0 && !g->stage)
-    fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
-                    " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
-                    ": keep the window; README, docs/tracker.md \"Fast beads\")\n",
-            c->auto_speed, c->auto_peaks, c->auto_speed * 1e-3 * (double)o->recon.framer.dt_us, g->dt_us,
-            o->recon.framer.dt_us);
-}
 
 /* --motion stage: the stage's velocity in a line, for the microscopist who
  * checks it (summary.json "stage" has the rest). The pooled velocity, each
@@ -512,6 +421,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->back_exp = 0;
     again->each_trigger = c.start_restart;
     again->lin = c.start_restart && c.lin_restart;
+    again->prior_only = o.motion == MOTION_STAGE && c.votes.have_v && !c.motion_restart && !c.start_restart &&
+                        !c.lin_restart && !c.blur_restart;
     /* the integral's windows: the worm's 2 ms (500 Hz) unless given; a
      * slow stage's, longer (track_stage_slow_dt_us) */
     again->dt_us = !others ? track_stage_slow_dt_us(&c)
@@ -519,8 +430,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                    : c.slow_restart ? TRACK_SLOW_BEADS_DT_US
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
     again->tau_follows = again->dt_us > 0 && (!others || c.slow_restart);
-    again_judged(again, &c);
-    say_again(&c, again);
+    track_again_judged(again, &c);
+    track_again_say(&c, again);
     rc = TRACK_RUN_AGAIN;
     goto done;
   }
@@ -566,7 +477,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     again->each_trigger = 1;
     again->lin = track_lin_choosable(&o) && !(c.median_speed_um_per_ms < TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);
     again->blur_px = -1; /* as the run had it */
-    if (!o.auto_chose) again_judged(again, &c); /* the first run's judgement, for summary.json */
+    if (!o.auto_chose) track_again_judged(again, &c); /* the first run's judgement, for summary.json */
     if (!o.quiet)
       fprintf(stderr, "eventlfm track: the recording's %" PRId64 " trigger edges come with its events "
                       "(the frames with an edge hold %.0fx the others', a peak in %.0f %% of them, "
@@ -660,23 +571,6 @@ done:
   return rc;
 }
 
-/* A run after auto's choices: nothing automatic left, and summary.json
- * says what was automatic (was) and what the first run judged. */
-static void auto_settled(track_opts *o, int was, const track_again *g, double ratio, double speed)
-{
-  o->blur_auto = o->dt_auto = o->repr_auto = o->lin_auto = 0;
-  /* a run on the LED's windows still tests for a stage, which it could
-   * not do before (the grid's run stopped at pulsed light's first peaks) */
-  o->motion_auto = o->motion_auto && g->each_trigger && (was & 8);
-  o->auto_chose = 1;
-  o->auto_was = was;
-  o->auto_ratio = ratio;
-  o->auto_speed = speed;
-  o->auto_rigid_dev = g->rigid_dev;
-  o->auto_rigid_speed = g->rigid_speed_um_per_ms;
-  o->auto_rigid_abs = g->rigid_abs_um_per_ms;
-}
-
 int cmd_track(int argc, char **argv)
 {
   track_opts o;
@@ -690,6 +584,7 @@ int cmd_track(int argc, char **argv)
   const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0) |
                   (o.motion_auto ? 8 : 0) | (o.start_auto ? 16 : 0) | (o.lin_auto ? 32 : 0);
   track_again again;
+  memset(&again, 0, sizeof again);
   double t0_s = NAN;
   int rc = track_run(&o, &again, &t0_s);
   if (rc != TRACK_RUN_AGAIN) return rc;
@@ -773,7 +668,7 @@ int cmd_track(int argc, char **argv)
     const int few = !again.each_trigger && !again.back_exp && again.few;
     pr = track_opts_parse(argc2, argv2, &o);
     if (pr != CLI_OK) break;
-    auto_settled(&o, was, &again, ratio, speed);
+    track_again_settle(&o, was, &again, ratio, speed);
     o.few_check = few;
     o.few_first_det = again.first_det;
     o.stage_watch = stage_watch;

@@ -10,6 +10,7 @@
 #include <threads.h>
 
 #include "cli.h"
+#include "cmd_track_vote.h"
 #include "elfm_tracker.h"
 
 enum { MOTION_AUTO = 0, MOTION_STAGE, MOTION_FREE };
@@ -111,6 +112,8 @@ typedef struct track_opts {
   double auto_speed;
   double auto_rigid_dev, auto_rigid_speed, auto_rigid_abs; /* what the first run judged of
                                                               the motion */
+  int auto_rigid_by_shift; /* ... by the frames' shift (cmd_track_vote.h) */
+  int shift_judged;     /* a run before judged that shift (track_votes_wanted) */
   int few_check;        /* 1: this run is the integral after a time surface with too few
                            peaks to judge; it goes back to the time surface when it finds
                            fewer detections than few_first_det, the time surface's */
@@ -454,8 +457,10 @@ typedef struct track_ctx {
   int64_t rigid_speed_hist[TRACK_SPEED_BINS];
   int64_t n_rigid_frames;
   int rigid_decided;    /* judged (or given up: rigid_dev NaN) */
+  int rigid_tracks_judged; /* ... by the tracks (then by their shift, track_votes) */
   int motion_restart;   /* ... moving as one: start again with --motion stage */
   double rigid_dev, rigid_speed, rigid_abs; /* the medians judged (NaN: not judged) */
+  track_votes votes;    /* ... where the tracks could not judge (cmd_track_vote.h) */
   int auto_stopped;     /* the run stopped to start again (cmd_track's on_volume) */
   int stage_fast_frames; /* stage_watch: windows in a row where the tracks moved
                             TRACK_STAGE_WATCH_STEP_UM or more */

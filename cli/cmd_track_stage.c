@@ -230,23 +230,44 @@ void track_rigid_add_frame(track_ctx *c, double *v, int n)
 
 int track_rigid_judge(track_ctx *c, int at_end)
 {
+  const track_opts *o = c->o;
   if (c->rigid_decided) return c->motion_restart;
+  /* under the LED's windows, frames that hold a pulse: the dark ones
+   * between pulses add no sample */
+  const int64_t frames = track_led_windows(o) ? c->n_lit_frames : c->n_frames;
+  const int last = at_end || frames >= TRACK_RIGID_MAX_FRAMES; /* no more frames to wait for */
   const int64_t need = at_end ? TRACK_RIGID_MIN_SAMPLES / 2 : TRACK_RIGID_MIN_SAMPLES;
-  if (c->n_rigid < need) {
-    /* under the LED's windows, frames that hold a pulse: the dark ones
-     * between pulses add no sample */
-    const int64_t frames = track_led_windows(c->o) ? c->n_lit_frames : c->n_frames;
-    if (at_end || frames >= TRACK_RIGID_MAX_FRAMES) c->rigid_decided = 1; /* not judged */
-    return 0;
+  if (!c->rigid_tracks_judged && c->n_rigid >= need) {
+    c->rigid_tracks_judged = 1;
+    c->rigid_dev = (track_hist_median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
+    c->rigid_speed = (track_hist_median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
+                     TRACK_SPEED_BIN_UM_PER_MS;
+    c->rigid_abs = (track_hist_median_bin(c->rigid_abs_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) *
+                   TRACK_RIGID_ABS_BIN_UM_PER_MS;
+    c->motion_restart = (c->rigid_dev < TRACK_RIGID_MAX_DEV || c->rigid_abs < TRACK_RIGID_MAX_ABS_UM_PER_MS) &&
+                        c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
   }
+  if (!c->rigid_tracks_judged) {
+    if (!last) return 0;        /* too few samples yet */
+    c->rigid_tracks_judged = 2; /* not judged by the tracks, and no later */
+  }
+  /* The frames' shift (cmd_track_vote.h), once its pairs are in, where
+   * the run takes it (track_votes_wanted; else it says 0 at once): with a
+   * stage found by the tracks, its velocity for the stage's run to start
+   * new tracks at; with none (or too few tracks to judge), a stage when
+   * the frames move as one. */
+  double speed, abs_um_per_ms, dev;
+  const int by_shift = track_votes_judge(&c->votes, last, &speed, &abs_um_per_ms, &dev);
+  if (by_shift < 0) return 0;
   c->rigid_decided = 1;
-  c->rigid_dev = (track_hist_median_bin(c->rigid_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) * TRACK_RIGID_BIN;
-  c->rigid_speed = (track_hist_median_bin(c->rigid_speed_hist, TRACK_SPEED_BINS, c->n_rigid_frames) + 0.5) *
-                   TRACK_SPEED_BIN_UM_PER_MS;
-  c->rigid_abs = (track_hist_median_bin(c->rigid_abs_hist, TRACK_RIGID_BINS, c->n_rigid) + 0.5) *
-                 TRACK_RIGID_ABS_BIN_UM_PER_MS;
-  c->motion_restart = (c->rigid_dev < TRACK_RIGID_MAX_DEV || c->rigid_abs < TRACK_RIGID_MAX_ABS_UM_PER_MS) &&
-                      c->rigid_speed >= TRACK_RIGID_MIN_SPEED_UM_PER_MS;
+  if (c->motion_restart) return 1;
+  if (by_shift) {
+    c->votes.by_shift = 1;
+    c->rigid_speed = speed;
+    c->rigid_abs = abs_um_per_ms;
+    c->rigid_dev = dev;
+    c->motion_restart = 1;
+  }
   return c->motion_restart;
 }
 

@@ -266,6 +266,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(par, "auto_rigid_dev", rigid_before ? o->auto_rigid_dev : c->rigid_dev);
   add_num(par, "auto_rigid_speed_um_per_ms", rigid_before ? o->auto_rigid_speed : c->rigid_speed);
   add_num(par, "auto_rigid_abs_um_per_ms", rigid_before ? o->auto_rigid_abs : c->rigid_abs);
+  /* ... judged by the frames' shift, where too few tracks were long
+   * (cmd_track_vote.h) */
+  cJSON_AddBoolToObject(par, "auto_rigid_by_shift",
+                        rigid_before ? o->auto_rigid_by_shift : c->votes.by_shift);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms", track_judged_speed_um_per_ms(c));
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
@@ -285,6 +289,11 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
                                        : o->smooth.loss == ELFM_LOSS_CAUCHY ? "cauchy" : "none");
   cJSON_AddNumberToObject(par, "loss_scale", o->smooth.loss_scale);
   if (o->has_stage_v) cJSON_AddItemToObject(par, "stage_velocity_um_per_ms", vec3(o->stage_v));
+  /* the velocity a new track predicts with: the given stage's, or the one
+   * the frames' shift found (track_again_settle, cmd_track_vote.h) */
+  const double *pv = o->link.prior_velocity_um_per_ms;
+  if (pv[0] != 0 || pv[1] != 0 || pv[2] != 0)
+    cJSON_AddItemToObject(par, "prior_velocity_um_per_ms", vec3(pv));
 
   cJSON *tim = cJSON_AddObjectToObject(j, "timing");
   add_num(tim, "wall_s", wall_s);

@@ -163,6 +163,8 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   if ((o->motion_auto || o->stage_watch) &&
       !(c->rigid_v = malloc((size_t)o->max_det * 4 * sizeof *c->rigid_v)))
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
+  if (track_votes_wanted(o) && !track_votes_init(&c->votes, o->link.kz))
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (frames for a stage)");
   if (!c->pk || !c->det || !c->sp || !c->slot_frame || !c->slot_plan ||
       (o->localize_near_um > 0 && (!c->fitok || !c->near_fit)) ||
       (o->view_support > 0 && !c->keep) || !c->pred || !c->pred_intensity)
@@ -625,6 +627,10 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   if (c->sp[slot].occupancy > TRACK_CROWD_OCC) c->n_crowded++;
   if (c->sp[slot].need > c->o->view_support) c->n_need_raised++;
   if (c->sp[slot].need > c->need_max) c->need_max = c->sp[slot].need;
+  if (c->votes.vel && !c->votes.judged) { /* the detector's peaks, before any search by tracks */
+    for (int j = 0; j < n; j++) track_votes_point(&c->votes, &det[j]);
+    track_votes_end_frame(&c->votes, v->t_us);
+  }
   double t1 = cli_now_s();
   /* the linker's predictions, once, for both track-guided searches */
   const int guided_peak = o->guided_low > 0 && o->link.weak_gate_um > 0;
@@ -762,6 +768,7 @@ void track_ctx_free(track_ctx *c)
   free(c->pred);
   free(c->pred_intensity);
   free(c->rigid_v);
+  track_votes_free(&c->votes);
   elfm_track_xml_free(c->xml);
   free(c->info);
   free(c->det);
