@@ -269,6 +269,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   static const char *const C = "track";
   track_opts o = *po;
   again->each_trigger = again->lin = again->stage_back = again->stage_short = again->tau_follows = 0;
+  again->prior_only = 0;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;

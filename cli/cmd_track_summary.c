@@ -266,8 +266,8 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   add_num(par, "auto_rigid_dev", rigid_before ? o->auto_rigid_dev : c->rigid_dev);
   add_num(par, "auto_rigid_speed_um_per_ms", rigid_before ? o->auto_rigid_speed : c->rigid_speed);
   add_num(par, "auto_rigid_abs_um_per_ms", rigid_before ? o->auto_rigid_abs : c->rigid_abs);
-  /* ... judged by the frames' shift, where too few tracks were long
-   * (cmd_track_vote.h) */
+  /* ... a stage found by the frames' shift, where the tracks found none
+   * (too few long ones, or linked across beads; cmd_track_vote.h) */
   cJSON_AddBoolToObject(par, "auto_rigid_by_shift",
                         rigid_before ? o->auto_rigid_by_shift : c->votes.by_shift);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);

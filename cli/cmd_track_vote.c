@@ -1,5 +1,6 @@
-/* cmd_track_vote.c — --motion auto's test for a stage by the shift between
- * consecutive frames' detections (cmd_track_vote.h). */
+/* cmd_track_vote.c — the shift between consecutive frames' detections, for
+ * a stage: --motion auto's test where the tracks cannot tell, and the
+ * velocity the stage's new tracks start at (cmd_track_vote.h). */
 #include "cmd_track_vote.h"
 
 #include <math.h>
@@ -94,8 +95,11 @@ int track_votes_judge(track_votes *v, int at_end, double *speed, double *abs_um_
     *dev = v->abs_um_per_ms / *speed;
     return 1;
   }
-  if (v->n_pairs < TRACK_VOTE_PAIRS && !(at_end && v->n_pairs >= TRACK_VOTE_MIN_PAIRS))
-    return at_end ? (v->judged = 1, 0) : -1;
+  if (v->n_pairs < TRACK_VOTE_PAIRS && !(at_end && v->n_pairs >= TRACK_VOTE_MIN_PAIRS)) {
+    if (!at_end) return -1;
+    v->judged = 1; /* the frames ended with too few pairs: no stage by them */
+    return 0;
+  }
   v->judged = 1;
   const int n = v->n_agree;
   if (n < TRACK_VOTE_MIN_SHARE * v->n_pairs) return 0;
