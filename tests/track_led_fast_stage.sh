@@ -17,6 +17,9 @@
 #  - --motion stage given: the same files;
 #  - seed 1 at 2.5 mm/s is found by its tracks, as before, not by the
 #    shift, and its new tracks start at the shift's velocity (2.5 um/ms).
+#  - an LED fired at random gaps of 2-12 ms, 4 mm/s seed 1, 400 ms: a
+#    stage, alpha above 0.8 (0.851; 0.223 before, the stage's pooled
+#    velocity 77 % off).
 # Usage: track_led_fast_stage.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -61,6 +64,13 @@ vy=$(echo "$pv" | cut -d, -f2)
 echo "blink_moving 2.5 mm/s seed 1: new tracks start at ($pv) um/ms, alpha $(key "$tmp/a.json" alpha)"
 [ -n "$vy" ] && below 2.425 1 "$vy" && below "$vy" 1 2.575 ||
   { echo "FAIL: the stage's new tracks start at '$pv', not the shift's 2.5 um/ms"; fail=$((fail+1)); }
+
+simulate_or_skip "$tmp/r4" blink_moving 400 1 --param motion.v0_mm_per_s=4 --param motion.v1_mm_per_s=4 \
+  --param 'illumination={"type":"random_pulses","pulse_us":1000,"gap_us":[2000,12000]}'
+track_score "$tmp/r4" "$tmp/ar4" "$tmp/ar4.json"
+expect_string "$tmp/ar4/summary.json" motion stage
+echo "blink_moving 4 mm/s, LED at random gaps, seed 1: motion $(key "$tmp/ar4/summary.json" motion), alpha $(key "$tmp/ar4.json" alpha)"
+expect_gain 0.8 "$(key "$tmp/ar4.json" alpha)" 0 "random gaps at 4 mm/s seed 1: alpha $(key "$tmp/ar4.json" alpha) <= 0.8 (0.223 each track's own)"
 
 [ $fail -eq 0 ] && echo "PASS: track_led_fast_stage" || echo "$fail failure(s)"
 exit $((fail > 0))
