@@ -152,10 +152,11 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     c->start_restart = c->lin_restart || c->blur_restart;
     return c->start_restart;
   }
-  if (o->motion == MOTION_STAGE && c->votes.vel && !c->votes.judged) {
-    /* --motion stage without a velocity under the LED's windows: the
-     * frames' shift gives it, and the run starts again with new tracks at
-     * it (cmd_track_vote.h) */
+  if (o->motion == MOTION_STAGE && c->votes.vel && !c->votes.judged &&
+      !(o->start_auto && !c->auto_decided && c->n_triggers > 0 && !at_end)) {
+    /* --motion stage without a velocity: the frames' shift gives it, and
+     * the run starts again with new tracks at it (cmd_track_vote.h); not
+     * while pulsed light may yet be found (the LED's run measures it) */
     double s, a, d;
     if (track_votes_judge(&c->votes, at_end, &s, &a, &d) == 1) return 1;
   }

@@ -10,10 +10,7 @@
 
 int track_votes_wanted(const struct track_opts *o)
 {
-  if (o->shift_judged) return 0;
-  if (o->motion_auto)
-    return o->auto_chose || !(o->blur_auto || o->dt_auto || o->repr_auto || o->start_auto);
-  return o->motion == MOTION_STAGE && !o->has_stage_v && track_led_windows(o);
+  return !o->shift_judged && (o->motion_auto || (o->motion == MOTION_STAGE && !o->has_stage_v));
 }
 
 int track_votes_init(track_votes *v, double kz)

@@ -6,12 +6,12 @@
  *    tracks of 5-8 points; under an LED's pulses a stage at 5-6 mm/s
  *    carries the beads 15-18 um from one pulse to the next, beyond the
  *    linker's gate, and few tracks grow that long, or those that do link
- *    other beads: where the tracks find no stage, the shift may;
+ *    other beads: where the tracks find no stage, the shift may (not
+ *    while pulsed light may yet be found, track_rigid_judge);
  *  - the stage's run then starts each new track at the shift's velocity
  *    (the linker's prior_velocity_um_per_ms, as a given stage velocity
- *    does), where it had started one at rest; --motion stage under the
- *    LED's windows without a velocity measures the shift first and starts
- *    again with it.
+ *    does), where it had started one at rest; --motion stage without a
+ *    velocity measures the shift first and starts again with it.
  * docs/tracker.md "A stage found by its frames' shift". */
 #ifndef CMD_TRACK_VOTE_H
 #define CMD_TRACK_VOTE_H
@@ -64,14 +64,9 @@ typedef struct track_votes {
 } track_votes;
 
 struct track_opts;
-/* Whether a run of these options takes the shift: not when a run before
- * this one judged it (o->shift_judged); --motion auto with no other
- * automatic choice left to make (in practice the LED's run: the first
- * run judges its peaks in an order, pulsed light, a stage, faint peaks,
- * that a stage found by the shift would cut short; blink_moving at a
- * quarter of the flux, seed 4: the grid's run found the stage before the
- * LED, alpha 0.390 -> 0.240), or --motion stage without a velocity under
- * the LED's windows. */
+/* Whether a run of these options takes the shift: --motion auto, or
+ * --motion stage without a velocity; not when a run before this one
+ * judged it (o->shift_judged). */
 int track_votes_wanted(const struct track_opts *o);
 /* Allocate (0: out of memory) and free; without init (vel NULL) the
  * other calls do nothing and the judgement is "not a stage". */
