@@ -587,9 +587,12 @@ int cmd_track(int argc, char **argv)
   if (pr != CLI_OK) return pr == TRACK_PARSE_HELP ? CLI_OK : pr;
   /* starting again reads the events again: a file, not a pipe */
   struct stat sb;
-  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto || o.start_auto || o.lin_auto) &&
-      (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode)))
+  if ((o.blur_auto || o.dt_auto || o.repr_auto || o.motion_auto || o.start_auto || o.lin_auto ||
+       track_votes_wanted(&o)) &&
+      (stat(o.events, &sb) != 0 || !S_ISREG(sb.st_mode))) {
     o.blur_auto = o.dt_auto = o.repr_auto = o.motion_auto = o.start_auto = o.lin_auto = 0;
+    o.shift_judged = 1; /* --motion stage's shift would start again too (cmd_track_vote.h) */
+  }
   const int was = (o.blur_auto ? 1 : 0) | (o.dt_auto ? 2 : 0) | (o.repr_auto ? 4 : 0) |
                   (o.motion_auto ? 8 : 0) | (o.start_auto ? 16 : 0) | (o.lin_auto ? 32 : 0);
   track_again again;

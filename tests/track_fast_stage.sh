@@ -15,7 +15,8 @@
 #    auto_rigid_by_shift, stderr says so), within 3 % of 6 um/ms, alpha >
 #    0.85 (0.908; 0.593 before); not a given velocity in summary.json;
 #    no note to shorten the windows (the LED opens them);
-#  - --motion stage given: the same files;
+#  - --motion stage given: the same files; from a pipe (which cannot be
+#    read twice) one run, without the shift;
 #  - seed 1 at 2.5 mm/s is found by its tracks, as before, not by the
 #    shift, and its new tracks start at the shift's velocity (2.5 um/ms).
 #  - an LED fired at random gaps of 2-12 ms, 4 mm/s seed 1, 400 ms: a
@@ -60,6 +61,12 @@ grep -q "starting again with new tracks at that velocity" "$tmp/s6.err" ||
 for f in tracks.csv detections.csv; do
   cmp -s "$tmp/a6/$f" "$tmp/s6/$f" || { echo "FAIL: --motion stage's $f is not the default's"; fail=$((fail+1)); }
 done
+# events from a pipe cannot be read again: no shift, no second run, and
+# the run succeeds (it had failed reading the pipe a second time)
+cat "$tmp/b6/events.raw" | "$bin" track --calib "$tmp/b6/calib.json" --events /dev/stdin --out "$tmp/p6" -q \
+  --motion stage --start each-trigger --repr lin ||
+  { echo "FAIL: --motion stage on a pipe"; fail=$((fail+1)); }
+[ -s "$tmp/p6/tracks.csv" ] || { echo "FAIL: no tracks from a pipe"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/b" blink_moving 200 1
 track_score "$tmp/b" "$tmp/a" "$tmp/a.json"
