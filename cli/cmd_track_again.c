@@ -23,6 +23,8 @@ void track_again_judged(track_again *g, const track_ctx *c)
   g->rigid_by_shift = c->votes.by_shift;
   if (c->votes.judged) { /* else what a run before judged, if one did */
     g->shift_judged = 1;
+    g->shift_agree = c->votes.n_agree;
+    g->shift_pairs = c->votes.n_pairs;
     g->rigid_v_known = c->votes.have_v;
     for (int a = 0; a < 3; a++) g->rigid_v_um_per_ms[a] = c->votes.v_um_per_ms[a];
   }
@@ -51,16 +53,16 @@ void track_again_say(const track_ctx *c, const track_again *g)
                     "of %d pairs, at (%.2f, %.2f, %.2f) um/ms: the stage's; starting again with new "
                     "tracks at that velocity (--stage-velocity-um-per-ms: a known one; docs/"
                     "tracker.md \"A stage found by its frames' shift\")\n",
-            c->votes.n_agree, c->votes.n_pairs, g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1],
+            g->shift_agree, g->shift_pairs, g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1],
             g->rigid_v_um_per_ms[2]);
   if (g->stage && g->rigid_by_shift)
     fprintf(stderr, "eventlfm track: no stage by the tracks (too few long ones, or linked across "
-                    "beads), but one shift carries each frame's detections onto the next's in %d of %d pairs (at %.2f um/ms; their velocities "
-                    "lie a median %.3f um/ms, %.1f %%, from the median): a stage; starting again "
+                    "beads), but one shift carries each frame's detections onto the next's in %d of "
+                    "%d pairs (at %.2f um/ms; their velocities lie a median %.3f um/ms, %.1f %%, from the median): a stage; starting again "
                     "with --motion stage, new tracks starting at (%.2f, %.2f, %.2f) um/ms "
                     "(--motion per-track: a model for each track; README, docs/tracker.md \"A "
                     "stage found by its frames' shift\")\n",
-            c->votes.n_agree, c->votes.n_pairs, c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev,
+            g->shift_agree, g->shift_pairs, c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev,
             g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
   else if (g->stage && g->rigid_v_known)
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
@@ -69,8 +71,8 @@ void track_again_say(const track_ctx *c, const track_again *g)
                     "%d pairs: a stage; starting again with --motion stage, new tracks starting at the "
                     "shift's (%.2f, %.2f, %.2f) um/ms (--motion per-track: a model for each track; "
                     "README, docs/tracker.md \"A stage found by its frames' shift\")\n",
-            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames, c->votes.n_agree,
-            c->votes.n_pairs, g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
+            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames, g->shift_agree,
+            g->shift_pairs, g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
   else if (g->stage)
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
                     "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64

@@ -27,6 +27,7 @@ typedef struct track_again {
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
   int rigid_by_shift;  /* ... judged by the frames' shift (cmd_track_vote.h) */
   int shift_judged;    /* that shift judged (in this run or one before), */
+  int shift_agree, shift_pairs; /* ... in so many of its pairs of frames */
   int rigid_v_known;   /* ... it moves them as one, */
   double rigid_v_um_per_ms[3]; /* ... at this velocity */
   int prior_only;      /* 1: --motion stage's run found that velocity, and runs again with it */

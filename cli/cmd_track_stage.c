@@ -256,17 +256,20 @@ int track_rigid_judge(track_ctx *c, int at_end)
    * stage found by the tracks, its velocity for the stage's run to start
    * new tracks at; with none (or too few tracks to judge), a stage when
    * the frames move as one. */
-  double speed, abs_um_per_ms, dev;
-  int by_shift = track_votes_judge(&c->votes, last, &speed, &abs_um_per_ms, &dev);
-  if (by_shift < 0) return 0;
-  c->rigid_decided = 1;
-  if (c->motion_restart) return 1;
   /* Not while pulsed light may yet be found (a trigger seen, the first
    * peaks not judged): one window per pulse comes first, and a stage
    * found here would turn that test off (blink_moving at a quarter of the
    * flux, seed 4: found by the shift on the grid before the LED, alpha
-   * 0.390 -> 0.240, the LED and the blur never chosen). */
-  if (o->start_auto && !c->auto_decided && c->n_triggers > 0) by_shift = 0;
+   * 0.390 -> 0.240, the LED and the blur never chosen); the shift is left
+   * unjudged for the LED's run to measure. */
+  double speed, abs_um_per_ms, dev;
+  int by_shift = 0;
+  if (!(o->start_auto && !c->auto_decided && c->n_triggers > 0)) {
+    by_shift = track_votes_judge(&c->votes, last, &speed, &abs_um_per_ms, &dev);
+    if (by_shift < 0) return 0;
+  }
+  c->rigid_decided = 1;
+  if (c->motion_restart) return 1;
   if (by_shift) {
     c->votes.by_shift = 1;
     c->rigid_speed = speed;
