@@ -255,9 +255,9 @@ int track_rigid_judge(track_ctx *c, int at_end)
    * the run takes it (track_votes_wanted; else it says 0 at once): with a
    * stage found by the tracks, its velocity for the stage's run to start
    * new tracks at; with none (or too few tracks to judge), a stage when
-   * the frames move as one. */
-  /* Not while pulsed light may yet be found (a trigger seen, the first
-   * peaks not judged): one window per pulse comes first, and a stage
+   * the frames move as one. Not while pulsed light may yet be found (a
+   * trigger seen, the first peaks not judged): one window per pulse comes
+   * first, and a stage
    * found here would turn that test off (blink_moving at a quarter of the
    * flux, seed 4: found by the shift on the grid before the LED, alpha
    * 0.390 -> 0.240, the LED and the blur never chosen); the shift is left

@@ -4,9 +4,10 @@
  * (elfm_analysis_shift_vote). Two uses:
  *  - --motion auto's test by tracks (TRACK_RIGID_*, cmd_track.h) needs
  *    tracks of 5-8 points; under an LED's pulses a stage at 5-6 mm/s
- *    carries the beads 15-18 um from one pulse to the next, beyond the
- *    linker's gate, and few tracks grow that long, or those that do link
- *    other beads: where the tracks find no stage, the shift may (not
+ *    carries the beads 15-18 um from one pulse to the next (8 um a 1 ms
+ *    frame at 8 mm/s on continuous light), beyond the linker's gate, and
+ *    few tracks grow that long, or those that do link other beads: where
+ *    the tracks find no stage, the shift may (not
  *    while pulsed light may yet be found, track_rigid_judge);
  *  - the stage's run then starts each new track at the shift's velocity
  *    (the linker's prior_velocity_um_per_ms, as a given stage velocity
@@ -37,7 +38,8 @@
  * within TRACK_RIGID_MAX_DEV of the median by the median, at
  * TRACK_RIGID_MIN_SPEED_UM_PER_MS or more. Measured: blink_moving 200 ms
  * at 5-6 mm/s, 16 of 16 pairs agree, their velocities a median 0.9-2.2 %
- * from the median; flow and random flow under the same pulses, no pair. */
+ * from the median; flow and random flow under the same pulses, no pair
+ * (the rule re-run on their detections by a script). */
 #define TRACK_VOTE_POINTS 16
 #define TRACK_VOTE_MIN_POINTS 3
 #define TRACK_VOTE_MAX_GAP_MS 20.0
