@@ -153,7 +153,7 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
     return c->start_restart;
   }
   if (o->motion == MOTION_STAGE && c->votes.vel && !c->votes.judged &&
-      !(o->start_auto && !c->auto_decided && c->n_triggers > 0 && !at_end)) {
+      !(track_pulsed_pending(c) && !at_end)) {
     /* --motion stage without a velocity: the frames' shift gives it, and
      * the run starts again with new tracks at it (cmd_track_vote.h); not
      * while pulsed light may yet be found (the LED's run measures it) */

@@ -670,6 +670,8 @@ double track_median_speed_um_per_ms(const track_ctx *c);
 #define TRACK_AUTO_PULSED_PEAKED 0.3
 #define TRACK_AUTO_PULSED_PEAKED_OVER 10.0
 int track_pulsed(const track_ctx *c);
+/* 1 while pulsed light may yet be found (--start auto, a trigger, the first peaks not judged) */
+int track_pulsed_pending(const track_ctx *c);
 /* lit frames' excess of mean events in standard errors (Welch's t); the
  * percentage of the lit (1) or other (0) frames with a peak */
 double track_pulsed_z(const track_ctx *c);

@@ -66,3 +66,8 @@ int track_pulsed(const track_ctx *c)
            c->n_dark_peaked * TRACK_AUTO_PULSED_PEAKED_OVER * (double)c->n_lit_frames <=
                (double)c->n_lit_peaked * (double)c->n_dark_frames));
 }
+
+int track_pulsed_pending(const track_ctx *c)
+{
+  return c->o->start_auto && !c->auto_decided && c->n_triggers > 0;
+}

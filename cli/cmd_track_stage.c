@@ -264,7 +264,7 @@ int track_rigid_judge(track_ctx *c, int at_end)
    * unjudged for the LED's run to measure. */
   double speed, abs_um_per_ms, dev;
   int by_shift = 0;
-  if (!(o->start_auto && !c->auto_decided && c->n_triggers > 0)) {
+  if (!track_pulsed_pending(c)) {
     by_shift = track_votes_judge(&c->votes, last, &speed, &abs_um_per_ms, &dev);
     if (by_shift < 0) return 0;
   }
