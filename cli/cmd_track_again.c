@@ -58,28 +58,31 @@ void track_again_say(const track_ctx *c, const track_again *g)
   if (g->stage && g->rigid_by_shift)
     fprintf(stderr, "eventlfm track: no stage by the tracks (too few long ones, or linked across "
                     "beads), but one shift carries each frame's detections onto the next's in %d of "
-                    "%d pairs (at %.2f um/ms; their velocities lie a median %.3f um/ms, %.1f %%, from the median): a stage; starting again "
-                    "with --motion stage, new tracks starting at (%.2f, %.2f, %.2f) um/ms "
+                    "%d pairs (at %.2f um/ms; their velocities lie a median %.3f um/ms, %.1f %%, from "
+                    "the median): a stage; starting again with --motion stage, new tracks starting "
+                    "at (%.2f, %.2f, %.2f) um/ms "
                     "(--motion per-track: a model for each track; README, docs/tracker.md \"A "
                     "stage found by its frames' shift\")\n",
             g->shift_agree, g->shift_pairs, c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev,
             g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
-  else if (g->stage && g->rigid_v_known)
+  else if (g->stage) {
+    /* found by its tracks; the shift, when its frames moved as one, gives
+     * the stage's new tracks their velocity */
+    char shift[160] = "", start[128] = "";
+    if (g->rigid_v_known) {
+      snprintf(shift, sizeof shift,
+               ", and one shift carries each frame's detections onto the next's in %d of %d pairs",
+               g->shift_agree, g->shift_pairs);
+      snprintf(start, sizeof start, ", new tracks starting at the shift's (%.2f, %.2f, %.2f) um/ms",
+               g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
+    }
     fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
                     "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
-                    " frames), and one shift carries each frame's detections onto the next's in %d of "
-                    "%d pairs: a stage; starting again with --motion stage, new tracks starting at the "
-                    "shift's (%.2f, %.2f, %.2f) um/ms (--motion per-track: a model for each track; "
-                    "README, docs/tracker.md \"A stage found by its frames' shift\")\n",
-            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames, g->shift_agree,
-            g->shift_pairs, g->rigid_v_um_per_ms[0], g->rigid_v_um_per_ms[1], g->rigid_v_um_per_ms[2]);
-  else if (g->stage)
-    fprintf(stderr, "eventlfm track: the tracks move as one (at %.2f um/ms; their velocities lie a "
-                    "median %.3f um/ms, %.1f %%, from each frame's median, over the first %" PRId64
-                    " frames): a stage; starting "
-                    "again with --motion stage (--motion per-track: a model for each track; "
-                    "README, docs/tracker.md \"A stage found by its tracks\")\n",
-            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames);
+                    " frames)%s: a stage; starting again with --motion stage%s (--motion per-track: a "
+                    "model for each track; README, docs/tracker.md \"A stage found by its %s\")\n",
+            c->rigid_speed, c->rigid_abs, 100 * c->rigid_dev, c->n_frames, shift, start,
+            g->rigid_v_known ? "frames' shift" : "tracks");
+  }
   if (g->stage && g->dt_us > 0)
     fprintf(stderr, "eventlfm track: the stage is slow (%.2f um per %" PRId64 " us window): "
                     "--dt-us %" PRId64 " --tau-us %" PRId64 " too, %.1f um per window (back to 1 ms "
