@@ -40,6 +40,8 @@
 #define MIN_SCALE_PX 0.05
 /* a neighbour's image closer than this to the object's is not taken out */
 #define NEAR_MIN_PX 2.0
+/* room for one pass's windows (localize): 25 views of 64 frames fit */
+#define WIN_KEY_MAX 4096
 
 void elfm_localize_options_default(elfm_localize_options *o)
 {
@@ -73,11 +75,9 @@ static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, double 
  * out first: a neighbour's light at pixel x is estimated as the value at x
  * mirrored through its centre (2 nb - x), as if its image were symmetric:
  * the far side of a neighbour holds its own light and not this object's. */
-static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, double u, double w,
-                              int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
+static double window_centroid_at(const elfm_frame *f, const elfm_refocus_box *b, long iu, long iw,
+                                 int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
 {
-  if (!(fabs(u) < 1e7 && fabs(w) < 1e7)) return -1; /* lround's range; far off anyway */
-  const long iu = lround(u), iw = lround(w);
   if (iu - r < b->x0 || iu + r >= b->x1 || iw - r < b->y0 || iw + r >= b->y1) return -1;
   double m = 0, su = 0, sw = 0;
   for (long y = iw - r; y <= iw + r; y++) {
@@ -104,6 +104,19 @@ static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, do
   *cu = (double)iu + su / m;
   *cw = (double)iw + sw / m;
   return m;
+}
+
+/* A window's centre pixel: the nearest to u, or WIN_OFF where lround's
+ * range ends (far off any box anyway). */
+#define WIN_OFF INT32_MIN
+static int32_t win_round(double u) { return fabs(u) < 1e7 ? (int32_t)lround(u) : WIN_OFF; }
+
+static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, double u, double w,
+                              int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
+{
+  const int32_t iu = win_round(u), iw = win_round(w);
+  if (iu == WIN_OFF || iw == WIN_OFF) return -1;
+  return window_centroid_at(f, b, iu, iw, r, pw, nb, n_nb, cu, cw);
 }
 
 /* Insert x into a[0 .. *n), kept ascending (for the medians of at most
@@ -151,26 +164,29 @@ static int solve_xyz(int n, const double *wt, const double *ru, const double *rw
 }
 
 /* The centroid of one view's image over n frames: frame j's window sits
- * where the object was then (q + off[j]), and its centroid is moved back by
- * that offset's image shift (off[j][0] + off[j][2] du in u, the same in w),
- * so that all frames' events add up at the object's position in frame 0.
- * Frames whose window leaves the view's box are skipped. Returns the summed
- * mass (0: nothing; -1: no frame's window fits). */
+ * where the object was then (q + off[j]; its centre pixel c[2j], c[2j+1],
+ * view_centres), and its centroid is moved back by that offset's image
+ * shift (off[j][0] + off[j][2] du in u, the same in w), so that all
+ * frames' events add up at the object's position in frame 0. Frames whose
+ * window leaves the view's box are skipped. Returns the summed mass (0:
+ * nothing; -1: no frame's window fits). */
 static double view_centroid(const elfm_frame *const *frames, const double (*off)[3], int n_frames,
-                            const elfm_refocus_box *b, const double q[3], double au, double aw,
-                            double du, double dw, int r, int pw, double *cu, double *cw)
+                            const elfm_refocus_box *b, const int32_t *c, double du, double dw,
+                            int r, int pw, double *cu, double *cw)
 {
-  if (n_frames == 1 && !off) /* the single-frame fit, exactly as it always was */
-    return window_centroid(frames[0], b, q[0] + au + q[2] * du, q[1] + aw + q[2] * dw, r, pw, NULL,
-                           0, cu, cw);
+  if (n_frames == 1 && !off) { /* the single-frame fit, exactly as it always was */
+    if (c[0] == WIN_OFF || c[1] == WIN_OFF) return -1;
+    return window_centroid_at(frames[0], b, c[0], c[1], r, pw, NULL, 0, cu, cw);
+  }
   double m = 0, su = 0, sw = 0;
   int any = 0;
   for (int j = 0; j < n_frames; j++) {
     const double ox = off ? off[j][0] : 0, oy = off ? off[j][1] : 0, oz = off ? off[j][2] : 0;
     const double su0 = ox + oz * du, sw0 = oy + oz * dw;
     double u, w;
-    const double mj = window_centroid(frames[j], b, q[0] + au + q[2] * du + su0,
-                                      q[1] + aw + q[2] * dw + sw0, r, pw, NULL, 0, &u, &w);
+    if (c[2 * j] == WIN_OFF || c[2 * j + 1] == WIN_OFF) continue;
+    const double mj =
+        window_centroid_at(frames[j], b, c[2 * j], c[2 * j + 1], r, pw, NULL, 0, &u, &w);
     if (mj < 0) continue;
     any = 1;
     if (mj == 0) continue;
@@ -183,6 +199,47 @@ static double view_centroid(const elfm_frame *const *frames, const double (*off)
   *cu = su / m;
   *cw = sw / m;
   return m;
+}
+
+/* The centre pixels of view v's windows at q, one pair per frame (frame
+ * j's at q + off[j], moved by that offset's image shift). */
+static void view_centres(const double (*off)[3], int n_frames, const double q[3], double au,
+                         double aw, double du, double dw, int32_t *c)
+{
+  for (int j = 0; j < n_frames; j++) {
+    const double ox = off ? off[j][0] : 0, oy = off ? off[j][1] : 0, oz = off ? off[j][2] : 0;
+    const double su0 = ox + oz * du, sw0 = oy + oz * dw;
+    c[2 * j] = win_round(q[0] + au + q[2] * du + su0);
+    c[2 * j + 1] = win_round(q[1] + aw + q[2] * dw + sw0);
+  }
+}
+
+/* The window of view v at q where neighbours are known (nq[0 .. nn): its
+ * centre pixel in c[0], c[1], and the neighbours whose images lie close
+ * enough to reach it, but not on top of it (mirrored, an image on top
+ * would take out the object's own light: the robust passes judge that
+ * view), listed in nb[0 .. 2 n_nb) as image centres. Returns their bits. */
+static int32_t near_pick(const double q[3], double au, double aw, double du, double dw,
+                         const double (*nq)[3], int nn, double reach, int32_t *c, double *nb,
+                         int *n_nb)
+{
+  const double pu = q[0] + au + q[2] * du, pw = q[1] + aw + q[2] * dw;
+  c[0] = win_round(pu);
+  c[1] = win_round(pw);
+  int32_t bits = 0;
+  *n_nb = 0;
+  for (int k = 0; k < nn; k++) {
+    const double bu = nq[k][0] + au + nq[k][2] * du;
+    const double bw = nq[k][1] + aw + nq[k][2] * dw;
+    const double d2 = (bu - pu) * (bu - pu) + (bw - pw) * (bw - pw);
+    if (d2 < reach * reach && d2 > NEAR_MIN_PX * NEAR_MIN_PX) {
+      nb[2 * *n_nb] = bu;
+      nb[2 * *n_nb + 1] = bw;
+      (*n_nb)++;
+      bits |= (int32_t)1 << k;
+    }
+  }
+  return bits;
 }
 
 int elfm_refocus_localize(const elfm_refocus_plan *p, const elfm_frame *frame, double x_vox,
@@ -269,37 +326,59 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
   const int passes = o->iterations < 1 ? 1 : o->iterations;
   double mass[MAXV], fac[MAXV], e2[MAXV];
   for (int v = 0; v < p->nv; v++) fac[v] = 1;
+  /* Each pass reads the frames only through its windows: per view (and
+   * frame) the centre pixel, and with neighbours the ones taken out. A
+   * plain pass whose windows are the last pass's computes the same
+   * centroids and leaves q where it is, as does every plain pass after
+   * it: the robust passes then start at once. The same bits in fewer
+   * passes (docs/recon.md "Passes that would repeat"). The windows of
+   * the last two passes are kept (win[cur], win[cur ^ 1]) where they fit,
+   * per view: 2 per frame, and with neighbours the bits of those taken
+   * out. */
+  const int per = 2 * n_frames + (nn > 0);
+  const int fits = p->nv * per <= WIN_KEY_MAX;
+  int32_t win[2][WIN_KEY_MAX], scratch[2 * MAXF + 1];
+  double nbv[MAXV][2 * MAXN];
+  int n_nbv[MAXV];
+  int cur = 0, have_last = 0;
+  const double reach = 3.0 * (2 * o->half_window_px + 1);
   for (int it = 0; it < passes + ROBUST_PASSES; it++) {
+    if (fits) {
+      for (int v = 0; v < p->nv; v++) {
+        int32_t *c = win[cur] + (size_t)v * (size_t)per;
+        if (!keep[v]) {
+          for (int k = 0; k < per; k++) c[k] = WIN_OFF;
+          continue;
+        }
+        if (nn > 0)
+          c[2] = near_pick(q, au[v], aw[v], du[v], dw[v], nq, nn, reach, c, nbv[v], &n_nbv[v]);
+        else
+          view_centres(off_vox, n_frames, q, au[v], aw[v], du[v], dw[v], c);
+      }
+      if (it < passes && have_last &&
+          memcmp(win[cur], win[cur ^ 1], (size_t)(p->nv * per) * sizeof win[0][0]) == 0)
+        it = passes; /* the plain passes have settled: on to the robust ones */
+      have_last = it < passes;
+    }
     int n_used = 0;
     for (int v = 0; v < p->nv; v++) {
       mass[v] = 0;
       if (!keep[v]) continue;
       double cu, cw, m;
-      if (nn > 0) {
-        /* the neighbours whose images lie close enough to reach the
-         * window, but not on top of it (mirrored, an image on top would
-         * take out the object's own light: the robust passes judge that
-         * view) */
-        const double pu = q[0] + au[v] + q[2] * du[v], pw = q[1] + aw[v] + q[2] * dw[v];
-        const double reach = 3.0 * (2 * o->half_window_px + 1);
-        double nb[2 * MAXN];
-        int n_nb = 0;
-        for (int k = 0; k < nn; k++) {
-          const double bu = nq[k][0] + au[v] + nq[k][2] * du[v];
-          const double bw = nq[k][1] + aw[v] + nq[k][2] * dw[v];
-          const double d2 = (bu - pu) * (bu - pu) + (bw - pw) * (bw - pw);
-          if (d2 < reach * reach && d2 > NEAR_MIN_PX * NEAR_MIN_PX) {
-            nb[2 * n_nb] = bu;
-            nb[2 * n_nb + 1] = bw;
-            n_nb++;
-          }
-        }
-        m = window_centroid(frames[0], &p->box[v], pu, pw, o->half_window_px, o->power, nb, n_nb, &cu,
-                            &cw);
-      } else {
-        m = view_centroid(frames, off_vox, n_frames, &p->box[v], q, au[v], aw[v], du[v], dw[v],
+      const int32_t *c = fits ? win[cur] + (size_t)v * (size_t)per : scratch;
+      if (!fits && nn > 0)
+        scratch[2] = near_pick(q, au[v], aw[v], du[v], dw[v], nq, nn, reach, scratch, nbv[v],
+                               &n_nbv[v]);
+      else if (!fits)
+        view_centres(off_vox, n_frames, q, au[v], aw[v], du[v], dw[v], scratch);
+      if (nn > 0)
+        m = c[0] == WIN_OFF || c[1] == WIN_OFF
+                ? -1
+                : window_centroid_at(frames[0], &p->box[v], c[0], c[1], o->half_window_px, o->power,
+                                     nbv[v], n_nbv[v], &cu, &cw);
+      else
+        m = view_centroid(frames, off_vox, n_frames, &p->box[v], c, du[v], dw[v],
                           o->half_window_px, o->power, &cu, &cw);
-      }
       if (m <= 0) continue;
       mass[v] = m;
       ru[v] = cu - au[v];
@@ -348,6 +427,7 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
         fabs(nq[1] - y_vox) > 2 * o->half_window_px)
       return 0; /* walked off: not a point this fit can follow */
     memcpy(q, nq, sizeof q);
+    cur ^= 1;
   }
   /* the views that agree: kept, with signal, and weighted at least half */
   int n_final = 0;
