@@ -386,6 +386,61 @@ int main(void)
     elfm_table_free(tb);
   }
 
+  /* Rows whose numbers take the text's full width (values near DBL_MAX
+   * are 300+ characters "%.4f"), written by the row builder in pieces:
+   * the file is the text printf gives, line for line, for 500 rows. */
+  {
+    enum { ND = 500 };
+    elfm_detection *dd = calloc(ND, sizeof *dd);
+    CHECK(dd != NULL);
+    if (dd) {
+      for (int i = 0; i < ND; i++) {
+        const double big = (i % 2 ? -1.7e308 : 1.7e308) / (double)(i + 1);
+        dd[i].frame = i;
+        dd[i].t_us = (int64_t)i * 1000 - 7;
+        dd[i].x_um = big;
+        dd[i].y_um = i % 3 ? -0.00005 : 0.03125;
+        dd[i].z_um = i % 5 ? big : NAN;
+        dd[i].intensity = i % 7 ? 1e300 : INFINITY;
+        dd[i].sigma_x_um = dd[i].sigma_y_um = dd[i].sigma_z_um = big;
+        dd[i].width_um = big > 0 ? big : 2;
+        dd[i].fit_sd_px = 0.09375;
+        dd[i].nearest_um = 1e200;
+        dd[i].claims = -i;
+      }
+      f = fopen(p_det, "w");
+      CHECK_OK(elfm_detections_write(f, p_det, dd, NULL, ND, &err), &err);
+      fclose(f);
+      char *txt = slurp(p_det);
+      CHECK(txt != NULL);
+      char *line = malloc(16384);
+      size_t at = 0;
+      int bad = 0;
+      for (int i = 0; txt && line && i < ND; i++) {
+        const elfm_detection *d = &dd[i];
+        int n = snprintf(line, 16384, "%" PRId64 ",%" PRId64 ",%.4f,%.4f,", d->frame, d->t_us,
+                         d->x_um, d->y_um);
+        if (isfinite(d->z_um)) n += snprintf(line + n, 16384 - (size_t)n, "%.4f", d->z_um);
+        n += snprintf(line + n, 16384 - (size_t)n, ",");
+        if (isfinite(d->intensity)) n += snprintf(line + n, 16384 - (size_t)n, "%.6g", d->intensity);
+        n += snprintf(line + n, 16384 - (size_t)n, ",%.4f,%.4f,%.4f,%.4f,%.4f,0,0,%.3f,%d,%.4f,%.4f,",
+                      d->sigma_x_um, d->sigma_y_um, d->sigma_z_um, d->width_um, d->fit_sd_px,
+                      d->nearest_um, d->claims, d->x_um, d->y_um);
+        if (isfinite(d->z_um)) n += snprintf(line + n, 16384 - (size_t)n, "%.4f", d->z_um);
+        n += snprintf(line + n, 16384 - (size_t)n, "\n");
+        if (strncmp(txt + at, line, (size_t)n) != 0) {
+          if (bad++ < 3) fprintf(stderr, "row %d differs from printf's: %.200s\n", i, line);
+          break;
+        }
+        at += (size_t)n;
+      }
+      CHECK(bad == 0 && txt && txt[at] == '\0');
+      free(line);
+      free(txt);
+    }
+    free(dd);
+  }
+
   /* ISBI: one particle per track, one detection per REAL point */
   f = fopen(p_isbi, "w");
   CHECK_OK(elfm_tracks_write_isbi(f, p_isbi, &s, &err), &err);
