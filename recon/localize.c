@@ -331,14 +331,16 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
    * plain pass whose windows are the last pass's computes the same
    * centroids and leaves q where it is, as does every plain pass after
    * it: the robust passes then start at once. The same bits in fewer
-   * passes (docs/recon.md "Passes that would repeat"). The windows of
-   * the last two passes are kept (win[cur], win[cur ^ 1]) where they fit,
-   * per view: 2 per frame, and with neighbours the bits of those taken
-   * out. */
+   * passes (docs/recon.md "Passes that would repeat"). So, view by view:
+   * a view whose windows are the last pass's has the last pass's
+   * centroid (prev_m, prev_cu, prev_cw), and only q's fit to it is new.
+   * The windows of the last two passes are kept (win[cur], win[cur ^ 1])
+   * where they fit, per view: 2 per frame, and with neighbours the bits
+   * of those taken out. */
   const int per = 2 * n_frames + (nn > 0);
   const int fits = p->nv * per <= WIN_KEY_MAX;
   int32_t win[2][WIN_KEY_MAX], scratch[2 * MAXF + 1];
-  double nbv[MAXV][2 * MAXN];
+  double nbv[MAXV][2 * MAXN], prev_m[MAXV], prev_cu[MAXV], prev_cw[MAXV];
   int n_nbv[MAXV];
   int cur = 0, have_last = 0;
   const double reach = 3.0 * (2 * o->half_window_px + 1);
@@ -358,27 +360,36 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
       if (it < passes && have_last &&
           memcmp(win[cur], win[cur ^ 1], (size_t)(p->nv * per) * sizeof win[0][0]) == 0)
         it = passes; /* the plain passes have settled: on to the robust ones */
-      have_last = it < passes;
     }
     int n_used = 0;
     for (int v = 0; v < p->nv; v++) {
       mass[v] = 0;
       if (!keep[v]) continue;
-      double cu, cw, m;
+      double cu = 0, cw = 0, m;
       const int32_t *c = fits ? win[cur] + (size_t)v * (size_t)per : scratch;
-      if (!fits && nn > 0)
-        scratch[2] = near_pick(q, au[v], aw[v], du[v], dw[v], nq, nn, reach, scratch, nbv[v],
-                               &n_nbv[v]);
-      else if (!fits)
-        view_centres(off_vox, n_frames, q, au[v], aw[v], du[v], dw[v], scratch);
-      if (nn > 0)
-        m = c[0] == WIN_OFF || c[1] == WIN_OFF
-                ? -1
-                : window_centroid_at(frames[0], &p->box[v], c[0], c[1], o->half_window_px, o->power,
-                                     nbv[v], n_nbv[v], &cu, &cw);
-      else
-        m = view_centroid(frames, off_vox, n_frames, &p->box[v], c, du[v], dw[v],
-                          o->half_window_px, o->power, &cu, &cw);
+      if (fits && have_last &&
+          memcmp(c, win[cur ^ 1] + (size_t)v * (size_t)per, (size_t)per * sizeof *c) == 0) {
+        m = prev_m[v]; /* the same windows: the same centroid */
+        cu = prev_cu[v];
+        cw = prev_cw[v];
+      } else {
+        if (!fits && nn > 0)
+          scratch[2] = near_pick(q, au[v], aw[v], du[v], dw[v], nq, nn, reach, scratch, nbv[v],
+                                 &n_nbv[v]);
+        else if (!fits)
+          view_centres(off_vox, n_frames, q, au[v], aw[v], du[v], dw[v], scratch);
+        if (nn > 0)
+          m = c[0] == WIN_OFF || c[1] == WIN_OFF
+                  ? -1
+                  : window_centroid_at(frames[0], &p->box[v], c[0], c[1], o->half_window_px,
+                                       o->power, nbv[v], n_nbv[v], &cu, &cw);
+        else
+          m = view_centroid(frames, off_vox, n_frames, &p->box[v], c, du[v], dw[v],
+                            o->half_window_px, o->power, &cu, &cw);
+        prev_m[v] = m;
+        prev_cu[v] = cu;
+        prev_cw[v] = cw;
+      }
       if (m <= 0) continue;
       mass[v] = m;
       ru[v] = cu - au[v];
@@ -428,6 +439,7 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
       return 0; /* walked off: not a point this fit can follow */
     memcpy(q, nq, sizeof q);
     cur ^= 1;
+    have_last = fits;
   }
   /* the views that agree: kept, with signal, and weighted at least half */
   int n_final = 0;
