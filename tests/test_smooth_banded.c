@@ -109,7 +109,7 @@ int main(void)
       }
     }
     for (int order = 2; order <= 3; order++) {
-      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order, NULL};
+      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order, NULL, 0};
       const double l1 = elfm_spline_gcv_lambda(&sp, w, 1), l5 = elfm_spline_gcv_lambda(&sp, w, 5);
       CHECK(l5 >= l1);
       /* the prior's rows from a table: the same numbers, so the same bits
@@ -150,6 +150,51 @@ int main(void)
         elfm_banded_free(&b3);
         elfm_banded_free(&b1);
         elfm_banded_free(&b2);
+      }
+      /* Sigmas one factor per point times one per axis (as the tracker
+       * gives them): the axes share one factorisation (iso), and the fit
+       * is the one with a matrix per axis, to rounding; with the axes'
+       * factors not proportional, elfm_spline_isotropic says so. */
+      {
+        double sg[3 * K], wv[K], ref[3] = {0.3, 0.45, 1.2};
+        for (int k = 0; k < K; k++) {
+          const double f = 0.5 + 0.37 * (double)((k * 7) % 11);
+          wv[k] = k % 5 == 3 ? 0.05 : 1.0 / (1.0 + 0.1 * (double)(k % 3));
+          for (int a = 0; a < 3; a++) sg[3 * k + a] = f * ref[a];
+        }
+        elfm_spline_problem pa = sp, pi;
+        pa.sig = sg;
+        pa.sig_ref = ref;
+        pi = pa;
+        CHECK(elfm_spline_isotropic(&pa) == 1);
+        pi.iso = 1;
+        double qa[3 * K], qi[3 * K], ra, ri, ea, ei;
+        elfm_banded b1;
+        elfm_banded_init(&b1);
+        for (double lam = 1e-3; lam <= 1e5; lam *= 100) {
+          CHECK(elfm_spline_linear(&pa, wv, lam, &b1, work, &ra, &ea, qa));
+          CHECK(elfm_spline_linear(&pi, wv, lam, &b1, work, &ri, &ei, qi));
+          /* to rounding: the stiff end's condition (~lambda / (sigma^2
+           * h^3)) magnifies it, 1e-7 of the path's span at 1e5 here */
+          double dmax = 0, span = 0;
+          for (int i = 0; i < 3 * K; i++) {
+            dmax = fmax(dmax, fabs(qa[i] - qi[i]));
+            span = fmax(span, fabs(x3[i]));
+          }
+          CHECK_MSG(dmax < 1e-6 * span && fabs(ra - ri) <= 1e-7 * ra && fabs(ea - ei) <= 1e-7 * ea,
+                    "order %d lambda %g: states %.3g apart, rss %.17g / %.17g, edf %.17g / %.17g",
+                    order, lam, dmax, ra, ri, ea, ei);
+          double rn;
+          CHECK(elfm_spline_linear(&pi, wv, lam, &b1, work, &rn, NULL, qa));
+          CHECK(rn == ri && memcmp(qa, qi, sizeof qa) == 0);
+        }
+        CHECK(elfm_spline_gcv_lambda(&pa, wv, 1) == elfm_spline_gcv_lambda(&pi, wv, 1));
+        sg[3 * 4 + 1] *= 1.001; /* one point's y no longer in step */
+        CHECK(elfm_spline_isotropic(&pa) == 0);
+        sg[3 * 4 + 1] /= 1.001;
+        ref[2] = 0; /* no reference: no sharing */
+        CHECK(elfm_spline_isotropic(&pa) == 0);
+        elfm_banded_free(&b1);
       }
       elfm_banded bd;
       elfm_banded_init(&bd);

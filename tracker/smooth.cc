@@ -372,6 +372,7 @@ elfm_spline_problem spline_problem(const Data &d, const SplineSetup &ss)
   sp.state_of = ss.state_of.data();
   sp.order = ss.order;
   sp.coef = ss.coef.empty() ? nullptr : ss.coef.data();
+  sp.iso = elfm_spline_isotropic(&sp);
   return sp;
 }
 

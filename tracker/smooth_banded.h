@@ -71,7 +71,16 @@ typedef struct elfm_spline_problem {
   const size_t *state_of;
   int order;
   const double *coef; /* elfm_spline_prior_table of ts, or NULL: rows computed as needed */
+  /* 1: every point's sigma is one factor times sig_ref on all three axes
+   * (elfm_spline_isotropic), so the axes share one matrix and one
+   * factorisation; 0 (a zero-initialised problem): one per axis */
+  int iso;
 } elfm_spline_problem;
+
+/* Whether sig[3 i + a] / sig_ref[a] is the same on the three axes for
+ * every point, to 1e-12 of itself: each axis's matrix is then the same
+ * matrix over sig_ref[a]^2, and its solution the same one. */
+int elfm_spline_isotropic(const elfm_spline_problem *sp);
 
 /* Per axis, the fit at lambda with point weights w (n): the states into p
  * (K x 3, when not NULL), the whitened weighted residual sum of squares
