@@ -92,7 +92,7 @@ int main(void)
    * its edf falls as lambda grows, and pricing each effective parameter
    * higher (gamma 5) never chooses a more flexible fit than classical GCV */
   {
-    double x3[3 * K], sig[3 * K], w[K], p[3 * K], work[3 * K + 1], sref[3] = {0.2, 0.2, 0.2};
+    double x3[3 * K], sig[3 * K], w[K], p[3 * K], work[5 * K + 1], sref[3] = {0.2, 0.2, 0.2};
     size_t st[K];
     uint64_t r = 12345;
     double raw = 0;

@@ -477,7 +477,7 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
 {
   const size_t K = ss.ts.size();
   const elfm_spline_problem sp = spline_problem(d, ss);
-  std::vector<double> w(d.n, 1.0), work(3 * K + 1);
+  std::vector<double> w(d.n, 1.0), work(5 * K + 1);
   // GCV's weight: whole decades first, then downhill on the half-decade
   // grid from the best (elfm_spline_gcv_lambda_coarse): 15-16 fits where
   // the half-decade grid took 25. Checked against the whole grid in the

@@ -184,6 +184,42 @@ void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x)
   }
 }
 
+void elfm_banded_solve3(const elfm_banded *bd, double *const x[3])
+{
+  const size_t K = bd->K;
+  const int b = bd->b;
+  double *const *l = bd->l;
+  double *x0 = x[0], *x1 = x[1], *x2 = x[2];
+  /* in place: row k reads its own right side before writing it, and only
+   * rows already solved besides */
+  for (size_t k = 0; k < K; k++) {
+    double y0 = x0[k], y1 = x1[k], y2 = x2[k];
+    for (int i = 1; i <= b && (size_t)i <= k; i++) {
+      const double li = l[i][k - i];
+      y0 -= li * x0[k - i];
+      y1 -= li * x1[k - i];
+      y2 -= li * x2[k - i];
+    }
+    x0[k] = y0;
+    x1[k] = y1;
+    x2[k] = y2;
+  }
+  for (size_t k = 0; k < K; k++) {
+    x0[k] /= bd->D[k];
+    x1[k] /= bd->D[k];
+    x2[k] /= bd->D[k];
+  }
+  for (size_t k = K; k-- > 0;) {
+    const int m = band_below(K, k, b);
+    for (int i = 1; i <= m; i++) {
+      const double li = l[i][k];
+      x0[k] -= li * x0[k + i];
+      x1[k] -= li * x1[k + i];
+      x2[k] -= li * x2[k + i];
+    }
+  }
+}
+
 void elfm_banded_inverse(elfm_banded *bd)
 {
   const size_t K = bd->K;
@@ -245,17 +281,20 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
       W[sp->state_of[i]] += w[i] * s0 / (sp->sig[3 * i] * sp->sig[3 * i]);
     banded_build(bd, W, sp->ts, sp->coef, lambda, sp->order);
     if (!elfm_banded_factor(bd)) return 0;
+    double *const xs[3] = {b, x, work + 3 * K}; /* each axis's right side, then its states */
+    for (int a = 0; a < 3; a++) memset(xs[a], 0, K * sizeof *xs[a]);
+    for (size_t i = 0; i < sp->n; i++) {
+      const double wi = w[i] * s0 / (sp->sig[3 * i] * sp->sig[3 * i]);
+      for (int a = 0; a < 3; a++) xs[a][sp->state_of[i]] += wi * sp->x[3 * i + a];
+    }
+    elfm_banded_solve3(bd, xs);
     for (int a = 0; a < 3; a++) {
-      memset(b, 0, K * sizeof *b);
-      for (size_t i = 0; i < sp->n; i++)
-        b[sp->state_of[i]] += w[i] * s0 / (sp->sig[3 * i] * sp->sig[3 * i]) * sp->x[3 * i + a];
-      elfm_banded_solve(bd, b, x);
       for (size_t i = 0; i < sp->n; i++) {
-        double r = (x[sp->state_of[i]] - sp->x[3 * i + a]) / sp->sig[3 * i + a];
+        double r = (xs[a][sp->state_of[i]] - sp->x[3 * i + a]) / sp->sig[3 * i + a];
         *rss += w[i] * r * r;
       }
       if (p)
-        for (size_t k = 0; k < K; k++) p[3 * k + a] = x[k];
+        for (size_t k = 0; k < K; k++) p[3 * k + a] = xs[a][k];
     }
     if (edf) {
       elfm_banded_inverse(bd);
@@ -355,7 +394,7 @@ static double gcv_search(const elfm_spline_problem *sp, const double *w, double 
 {
   elfm_banded bd;
   elfm_banded_init(&bd);
-  double *work = malloc((3 * sp->K + 1) * sizeof *work);
+  double *work = malloc((5 * sp->K + 1) * sizeof *work);
   double best = 1.0, best_g = INFINITY;
   int best_e = 0;
   for (int e = GCV_E_MIN; work && e <= GCV_E_MAX; e += how == GCV_ALL ? 1 : 2) {

@@ -58,6 +58,11 @@ void elfm_banded_build_table(elfm_banded *bd, const double *W, const double *coe
 int elfm_banded_factor(elfm_banded *bd);
 /* x = A^-1 rhs (after factor); x has K entries. */
 void elfm_banded_solve(const elfm_banded *bd, const double *rhs, double *x);
+/* x[j] = A^-1 x[j] for j = 0, 1, 2 in place (after factor): three right
+ * sides at once, each the same operations in the same order as
+ * elfm_banded_solve (so the same bits); the three recurrences interleaved
+ * keep the processor busy where one waits on its last row. */
+void elfm_banded_solve3(const elfm_banded *bd, double *const x[3]);
 /* A^-1 on the band into z (after factor), from the last row up. */
 void elfm_banded_inverse(elfm_banded *bd);
 
@@ -88,7 +93,7 @@ int elfm_spline_isotropic(const elfm_spline_problem *sp);
  * edf may be NULL: then A^-1 is not formed (a third of the fit's work),
  * as reweighting needs only the states. bd is the workspace (its band of
  * A^-1 is the last axis's afterwards when edf was asked for);
- * work holds 3 K doubles. 0 when A is not positive definite or no memory. */
+ * work holds 5 K doubles. 0 when A is not positive definite or no memory. */
 int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
                        elfm_banded *bd, double *work, double *rss, double *edf, double *p);
 
