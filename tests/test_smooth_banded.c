@@ -188,6 +188,21 @@ int main(void)
           CHECK(elfm_spline_linear(&pi, wv, lam, &b1, work, &rn, NULL, qa));
           CHECK(rn == ri && memcmp(qa, qi, sizeof qa) == 0);
         }
+        /* three right sides at once: each the one-at-a-time solve's bits,
+         * in place (b1 holds the last shared factorisation) */
+        {
+          double r3[3][K], one[K];
+          double *const xs[3] = {r3[0], r3[1], r3[2]};
+          for (int a = 0; a < 3; a++)
+            for (int k = 0; k < K; k++) r3[a][k] = x3[3 * k + a] * (1.0 + 0.1 * a);
+          double want[3][K];
+          for (int a = 0; a < 3; a++) {
+            memcpy(one, r3[a], sizeof one);
+            elfm_banded_solve(&b1, one, want[a]);
+          }
+          elfm_banded_solve3(&b1, xs);
+          CHECK(memcmp(r3, want, sizeof r3) == 0);
+        }
         CHECK(elfm_spline_gcv_lambda(&pa, wv, 1) == elfm_spline_gcv_lambda(&pi, wv, 1));
         sg[3 * 4 + 1] *= 1.001; /* one point's y no longer in step */
         CHECK(elfm_spline_isotropic(&pa) == 0);
