@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "events_internal.h"
+#include "fmt_num.h"
 
 elfm_status elfm_csv_write_header(elfm_writer *w, elfm_error *err)
 {
@@ -12,30 +13,17 @@ elfm_status elfm_csv_write_header(elfm_writer *w, elfm_error *err)
   return ELFM_OK;
 }
 
-/* Decimal digits of v at out (no terminator); returns the count. */
-static size_t put_u(char *out, uint64_t v)
-{
-  char tmp[20];
-  size_t n = 0;
-  do {
-    tmp[n++] = (char)('0' + v % 10);
-    v /= 10;
-  } while (v);
-  for (size_t i = 0; i < n; i++) out[i] = tmp[n - 1 - i];
-  return n;
-}
-
 elfm_status elfm_csv_write_events(elfm_writer *w, const elfm_event_chunk *c, elfm_error *err)
 {
   for (size_t i = 0; i < c->n; i++) {
     /* 19 + 1 + 5 + 1 + 5 + 1 + 1 + 1 bytes at most. */
     if (elfm_writer_reserve(w, 40, err)) return ELFM_ERR_IO;
     char *o = (char *)w->buf + w->len;
-    size_t k = put_u(o, (uint64_t)c->t_us[i]);
+    size_t k = elfm_fmt_u64(o, (uint64_t)c->t_us[i]);
     o[k++] = ',';
-    k += put_u(o + k, c->x[i]);
+    k += elfm_fmt_u64(o + k, c->x[i]);
     o[k++] = ',';
-    k += put_u(o + k, c->y[i]);
+    k += elfm_fmt_u64(o + k, c->y[i]);
     o[k++] = ',';
     o[k++] = (char)('0' + c->p[i]);
     o[k++] = '\n';

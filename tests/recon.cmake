@@ -11,3 +11,4 @@ elfm_add_test(test_mip_png test_mip_png.c TIMEOUT 60)
 target_link_libraries(test_recon_pipeline PRIVATE TIFF::TIFF)  # writes a mixed-depth stack
 elfm_add_test(test_recon_sim test_recon_sim.c)
 elfm_add_test(test_recon_cli test_recon_cli.c)
+elfm_add_test(test_fmt_num test_fmt_num.c TIMEOUT 120)

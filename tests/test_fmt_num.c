@@ -1,4 +1,4 @@
-/* test_fmt_num.c — the writers' number text (tracker/fmt_num.c) against
+/* test_fmt_num.c — the writers' number text (recon/fmt_num.c) against
  * printf's own, byte for byte: random doubles of every magnitude the
  * tracks hold, exact ties at the last decimal (where rounding to even
  * shows), values next to a tie (one ulp either side), negatives that round

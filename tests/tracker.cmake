@@ -17,7 +17,6 @@ elfm_add_test(test_smooth_banded test_smooth_banded.c TIMEOUT 60)
 elfm_add_test(test_smooth_noise test_smooth_noise.c TIMEOUT 60)
 elfm_add_test(test_analysis test_analysis.c TIMEOUT 60)
 elfm_add_test(test_tracks test_tracks.c TIMEOUT 60)
-elfm_add_test(test_fmt_num test_fmt_num.c TIMEOUT 120)
 elfm_add_test(test_frame_times test_frame_times.c TIMEOUT 60)
 # End to end (simulate -> eventlfm track -> score): short scenes by default,
 # the long ones (stage_accel, blink, blink_moving, worm) labelled slow.

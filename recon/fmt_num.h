@@ -1,8 +1,9 @@
-/* fmt_num.h — numbers into text for the writers (tracks_write.c), without
- * printf's machinery: a track run writes ~20 numbers per point, and
- * fprintf's "%.4f" was ~4 % of `eventlfm track`'s time on one thread.
- * Internal to the tracker; the text is printf's, byte for byte
- * (tests/test_fmt_num.c compares them on millions of values). */
+/* fmt_num.h — numbers into text for the writers (the tracker's
+ * tracks_write.c, the events' writer_csv.c), without printf's machinery: a
+ * track run writes ~20 numbers per point, and fprintf's "%.4f" was ~4 % of
+ * `eventlfm track`'s time on one thread. Internal to the writers; the text
+ * is printf's, byte for byte (tests/test_fmt_num.c compares them on
+ * millions of values). */
 #ifndef ELFM_FMT_NUM_H
 #define ELFM_FMT_NUM_H
 
