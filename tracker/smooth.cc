@@ -421,17 +421,14 @@ bool spline_ceres(const Data &d, const SplineSetup &ss, const Loss &loss, double
   return sum.IsSolutionUsable();
 }
 
-// The robust weights at p into w; with chi2 (then outliers too), the
-// robust cost and the outliers' count. Reweighting asks for the weights
-// alone: the Cauchy loss's log1p per point and step was a tenth of them.
+// The robust weights at p into w, and where asked (not while reweighting), the robust cost and
+// the outliers' count: the Cauchy loss's log1p per point was paid at every reweighting step.
 void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
                     const std::vector<double> &p, std::vector<double> &w, double *chi2,
                     int *outliers)
 {
-  if (chi2) {
-    *chi2 = 0;
-    *outliers = 0;
-  }
+  if (chi2) *chi2 = 0;
+  if (outliers) *outliers = 0;
   for (size_t i = 0; i < d.n; i++) {
     double s = 0, d2 = 0;
     for (int a = 0; a < 3; a++) {
@@ -440,10 +437,8 @@ void robust_weights(const Data &d, const SplineSetup &ss, const Loss &loss,
       d2 += a == 2 ? e * e / 16 : e * e;
     }
     w[i] = loss.weight(s);
-    if (chi2) {
-      *chi2 += loss.rho(s);
-      *outliers += loss.outlier(s, d2);
-    }
+    if (chi2) *chi2 += loss.rho(s);
+    if (outliers) *outliers += loss.outlier(s, d2);
   }
 }
 
