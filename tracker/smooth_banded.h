@@ -92,7 +92,8 @@ int elfm_spline_isotropic(const elfm_spline_problem *sp);
  * into *rss and the hat matrix's trace summed over the axes into *edf.
  * edf may be NULL: then A^-1 is not formed (a third of the fit's work),
  * as reweighting needs only the states. bd is the workspace (its band of
- * A^-1 is the last axis's afterwards when edf was asked for);
+ * A^-1 is the last axis's afterwards when edf was asked for; with iso, the
+ * shared matrix's, which is sig_ref[a]^2 times axis a's inverse);
  * work holds 5 K doubles. 0 when A is not positive definite or no memory. */
 int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
                        elfm_banded *bd, double *work, double *rss, double *edf, double *p);
