@@ -17,10 +17,10 @@ static elfm_status io_check(FILE *f, const char *path, elfm_error *err)
   return ELFM_OK;
 }
 
-/* A row as it is built: numbers go in through fmt_num.c (printf's text
- * without printf's cost, ~4 % of a track run on one thread), and the row
- * out in one fwrite. A row that outgrows the buffer (values near DBL_MAX
- * take 330 characters each) goes out in pieces. */
+/* Rows as they are built: numbers go in through fmt_num.c (printf's text
+ * without printf's cost, ~4 % of a track run on one thread), and the rows
+ * out ~2 KB at a time, one fwrite each. A row that outgrows the buffer
+ * (values near DBL_MAX take 330 characters each) goes out in pieces. */
 typedef struct row {
   FILE *f;
   size_t n;
