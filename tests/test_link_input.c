@@ -197,6 +197,43 @@ int main(void)
     CHECK_EQ_INT((int)elfm_link_last_velocity(NULL, 0, v, vl, NULL), 0);
     elfm_link_free(l);
   }
+  /* How far each detection lay from its track's prediction
+   * (elfm_link_last_miss_um): none before the track has 5 points, none for
+   * a newborn or past the last detection; ~0 on the track's exact line; a
+   * point put 1.5 um aside and 4 um deeper misses by sqrt(1.5^2 + (4 /
+   * kz)^2); after a frame without its detection, none (the prediction
+   * came across a gap). */
+  {
+    elfm_linker *l = elfm_link_create(&o, &err);
+    CHECK(l != NULL);
+    for (int f = 0; f < 25; f++) {
+      if (f == 18) { /* the bead unseen */
+        CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, NULL, 0, &err), &err);
+        continue;
+      }
+      elfm_detection d[2] = {mk(0.8 * f, -1.2 * f, 0.4 * f), mk(30, 30, 0)};
+      if (f == 12) {
+        d[0].y_um += 1.5;
+        d[0].z_um += 4;
+      }
+      const int n = f == 24 ? 2 : 1;
+      CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+      const double m = elfm_link_last_miss_um(l, 0);
+      if (f < 5 || f == 19)
+        CHECK_MSG(isnan(m), "frame %d: miss %g, none expected", f, m);
+      else if (f == 12)
+        CHECK_NEAR(m, sqrt(1.5 * 1.5 + (4 / o.kz) * (4 / o.kz)), 1e-6);
+      else if (f < 12)
+        CHECK_NEAR(m, 0, 1e-6);
+      else
+        CHECK_MSG(m >= 0 && m < 3, "frame %d: miss %g", f, m);
+    }
+    CHECK(isnan(elfm_link_last_miss_um(l, 1)));  /* the newborn */
+    CHECK(isnan(elfm_link_last_miss_um(l, 2)));  /* past the last */
+    CHECK(isnan(elfm_link_last_miss_um(l, -1)));
+    CHECK(isnan(elfm_link_last_miss_um(NULL, 0)));
+    elfm_link_free(l);
+  }
   /* the line through a track's points around a frame: exact on a line
    * (x = 1 + 0.5 t_ms, z = -2 t_ms), at times near 1e12 us too; the window
    * counts frames, not points (frame 14 is a gap); fewer than 3 points, or

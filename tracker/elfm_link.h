@@ -438,6 +438,14 @@ elfm_status elfm_link_take_piece(elfm_linker *l, size_t piece_points, size_t kee
 /* Speed (um/ms) of the track detection i of the LAST step joined, from its
  * recent history; NaN for a new track or i out of range. */
 double elfm_link_last_speed(const elfm_linker *l, int i);
+/* How far detection i of the LAST step lay from the position its track
+ * predicted for it (um, the linker's metric: z divided by kz), for a track
+ * of 5 points or more that was seen in the frame before; NaN otherwise
+ * (a new track, a track back from a gap, i out of range). The miss is the
+ * detections' noise plus the motion the predictor cannot follow: helical
+ * flow at 1 ms frames misses by ~1-1.5 um, random flow by ~2-3 um
+ * (docs/tracker.md "Frames twice as often for turning beads"). */
+double elfm_link_last_miss_um(const elfm_linker *l, int i);
 /* The same track's velocity (um/ms) into v_um_per_ms, and (each when not
  * NULL) its long constant-velocity fit's over the last `history` points
  * into v_long_um_per_ms and the time those points span into *long_span_ms

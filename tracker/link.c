@@ -271,30 +271,6 @@ int64_t elfm_link_oldest_frame(const elfm_linker *l)
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 int64_t elfm_link_n_twins(const elfm_linker *l) { return l ? l->n_twins : 0; }
 
-double elfm_link_last_speed(const elfm_linker *l, int i)
-{
-  double v[3];
-  if (elfm_link_last_velocity(l, i, v, NULL, NULL) < 2) return NAN;
-  return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-}
-
-size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
-                               double v_long_um_per_ms[3], double *long_span_ms)
-{
-  for (int a = 0; a < 3; a++) {
-    v_um_per_ms[a] = NAN;
-    if (v_long_um_per_ms) v_long_um_per_ms[a] = NAN;
-  }
-  if (long_span_ms) *long_span_ms = NAN;
-  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return 0;
-  const double *m = l->det_vel + LINK_DET_VEL * (size_t)i;
-  if (!(m[6] >= 2)) return m[6] >= 1 ? 1 : 0;
-  memcpy(v_um_per_ms, m, 3 * sizeof *m);
-  if (v_long_um_per_ms) memcpy(v_long_um_per_ms, m + 3, 3 * sizeof *m);
-  if (long_span_ms) *long_span_ms = m[7];
-  return (size_t)m[6];
-}
-
 /* Detection j joined no track (or a new one): no velocity. */
 static void det_vel_none(elfm_linker *l, size_t j)
 {
@@ -705,6 +681,12 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
   for (size_t i = 0; i < nt; i++) {
     int j = l->track_det[i];
     if (j < 0) continue;
+    /* before attach: the prediction, and whether it came from a track of
+     * LINK_MISS_MIN_POINTS points seen in the frame before */
+    const int from_seen = l->live[i].missed <= 0 && l->live[i].has_short &&
+                          l->live[i].t->n >= LINK_MISS_MIN_POINTS;
+    double pred[3];
+    memcpy(pred, l->live[i].pred, sizeof pred);
     st = attach(l, &l->live[i], &det[j], err);
     if (st != ELFM_OK) return st;
     if (l->live[i].missed > 0 && l->live[i].t->n >= 5) {
@@ -721,6 +703,8 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
     /* the long fit's points: the last `history` (elfm_link_fit_velocity) */
     const size_t k0 = t->n > (size_t)o->history ? t->n - (size_t)o->history : 0;
     m[7] = 1e-3 * (double)(t->pts[t->n - 1].t_us - t->pts[k0].t_us);
+    /* the detection as attach left it (its lag taken out) */
+    m[8] = from_seen ? elfm_link_miss_um(o, pred, &det[j]) : NAN;
   }
   if (o->swap_points > 0 && o->encounter_um > 0) {
     st = elfm_link_mark_encounters(l, frame, nt, err);

@@ -65,7 +65,10 @@ typedef struct link_xkey {
   int track;
 } link_xkey;
 
-#define LINK_DET_VEL 8
+#define LINK_DET_VEL 9
+/* elfm_link_last_miss_um: the points a track needs before its prediction
+ * is judged (its short fit, >= 4 points, and one more) */
+#define LINK_MISS_MIN_POINTS 5
 
 /* The linker (opaque in elfm_link.h). */
 struct elfm_linker {
@@ -92,8 +95,10 @@ struct elfm_linker {
   int64_t *det_id;
   double *det_vel;           /* n_det x LINK_DET_VEL: the joined track's velocity now
                               * and its long fit's (um/ms; NaN for none or one
-                              * point), its number of points, and the time its
-                              * long fit spans (ms) */
+                              * point), its number of points, the time its
+                              * long fit spans (ms), and how far the detection
+                              * lay from the track's prediction (um, z / kz;
+                              * NaN unless elfm_link_last_miss_um's terms hold) */
   size_t cap_cost;
   double *cost;
   int *row_to_col;
@@ -199,6 +204,8 @@ int elfm_link_fit_circle(const elfm_link_options *o, const elfm_detection *pts, 
 void elfm_link_circle_predict(const elfm_link_circle *c, double dt_ms, double out[3]);
 /* Score the two predictions made for d's frame against d (link_predict.c). */
 void elfm_link_score_predictions(const elfm_link_options *o, live_track *lt, const elfm_detection *d);
+/* How far d lies from the prediction pred, in the linker's metric (z / kz). */
+double elfm_link_miss_um(const elfm_link_options *o, const double pred[3], const elfm_detection *d);
 
 /* Can detection d join a track, dark for `missed` frames, whose hypothesis
  * puts it at c[] within gate_um? 1 with *cost = d2 / gate^2 + gap_cost x

@@ -207,3 +207,42 @@ void elfm_link_predict_rest(const elfm_link_options *o, live_track *lt, int64_t 
   const double pspeed = sqrt(pv[0] * pv[0] + pv[1] * pv[1] + pv[2] * pv[2]);
   lt->rest_gate_um = track_gate_um(o, lt->missed, pspeed, dt_ms / (lt->missed + 1));
 }
+
+/* What the last step's detections joined (elfm_link.h): the det_vel rows
+ * step 4 of elfm_link_step fills. */
+double elfm_link_last_speed(const elfm_linker *l, int i)
+{
+  double v[3];
+  if (elfm_link_last_velocity(l, i, v, NULL, NULL) < 2) return NAN;
+  return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+double elfm_link_last_miss_um(const elfm_linker *l, int i)
+{
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return NAN;
+  return l->det_vel[LINK_DET_VEL * (size_t)i + 8];
+}
+
+size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
+                               double v_long_um_per_ms[3], double *long_span_ms)
+{
+  for (int a = 0; a < 3; a++) {
+    v_um_per_ms[a] = NAN;
+    if (v_long_um_per_ms) v_long_um_per_ms[a] = NAN;
+  }
+  if (long_span_ms) *long_span_ms = NAN;
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return 0;
+  const double *m = l->det_vel + LINK_DET_VEL * (size_t)i;
+  if (!(m[6] >= 2)) return m[6] >= 1 ? 1 : 0;
+  memcpy(v_um_per_ms, m, 3 * sizeof *m);
+  if (v_long_um_per_ms) memcpy(v_long_um_per_ms, m + 3, 3 * sizeof *m);
+  if (long_span_ms) *long_span_ms = m[7];
+  return (size_t)m[6];
+}
+
+/* Shared with link.c (link_internal.h). */
+double elfm_link_miss_um(const elfm_link_options *o, const double pred[3], const elfm_detection *d)
+{
+  const double dx = d->x_um - pred[0], dy = d->y_um - pred[1], dz = (d->z_um - pred[2]) / o->kz;
+  return sqrt(dx * dx + dy * dy + dz * dz);
+}
