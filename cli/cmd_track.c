@@ -106,7 +106,9 @@ static void judged_for_pulses(track_ctx *c)
   const double h = c->n_height ? track_peak_height_median(c) : NAN;
   c->auto_ratio = h / o->peaks.absolute;
   c->auto_speed = track_detection_speed_median(c);
-  c->repr_restart = c->dt_restart = c->few_restart = c->slow_restart = 0;
+  c->auto_miss = track_detection_miss_median(c);
+  c->miss_decided = 1;
+  c->repr_restart = c->dt_restart = c->few_restart = c->slow_restart = c->stride_restart = 0;
   c->blur_restart = faint_uncrowded(c, h);
 }
 
@@ -115,7 +117,9 @@ static void judged_for_pulses(track_ctx *c)
  * again: with the integral (their tracks crawl,
  * TRACK_AUTO_CRAWL_UM_PER_MS), the blur (faint peaks whose tracks do not
  * crawl, TRACK_HINT_DIM_FACTOR), half the window (tracks that move
- * TRACK_DT_AUTO_STEP_UM or more per frame), or the last two. And --motion
+ * TRACK_DT_AUTO_STEP_UM or more per frame), or the last two; and the same
+ * windows twice as often (tracks whose predictions miss by
+ * TRACK_STRIDE_AUTO_MISS_UM or more), with the blur or alone. And --motion
  * auto: with --motion stage when the first tracks move as one
  * (track_rigid_judge), which comes first: a stage turns the others off
  * (track_opts_derive), so their restart waits for that judgement.
@@ -169,7 +173,8 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
        * (TRACK_AUTO_FEW_MIN_FRAMES); a stage would have been found above */
       c->auto_decided = 1;
       c->auto_peaks = c->n_height;
-      c->auto_ratio = c->auto_speed = NAN;
+      c->auto_ratio = c->auto_speed = c->auto_miss = NAN;
+      c->miss_decided = 1;
       c->few_restart = c->repr_restart = 1;
       return 1;
     }
@@ -206,8 +211,23 @@ static int auto_judge(track_ctx *c, int64_t min_peaks, int at_end)
                       (!c->blur_restart || c->auto_speed < TRACK_SLOW_BEADS_WINDOW_OVER_BLUR_UM_PER_MS);
     if (c->slow_restart) c->blur_restart = 0;
   }
+  if (!c->miss_decided) {
+    /* Beads that turn beyond prediction: the same windows twice as often
+     * (TRACK_STRIDE_AUTO_MISS_UM); not where another window is chosen.
+     * The misses need tracks of 5 points, which a crowded field's first
+     * peaks do not have yet (40 beads: 200 peaks in 5-6 frames): they are
+     * counted on, and the run judged, until TRACK_WIDTH_MIN_PEAKS of them
+     * are in (or TRACK_MISS_MAX_FRAMES frames have passed: too few to judge). */
+    const int wanted = o->dt_auto && !c->dt_restart && !c->slow_restart && !c->repr_restart;
+    if (wanted && !at_end && c->n_miss < TRACK_WIDTH_MIN_PEAKS && c->n_frames < TRACK_MISS_MAX_FRAMES)
+      return 0;
+    c->miss_decided = 1;
+    c->auto_miss = track_detection_miss_median(c);
+    c->stride_restart = wanted && c->n_miss >= TRACK_WIDTH_MIN_PEAKS &&
+                        c->auto_miss >= TRACK_STRIDE_AUTO_MISS_UM;
+  }
   if (o->motion_auto && !c->rigid_decided) return 0;
-  return c->repr_restart || c->blur_restart || c->dt_restart || c->slow_restart;
+  return c->repr_restart || c->blur_restart || c->dt_restart || c->slow_restart || c->stride_restart;
 }
 
 /* The ordered per-volume callback: track_on_volume, then auto's judgement
@@ -271,6 +291,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   track_opts o = *po;
   again->each_trigger = again->lin = again->stage_back = again->stage_short = again->tau_follows = 0;
   again->prior_only = 0;
+  again->stride_us = -1;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib calib;
@@ -432,6 +453,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                    : c.slow_restart ? TRACK_SLOW_BEADS_DT_US
                    : c.repr_restart && o.dt_auto ? 2000 : -1;
     again->tau_follows = again->dt_us > 0 && (!others || c.slow_restart);
+    again->stride_us = others && c.stride_restart ? o.recon.framer.dt_us / 2 : -1;
     track_again_judged(again, &c);
     track_again_say(&c, again);
     rc = TRACK_RUN_AGAIN;
@@ -605,7 +627,7 @@ int cmd_track(int argc, char **argv)
    * integral's, each-trigger's), and nothing automatic left but the start
    * (a finished run may still find pulsed light). At most: auto's choices,
    * back to the time surface, each-trigger. */
-  char dt[32];
+  char dt[32], stride[32];
   int stage_watch = 0;
   char **argv2 = malloc(((size_t)argc + 24) * sizeof *argv2);
   if (!argv2) return cli_message("track", CLI_FAIL, "out of memory");
@@ -674,6 +696,11 @@ int cmd_track(int argc, char **argv)
           argv2[argc2++] = dt;
           stage_watch = again.stage; /* a slow stage's, watched */
         }
+      }
+      if (again.stride_us > 0) {
+        snprintf(stride, sizeof stride, "%" PRId64, again.stride_us);
+        argv2[argc2++] = "--stride-us";
+        argv2[argc2++] = stride;
       }
     }
     argv2[argc2] = NULL;

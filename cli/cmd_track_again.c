@@ -16,6 +16,7 @@ void track_again_judged(track_again *g, const track_ctx *c)
   if (c->auto_decided || !c->o->auto_chose) {
     g->ratio = c->auto_decided ? c->auto_ratio : NAN;
     g->speed_um_per_ms = c->auto_decided ? c->auto_speed : NAN;
+    g->miss_um = c->miss_decided ? c->auto_miss : NAN;
   }
   g->rigid_dev = c->rigid_dev;
   g->rigid_speed_um_per_ms = c->rigid_speed;
@@ -116,6 +117,13 @@ void track_again_say(const track_ctx *c, const track_again *g)
                     ", windows that hold more of each bead's events (--dt-us %" PRId64 ": keep the "
                     "window; docs/tracker.md \"Windows for slow beads\")\n",
             c->auto_speed, c->auto_peaks, g->dt_us, g->dt_us, o->recon.framer.dt_us);
+  else if (g->stride_us > 0 && !g->stage)
+    fprintf(stderr, "eventlfm track: the tracks turn beyond prediction (%" PRId64 " detections lay "
+                    "a median %.2f um from where their tracks predicted them): starting again with "
+                    "--stride-us %" PRId64 ", the %" PRId64 " us windows twice as often (--stride-us "
+                    "%" PRId64 ": keep the rate; docs/tracker.md \"Frames twice as often for turning "
+                    "beads\")\n",
+            c->n_miss, c->auto_miss, g->stride_us, o->recon.framer.dt_us, o->recon.framer.dt_us);
   else if (g->dt_us > 0 && !g->stage)
     fprintf(stderr, "eventlfm track: the tracks move fast (median %.2f um/ms over the first %" PRId64
                     " peaks, %.1f um per frame): starting again with --dt-us %" PRId64 " (--dt-us %" PRId64
@@ -136,6 +144,7 @@ void track_again_settle(track_opts *o, int was, const track_again *g, double rat
   o->auto_was = was;
   o->auto_ratio = ratio;
   o->auto_speed = speed;
+  o->auto_miss = isfinite(speed) ? g->miss_um : NAN; /* judged with the speed */
   o->auto_rigid_dev = g->rigid_dev;
   o->auto_rigid_speed = g->rigid_speed_um_per_ms;
   o->auto_rigid_abs = g->rigid_abs_um_per_ms;

@@ -12,6 +12,7 @@
 typedef struct track_again {
   int blur_px;     /* -1: as given */
   int64_t dt_us;   /* -1: as given */
+  int64_t stride_us; /* -1: as given */
   int integral;    /* 1: --repr integral */
   int stage;       /* 1: --motion stage (and nothing else) */
   int few;         /* 1: the integral because too few peaks were found to judge */
@@ -24,6 +25,7 @@ typedef struct track_again {
                        the command with --motion stage and dt_us, tau following */
   int each_trigger; /* 1: pulsed light (track_pulsed): --start each-trigger */
   int lin;          /* 1: ... and the objects move: --repr lin too */
+  double miss_um;  /* the first run's judged miss (track_detection_miss_median) */
   double ratio, speed_um_per_ms, rigid_dev, rigid_speed_um_per_ms, rigid_abs_um_per_ms;
   int rigid_by_shift;  /* ... judged by the frames' shift (cmd_track_vote.h) */
   int shift_judged;    /* that shift judged (in this run or one before), */

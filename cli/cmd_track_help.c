@@ -54,6 +54,14 @@ void track_usage(FILE *f)
     "                       %g um (%d..%d us: slow beads fire few of their pixels\n"
     "                       in 1 ms), and at 1 ms again if it speeds up to %g um per\n"
     "                       window; not with --tau-us\n"
+    "  --stride-us, not given  the window's own length, and when those peaks'\n"
+    "                       tracks (5 points or more) find their next in-focus\n"
+    "                       peaks a median %g um or more from where they\n"
+    "                       predicted (beads that turn at random) start again\n"
+    "                       with half of it: the same windows twice as often (and\n"
+    "                       twice the time); where --dt-us's choice applies\n"
+    "                       (above) and keeps the window; --stride-us 1000 keeps\n"
+    "                       the rate\n"
     "  --start, not given   the grid from the first event, and under pulsed light\n"
     "                       (%d rising trigger edges or more, and the frames with an\n"
     "                       edge, or after one, hold over %g x the others' events, or\n"
@@ -73,6 +81,7 @@ void track_usage(FILE *f)
     TRACK_AUTO_CRAWL_UM_PER_MS, TRACK_SLOW_BEADS_MAX_UM_PER_MS, TRACK_SLOW_BEADS_DT_US, TRACK_SLOW_BEADS_DT_US,
     TRACK_STAGE_SLOW_STEP_UM * 1e3 / TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_STEP_UM,
     TRACK_STAGE_SLOW_MIN_DT_US, TRACK_STAGE_SLOW_MAX_DT_US, TRACK_STAGE_WATCH_STEP_UM,
+    TRACK_STRIDE_AUTO_MISS_UM,
     TRACK_AUTO_TRIGGER_EDGES, TRACK_AUTO_PULSED_RATIO, TRACK_AUTO_PULSED_DIM_RATIO, TRACK_AUTO_PULSED_MIN_Z,
     TRACK_AUTO_PULSED_PEAKED, TRACK_AUTO_PULSED_PEAKED_OVER,
     TRACK_HINT_PULSED_MIN_SPEED_UM_PER_MS);

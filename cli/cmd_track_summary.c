@@ -86,6 +86,14 @@ double track_median_speed_um_per_ms(const track_ctx *c)
   return r;
 }
 
+/* The median miss the first peaks' tracks made (track_detection_miss_median),
+ * as this run judged it or the first run (auto_chose); NaN: not judged. */
+static double judged_miss_um(const track_ctx *c)
+{
+  if (c->o->auto_chose) return c->o->auto_miss;
+  return c->miss_decided ? c->auto_miss : NAN;
+}
+
 elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, double wall_s,
                                 const char *path, const elfm_error *input_err, elfm_error *err)
 {
@@ -272,6 +280,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
                         rigid_before ? o->auto_rigid_by_shift : c->votes.by_shift);
   add_num(par, "auto_height_ratio", o->auto_chose ? o->auto_ratio : c->auto_decided ? c->auto_ratio : NAN);
   add_num(par, "auto_track_speed_um_per_ms", track_judged_speed_um_per_ms(c));
+  add_num(par, "auto_prediction_miss_um", judged_miss_um(c));
   cJSON_AddNumberToObject(par, "motion_delay_us", o->smooth.motion_delay_us);
   cJSON_AddNumberToObject(par, "motion_lead_fade_um_per_ms", o->smooth.motion_lead_fade_um_per_ms);
   cJSON_AddNumberToObject(par, "motion_slow_lead_ms", o->smooth.motion_slow_lead_ms);

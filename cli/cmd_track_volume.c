@@ -36,6 +36,17 @@ void track_speed_add(track_ctx *c, double v_um_per_ms)
   c->n_speed++;
 }
 
+void track_miss_add(track_ctx *c, const elfm_detection *d, double miss_um)
+{
+  /* in focus, where the views place a bead best (0.3 um per lateral axis
+   * against 0.7-0.8 beyond 60 um, docs/tracker.md "Where the information
+   * runs out"): there the miss is the motion's more than the noise's */
+  if (!(miss_um >= 0) || d->view_fit || !(fabs(d->z_um) < TRACK_MISS_FOCUS_UM)) return;
+  const double b = floor(miss_um / TRACK_MISS_BIN_UM);
+  track_hist_add(c->miss_hist, TRACK_MISS_BINS, b);
+  c->n_miss++;
+}
+
 /* The bin of a histogram's median (n > 0 counts in hist[0 .. bins)). */
 int track_hist_median_bin(const int64_t *hist, int bins, int64_t n)
 {
@@ -55,6 +66,12 @@ double track_detection_speed_median(const track_ctx *c)
 {
   if (c->n_speed == 0) return NAN;
   return (track_hist_median_bin(c->speed_hist, TRACK_SPEED_BINS, c->n_speed) + 0.5) * TRACK_SPEED_BIN_UM_PER_MS;
+}
+
+double track_detection_miss_median(const track_ctx *c)
+{
+  if (c->n_miss == 0) return NAN;
+  return (track_hist_median_bin(c->miss_hist, TRACK_MISS_BINS, c->n_miss) + 0.5) * TRACK_MISS_BIN_UM;
 }
 
 /* Which peaks give the width: 1 the in-focus ones, 2 those near focus, 0
@@ -692,8 +709,10 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     /* the first peaks' speed: for auto's choices, and for --repr lin under
      * the LED's windows, found (start_auto) or given */
     if ((o->blur_auto || o->dt_auto || o->repr_auto ||
-         (track_lin_choosable(o) && (o->start_auto || track_led_windows(o)))) && !c->auto_decided)
-      track_speed_add(c, elfm_link_last_speed(c->lk, j));
+         (track_lin_choosable(o) && (o->start_auto || track_led_windows(o))))) {
+      if (!c->auto_decided) track_speed_add(c, elfm_link_last_speed(c->lk, j));
+      if (!c->miss_decided) track_miss_add(c, &det[j], elfm_link_last_miss_um(c->lk, j));
+    }
     if (o->motion_auto && !c->rigid_decided &&
         elfm_link_last_velocity(c->lk, j, vnow, c->rigid_v + 3 * (size_t)n_rigid, &span_ms) >=
             (track_led_windows(o) ? TRACK_RIGID_LED_MIN_POINTS : TRACK_RIGID_MIN_POINTS) &&

@@ -359,7 +359,12 @@ int main(int argc, char **argv)
      * the tracker was not tuned on (measured at the defaults, seed 1: alpha
      * 0.686, F1 0.913, lateral RMSE 0.65 / 0.64 um, axial 1.33 um, 20 of
      * 20 beads paired; seeds 1-20 alpha 0.614, docs/tracker.md "Random
-     * motion"). A guard against a tracker that works on helices only. */
+     * motion"). A guard against a tracker that works on helices only.
+     * Since the fiftieth session track finds that these beads turn beyond
+     * its prediction and runs at twice the rate (--stride-us 500): seed 1
+     * alpha 0.750 (0.671 at 1 ms frames), F1 0.932, RMSE 0.60 / 0.59 /
+     * 1.35 um (docs/tracker.md "Frames twice as often for turning beads");
+     * the bar rose from 0.6 to 0.7 with it. */
     sub(dir, sizeof dir, "flow_random");
     fprintf(stderr, "flow_random (100 ms):\n");
     if (simulate("flow_random", 100, dir) && track(dir, "") && score(dir, NULL, &r)) {
@@ -367,7 +372,7 @@ int main(int argc, char **argv)
       CHECK_MSG(r.rmse_x_um <= 0.9 && r.rmse_y_um <= 0.9, "flow_random lateral RMSE %.2f %.2f",
                 r.rmse_x_um, r.rmse_y_um);
       CHECK_MSG(r.rmse_z_um <= 2.0, "flow_random axial RMSE %.2f", r.rmse_z_um);
-      CHECK_MSG(r.alpha >= 0.6, "flow_random alpha %.3f", r.alpha);
+      CHECK_MSG(r.alpha >= 0.7, "flow_random alpha %.3f", r.alpha);
       CHECK_MSG(r.n_paired_tracks >= r.n_truth_tracks - 2, "flow_random paired %d of %d",
                 r.n_paired_tracks, r.n_truth_tracks);
     } else CHECK(0);

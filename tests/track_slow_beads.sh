@@ -3,7 +3,7 @@
 # speeds at 1 ms; faster than cells, slower than the usual flow's 3.7-4.2)
 # on a time surface with neither --dt-us nor --tau-us given, the run starts
 # again with --dt-us 1500 --tau-us 1500: a bead at 0.3-2 mm/s fires few of
-# its pixels in 1 ms (cmd_track.h TRACK_SLOW_BEADS_*; docs/tracker.md
+# its pixels in 1 ms (cmd_track_auto.h TRACK_SLOW_BEADS_*; docs/tracker.md
 # "Windows for slow beads"). Checked: flow at 0.6-1 mm/s (150 ms, seed 1:
 # alpha 0.683 at 1 ms, where its faint peaks got the blur, 0.792 by
 # default) must gain 0.05; --dt-us or --tau-us given keeps the window; the
