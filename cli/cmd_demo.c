@@ -48,7 +48,7 @@ static void demo_usage(FILE *f)
 
 static int make_dir(const char *p)
 {
-  return (mkdir(p, 0777) == 0 || errno == EEXIST) ? 0 : -1;
+  return cli_mkdir_p(p); /* and its parents */
 }
 
 /* Run one of our subcommands in process with a fresh getopt state. */

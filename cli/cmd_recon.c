@@ -82,7 +82,7 @@ static void usage(FILE *f)
 
 static int make_dir(const char *path)
 {
-  if (mkdir(path, 0777) == 0 || errno == EEXIST) return 1;
+  if (cli_mkdir_p(path) == 0) return 1; /* and its parents */
   cli_message("recon", CLI_FAIL, "%s: cannot create directory: %s", path, strerror(errno));
   return 0;
 }

@@ -237,7 +237,7 @@ int cmd_traces(int argc, char **argv)
                                                                  a.min_dets, &t.obj, &err);
   elfm_table_free(tab);
   if (st) return cli_fail("traces", &err);
-  if (mkdir(a.out, 0777) != 0 && errno != EEXIST) {
+  if (cli_mkdir_p(a.out) != 0) {
     elfm_trace_objects_free(t.obj);
     return cli_message("traces", CLI_FAIL, "%s: cannot create directory: %s", a.out, strerror(errno));
   }

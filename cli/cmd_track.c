@@ -308,7 +308,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * -0.3 um x the sign of v_z, falls to -0.13 (docs/tracker.md). */
     elfm_smooth_options_set_views(&o.smooth, &calib);
   }
-  if (mkdir(o.out, 0777) != 0 && errno != EEXIST)
+  if (cli_mkdir_p(o.out) != 0) /* and its parents: --out results/run1 */
     return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));
 
   track_ctx c;

@@ -99,6 +99,18 @@ for o in o5 o6; do
   tail -1 "$d/tracks_trackmate.xml" | grep -q '</TrackMate>' || { echo "FAIL: $o: TrackMate XML not closed"; fail=$((fail+1)); }
   ls "$d" | grep -q 'tmp' && { echo "FAIL: $o: scratch file left: $(ls "$d")"; fail=$((fail+1)); }
 done
+# output directories whose parents do not exist yet are made, parents and
+# all (simulate, track, recon); one under a regular file is an error naming it
+check 0 "" "$bin" simulate flow --out "$tmp/new/sim/a" --duration-ms 5 --quiet
+check 0 "" "$bin" track --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" \
+  --out "$tmp/new/runs/1" -q
+[ -s "$tmp/new/runs/1/tracks.csv" ] && [ -s "$tmp/new/runs/1/summary.json" ] ||
+  { echo "FAIL: track --out with new parents wrote no tracks.csv / summary.json"; fail=$((fail+1)); }
+check 0 "" "$bin" recon --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" \
+  --out "$tmp/new/recon/1" --quiet --to-us 3000
+[ -d "$tmp/new/recon/1" ] || { echo "FAIL: recon --out with new parents made no directory"; fail=$((fail+1)); }
+check 1 "events.raw/x: cannot create directory" "$bin" track --calib "$tmp/new/sim/a/calib.json" \
+  --events "$tmp/new/sim/a/events.raw" --out "$tmp/new/sim/a/events.raw/x" -q
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
