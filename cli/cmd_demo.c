@@ -14,7 +14,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cjson/cJSON.h>
@@ -44,11 +43,6 @@ static void demo_usage(FILE *f)
           "also by the truth's depth (recall and alpha at |z| 0-20, 20-40, 40-60 and beyond\n"
           "60 um: score --by-depth).\n"
           "Output directory: DIR (default eventlfm_demo) with sim/, track/, recon/mips/, tracks.png.\n");
-}
-
-static int make_dir(const char *p)
-{
-  return cli_mkdir_p(p); /* and its parents */
 }
 
 /* Run one of our subcommands in process with a fresh getopt state. */
@@ -176,7 +170,7 @@ int cmd_demo(int argc, char **argv)
     return cli_message("demo", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
 
   char dir[PATH_MAX];
-  if (make_dir(op.out) != 0 || !realpath(op.out, dir))
+  if (cli_mkdir_p(op.out) != 0 || !realpath(op.out, dir)) /* and its parents */
     return cli_message("demo", CLI_FAIL, "cannot create %s: %s", op.out, strerror(errno));
   char sim[PATH_MAX], trk[PATH_MAX], mips[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX];
   cli_path_fmt(sim, sizeof sim, "%s/sim", dir);
@@ -184,7 +178,7 @@ int cmd_demo(int argc, char **argv)
   cli_path_fmt(mips, sizeof mips, "%s/recon", dir); /* recon writes recon/mips/ */
   cli_path_fmt(calib, sizeof calib, "%s/calib.json", sim);
   cli_path_fmt(ev, sizeof ev, "%s/events.raw", sim);
-  if (make_dir(sim) || make_dir(trk) || make_dir(mips))
+  if (cli_mkdir_p(sim) || cli_mkdir_p(trk) || cli_mkdir_p(mips))
     return cli_message("demo", CLI_FAIL, "cannot create directories in %s", dir);
 
   /* 1. simulate */
