@@ -685,7 +685,10 @@ double cli_peak_rss_mb(void)
 int cli_mkdir_p(const char *path)
 {
   char buf[PATH_MAX];
-  if (cli_path_fmt(buf, sizeof buf, "%s", path) >= (int)sizeof buf) return -1;
+  if (cli_path_fmt(buf, sizeof buf, "%s", path) != 0) { /* -1 when it does not fit */
+    errno = ENAMETOOLONG;
+    return -1;
+  }
   for (char *p = buf + 1; *p; p++) {
     if (*p != '/') continue;
     *p = '\0';

@@ -308,6 +308,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * -0.3 um x the sign of v_z, falls to -0.13 (docs/tracker.md). */
     elfm_smooth_options_set_views(&o.smooth, &calib);
   }
+  if (strlen(o.out) + sizeof "/tracks_trackmate.xml" > TRACK_PATH_CHARS) /* the longest name */
+    return cli_message(C, CLI_FAIL, "--out: %.60s...: %zu characters, too long for its files' paths "
+                       "(at most %zu)", o.out, strlen(o.out), TRACK_PATH_CHARS - sizeof "/tracks_trackmate.xml");
   if (cli_mkdir_p(o.out) != 0) /* and its parents: --out results/run1 */
     return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));
 
@@ -323,7 +326,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   snprintf(c.p_det, sizeof c.p_det, "%s/detections.csv", o.out);
   snprintf(c.p_tr, sizeof c.p_tr, "%s/tracks.csv", o.out);
   snprintf(c.p_fr, sizeof c.p_fr, "%s/frames.csv", o.out);
-  char p_isbi[1100], p_tm[1100], p_sum[1100], p_scratch[1100];
+  char p_isbi[TRACK_PATH_CHARS], p_tm[TRACK_PATH_CHARS], p_sum[TRACK_PATH_CHARS], p_scratch[TRACK_PATH_CHARS];
   snprintf(p_isbi, sizeof p_isbi, "%s/tracks_isbi.xml", o.out);
   snprintf(p_scratch, sizeof p_scratch, "%s/.tracks_points.tmp", o.out);
   snprintf(p_tm, sizeof p_tm, "%s/tracks_trackmate.xml", o.out);

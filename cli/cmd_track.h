@@ -337,6 +337,12 @@ typedef struct fwhm_list {
   } *b;
 } fwhm_list;
 
+/* The output files' paths: --out DIR and a name. Longer directories are
+ * refused before anything is made: cut to fit, every file's path became
+ * the same prefix, and the files overwrote one another (the ISBI writer
+ * then read its own scratch file cut short: a bus error). */
+#define TRACK_PATH_CHARS 1100
+
 typedef struct track_ctx {
   const track_opts *o;
   const elfm_calib *calib;
@@ -380,7 +386,7 @@ typedef struct track_ctx {
   elfm_linker *lk;
   FILE *fdet, *ftr, *ffr;      /* detections.csv, tracks.csv, frames.csv */
   elfm_frame_times frame_times; /* every frame's time, for the smoother's gap frames */
-  char p_det[1100], p_tr[1100], p_fr[1100];
+  char p_det[TRACK_PATH_CHARS], p_tr[TRACK_PATH_CHARS], p_fr[TRACK_PATH_CHARS];
   /* What is kept of each written track (summary.json, the stage analysis):
    * 112 bytes, a later piece's folded into its track's. The tracks are
    * freed once written and long ones written in pieces, so memory grows

@@ -111,6 +111,22 @@ check 0 "" "$bin" recon --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/s
 [ -d "$tmp/new/recon/1" ] || { echo "FAIL: recon --out with new parents made no directory"; fail=$((fail+1)); }
 check 1 "events.raw/x: cannot create directory" "$bin" track --calib "$tmp/new/sim/a/calib.json" \
   --events "$tmp/new/sim/a/events.raw" --out "$tmp/new/sim/a/events.raw/x" -q
+# output directories too long for their files' paths (many short parts,
+# each of them legal; one past PATH_MAX too): an error naming --out, and no
+# directory made. Before, the files' paths were cut to one prefix and
+# overwrote one another: a bus error at 4081 characters.
+for n in 120 500; do
+  long="$tmp/long"; i=0
+  while [ $i -lt $n ]; do long="$long/abcdefghi"; i=$((i+1)); done
+  check 1 "out: .*too long for its files' paths" "$bin" track --calib "$tmp/new/sim/a/calib.json" \
+    --events "$tmp/new/sim/a/events.raw" --out "$long" -q
+  [ -e "$tmp/long" ] && { echo "FAIL: a too long --out ($n parts) left directories behind"; fail=$((fail+1)); }
+done
+# the longest that fits works, parents and all
+long="$tmp/fits"
+while [ $((${#long} + 10)) -lt $((1100 - 22)) ]; do long="$long/abcdefghi"; done
+check 0 "" "$bin" track --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" --out "$long" -q
+[ -s "$long/tracks_trackmate.xml" ] || { echo "FAIL: an --out of ${#long} characters wrote no TrackMate file"; fail=$((fail+1)); }
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
