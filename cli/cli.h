@@ -204,6 +204,13 @@ int cli_bad_option(const char *cmd, int c, char *const argv[]);
 /* mkdir -p: path and its missing parents. 0, or -1 when one could not be
  * made (errno from mkdir) or the path is too long. */
 int cli_mkdir_p(const char *path);
+/* Whether every file a command writes into --out fits a path of PATH_MAX:
+ * longest_name (with its leading '/') is the longest of them. 1 when it
+ * fits; otherwise 0 and a message naming --out and the limit. Called before
+ * any directory is made, so a refused --out leaves nothing behind: cut to
+ * fit, the paths would name other files (and with many parts the
+ * directories were made before the first file failed). */
+int cli_out_fits(const char *cmd, const char *out, const char *longest_name);
 /* The whole file as a NUL-terminated string (the caller frees it); NULL
  * when it cannot be read or is longer than max_bytes (a caller's bound on
  * what it is willing to parse). */

@@ -699,6 +699,15 @@ int cli_mkdir_p(const char *path)
   return 0;
 }
 
+int cli_out_fits(const char *cmd, const char *out, const char *longest_name)
+{
+  const size_t n = strlen(out), most = PATH_MAX - 1 - strlen(longest_name);
+  if (n <= most) return 1;
+  cli_message(cmd, CLI_FAIL, "--out: %.60s...: %zu characters, too long for its files' paths (at most %zu)",
+              out, n, most);
+  return 0;
+}
+
 char *cli_read_text(const char *path, long max_bytes)
 {
   FILE *f = fopen(path, "rb");

@@ -170,6 +170,9 @@ int cmd_demo(int argc, char **argv)
     return cli_message("demo", CLI_USAGE, "unexpected argument '%s'", argv[optind]);
 
   char dir[PATH_MAX];
+  /* the longest file of the four steps, as given (made absolute below, a
+   * relative --out grows by the working directory: the steps then refuse) */
+  if (!cli_out_fits("demo", op.out, "/track/tracks_trackmate.xml")) return CLI_FAIL;
   if (cli_mkdir_p(op.out) != 0 || !realpath(op.out, dir)) /* and its parents */
     return cli_message("demo", CLI_FAIL, "cannot create %s: %s", op.out, strerror(errno));
   char sim[PATH_MAX], trk[PATH_MAX], mips[PATH_MAX], calib[PATH_MAX], ev[PATH_MAX];

@@ -140,6 +140,10 @@ int cmd_simulate(int argc, char **argv)
     elfm_sim_stats st;
     /* the directory's parents: elfm_sim_run makes the directory itself
      * (and says so when it cannot) */
+    if (!cli_out_fits("simulate", o.out, "/stimulus.csv")) {
+      elfm_scene_free(s);
+      return CLI_FAIL;
+    }
     (void)cli_mkdir_p(o.out);
     if (elfm_sim_run(s, o.out, &so, &st, &err)) {
       rc = cli_fail("simulate", &err);

@@ -218,6 +218,7 @@ int cmd_traces(int argc, char **argv)
   if (a.hold && !a.tracks)
     return cli_message("traces", CLI_USAGE, "--hold goes with --tracks (clusters are held anyway)");
   if (!cli_check_recon_options("traces", &rp)) return CLI_USAGE;
+  if (!cli_out_fits("traces", a.out, "/traces_summary.json")) return CLI_FAIL;
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib cal;

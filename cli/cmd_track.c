@@ -308,9 +308,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
      * -0.3 um x the sign of v_z, falls to -0.13 (docs/tracker.md). */
     elfm_smooth_options_set_views(&o.smooth, &calib);
   }
-  if (strlen(o.out) + sizeof "/tracks_trackmate.xml" > TRACK_PATH_CHARS) /* the longest name */
-    return cli_message(C, CLI_FAIL, "--out: %.60s...: %zu characters, too long for its files' paths "
-                       "(at most %zu)", o.out, strlen(o.out), TRACK_PATH_CHARS - sizeof "/tracks_trackmate.xml");
+  if (!cli_out_fits(C, o.out, "/tracks_trackmate.xml")) return CLI_FAIL; /* the longest name */
   if (cli_mkdir_p(o.out) != 0) /* and its parents: --out results/run1 */
     return cli_message(C, CLI_FAIL, "%s: cannot create directory: %s", o.out, strerror(errno));
 

@@ -5,6 +5,7 @@
 #ifndef ELFM_CMD_TRACK_H
 #define ELFM_CMD_TRACK_H
 
+#include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <threads.h>
@@ -337,11 +338,12 @@ typedef struct fwhm_list {
   } *b;
 } fwhm_list;
 
-/* The output files' paths: --out DIR and a name. Longer directories are
- * refused before anything is made: cut to fit, every file's path became
- * the same prefix, and the files overwrote one another (the ISBI writer
- * then read its own scratch file cut short: a bus error). */
-#define TRACK_PATH_CHARS 1100
+/* The output files' paths: --out DIR and a name, as long as the system
+ * takes. Longer directories are refused before anything is made
+ * (cli_out_fits): cut to fit, every file's path became the same prefix,
+ * and the files overwrote one another (the ISBI writer then read its own
+ * scratch file cut short: a bus error). */
+#define TRACK_PATH_CHARS PATH_MAX
 
 typedef struct track_ctx {
   const track_opts *o;

@@ -18,6 +18,10 @@
 
 #include "sim_ws.h"
 
+/* the output files' paths: a directory and a name, as long as the system
+ * takes (PATH_MAX on Linux, with its NUL) */
+#define SIM_PATH_CHARS 4096
+
 /* ---- step 5: sort, hand on, keep the late ones ---- */
 typedef struct sim_out {
   elfm_sim_sink_fn sink;
@@ -277,12 +281,15 @@ elfm_status elfm_sim_run(const elfm_scene *s, const char *out_dir, const elfm_si
                          elfm_sim_stats *stats, elfm_error *err)
 {
   if (!s || !out_dir) return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "sim_run: NULL argument");
+  /* checked before the directory is made: a refused name leaves nothing */
+  char p_ev[SIM_PATH_CHARS], p_truth[SIM_PATH_CHARS], p_calib[SIM_PATH_CHARS], p_stim[SIM_PATH_CHARS];
+  if (strlen(out_dir) + sizeof "/stimulus.csv" > sizeof p_ev) /* the longest name */
+    return elfm_error_set(err, ELFM_ERR_INVALID, out_dir, -1,
+                          "output directory name too long (%zu characters, at most %zu)",
+                          strlen(out_dir), sizeof p_ev - sizeof "/stimulus.csv");
   if (mkdir(out_dir, 0777) != 0 && errno != EEXIST)
     return elfm_error_set(err, ELFM_ERR_IO, out_dir, -1, "cannot create directory: %s",
                           strerror(errno));
-  char p_ev[1100], p_truth[1100], p_calib[1100], p_stim[1100];
-  if (strlen(out_dir) > 1000)
-    return elfm_error_set(err, ELFM_ERR_INVALID, out_dir, -1, "output directory name too long");
   snprintf(p_ev, sizeof p_ev, "%s/events.raw", out_dir);
   snprintf(p_truth, sizeof p_truth, "%s/truth.csv", out_dir);
   snprintf(p_calib, sizeof p_calib, "%s/calib.json", out_dir);

@@ -11,7 +11,9 @@
  */
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "check.h"
 #include "elfm_datasets.h"
@@ -661,6 +663,44 @@ static void test_memory_bounded(void)
   CHECK_MSG(long_kb - short_kb < 4096, "peak grew by %ld kB", long_kb - short_kb);
 }
 
+/* Build DIR = base + parts x "/abcdefghi" and make every directory but the
+ * last; returns its length. */
+static size_t long_dir(char *dir, size_t cap, const char *base, int parts)
+{
+  size_t n = (size_t)snprintf(dir, cap, "%s", base);
+  for (int i = 0; i < parts && n + 11 < cap; i++) {
+    (void)mkdir(dir, 0777);
+    n += (size_t)snprintf(dir + n, cap - n, "/abcdefghi");
+  }
+  return n;
+}
+
+/* Output directories as long as the system takes are written whole; longer
+ * ones are refused before the directory is made. Before, anything over 1000
+ * characters was refused, and only after its directory had been made. */
+static void test_long_out_dir(void)
+{
+  const char *p[] = {"objects.count=1", "duration_ms=2"};
+  elfm_scene *s = load("stage", p, 2);
+  if (!s) return;
+  elfm_error err;
+  static char dir[8192], f[8300];
+  size_t n = long_dir(dir, sizeof dir, "sim_long_ok", 120); /* 1211 characters */
+  CHECK(n > 1100);
+  CHECK_OK(elfm_sim_run(s, dir, NULL, NULL, &err), &err);
+  snprintf(f, sizeof f, "%s/stimulus.csv", dir); /* the longest name: none here */
+  CHECK(access(f, F_OK) != 0);
+  snprintf(f, sizeof f, "%s/truth.csv", dir);
+  CHECK(access(f, F_OK) == 0);
+  n = long_dir(dir, sizeof dir, "sim_long_no", 408); /* 4091: parents made */
+  CHECK(n > 4096 - sizeof "/stimulus.csv");
+  elfm_error_clear(&err);
+  CHECK(elfm_sim_run(s, dir, NULL, NULL, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "too long") != NULL);
+  CHECK(access(dir, F_OK) != 0); /* nothing made */
+  elfm_scene_free(s);
+}
+
 int main(void)
 {
   test_static_noise();
@@ -670,6 +710,7 @@ int main(void)
   test_step_size_timing();
   test_roundtrip_and_seed();
   test_truth_file();
+  test_long_out_dir();
   test_truth_motion();
   test_random_motion();
   test_random_motion_too_big();

@@ -115,16 +115,17 @@ check 1 "events.raw/x: cannot create directory" "$bin" track --calib "$tmp/new/s
 # each of them legal; one past PATH_MAX too): an error naming --out, and no
 # directory made. Before, the files' paths were cut to one prefix and
 # overwrote one another: a bus error at 4081 characters.
-for n in 120 500; do
+for n in 408 500; do
   long="$tmp/long"; i=0
   while [ $i -lt $n ]; do long="$long/abcdefghi"; i=$((i+1)); done
   check 1 "out: .*too long for its files' paths" "$bin" track --calib "$tmp/new/sim/a/calib.json" \
     --events "$tmp/new/sim/a/events.raw" --out "$long" -q
   [ -e "$tmp/long" ] && { echo "FAIL: a too long --out ($n parts) left directories behind"; fail=$((fail+1)); }
 done
-# the longest that fits works, parents and all
+# the longest that fits works, parents and all (PATH_MAX 4096 with its
+# NUL, less /tracks_trackmate.xml; the limit was 1078 characters before)
 long="$tmp/fits"
-while [ $((${#long} + 10)) -lt $((1100 - 22)) ]; do long="$long/abcdefghi"; done
+while [ $((${#long} + 10)) -le $((4095 - 21)) ]; do long="$long/abcdefghi"; done
 check 0 "" "$bin" track --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" --out "$long" -q
 [ -s "$long/tracks_trackmate.xml" ] || { echo "FAIL: an --out of ${#long} characters wrote no TrackMate file"; fail=$((fail+1)); }
 # an empty recording: valid outputs with headers only

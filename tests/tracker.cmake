@@ -53,6 +53,7 @@ elfm_add_track_script(track_near)
 # the slice scene end to end) and the command on bad input.
 elfm_add_test(test_traces test_traces.c TIMEOUT 120)
 elfm_add_track_script(traces_cli)
+elfm_add_track_script(long_out_cli)
 elfm_add_track_script(track_planes)
 elfm_add_track_script(track_dim)
 elfm_add_track_script(track_views)
