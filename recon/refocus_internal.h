@@ -73,9 +73,9 @@ struct elfm_refocus_plan {
  * path): consecutive non-zero ones, and the zeros of gaps up to
  * merge_gap_px between them. Its values sit at vals[off + 1 .. off + n], with a
  * zero on each side (vals[off] and vals[off + n + 1], then ELFM_RUN_PAD more
- * zeros for the scatter's groups of four) so that the scatter of
+ * zeros for the scatter's groups of eight) so that the scatter of
  * the run is a short gather over n + 1 voxels without edge cases. */
-#define ELFM_RUN_PAD 4
+#define ELFM_RUN_PAD 8
 typedef struct elfm_refocus_run {
   int view, row, c0, n;
   size_t off;

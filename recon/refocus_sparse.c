@@ -20,9 +20,9 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
+
+/* Eight floats, operated on lane by lane (GCC's vector extension). */
+typedef float v8f __attribute__((vector_size(32)));
 
 /* Plane rows per block of the scatter (elfm_refocus_sparse): the rows'
  * written extents live on the stack. bench_refocus on flow 1 s, 1 thread,
@@ -185,26 +185,17 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   return ELFM_OK;
 }
 
-elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,
-                                elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err)
+/* The plain path's planes (no agreement rule). On x86-64 Linux it is built
+ * twice, for AVX2 and for any x86-64 (SSE2), and the loader picks one; the
+ * source is the same, and its vectors of 8 are one instruction with AVX2,
+ * two without. */
+#if defined(__x86_64__) && defined(__GNUC__) && defined(__linux__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws,
+                           size_t n_old)
 {
-  /* the agreement rule reads each run as signal: its runs stay exact */
-  elfm_status st = sparse_runs(p, frame, p->need ? 0 : ws->merge_gap_px, ws, err);
-  if (st) return st;
-  const size_t n_old = sparse_begin(p, vol, ws);
   size_t old_at = 0;
-  if (p->need) {
-    /* the view-agreement rule: refocus_agree.c */
-    elfm_agree_support(p, ws);
-    const int avx2 = elfm_agree_avx2(ws);
-    for (int k = 0; k < p->nz; k++) {
-      sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
-      elfm_agree_plane(p, frame, vol, ws, k, avx2);
-    }
-    elfm_agree_support_clear(p, ws);
-    elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
-    return ELFM_OK;
-  }
   const int W = p->w, H = p->h;
   const elfm_refocus_run *runs = ws->runs;
   const float inv_all = p->inv_table[p->nv];
@@ -260,25 +251,27 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
             const int m = i1 - i0;
             const float *bb = b + i0;
             float *o = plane + (size_t)Y * W + (size_t)(Xs + i0);
-#ifdef __SSE2__
-            /* Four voxels at a time, the last group running past the run
+            /* Eight voxels at a time, the last group running past the run
              * onto its padding zeros: those voxels get + 0, their own value.
              * Not where the run is cut at xhi (the values go on there), nor
              * past the row's end. The same products and sums in the same
-             * order as the loop below, so the same floats; the loop's
-             * vectorised body with its scalar tail cost more on runs of ~8
-             * (bench_refocus on flow 1 s: 4.78-4.82 -> 4.46-4.70 ms per volume). */
-            const int m4 = (m + 3) & ~3;
-            if (i1 == run->n + 1 && Xs + i0 + m4 <= W) {
-              const __m128 v0 = _mm_set1_ps(w0), v1 = _mm_set1_ps(w1);
-              for (int i = 0; i < m4; i += 4) {
-                const __m128 t = _mm_add_ps(_mm_mul_ps(v0, _mm_loadu_ps(bb + i)),
-                                            _mm_mul_ps(v1, _mm_loadu_ps(bb + i + 1)));
-                _mm_storeu_ps(o + i, _mm_add_ps(_mm_loadu_ps(o + i), t));
+             * order as the loop below, so the same floats (neither target
+             * has FMA to contract them into); the loop's vectorised body
+             * with its scalar tail cost more on runs of ~8 (bench_refocus on
+             * flow 1 s: 4.78-4.82 -> 4.46-4.70 ms per volume, 4 at a time). */
+            const int m8 = (m + 7) & ~7;
+            if (i1 == run->n + 1 && Xs + i0 + m8 <= W) {
+              const v8f v0 = {w0, w0, w0, w0, w0, w0, w0, w0}, v1 = {w1, w1, w1, w1, w1, w1, w1, w1};
+              for (int i = 0; i < m8; i += 8) {
+                v8f b0, b1, acc;
+                memcpy(&b0, bb + i, sizeof b0);
+                memcpy(&b1, bb + i + 1, sizeof b1);
+                memcpy(&acc, o + i, sizeof acc);
+                acc += v0 * b0 + v1 * b1;
+                memcpy(o + i, &acc, sizeof acc);
               }
               continue;
             }
-#endif
             for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
           }
         }
@@ -305,6 +298,29 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
       }
     }
   }
+}
+
+elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,
+                                elfm_volume *vol, elfm_refocus_workspace *ws, elfm_error *err)
+{
+  /* the agreement rule reads each run as signal: its runs stay exact */
+  elfm_status st = sparse_runs(p, frame, p->need ? 0 : ws->merge_gap_px, ws, err);
+  if (st) return st;
+  const size_t n_old = sparse_begin(p, vol, ws);
+  size_t old_at = 0;
+  if (p->need) {
+    /* the view-agreement rule: refocus_agree.c */
+    elfm_agree_support(p, ws);
+    const int avx2 = elfm_agree_avx2(ws);
+    for (int k = 0; k < p->nz; k++) {
+      sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
+      elfm_agree_plane(p, frame, vol, ws, k, avx2);
+    }
+    elfm_agree_support_clear(p, ws);
+    elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
+    return ELFM_OK;
+  }
+  sparse_scatter(p, vol, ws, n_old);
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
   return ELFM_OK;
 }
