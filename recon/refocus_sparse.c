@@ -21,8 +21,21 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Eight floats, operated on lane by lane (GCC's vector extension). */
+/* Eight floats, operated on lane by lane (GCC's vector extension), loaded
+ * and stored unaligned through memcpy. Passed by pointer: by value they
+ * would change the ABI between sparse_scatter's targets. */
 typedef float v8f __attribute__((vector_size(32)));
+
+/* o[i] += w0[i] b0[i] + w1[i] b1[i], i < 8: the scalar loop's products and
+ * sums, in its order */
+__attribute__((always_inline)) static inline void add8(float *o, const v8f *w0, const v8f *b0,
+                                                      const v8f *w1, const v8f *b1)
+{
+  v8f acc;
+  memcpy(&acc, o, sizeof acc);
+  acc += *w0 * *b0 + *w1 * *b1;
+  memcpy(o, &acc, sizeof acc);
+}
 
 /* Plane rows per block of the scatter (elfm_refocus_sparse): the rows'
  * written extents live on the stack. bench_refocus on flow 1 s, 1 thread,
@@ -261,15 +274,11 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
             const float *bb = b + i0;
             float *oa = plane + (size_t)Y0 * W + (size_t)(Xs + i0), *oc = oa - W;
             for (int i = 0; i < m8; i += 8) {
-              v8f b0, b1, acc;
+              v8f b0, b1;
               memcpy(&b0, bb + i, sizeof b0);
               memcpy(&b1, bb + i + 1, sizeof b1);
-              memcpy(&acc, oa + i, sizeof acc);
-              acc += va0 * b0 + va1 * b1;
-              memcpy(oa + i, &acc, sizeof acc);
-              memcpy(&acc, oc + i, sizeof acc);
-              acc += vc0 * b0 + vc1 * b1;
-              memcpy(oc + i, &acc, sizeof acc);
+              add8(oa + i, &va0, &b0, &va1, &b1);
+              add8(oc + i, &vc0, &b0, &vc1, &b1);
             }
             continue;
           }
@@ -296,12 +305,10 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
             if (i1 == run->n + 1 && Xs + i0 + m8 <= W) {
               const v8f v0 = {w0, w0, w0, w0, w0, w0, w0, w0}, v1 = {w1, w1, w1, w1, w1, w1, w1, w1};
               for (int i = 0; i < m8; i += 8) {
-                v8f b0, b1, acc;
+                v8f b0, b1;
                 memcpy(&b0, bb + i, sizeof b0);
                 memcpy(&b1, bb + i + 1, sizeof b1);
-                memcpy(&acc, o + i, sizeof acc);
-                acc += v0 * b0 + v1 * b1;
-                memcpy(o + i, &acc, sizeof acc);
+                add8(o + i, &v0, &b0, &v1, &b1);
               }
               continue;
             }
