@@ -327,8 +327,10 @@ int cmd_recon(int argc, char **argv)
   memset(&o, 0, sizeof o);
   o.a = &a;
   /* the longest name it writes, before any directory is made */
-  if (!cli_out_fits("recon", a.out, a.save_volumes ? "/volumes/vol_000000.exr" : "/summary.json"))
-    return CLI_FAIL;
+  const char *longest = a.save_volumes ? "/volumes/vol_000000.exr"
+                        : a.save_mips  ? "/mips/mip_000000.png"
+                                       : "/summary.json";
+  if (!cli_out_fits("recon", a.out, longest)) return CLI_FAIL;
   snprintf(o.dir, sizeof o.dir, "%s", a.out);
   if (!make_dir(o.dir)) return CLI_FAIL;
   char sub[4200];

@@ -138,12 +138,12 @@ int cmd_simulate(int argc, char **argv)
     int last = -1;
     elfm_sim_options so = {o.quiet ? NULL : progress, &last, !o.no_truth};
     elfm_sim_stats st;
-    /* the directory's parents: elfm_sim_run makes the directory itself
-     * (and says so when it cannot) */
-    if (!cli_out_fits("simulate", o.out, "/stimulus.csv")) {
+    if (!cli_out_fits("simulate", o.out, "/stimulus.csv")) { /* the longest name */
       elfm_scene_free(s);
       return CLI_FAIL;
     }
+    /* the directory's parents: elfm_sim_run makes the directory itself
+     * (and says so when it cannot) */
     (void)cli_mkdir_p(o.out);
     if (elfm_sim_run(s, o.out, &so, &st, &err)) {
       rc = cli_fail("simulate", &err);

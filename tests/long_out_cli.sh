@@ -51,6 +51,12 @@ check 0 "" "$bin" recon --calib sim/calib.json --events sim/events.raw --out "$d
   { echo "FAIL: recon to ${#d} characters wrote no volume, MIP or summary"; fail=$((fail+1)); }
 refused recon_no "$bin" recon --calib sim/calib.json --events sim/events.raw --out "$(long recon_no 4080)" --save-volumes --quiet
 refused recon_no "$bin" recon --calib sim/calib.json --events sim/events.raw --out "$(long recon_no 5000)" --quiet
+# with MIPs only the longest is /mips/mip_NNNNNN.png (20): 4078 characters
+# are refused there, and written without them (/summary.json, 13)
+d=$(long recon_mp 4078)
+refused recon_mp "$bin" recon --calib sim/calib.json --events sim/events.raw --out "$d" --save-mips --quiet
+check 0 "" "$bin" recon --calib sim/calib.json --events sim/events.raw --out "$d" --quiet
+[ -s "$d/summary.json" ] || { echo "FAIL: recon to ${#d} characters wrote no summary"; fail=$((fail+1)); }
 # without volumes the longest is /summary.json: the same 4080 fits
 d=$(long recon_no 4080)
 [ $((${#d} + 13)) -le 4095 ] || d=${d%/abcdefghi}
