@@ -675,6 +675,26 @@ static size_t long_dir(char *dir, size_t cap, const char *base, int parts)
   return n;
 }
 
+/* Remove what long_dir made below base (and the files sim_run wrote at its
+ * end): a chain of 400 directories is more than some tools take (git's
+ * recursive removal stops at "File name too long"). */
+static void long_dir_remove(char *dir, const char *base)
+{
+  static const char *files[] = {"events.raw", "truth.csv", "calib.json", "stimulus.csv"};
+  char f[8300];
+  for (size_t i = 0; i < sizeof files / sizeof *files; i++) {
+    snprintf(f, sizeof f, "%s/%s", dir, files[i]);
+    (void)unlink(f);
+  }
+  const size_t nb = strlen(base);
+  for (;;) {
+    (void)rmdir(dir);
+    char *slash = strrchr(dir, '/');
+    if (!slash || (size_t)(slash - dir) < nb) break;
+    *slash = '\0';
+  }
+}
+
 /* Output directories as long as the system takes are written whole; longer
  * ones are refused before the directory is made. Before, anything over 1000
  * characters was refused, and only after its directory had been made. */
@@ -692,12 +712,16 @@ static void test_long_out_dir(void)
   CHECK(access(f, F_OK) != 0);
   snprintf(f, sizeof f, "%s/truth.csv", dir);
   CHECK(access(f, F_OK) == 0);
+  long_dir_remove(dir, "sim_long_ok");
+  CHECK(access("sim_long_ok", F_OK) != 0);
   n = long_dir(dir, sizeof dir, "sim_long_no", 408); /* 4091: parents made */
   CHECK(n > 4096 - sizeof "/stimulus.csv");
   elfm_error_clear(&err);
   CHECK(elfm_sim_run(s, dir, NULL, NULL, &err) == ELFM_ERR_INVALID);
   CHECK(strstr(err.message, "too long") != NULL);
   CHECK(access(dir, F_OK) != 0); /* nothing made */
+  long_dir_remove(dir, "sim_long_no");
+  CHECK(access("sim_long_no", F_OK) != 0);
   elfm_scene_free(s);
 }
 
