@@ -676,8 +676,8 @@ static size_t long_dir(char *dir, size_t cap, const char *base, int parts)
 }
 
 /* Remove what long_dir made below base (and the files sim_run wrote at its
- * end): a chain of 400 directories is more than some tools take (git's
- * recursive removal stops at "File name too long"). */
+ * end): a chain of 400 directories is more than some tools take (git worktree
+ * remove stops at "File name too long" on them). */
 static void long_dir_remove(char *dir, const char *base)
 {
   static const char *files[] = {"events.raw", "truth.csv", "calib.json", "stimulus.csv"};
