@@ -12,13 +12,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-check() {  # expected-exit-code pattern-in-stderr command...
-  want=$1; pat=$2; shift 2
-  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
-  if [ $rc -ne "$want" ]; then echo "FAIL: exit $rc (want $want): $1 $2"; head -c 300 "$tmp/err"; echo; fail=$((fail+1)); return; fi
-  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/err"; then
-    echo "FAIL: stderr lacks '$pat': $1 $2"; head -c 300 "$tmp/err"; echo; fail=$((fail+1)); fi
-}
+. "$(dirname "$0")/track_lib.sh"  # check
 # long ROOT CHARS: ROOT/abcdefghi/... of at least CHARS characters
 long() {
   d=$1

@@ -7,13 +7,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-check() {  # expected-exit-code pattern-in-stderr command...
-  want=$1; pat=$2; shift 2
-  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
-  if [ $rc -ne "$want" ]; then echo "FAIL: exit $rc (want $want): $*"; cat "$tmp/err"; fail=$((fail+1)); return; fi
-  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/err"; then
-    echo "FAIL: stderr lacks '$pat': $*"; cat "$tmp/err"; fail=$((fail+1)); fi
-}
+. "$(dirname "$0")/track_lib.sh"  # check
 check 0 "" "$bin" traces --help
 grep -q "detections.csv" "$tmp/out" || { echo "FAIL: --help says nothing of detections.csv"; fail=$((fail+1)); }
 check 2 "required" "$bin" traces

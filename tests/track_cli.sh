@@ -5,13 +5,7 @@ bin=$1
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
-check() {  # expected-exit-code pattern-in-stderr command...
-  want=$1; pat=$2; shift 2
-  "$@" >"$tmp/out" 2>"$tmp/err"; rc=$?
-  if [ $rc -ne "$want" ]; then echo "FAIL: exit $rc (want $want): $*"; cat "$tmp/err"; fail=$((fail+1)); return; fi
-  if [ -n "$pat" ] && ! grep -q -- "$pat" "$tmp/err"; then
-    echo "FAIL: stderr lacks '$pat': $*"; cat "$tmp/err"; fail=$((fail+1)); fi
-}
+. "$(dirname "$0")/track_lib.sh"  # check
 check 2 "required" "$bin" track
 check 2 "unknown option" "$bin" track --calib a --events b --out c --bogus
 check 2 "motion" "$bin" track --calib a --events b --out c --motion sideways

@@ -67,3 +67,21 @@ expect_usage_errors() {
       { echo "FAIL: $eu_bad not a usage error"; fail=$((fail+1)); }
   done
 }
+
+# check EXIT PATTERN COMMAND...: COMMAND exits EXIT and, when PATTERN is not
+# empty, its stderr holds it (grep); otherwise the command (its first 300
+# characters: long_out_cli.sh's paths run to 5000) and its stderr are
+# printed and the failure counted in $fail. COMMAND's output is left in
+# $tmp/out and $tmp/err.
+check() {
+  ck_want=$1; ck_pat=$2; shift 2
+  "$@" >"$tmp/out" 2>"$tmp/err"; ck_rc=$?
+  if [ $ck_rc -ne "$ck_want" ]; then
+    echo "FAIL: exit $ck_rc (want $ck_want): $(printf '%s' "$*" | cut -c1-300)"; head -c 2000 "$tmp/err"; echo
+    fail=$((fail+1)); return
+  fi
+  if [ -n "$ck_pat" ] && ! grep -q -- "$ck_pat" "$tmp/err"; then
+    echo "FAIL: stderr lacks '$ck_pat': $(printf '%s' "$*" | cut -c1-300)"; head -c 2000 "$tmp/err"; echo
+    fail=$((fail+1))
+  fi
+}
