@@ -244,7 +244,8 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
         if (ra >= rb) continue;
         const uint32_t *vr = ws->vrow + p->vrow_off[v] - bx->y0;
         const float gx0 = 1.0f - s->fx, gx1 = s->fx;
-        /* the two tap rows' weights: upper row (1 - fy), lower fy */
+        /* the two tap rows' weights, upper row (1 - fy) and lower fy, times
+         * the two columns' (1 - fx and fx) */
         const float wa = 1.0f - s->fy, wb = s->fy;
         const float a0 = wa * gx0, a1 = wa * gx1, c0 = wb * gx0, c1 = wb * gx1;
         const v8f va0 = {a0, a0, a0, a0, a0, a0, a0, a0}, va1 = {a1, a1, a1, a1, a1, a1, a1, a1};
@@ -285,9 +286,7 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
           for (int dy = 0; dy < 2; dy++) {
             const int Y = run->row - s->iy - dy;
             if (Y < ya || Y >= yb) continue;
-            const float wy = dy ? s->fy : 1.0f - s->fy;
-            if (wy == 0.0f) continue; /* an integer row shift: one row only */
-            const float w0 = wy * gx0, w1 = wy * gx1;
+            if ((dy ? wb : wa) == 0.0f) continue; /* an integer row shift: one row only */
             if (Xs + i0 < blo[Y - Yb]) blo[Y - Yb] = Xs + i0;
             if (Xs + i1 > bhi[Y - Yb]) bhi[Y - Yb] = Xs + i1;
             const int m = i1 - i0;
@@ -300,10 +299,10 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
              * order as the loop below, so the same floats (neither target
              * has FMA to contract them into); the loop's vectorised body
              * with its scalar tail cost more on runs of ~8 (bench_refocus on
-             * flow 1 s: 4.78-4.82 -> 4.46-4.70 ms per volume, 4 at a time). */
-            const int m8 = (m + 7) & ~7;
+             * flow 1 s: 4.78-4.82 -> 4.46-4.70 ms per volume, 4 at a time);
+             * m8 is m rounded up to the group. */
             if (i1 == run->n + 1 && Xs + i0 + m8 <= W) {
-              const v8f v0 = {w0, w0, w0, w0, w0, w0, w0, w0}, v1 = {w1, w1, w1, w1, w1, w1, w1, w1};
+              const v8f v0 = dy ? vc0 : va0, v1 = dy ? vc1 : va1;
               for (int i = 0; i < m8; i += 8) {
                 v8f b0, b1;
                 memcpy(&b0, bb + i, sizeof b0);
@@ -312,6 +311,7 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
               }
               continue;
             }
+            const float w0 = dy ? c0 : a0, w1 = dy ? c1 : a1;
             for (int i = 0; i < m; i++) o[i] += w0 * bb[i] + w1 * bb[i + 1];
           }
         }
