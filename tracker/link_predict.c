@@ -209,7 +209,14 @@ void elfm_link_predict_rest(const elfm_link_options *o, live_track *lt, int64_t 
 }
 
 /* What the last step's detections joined (elfm_link.h): the det_vel rows
- * step 4 of elfm_link_step fills. */
+ * step 4 of elfm_link_step fills. Detection i's row, or NULL when it has
+ * none (out of range, or it joined no track). */
+static const double *det_row(const elfm_linker *l, int i)
+{
+  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return NULL;
+  return l->det_vel + LINK_DET_VEL * (size_t)i;
+}
+
 double elfm_link_last_speed(const elfm_linker *l, int i)
 {
   double v[3];
@@ -219,8 +226,8 @@ double elfm_link_last_speed(const elfm_linker *l, int i)
 
 double elfm_link_last_miss_um(const elfm_linker *l, int i)
 {
-  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return NAN;
-  return l->det_vel[LINK_DET_VEL * (size_t)i + 8];
+  const double *m = det_row(l, i);
+  return m ? m[8] : NAN;
 }
 
 size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3],
@@ -231,8 +238,8 @@ size_t elfm_link_last_velocity(const elfm_linker *l, int i, double v_um_per_ms[3
     if (v_long_um_per_ms) v_long_um_per_ms[a] = NAN;
   }
   if (long_span_ms) *long_span_ms = NAN;
-  if (!l || i < 0 || (size_t)i >= l->cap_det || !l->det_vel || l->det_id[i] < 0) return 0;
-  const double *m = l->det_vel + LINK_DET_VEL * (size_t)i;
+  const double *m = det_row(l, i);
+  if (!m) return 0;
   if (!(m[6] >= 2)) return m[6] >= 1 ? 1 : 0;
   memcpy(v_um_per_ms, m, 3 * sizeof *m);
   if (v_long_um_per_ms) memcpy(v_long_um_per_ms, m + 3, 3 * sizeof *m);
