@@ -1,6 +1,7 @@
 /* test_peaks.c — 3D peak detector on synthetic volumes with known blobs:
  * positions (sub-voxel), widths, thresholds, separation, bad input, and the
  * time-surface lag correction. */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -42,6 +43,72 @@ static const elfm_detection *nearest(const elfm_detection *d, int n, double x, d
     if (e < bd) { bd = e; best = &d[i]; }
   }
   return best;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+  const float x = *(const float *)a, y = *(const float *)b;
+  return (x > y) - (x < y);
+}
+
+/* The k-sigma rule's median and MAD exactly: a volume small enough that
+ * the noise sample is every voxel, values with many ties, negatives,
+ * zeros of both signs and, in the last case, mostly zeros (then only the
+ * non-zero voxels are sampled). The threshold must be median + k x 1.4826
+ * x MAD to the last bit of the floats, as from a full sort; a selection
+ * off by one rank moves it by a step of the values. */
+static void test_noise_exact(void)
+{
+  const int dims[3][3] = {{16, 16, 16}, {15, 15, 15}, {20, 17, 9}};
+  for (int c = 0; c < 4; c++) {
+    const int *dm = dims[c % 3];
+    const size_t nvox = (size_t)dm[0] * dm[1] * dm[2];
+    elfm_error err;
+    elfm_error_clear(&err);
+    elfm_volume *v = elfm_volume_create(dm[0], dm[1], dm[2], 1.0, -10, 2, &err);
+    float *s = malloc(nvox * sizeof *s);
+    CHECK(v != NULL && s != NULL);
+    if (!v || !s) {
+      free(s);
+      elfm_volume_free(v);
+      return;
+    }
+    uint64_t sd = 4242 + (uint64_t)c;
+    size_t ns = 0, nz = 0;
+    for (size_t i = 0; i < nvox; i++) {
+      sd ^= sd << 13; sd ^= sd >> 7; sd ^= sd << 17;
+      const unsigned r = (unsigned)(sd >> 40) % 100;
+      float x;
+      const float u = (float)((double)(sd >> 11) / 9007199254740992.0 * 40.0 - 5.0);
+      if (c == 3) x = r < 80 ? 0.0f : u;                  /* mostly zeros */
+      else if (r < 10) x = 0.0f;
+      else if (r < 15) x = -0.0f;
+      else if (r < 35) x = (float)((int)(r % 11) - 3);      /* ties, negatives */
+      else x = u;
+      v->data[i] = x;
+      if (x != 0) nz++;
+    }
+    const int nonzero_only = nz * 2 < nvox;
+    for (size_t i = 0; i < nvox; i++)
+      if (!nonzero_only || v->data[i] != 0) s[ns++] = v->data[i];
+    qsort(s, ns, sizeof *s, cmp_float);
+    const float med = s[ns / 2];
+    for (size_t i = 0; i < ns; i++) s[i] = fabsf(s[i] - med);
+    qsort(s, ns, sizeof *s, cmp_float);
+    const double want = (double)med + 6.0 * (1.4826 * (double)s[ns / 2]);
+    elfm_peaks_options o;
+    elfm_peaks_options_default(&o);
+    o.k_sigma = 6;
+    elfm_peaks *pk = elfm_peaks_create(&o, v->w, v->h, v->nz, &err);
+    elfm_detection det[64];
+    int n = 0;
+    CHECK_OK(elfm_peaks_detect(pk, v, det, 64, &n, &err), &err);
+    CHECK_MSG(elfm_peaks_last_threshold(pk) == want, "case %d: threshold %.9g, sorted %.9g (%zu samples)",
+              c, elfm_peaks_last_threshold(pk), want, ns);
+    elfm_peaks_free(pk);
+    free(s);
+    elfm_volume_free(v);
+  }
 }
 
 int main(void)
@@ -485,5 +552,6 @@ int main(void)
 
   elfm_peaks_free(pk);
   elfm_volume_free(v);
+  test_noise_exact();
   return check_report();
 }

@@ -27,6 +27,7 @@ struct elfm_peaks {
   size_t cand_cap;
   peak_cand *cand;   /* candidates of the current volume */
   float *sample;     /* noise sample */
+  uint32_t *keys;    /* its selection's scratch (select_kth) */
   double *thr_plane; /* threshold per z plane of the current volume */
   double *thr_low;   /* hysteresis (low) threshold per plane; = thr_plane when off */
   uint8_t *views;    /* views sampling each voxel (NULL: rule off) */
@@ -96,10 +97,11 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   p->cand_cap = nvox / 8 + 64;
   p->cand = malloc(p->cand_cap * sizeof *p->cand);
   p->sample = malloc(PEAKS_NOISE_SAMPLES * sizeof *p->sample);
+  p->keys = malloc(PEAKS_NOISE_SAMPLES * sizeof *p->keys);
   p->row_max = malloc((size_t)h * nz * sizeof *p->row_max);
   p->thr_plane = malloc((size_t)nz * sizeof *p->thr_plane);
   p->thr_low = malloc((size_t)nz * sizeof *p->thr_low);
-  if (!p->cand || !p->sample || !p->row_max || !p->thr_plane || !p->thr_low) goto nomem;
+  if (!p->cand || !p->sample || !p->keys || !p->row_max || !p->thr_plane || !p->thr_low) goto nomem;
   return p;
 nomem:
   elfm_peaks_free(p);
@@ -112,6 +114,7 @@ void elfm_peaks_free(elfm_peaks *p)
   if (!p) return;
   free(p->cand);
   free(p->sample);
+  free(p->keys);
   free(p->row_max);
   free(p->thr_plane);
   free(p->thr_low);
@@ -143,37 +146,59 @@ elfm_status elfm_peaks_set_view_counts(elfm_peaks *p, const uint8_t *count, int 
 
 double elfm_peaks_last_threshold(const elfm_peaks *p) { return p ? p->last_threshold : NAN; }
 
-/* k-th smallest of a[0..n-1] (Hoare's selection; reorders a). */
-static float select_kth(float *a, size_t n, size_t k)
+/* A float's bits as an unsigned key in the floats' order (not NaN): a
+ * negative float's bits flipped, a positive one's sign bit set. -0 sorts
+ * just below +0, which compare equal: either is the same value below. */
+static inline uint32_t float_key(float f)
 {
-  size_t lo = 0, hi = n - 1;
-  while (lo < hi) {
-    float pivot = a[lo + (hi - lo) / 2];
-    size_t i = lo, j = hi;
-    while (i <= j) {
-      while (a[i] < pivot) i++;
-      while (a[j] > pivot) j--;
-      if (i <= j) {
-        float t = a[i]; a[i] = a[j]; a[j] = t;
-        i++;
-        if (j == 0) break;
-        j--;
-      }
-    }
-    if (k <= j) hi = j;
-    else if (k >= i) lo = i;
-    else break;
-  }
-  return a[k];
+  uint32_t b;
+  memcpy(&b, &f, sizeof b);
+  return (b & 0x80000000u) ? ~b : b | 0x80000000u;
 }
 
-/* median and 1.4826 * MAD of s[0..n-1] (reorders s). */
-static void robust_stats(float *s, size_t n, double *median, double *sigma)
+static inline float key_float(uint32_t k)
+{
+  const uint32_t b = (k & 0x80000000u) ? k & 0x7fffffffu : ~k;
+  float f;
+  memcpy(&f, &b, sizeof f);
+  return f;
+}
+
+/* The k-th smallest (from 0) of a[0 .. n-1], k < n, no NaN: a radix
+ * selection on float_key, 11 + 11 + 10 bits, each pass counting the keys
+ * that share the bits found so far and keeping those of the digit that
+ * holds rank k (keys: n of scratch). The same value as any exact
+ * selection; Hoare's quickselect, which this replaced, was 2 % of `track`
+ * under perf (its partitions branch on every sample: two selections of
+ * 16,384 samples per volume). */
+static float select_kth(const float *a, size_t n, size_t k, uint32_t *keys)
+{
+  static const int shift[3] = {21, 10, 0};
+  static const uint32_t digits[3] = {2048, 2048, 1024};
+  for (size_t i = 0; i < n; i++) keys[i] = float_key(a[i]);
+  size_t m = n;
+  for (int pass = 0; pass < 3; pass++) {
+    uint32_t hist[2048] = {0};
+    const uint32_t dm = digits[pass] - 1;
+    for (size_t i = 0; i < m; i++) hist[(keys[i] >> shift[pass]) & dm]++;
+    uint32_t dg = 0;
+    while (k >= hist[dg]) k -= hist[dg++];
+    /* keep the keys of digit dg, in place (the write index trails) */
+    size_t j = 0;
+    for (size_t i = 0; i < m; i++)
+      if (((keys[i] >> shift[pass]) & dm) == dg) keys[j++] = keys[i];
+    m = j;
+  }
+  return key_float(keys[0]); /* m keys left, all the same */
+}
+
+/* median and 1.4826 * MAD of s[0..n-1] (overwrites s; keys: n of scratch). */
+static void robust_stats(float *s, size_t n, uint32_t *keys, double *median, double *sigma)
 {
   if (n == 0) { *median = 0; *sigma = 0; return; }
-  float med = select_kth(s, n, n / 2);
+  float med = select_kth(s, n, n / 2, keys);
   for (size_t i = 0; i < n; i++) s[i] = fabsf(s[i] - med);
-  float mad = select_kth(s, n, n / 2);
+  float mad = select_kth(s, n, n / 2, keys);
   *median = med;
   *sigma = 1.4826 * mad;  /* MAD -> sigma for Gaussian noise */
 }
@@ -499,7 +524,7 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
       if (n >= PEAKS_NOISE_SAMPLES / 16 || step == run) break;
     }
     double med, sig;
-    robust_stats(p->sample, n, &med, &sig);
+    robust_stats(p->sample, n, p->keys, &med, &sig);
     double t = med + o->k_sigma * sig;
     if (t > thr) thr = t;
   }
