@@ -143,32 +143,6 @@ void solver_options(ceres::Solver::Options *so, bool sparse, int max_iter)
   }
 }
 
-// Invert a small SPD matrix (m <= 3) in place by Gauss-Jordan; false if singular.
-bool invert_small(double *M, int m)
-{
-  double A[3][6];
-  for (int i = 0; i < m; i++)
-    for (int j = 0; j < 2 * m; j++) A[i][j] = j < m ? M[i * m + j] : (j - m == i);
-  for (int c = 0; c < m; c++) {
-    int p = c;
-    for (int r = c + 1; r < m; r++)
-      if (std::fabs(A[r][c]) > std::fabs(A[p][c])) p = r;
-    if (!(std::fabs(A[p][c]) > 1e-300)) return false;
-    if (p != c)
-      for (int j = 0; j < 2 * m; j++) std::swap(A[p][j], A[c][j]);
-    double d = A[c][c];
-    for (int j = 0; j < 2 * m; j++) A[c][j] /= d;
-    for (int r = 0; r < m; r++)
-      if (r != c) {
-        double f = A[r][c];
-        for (int j = 0; j < 2 * m; j++) A[r][j] -= f * A[c][j];
-      }
-  }
-  for (int i = 0; i < m; i++)
-    for (int j = 0; j < m; j++) M[i * m + j] = A[i][j + m];
-  return true;
-}
-
 // Reweighted linear fits (IRLS) that start a Ceres solve: at most this
 // many, until no point's weight moves by more than the tolerance. Each
 // costs a few linear solves (3 x 3, or banded), a Ceres iteration an
@@ -178,6 +152,10 @@ bool invert_small(double *M, int m)
 // 50 allowed). From IRLS's fit they take 6.0, the spline's one.
 const int kIrlsMaxIter = 200;
 const double kIrlsWeightTol = 1e-5;
+// BIC units (chi2 units) above the lowest BIC beyond which a polynomial
+// fit from settled IRLS weights is not polished by Ceres (fit_impl), plus
+// 1e-4 of that BIC: Ceres moved such costs by under 1e-6.
+const double kPolishMargin = 2.0;
 
 // ---- parametric fits -----------------------------------------------------
 
@@ -188,6 +166,7 @@ struct PolyFit {
   double chi2 = 0;
   int outliers = 0;
   bool ok = false;
+  bool polished = false;      // Ceres ran (poly_fit)
 };
 
 // The polynomial's start for Ceres: reweighted linear least squares per
@@ -197,7 +176,8 @@ struct PolyFit {
 // mean, at rest) and spent its iterations getting to where the 3 x 3
 // solves put it: bench_smooth, 1000-point track, 4.9 -> 1.2 ms (constant
 // velocity), 6.8 -> 1.5 ms (acceleration).
-void poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
+// True when the weights settled (no longer moving by kIrlsWeightTol).
+bool poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
 {
   const int m = order + 1;
   double T = 0;
@@ -215,7 +195,7 @@ void poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
     w[i] = loss.weight(s);
   }
   double q[3][3] = {{0}};  // coefficients in scaled time u = tau / T: sum_r q[r] u^r
-  bool have = false;
+  bool have = false, settled = false;
   for (int it = 0; it < kIrlsMaxIter; it++) {
     double M[3][9] = {{0}}, b[3][3] = {{0}};
     for (size_t i = 0; i < d.n; i++) {
@@ -229,7 +209,7 @@ void poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
       }
     }
     bool solved = true;
-    for (int a = 0; a < 3; a++) solved = solved && invert_small(M[a], m);
+    for (int a = 0; a < 3; a++) solved = solved && elfm_invert_small(M[a], m);
     if (!solved) break;  // too few distinct times (or weights): the last solution, if any
     for (int a = 0; a < 3; a++)
       for (int r = 0; r < m; r++) {
@@ -250,20 +230,23 @@ void poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
       dw = std::max(dw, std::fabs(wn - w[i]));
       w[i] = wn;
     }
-    if (dw < kIrlsWeightTol) break;
+    if (dw < kIrlsWeightTol) {
+      settled = true;
+      break;
+    }
   }
-  if (!have) return;  // Ceres starts from p as it is
+  if (!have) return false;  // Ceres starts from p as it is
   for (int a = 0; a < 3; a++) {
     p[0][a] = q[a][0];
     p[1][a] = q[a][1] / T;
     p[2][a] = m > 2 ? 2 * q[a][2] / (T * T) : 0;  // the model's 0.5 acc tau^2
   }
+  return settled;
 }
 
-void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit *f)
+// Ceres from f->p (IRLS's fit, or 0 where it had none).
+void poly_solve(const Data &d, const Loss &loss, int order, int max_iter, PolyFit *f)
 {
-  f->order = order;
-  poly_start(d, loss, order, f->p);
   ceres::Problem::Options po;
   po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem prob(po);
@@ -286,7 +269,13 @@ void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit 
   ceres::Solver::Summary sum;
   ceres::Solve(so, &prob, &sum);
   f->ok = sum.IsSolutionUsable();
-  // chi2 (robustified), IRLS weights and the covariance per axis
+}
+
+// At f->p: the robust chi2, the outliers and the covariance per axis
+// (from the IRLS weights there).
+void poly_stats(const Data &d, const Loss &loss, PolyFit *f)
+{
+  const int order = f->order;
   const int m = order + 1;
   double M[3][9] = {{0}};
   f->chi2 = 0;
@@ -311,9 +300,20 @@ void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit 
   }
   for (int a = 0; a < 3; a++) {
     std::memcpy(f->cov[a], M[a], sizeof(double) * m * m);
-    if (!invert_small(f->cov[a], m))
+    if (!elfm_invert_small(f->cov[a], m))
       for (int k = 0; k < m * m; k++) f->cov[a][k] = kNaN;
   }
+}
+
+// polish: Ceres from IRLS's fit (as every fit a track keeps); without, IRLS's
+// fit alone where its weights settled (poly_fit_choose says why), else Ceres.
+void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, bool polish, PolyFit *f)
+{
+  f->order = order;
+  f->polished = polish || !poly_start(d, loss, order, f->p);
+  if (f->polished) poly_solve(d, loss, order, max_iter, f);
+  else f->ok = true;
+  poly_stats(d, loss, f);
 }
 
 void poly_eval(const PolyFit &f, const Data &d, size_t nq, const int64_t *q, double *pos,
@@ -677,14 +677,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   PolyFit cv, ca;
   SplineFit sp;
   SplineSetup ss;
-  if (try_cv) {
-    poly_fit(d, loss, 1, o->max_iterations, &cv);
-    if (cv.ok) inf.bic[ELFM_MODEL_CONST_VELOCITY] = cv.chi2 + 6 * lnobs;
-  }
-  if (try_ca) {
-    poly_fit(d, loss, 2, o->max_iterations, &ca);
-    if (ca.ok) inf.bic[ELFM_MODEL_CONST_ACCEL] = ca.chi2 + 9 * lnobs;
-  }
+  if (try_cv) poly_fit(d, loss, 1, o->max_iterations, false, &cv);
+  if (try_ca) poly_fit(d, loss, 2, o->max_iterations, false, &ca);
   if (try_sp) {
     // states: union of data and query times
     std::vector<int64_t> all(t_us, t_us + n);
@@ -716,6 +710,32 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     if (spline_fit(d, ss, loss, o->spline_weight_ms3, o->gcv_gamma, sparse, o->max_iterations, &sp) &&
         sp.ok)
       inf.bic[ELFM_MODEL_SPLINE] = sp.chi2 + sp.edf * lnobs;
+  }
+  // ---- the polynomials: Ceres polishes each one that could be chosen,
+  // that is, whose BIC from IRLS lies within kPolishMargin of the lowest
+  // so far (polishing only lowers a cost, so a polished one may come under
+  // another, which is then polished too). Why: from IRLS's settled weights
+  // Ceres took 6-7 steps that left the cost the same to 1e-6 (flow 1 s
+  // seed 1, every fit), while a curved track's spline lies hundreds of
+  // units lower: 49 of its 54 polynomial solves were for models no track
+  // kept, 7 % of its smoothing time. The outputs are the same bytes (50
+  // recordings of every scene; as they are with no polynomial polished).
+  for (bool again = true; again;) {
+    if (try_cv && cv.ok) inf.bic[ELFM_MODEL_CONST_VELOCITY] = cv.chi2 + 6 * lnobs;
+    if (try_ca && ca.ok) inf.bic[ELFM_MODEL_CONST_ACCEL] = ca.chi2 + 9 * lnobs;
+    double lo = std::numeric_limits<double>::infinity();
+    for (double b : inf.bic)
+      if (b < lo) lo = b;  // NaN (not fitted) never
+    const double margin = kPolishMargin + 1e-4 * std::fabs(lo);
+    again = false;
+    for (PolyFit *f : {try_cv ? &cv : nullptr, try_ca ? &ca : nullptr}) {
+      const double b = f ? inf.bic[f == &cv ? ELFM_MODEL_CONST_VELOCITY : ELFM_MODEL_CONST_ACCEL] : 0;
+      if (f && !f->polished && !(b >= lo + margin)) {
+        poly_fit(d, loss, f->order, o->max_iterations, true, f);
+        if (!f->ok) inf.bic[f == &cv ? ELFM_MODEL_CONST_VELOCITY : ELFM_MODEL_CONST_ACCEL] = kNaN;
+        again = true;
+      }
+    }
   }
   // ---- choose: lowest BIC, ties (within 1e-9 relative) to the simpler
   elfm_motion_model best = ELFM_MODEL_AUTO;
@@ -751,25 +771,6 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
 }  // namespace
 
 extern "C" {
-
-void elfm_smooth_options_default(elfm_smooth_options *o)
-{
-  std::memset(o, 0, sizeof *o);
-  o->model = ELFM_MODEL_AUTO;
-  o->loss = ELFM_LOSS_HUBER;
-  o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
-  o->spline_weight_ms3 = 0;
-  o->gcv_gamma = 1;      // classical GCV; track: 1.4 (elfm_smooth.h)
-  o->spline_order = 2;   // acceleration penalty
-  o->solver = ELFM_SOLVER_AUTO;
-  o->max_iterations = 50;
-  o->min_sigma_xy_um = 0.02;
-  o->min_sigma_z_um = 0.08;
-  o->allow_spline = 1;
-  o->view_fit_sigma_factor = 1.5;  // view fits vs peaks at equal depth (elfm_smooth.h)
-  o->fit_sd_power = 0;             // each point's own view-fit scatter: off (elfm_smooth.h)
-  o->motion_lead_fade_um_per_ms = 0.5;  // the lead's fade speed (elfm_smooth.h)
-}
 
 elfm_status elfm_smooth_fit(const elfm_smooth_options *o, size_t n, const int64_t *t_us,
                             const double *xyz_um, const double *sigma_um, size_t nq,

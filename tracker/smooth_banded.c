@@ -423,3 +423,33 @@ double elfm_spline_gcv_lambda_coarse(const elfm_spline_problem *sp, const double
 {
   return gcv_search(sp, w, gamma, GCV_DECADES);
 }
+
+/* smooth_banded.h */
+int elfm_invert_small(double *M, int m)
+{
+  double A[3][6];
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < 2 * m; j++) A[i][j] = j < m ? M[i * m + j] : (j - m == i);
+  for (int c = 0; c < m; c++) {
+    int p = c;
+    for (int r = c + 1; r < m; r++)
+      if (fabs(A[r][c]) > fabs(A[p][c])) p = r;
+    if (!(fabs(A[p][c]) > 1e-300)) return 0;
+    if (p != c)
+      for (int j = 0; j < 2 * m; j++) {
+        const double t = A[p][j];
+        A[p][j] = A[c][j];
+        A[c][j] = t;
+      }
+    double d = A[c][c];
+    for (int j = 0; j < 2 * m; j++) A[c][j] /= d;
+    for (int r = 0; r < m; r++)
+      if (r != c) {
+        double f = A[r][c];
+        for (int j = 0; j < 2 * m; j++) A[r][j] -= f * A[c][j];
+      }
+  }
+  for (int i = 0; i < m; i++)
+    for (int j = 0; j < m; j++) M[i * m + j] = A[i][j + m];
+  return 1;
+}

@@ -113,6 +113,10 @@ double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, do
  * look. The whole grid when no decade has a score. */
 double elfm_spline_gcv_lambda_coarse(const elfm_spline_problem *sp, const double *w, double gamma);
 
+/* Invert a small SPD matrix (m <= 3, row-major) in place by Gauss-Jordan
+ * with partial pivoting; 0 (M undefined) when singular. */
+int elfm_invert_small(double *M, int m);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,10 +1,12 @@
 /* smooth_models.c — smoothing a whole track over its span (the C side of
- * elfm_smooth.h: frame grid, gap times, storing the result in the track). */
+ * elfm_smooth.h: the options' defaults, frame grid, gap times, storing the
+ * result in the track). */
 #include "elfm_smooth.h"
 #include "elfm_analysis.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* b(w) of one image moving at (wx, wy) um/ms (elfm_smooth.h). */
 static double image_bias_factor(const elfm_smooth_options *o, double wx, double wy)
@@ -12,6 +14,25 @@ static double image_bias_factor(const elfm_smooth_options *o, double wx, double 
   const double sp = hypot(wx, wy);
   const double lead = o->motion_lead_um + o->motion_slow_lead_ms * fmax(0.0, o->motion_slow_um_per_ms - sp);
   return lead / fmax(sp, o->motion_lead_fade_um_per_ms) - o->motion_delay_us * 1e-3;
+}
+
+void elfm_smooth_options_default(elfm_smooth_options *o)
+{
+  memset(o, 0, sizeof *o);
+  o->model = ELFM_MODEL_AUTO;
+  o->loss = ELFM_LOSS_HUBER;
+  o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
+  o->spline_weight_ms3 = 0;
+  o->gcv_gamma = 1;      // classical GCV; track: 1.4 (elfm_smooth.h)
+  o->spline_order = 2;   // acceleration penalty
+  o->solver = ELFM_SOLVER_AUTO;
+  o->max_iterations = 50;
+  o->min_sigma_xy_um = 0.02;
+  o->min_sigma_z_um = 0.08;
+  o->allow_spline = 1;
+  o->view_fit_sigma_factor = 1.5;  // view fits vs peaks at equal depth (elfm_smooth.h)
+  o->fit_sd_power = 0;             // each point's own view-fit scatter: off (elfm_smooth.h)
+  o->motion_lead_fade_um_per_ms = 0.5;  // the lead's fade speed (elfm_smooth.h)
 }
 
 void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
