@@ -143,18 +143,13 @@ void solver_options(ceres::Solver::Options *so, bool sparse, int max_iter)
   }
 }
 
-// Reweighted linear fits (IRLS) that start a Ceres solve: at most this
-// many, until no point's weight moves by more than the tolerance. Each
-// costs a few linear solves (3 x 3, or banded), a Ceres iteration an
-// evaluation of every residual block and a sparse factorisation; and
-// where the loss is far from quadratic Ceres crept (worm 0.5 s seed 1: 62
-// polynomial fits took 23.5 iterations on average, some stopped at the
-// 50 allowed). From IRLS's fit they take 6.0, the spline's one.
+// Reweighted linear fits (IRLS, a few 3 x 3 or banded solves each) start
+// every Ceres solve: at most this many, until no weight moves by the
+// tolerance. From p = 0 Ceres crept where the loss is far from quadratic
+// (worm 0.5 s seed 1: 23.5 iterations per polynomial fit); from IRLS, 6.0.
 const int kIrlsMaxIter = 200;
 const double kIrlsWeightTol = 1e-5;
-// BIC units (chi2 units) above the lowest BIC beyond which a polynomial
-// fit from settled IRLS weights is not polished by Ceres (fit_impl), plus
-// 1e-4 of that BIC: Ceres moved such costs by under 1e-6.
+// fit_impl: Ceres polishes settled polynomial fits within this + 1e-4 x BIC of the lowest.
 const double kPolishMargin = 2.0;
 
 // ---- parametric fits -----------------------------------------------------
@@ -305,14 +300,21 @@ void poly_stats(const Data &d, const Loss &loss, PolyFit *f)
   }
 }
 
-// polish: Ceres from IRLS's fit (as every fit a track keeps); without, IRLS's
-// fit alone where its weights settled (poly_fit_choose says why), else Ceres.
-void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, bool polish, PolyFit *f)
+// IRLS's fit; Ceres's from there where its weights did not settle.
+void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit *f)
 {
   f->order = order;
-  f->polished = polish || !poly_start(d, loss, order, f->p);
+  f->polished = !poly_start(d, loss, order, f->p);
   if (f->polished) poly_solve(d, loss, order, max_iter, f);
   else f->ok = true;
+  poly_stats(d, loss, f);
+}
+
+// Ceres from IRLS's settled fit (poly_fit left it in f->p).
+void poly_polish(const Data &d, const Loss &loss, int max_iter, PolyFit *f)
+{
+  f->polished = true;
+  poly_solve(d, loss, f->order, max_iter, f);
   poly_stats(d, loss, f);
 }
 
@@ -677,8 +679,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   PolyFit cv, ca;
   SplineFit sp;
   SplineSetup ss;
-  if (try_cv) poly_fit(d, loss, 1, o->max_iterations, false, &cv);
-  if (try_ca) poly_fit(d, loss, 2, o->max_iterations, false, &ca);
+  if (try_cv) poly_fit(d, loss, 1, o->max_iterations, &cv);
+  if (try_ca) poly_fit(d, loss, 2, o->max_iterations, &ca);
   if (try_sp) {
     // states: union of data and query times
     std::vector<int64_t> all(t_us, t_us + n);
@@ -711,30 +713,28 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
         sp.ok)
       inf.bic[ELFM_MODEL_SPLINE] = sp.chi2 + sp.edf * lnobs;
   }
-  // ---- the polynomials: Ceres polishes each one that could be chosen,
-  // that is, whose BIC from IRLS lies within kPolishMargin of the lowest
-  // so far (polishing only lowers a cost, so a polished one may come under
-  // another, which is then polished too). Why: from IRLS's settled weights
-  // Ceres took 6-7 steps that left the cost the same to 1e-6 (flow 1 s
-  // seed 1, every fit), while a curved track's spline lies hundreds of
-  // units lower: 49 of its 54 polynomial solves were for models no track
-  // kept, 7 % of its smoothing time. The outputs are the same bytes (50
-  // recordings of every scene; as they are with no polynomial polished).
+  // ---- Ceres polishes each polynomial that could be chosen (its IRLS BIC
+  // near the lowest; a polished one may fall under another: that one too).
+  // From settled IRLS weights Ceres's 6-7 steps left the cost the same to
+  // 1e-6, and a curved track's spline lies hundreds of units lower: on flow
+  // 1 s seed 1, 49 of 54 solves were for models no track kept, 7 % of the
+  // smoothing. The same output bytes on 50 recordings (docs/tracker.md).
+  PolyFit *const poly[2] = {try_cv ? &cv : nullptr, try_ca ? &ca : nullptr};
+  const elfm_motion_model poly_model[2] = {ELFM_MODEL_CONST_VELOCITY, ELFM_MODEL_CONST_ACCEL};
   for (bool again = true; again;) {
-    if (try_cv && cv.ok) inf.bic[ELFM_MODEL_CONST_VELOCITY] = cv.chi2 + 6 * lnobs;
-    if (try_ca && ca.ok) inf.bic[ELFM_MODEL_CONST_ACCEL] = ca.chi2 + 9 * lnobs;
+    for (int j = 0; j < 2; j++)  // 3 (order + 1) parameters
+      if (poly[j] && poly[j]->ok) inf.bic[poly_model[j]] = poly[j]->chi2 + 3 * (j + 2) * lnobs;
     double lo = std::numeric_limits<double>::infinity();
     for (double b : inf.bic)
       if (b < lo) lo = b;  // NaN (not fitted) never
     const double margin = kPolishMargin + 1e-4 * std::fabs(lo);
     again = false;
-    for (PolyFit *f : {try_cv ? &cv : nullptr, try_ca ? &ca : nullptr}) {
-      const double b = f ? inf.bic[f == &cv ? ELFM_MODEL_CONST_VELOCITY : ELFM_MODEL_CONST_ACCEL] : 0;
-      if (f && !f->polished && !(b >= lo + margin)) {
-        poly_fit(d, loss, f->order, o->max_iterations, true, f);
-        if (!f->ok) inf.bic[f == &cv ? ELFM_MODEL_CONST_VELOCITY : ELFM_MODEL_CONST_ACCEL] = kNaN;
-        again = true;
-      }
+    for (int j = 0; j < 2; j++) {
+      PolyFit *f = poly[j];
+      if (!f || f->polished || inf.bic[poly_model[j]] >= lo + margin) continue;
+      poly_polish(d, loss, o->max_iterations, f);
+      if (!f->ok) inf.bic[poly_model[j]] = kNaN;
+      again = true;
     }
   }
   // ---- choose: lowest BIC, ties (within 1e-9 relative) to the simpler
