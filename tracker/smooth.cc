@@ -143,14 +143,13 @@ void solver_options(ceres::Solver::Options *so, bool sparse, int max_iter)
   }
 }
 
-// Reweighted linear fits (IRLS, a few 3 x 3 or banded solves each) start
-// every Ceres solve: at most this many, until no weight moves by the
-// tolerance. From p = 0 Ceres crept where the loss is far from quadratic
-// (worm 0.5 s seed 1: 23.5 iterations per polynomial fit); from IRLS, 6.0.
+// Reweighted linear fits (IRLS) start every Ceres solve: at most this many, until
+// no weight moves by the tolerance (from p = 0 Ceres crept: docs/tracker.md "Smoother").
 const int kIrlsMaxIter = 200;
 const double kIrlsWeightTol = 1e-5;
-// fit_impl: Ceres polishes settled polynomial fits within this + 1e-4 x BIC of the lowest.
-const double kPolishMargin = 2.0;
+// fit_impl: Ceres polishes settled polynomial fits within this + 1e-4 x BIC of the lowest;
+// unsettled ones within this + a tenth of their own (Ceres took up to 0.7 % off such costs).
+const double kPolishMargin = 2.0, kUnsettledShare = 0.1;
 
 // ---- parametric fits -----------------------------------------------------
 
@@ -162,17 +161,16 @@ struct PolyFit {
   int outliers = 0;
   bool ok = false;
   bool polished = false;      // Ceres ran (poly_fit)
+  int irls = 0;               // poly_start's verdict
 };
 
-// The polynomial's start for Ceres: reweighted linear least squares per
-// axis (IRLS, the robust weights shared by the axes as the loss shares
-// them), in times scaled to [-1, 1] so that the normal equations stay
-// well conditioned for long tracks. Why: Ceres started at p = 0 (the
-// mean, at rest) and spent its iterations getting to where the 3 x 3
-// solves put it: bench_smooth, 1000-point track, 4.9 -> 1.2 ms (constant
-// velocity), 6.8 -> 1.5 ms (acceleration).
-// True when the weights settled (no longer moving by kIrlsWeightTol).
-bool poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
+// The polynomial by reweighted least squares per axis (IRLS, the robust
+// weights shared by the axes as the loss shares them), in times scaled to
+// [-1, 1] for long tracks' conditioning: Ceres from p = 0 crept there
+// (bench_smooth, 1000 points: 4.9 -> 1.2 ms, acceleration 6.8 -> 1.5 ms).
+// 2 when the weights settled (moving by under kIrlsWeightTol), 1 when not,
+// 0 when no fit could be solved (p left as it was).
+int poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
 {
   const int m = order + 1;
   double T = 0;
@@ -230,13 +228,13 @@ bool poly_start(const Data &d, const Loss &loss, int order, double p[3][3])
       break;
     }
   }
-  if (!have) return false;  // Ceres starts from p as it is
+  if (!have) return 0;  // Ceres starts from p as it is
   for (int a = 0; a < 3; a++) {
     p[0][a] = q[a][0];
     p[1][a] = q[a][1] / T;
     p[2][a] = m > 2 ? 2 * q[a][2] / (T * T) : 0;  // the model's 0.5 acc tau^2
   }
-  return settled;
+  return settled ? 2 : 1;
 }
 
 // Ceres from f->p (IRLS's fit, or 0 where it had none).
@@ -300,17 +298,18 @@ void poly_stats(const Data &d, const Loss &loss, PolyFit *f)
   }
 }
 
-// IRLS's fit; Ceres's from there where its weights did not settle.
+// IRLS's fit; Ceres's where IRLS had none.
 void poly_fit(const Data &d, const Loss &loss, int order, int max_iter, PolyFit *f)
 {
   f->order = order;
-  f->polished = !poly_start(d, loss, order, f->p);
+  f->irls = poly_start(d, loss, order, f->p);
+  f->polished = f->irls == 0;
   if (f->polished) poly_solve(d, loss, order, max_iter, f);
   else f->ok = true;
   poly_stats(d, loss, f);
 }
 
-// Ceres from IRLS's settled fit (poly_fit left it in f->p).
+// Ceres from IRLS's fit (poly_fit left it in f->p).
 void poly_polish(const Data &d, const Loss &loss, int max_iter, PolyFit *f)
 {
   f->polished = true;
@@ -715,10 +714,9 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   }
   // ---- Ceres polishes each polynomial that could be chosen (its IRLS BIC
   // near the lowest; a polished one may fall under another: that one too).
-  // From settled IRLS weights Ceres's 6-7 steps left the cost the same to
-  // 1e-6, and a curved track's spline lies hundreds of units lower: on flow
-  // 1 s seed 1, 49 of 54 solves were for models no track kept, 7 % of the
-  // smoothing. The same output bytes on 50 recordings (docs/tracker.md).
+  // From settled weights Ceres's 6-7 steps left the cost the same to 1e-6,
+  // and a curved track's spline lies hundreds of units lower: the solves
+  // were for models no track kept (docs/tracker.md "Fewer Ceres solves").
   PolyFit *const poly[2] = {try_cv ? &cv : nullptr, try_ca ? &ca : nullptr};
   const elfm_motion_model poly_model[2] = {ELFM_MODEL_CONST_VELOCITY, ELFM_MODEL_CONST_ACCEL};
   for (bool again = true; again;) {
@@ -727,11 +725,13 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     double lo = std::numeric_limits<double>::infinity();
     for (double b : inf.bic)
       if (b < lo) lo = b;  // NaN (not fitted) never
-    const double margin = kPolishMargin + 1e-4 * std::fabs(lo);
     again = false;
     for (int j = 0; j < 2; j++) {
       PolyFit *f = poly[j];
-      if (!f || f->polished || inf.bic[poly_model[j]] >= lo + margin) continue;
+      if (!f || f->polished) continue;
+      const double b = inf.bic[poly_model[j]];
+      if (b >= lo + kPolishMargin + (f->irls == 2 ? 1e-4 * std::fabs(lo) : kUnsettledShare * std::fabs(b)))
+        continue;
       poly_polish(d, loss, o->max_iterations, f);
       if (!f->ok) inf.bic[poly_model[j]] = kNaN;
       again = true;
