@@ -86,6 +86,7 @@ int main(void)
     CHECK_OK(elfm_smooth_fit(&o, m, T, X, NULL, m, T, P, V, PS, NULL, &i1, &err), &err);
     CHECK_OK(elfm_smooth_fit(&on, m, T, X, NULL, m, T, P1, V1, PS1, NULL, &i2, &err), &err);
     CHECK_EQ_INT(i1.model, on.model);
+    CHECK(i1.ceres == 1 && i2.ceres == 1); /* the chosen polynomial polished */
     CHECK_MSG(memcmp(P, P1, 3 * m * sizeof *P) == 0 && memcmp(V, V1, 3 * m * sizeof *V) == 0 &&
                   memcmp(PS, PS1, 3 * m * sizeof *PS) == 0,
               "case %d: auto's fit is not the named model's (x %.17g / %.17g)", c, P[0], P1[0]);
@@ -121,6 +122,29 @@ int main(void)
     double md = 0;
     for (int i = 0; i < 900; i++) md = fmax(md, fabs(P2[i] - P3[i]));
     CHECK_MSG(md < 1e-4, "dense vs sparse %g", md);
+  }
+  /* irls_only: the spline as the reweighted linear fits leave it, Ceres's
+   * polish skipped (info.ceres says which), and here the same as Ceres's
+   * to 1e-3 um, with outliers and either loss: a fit that only feeds
+   * another may skip the polish (elfm_track_smooth). */
+  for (int c = 0; c < 4; c++) {
+    elfm_smooth_options oi = o;
+    oi.loss = c & 1 ? ELFM_LOSS_CAUCHY : ELFM_LOSS_HUBER;
+    double X2[3 * 300], P1[3 * 300], P2[3 * 300];
+    memcpy(X2, X, sizeof X2);
+    if (c & 2)
+      for (int k = 0; k < 6; k++) X2[3 * (20 + 45 * k) + k % 3] += 3.0 + k;
+    elfm_smooth_info ii;
+    CHECK_OK(elfm_smooth_fit(&oi, 300, T, X2, NULL, 300, T, P1, NULL, NULL, NULL, &ii, &err), &err);
+    CHECK_MSG(ii.model == ELFM_MODEL_SPLINE && ii.ceres == 1, "case %d: model %d, ceres %d", c,
+              ii.model, ii.ceres);
+    oi.irls_only = 1;
+    CHECK_OK(elfm_smooth_fit(&oi, 300, T, X2, NULL, 300, T, P2, NULL, NULL, NULL, &ii, &err), &err);
+    CHECK_MSG(ii.model == ELFM_MODEL_SPLINE && ii.ceres == 0, "case %d irls_only: model %d, ceres %d",
+              c, ii.model, ii.ceres);
+    double md = 0;
+    for (int i = 0; i < 900; i++) md = fmax(md, fabs(P2[i] - P1[i]));
+    CHECK_MSG(md < 1e-3, "case %d: IRLS's fit %g um from Ceres's", c, md);
   }
 
   /* 4. Offsets: the same track at t ~ 0 vs ~1e12 us, and shifted by

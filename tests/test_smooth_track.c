@@ -173,6 +173,20 @@ int main(void)
     CHECK(e_off > 0.15);
     CHECK(e_on < e_ref + 0.01);
     CHECK(e_ref < 0.06);
+    /* with the bias, the first fit only feeds the second: IRLS's alone;
+     * the fit kept is Ceres's (the spline along the turn: a third) */
+    CHECK(tb[0]->ceres == 1 && tb[1]->ceres == 1 && tb[2]->ceres == 1);
+    {
+      elfm_smooth_options ot = ob;
+      ot.spline_turn = 1;
+      ot.spline_order = 3;
+      CHECK_OK(elfm_track_smooth(tb[1], &ot, &err), &err);
+      CHECK_MSG(tb[1]->model == ELFM_MODEL_SPLINE && tb[1]->spline_omega_rad_per_ms > 0 &&
+                    tb[1]->ceres == 1,
+                "turn: model %d omega %g ceres %d", tb[1]->model, tb[1]->spline_omega_rad_per_ms,
+                tb[1]->ceres);
+      CHECK_OK(elfm_track_smooth(tb[1], &ob, &err), &err); /* back as it was */
+    }
     /* the points stay the detections as measured */
     CHECK(tb[1]->pts[40].x_um == tb[0]->pts[40].x_um && tb[1]->pts[40].y_um == tb[0]->pts[40].y_um);
     /* z is left alone: the bias is along the lateral motion */

@@ -116,6 +116,11 @@ typedef struct elfm_smooth_options {
   int spline_turn;
   elfm_smooth_solver solver;
   int max_iterations;           /* Ceres iterations, 50 */
+  /* 1: the fits as the reweighted linear fits (IRLS) leave them, without
+   * Ceres's polish (a fit whose result only feeds another:
+   * elfm_track_smooth's first fits, when a last one follows). 0 (default):
+   * Ceres polishes the fits that could be chosen. */
+  int irls_only;
   double min_sigma_xy_um;       /* floors of the estimated noise: 0.02 um */
   double min_sigma_z_um;        /* and 0.08 um (kz = 4 times the lateral) */
   int allow_spline;             /* AUTO may pick the spline (1); 0 for rigid stage motion */
@@ -197,6 +202,9 @@ typedef struct elfm_smooth_info {
   int n_outliers;               /* points beyond twice the loss scale (where Huber's weight
                                    falls below 1/2), whichever the loss, and farther than
                                    outlier_min_um from the fit */
+  int ceres;                    /* 1: Ceres polished the fit used; 0: the reweighted
+                                   linear fits alone (irls_only, or the plain loss, or a
+                                   static track) */
 } elfm_smooth_info;
 
 /* Fit n points (t_us non-decreasing; xyz_um n x 3; sigma_um n x 3 or NULL

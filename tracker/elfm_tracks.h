@@ -89,6 +89,7 @@ typedef struct elfm_track {
                                      elfm_smooth_options.spline_turn), else 0 */
   double edf;                 /* effective parameters per axis */
   int n_outliers;             /* points beyond twice the loss scale (elfm_smooth.h) */
+  int ceres;                  /* 1: Ceres polished the fit kept (elfm_smooth_info.ceres) */
   /* A piece of a long track (elfm_link_take_piece): partial = 1, and only
    * the frames in [write_from_frame, write_to_frame) are its own, written
    * to tracks.csv, ISBI and TrackMate; its points outside them are the

@@ -383,7 +383,7 @@ struct SplineFit {
   std::vector<double> z0[3], z1[3], z2[3];
   double chi2 = 0, edf = 0;
   int outliers = 0;
-  bool ok = false;
+  bool ok = false, polished = false;  // polished: Ceres ran
 };
 
 // Robust spline at lambda through Ceres, started from the linear solution.
@@ -480,13 +480,10 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
   const size_t K = ss.ts.size();
   const elfm_spline_problem sp = spline_problem(d, ss);
   std::vector<double> w(d.n, 1.0), work(5 * K + 1);
-  // GCV's weight: whole decades first, then downhill on the half-decade
-  // grid from the best (elfm_spline_gcv_lambda_coarse): 15-16 fits where
-  // the half-decade grid took 25. Checked against the whole grid in the
-  // same runs, both choices: the same weight in 5159 of 5160 on 162
-  // recordings (docs/tracker.md "The spline's weight in fewer fits"); the
-  // other, a 7-point track whose score is flat to 1e-6 beyond 1e7 (a
-  // straight line), at 1.8e8 against 3.2e7.
+  // GCV's weight: whole decades, then downhill on the half-decade grid
+  // (elfm_spline_gcv_lambda_coarse): 15-16 fits, not the grid's 25, and the
+  // same weight in 5159 of 5160 on 162 recordings (docs/tracker.md "The
+  // spline's weight in fewer fits").
   double lam = lambda_given > 0 ? lambda_given : elfm_spline_gcv_lambda_coarse(&sp, w.data(), gcv_gamma);
   // Beyond these the banded factorisation loses its digits (condition
   // ~ lambda / (sigma^2 h^3)); the ends are already "interpolate" and "line".
@@ -514,7 +511,8 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
       lam = std::min(std::max(elfm_spline_gcv_lambda_coarse(&sp, w.data(), gcv_gamma), 1e-9), 1e9);
     }
     spline_irls(d, ss, sp, loss, lam, &bd, work, w, f->p);
-    if (!spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
+    if (max_iter > 0 && !spline_ceres(d, ss, loss, lam, sparse, max_iter, f->p)) return false;
+    f->polished = max_iter > 0;
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
   } else {
     robust_weights(d, ss, loss, f->p, w, &f->chi2, &f->outliers);
@@ -698,8 +696,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
       elfm_spline_prior_table(ss.ts.data(), ss.ts.size(), ss.order, ss.coef.data());
     ss.state_of.resize(n);
     for (size_t i = 0; i < n; i++)
-      ss.state_of[i] =
-          (size_t)(std::lower_bound(all.begin(), all.end(), t_us[i]) - all.begin());
+      ss.state_of[i] = (size_t)(std::lower_bound(all.begin(), all.end(), t_us[i]) - all.begin());
     for (int a = 0; a < 3; a++) {
       std::vector<double> s(n);
       for (size_t i = 0; i < n; i++) s[i] = d.sig[3 * i + a];
@@ -708,7 +705,8 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     }
     bool sparse = o->solver == ELFM_SOLVER_SPARSE ||
                   (o->solver == ELFM_SOLVER_AUTO && ss.ts.size() > 30);
-    if (spline_fit(d, ss, loss, o->spline_weight_ms3, o->gcv_gamma, sparse, o->max_iterations, &sp) &&
+    const int iters = o->irls_only ? 0 : o->max_iterations;  // 0: IRLS's fit, no Ceres
+    if (spline_fit(d, ss, loss, o->spline_weight_ms3, o->gcv_gamma, sparse, iters, &sp) &&
         sp.ok)
       inf.bic[ELFM_MODEL_SPLINE] = sp.chi2 + sp.edf * lnobs;
   }
@@ -728,7 +726,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     again = false;
     for (int j = 0; j < 2; j++) {
       PolyFit *f = poly[j];
-      if (!f || f->polished) continue;
+      if (!f || f->polished || o->irls_only) continue;
       const double b = inf.bic[poly_model[j]];
       if (b >= lo + kPolishMargin + (f->irls == 2 ? 1e-4 * std::fabs(lo) : kUnsettledShare * std::fabs(b)))
         continue;
@@ -756,11 +754,13 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     inf.spline_weight_ms3 = sp.lambda;
     inf.edf = sp.edf / 3;
     inf.n_outliers = sp.outliers;
+    inf.ceres = sp.polished;
   } else {
     const PolyFit &f = best == ELFM_MODEL_CONST_ACCEL ? ca : cv;
     poly_eval(f, d, nq, q, pos, vel, psd, vsd);
     inf.edf = f.order + 1;
     inf.n_outliers = f.outliers;
+    inf.ceres = f.polished;
     if (best == ELFM_MODEL_CONST_ACCEL)
       for (int a = 0; a < 3; a++) inf.accel_um_per_ms2[a] = f.p[2][a];
   }

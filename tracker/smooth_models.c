@@ -240,9 +240,15 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     sig = NULL;
   }
   elfm_smooth_info info;
-  st = elfm_smooth_fit(o, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
-  if (st != ELFM_OK) goto fail;
   const int bias = o->motion_lead_um != 0 || o->motion_delay_us != 0 || o->motion_slow_lead_ms != 0;
+  /* With the bias, a second fit follows (below) and only its result is
+   * kept: the first is IRLS's alone, without Ceres's polish, which moved
+   * no output of the flow, worm, stage and blinking scenes (docs/tracker.md
+   * "Fewer Ceres solves"); the last fit of a track is always Ceres's. */
+  elfm_smooth_options o1 = *o;
+  o1.irls_only = o->irls_only || (bias && n >= 3);
+  st = elfm_smooth_fit(&o1, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
+  if (st != ELFM_OK) goto fail;
   double omega = 0;
   if (o->spline_turn && o->spline_order == 3 && info.model == ELFM_MODEL_SPLINE) {
     if (!(omega_scratch = malloc(ns * sizeof *omega_scratch))) {
@@ -263,6 +269,8 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
     if (bias) points_unbiased(o, t, vel, xyz);
     elfm_smooth_options o2 = *o;
     o2.model = info.model;
+    /* and a third after this one: the bias again along the turn */
+    o2.irls_only = o->irls_only || (bias && omega > 0 && info.model == ELFM_MODEL_SPLINE);
     if (info.model == ELFM_MODEL_SPLINE && !(omega > 0)) o2.spline_weight_ms3 = info.spline_weight_ms3;
     o2.spline_omega_rad_per_ms = omega > 0 ? omega : o->spline_omega_rad_per_ms;
     st = elfm_smooth_fit(&o2, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
@@ -275,6 +283,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
        * again as well: 0.8769; the weight chosen again: 0.8763. */
       points_unbiased(o, t, vel, xyz);
       o2.spline_weight_ms3 = info.spline_weight_ms3;
+      o2.irls_only = o->irls_only;
       st = elfm_smooth_fit(&o2, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
       if (st != ELFM_OK) goto fail;
     }
@@ -303,6 +312,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   t->spline_omega_rad_per_ms = info.model == ELFM_MODEL_SPLINE ? omega : 0;
   t->edf = info.edf;
   t->n_outliers = info.n_outliers;
+  t->ceres = info.ceres;
   free(td);
   free(xyz);
   free(sig);
