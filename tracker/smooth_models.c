@@ -242,9 +242,9 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   elfm_smooth_info info;
   const int bias = o->motion_lead_um != 0 || o->motion_delay_us != 0 || o->motion_slow_lead_ms != 0;
   /* With the bias, a second fit follows (below) and only its result is
-   * kept: the first is IRLS's alone, without Ceres's polish, which moved
-   * no output of the flow, worm, stage and blinking scenes (docs/tracker.md
-   * "Fewer Ceres solves"); the last fit of a track is always Ceres's. */
+   * kept: the first is IRLS's alone, without Ceres's polish (on 66
+   * recordings, one track on 6 of them moved, alpha the same: docs/
+   * tracker.md "Fewer Ceres solves"); the last fit is always Ceres's. */
   elfm_smooth_options o1 = *o;
   o1.irls_only = o->irls_only || (bias && n >= 3);
   st = elfm_smooth_fit(&o1, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
