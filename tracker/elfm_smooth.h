@@ -203,8 +203,8 @@ typedef struct elfm_smooth_info {
                                    falls below 1/2), whichever the loss, and farther than
                                    outlier_min_um from the fit */
   int ceres;                    /* 1: Ceres polished the fit used; 0: the reweighted
-                                   linear fits alone (irls_only, or the plain loss, or a
-                                   static track) */
+                                   linear fits alone (irls_only; the spline under the
+                                   plain loss, a linear fit; a static track) */
 } elfm_smooth_info;
 
 /* Fit n points (t_us non-decreasing; xyz_um n x 3; sigma_um n x 3 or NULL

@@ -21,18 +21,18 @@ void elfm_smooth_options_default(elfm_smooth_options *o)
   memset(o, 0, sizeof *o);
   o->model = ELFM_MODEL_AUTO;
   o->loss = ELFM_LOSS_HUBER;
-  o->loss_scale = 3.0;   // |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof
+  o->loss_scale = 3.0;   /* |r| > 3 sigma (3D norm): ~3 % of inliers for chi2 with 3 dof */
   o->spline_weight_ms3 = 0;
-  o->gcv_gamma = 1;      // classical GCV; track: 1.4 (elfm_smooth.h)
-  o->spline_order = 2;   // acceleration penalty
+  o->gcv_gamma = 1;      /* classical GCV; track: 1.4 (elfm_smooth.h) */
+  o->spline_order = 2;   /* acceleration penalty */
   o->solver = ELFM_SOLVER_AUTO;
   o->max_iterations = 50;
   o->min_sigma_xy_um = 0.02;
   o->min_sigma_z_um = 0.08;
   o->allow_spline = 1;
-  o->view_fit_sigma_factor = 1.5;  // view fits vs peaks at equal depth (elfm_smooth.h)
-  o->fit_sd_power = 0;             // each point's own view-fit scatter: off (elfm_smooth.h)
-  o->motion_lead_fade_um_per_ms = 0.5;  // the lead's fade speed (elfm_smooth.h)
+  o->view_fit_sigma_factor = 1.5;  /* view fits vs peaks at equal depth (elfm_smooth.h) */
+  o->fit_sd_power = 0;             /* each point's own view-fit scatter: off (elfm_smooth.h) */
+  o->motion_lead_fade_um_per_ms = 0.5;  /* the lead's fade speed (elfm_smooth.h) */
 }
 
 void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
