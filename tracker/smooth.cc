@@ -719,7 +719,7 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
   const elfm_motion_model poly_model[2] = {ELFM_MODEL_CONST_VELOCITY, ELFM_MODEL_CONST_ACCEL};
   for (bool again = true; again;) {
     for (int j = 0; j < 2; j++)  // 3 (order + 1) parameters
-      if (poly[j] && poly[j]->ok) inf.bic[poly_model[j]] = poly[j]->chi2 + 3 * (j + 2) * lnobs;
+      if (poly[j] && poly[j]->ok) inf.bic[poly_model[j]] = poly[j]->chi2 + 3 * (poly[j]->order + 1) * lnobs;
     double lo = std::numeric_limits<double>::infinity();
     for (double b : inf.bic)
       if (b < lo) lo = b;  // NaN (not fitted) never
