@@ -134,11 +134,15 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     if (b->x1 < b->x0) b->x1 = b->x0;
     if (b->y1 < b->y0) b->y1 = b->y0;
     p->box_area += (double)(b->x1 - b->x0) * (b->y1 - b->y0);
-    for (int y = b->y0; y < b->y1; y++)
-      for (int x = b->x0; x < b->x1; x++) {
-        uint8_t *q = p->in_boxes + (size_t)y * (size_t)p->sw + (size_t)x;
-        if (*q < 255) (*q)++;
-      }
+    /* The bounds in locals: stores through a uint8_t pointer may alias
+     * anything, so with b->x1 or s->xhi in the loop test the compiler
+     * reloads it per byte and does not vectorise (these two loops were 70 %
+     * of the plan's time under perf, 10 % of a 50 ms `track`). */
+    const int bx0 = b->x0, bx1 = b->x1;
+    for (int y = b->y0; y < b->y1; y++) {
+      uint8_t *q = p->in_boxes + (size_t)y * (size_t)p->sw;
+      for (int x = bx0; x < bx1; x++) q[x] += q[x] < 255;
+    }
     p->vrow_off[v] = p->n_vrow;
     p->n_vrow += (size_t)(b->y1 - b->y0) + 1;
     for (int k = 0; k < nz; k++) {
@@ -161,9 +165,10 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
       s->yhi = imin(p->h, b->y1 - 1 - s->iy);
       if (s->xhi < s->xlo) s->xhi = s->xlo;
       if (s->yhi < s->ylo) s->yhi = s->ylo;
+      const int xlo = s->xlo, xhi = s->xhi;
       for (int Y = s->ylo; Y < s->yhi; Y++) {
         uint8_t *row = p->count + ((size_t)k * p->h + Y) * p->w;
-        for (int X = s->xlo; X < s->xhi; X++) row[X]++;
+        for (int X = xlo; X < xhi; X++) row[X]++;
       }
     }
   }
