@@ -159,6 +159,15 @@ void track_defaults(track_opts *o)
    * 0.326 (docs/tracker.md "Stitching"). Points 4-6 and gates 6-10 um
    * gave the same to +-0.01. Off in --motion stage (below). */
   o->link.stitch_points = 5;
+  /* ... and a track about to end onto a young one of 3 or 4 points on its
+   * path (step 5b), which step 5 would judge only after the end: a deep
+   * bead seen a few frames at a time (flow 1 s seed 8, a track dark since
+   * frame 689 ended in 741, when its bead's new track reached 5 points).
+   * Flow 1 s seeds 1-24: alpha 0.7624 -> 0.7631 (6 seeds up, none down);
+   * flow_random 1 s seeds 1-16 +0.002 (12 up, 3 down), 100 ms seeds 1-24
+   * -0.0002; 44 other recordings of every scene the same bytes
+   * (docs/tracker.md "A young track one frame late"). */
+  o->link.stitch_late_points = 3;
   /* Swap review of gap closings that do not fit, after 8 points of the new
    * tail (elfm_link.h step 6). Flow 100 ms seeds 1, 2, 4-9 at 6 points:
    * alpha 0.697, 0.691 -> 0.714 (seed 2), 0.618 -> 0.691 (seed 7), the

@@ -149,6 +149,8 @@ void track_usage(FILE *f)
     "  --stitch-points N    a new track of N points continues a dark one when its points\n"
     "                       lie on that one's recent path (5; 0 off; --motion stage: 0)\n"
     "  --stitch-gate-um G   RMS distance to the dark track's path for that (8)\n"
+    "  --stitch-late-points N  ... and a track that ends goes on as a new one of N\n"
+    "                       or more (fewer than --stitch-points) on its path (3; 0 off)\n"
     "  --swap-points N      review a gap closing that does not fit when its new tail\n"
     "                       has N points; exchange tails with a better fit (8; 0 off)\n"
     "  --encounter-um D     two tracks that came within D (linker metric) are reviewed\n"

@@ -44,7 +44,7 @@ enum {
   O_GATE, O_MAXGAP, O_MINPTS, O_LAG, O_MOTION, O_STAGEV, O_MODEL, O_LOSS, O_SPW, O_RES, O_MAXOUT, O_OUTMIN,
   O_THDEPTH, O_THMIN, O_VIEWSRULE, O_RESCUE, O_LEAD, O_LINKKZ, O_VEXP, O_HYST, O_WEAKGATE,
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
-  O_STITCHN, O_STITCHG, O_SWAPN, O_LOC, O_LOCWIN,
+  O_STITCHN, O_STITCHG, O_STITCHL, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
@@ -72,6 +72,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"rescue-factor", required_argument, 0, O_RESCUE},
       {"stitch-points", required_argument, 0, O_STITCHN},
       {"stitch-gate-um", required_argument, 0, O_STITCHG},
+      {"stitch-late-points", required_argument, 0, O_STITCHL},
       {"swap-points", required_argument, 0, O_SWAPN},
       {"encounter-um", required_argument, 0, O_ENCUM},
       {"encounter-pad", required_argument, 0, O_ENCPAD},
@@ -329,6 +330,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (o.link.stitch_points != 0 && (o.link.stitch_points < 4 || o.link.stitch_points > 100000))
         return cli_message(C, CLI_USAGE, "--stitch-points must be 0 (off) or 4..100000, not %s", a);
       g.stitch = 1;
+      break;
+    case O_STITCHL:
+      if (!cli_parse_int(C, "--stitch-late-points", a, &o.link.stitch_late_points)) return CLI_USAGE;
+      if (o.link.stitch_late_points < 0 || o.link.stitch_late_points > 100000)
+        return cli_message(C, CLI_USAGE, "--stitch-late-points must be 0 (off) or 1..100000, not %s", a);
       break;
     case O_SWAPN:
       if (!cli_parse_int(C, "--swap-points", a, &o.link.swap_points)) return CLI_USAGE;

@@ -139,6 +139,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "gap_fills_retried_unconfirmed", (double)c->n_retry_dropped);
   cJSON_AddNumberToObject(cnt, "tracks_started", (double)elfm_link_n_started(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks_joined_twins", (double)elfm_link_n_twins(c->lk));
+  cJSON_AddNumberToObject(cnt, "tracks_stitched_late", (double)elfm_link_n_late_stitches(c->lk));
   cJSON_AddNumberToObject(cnt, "tracks", (double)c->n_info);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_outliers", (double)c->n_rejected);
   cJSON_AddNumberToObject(cnt, "tracks_rejected_off_stage", (double)c->n_rejected_stage);
@@ -193,6 +194,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
   cJSON_AddNumberToObject(par, "stitch_points", o->link.stitch_points);
   cJSON_AddNumberToObject(par, "stitch_gate_um", o->link.stitch_gate_um);
+  cJSON_AddNumberToObject(par, "stitch_late_points", o->link.stitch_late_points);
   cJSON_AddNumberToObject(par, "stitch_history", o->link.stitch_history);
   cJSON_AddNumberToObject(par, "swap_points", o->link.swap_points);
   cJSON_AddNumberToObject(par, "swap_ratio", o->link.swap_ratio);

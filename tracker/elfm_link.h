@@ -36,7 +36,9 @@
  *     least min_points real points become "finished" and can be taken with
  *     elfm_link_pop_finished as soon as they end (shorter ones are dropped).
  *  5. stitching (optional): a track reaching stitch_points points continues a
- *     dark live track whose recent path it follows;
+ *     dark live track whose recent path it follows; 5b (optional), a track
+ *     about to end goes on as a younger one, too short for that yet, that
+ *     follows its path;
  *  6. swap review (optional): a gap closing that does not fit is revisited
  *     a few frames later and the tails of two tracks exchanged when that fits;
  *  7. encounter review (optional, with 6): two tracks that came within
@@ -220,6 +222,12 @@ typedef struct elfm_link_options {
    * come back behind itself, but the next bead on the same line of a stage
    * phantom does. Default 0.1; 0 = off. */
   double stitch_straight_frac;
+  /* Late stitching (step 5b): a track ending (dark for more than
+   * max_gap_frames) goes on as a young track of at least this many points
+   * and fewer than stitch_points, born after its end and passing step 5's
+   * test, so one that would reach stitch_points only after the end is not
+   * lost. 0 = off (default). */
+  int stitch_late_points;
   /* Swap review (step 6): a gap closing whose junction does not fit (the
    * track's head and new tail, extrapolated to the middle of the gap, more
    * than gate_um apart) is revisited once the tail has swap_points real
@@ -473,6 +481,8 @@ int64_t elfm_link_oldest_frame(const elfm_linker *l);
 int64_t elfm_link_n_started(const elfm_linker *l);
 /* Tracks that step 8 continued as a younger twin (elfm_link_options.twin_um). */
 int64_t elfm_link_n_twins(const elfm_linker *l);
+/* Tracks that step 5b continued as a young track (elfm_link_options.stitch_late_points). */
+int64_t elfm_link_n_late_stitches(const elfm_linker *l);
 
 /* Id of the track detection i of the LAST step joined (a new track when it
  * matched none), -2 when it was suppressed as a trail, -3 when it was weak

@@ -38,6 +38,7 @@ void elfm_link_options_default(elfm_link_options *o)
   o->stitch_gate_um = 8.0;
   o->stitch_history = 100;
   o->stitch_straight_frac = 0.1;
+  o->stitch_late_points = 0;
   o->swap_points = 0;
   o->swap_ratio = 0.5;
   o->encounter_um = 0;
@@ -102,6 +103,7 @@ static elfm_status link_options_check(const elfm_link_options *o, elfm_error *er
   LINK_NEED(o->stitch_history >= 1, "stitch_history", o->stitch_history, ">= 1");
   LINK_NEED(o->stitch_straight_frac >= 0 && isfinite(o->stitch_straight_frac), "stitch_straight_frac",
             o->stitch_straight_frac, ">= 0");
+  LINK_NEED(o->stitch_late_points >= 0, "stitch_late_points", o->stitch_late_points, ">= 0");
   LINK_NEED(o->swap_points == 0 || o->swap_points >= 4, "swap_points", o->swap_points, "0 or >= 4");
   LINK_NEED(o->swap_ratio > 0 && o->swap_ratio <= 1, "swap_ratio", o->swap_ratio, "> 0 and <= 1");
   LINK_NEED(o->encounter_um >= 0 && isfinite(o->encounter_um), "encounter_um", o->encounter_um, ">= 0");
@@ -270,6 +272,7 @@ int64_t elfm_link_oldest_frame(const elfm_linker *l)
 }
 int64_t elfm_link_n_started(const elfm_linker *l) { return l ? l->next_id : 0; }
 int64_t elfm_link_n_twins(const elfm_linker *l) { return l ? l->n_twins : 0; }
+int64_t elfm_link_n_late_stitches(const elfm_linker *l) { return l ? l->n_late_stitches : 0; }
 
 /* Detection j joined no track (or a new one): no velocity. */
 static void det_vel_none(elfm_linker *l, size_t j)
@@ -525,6 +528,10 @@ elfm_status elfm_link_step(elfm_linker *l, int64_t frame, int64_t t_us, elfm_det
    * predict the others. */
   if (o->twin_um > 0) {
     elfm_status st = elfm_link_join_twins(l, frame, err);
+    if (st != ELFM_OK) return st;
+  }
+  if (o->stitch_points > 0 && o->stitch_late_points > 0) {
+    elfm_status st = elfm_link_stitch_late(l, frame, err);
     if (st != ELFM_OK) return st;
   }
   size_t w = 0;

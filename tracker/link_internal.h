@@ -81,6 +81,7 @@ struct elfm_linker {
   size_t n_enc, cap_enc;
   int64_t next_id, last_frame, last_t_us;
   int64_t n_twins;           /* tracks step 8 joined to a younger twin */
+  int64_t n_late_stitches;   /* tracks step 5b continued as a young one */
   int started;
   /* per-frame scratch, grown on demand */
   size_t cap_det, cap_trk;
@@ -267,6 +268,11 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
  * slot carries on with the ending track's points, then the twin's after
  * them, and the ending track's slot is removed (the order kept). */
 elfm_status elfm_link_join_twins(elfm_linker *l, int64_t frame, elfm_error *err);
+
+/* Step 5b, late stitching (o.stitch_late_points > 0), with the twins: each
+ * live track that ends in `frame` goes on as a young track on its recent
+ * path too short for step 5 yet (elfm_link_options.stitch_late_points). */
+elfm_status elfm_link_stitch_late(elfm_linker *l, int64_t frame, elfm_error *err);
 
 /* Step 6, swap review (o.swap_points > 0): each gap closing still to be
  * reviewed whose tail has swap_points points is revisited once; the tails

@@ -4,6 +4,9 @@
  * detections.
  *  5. stitching: a young track that retraces the recent path of a dormant
  *     one is appended to it (elfm_link_stitch);
+ *  5b. late stitching: a track about to end goes on as a young one on its
+ *     path that step 5 has not judged yet (elfm_link_stitch_late, run in
+ *     step 1 with the twins);
  *  6. swap review: a gap closing that does not fit is revisited once its
  *     tail has a few points, and two tracks' tails are exchanged when that
  *     fits better (elfm_link_review_swaps);
@@ -93,6 +96,40 @@ static void drop_removed(elfm_linker *l)
   l->n_live = w;
 }
 
+/* The stitching test of young track y against dormant track d: INFINITY
+ * when y cannot continue d (born more than max_gap_frames after d's last
+ * point, out of reach, or behind d's end along a straight path), else the
+ * mean squared distance of y's points to d's recent path. */
+static double stitch_distance2(const elfm_link_options *o, const live_track *d, const live_track *y)
+{
+  /* gap -1: the young track was born in the dormant one's last frame,
+   * from a second detection of the same bead (a twin that then took the
+   * bead: a one-point track's gate, widened for its unknown speed, makes
+   * its normalised cost the lower); that frame keeps the dormant's point.
+   * Flow 100 ms seeds 1-20: alpha 0.7335 -> 0.7355, seeds 2, 3 and 16 up
+   * (0.727 -> 0.749, 0.806 -> 0.810, 0.695 -> 0.708), none down. */
+  int64_t gap = y->t->pts[0].frame - d->last_frame - 1;
+  if (gap < -1 || gap > o->max_gap_frames) return INFINITY;
+  /* Reachable: from the dormant end to the young start at no more than
+   * 1.5 x the faster one's speed. Without it a bead trailing another on
+   * the same line (stage scene) lies on the other's path, and stitching
+   * them ran tracks backwards (stage alpha 0.717 -> 0.075). */
+  const double *vd = elfm_link_current_velocity(d), *vy = elfm_link_current_velocity(y);
+  double sd = sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]),
+         sy = sqrt(vy[0] * vy[0] + vy[1] * vy[1] + vy[2] * vy[2]);
+  double reach = o->stitch_gate_um + 1.5 * (sd > sy ? sd : sy) *
+                                         (double)(y->t->pts[0].t_us - d->last_t_us) * 1e-3;
+  double jx = y->t->pts[0].x_um - d->last[0], jy = y->t->pts[0].y_um - d->last[1],
+         jz = (y->t->pts[0].z_um - d->last[2]) / o->kz;
+  if (jx * jx + jy * jy + jz * jz > reach * reach) return INFINITY;
+  const double p0[3] = {y->t->pts[0].x_um, y->t->pts[0].y_um, y->t->pts[0].z_um};
+  if (o->stitch_straight_frac > 0 &&
+      straight_and_behind(d->t, p0, (size_t)o->stitch_history, o->kz,
+                          o->stitch_straight_frac, o->stitch_gate_um))
+    return INFINITY;
+  return path_distance2(y->t, d->t, (size_t)o->stitch_history, o->kz);
+}
+
 /* 5. Stitching: a track that has just reached stitch_points real points
  * (young) may be the continuation of a live track dark since before the
  * young one's first point (dormant). The forward gap closing cannot find
@@ -132,32 +169,7 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
       const live_track *d = &l->live[l->rows[r]];
       double *cost = &l->cost[(size_t)r * nc + c];
       *cost = INFINITY;
-      /* gap -1: the young track was born in the dormant one's last frame,
-       * from a second detection of the same bead (a twin that then took the
-       * bead: a one-point track's gate, widened for its unknown speed, makes
-       * its normalised cost the lower); that frame keeps the dormant's point.
-       * Flow 100 ms seeds 1-20: alpha 0.7335 -> 0.7355, seeds 2, 3 and 16 up
-       * (0.727 -> 0.749, 0.806 -> 0.810, 0.695 -> 0.708), none down. */
-      int64_t gap = y->t->pts[0].frame - d->last_frame - 1;
-      if (gap < -1 || gap > o->max_gap_frames) continue;
-      /* Reachable: from the dormant end to the young start at no more than
-       * 1.5 x the faster one's speed. Without it a bead trailing another on
-       * the same line (stage scene) lies on the other's path, and stitching
-       * them ran tracks backwards (stage alpha 0.717 -> 0.075). */
-      const double *vd = elfm_link_current_velocity(d), *vy = elfm_link_current_velocity(y);
-      double sd = sqrt(vd[0] * vd[0] + vd[1] * vd[1] + vd[2] * vd[2]),
-             sy = sqrt(vy[0] * vy[0] + vy[1] * vy[1] + vy[2] * vy[2]);
-      double reach = o->stitch_gate_um + 1.5 * (sd > sy ? sd : sy) *
-                                             (double)(y->t->pts[0].t_us - d->last_t_us) * 1e-3;
-      double jx = y->t->pts[0].x_um - d->last[0], jy = y->t->pts[0].y_um - d->last[1],
-             jz = (y->t->pts[0].z_um - d->last[2]) / o->kz;
-      if (jx * jx + jy * jy + jz * jz > reach * reach) continue;
-      const double p0[3] = {y->t->pts[0].x_um, y->t->pts[0].y_um, y->t->pts[0].z_um};
-      if (o->stitch_straight_frac > 0 &&
-          straight_and_behind(d->t, p0, (size_t)o->stitch_history, o->kz,
-                              o->stitch_straight_frac, o->stitch_gate_um))
-        continue;
-      double h2 = path_distance2(y->t, d->t, (size_t)o->stitch_history, o->kz);
+      const double h2 = stitch_distance2(o, d, y);
       if (h2 < g2) {
         *cost = h2 / g2;
         any = 1;
@@ -645,6 +657,37 @@ static int twin_count(const elfm_track *a, size_t j0, size_t j1, const elfm_trac
   return n;
 }
 
+/* Track a, ending, goes on as the younger live track y: y's points after
+ * a's last are appended to a's, y's slot carries on with a's track and
+ * y's own state (its fits), and a's slot is marked for removal (the
+ * caller's drop_removed). On failure (no memory) both stay live. */
+static elfm_status continue_as(elfm_linker *l, live_track *a, live_track *y, elfm_error *err)
+{
+  const int64_t a_end = a->t->pts[a->t->n - 1].frame, y_id = y->t->id, a_id = a->t->id;
+  elfm_status st = ELFM_OK;
+  for (size_t k = first_from(y->t, a_end + 1); k < y->t->n && st == ELFM_OK; k++)
+    st = elfm_track_append(a->t, &y->t->pts[k], err);
+  if (st != ELFM_OK) return st;
+  /* y's pending encounters are a's now (the pair kept in id order) */
+  for (size_t e = 0; e < l->n_enc; e++) {
+    link_encounter *E = &l->enc[e];
+    if (E->a_id == y_id) E->a_id = a_id;
+    if (E->b_id == y_id) E->b_id = a_id;
+    if (E->a_id > E->b_id) {
+      const int64_t t = E->a_id;
+      E->a_id = E->b_id;
+      E->b_id = t;
+    }
+  }
+  elfm_track *keep = a->t;
+  elfm_track_free(y->t);
+  y->t = keep;  /* y's slot goes on with y's state (its own fits) */
+  y->tail0 = 0; /* y's gap closing (if any) indexed y's points */
+  y->review = 0;
+  a->t = NULL;  /* not ended: removed by drop_removed, keeping the order */
+  return ELFM_OK;
+}
+
 elfm_status elfm_link_join_twins(elfm_linker *l, int64_t frame, elfm_error *err)
 {
   const elfm_link_options *o = &l->o;
@@ -678,29 +721,48 @@ elfm_status elfm_link_join_twins(elfm_linker *l, int64_t frame, elfm_error *err)
       best_n = n;
     }
     if (best == l->n_live) continue;
-    live_track *y = &l->live[best];
-    const int64_t a_end = a->t->pts[a->t->n - 1].frame, y_id = y->t->id, a_id = a->t->id;
-    for (size_t k = first_from(y->t, a_end + 1); k < y->t->n && st == ELFM_OK; k++)
-      st = elfm_track_append(a->t, &y->t->pts[k], err);
-    if (st != ELFM_OK) break; /* no memory: the step fails, both stay live (freed with l) */
-    /* y's pending encounters are a's now (the pair kept in id order) */
-    for (size_t e = 0; e < l->n_enc; e++) {
-      link_encounter *E = &l->enc[e];
-      if (E->a_id == y_id) E->a_id = a_id;
-      if (E->b_id == y_id) E->b_id = a_id;
-      if (E->a_id > E->b_id) {
-        const int64_t t = E->a_id;
-        E->a_id = E->b_id;
-        E->b_id = t;
+    if ((st = continue_as(l, a, &l->live[best], err)) != ELFM_OK) break;
+    l->n_twins++;
+  }
+  drop_removed(l);
+  return st;
+}
+
+/* 5b. Late stitching (o.stitch_late_points > 0), at the start of a step
+ * with the twins: a track ending in this frame (dark for more than
+ * max_gap_frames) goes on as the young track of stitch_late_points to
+ * stitch_points - 1 points that step 5 has not judged yet, born after its
+ * end and lying on its recent path by step 5's test. A deep bead seen in
+ * a few frames at a time is otherwise lost when its new track reaches
+ * stitch_points just after the old one ended (flow 1 s seed 8, frame 741:
+ * a bead's track dark since 689, the next one 4 points old since 711). */
+elfm_status elfm_link_stitch_late(elfm_linker *l, int64_t frame, elfm_error *err)
+{
+  const elfm_link_options *o = &l->o;
+  const double g2 = o->stitch_gate_um * o->stitch_gate_um;
+  elfm_status st = ELFM_OK;
+  for (size_t i = 0; i < l->n_live && st == ELFM_OK; i++) {
+    live_track *a = &l->live[i];
+    if (!a->t || frame - a->last_frame - 1 <= o->max_gap_frames ||
+        a->t->n < (size_t)o->stitch_points)
+      continue;
+    size_t best = l->n_live;
+    double best_h2 = g2;
+    for (size_t k = 0; k < l->n_live; k++) {
+      const live_track *y = &l->live[k];
+      if (k == i || !y->t || y->t->partial || y->t->n < (size_t)o->stitch_late_points ||
+          y->t->n >= (size_t)o->stitch_points || y->t->pts[0].frame <= a->last_frame ||
+          frame - y->last_frame - 1 > o->max_gap_frames)
+        continue;
+      const double h2 = stitch_distance2(o, a, y);
+      if (h2 < best_h2) {
+        best = k;
+        best_h2 = h2;
       }
     }
-    elfm_track *keep = a->t;
-    elfm_track_free(y->t);
-    y->t = keep;  /* y's slot goes on with y's state (its own fits) */
-    y->tail0 = 0; /* y's gap closing (if any) indexed y's points */
-    y->review = 0;
-    a->t = NULL;  /* not ended: removed below, keeping the order */
-    l->n_twins++;
+    if (best == l->n_live) continue;
+    if ((st = continue_as(l, a, &l->live[best], err)) != ELFM_OK) break;
+    l->n_late_stitches++;
   }
   drop_removed(l);
   return st;
