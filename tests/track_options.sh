@@ -15,7 +15,8 @@ expect_usage_errors "--gate-um 0" "--gate-um -1" "--gate-um x" "--link-kz 0" "--
   "--stitch-gate-um -1" "--weak-gate-um -1" "--radius-xy-um 0" "--radius-z-um 0" \
   "--min-separation-um -1" "--threshold-rel 2" "--threshold-rel -0.5" "--threshold-low -1" \
   "--threshold-min -5" "--threshold-depth-um -1" "--threshold-k -1" "--threshold-abs -1" \
-  "--views-exponent -1" "--views-exponent 5" "--spline-weight-ms3 -1"
+  "--views-exponent -1" "--views-exponent 5" "--spline-weight-ms3 -1" "--stitch-late-points -1" \
+  "--stitch-late-points x"
 # the message says what the option takes
 "$bin" track --calib a --events b --out c --stitch-points 3 2>"$tmp/err" >/dev/null
 grep -q -- "--stitch-points must be 0 (off) or 4..100000, not 3" "$tmp/err" ||
@@ -25,7 +26,7 @@ grep -q -- "--gate-um must be > 0 and <= 10000, not '0'" "$tmp/err" ||
   { echo "FAIL: --gate-um message: $(cat "$tmp/err")"; fail=$((fail+1)); }
 # the edges of the ranges are taken (the command then fails on the missing
 # files, exit 1, not 2)
-for ok in "--stitch-points 0" "--stitch-points 4" "--swap-points 0" "--threshold-rel 1" "--max-gap 0" \
+for ok in "--stitch-points 0" "--stitch-points 4" "--stitch-late-points 0" "--stitch-late-points 3" "--swap-points 0" "--threshold-rel 1" "--max-gap 0" \
   "--rescue-factor 0" "--weak-gate-um 0" "--spline-weight-ms3 0" "--views-exponent 4"; do
   # shellcheck disable=SC2086
   "$bin" track --calib "$tmp/none.json" --events b --out "$tmp/o" $ok >/dev/null 2>"$tmp/err"
