@@ -372,10 +372,10 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
   if (!o.quiet && !o.auto_chose) {  /* said once, not again in a second run */
     /* the planes are track's own choice unless given: say which */
     if (o.plane_every > 1)
-      fprintf(stderr, "eventlfm track: %d planes %g..%g um, %g um apart: every %d%s of %s's "
+      fprintf(stderr, "eventlfm track: %d planes %g..%g um, %g um apart: %s %d%s of %s's "
               "(--plane-shift-px 0 for all)\n", elfm_calib_n_planes(&calib), calib.z_min_um,
-              calib.z_max_um, calib.z_step_um, o.plane_every,
-              o.plane_every == 2 ? "nd" : o.plane_every == 3 ? "rd" : "th", o.calib);
+              calib.z_max_um, calib.z_step_um, o.plane_centred ? "centred, the spacing of every" : "every",
+              o.plane_every, o.plane_every == 2 ? "nd" : o.plane_every == 3 ? "rd" : "th", o.calib);
     if (o.views_scaled)
       fprintf(stderr, "eventlfm track: %d views: views that must agree scaled from the 25 views' "
               "defaults to %d (view fit), %d (guided), %d (fill), %d (deep peaks)\n",

@@ -77,6 +77,7 @@ typedef struct track_opts {
                             outermost view moving <= this between them (0 = all of them;
                             track_plane_step) */
   int plane_every;      /* the m taken (1: the calibration's planes), for summary.json */
+  int plane_centred;    /* m does not divide the calibration's range: centred, off its grid */
   int thr_defaulted;    /* 1 absolute, 2 hysteresis_low, 4 absolute_min: track's own
                            defaults, which coarser planes scale (track_plane_step) */
   int views_scaled;     /* track_views_step scaled them for this many views (0: not) */
@@ -259,11 +260,12 @@ int track_opts_derive(track_opts *o, const track_given *g);
 void track_bias_derive(track_opts *o, const track_given *g);
 
 /* Without --z-step-um: take every m-th of *cal's planes, m the largest
- * whose outermost view moves at most o->plane_shift_px between planes and
- * that divides the planes' span (so the first and last plane stay); keep
+ * whose outermost view moves at most o->plane_shift_px between planes
+ * (where m does not divide the planes' span, the range is centred: the
+ * first and last plane move in by half the remainder); keep
  * the peak fit's axial window (fit_half_z) as wide in um, and lower the
  * default absolute thresholds by what the wider sampling costs a peak
- * (TRACK_AXIAL_SIGMA_UM). Sets o->plane_every. */
+ * (TRACK_AXIAL_SIGMA_UM). Sets o->plane_every and o->plane_centred. */
 void track_plane_step(track_opts *o, elfm_calib *cal);
 
 /* With fewer views than the paper's 25 (a 3 x 3 lens array): track's

@@ -690,6 +690,7 @@ void track_views_step(track_opts *o, const elfm_calib *cal)
 void track_plane_step(track_opts *o, elfm_calib *cal)
 {
   o->plane_every = 1;
+  o->plane_centred = 0;
   if (!isnan(o->planes_um[2]) || !(o->plane_shift_px > 0)) return;
   double shift = 0; /* px per um, the outermost view */
   for (int v = 0; v < cal->n_views; v++) {
@@ -701,9 +702,13 @@ void track_plane_step(track_opts *o, elfm_calib *cal)
   if (!(shift > 0) || span < 2) return;
   int m = (int)floor(o->plane_shift_px / (shift * step) + 1e-9);
   if (m > span) m = (int)span;
-  while (m > 1 && span % m != 0) m--;
   if (m <= 1) return;
+  /* Every m-th plane, the range centred: where m does not divide the
+   * span, the remainder (under m calibration planes) is split between
+   * the two ends (6 um on -100..100 at 2 um: -99..99). */
   cal->z_step_um = step * m;
+  cal->z_min_um += 0.5 * (double)(span % m) * step;
+  o->plane_centred = span % m != 0;
   cal->z_max_um = cal->z_min_um + (double)(span / m) * cal->z_step_um;
   o->plane_every = m;
   /* the same axial window in um: +-3 planes of 2 um are +-2 of 4 um */

@@ -88,8 +88,10 @@ void track_usage(FILE *f)
   fprintf(f,
     "  --plane-shift-px S   without --z-step-um: every m-th of the calibration's planes,\n"
     "                       m the largest that moves the outermost view <= S px\n"
-    "                       between planes (1.5: 4 um on the paper's 2 um planes, about\n"
-    "                       the same accuracy in 0.68 of the time; 0 = every plane);\n"
+    "                       between planes, the range centred where m does not divide\n"
+    "                       it (1.5: 4 um on the paper's 2 um planes, about the same\n"
+    "                       accuracy in 0.68 of the time; 2.2: 6 um, 0.84 of that time,\n"
+    "                       worse on random flows and the worm; 0 = every plane);\n"
     "                       the default thresholds fall by the coarser sampling's cost;\n"
     "                       use 0 where the sensor cuts off much of the views (640x480)\n"
     "detection:\n"

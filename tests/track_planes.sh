@@ -1,8 +1,9 @@
 #!/bin/sh
 # The planes `eventlfm track` refocuses on when --z-step-um is not given:
 # every m-th of the calibration's planes, m the largest that moves the
-# outermost view <= --plane-shift-px (1.5) px between planes and divides the
-# planes' span; the default absolute thresholds fall by what the wider
+# outermost view <= --plane-shift-px (1.5) px between planes (where it does
+# not divide the planes' span, the range is centred); the default absolute
+# thresholds fall by what the wider
 # sampling costs a peak (exp(-((h/2)^2 - (h0/2)^2) / (2 x 5^2))); a given
 # step, a given threshold and --plane-shift-px 0 are taken as they are. On
 # simulator truth the coarser planes keep the accuracy of every plane.
@@ -52,6 +53,21 @@ ra=$(key "$tmp/say/summary.json" auto_height_ratio)
   --plane-shift-px 0 2>"$tmp/say0.err" >/dev/null
 grep -q "apart: every" "$tmp/say0.err" && { echo "FAIL: planes named with every plane"; fail=$((fail+1)); }
 
+# A spacing that does not divide the range (3 planes of 2 um: 2.15 px within
+# 2.2): the 100 steps take 33 of 6 um, centred on the range, -99..99 um.
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/six" \
+  --plane-shift-px 2.2 2>"$tmp/six.err" >/dev/null || { echo "FAIL: track --plane-shift-px 2.2"; fail=$((fail+1)); }
+s=$tmp/six/summary.json
+expect_key nz "$s" 34
+expect_key z_step_um "$s" 6
+expect_key z_min_um "$s" -99
+expect_key calib_planes_per_plane "$s" 3
+expect_key fit_half_z "$s" 1
+# 45 x exp(-(3^2 - 1^2) / 50)
+expect_key threshold_abs "$s" 38.3465
+grep -q "34 planes -99..99 um, 6 um apart: centred" "$tmp/six.err" ||
+  { echo "FAIL: the centred planes not named: $(head -c 300 "$tmp/six.err")"; fail=$((fail+1)); }
+
 # Given values stay: the step, and a threshold (the others still scale).
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/step" -q \
   --z-step-um 2 || { echo "FAIL: track --z-step-um 2"; fail=$((fail+1)); }
@@ -63,9 +79,10 @@ expect_key nz "$tmp/thr/summary.json" 51
 expect_key threshold_abs "$tmp/thr/summary.json" 45
 
 # Other calibrations of the same sensor (the planes only: the events are
-# the paper's): 1 um planes -> every 4th; a span of 99 steps, which 2
-# does not divide -> every plane; 40x optics, whose outer views move 1.75
-# px per um -> every plane.
+# the paper's): 1 um planes -> every 4th; a span of 99 steps of 2 um
+# (-99..99), which 2 does not divide -> every 2nd, centred: 49 steps of 4 um,
+# -98..98 (every plane before the fifty-third session); 40x optics, whose
+# outer views move 1.75 px per um -> every plane.
 # planes CALIB_OPTIONS NZ STEP EVERY
 planes() {
   pl_n=$((pl_n+1))
@@ -79,7 +96,8 @@ planes() {
 }
 pl_n=0
 planes "--z-step-um 1" 51 4 4
-planes "--z-min-um -99 --z-max-um 99 --z-step-um 2" 100 2 1
+planes "--z-min-um -99 --z-max-um 99 --z-step-um 2" 50 4 2
+expect_key z_min_um "$tmp/p2/summary.json" -98
 planes "--magnification 40" 101 2 1
 
 # Accuracy: the coarser planes lose no more than a little alpha and recall
