@@ -53,11 +53,8 @@ static int run(int late_points, int stitch_points, int young_points, double cx, 
   if (!l) return -1;
   for (int f = 0; f < N_FRAMES; f++) {
     double p[3];
-    elfm_detection d = link_test_det(0, 0, 0, 50);
     const int seen = bead(f, young_points, cx, p);
-    d.x_um = p[0];
-    d.y_um = p[1];
-    d.z_um = p[2];
+    elfm_detection d = link_test_det(p[0], p[1], p[2], 50);
     CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, &d, seen, &err), &err);
   }
   CHECK_OK(elfm_link_finish(l, &err), &err);

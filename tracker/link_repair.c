@@ -96,6 +96,20 @@ static void drop_removed(elfm_linker *l)
   l->n_live = w;
 }
 
+/* Append to a the points of y after a's last frame (y's in frame order;
+ * those in a's frames, the overlap, stay a's): stitching's and the twins'
+ * join. */
+static elfm_status append_after(elfm_track *a, const elfm_track *y, elfm_error *err)
+{
+  const int64_t end = a->pts[a->n - 1].frame;
+  for (size_t k = 0; k < y->n; k++) {
+    if (y->pts[k].frame <= end) continue;
+    elfm_status st = elfm_track_append(a, &y->pts[k], err);
+    if (st != ELFM_OK) return st;
+  }
+  return ELFM_OK;
+}
+
 /* The stitching test of young track y against dormant track d: INFINITY
  * when y cannot continue d (born more than max_gap_frames after d's last
  * point, out of reach, or behind d's end along a straight path), else the
@@ -183,11 +197,7 @@ elfm_status elfm_link_stitch(elfm_linker *l, int64_t frame, size_t nd, elfm_erro
     int c = l->row_to_col[r];
     if (c < 0 || !isfinite(l->cost[(size_t)r * nc + c])) continue;
     live_track *d = &l->live[l->rows[r]], *y = &l->live[l->cols[c]];
-    for (size_t k = 0; k < y->t->n; k++) {
-      if (y->t->pts[k].frame <= d->t->pts[d->t->n - 1].frame) continue; /* the overlap */
-      st = elfm_track_append(d->t, &y->t->pts[k], err);
-      if (st != ELFM_OK) return st;
-    }
+    if ((st = append_after(d->t, y->t, err)) != ELFM_OK) return st;
     /* this frame's detection now belongs to the dormant track */
     for (size_t j = 0; j < nd; j++)
       if (l->det_id[j] == y->t->id) l->det_id[j] = d->t->id;
@@ -663,10 +673,8 @@ static int twin_count(const elfm_track *a, size_t j0, size_t j1, const elfm_trac
  * caller's drop_removed). On failure (no memory) both stay live. */
 static elfm_status continue_as(elfm_linker *l, live_track *a, live_track *y, elfm_error *err)
 {
-  const int64_t a_end = a->t->pts[a->t->n - 1].frame, y_id = y->t->id, a_id = a->t->id;
-  elfm_status st = ELFM_OK;
-  for (size_t k = first_from(y->t, a_end + 1); k < y->t->n && st == ELFM_OK; k++)
-    st = elfm_track_append(a->t, &y->t->pts[k], err);
+  const int64_t y_id = y->t->id, a_id = a->t->id;
+  elfm_status st = append_after(a->t, y->t, err);
   if (st != ELFM_OK) return st;
   /* y's pending encounters are a's now (the pair kept in id order) */
   for (size_t e = 0; e < l->n_enc; e++) {
