@@ -532,6 +532,11 @@ double track_occupancy_mean(const track_ctx *c);
 /* The ordered callback (elfm_volume_slot_fn): link the slot's detections,
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
+/* The searches guided by the linker's predictions for this frame, before
+ * its detections are linked: a low peak or a view fit for each track with
+ * no detection near it; det grows (at most max_det; cmd_track_guided.c). */
+elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det,
+                                int *n_io, elfm_error *err);
 /* Append to nb[k ..] the detections of det[0 .. n) but det[skip] (-1: none)
  * within near_um laterally of (x_um, y_um), in geo's voxels (the view fit's
  * neighbours, localize_near_um); returns the new count, at most

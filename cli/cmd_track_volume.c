@@ -484,82 +484,6 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   return st;
 }
 
-/* Is a detection of det[0 .. n) within the weak gate of prediction q? */
-static int any_near(const elfm_detection *det, int n, const double q[3], double gate_um, double kz)
-{
-  for (int j = 0; j < n; j++) {
-    double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1], dz = (det[j].z_um - q[2]) / kz;
-    if (dx * dx + dy * dy + dz * dz < gate_um * gate_um) return 1;
-  }
-  return 0;
-}
-
-/* Track-guided view fit: where an established track expects its bead and
- * no peak lies within the weak gate, run the view fit from the prediction
- * itself. A deep bead's few events often leave no local maximum in the
- * volume (recall 0.3 beyond |z| = 60 um on flow) while its images are still
- * there in most views; a fit that lands within the weak gate with at least
- * guided_views views agreeing (ghosts and noise give a few) becomes a
- * weak peak, which can only continue that track. Flow 100 ms, 8 seeds: F1
- * 0.911 -> 0.929 over the view fit of every peak alone (docs/tracker.md).
- * pred[0 .. np) are the linker's predictions for this frame. */
-static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const double *pred, int np,
-                            elfm_detection *det, int *n_io)
-{
-  const track_opts *o = c->o;
-  const elfm_frame *frame = c->slot_frame[slot];
-  const elfm_refocus_plan *plan = c->slot_plan[slot];
-  if (!frame || !plan) return;
-  int n = *n_io;
-  const double g = o->link.weak_gate_um, kz = o->link.kz;
-  elfm_localize_options lo = o->loc;
-  lo.min_views = o->guided_views;
-  for (int k = 0; k < np && n < o->max_det; k++) {
-    const double *q = pred + 3 * (size_t)k;
-    if (any_near(det, n, q, g, kz)) continue;
-    elfm_localize_result r;
-    /* the frame's objects near the prediction: its peaks, and where no
-     * peak stands, the other tracks' predictions (localize_near_um) */
-    double nb[TRACK_NEAR_MAX][3];
-    int k_nb = 0;
-    if (o->localize_near_um > 0) {
-      const double r2 = o->localize_near_um * o->localize_near_um;
-      k_nb = track_near_add(det, n, -1, q[0], q[1], o->localize_near_um, v, nb, 0);
-      for (int j = 0; j < np && k_nb < TRACK_NEAR_MAX; j++) {
-        const double *qj = pred + 3 * (size_t)j;
-        const double dx = qj[0] - q[0], dy = qj[1] - q[1];
-        if (j == k || dx * dx + dy * dy >= r2 || any_near(det, n, qj, g, kz)) continue;
-        nb[k_nb][0] = elfm_volume_x_vox(v, qj[0]);
-        nb[k_nb][1] = elfm_volume_y_vox(v, qj[1]);
-        nb[k_nb][2] = elfm_volume_z_vox(v, qj[2]);
-        k_nb++;
-      }
-    }
-    if (!elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, q[0]),
-                                    elfm_volume_y_vox(v, q[1]), elfm_volume_z_vox(v, q[2]),
-                                    (const double(*)[3])nb, k_nb, &lo, &r))
-      continue;
-    const int X = (int)lround(r.x_vox), Y = (int)lround(r.y_vox), K = (int)lround(r.z_vox);
-    if (X < 0 || Y < 0 || K < 0 || X >= v->w || Y >= v->h || K >= v->nz) continue;
-    elfm_detection d;
-    memset(&d, 0, sizeof d);
-    d.frame = v->frame;
-    d.t_us = v->t_us;
-    d.x_um = elfm_volume_x_um(v, r.x_vox);
-    d.y_um = elfm_volume_y_um(v, r.y_vox);
-    d.z_um = elfm_volume_z_um(v, r.z_vox);
-    d.fit_sd_px = r.sd_px;
-    if (!any_near(&d, 1, q, g, kz)) continue;
-    d.intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
-    if (d.intensity < o->guided_min_ratio * c->pred_intensity[k]) continue;
-    d.weak = 1;
-    d.view_fit = 1;
-    det[n++] = d;
-    c->n_guided_views++;
-  }
-  *n_io = n;
-}
-
 /* Each detection's distance to the nearest other one of its frame, in the
  * linker's metric (dz / kz), into nearest_um (0 when alone): sorted by x,
  * each scans outwards while |dx| can still beat its best. Why: where two
@@ -649,32 +573,9 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
     track_votes_end_frame(&c->votes, v->t_us);
   }
   double t1 = cli_now_s();
-  /* the linker's predictions, once, for both track-guided searches */
-  const int guided_peak = o->guided_low > 0 && o->link.weak_gate_um > 0;
-  const int guided_fit = o->guided_views > 0 && o->link.weak_gate_um > 0;
-  int np = 0;
-  if (guided_peak || guided_fit) {
-    elfm_status sp = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred,
-                                       c->pred_intensity, o->max_det, &np, err);
-    if (sp != ELFM_OK) return sp;
-  }
-  if (guided_peak) {
-    /* Track-guided search: where an established track expects its bead
-     * and no peak lies within the weak gate, take the local maximum above
-     * guided_low there (weak: it can only continue that track). Deep beads
-     * fade below the global threshold (25-55 on the surface, docs). */
-    const double g = o->link.weak_gate_um, kz = o->link.kz, gs = o->guided_radius_um;
-    for (int k = 0; k < np && n < o->max_det; k++) {
-      const double *q = c->pred + 3 * (size_t)k;
-      if (any_near(det, n, q, g, kz)) continue;
-      int found = 0;
-      elfm_status sp = elfm_peaks_find_near(c->pk[0], v, q, gs, gs * kz, o->guided_low, &det[n], &found, err);
-      if (sp != ELFM_OK) return sp;
-      n += found;
-    }
-  }
-  if (guided_fit) guided_view_fit(c, v, slot, c->pred, np, det, &n);
-  elfm_status st = track_nearest(det, n, o->link.kz, err);
+  elfm_status st = track_guided_search(c, v, slot, det, &n, err);
+  if (st != ELFM_OK) return st;
+  st = track_nearest(det, n, o->link.kz, err);
   if (st != ELFM_OK) return st;
   if (o->rescue_auto &&
       (st = elfm_link_set_rescue_gate_factor(c->lk, track_rescue_factor(o, c->sp[slot].occupancy), err)) !=
