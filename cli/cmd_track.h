@@ -56,6 +56,9 @@ typedef struct track_opts {
                               TRACK_NEAR_MAX of them */
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
   double guided_min_ratio; /* and its find at least this x the track's last intensity */
+  double pair_fit_um;  /* pair fits: two established tracks' predictions within this
+                          laterally that share one detection get a view fit each
+                          (cmd_track_guided.c; 0 = off) */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
                            view fit from it has this many views agreeing (0 = no test) */
   int fill_views;      /* gap filling: views that must agree (0 = off) */
@@ -400,6 +403,7 @@ typedef struct track_ctx {
   elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */
   int64_t n_pieces;            /* pieces taken from long live tracks (elfm_link_take_piece) */
   int64_t n_support_rejected, n_explained, n_localized, n_guided_views, n_deep_dropped;
+  int64_t n_pair_fits; /* detections split in two by the pair fits */
   /* view_support_auto: the frames' occupancy summed, frames that needed
    * more than view_support, and the most a frame needed */
   double occupancy_sum, need_max;
@@ -533,8 +537,9 @@ double track_occupancy_mean(const track_ctx *c);
  * write them, queue the tracks that ended and write those smoothed. */
 elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_error *err);
 /* The searches guided by the linker's predictions for this frame, before
- * its detections are linked: a low peak or a view fit for each track with
- * no detection near it; det grows (at most max_det; cmd_track_guided.c). */
+ * its detections are linked: pair fits, then a low peak or a view fit for
+ * each track with no detection near it; det grows (at most max_det;
+ * cmd_track_guided.c). */
 elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det,
                                 int *n_io, elfm_error *err);
 /* Append to nb[k ..] the detections of det[0 .. n) but det[skip] (-1: none)

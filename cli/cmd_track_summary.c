@@ -130,6 +130,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "peaks_placed_by_view_fit", (double)c->n_localized);
   cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
+  cJSON_AddNumberToObject(cnt, "pair_fits", (double)c->n_pair_fits);
   cJSON_AddNumberToObject(cnt, "gap_fill_tries", (double)c->n_fill_tries);
   cJSON_AddNumberToObject(cnt, "gap_fills", (double)c->n_filled);
   cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame", (double)c->n_filled_multi);
@@ -173,6 +174,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
   cJSON_AddNumberToObject(par, "guided_views", o->guided_views);
   cJSON_AddNumberToObject(par, "guided_min_ratio", o->guided_min_ratio);
+  cJSON_AddNumberToObject(par, "pair_fit_um", o->pair_fit_um);
   cJSON_AddNumberToObject(par, "fill_views", o->fill_views);
   cJSON_AddNumberToObject(par, "fill_gate_um", o->fill_gate_um);
   cJSON_AddNumberToObject(par, "fill_max_gap", o->fill_max_gap);
