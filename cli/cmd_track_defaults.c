@@ -151,14 +151,13 @@ void track_defaults(track_opts *o)
    * 0.8638 -> 0.8746, 1 s 0.7599 -> 0.7747, seeds 1-20 0.8814 -> 0.8786;
    * docs/tracker.md "Neighbours taken out on time surfaces too"). */
   o->localize_near_um = 12;
-  /* Pair fits (cmd_track_guided.c): off. At 4 um (about the paper's
-   * lateral FWHM, 3.9 um: objects further apart leave two peaks) flow 1 s
-   * alpha +0.010 +- 0.005 over seeds 1-60, random flow 1 s -0.004 +- 0.006
-   * over seeds 1-44, flow 100 ms none; but the worm case of
-   * track_integral.sh 0.925 -> 0.862 (its neurons meet at one depth, where
-   * the views cannot part their images) and flow 100 ms seeds 22 and 29
-   * -0.012 each (docs/tracker.md "Two tracks at one peak"). */
-  o->pair_fit_um = 0;
+  /* Pair fits (cmd_track_guided.c) for predictions within 4 um laterally,
+   * about the paper's lateral FWHM (3.9 um): objects further apart leave
+   * two peaks. Where half the views part the two images: flow 1 s alpha
+   * +0.009 +- 0.004 over seeds 1-60, random flow 1 s -0.001 +- 0.006 over
+   * seeds 1-44, flow 100 ms -0.001 +- 0.002 over seeds 1-40 (docs/tracker.md
+   * "Two tracks at one peak"). */
+  o->pair_fit_um = 4;
   /* Stitching a new track of 5 points onto a dark track whose recent path
    * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
    * circle and come back onto their own path after gaps no extrapolation

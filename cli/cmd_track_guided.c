@@ -49,6 +49,30 @@ static double dist2_kz(const double *a, const double *b, double kz)
   return dx * dx + dy * dy + dz * dz;
 }
 
+/* Two predicted images are told apart in a view when they lie at least
+ * this far apart there (px): about a bead's image width (2.6 px in focus);
+ * nearer, the fit's window holds both (and localize.c takes out no
+ * neighbour closer than 2 px). */
+#define PAIR_VIEW_SEP_PX 3.0
+
+/* Do at least half of the views see the images of objects at a and b (um)
+ * PAIR_VIEW_SEP_PX apart? Two objects at one depth and close laterally are
+ * one blob in every view, and a fit from each prediction then lands where
+ * the predictions were, not where the objects are: the worm's neuron pairs
+ * (track_integral.sh's worm, alpha 0.925 -> 0.862 with every merged peak
+ * split, 0.920 with this test). */
+static int views_part(const elfm_calib *cal, const double *a, const double *b)
+{
+  const double dx = (a[0] - b[0]) / cal->um_per_px, dy = (a[1] - b[1]) / cal->um_per_px;
+  const double dz = a[2] - b[2];
+  int n = 0;
+  for (int v = 0; v < cal->n_views; v++) {
+    const double su = dx + dz * cal->views[v].dx_px_per_um, sv = dy + dz * cal->views[v].dy_px_per_um;
+    n += su * su + sv * sv >= PAIR_VIEW_SEP_PX * PAIR_VIEW_SEP_PX;
+  }
+  return 2 * n >= cal->n_views;
+}
+
 /* The view fit from q (um) with the light of an object at `other` taken
  * out of its windows; 0 where it fails or lands outside the volume. */
 static int fit_beside(const track_ctx *c, const elfm_volume *v, const elfm_refocus_plan *plan,
@@ -69,21 +93,21 @@ static int fit_beside(const track_ctx *c, const elfm_volume *v, const elfm_refoc
  * weak gate of either, the two objects' images have merged into one peak
  * of the volume, which both tracks would claim: one takes it, and the
  * other goes dark or, a frame later, leaves on the wrong object. The views
- * still tell the two apart: in a Fourier LFM an object's image in view v
- * moves by z dx_v, so two objects dz apart in depth sit up to 0.5 dz px
+ * can still tell the two apart: in a Fourier LFM an object's image in view
+ * v moves by z dx_v, so two objects dz apart in depth sit up to 0.5 dz px
  * further apart in the corner views (the paper's 5 x 5 array) than in the
- * centre one, while the volume's axial blur (~20 um) merges them. So each
- * object is fitted from its own track's prediction with the other's light
- * taken out of the views' windows (elfm_refocus_localize_near), then again
- * from the two fits. When both fits succeed, each within the weak gate of
- * its own prediction and the two at least PAIR_MIN_SEP_UM apart, they
- * replace the merged detection as weak view-fit points (each can only go
- * on with a track, never start one). On simulated flows 9 in 10 of these
- * splits put both fits on the beads their tracks had followed. Off by
- * default: at 4 um flow 1 s alpha +0.010 +- 0.005 over 60 seeds, random
- * flow 1 s -0.004 +- 0.006 over 44, flow 100 ms none, and a worm whose
- * neurons meet at one depth, where no view parts their images, -0.06
- * (docs/tracker.md "Two tracks at one peak"). */
+ * centre one, while the volume's axial blur (~20 um) merges them. Where
+ * half the views part the two predicted images (views_part), each object
+ * is fitted from its own track's prediction with the other's light taken
+ * out of the views' windows (elfm_refocus_localize_near), then again from
+ * the two fits. When both fits succeed, each within the weak gate of its
+ * own prediction and the two at least PAIR_MIN_SEP_UM apart, they replace
+ * the merged detection as weak view-fit points (each can only go on with a
+ * track, never start one). On simulated flows 9 in 10 of the splits put
+ * both fits on the beads their tracks had followed. Flow 1 s alpha +0.009
+ * +- 0.004 over 60 seeds, random flow 1 s -0.001 +- 0.006 over 44, flow
+ * 100 ms -0.001 +- 0.002 over 40 (docs/tracker.md "Two tracks at one
+ * peak"). */
 static void pair_fits(track_ctx *c, const elfm_volume *v, int slot, const double *pred, int np,
                       elfm_detection *det, int *n_io)
 {
@@ -105,6 +129,7 @@ static void pair_fits(track_ctx *c, const elfm_volume *v, int slot, const double
           merged = i;
         }
       if (n_in != 1) continue;
+      if (!views_part(c->calib, a, b)) continue;
       elfm_detection a0, b0, d[2];
       if (!fit_beside(c, v, plan, frame, a, b, &a0) || !fit_beside(c, v, plan, frame, b, a, &b0))
         continue;

@@ -37,6 +37,9 @@
 #  - --motion stage leaves the threshold flat (the stage's velocity got
 #    noisier with the deep tracks);
 #  - bad values are usage errors; summary.json records the defaults.
+# The runs leave out the pair fits (--pair-fit-um, fifty-fourth session),
+# which keep the case: with them the rule gives recall 0.9755 -> 0.978 and
+# alpha 0.834 -> 0.849.
 # Usage: track_deep.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -46,9 +49,9 @@ fail=0
 expect_usage_errors "--deep-peak-views 1" "--deep-peak-views 300"
 
 simulate_or_skip "$tmp/flow" flow 100 22
-track_score "$tmp/flow" "$tmp/def" "$tmp/def.json" --circle-points 0 --explain-brighter 0
-track_score "$tmp/flow" "$tmp/flat" "$tmp/flat.json" --threshold-depth-um 0 --circle-points 0 --explain-brighter 0
-track_score "$tmp/flow" "$tmp/any" "$tmp/any.json" --deep-peak-views 0 --circle-points 0 --explain-brighter 0
+track_score "$tmp/flow" "$tmp/def" "$tmp/def.json" --circle-points 0 --explain-brighter 0 --pair-fit-um 0
+track_score "$tmp/flow" "$tmp/flat" "$tmp/flat.json" --threshold-depth-um 0 --circle-points 0 --explain-brighter 0 --pair-fit-um 0
+track_score "$tmp/flow" "$tmp/any" "$tmp/any.json" --deep-peak-views 0 --circle-points 0 --explain-brighter 0 --pair-fit-um 0
 a0=$(key "$tmp/flat.json" alpha); a1=$(key "$tmp/def.json" alpha)
 r0=$(key "$tmp/flat.json" recall); r1=$(key "$tmp/def.json" recall)
 p0=$(key "$tmp/any.json" precision); p1=$(key "$tmp/def.json" precision)

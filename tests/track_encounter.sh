@@ -61,6 +61,11 @@
 # leak more slowly, threshold 25, lead -0.05 um) and seed 5's pairs no
 # longer cross; the test runs with the settings of the time (one leak,
 # threshold 20, lead 0.1 um), which keep the case (0.785 -> 0.826).
+# Pair fits (--pair-fit-um, fifty-fourth session) split the merged peaks
+# of seed 12 and of both worm cases, which then no longer reach the cases:
+# seed 12 0.884 without the review and 0.903 with it; worm seed 5 0.923
+# either way (0.925 with the review before); worm seed 1 0.919 -> 0.939
+# (0.920 before). Those three run without them, which keeps the cases.
 # Usage: track_encounter.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -90,12 +95,14 @@ compare() {
   [ "$(key "$tmp/on$1/summary.json" "$5")" = "$6" ] ||
     { echo "FAIL: $5 not $6 in summary.json"; fail=$((fail+1)); }
 }
-compare 12 "--encounter-um 0" 0.03 "the encounter review" encounter_um 5
 compare 27 "--review-join-factor 0" 0.01 "the join limit" review_join_factor 2
+# (TRACK_ARGS set before a function call may stay set in some shells: the
+# cases with options come last, each setting its own)
+TRACK_ARGS="--pair-fit-um 0" compare 12 "--encounter-um 0" 0.03 "the encounter review" encounter_um 5
 # (on the calibration's planes, where this case was found)
-SCENE=worm TRACK_ARGS="--dt-us 2000 --repr integral --tau-bright-us 100000 --threshold-abs 20 --motion-lead-um 0.1 --plane-shift-px 0" \
+SCENE=worm TRACK_ARGS="--dt-us 2000 --repr integral --tau-bright-us 100000 --threshold-abs 20 --motion-lead-um 0.1 --plane-shift-px 0 --pair-fit-um 0" \
   compare 5 "--encounter-apart 0" 0.02 "frames apart within an encounter" encounter_apart 4
-SCENE=worm MS=500 TRACK_ARGS="--dt-us 2000 --repr integral" \
+SCENE=worm MS=500 TRACK_ARGS="--dt-us 2000 --repr integral --pair-fit-um 0" \
   compare 1 "--encounter-line-ratio 0" 0.03 "straight lines at rest" encounter_line_ratio 0.5
 [ $fail -eq 0 ] && echo "track_encounter: all passed" || echo "track_encounter: $fail failed"
 [ $fail -eq 0 ]
