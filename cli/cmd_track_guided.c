@@ -202,7 +202,6 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const 
   *n_io = n;
 }
 
-
 /* cmd_track.h */
 elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det,
                                 int *n_io, elfm_error *err)

@@ -37,8 +37,8 @@
 #  - --motion stage leaves the threshold flat (the stage's velocity got
 #    noisier with the deep tracks);
 #  - bad values are usage errors; summary.json records the defaults.
-# The runs leave out the pair fits (--pair-fit-um, fifty-fourth session),
-# which keep the case: with them the rule gives recall 0.9755 -> 0.978 and
+# The runs leave out the pair fits (--pair-fit-um, fifty-fourth session);
+# that keeps the case. With them the rule gives recall 0.9755 -> 0.978 and
 # alpha 0.834 -> 0.849.
 # Usage: track_deep.sh BINARY
 bin=$1

@@ -62,10 +62,10 @@
 # longer cross; the test runs with the settings of the time (one leak,
 # threshold 20, lead 0.1 um), which keep the case (0.785 -> 0.826).
 # Pair fits (--pair-fit-um, fifty-fourth session) split the merged peaks
-# of seed 12 and of both worm cases, which then no longer reach the cases:
-# seed 12 0.884 without the review and 0.903 with it; worm seed 5 0.923
-# either way (0.925 with the review before); worm seed 1 0.919 -> 0.939
-# (0.920 before). Those three run without them, which keeps the cases.
+# of seed 12 and of both worm cases, and the cases change: seed 12 0.884
+# without the review and 0.903 with it; worm seed 5 0.923 either way (0.925
+# with the review before); worm seed 1 0.919 -> 0.939 (0.920 before). Those
+# three run without the pair fits, which keeps the cases.
 # Usage: track_encounter.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
