@@ -108,13 +108,11 @@ static int fit_beside(const track_ctx *c, const elfm_volume *v, const elfm_refoc
  * +- 0.004 over 60 seeds, random flow 1 s -0.001 +- 0.006 over 44, flow
  * 100 ms -0.001 +- 0.002 over 40 (docs/tracker.md "Two tracks at one
  * peak"). */
-static void pair_fits(track_ctx *c, const elfm_volume *v, int slot, const double *pred, int np,
+static void pair_fits(track_ctx *c, const elfm_volume *v, const elfm_frame *frame,
+                      const elfm_refocus_plan *plan, const double *pred, int np,
                       elfm_detection *det, int *n_io)
 {
   const track_opts *o = c->o;
-  const elfm_frame *frame = c->slot_frame[slot];
-  const elfm_refocus_plan *plan = c->slot_plan[slot];
-  if (!frame || !plan) return;
   int n = *n_io;
   const double g = o->link.weak_gate_um, kz = o->link.kz, D = o->pair_fit_um;
   for (int k = 0; k < np; k++)
@@ -157,13 +155,11 @@ static void pair_fits(track_ctx *c, const elfm_volume *v, int slot, const double
  * weak peak, which can only continue that track. Flow 100 ms, 8 seeds: F1
  * 0.911 -> 0.929 over the view fit of every peak alone (docs/tracker.md).
  * pred[0 .. np) are the linker's predictions for this frame. */
-static void guided_view_fit(track_ctx *c, const elfm_volume *v, int slot, const double *pred, int np,
+static void guided_view_fit(track_ctx *c, const elfm_volume *v, const elfm_frame *frame,
+                            const elfm_refocus_plan *plan, const double *pred, int np,
                             elfm_detection *det, int *n_io)
 {
   const track_opts *o = c->o;
-  const elfm_frame *frame = c->slot_frame[slot];
-  const elfm_refocus_plan *plan = c->slot_plan[slot];
-  if (!frame || !plan) return;
   int n = *n_io;
   const double g = o->link.weak_gate_um, kz = o->link.kz;
   elfm_localize_options lo = o->loc;
@@ -216,7 +212,12 @@ elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, el
   elfm_status st = elfm_link_predict(c->lk, v->frame, v->t_us, o->guided_min_points, c->pred,
                                      c->pred_intensity, o->max_det, &np, err);
   if (st != ELFM_OK) return st;
-  if (pair_fit) pair_fits(c, v, slot, c->pred, np, det, &n);
+  /* the frame and plan the worker refocused this volume from (the view
+   * fits read the frame's views) */
+  const elfm_frame *frame = c->slot_frame[slot];
+  const elfm_refocus_plan *plan = c->slot_plan[slot];
+  const int have_views = frame && plan;
+  if (pair_fit && have_views) pair_fits(c, v, frame, plan, c->pred, np, det, &n);
   if (guided_peak) {
     /* Track-guided search: where an established track expects its bead
      * and no peak lies within the weak gate, take the local maximum above
@@ -235,7 +236,7 @@ elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, el
       n += found;
     }
   }
-  if (guided_fit) guided_view_fit(c, v, slot, c->pred, np, det, &n);
+  if (guided_fit && have_views) guided_view_fit(c, v, frame, plan, c->pred, np, det, &n);
   *n_io = n;
   return ELFM_OK;
 }
