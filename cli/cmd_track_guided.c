@@ -9,12 +9,19 @@
 
 #include "cmd_track.h"
 
+/* The squared distance of a and b (um) in the linker's metric (dz / kz). */
+static double dist2_kz(const double *a, const double *b, double kz)
+{
+  const double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
+  return dx * dx + dy * dy + dz * dz;
+}
+
 /* Is a detection of det[0 .. n) within the weak gate of prediction q? */
 static int any_near(const elfm_detection *det, int n, const double q[3], double gate_um, double kz)
 {
   for (int j = 0; j < n; j++) {
-    double dx = det[j].x_um - q[0], dy = det[j].y_um - q[1], dz = (det[j].z_um - q[2]) / kz;
-    if (dx * dx + dy * dy + dz * dz < gate_um * gate_um) return 1;
+    const double p[3] = {det[j].x_um, det[j].y_um, det[j].z_um};
+    if (dist2_kz(p, q, kz) < gate_um * gate_um) return 1;
   }
   return 0;
 }
@@ -42,12 +49,6 @@ static int guided_point(const elfm_volume *v, const elfm_localize_result *r, elf
 /* Two fits closer than this (um, the linker's metric) found one object
  * twice, not the two the tracks expect. */
 #define PAIR_MIN_SEP_UM 0.5
-
-static double dist2_kz(const double *a, const double *b, double kz)
-{
-  const double dx = a[0] - b[0], dy = a[1] - b[1], dz = (a[2] - b[2]) / kz;
-  return dx * dx + dy * dy + dz * dz;
-}
 
 /* Two predicted images are told apart in a view when they lie at least
  * this far apart there (px): about a bead's image width (2.6 px in focus);
