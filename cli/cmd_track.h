@@ -59,6 +59,11 @@ typedef struct track_opts {
   double pair_fit_um;  /* pair fits: two established tracks' predictions within this
                           laterally that share one detection get a view fit each
                           (cmd_track_guided.c; 0 = off) */
+  int64_t deep_window_us; /* the deep window (elfm_framer_options.deep_window_us): 0
+                          off (default), -1 auto (2 x dt), else its length; on the
+                          ON time surface of a fixed grid only (track_opts_derive) */
+  double deep_window_um;  /* ... for the planes and fits beyond this |z|
+                          (elfm_refocus_options.deep_z_um) */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
                            view fit from it has this many views agreeing (0 = no test) */
   int fill_views;      /* gap filling: views that must agree (0 = off) */
@@ -312,10 +317,16 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
 #define TRACK_GATE_PER_OCC_UM 200.0
 #define TRACK_GATE_MIN_UM 4.0
 
+/* The deep window's depth (track_opts.deep_window_um): beyond it the
+ * planes and view fits see 2 x dt of events. Flow recall falls beyond
+ * ~45 um (docs/tracker.md "Where the information runs out"). */
+#define TRACK_DEEP_WINDOW_UM 45.0
+
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */
 typedef struct ring_slot {
   int64_t frame;         /* the frame held, -1 none */
   int64_t t_us;
+  float recent_floor;    /* the frame's (elfm_frame.recent_floor) */
   size_t nnz, nnz_cap;
   uint32_t *idx;         /* [nnz] pixel y*w + x */
   float *val;            /* [nnz] its value */

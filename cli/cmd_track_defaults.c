@@ -6,6 +6,7 @@
  * (track_bias_derive, cmd_track_bias.c). Each of those is taken only when
  * its option was not given (track_given). Each default says what it was
  * measured on. The parsing is in cmd_track_opts.c. */
+#include <inttypes.h>
 #include <math.h>
 #include <string.h>
 
@@ -158,6 +159,8 @@ void track_defaults(track_opts *o)
    * seeds 1-44, flow 100 ms -0.001 +- 0.002 over seeds 1-40 (docs/tracker.md
    * "Two tracks at one peak"). */
   o->pair_fit_um = 4;
+  o->deep_window_us = 0;
+  o->deep_window_um = TRACK_DEEP_WINDOW_UM;
   /* Stitching a new track of 5 points onto a dark track whose recent path
    * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
    * circle and come back onto their own path after gaps no extrapolation
@@ -662,6 +665,26 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->start_auto && (o->recon.framer.start != ELFM_START_FIRST_EVENT ||
                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->start_auto = 0;
+  /* The deep window, when asked for (docs/tracker.md "A longer window for
+   * deep beads"): a bead beyond |z| ~45 um fires a few ON events per view
+   * and window, and the planes and view fits there see the last 2 x dt of
+   * events; nearer focus everything sees the window alone, as before. Only
+   * on the ON time surface of a fixed grid, unblurred and unfiltered (the
+   * blur and the median would mix the older pixels into the window's).
+   * Not by default: it gains on flow (100 ms and 1 s) but loses precision
+   * on crowded flows, and a first run's judgements (the blur, the LED's
+   * windows) read its deeper peaks. */
+  const int deep_ok = o->recon.framer.repr == ELFM_REPR_EXP && o->recon.framer.polarity == ELFM_POL_ON &&
+                      !each_trigger && o->recon.blur_px == 0 && o->recon.median == 0;
+  o->recon.framer.deep_window_us = !deep_ok ? 0
+                                   : o->deep_window_us < 0 ? 2 * o->recon.framer.dt_us
+                                                           : o->deep_window_us;
+  if (o->recon.framer.deep_window_us > 0 && o->recon.framer.deep_window_us <= o->recon.framer.dt_us) {
+    cli_message(C, CLI_USAGE, "--deep-window-us %" PRId64 " must be longer than the window (--dt-us %" PRId64
+                ") or 0 (off)", o->recon.framer.deep_window_us, o->recon.framer.dt_us);
+    return CLI_USAGE;
+  }
+  o->recon.refocus.deep_z_um = o->recon.framer.deep_window_us > 0 ? o->deep_window_um : 0;
   return CLI_OK;
 }
 

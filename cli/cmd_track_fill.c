@@ -82,6 +82,7 @@ elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, el
   sl->nnz = f->nnz;
   sl->frame = frame;
   sl->t_us = f->t_us;
+  sl->recent_floor = f->recent_floor;
   return ELFM_OK;
 }
 
@@ -89,6 +90,7 @@ elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, el
 static void slot_load(elfm_frame *f, const ring_slot *sl)
 {
   for (size_t i = 0; i < sl->nnz; i++) f->data[sl->idx[i]] = sl->val[i];
+  f->recent_floor = sl->recent_floor;
 }
 
 static void slot_clear(elfm_frame *f, const ring_slot *sl)

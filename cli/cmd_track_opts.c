@@ -48,7 +48,7 @@ enum {
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
-  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT
+  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -100,6 +100,8 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"view-fit-sigma", required_argument, 0, O_VFSIG},
       {"guided-min-ratio", required_argument, 0, O_GRATIO},
       {"pair-fit-um", required_argument, 0, O_PAIRFIT},
+      {"deep-window-us", required_argument, 0, O_DEEPW},
+      {"deep-window-um", required_argument, 0, O_DEEPZ},
       {"deep-peak-views", required_argument, 0, O_DEEPV},
       {"priority-points", required_argument, 0, O_PRIO},
       {"gcv-gamma", required_argument, 0, O_GCVG},
@@ -264,6 +266,17 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_PAIRFIT:
       if (!cli_parse_double_in(C, "--pair-fit-um", a, 0, 0, 100, "0..100 (0: off)", &o.pair_fit_um)) return CLI_USAGE;
+      break;
+    case O_DEEPW:
+      if (!strcmp(a, "auto")) o.deep_window_us = -1;
+      else if (!cli_parse_int64(C, "--deep-window-us", a, &o.deep_window_us)) return CLI_USAGE;
+      else if (o.deep_window_us < 0 || o.deep_window_us > 10000000) {
+        cli_message(C, CLI_USAGE, "--deep-window-us must be auto or 0..10000000 (0: off), not '%s'", a);
+        return CLI_USAGE;
+      }
+      break;
+    case O_DEEPZ:
+      if (!cli_parse_double_in(C, "--deep-window-um", a, 0, 0, 1000, "0..1000 (0: every plane)", &o.deep_window_um)) return CLI_USAGE;
       break;
     case O_FILLR:
       if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;

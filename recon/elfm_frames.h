@@ -99,6 +99,10 @@ typedef struct elfm_frame {
   int64_t n_triggers;  /* rising trigger edges (of trigger_channel, or any) from the
                           recording's start up to the window's end: a caller can tell
                           pulsed light from the frames alone */
+  float recent_floor;  /* > 0 on a deep window's frame (elfm_framer_options.deep_window_us):
+                          a value >= it is a pixel whose latest event lies in the
+                          window [t_start, t_end), a smaller one older; 0: every
+                          pixel is the window's */
 } elfm_frame;
 
 /* A zero frame of w x h; NULL (err filled) when out of memory.
@@ -154,6 +158,14 @@ typedef struct elfm_framer_options {
   double off_weight;    /* INTEGRAL: an OFF event's step over an ON event's; default 1 */
   double tau_bright_us; /* INTEGRAL: the leak of a level above 0; default 0 = tau_us
                            (ELFM_INTEGRAL_TAU_BRIGHT_FACTOR x tau_us is a good start) */
+  int64_t deep_window_us; /* EXP only, > dt_us: each frame's surface holds the pixels of
+                           the last deep_window_us before its end, not only of its
+                           window; those whose latest event lies before the window
+                           (older, so smaller) sit below frame.recent_floor, and a
+                           consumer that wants the window alone leaves them out
+                           (elfm_refocus_options.deep_z_um: deep beads, which fire
+                           few events per window). Times, windows and n_events stay
+                           the window's. 0 (default) = off */
 } elfm_framer_options;
 
 void elfm_framer_options_default(elfm_framer_options *o);

@@ -64,6 +64,13 @@ typedef struct elfm_refocus_options {
   elfm_ghost_threshold threshold;  /* default NONE */
   double threshold_value;          /* ABS: value; FRAC_MAX: fraction; MAD: k */
   double agree_frac;               /* 0 = off; else in (0, 1]; default 0.3 (docs/recon.md) */
+  /* On a deep window's frames (elfm_frame.recent_floor > 0): the planes
+   * nearer focus than this (|z| < deep_z_um), and the view fits and view
+   * support there, use only the window's own pixels; the deeper ones use
+   * every pixel the frame holds. 0 (default): every plane uses them all.
+   * Needs the sparse path without the agreement rule (agree_frac 0); a
+   * frame with older pixels always takes the sparse path. */
+  double deep_z_um;
 } elfm_refocus_options;
 
 void elfm_refocus_options_default(elfm_refocus_options *o);

@@ -134,6 +134,7 @@ void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src)
   dst->index = src->index;
   dst->n_events = src->n_events;
   dst->n_triggers = src->n_triggers;
+  dst->recent_floor = src->recent_floor;
 }
 
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err)
@@ -196,6 +197,13 @@ elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown representation %d", (int)o->repr);
   if ((unsigned)o->polarity > ELFM_POL_SIGNED)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown polarity %d", (int)o->polarity);
+  if (o->deep_window_us != 0 &&
+      (o->repr != ELFM_REPR_EXP || o->start == ELFM_START_EACH_TRIGGER ||
+       o->deep_window_us <= o->dt_us || o->deep_window_us > 10000000))
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "deep_window_us %lld needs the exp surface on a fixed grid and "
+                          "dt_us (%lld) < it <= 10000000 (0 = off)",
+                          (long long)o->deep_window_us, (long long)o->dt_us);
   if ((unsigned)o->start > ELFM_START_EACH_TRIGGER)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown start mode %d", (int)o->start);
   if (o->trigger_channel < -1 || o->trigger_channel > 255)
@@ -232,9 +240,11 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   f->q_t = malloc(f->q_cap * sizeof *f->q_t);
   f->q_pix = malloc(f->q_cap * sizeof *f->q_pix);
   f->stamp = calloc(n, sizeof *f->stamp);
+  /* the oldest age a frame shows: the window's, or the deep window's */
+  const int64_t max_age_us = o->deep_window_us > o->dt_us ? o->deep_window_us : o->dt_us;
   int table = (o->repr == ELFM_REPR_EXP || o->repr == ELFM_REPR_LIN) &&
-              o->dt_us <= ELFM_DECAY_TABLE_MAX_US;
-  if (table) f->decay = malloc((size_t)(o->dt_us + 1) * sizeof *f->decay);
+              max_age_us <= ELFM_DECAY_TABLE_MAX_US;
+  if (table) f->decay = malloc((size_t)(max_age_us + 1) * sizeof *f->decay);
   int integral = o->repr == ELFM_REPR_INTEGRAL;
   if (integral) {
     f->px = calloc(n, sizeof *f->px);
@@ -249,7 +259,7 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   if (table) {
     float *d = f->decay;
     f->decay = NULL; /* framer_decay computes directly while the table is built */
-    for (int64_t a = 0; a <= o->dt_us; a++) d[a] = framer_decay(f, a);
+    for (int64_t a = 0; a <= max_age_us; a++) d[a] = framer_decay(f, a);
     f->decay = d;
   }
   f->cur_stamp = 0;
@@ -551,8 +561,10 @@ static size_t framer_integrate(elfm_framer *f, int64_t t0, int64_t t1, elfm_fram
   return nev;
 }
 
-/* EXP, LIN, COUNT: the events of [t0, t1) only. Returns their number. */
-static size_t framer_window(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *out)
+/* EXP, LIN, COUNT: the events of [t0, t1) only, or on a deep window's
+ * EXP frame those of [t_from, t1) (t_from < t0). Returns the number in
+ * [t0, t1). */
+static size_t framer_window(elfm_framer *f, int64_t t_from, int64_t t0, int64_t t1, elfm_frame *out)
 {
   const int sign = f->opt.polarity == ELFM_POL_SIGNED;
   size_t nev = 0;
@@ -589,12 +601,12 @@ static size_t framer_window(elfm_framer *f, int64_t t0, int64_t t1, elfm_frame *
     size_t k = (f->q_head + i) & (f->q_cap - 1);
     int64_t t = f->q_t[k];
     if (t >= t1) break;
-    if (t < t0) continue; /* only when stride < dt left older events queued */
+    if (t < t_from) continue; /* only when stride < dt left older events queued */
     if (i + PREFETCH_AHEAD < f->q_n)
       __builtin_prefetch(&d[f->q_pix[(k + PREFETCH_AHEAD) & (f->q_cap - 1)] & 0x7fffffffu], 1);
     uint32_t pix = f->q_pix[k] & 0x7fffffffu;
     const float age = (float)(t1 - t);
-    nev++;
+    nev += t >= t0;
     if (d[pix] == 0.0f) out->idx[out->nnz++] = pix;
     d[pix] = (f->q_pix[k] >> 31) ? age : -age;
   }
@@ -626,8 +638,14 @@ int elfm_framer_next(elfm_framer *f, elfm_frame *out)
   if (!closed) return 0;
 
   elfm_frame_clear(out);
+  /* a deep window's surface reaches back before the window (t0 is never
+   * cut on its fixed grid) */
+  const int64_t deep_us = f->opt.deep_window_us;
   size_t nev = f->opt.repr == ELFM_REPR_INTEGRAL ? framer_integrate(f, t0, t1, out)
-                                                 : framer_window(f, t0, t1, out);
+                                                 : framer_window(f, deep_us ? t1 - deep_us : t0, t0, t1, out);
+  /* age t1 - t0 is the window's oldest: every age up to it decays to at
+   * least this value, every older one (by 1 us or more) below it */
+  out->recent_floor = deep_us ? framer_decay(f, t1 - t0) : 0.0f;
   const int count = f->opt.repr == ELFM_REPR_COUNT;
   out->n_events = nev;
   /* edges come in time order, so those before t1 are all pushed by now */
@@ -642,10 +660,12 @@ int elfm_framer_next(elfm_framer *f, elfm_frame *out)
   out->t_us = count ? t0 + (t1 - t0) / 2 : t1;
   out->index = f->next_index;
   f->next_index++;
-  /* drop what no later window needs */
+  /* drop what no later window needs (a deep window: reaching back
+   * deep_window_us from the next window's end) */
   const int64_t next_t0 = cut ? t1 : t0 + f->opt.stride_us;
   f->next_t0 = next_t0;
-  while (f->q_n > 0 && f->q_t[f->q_head] < next_t0) {
+  const int64_t keep_from = deep_us ? next_t0 + f->opt.dt_us - deep_us : next_t0;
+  while (f->q_n > 0 && f->q_t[f->q_head] < keep_from) {
     f->q_head = (f->q_head + 1) & (f->q_cap - 1);
     f->q_n--;
   }

@@ -55,7 +55,7 @@ void elfm_localize_options_default(elfm_localize_options *o)
 
 /* The frame's value at (x, y) by bilinear interpolation, positive part
  * only, 0 outside box b (another view's light is not this one's). */
-static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, double x, double y)
+static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, int ro, double x, double y)
 {
   if (!(x >= b->x0 && y >= b->y0 && x <= b->x1 - 1 && y <= b->y1 - 1)) return 0;
   long ix = (long)floor(x), iy = (long)floor(y);
@@ -63,8 +63,9 @@ static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, double 
   if (iy > b->y1 - 2) iy = b->y1 - 2;
   const double fx = x - (double)ix, fy = y - (double)iy;
   const float *r0 = f->data + (size_t)iy * (size_t)f->w + ix, *r1 = r0 + f->w;
-  const double v00 = r0[0] > 0 ? r0[0] : 0, v01 = r0[1] > 0 ? r0[1] : 0;
-  const double v10 = r1[0] > 0 ? r1[0] : 0, v11 = r1[1] > 0 ? r1[1] : 0;
+  const float fl = ro ? f->recent_floor : 0.0f; /* 0: every pixel counts */
+  const double v00 = r0[0] > 0 && r0[0] >= fl ? r0[0] : 0, v01 = r0[1] > 0 && r0[1] >= fl ? r0[1] : 0;
+  const double v10 = r1[0] > 0 && r1[0] >= fl ? r1[0] : 0, v11 = r1[1] > 0 && r1[1] >= fl ? r1[1] : 0;
   return (1 - fy) * ((1 - fx) * v00 + fx * v01) + fy * ((1 - fx) * v10 + fx * v11);
 }
 
@@ -75,9 +76,11 @@ static double sample_box(const elfm_frame *f, const elfm_refocus_box *b, double 
  * out first: a neighbour's light at pixel x is estimated as the value at x
  * mirrored through its centre (2 nb - x), as if its image were symmetric:
  * the far side of a neighbour holds its own light and not this object's. */
-static double window_centroid_at(const elfm_frame *f, const elfm_refocus_box *b, long iu, long iw,
-                                 int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
+static double window_centroid_at(const elfm_frame *f, const elfm_refocus_box *b, int ro, long iu,
+                                 long iw, int r, int pw, const double *nb, int n_nb, double *cu,
+                                 double *cw)
 {
+  const float fl = ro ? f->recent_floor : 0.0f;
   if (iu - r < b->x0 || iu + r >= b->x1 || iw - r < b->y0 || iw + r >= b->y1) return -1;
   double m = 0, su = 0, sw = 0;
   for (long y = iw - r; y <= iw + r; y++) {
@@ -87,9 +90,9 @@ static double window_centroid_at(const elfm_frame *f, const elfm_refocus_box *b,
       /* positive values only: on a signed surface (ON - OFF) the OFF
        * trail is not the object, and negative weights could put a
        * centroid outside its window */
-      double f0 = row[x] > 0 ? row[x] : 0;
+      double f0 = row[x] > 0 && row[x] >= fl ? row[x] : 0;
       for (int k = 0; k < n_nb && f0 > 0; k++)
-        f0 -= sample_box(f, b, 2 * nb[2 * k] - (double)x, 2 * nb[2 * k + 1] - (double)y);
+        f0 -= sample_box(f, b, ro, 2 * nb[2 * k] - (double)x, 2 * nb[2 * k + 1] - (double)y);
       if (!(f0 > 0)) continue;
       double v = f0;
       for (int k = 1; k < pw; k++) v *= f0;
@@ -111,12 +114,13 @@ static double window_centroid_at(const elfm_frame *f, const elfm_refocus_box *b,
 #define WIN_OFF INT32_MIN
 static int32_t win_round(double u) { return fabs(u) < 1e7 ? (int32_t)lround(u) : WIN_OFF; }
 
-static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, double u, double w,
-                              int r, int pw, const double *nb, int n_nb, double *cu, double *cw)
+static double window_centroid(const elfm_frame *f, const elfm_refocus_box *b, int ro, double u,
+                              double w, int r, int pw, const double *nb, int n_nb, double *cu,
+                              double *cw)
 {
   const int32_t iu = win_round(u), iw = win_round(w);
   if (iu == WIN_OFF || iw == WIN_OFF) return -1;
-  return window_centroid_at(f, b, iu, iw, r, pw, nb, n_nb, cu, cw);
+  return window_centroid_at(f, b, ro, iu, iw, r, pw, nb, n_nb, cu, cw);
 }
 
 /* Insert x into a[0 .. *n), kept ascending (for the medians of at most
@@ -171,12 +175,12 @@ static int solve_xyz(int n, const double *wt, const double *ru, const double *rw
  * window leaves the view's box are skipped. Returns the summed mass (0:
  * nothing; -1: no frame's window fits). */
 static double view_centroid(const elfm_frame *const *frames, const double (*off)[3], int n_frames,
-                            const elfm_refocus_box *b, const int32_t *c, double du, double dw,
-                            int r, int pw, double *cu, double *cw)
+                            const elfm_refocus_box *b, int ro, const int32_t *c, double du,
+                            double dw, int r, int pw, double *cu, double *cw)
 {
   if (n_frames == 1 && !off) { /* the single-frame fit, exactly as it always was */
     if (c[0] == WIN_OFF || c[1] == WIN_OFF) return -1;
-    return window_centroid_at(frames[0], b, c[0], c[1], r, pw, NULL, 0, cu, cw);
+    return window_centroid_at(frames[0], b, ro, c[0], c[1], r, pw, NULL, 0, cu, cw);
   }
   double m = 0, su = 0, sw = 0;
   int any = 0;
@@ -186,7 +190,7 @@ static double view_centroid(const elfm_frame *const *frames, const double (*off)
     double u, w;
     if (c[2 * j] == WIN_OFF || c[2 * j + 1] == WIN_OFF) continue;
     const double mj =
-        window_centroid_at(frames[j], b, c[2 * j], c[2 * j + 1], r, pw, NULL, 0, &u, &w);
+        window_centroid_at(frames[j], b, ro, c[2 * j], c[2 * j + 1], r, pw, NULL, 0, &u, &w);
     if (mj < 0) continue;
     any = 1;
     if (mj == 0) continue;
@@ -321,6 +325,10 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
   }
   /* unknowns: X, Y (volume voxels = sensor px), z (um) */
   double q[3] = {x_vox, y_vox, c->z_min_um + z_vox * c->z_step_um};
+  /* a fit started nearer focus than deep_z_um reads a deep window's
+   * frames as the window alone (elfm_refocus_options.deep_z_um), the one
+   * the shallow planes showed; a deep one reads every pixel */
+  const int ro = fabs(q[2]) < p->opt.deep_z_um;
   const double zlo = c->z_min_um - c->z_step_um, zhi = c->z_min_um + p->nz * c->z_step_um;
   const double out2 = o->outlier_px * o->outlier_px;
   const int passes = o->iterations < 1 ? 1 : o->iterations;
@@ -381,10 +389,10 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
         if (nn > 0)
           m = c[0] == WIN_OFF || c[1] == WIN_OFF
                   ? -1
-                  : window_centroid_at(frames[0], &p->box[v], c[0], c[1], o->half_window_px,
+                  : window_centroid_at(frames[0], &p->box[v], ro, c[0], c[1], o->half_window_px,
                                        o->power, nbv[v], n_nbv[v], &cu, &cw);
         else
-          m = view_centroid(frames, off_vox, n_frames, &p->box[v], c, du[v], dw[v],
+          m = view_centroid(frames, off_vox, n_frames, &p->box[v], ro, c, du[v], dw[v],
                             o->half_window_px, o->power, &cu, &cw);
         prev_m[v] = m;
         prev_cu[v] = cu;
@@ -471,7 +479,7 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
     for (int v = 0; v < p->nv; v++) {
       if (!(mass[v] > 0) || fac[v] < 0.5) continue;
       double cu, cw;
-      const double m = window_centroid(frames[0], &p->box[v], q[0] + au[v] + q[2] * du[v],
+      const double m = window_centroid(frames[0], &p->box[v], ro, q[0] + au[v] + q[2] * du[v],
                                        q[1] + aw[v] + q[2] * dw[v], o->half_window_px, o->power,
                                        NULL, 0, &cu, &cw);
       if (m <= 0) continue;

@@ -161,6 +161,9 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   }
   ws->n_runs = 0;
   ws->n_vals = 0;
+  /* a deep window's frame for planes that want the window's pixels alone */
+  const float fl = frame->recent_floor;
+  ws->vals_recent_ok = fl > 0 && p->opt.deep_z_um > 0;
   for (int v = 0; v < p->nv; v++) {
     const elfm_refocus_box *bx = &p->box[v];
     uint32_t *vr = ws->vrow + p->vrow_off[v] - bx->y0; /* indexed by box row */
@@ -189,6 +192,21 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
         o[0] = 0.0f;
         memcpy(o + 1, row + c0, (size_t)len * sizeof *o);
         for (int z = 1; z <= 1 + ELFM_RUN_PAD; z++) o[len + z] = 0.0f;
+        if (ws->vals_recent_ok) {
+          /* the same run, its older pixels 0: a shallow plane's voxels get
+           * w x 0 from them, so the same sums as from the window's runs */
+          const size_t need = ws->n_vals + (size_t)len + 2 + ELFM_RUN_PAD;
+          if (!ws->vals_recent || need > ws->cap_vals_recent) {
+            size_t c = ws->cap_vals;
+            while (c < need) c *= 2;
+            float *nv = realloc(ws->vals_recent, c * sizeof *nv);
+            if (!nv) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (runs)");
+            ws->vals_recent = nv;
+            ws->cap_vals_recent = c;
+          }
+          float *q = ws->vals_recent + ws->n_vals;
+          for (size_t z = 0; z < (size_t)len + 2 + ELFM_RUN_PAD; z++) q[z] = o[z] >= fl ? o[z] : 0.0f;
+        }
         ws->n_vals += (size_t)len + 2 + ELFM_RUN_PAD;
         i = j;
       }
@@ -216,6 +234,8 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
     sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
     float *plane = vol->data + (size_t)k * W * H;
+    /* a deep window's frame: the shallow planes take the window's pixels */
+    const float *vals = ws->vals_recent_ok && p->shallow[k] ? ws->vals_recent : ws->vals;
     /* A block of plane rows at a time, view by view: each view takes only
      * its runs on the box rows that reach the block (vrow), and the rows'
      * written columns are kept on the stack and marked once per row. Each
@@ -258,7 +278,7 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
           if (i0 < 0) i0 = 0;
           if (i1 > run->n + 1) i1 = run->n + 1;
           if (i0 >= i1) continue;
-          const float *b = ws->vals + run->off;
+          const float *b = vals + run->off;
           /* Both tap rows in one pass where both are in the block and
            * weighed, in groups of eight (below): each group of the run's
            * values is loaded once for the two rows. Every voxel gets the
@@ -349,7 +369,8 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
   const size_t n_old = sparse_begin(p, vol, ws);
   size_t old_at = 0;
   if (p->need) {
-    /* the view-agreement rule: refocus_agree.c */
+    /* the view-agreement rule: refocus_agree.c (no deep window: the plan
+     * refuses deep_z_um with it, and every plane takes every pixel) */
     elfm_agree_support(p, ws);
     const int avx2 = elfm_agree_avx2(ws);
     for (int k = 0; k < p->nz; k++) {

@@ -1,6 +1,7 @@
 # recon: frames, median, refocusing, pipeline and outputs (issue 4).
 elfm_add_test(test_frames test_frames.c)
 elfm_add_test(test_frames_integral test_frames_integral.c)
+elfm_add_test(test_frames_deep test_frames_deep.c)
 elfm_add_test(test_median test_median.c)
 elfm_add_test(test_blur test_blur.c)
 elfm_add_test(test_refocus test_refocus.c)

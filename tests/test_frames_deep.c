@@ -1,0 +1,290 @@
+/* test_frames_deep.c — the deep window (elfm_framer_options.deep_window_us,
+ * elfm_refocus_options.deep_z_um):
+ *  - the framer: each frame keeps its window's times, index and event
+ *    count, and its pixels at or above recent_floor are exactly the plain
+ *    window's, bit for bit; all its pixels are the surface of the longer
+ *    window ending at the same time (a framer of windows that long, strided
+ *    by the window), bit for bit; the same in any chunking;
+ *  - bad options: other representations, each-trigger windows, a deep
+ *    window no longer than the window;
+ *  - the refocus: planes nearer focus than deep_z_um are the plain window's
+ *    volume bit for bit, the deeper ones the whole frame's; the view
+ *    support there, the occupancy and the view fits started there likewise.
+ * The tracker's use is tests/track_deep_window.sh. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "elfm_recon.h"
+#include "lfm_render.h"
+
+enum { SW = 64, SH = 48 };
+
+static void add_event(elfm_event_chunk *c, int64_t t, int x, int y, int p)
+{
+  c->t_us[c->n] = t;
+  c->x[c->n] = (uint16_t)x;
+  c->y[c->n] = (uint16_t)y;
+  c->p[c->n] = (uint8_t)p;
+  c->n++;
+}
+
+/* n events over [0, span_us), time-ordered, on a few hundred pixels (so
+ * that pixels fire again in later windows), from an LCG */
+static void make_events(elfm_event_chunk *c, int n, int64_t span_us)
+{
+  uint32_t s = 12345;
+  for (int i = 0; i < n; i++) {
+    s = s * 1664525u + 1013904223u;
+    const int x = (int)((s >> 8) % 20) + 5, y = (int)((s >> 16) % 15) + 3;
+    s = s * 1664525u + 1013904223u;
+    add_event(c, (int64_t)i * span_us / n, x, y, (int)((s >> 12) & 1));
+  }
+}
+
+/* All frames of a framer with options o over the events, pushed in chunks
+ * of `chunk` events; at most max frames into fr[] (created here). */
+static int run_framer(const elfm_framer_options *o, const elfm_event_chunk *all, int chunk,
+                      elfm_frame **fr, int max)
+{
+  elfm_error err;
+  elfm_framer *f = NULL;
+  CHECK_OK(elfm_framer_create(o, SW, SH, &f, &err), &err);
+  elfm_event_chunk *c = elfm_chunk_create((size_t)chunk, &err);
+  int n = 0;
+  for (size_t i = 0; i < all->n;) {
+    c->n = 0;
+    for (; i < all->n && c->n < (size_t)chunk; i++)
+      add_event(c, all->t_us[i], all->x[i], all->y[i], all->p[i]);
+    CHECK_OK(elfm_framer_push(f, c, &err), &err);
+    while (n < max) {
+      fr[n] = elfm_frame_create(SW, SH, &err);
+      if (!elfm_framer_next(f, fr[n])) {
+        elfm_frame_free(fr[n]);
+        break;
+      }
+      n++;
+    }
+  }
+  elfm_framer_finish(f);
+  while (n < max) {
+    fr[n] = elfm_frame_create(SW, SH, &err);
+    if (!elfm_framer_next(f, fr[n])) {
+      elfm_frame_free(fr[n]);
+      break;
+    }
+    n++;
+  }
+  elfm_framer_free(f);
+  elfm_chunk_free(c);
+  return n;
+}
+
+static int same_bits(float a, float b) { return memcmp(&a, &b, sizeof a) == 0; }
+
+static void test_framer(void)
+{
+  elfm_error err;
+  elfm_event_chunk *all = elfm_chunk_create(6000, &err);
+  make_events(all, 6000, 8000);
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.start = ELFM_START_AT_TIME;
+  o.start_us = 0;
+  o.polarity = ELFM_POL_ON;
+  elfm_framer_options od = o, ol = o;
+  od.deep_window_us = 2000;
+  ol.dt_us = 2000; /* the longer windows, ending where od's do from its second on */
+  ol.stride_us = 1000;
+  enum { MAX = 16 };
+  elfm_frame *a[MAX], *d[MAX], *d7[MAX], *l[MAX];
+  const int na = run_framer(&o, all, 6000, a, MAX), nd = run_framer(&od, all, 6000, d, MAX);
+  const int nd7 = run_framer(&od, all, 7, d7, MAX), nl = run_framer(&ol, all, 6000, l, MAX);
+  CHECK_EQ_INT(na, 8);
+  CHECK_EQ_INT(nd, na);
+  CHECK_EQ_INT(nd7, na);
+  CHECK(nl >= na - 1);
+  int older = 0;
+  for (int k = 0; k < na && k < nd; k++) {
+    CHECK_EQ_INT(d[k]->t_start_us, a[k]->t_start_us);
+    CHECK_EQ_INT(d[k]->t_end_us, a[k]->t_end_us);
+    CHECK_EQ_INT(d[k]->t_us, a[k]->t_us);
+    CHECK_EQ_INT(d[k]->index, a[k]->index);
+    CHECK_EQ_INT((long long)d[k]->n_events, (long long)a[k]->n_events);
+    CHECK(a[k]->recent_floor == 0.0f);
+    /* 255 / e: the window's oldest event (age 1 ms at tau 1 ms) */
+    CHECK_NEAR(d[k]->recent_floor, 255.0 * exp(-1.0), 1e-3);
+    for (int i = 0; i < SW * SH; i++) {
+      const float va = a[k]->data[i], vd = d[k]->data[i];
+      if (va != 0.0f) {
+        CHECK(same_bits(va, vd));
+        CHECK(vd >= d[k]->recent_floor);
+      } else if (vd != 0.0f) {
+        CHECK(vd < d[k]->recent_floor);
+        older++;
+      }
+      CHECK(same_bits(d7[k]->data[i], vd)); /* any chunking */
+      if (k >= 1 && k - 1 < nl) CHECK(same_bits(l[k - 1]->data[i], vd));
+    }
+    if (k == 0) CHECK_EQ_INT(d[0]->nnz, a[0]->nnz); /* nothing before the recording */
+  }
+  CHECK(older > 100); /* the test holds older pixels at all */
+  for (int k = 0; k < na; k++) elfm_frame_free(a[k]);
+  for (int k = 0; k < nd; k++) elfm_frame_free(d[k]);
+  for (int k = 0; k < nd7; k++) elfm_frame_free(d7[k]);
+  for (int k = 0; k < nl; k++) elfm_frame_free(l[k]);
+  elfm_chunk_free(all);
+}
+
+static void test_bad_options(void)
+{
+  elfm_error err;
+  elfm_framer_options o;
+  elfm_framer_options_default(&o);
+  o.deep_window_us = 1000; /* = dt */
+  CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "deep_window_us") != NULL);
+  o.deep_window_us = 2000;
+  CHECK_OK(elfm_framer_options_check(&o, &err), &err);
+  o.repr = ELFM_REPR_COUNT;
+  CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
+  o.repr = ELFM_REPR_EXP;
+  o.start = ELFM_START_EACH_TRIGGER;
+  CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
+  elfm_refocus_options ro;
+  elfm_refocus_options_default(&ro);
+  ro.deep_z_um = 45; /* with the agreement rule (default 0.3) */
+  elfm_calib c;
+  elfm_optics op;
+  elfm_optics_default(&op);
+  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
+  elfm_refocus_plan *p = NULL;
+  CHECK(elfm_refocus_plan_create(&c, &ro, &p, &err) == ELFM_ERR_INVALID);
+  CHECK(p == NULL);
+  ro.agree_frac = 0;
+  ro.deep_z_um = -1;
+  CHECK(elfm_refocus_plan_create(&c, &ro, &p, &err) == ELFM_ERR_INVALID);
+}
+
+static int same_volume_planes(const elfm_volume *x, const elfm_volume *y, int k0, int k1)
+{
+  const size_t pl = (size_t)x->w * x->h;
+  return memcmp(x->data + (size_t)k0 * pl, y->data + (size_t)k0 * pl,
+                (size_t)(k1 - k0) * pl * sizeof *x->data) == 0;
+}
+
+static int same_fit(int ra, const elfm_localize_result *a, int rb, const elfm_localize_result *b)
+{
+  return ra == rb && (!ra || (a->x_vox == b->x_vox && a->y_vox == b->y_vox && a->z_vox == b->z_vox &&
+                              a->n_views == b->n_views && a->rms_px == b->rms_px));
+}
+
+static void test_refocus(void)
+{
+  elfm_error err;
+  elfm_calib c;
+  elfm_optics op;
+  elfm_optics_default(&op);
+  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
+  const float floor_v = (float)(255.0 * exp(-1.0));
+  /* the window: a bead at 10 um (a narrow image, so that its trail shows
+   * beside it), every value at or above the floor */
+  elfm_frame *w = elfm_frame_create(1280, 720, &err), *old = elfm_frame_create(1280, 720, &err);
+  render_views(w, &c, 5.0, -3.0, 10.0, 20.0, 0.8, 0, 0, 0);
+  for (size_t i = 0; i < w->nnz; i++) w->data[w->idx[i]] += floor_v;
+  /* older pixels: a bead at 70 um and the first bead's trail, below it */
+  render_views(old, &c, -12.0, 8.0, 70.0, 80.0, 1.8, 0, 0, 0);
+  render_views(old, &c, 3.5, -3.0, 10.0, 80.0, 1.3, 0, 0, 0);
+  elfm_frame *deep = elfm_frame_create(1280, 720, &err), *whole = elfm_frame_create(1280, 720, &err);
+  CHECK_OK(elfm_frame_copy(deep, w, &err), &err);
+  for (size_t i = 0; i < old->nnz; i++) {
+    const uint32_t pix = old->idx[i];
+    if (deep->data[pix] == 0.0f) elfm_frame_set(deep, pix, fminf(old->data[pix], floor_v * 0.99f));
+  }
+  deep->recent_floor = floor_v;
+  CHECK_OK(elfm_frame_copy(whole, deep, &err), &err);
+  whole->recent_floor = 0; /* the same pixels, all of them the window's */
+  CHECK(deep->nnz > w->nnz + 100);
+
+  elfm_refocus_options ro;
+  elfm_refocus_options_default(&ro);
+  ro.agree_frac = 0;
+  ro.deep_z_um = 45;
+  elfm_refocus_plan *p = NULL;
+  CHECK_OK(elfm_refocus_plan_create(&c, &ro, &p, &err), &err);
+  int W, H, nz;
+  elfm_refocus_plan_size(p, &W, &H, &nz);
+  elfm_refocus_workspace *ws = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
+  elfm_volume *vw = elfm_refocus_volume_create(p, &err), *vd = elfm_refocus_volume_create(p, &err);
+  elfm_volume *vh = elfm_refocus_volume_create(p, &err);
+  /* the dense path for the plain frames; the deep frame takes the sparse one */
+  CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, w, vw, ws, &err), &err);
+  CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, whole, vh, ws, &err), &err);
+  CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, deep, vd, ws, &err), &err);
+  CHECK(elfm_refocus_workspace_last_path(ws) == ELFM_PATH_SPARSE);
+  /* planes: |z| < 45 um are -44..44 um of -100..100 every 2 um: k 28..72 */
+  const elfm_calib *pc = elfm_refocus_plan_calib(p);
+  int k_lo = nz, k_hi = -1;
+  for (int k = 0; k < nz; k++)
+    if (fabs(pc->z_min_um + k * pc->z_step_um) < 45) {
+      if (k < k_lo) k_lo = k;
+      k_hi = k;
+    }
+  CHECK(k_lo > 0 && k_hi < nz - 1);
+  CHECK(same_volume_planes(vd, vw, k_lo, k_hi + 1));
+  CHECK(same_volume_planes(vd, vh, 0, k_lo));
+  CHECK(same_volume_planes(vd, vh, k_hi + 1, nz));
+  CHECK(!same_volume_planes(vh, vw, k_lo, k_hi + 1)); /* the older pixels do show there */
+  CHECK(!same_volume_planes(vh, vw, k_hi + 1, nz));
+  /* occupancy: the window's pixels */
+  CHECK(elfm_refocus_occupancy(p, deep) == elfm_refocus_occupancy(p, w));
+  CHECK(elfm_refocus_occupancy(p, whole) > elfm_refocus_occupancy(p, w));
+  /* view support: the window's near focus, every pixel's beyond */
+  const int kz10 = (int)lround((10.0 - pc->z_min_um) / pc->z_step_um);
+  const int kz70 = (int)lround((70.0 - pc->z_min_um) / pc->z_step_um);
+  const double X3 = 3.5 / pc->um_per_px + 0.5 * (W - 1), Y3 = -3.0 / pc->um_per_px + 0.5 * (H - 1);
+  const double Xd = -12.0 / pc->um_per_px + 0.5 * (W - 1), Yd = 8.0 / pc->um_per_px + 0.5 * (H - 1);
+  int nsa, nsb;
+  CHECK_EQ_INT(elfm_refocus_view_support(p, deep, (int)lround(X3), (int)lround(Y3), kz10, &nsa),
+               elfm_refocus_view_support(p, w, (int)lround(X3), (int)lround(Y3), kz10, &nsb));
+  CHECK_EQ_INT(elfm_refocus_view_support(p, deep, (int)lround(Xd), (int)lround(Yd), kz70, &nsa),
+               elfm_refocus_view_support(p, whole, (int)lround(Xd), (int)lround(Yd), kz70, &nsb));
+  CHECK(elfm_refocus_view_support(p, deep, (int)lround(Xd), (int)lround(Yd), kz70, &nsa) >
+        elfm_refocus_view_support(p, w, (int)lround(Xd), (int)lround(Yd), kz70, &nsb));
+  /* view fits: started near focus they read the window alone (the trail
+   * 1.5 um behind would pull them), started deep every pixel */
+  elfm_localize_options lo;
+  elfm_localize_options_default(&lo);
+  elfm_localize_result r1, r2;
+  int a1 = elfm_refocus_localize(p, deep, X3, Y3, kz10, &lo, &r1);
+  int a2 = elfm_refocus_localize(p, w, X3, Y3, kz10, &lo, &r2);
+  CHECK(a1 && same_fit(a1, &r1, a2, &r2));
+  a2 = elfm_refocus_localize(p, whole, X3, Y3, kz10, &lo, &r2);
+  CHECK(!same_fit(a1, &r1, a2, &r2));
+  a1 = elfm_refocus_localize(p, deep, Xd, Yd, kz70, &lo, &r1);
+  a2 = elfm_refocus_localize(p, whole, Xd, Yd, kz70, &lo, &r2);
+  CHECK(a1 && same_fit(a1, &r1, a2, &r2));
+  CHECK(!elfm_refocus_localize(p, w, Xd, Yd, kz70, &lo, &r2)); /* nothing of it in the window */
+  /* a frame copy keeps the floor (the tracker's kept frames) */
+  CHECK_OK(elfm_frame_copy(whole, deep, &err), &err);
+  CHECK(whole->recent_floor == deep->recent_floor);
+  elfm_volume_free(vw);
+  elfm_volume_free(vd);
+  elfm_volume_free(vh);
+  elfm_refocus_workspace_free(ws);
+  elfm_refocus_plan_free(p);
+  elfm_frame_free(w);
+  elfm_frame_free(old);
+  elfm_frame_free(deep);
+  elfm_frame_free(whole);
+}
+
+int main(void)
+{
+  test_framer();
+  test_bad_options();
+  test_refocus();
+  return check_report();
+}
