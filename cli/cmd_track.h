@@ -62,8 +62,8 @@ typedef struct track_opts {
   int64_t deep_window_us; /* the deep window (elfm_framer_options.deep_window_us): 0
                           off (default), -1 auto (2 x dt), else its length; on the
                           ON time surface of a fixed grid only (track_opts_derive) */
-  double deep_window_um;  /* ... for the planes and fits beyond this |z|
-                          (elfm_refocus_options.deep_z_um) */
+  double deep_window_um;  /* ... read by the track-guided fits started beyond this |z|
+                          (track_guided_loc) */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the
                            view fit from it has this many views agreeing (0 = no test) */
   int fill_views;      /* gap filling: views that must agree (0 = off) */
@@ -553,6 +553,12 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
  * cmd_track_guided.c). */
 elfm_status track_guided_search(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det,
                                 int *n_io, elfm_error *err);
+/* The view fit's options for the fits a track guides (its prediction, a
+ * pair fit, gap filling): the run's, and with the deep window on, a fit
+ * started beyond deep_window_um reads the window's older pixels too
+ * (elfm_localize_options.deep_z_um). The peaks' own fits keep the
+ * window's pixels. */
+elfm_localize_options track_guided_loc(const track_opts *o);
 /* Append to nb[k ..] the detections of det[0 .. n) but det[skip] (-1: none)
  * within near_um laterally of (x_um, y_um), in geo's voxels (the view fit's
  * neighbours, localize_near_um); returns the new count, at most

@@ -684,7 +684,6 @@ int track_opts_derive(track_opts *o, const track_given *g)
                 ") or 0 (off)", o->recon.framer.deep_window_us, o->recon.framer.dt_us);
     return CLI_USAGE;
   }
-  o->recon.refocus.deep_z_um = o->recon.framer.deep_window_us > 0 ? o->deep_window_um : 0;
   return CLI_OK;
 }
 

@@ -226,7 +226,7 @@ static int fill_at(track_ctx *c, fill_view *fv, const double q[3], const double 
   const elfm_volume *geo = &c->geo;
   const ring_slot *sl = fv->sl;
   const elfm_frame *s = c->scratch;
-  elfm_localize_options lo = o->loc;
+  elfm_localize_options lo = track_guided_loc(o);
   lo.min_views = o->fill_views;
   elfm_localize_result res;
   int multi = 0;

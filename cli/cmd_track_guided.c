@@ -83,10 +83,18 @@ static int fit_beside(const track_ctx *c, const elfm_volume *v, const elfm_refoc
   const double nb[1][3] = {{elfm_volume_x_vox(v, other[0]), elfm_volume_y_vox(v, other[1]),
                             elfm_volume_z_vox(v, other[2])}};
   elfm_localize_result r;
+  const elfm_localize_options lo = track_guided_loc(c->o);
   return elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, q[0]),
                                     elfm_volume_y_vox(v, q[1]), elfm_volume_z_vox(v, q[2]), nb, 1,
-                                    &c->o->loc, &r) &&
+                                    &lo, &r) &&
          guided_point(v, &r, d);
+}
+
+elfm_localize_options track_guided_loc(const track_opts *o)
+{
+  elfm_localize_options lo = o->loc;
+  if (o->recon.framer.deep_window_us > 0) lo.deep_z_um = o->deep_window_um;
+  return lo;
 }
 
 /* Pair fits (pair_fit_um): where two established tracks' predictions lie
@@ -163,7 +171,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, const elfm_frame
   const track_opts *o = c->o;
   int n = *n_io;
   const double g = o->link.weak_gate_um, kz = o->link.kz;
-  elfm_localize_options lo = o->loc;
+  elfm_localize_options lo = track_guided_loc(o);
   lo.min_views = o->guided_views;
   for (int k = 0; k < np && n < o->max_det; k++) {
     const double *q = pred + 3 * (size_t)k;

@@ -176,7 +176,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "guided_min_ratio", o->guided_min_ratio);
   cJSON_AddNumberToObject(par, "pair_fit_um", o->pair_fit_um);
   cJSON_AddNumberToObject(par, "deep_window_us", (double)o->recon.framer.deep_window_us);
-  cJSON_AddNumberToObject(par, "deep_window_um", o->recon.refocus.deep_z_um);
+  cJSON_AddNumberToObject(par, "deep_window_um", o->recon.framer.deep_window_us > 0 ? o->deep_window_um : 0);
   cJSON_AddNumberToObject(par, "fill_views", o->fill_views);
   cJSON_AddNumberToObject(par, "fill_gate_um", o->fill_gate_um);
   cJSON_AddNumberToObject(par, "fill_max_gap", o->fill_max_gap);

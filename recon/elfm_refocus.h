@@ -64,13 +64,6 @@ typedef struct elfm_refocus_options {
   elfm_ghost_threshold threshold;  /* default NONE */
   double threshold_value;          /* ABS: value; FRAC_MAX: fraction; MAD: k */
   double agree_frac;               /* 0 = off; else in (0, 1]; default 0.3 (docs/recon.md) */
-  /* On a deep window's frames (elfm_frame.recent_floor > 0): the planes
-   * nearer focus than this (|z| < deep_z_um), and the view fits and view
-   * support there, use only the window's own pixels; the deeper ones use
-   * every pixel the frame holds. 0 (default): every plane uses them all.
-   * Needs the sparse path without the agreement rule (agree_frac 0); a
-   * frame with older pixels always takes the sparse path. */
-  double deep_z_um;
 } elfm_refocus_options;
 
 void elfm_refocus_options_default(elfm_refocus_options *o);
@@ -159,6 +152,10 @@ typedef struct elfm_localize_options {
   int min_views;       /* fewer views agreeing: no result (6) */
   int power;           /* pixel weight value^power: on a time surface the newest
                           events count most (3) */
+  double deep_z_um;    /* on a deep window's frames (elfm_frame.recent_floor > 0): a fit
+                          started at |z| >= this reads the older pixels too, a nearer
+                          one the window's alone; INFINITY (default): always the
+                          window's, as the refocus reads them */
 } elfm_localize_options;
 
 typedef struct elfm_localize_result {

@@ -51,6 +51,7 @@ void elfm_localize_options_default(elfm_localize_options *o)
   o->outlier_px = 1.5;
   o->min_views = 6;
   o->power = 3;
+  o->deep_z_um = INFINITY;
 }
 
 /* The frame's value at (x, y) by bilinear interpolation, positive part
@@ -326,9 +327,9 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
   /* unknowns: X, Y (volume voxels = sensor px), z (um) */
   double q[3] = {x_vox, y_vox, c->z_min_um + z_vox * c->z_step_um};
   /* a fit started nearer focus than deep_z_um reads a deep window's
-   * frames as the window alone (elfm_refocus_options.deep_z_um), the one
-   * the shallow planes showed; a deep one reads every pixel */
-  const int ro = fabs(q[2]) < p->opt.deep_z_um;
+   * frames as the window alone, as the refocus did; a deeper one reads
+   * every pixel (elfm_localize_options.deep_z_um) */
+  const int ro = !(fabs(q[2]) >= o->deep_z_um);
   const double zlo = c->z_min_um - c->z_step_um, zhi = c->z_min_um + p->nz * c->z_step_um;
   const double out2 = o->outlier_px * o->outlier_px;
   const int passes = o->iterations < 1 ? 1 : o->iterations;

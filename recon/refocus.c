@@ -34,7 +34,6 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->full_lo);
   free(p->full_hi);
   free(p->vrow_off);
-  free(p->shallow);
   free(p->need);
   free(p->need_row_min);
   free(p->need_bits);
@@ -60,11 +59,6 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
                           o.crop_margin_px);
   if (!(o.agree_frac >= 0.0 && o.agree_frac <= 1.0))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "agree_frac must be in [0, 1]");
-  if (!(o.deep_z_um >= 0.0) || !isfinite(o.deep_z_um))
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "deep_z_um must be >= 0");
-  if (o.deep_z_um > 0.0 && o.agree_frac > 0.0)
-    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                          "deep_z_um needs the view-agreement rule off (agree_frac 0)");
   if ((unsigned)o.threshold > ELFM_GHOST_THR_MAD || !isfinite(o.threshold_value) ||
       o.threshold_value < 0.0)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
@@ -108,7 +102,6 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   p->full_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_lo);
   p->full_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_hi);
   p->vrow_off = calloc((size_t)p->nv, sizeof *p->vrow_off);
-  p->shallow = calloc((size_t)nz, 1);
   p->in_boxes = calloc((size_t)p->sw * (size_t)p->sh, 1);
   if (o.agree_frac > 0.0) {
     p->need = calloc(nvox + 32, 1);
@@ -116,7 +109,7 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off || !p->shallow || !p->in_boxes ||
+  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off || !p->in_boxes ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
@@ -179,7 +172,6 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
       }
     }
   }
-  for (int k = 0; k < nz; k++) p->shallow[k] = fabs(c->z_min_um + k * c->z_step_um) < o.deep_z_um;
   p->inv_table[0] = 0.0f;
   for (int n = 1; n < 256; n++) p->inv_table[n] = 1.0f / (float)n;
   for (size_t r = 0; r < (size_t)p->h * (size_t)nz; r++) {
@@ -249,8 +241,8 @@ static int view_sample(const elfm_refocus_plan *p, const elfm_frame *frame, int 
   elfm_refocus_shift_weights(sh, w);
   const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
   const float *r1 = r0 + p->sw;
-  const float fl = elfm_refocus_recent_floor(p, frame, k);
-  if (fl > 0) { /* the window's own pixels: the older ones count as 0 */
+  const float fl = frame->recent_floor;
+  if (fl > 0) { /* a deep window's frame: its older pixels are not the window's */
     *a = w[0] * (r0[0] >= fl ? r0[0] : 0.0f) + w[1] * (r0[1] >= fl ? r0[1] : 0.0f) +
          w[2] * (r1[0] >= fl ? r1[0] : 0.0f) + w[3] * (r1[1] >= fl ? r1[1] : 0.0f);
     return 1;
@@ -463,7 +455,6 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->sorted);
   free(ws->runs);
   free(ws->vals);
-  free(ws->vals_recent);
   free(ws->row_lo);
   free(ws->row_hi);
   free(ws->sup);
@@ -565,7 +556,7 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
   if (!ws || ws->plan != p)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "workspace was made for another plan");
   if (path == ELFM_PATH_AUTO) path = p->opt.path;
-  /* only the sparse path tells a deep window's older pixels apart */
+  /* only the sparse path leaves out a deep window's older pixels */
   if (frame->recent_floor > 0) path = ELFM_PATH_SPARSE;
   if (path == ELFM_PATH_AUTO)
     path = (double)frame->nnz < p->opt.sparse_max_fill * p->box_area ? ELFM_PATH_SPARSE

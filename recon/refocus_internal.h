@@ -48,9 +48,6 @@ struct elfm_refocus_plan {
   /* [nv]: where view v's box rows (and one end mark) start in the sparse
    * workspace's run index by row (vrow), n_vrow in all */
   size_t *vrow_off, n_vrow;
-  /* [k]: 1 where |z| < opt.deep_z_um, the planes that leave out a deep
-   * window's older pixels (elfm_refocus_options.deep_z_um) */
-  uint8_t *shallow;
   uint8_t *need;              /* [k][Y][X]: views that must agree, NULL if off */
   uint8_t *need_row_min;      /* [k][Y]: least non-zero `need` of the row (255: none) */
   /* [k][Y][b][need_words]: bit b of each voxel's `need`, 63 where no view
@@ -59,13 +56,6 @@ struct elfm_refocus_plan {
   uint64_t *need_bits;
   size_t need_words;          /* ceil(W / 64) */
 };
-
-/* Whether plane k leaves out the older pixels of this frame (a deep
- * window's, elfm_refocus_options.deep_z_um), and the floor they lie below. */
-static inline float elfm_refocus_recent_floor(const elfm_refocus_plan *p, const elfm_frame *frame, int k)
-{
-  return frame->recent_floor > 0 && k >= 0 && k < p->nz && p->shallow[k] ? frame->recent_floor : 0.0f;
-}
 
 /* Runs of one view's row with at most this many zero pixels between them
  * are scattered as one. A time-surface frame's runs are short (flow at 12.5 Mev/s: 5,600
@@ -110,11 +100,6 @@ struct elfm_refocus_workspace {
   uint32_t *vrow;             /* [p->n_vrow] */
   float *vals;
   size_t n_vals, cap_vals;
-  /* the same runs with a deep window's older pixels set to 0, for the
-   * shallow planes; filled only on such frames (vals_recent_ok) */
-  float *vals_recent;
-  size_t cap_vals_recent;
-  int vals_recent_ok;
   /* agreement on (refocus_agree.c): per view, a bit map over its crop box,
    * bit c of box row y at bit sup_bit[v] + y sup_stride_bits[v] + c of
    * sup, set where a voxel whose first tap is there could see signal

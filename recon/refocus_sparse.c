@@ -139,9 +139,12 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   const uint32_t SW = (uint32_t)p->sw;
   uint32_t *start = ws->row_start;
   memset(start, 0, ((size_t)p->sh + 1) * sizeof *start);
+  /* a deep window's older pixels (below the floor) are not the window's:
+   * left out, and 0 where a run spans them */
+  const float fl = frame->recent_floor;
   size_t n = 0;
   for (size_t i = 0; i < frame->nnz; i++)
-    if (frame->data[frame->idx[i]] != 0.0f) {
+    if (frame->data[frame->idx[i]] != 0.0f && !(frame->data[frame->idx[i]] < fl)) {
       start[frame->idx[i] / SW + 1]++;
       n++;
     }
@@ -151,7 +154,7 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   /* place: start[y] runs ahead while filling, then is restored */
   for (size_t i = 0; i < frame->nnz; i++) {
     uint32_t pix = frame->idx[i];
-    if (frame->data[pix] != 0.0f) ws->sorted[start[pix / SW]++] = pix % SW;
+    if (frame->data[pix] != 0.0f && !(frame->data[pix] < fl)) ws->sorted[start[pix / SW]++] = pix % SW;
   }
   for (int y = p->sh; y > 0; y--) start[y] = start[y - 1];
   start[0] = 0;
@@ -161,9 +164,6 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   }
   ws->n_runs = 0;
   ws->n_vals = 0;
-  /* a deep window's frame for planes that want the window's pixels alone */
-  const float fl = frame->recent_floor;
-  ws->vals_recent_ok = fl > 0 && p->opt.deep_z_um > 0;
   for (int v = 0; v < p->nv; v++) {
     const elfm_refocus_box *bx = &p->box[v];
     uint32_t *vr = ws->vrow + p->vrow_off[v] - bx->y0; /* indexed by box row */
@@ -192,21 +192,9 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
         o[0] = 0.0f;
         memcpy(o + 1, row + c0, (size_t)len * sizeof *o);
         for (int z = 1; z <= 1 + ELFM_RUN_PAD; z++) o[len + z] = 0.0f;
-        if (ws->vals_recent_ok) {
-          /* the same run, its older pixels 0: a shallow plane's voxels get
-           * w x 0 from them, so the same sums as from the window's runs */
-          const size_t need = ws->n_vals + (size_t)len + 2 + ELFM_RUN_PAD;
-          if (!ws->vals_recent || need > ws->cap_vals_recent) {
-            size_t c = ws->cap_vals;
-            while (c < need) c *= 2;
-            float *nv = realloc(ws->vals_recent, c * sizeof *nv);
-            if (!nv) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (runs)");
-            ws->vals_recent = nv;
-            ws->cap_vals_recent = c;
-          }
-          float *q = ws->vals_recent + ws->n_vals;
-          for (size_t z = 0; z < (size_t)len + 2 + ELFM_RUN_PAD; z++) q[z] = o[z] >= fl ? o[z] : 0.0f;
-        }
+        if (fl > 0)
+          for (int z = 1; z <= len; z++)
+            if (o[z] < fl) o[z] = 0.0f;
         ws->n_vals += (size_t)len + 2 + ELFM_RUN_PAD;
         i = j;
       }
@@ -234,8 +222,7 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
     sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
     float *plane = vol->data + (size_t)k * W * H;
-    /* a deep window's frame: the shallow planes take the window's pixels */
-    const float *vals = ws->vals_recent_ok && p->shallow[k] ? ws->vals_recent : ws->vals;
+    const float *vals = ws->vals;
     /* A block of plane rows at a time, view by view: each view takes only
      * its runs on the box rows that reach the block (vrow), and the rows'
      * written columns are kept on the stack and marked once per row. Each
@@ -369,8 +356,11 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
   const size_t n_old = sparse_begin(p, vol, ws);
   size_t old_at = 0;
   if (p->need) {
-    /* the view-agreement rule: refocus_agree.c (no deep window: the plan
-     * refuses deep_z_um with it, and every plane takes every pixel) */
+    /* the view-agreement rule: refocus_agree.c, which reads the frame
+     * itself (not a deep window's: track's, where the rule is off) */
+    if (frame->recent_floor > 0)
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                            "the view-agreement rule takes no deep window's frames");
     elfm_agree_support(p, ws);
     const int avx2 = elfm_agree_avx2(ws);
     for (int k = 0; k < p->nz; k++) {

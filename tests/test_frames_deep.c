@@ -1,5 +1,5 @@
 /* test_frames_deep.c — the deep window (elfm_framer_options.deep_window_us,
- * elfm_refocus_options.deep_z_um):
+ * elfm_localize_options.deep_z_um):
  *  - the framer: each frame keeps its window's times, index and event
  *    count, and its pixels at or above recent_floor are exactly the plain
  *    window's, bit for bit; all its pixels are the surface of the longer
@@ -7,9 +7,10 @@
  *    by the window), bit for bit; the same in any chunking;
  *  - bad options: other representations, each-trigger windows, a deep
  *    window no longer than the window;
- *  - the refocus: planes nearer focus than deep_z_um are the plain window's
- *    volume bit for bit, the deeper ones the whole frame's; the view
- *    support there, the occupancy and the view fits started there likewise.
+ *  - the refocus, the view support and the occupancy read the window's
+ *    pixels alone, bit for bit (a frame with older pixels takes the sparse
+ *    path; the view-agreement rule refuses it); a view fit does too, unless
+ *    its options ask for the older pixels and it starts beyond deep_z_um.
  * The tracker's use is tests/track_deep_window.sh. */
 #include <math.h>
 #include <stdlib.h>
@@ -152,19 +153,6 @@ static void test_bad_options(void)
   o.repr = ELFM_REPR_EXP;
   o.start = ELFM_START_EACH_TRIGGER;
   CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
-  elfm_refocus_options ro;
-  elfm_refocus_options_default(&ro);
-  ro.deep_z_um = 45; /* with the agreement rule (default 0.3) */
-  elfm_calib c;
-  elfm_optics op;
-  elfm_optics_default(&op);
-  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
-  elfm_refocus_plan *p = NULL;
-  CHECK(elfm_refocus_plan_create(&c, &ro, &p, &err) == ELFM_ERR_INVALID);
-  CHECK(p == NULL);
-  ro.agree_frac = 0;
-  ro.deep_z_um = -1;
-  CHECK(elfm_refocus_plan_create(&c, &ro, &p, &err) == ELFM_ERR_INVALID);
 }
 
 static int same_volume_planes(const elfm_volume *x, const elfm_volume *y, int k0, int k1)
@@ -210,7 +198,6 @@ static void test_refocus(void)
   elfm_refocus_options ro;
   elfm_refocus_options_default(&ro);
   ro.agree_frac = 0;
-  ro.deep_z_um = 45;
   elfm_refocus_plan *p = NULL;
   CHECK_OK(elfm_refocus_plan_create(&c, &ro, &p, &err), &err);
   int W, H, nz;
@@ -219,42 +206,31 @@ static void test_refocus(void)
   CHECK_OK(elfm_refocus_workspace_create(p, &ws, &err), &err);
   elfm_volume *vw = elfm_refocus_volume_create(p, &err), *vd = elfm_refocus_volume_create(p, &err);
   elfm_volume *vh = elfm_refocus_volume_create(p, &err);
-  /* the dense path for the plain frames; the deep frame takes the sparse one */
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, w, vw, ws, &err), &err);
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, whole, vh, ws, &err), &err);
+  /* the dense path asked for: the deep frame takes the sparse one */
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, deep, vd, ws, &err), &err);
   CHECK(elfm_refocus_workspace_last_path(ws) == ELFM_PATH_SPARSE);
-  /* planes: |z| < 45 um are -44..44 um of -100..100 every 2 um: k 28..72 */
-  const elfm_calib *pc = elfm_refocus_plan_calib(p);
-  int k_lo = nz, k_hi = -1;
-  for (int k = 0; k < nz; k++)
-    if (fabs(pc->z_min_um + k * pc->z_step_um) < 45) {
-      if (k < k_lo) k_lo = k;
-      k_hi = k;
-    }
-  CHECK(k_lo > 0 && k_hi < nz - 1);
-  CHECK(same_volume_planes(vd, vw, k_lo, k_hi + 1));
-  CHECK(same_volume_planes(vd, vh, 0, k_lo));
-  CHECK(same_volume_planes(vd, vh, k_hi + 1, nz));
-  CHECK(!same_volume_planes(vh, vw, k_lo, k_hi + 1)); /* the older pixels do show there */
-  CHECK(!same_volume_planes(vh, vw, k_hi + 1, nz));
+  CHECK(same_volume_planes(vd, vw, 0, nz));
+  CHECK(!same_volume_planes(vh, vw, 0, nz)); /* the older pixels would show */
   /* occupancy: the window's pixels */
   CHECK(elfm_refocus_occupancy(p, deep) == elfm_refocus_occupancy(p, w));
   CHECK(elfm_refocus_occupancy(p, whole) > elfm_refocus_occupancy(p, w));
-  /* view support: the window's near focus, every pixel's beyond */
+  /* view support: the window's, near focus and deep */
+  const elfm_calib *pc = elfm_refocus_plan_calib(p);
   const int kz10 = (int)lround((10.0 - pc->z_min_um) / pc->z_step_um);
   const int kz70 = (int)lround((70.0 - pc->z_min_um) / pc->z_step_um);
   const double X3 = 3.5 / pc->um_per_px + 0.5 * (W - 1), Y3 = -3.0 / pc->um_per_px + 0.5 * (H - 1);
   const double Xd = -12.0 / pc->um_per_px + 0.5 * (W - 1), Yd = 8.0 / pc->um_per_px + 0.5 * (H - 1);
   int nsa, nsb;
-  CHECK_EQ_INT(elfm_refocus_view_support(p, deep, (int)lround(X3), (int)lround(Y3), kz10, &nsa),
-               elfm_refocus_view_support(p, w, (int)lround(X3), (int)lround(Y3), kz10, &nsb));
-  CHECK_EQ_INT(elfm_refocus_view_support(p, deep, (int)lround(Xd), (int)lround(Yd), kz70, &nsa),
-               elfm_refocus_view_support(p, whole, (int)lround(Xd), (int)lround(Yd), kz70, &nsb));
-  CHECK(elfm_refocus_view_support(p, deep, (int)lround(Xd), (int)lround(Yd), kz70, &nsa) >
-        elfm_refocus_view_support(p, w, (int)lround(Xd), (int)lround(Yd), kz70, &nsb));
-  /* view fits: started near focus they read the window alone (the trail
-   * 1.5 um behind would pull them), started deep every pixel */
+  for (int t = 0; t < 2; t++) {
+    const int X = (int)lround(t ? Xd : X3), Y = (int)lround(t ? Yd : Y3), k = t ? kz70 : kz10;
+    CHECK_EQ_INT(elfm_refocus_view_support(p, deep, X, Y, k, &nsa),
+                 elfm_refocus_view_support(p, w, X, Y, k, &nsb));
+  }
+  CHECK(elfm_refocus_view_support(p, whole, (int)lround(Xd), (int)lround(Yd), kz70, &nsa) >
+        elfm_refocus_view_support(p, deep, (int)lround(Xd), (int)lround(Yd), kz70, &nsb));
+  /* view fits: by default the window's pixels, wherever they start */
   elfm_localize_options lo;
   elfm_localize_options_default(&lo);
   elfm_localize_result r1, r2;
@@ -262,14 +238,32 @@ static void test_refocus(void)
   int a2 = elfm_refocus_localize(p, w, X3, Y3, kz10, &lo, &r2);
   CHECK(a1 && same_fit(a1, &r1, a2, &r2));
   a2 = elfm_refocus_localize(p, whole, X3, Y3, kz10, &lo, &r2);
-  CHECK(!same_fit(a1, &r1, a2, &r2));
+  CHECK(!same_fit(a1, &r1, a2, &r2)); /* the trail 1.5 um behind would pull it */
+  CHECK(!elfm_refocus_localize(p, deep, Xd, Yd, kz70, &lo, &r1)); /* nothing deep in the window */
+  /* asked for (deep_z_um 45): a fit started deep reads every pixel, one
+   * started near focus still the window's */
+  lo.deep_z_um = 45;
+  a1 = elfm_refocus_localize(p, deep, X3, Y3, kz10, &lo, &r1);
+  a2 = elfm_refocus_localize(p, w, X3, Y3, kz10, &lo, &r2);
+  CHECK(a1 && same_fit(a1, &r1, a2, &r2));
   a1 = elfm_refocus_localize(p, deep, Xd, Yd, kz70, &lo, &r1);
   a2 = elfm_refocus_localize(p, whole, Xd, Yd, kz70, &lo, &r2);
   CHECK(a1 && same_fit(a1, &r1, a2, &r2));
-  CHECK(!elfm_refocus_localize(p, w, Xd, Yd, kz70, &lo, &r2)); /* nothing of it in the window */
   /* a frame copy keeps the floor (the tracker's kept frames) */
   CHECK_OK(elfm_frame_copy(whole, deep, &err), &err);
   CHECK(whole->recent_floor == deep->recent_floor);
+  /* the view-agreement rule reads frames itself: it refuses them */
+  elfm_refocus_plan *pa = NULL;
+  elfm_refocus_options_default(&ro);
+  CHECK_OK(elfm_refocus_plan_create(&c, &ro, &pa, &err), &err);
+  elfm_refocus_workspace *wsa = NULL;
+  CHECK_OK(elfm_refocus_workspace_create(pa, &wsa, &err), &err);
+  elfm_volume *va = elfm_refocus_volume_create(pa, &err);
+  CHECK(elfm_refocus_execute(pa, deep, va, wsa, &err) == ELFM_ERR_INVALID);
+  CHECK(strstr(err.message, "deep window") != NULL);
+  elfm_volume_free(va);
+  elfm_refocus_workspace_free(wsa);
+  elfm_refocus_plan_free(pa);
   elfm_volume_free(vw);
   elfm_volume_free(vd);
   elfm_volume_free(vh);
