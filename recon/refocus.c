@@ -293,7 +293,8 @@ double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *fram
   for (size_t i = 0; i < frame->nnz; i++) {
     const uint32_t pix = frame->idx[i];
     /* a deep window's older pixels are not the window's crowd */
-    if (frame->data[pix] != 0.0f && !(frame->data[pix] < frame->recent_floor)) n += p->in_boxes[pix];
+    if (frame->data[pix] != 0.0f && !(frame->recent_floor > 0 && frame->data[pix] < frame->recent_floor))
+      n += p->in_boxes[pix];
   }
   return (double)n / p->box_area;
 }

@@ -144,7 +144,7 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   const float fl = frame->recent_floor;
   size_t n = 0;
   for (size_t i = 0; i < frame->nnz; i++)
-    if (frame->data[frame->idx[i]] != 0.0f && !(frame->data[frame->idx[i]] < fl)) {
+    if (frame->data[frame->idx[i]] != 0.0f && !(fl > 0 && frame->data[frame->idx[i]] < fl)) {
       start[frame->idx[i] / SW + 1]++;
       n++;
     }
@@ -154,7 +154,8 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   /* place: start[y] runs ahead while filling, then is restored */
   for (size_t i = 0; i < frame->nnz; i++) {
     uint32_t pix = frame->idx[i];
-    if (frame->data[pix] != 0.0f && !(frame->data[pix] < fl)) ws->sorted[start[pix / SW]++] = pix % SW;
+    if (frame->data[pix] != 0.0f && !(fl > 0 && frame->data[pix] < fl))
+      ws->sorted[start[pix / SW]++] = pix % SW;
   }
   for (int y = p->sh; y > 0; y--) start[y] = start[y - 1];
   start[0] = 0;

@@ -249,6 +249,19 @@ static void test_refocus(void)
   a1 = elfm_refocus_localize(p, deep, Xd, Yd, kz70, &lo, &r1);
   a2 = elfm_refocus_localize(p, whole, Xd, Yd, kz70, &lo, &r2);
   CHECK(a1 && same_fit(a1, &r1, a2, &r2));
+  /* without a deep window (floor 0) a signed frame's negative pixels count
+   * as ever: the test for older pixels is a deep window's only */
+  elfm_frame *sg = elfm_frame_create(1280, 720, &err);
+  CHECK_OK(elfm_frame_copy(sg, w, &err), &err);
+  for (size_t i = 0; i < sg->nnz; i++) sg->data[sg->idx[i]] = -sg->data[sg->idx[i]];
+  CHECK(elfm_refocus_occupancy(p, sg) == elfm_refocus_occupancy(p, w));
+  elfm_volume *vs = elfm_refocus_volume_create(p, &err);
+  CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_SPARSE, sg, vs, ws, &err), &err);
+  float mn = 0;
+  for (size_t i = 0; i < (size_t)W * H * nz; i++) mn = fminf(mn, vs->data[i]);
+  CHECK(mn < -100); /* the negative images refocused, not left out */
+  elfm_volume_free(vs);
+  elfm_frame_free(sg);
   /* a frame copy keeps the floor (the tracker's kept frames) */
   CHECK_OK(elfm_frame_copy(whole, deep, &err), &err);
   CHECK(whole->recent_floor == deep->recent_floor);
