@@ -59,9 +59,9 @@ typedef struct track_opts {
   double pair_fit_um;  /* pair fits: two established tracks' predictions within this
                           laterally that share one detection get a view fit each
                           (cmd_track_guided.c; 0 = off) */
-  int64_t deep_window_us; /* the deep window (elfm_framer_options.deep_window_us): 0
-                          off (default), -1 auto (2 x dt), else its length; on the
-                          ON time surface of a fixed grid only (track_opts_derive) */
+  int64_t deep_window_us; /* the deep window (elfm_framer_options.deep_window_us): -1
+                          auto (default: 2 x dt), 0 off, else its length; on the ON
+                          time surface of a fixed grid only (track_opts_derive) */
   double deep_window_um;  /* ... read by the track-guided fits started beyond this |z|
                           (track_guided_loc) */
   int deep_peak_views;  /* a peak above the depth-scaled threshold only is kept when the

@@ -159,7 +159,7 @@ void track_defaults(track_opts *o)
    * seeds 1-44, flow 100 ms -0.001 +- 0.002 over seeds 1-40 (docs/tracker.md
    * "Two tracks at one peak"). */
   o->pair_fit_um = 4;
-  o->deep_window_us = 0;
+  o->deep_window_us = -1; /* auto */
   o->deep_window_um = TRACK_DEEP_WINDOW_UM;
   /* Stitching a new track of 5 points onto a dark track whose recent path
    * its points follow within 8 um RMS (elfm_link.h step 5): flow beads
@@ -665,15 +665,16 @@ int track_opts_derive(track_opts *o, const track_given *g)
   if (o->start_auto && (o->recon.framer.start != ELFM_START_FIRST_EVENT ||
                         (o->recon.framer.repr != ELFM_REPR_EXP && o->recon.framer.repr != ELFM_REPR_LIN)))
     o->start_auto = 0;
-  /* The deep window, when asked for (docs/tracker.md "A longer window for
-   * deep beads"): a bead beyond |z| ~45 um fires a few ON events per view
-   * and window, and the planes and view fits there see the last 2 x dt of
-   * events; nearer focus everything sees the window alone, as before. Only
-   * on the ON time surface of a fixed grid, unblurred and unfiltered (the
-   * blur and the median would mix the older pixels into the window's).
-   * Not by default: it gains on flow (100 ms and 1 s) but loses precision
-   * on crowded flows, and a first run's judgements (the blur, the LED's
-   * windows) read its deeper peaks. */
+  /* The deep window (docs/tracker.md "A longer window for deep beads"): a
+   * bead beyond |z| ~45 um fires a few ON events per view and window, and
+   * the fits a track guides there (track_guided_loc) read the last 2 x dt
+   * of events; the volume, its peaks and their own fits keep the window's,
+   * so the first run's judgements see the same peaks. Flow 1 s seeds 1-60
+   * alpha +0.012, 100 ms seeds 1-40 +0.003, random flow 1 s seeds 1-44
+   * -0.001 (alpha_identities +0.005..+0.013 on every set); 1.07 of the
+   * time. Only on the ON time surface of a fixed grid, unblurred and
+   * unfiltered (the blur and the median would mix the older pixels into
+   * the window's). */
   const int deep_ok = o->recon.framer.repr == ELFM_REPR_EXP && o->recon.framer.polarity == ELFM_POL_ON &&
                       !each_trigger && o->recon.blur_px == 0 && o->recon.median == 0;
   o->recon.framer.deep_window_us = !deep_ok ? 0

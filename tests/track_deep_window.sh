@@ -1,6 +1,6 @@
 #!/bin/sh
-# The deep window (`eventlfm track --deep-window-us W|auto`, default 0 =
-# off; `--deep-window-um Z`, 45): the fits a track guides (from its
+# The deep window (`eventlfm track --deep-window-us W|auto|0`, default auto;
+# `--deep-window-um Z`, 45): the fits a track guides (from its
 # prediction, pair fits, gap filling) that start beyond |z| Z read the ON
 # events of the last W us (auto: 2 x dt); the volume, the peaks and their
 # own fits keep the window's (tests/test_frames_deep.c checks that bit for
@@ -9,7 +9,7 @@
 # 0.8829 -> 0.8891). Asked: that recall up by 0.04, alpha not down by more
 # than 0.01 (over flow 100 ms seeds 1-40 alpha gains 0.003 +- 0.003:
 # docs/tracker.md "A longer window for deep beads"), the setting in
-# summary.json (2000 with auto, 0 by default and on the integral), and bad
+# summary.json (2000 by default, 0 when off and on the integral), and bad
 # values as usage errors.
 # Usage: track_deep_window.sh BINARY
 bin=$1
@@ -21,8 +21,8 @@ expect_usage_errors "--deep-window-us -1" "--deep-window-us x" "--deep-window-us
   "--deep-window-um -1" "--deep-window-um nan"
 simulate_or_skip "$tmp/f" flow 100 4
 score_args="--by-depth 55"
-track_score "$tmp/f" "$tmp/off" "$tmp/off.json"
-track_score "$tmp/f" "$tmp/on" "$tmp/on.json" --deep-window-us auto
+track_score "$tmp/f" "$tmp/off" "$tmp/off.json" --deep-window-us 0
+track_score "$tmp/f" "$tmp/on" "$tmp/on.json"
 # the band beyond 55 um: its recall, from the table score prints
 deep_recall() {
   "$bin" score --truth "$tmp/f/truth.csv" --tracks "$1/tracks.csv" --detections "$1/detections.csv" \
@@ -38,8 +38,8 @@ expect_key deep_window_us "$tmp/on/summary.json" 2000
 expect_key deep_window_um "$tmp/on/summary.json" 45
 # not on the integral (a leaky sum of every past event already)
 "$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/int" -q \
-  --to-us 20000 --repr integral --dt-us 2000 --deep-window-us auto ||
-  { echo "FAIL: track --repr integral --deep-window-us auto"; fail=$((fail+1)); }
+  --to-us 20000 --repr integral --dt-us 2000 ||
+  { echo "FAIL: track --repr integral"; fail=$((fail+1)); }
 expect_key deep_window_us "$tmp/int/summary.json" 0
 [ $fail -eq 0 ] && echo "track_deep_window: all passed" || echo "track_deep_window: $fail failed"
 [ $fail -eq 0 ]
