@@ -62,6 +62,7 @@ static const struct sweep_point SWEEP[] = {
     {"localize", "peak fit only", {"--localize", "peak", "--guided-views", "0", NULL}, 0, 1},
     {"localize", "view fit, no guided fit", {"--guided-views", "0", NULL}, 0, 1},
     {"localize", "view fit, power 1", {"--localize-power", "1", NULL}, 0, 0},
+    {"deep window", "deep window off", {"--deep-window-us", "0", NULL}, 0, 1},
     {"link radius", "gate 2 um", {"--gate-um", "2", NULL}, 0, 1},
     {"link radius", "gate 4 um", {"--gate-um", "4", NULL}, 0, 0},
     {"link radius", "gate 8 um", {"--gate-um", "8", NULL}, 0, 1},
