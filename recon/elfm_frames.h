@@ -103,6 +103,10 @@ typedef struct elfm_frame {
                           a value >= it is a pixel whose latest event lies in the
                           window [t_start, t_end), a smaller one older; 0: every
                           pixel is the window's */
+  size_t nnz_recent;   /* with recent_floor > 0: idx[nnz_recent .. nnz) hold older pixels
+                          only (the framer lists the window's first), so a reader of
+                          the window's pixels may stop there; before it, a pixel may
+                          be either (test the floor) */
 } elfm_frame;
 
 /* A zero frame of w x h; NULL (err filled) when out of memory.
@@ -115,7 +119,8 @@ void elfm_frame_clear(elfm_frame *f);
  * the pixel was zero (it searches the list): for tests and small edits only. */
 void elfm_frame_set(elfm_frame *f, uint32_t i, float value);
 /* Clear dst (O(its nnz)) and give it src's times, index and event count:
- * the start of a filter's output frame. */
+ * the start of a filter's output frame (without a deep window's floor: a
+ * filter mixes the pixels). */
 void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src);
 /* Copy src into dst (same size): dst is cleared first. O(nnz). */
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err);

@@ -109,6 +109,7 @@ void elfm_frame_clear(elfm_frame *f)
 {
   for (size_t i = 0; i < f->nnz; i++) f->data[f->idx[i]] = 0.0f;
   f->nnz = 0;
+  f->nnz_recent = 0;
   f->n_events = 0;
   f->n_triggers = 0;
 }
@@ -121,6 +122,7 @@ void elfm_frame_set(elfm_frame *f, uint32_t i, float value)
     for (k = 0; k < f->nnz; k++)
       if (f->idx[k] == i) break;
     if (k == f->nnz) f->idx[f->nnz++] = i;
+    f->nnz_recent = f->nnz; /* the new pixel may be either */
   }
   f->data[i] = value;
 }
@@ -134,7 +136,7 @@ void elfm_frame_clear_like(elfm_frame *dst, const elfm_frame *src)
   dst->index = src->index;
   dst->n_events = src->n_events;
   dst->n_triggers = src->n_triggers;
-  dst->recent_floor = src->recent_floor;
+  dst->recent_floor = 0.0f;
 }
 
 elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *err)
@@ -149,6 +151,8 @@ elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *
     dst->data[p] = src->data[p];
   }
   dst->nnz = src->nnz;
+  dst->recent_floor = src->recent_floor;
+  dst->nnz_recent = src->nnz_recent;
   return ELFM_OK;
 }
 
@@ -615,6 +619,23 @@ static size_t framer_window(elfm_framer *f, int64_t t_from, int64_t t0, int64_t 
     const float e = d[pix];
     float v = framer_decay(f, (int64_t)fabsf(e));
     d[pix] = sign && e < 0 ? -v : v;
+  }
+  if (t_from < t0) {
+    /* a deep window's: the window's pixels first (elfm_frame.nnz_recent),
+     * so that its readers stop at the older ones (the order is free: the
+     * refocus sorts the pixels) */
+    const float fl = framer_decay(f, t1 - t0);
+    size_t a = 0, b = out->nnz;
+    while (a < b) {
+      if (d[out->idx[a]] >= fl) {
+        a++;
+      } else {
+        const uint32_t x = out->idx[a];
+        out->idx[a] = out->idx[--b];
+        out->idx[b] = x;
+      }
+    }
+    out->nnz_recent = a;
   }
   return nev;
 }

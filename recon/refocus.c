@@ -290,9 +290,11 @@ double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *fram
 {
   if (!(p->box_area > 0) || frame->w != p->sw || frame->h != p->sh) return 0;
   size_t n = 0;
-  for (size_t i = 0; i < frame->nnz; i++) {
+  /* a deep window's older pixels are not the window's crowd: they come
+   * after nnz_recent, and are below the floor */
+  const size_t n_list = frame->recent_floor > 0 ? frame->nnz_recent : frame->nnz;
+  for (size_t i = 0; i < n_list; i++) {
     const uint32_t pix = frame->idx[i];
-    /* a deep window's older pixels are not the window's crowd */
     if (frame->data[pix] != 0.0f && !(frame->recent_floor > 0 && frame->data[pix] < frame->recent_floor))
       n += p->in_boxes[pix];
   }

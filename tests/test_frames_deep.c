@@ -129,6 +129,10 @@ static void test_framer(void)
       if (k >= 1 && k - 1 < nl) CHECK(same_bits(l[k - 1]->data[i], vd));
     }
     if (k == 0) CHECK_EQ_INT(d[0]->nnz, a[0]->nnz); /* nothing before the recording */
+    /* the window's pixels listed first, the older ones after them */
+    CHECK_EQ_INT(d[k]->nnz_recent, a[k]->nnz);
+    for (size_t i = 0; i < d[k]->nnz; i++)
+      CHECK((d[k]->data[d[k]->idx[i]] >= d[k]->recent_floor) == (i < d[k]->nnz_recent));
   }
   CHECK(older > 100); /* the test holds older pixels at all */
   for (int k = 0; k < na; k++) elfm_frame_free(a[k]);
