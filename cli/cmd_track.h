@@ -317,9 +317,9 @@ void track_views_step(track_opts *o, const elfm_calib *cal);
 #define TRACK_GATE_PER_OCC_UM 200.0
 #define TRACK_GATE_MIN_UM 4.0
 
-/* The deep window's depth (track_opts.deep_window_um): beyond it the
- * planes and view fits see 2 x dt of events. Flow recall falls beyond
- * ~45 um (docs/tracker.md "Where the information runs out"). */
+/* The deep window's depth (track_opts.deep_window_um): the fits a track
+ * guides that start beyond it read 2 x dt of events. Flow recall falls
+ * beyond ~45 um (docs/tracker.md "Where the information runs out"). */
 #define TRACK_DEEP_WINDOW_UM 45.0
 
 /* One kept frame of the gap-filling ring (cmd_track_fill.c). */

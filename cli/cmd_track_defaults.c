@@ -676,7 +676,8 @@ int track_opts_derive(track_opts *o, const track_given *g)
    * unfiltered (the blur and the median would mix the older pixels into
    * the window's). */
   const int deep_ok = o->recon.framer.repr == ELFM_REPR_EXP && o->recon.framer.polarity == ELFM_POL_ON &&
-                      !each_trigger && o->recon.blur_px == 0 && o->recon.median == 0;
+                      !each_trigger && o->recon.blur_px == 0 && o->recon.median == 0 &&
+                      o->recon.framer.dt_us <= 5000000;
   o->recon.framer.deep_window_us = !deep_ok ? 0
                                    : o->deep_window_us < 0 ? 2 * o->recon.framer.dt_us
                                                            : o->deep_window_us;

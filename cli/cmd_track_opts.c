@@ -276,7 +276,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       }
       break;
     case O_DEEPZ:
-      if (!cli_parse_double_in(C, "--deep-window-um", a, 0, 0, 1000, "0..1000 (0: every plane)", &o.deep_window_um)) return CLI_USAGE;
+      if (!cli_parse_double_in(C, "--deep-window-um", a, 0, 0, 1000, "0..1000 (0: every such fit)", &o.deep_window_um)) return CLI_USAGE;
       break;
     case O_FILLR:
       if (!cli_parse_double_in(C, "--fill-min-ratio", a, 0, 0, 1, "0..1", &o.fill_min_ratio)) return CLI_USAGE;

@@ -163,14 +163,15 @@ typedef struct elfm_framer_options {
   double off_weight;    /* INTEGRAL: an OFF event's step over an ON event's; default 1 */
   double tau_bright_us; /* INTEGRAL: the leak of a level above 0; default 0 = tau_us
                            (ELFM_INTEGRAL_TAU_BRIGHT_FACTOR x tau_us is a good start) */
-  int64_t deep_window_us; /* EXP only, > dt_us: each frame's surface holds the pixels of
-                           the last deep_window_us before its end, not only of its
-                           window; those whose latest event lies before the window
-                           (older, so smaller) sit below frame.recent_floor, and a
-                           consumer that wants the window alone leaves them out
-                           (elfm_refocus_options.deep_z_um: deep beads, which fire
-                           few events per window). Times, windows and n_events stay
-                           the window's. 0 (default) = off */
+  int64_t deep_window_us; /* EXP, not signed, > dt_us: each frame's surface holds the
+                           pixels of the last deep_window_us before its end, not only
+                           of its window; those whose latest event lies before the
+                           window (older, so smaller) sit below frame.recent_floor.
+                           The refocus, view support and occupancy leave them out; a
+                           view fit reads them where elfm_localize_options.deep_z_um
+                           asks (deep beads, which fire few events per window).
+                           Times, windows and n_events stay the window's. 0 (default)
+                           = off */
 } elfm_framer_options;
 
 void elfm_framer_options_default(elfm_framer_options *o);

@@ -201,12 +201,14 @@ elfm_status elfm_framer_options_check(const elfm_framer_options *o, elfm_error *
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown representation %d", (int)o->repr);
   if ((unsigned)o->polarity > ELFM_POL_SIGNED)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown polarity %d", (int)o->polarity);
+  /* the floor tells older pixels by their smaller values: positive ones */
   if (o->deep_window_us != 0 &&
-      (o->repr != ELFM_REPR_EXP || o->start == ELFM_START_EACH_TRIGGER ||
-       o->deep_window_us <= o->dt_us || o->deep_window_us > 10000000))
+      (o->repr != ELFM_REPR_EXP || o->polarity == ELFM_POL_SIGNED ||
+       o->start == ELFM_START_EACH_TRIGGER || o->deep_window_us <= o->dt_us ||
+       o->deep_window_us > 10000000))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                          "deep_window_us %lld needs the exp surface on a fixed grid and "
-                          "dt_us (%lld) < it <= 10000000 (0 = off)",
+                          "deep_window_us %lld needs the exp surface, unsigned, on a fixed grid, "
+                          "and dt_us (%lld) < it <= 10000000 (0 = off)",
                           (long long)o->deep_window_us, (long long)o->dt_us);
   if ((unsigned)o->start > ELFM_START_EACH_TRIGGER)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "unknown start mode %d", (int)o->start);

@@ -155,6 +155,9 @@ static void test_bad_options(void)
   o.repr = ELFM_REPR_COUNT;
   CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
   o.repr = ELFM_REPR_EXP;
+  o.polarity = ELFM_POL_SIGNED; /* negative values: no floor tells them */
+  CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
+  o.polarity = ELFM_POL_ON;
   o.start = ELFM_START_EACH_TRIGGER;
   CHECK(elfm_framer_options_check(&o, &err) == ELFM_ERR_INVALID);
 }
