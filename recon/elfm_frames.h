@@ -113,7 +113,8 @@ typedef struct elfm_frame {
  * Free with elfm_frame_free (NULL is a no-op). */
 elfm_frame *elfm_frame_create(int w, int h, elfm_error *err);
 void elfm_frame_free(elfm_frame *f);
-/* Zero the listed pixels and empty the list: O(nnz). */
+/* Zero the listed pixels and empty the list (no deep window's floor either):
+ * O(nnz). */
 void elfm_frame_clear(elfm_frame *f);
 /* Set pixel i (< w*h) to value, listing it if needed. O(nnz) per call when
  * the pixel was zero (it searches the list): for tests and small edits only. */

@@ -110,6 +110,7 @@ void elfm_frame_clear(elfm_frame *f)
   for (size_t i = 0; i < f->nnz; i++) f->data[f->idx[i]] = 0.0f;
   f->nnz = 0;
   f->nnz_recent = 0;
+  f->recent_floor = 0.0f;
   f->n_events = 0;
   f->n_triggers = 0;
 }

@@ -135,6 +135,10 @@ static void test_framer(void)
       CHECK((d[k]->data[d[k]->idx[i]] >= d[k]->recent_floor) == (i < d[k]->nnz_recent));
   }
   CHECK(older > 100); /* the test holds older pixels at all */
+  /* a cleared frame holds no pixel, and no floor: a frame read into it
+   * afterwards (a light-field TIFF) is the window's whole */
+  elfm_frame_clear(d[0]);
+  CHECK(d[0]->recent_floor == 0.0f && d[0]->nnz == 0 && d[0]->nnz_recent == 0);
   for (int k = 0; k < na; k++) elfm_frame_free(a[k]);
   for (int k = 0; k < nd; k++) elfm_frame_free(d[k]);
   for (int k = 0; k < nd7; k++) elfm_frame_free(d7[k]);
