@@ -6,17 +6,9 @@
 
 #include "check.h"
 #include "elfm_recon.h"
+#include "frames_test_util.h"
 
 enum { SW = 64, SH = 48 };
-
-static void add_event(elfm_event_chunk *c, int64_t t, int x, int y, int p)
-{
-  c->t_us[c->n] = t;
-  c->x[c->n] = (uint16_t)x;
-  c->y[c->n] = (uint16_t)y;
-  c->p[c->n] = (uint8_t)p;
-  c->n++;
-}
 
 static float px(const elfm_frame *f, int x, int y) { return f->data[y * f->w + x]; }
 

@@ -18,18 +18,10 @@
 
 #include "check.h"
 #include "elfm_recon.h"
+#include "frames_test_util.h"
 #include "lfm_render.h"
 
 enum { SW = 64, SH = 48 };
-
-static void add_event(elfm_event_chunk *c, int64_t t, int x, int y, int p)
-{
-  c->t_us[c->n] = t;
-  c->x[c->n] = (uint16_t)x;
-  c->y[c->n] = (uint16_t)y;
-  c->p[c->n] = (uint8_t)p;
-  c->n++;
-}
 
 /* n events over [0, span_us), time-ordered, on a few hundred pixels (so
  * that pixels fire again in later windows), from an LCG */
@@ -42,6 +34,21 @@ static void make_events(elfm_event_chunk *c, int n, int64_t span_us)
     s = s * 1664525u + 1013904223u;
     add_event(c, (int64_t)i * span_us / n, x, y, (int)((s >> 12) & 1));
   }
+}
+
+/* The frames f closes now, appended to fr[n ..] (at most max in all). */
+static int take_frames(elfm_framer *f, elfm_frame **fr, int n, int max)
+{
+  elfm_error err;
+  while (n < max) {
+    fr[n] = elfm_frame_create(SW, SH, &err);
+    if (!elfm_framer_next(f, fr[n])) {
+      elfm_frame_free(fr[n]);
+      break;
+    }
+    n++;
+  }
+  return n;
 }
 
 /* All frames of a framer with options o over the events, pushed in chunks
@@ -59,24 +66,10 @@ static int run_framer(const elfm_framer_options *o, const elfm_event_chunk *all,
     for (; i < all->n && c->n < (size_t)chunk; i++)
       add_event(c, all->t_us[i], all->x[i], all->y[i], all->p[i]);
     CHECK_OK(elfm_framer_push(f, c, &err), &err);
-    while (n < max) {
-      fr[n] = elfm_frame_create(SW, SH, &err);
-      if (!elfm_framer_next(f, fr[n])) {
-        elfm_frame_free(fr[n]);
-        break;
-      }
-      n++;
-    }
+    n = take_frames(f, fr, n, max);
   }
   elfm_framer_finish(f);
-  while (n < max) {
-    fr[n] = elfm_frame_create(SW, SH, &err);
-    if (!elfm_framer_next(f, fr[n])) {
-      elfm_frame_free(fr[n]);
-      break;
-    }
-    n++;
-  }
+  n = take_frames(f, fr, n, max);
   elfm_framer_free(f);
   elfm_chunk_free(c);
   return n;
