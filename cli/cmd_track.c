@@ -596,6 +596,14 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                     "a pulse at a random phase against the window grid is not; score such a run "
                     "with --frames run --window-us run (README, blinking objects)\n",
             rs.triggers, track_pulsed_ratio(&c));
+  /* a deep window given, where it cannot be (track_opts_derive): said,
+   * not an error, since auto's later choices (the LED's windows, the blur)
+   * may be what turned it off */
+  if (!o.quiet && o.deep_window_us > 0 && o.recon.framer.deep_window_us == 0)
+    fprintf(stderr, "eventlfm track: note: --deep-window-us %" PRId64 " was given, but the deep "
+                    "window needs the ON time surface on a fixed grid, unblurred and without the "
+                    "median: it was off in this run (summary.json deep_window_us)\n",
+            o.deep_window_us);
   dim_note(&c, 0);
   rc = CLI_OK;
 done:

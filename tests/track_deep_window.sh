@@ -9,8 +9,8 @@
 # 0.8829 -> 0.8891). Asked: that recall up by 0.04, alpha not down by more
 # than 0.01 (over flow 100 ms seeds 1-40 alpha gains 0.003 +- 0.003:
 # docs/tracker.md "A longer window for deep beads"), the setting in
-# summary.json (2000 by default, 0 when off and on the integral), and bad
-# values as usage errors.
+# summary.json (2000 by default, 0 when off and on the integral, with a note
+# on stderr when it was given there), and bad values as usage errors.
 # Usage: track_deep_window.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -37,9 +37,18 @@ expect_key deep_window_us "$tmp/off/summary.json" 0
 expect_key deep_window_us "$tmp/on/summary.json" 2000
 expect_key deep_window_um "$tmp/on/summary.json" 45
 # not on the integral (a leaky sum of every past event already)
-"$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/int" -q \
-  --to-us 20000 --repr integral --dt-us 2000 ||
+"$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/int" \
+  --to-us 20000 --repr integral --dt-us 2000 >/dev/null 2>"$tmp/int.err" ||
   { echo "FAIL: track --repr integral"; fail=$((fail+1)); }
 expect_key deep_window_us "$tmp/int/summary.json" 0
+# given there, it is off too, and a note says so (auto's silence otherwise)
+"$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/int2" \
+  --to-us 20000 --repr integral --dt-us 2000 --deep-window-us 4000 >/dev/null 2>"$tmp/int2.err" ||
+  { echo "FAIL: track --repr integral --deep-window-us 4000"; fail=$((fail+1)); }
+expect_key deep_window_us "$tmp/int2/summary.json" 0
+grep -q "note: --deep-window-us 4000 was given, but" "$tmp/int2.err" ||
+  { echo "FAIL: no note for a deep window given where it cannot be"; fail=$((fail+1)); }
+grep -q "note: --deep-window-us" "$tmp/int.err" &&
+  { echo "FAIL: the note without the option"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_deep_window: all passed" || echo "track_deep_window: $fail failed"
 [ $fail -eq 0 ]
