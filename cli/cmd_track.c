@@ -380,6 +380,15 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
       fprintf(stderr, "eventlfm track: %d views: views that must agree scaled from the 25 views' "
               "defaults to %d (view fit), %d (guided), %d (fill), %d (deep peaks)\n",
               o.views_scaled, o.loc.min_views, o.guided_views, o.fill_views, o.deep_peak_views);
+    /* On fewer views than 25 the time surface's ghosts make the first
+     * tracks of crawling cells look fast, and nothing measured tells them
+     * from slow beads, which the integral loses (docs/tracker.md
+     * "Measured, not built (fifty-sixth session)"): a hint, not a choice. */
+    if (o.views_scaled > 0 && o.views_scaled < 25 && o.repr_auto)
+      fprintf(stderr, "eventlfm track: note: on %d views the time surface's ghosts make crawling "
+                      "cells look fast, and the integral is not chosen for them: give --repr "
+                      "integral for cells (worm on 9 views: alpha 0.12 -> 0.90; README)\n",
+              o.views_scaled);
   }
   if (isnan(*t0_s)) *t0_s = cli_now_s();
   const double t0 = *t0_s;

@@ -41,6 +41,13 @@ expect_key guided_views "$tmp/one/summary.json" 7
 expect_key deep_peak_views "$tmp/one/summary.json" 4
 grep -q "9 views: views that must agree scaled from the 25 views' defaults to 3 (view fit), 7 (guided), 2 (fill), 4 (deep peaks)" "$tmp/one.err" ||
   { echo "FAIL: stderr does not say the scaled counts: $(head -c 400 "$tmp/one.err")"; fail=$((fail+1)); }
+# the hint for cells on few views (auto cannot tell them from slow beads
+# there), not when --repr is given
+grep -q "note: on 9 views the time surface's ghosts make crawling cells look fast" "$tmp/one.err" ||
+  { echo "FAIL: no hint for cells on 9 views"; fail=$((fail+1)); }
+"$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/rexp" \
+  --repr exp --to-us 5000 2>"$tmp/rexp.err" >/dev/null || { echo "FAIL: track --repr exp"; fail=$((fail+1)); }
+grep -q "note: on 9 views" "$tmp/rexp.err" && { echo "FAIL: the hint with --repr given"; fail=$((fail+1)); }
 
 r0=$(key "$tmp/given.json" recall); r1=$(key "$tmp/scaled.json" recall)
 a0=$(key "$tmp/given.json" alpha); a1=$(key "$tmp/scaled.json" alpha)
@@ -54,5 +61,6 @@ simulate_or_skip "$tmp/sim25" flow 20 15
 expect_key views_scaled_for "$tmp/t25/summary.json" 0
 expect_key deep_peak_views "$tmp/t25/summary.json" 10
 grep -q "views that must agree scaled" "$tmp/t25.err" && { echo "FAIL: scaling said on 25 views"; fail=$((fail+1)); }
+grep -q "note: on .* views the time surface" "$tmp/t25.err" && { echo "FAIL: the hint on 25 views"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "1 passed, 0 failed" || echo "0 passed, $fail failed"
 exit $fail
