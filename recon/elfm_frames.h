@@ -109,6 +109,19 @@ typedef struct elfm_frame {
                           be either (test the floor) */
 } elfm_frame;
 
+/* A reader of the window's pixels alone (the refocus, the occupancy): it
+ * goes over idx[0 .. elfm_frame_n_window(f)) and keeps the nonzero values v
+ * for which elfm_frame_in_window(f, v) holds; on a frame without a deep
+ * window, every listed pixel. */
+static inline size_t elfm_frame_n_window(const elfm_frame *f)
+{
+  return f->recent_floor > 0 ? f->nnz_recent : f->nnz;
+}
+static inline int elfm_frame_in_window(const elfm_frame *f, float v)
+{
+  return !(f->recent_floor > 0 && v < f->recent_floor);
+}
+
 /* A zero frame of w x h; NULL (err filled) when out of memory.
  * Free with elfm_frame_free (NULL is a no-op). */
 elfm_frame *elfm_frame_create(int w, int h, elfm_error *err);

@@ -290,13 +290,12 @@ double elfm_refocus_occupancy(const elfm_refocus_plan *p, const elfm_frame *fram
 {
   if (!(p->box_area > 0) || frame->w != p->sw || frame->h != p->sh) return 0;
   size_t n = 0;
-  /* a deep window's older pixels are not the window's crowd: they come
-   * after nnz_recent, and are below the floor */
-  const size_t n_list = frame->recent_floor > 0 ? frame->nnz_recent : frame->nnz;
+  /* a deep window's older pixels are not the window's crowd */
+  const size_t n_list = elfm_frame_n_window(frame);
   for (size_t i = 0; i < n_list; i++) {
     const uint32_t pix = frame->idx[i];
-    if (frame->data[pix] != 0.0f && !(frame->recent_floor > 0 && frame->data[pix] < frame->recent_floor))
-      n += p->in_boxes[pix];
+    const float v = frame->data[pix];
+    if (v != 0.0f && elfm_frame_in_window(frame, v)) n += p->in_boxes[pix];
   }
   return (double)n / p->box_area;
 }

@@ -142,21 +142,23 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   /* a deep window's older pixels (below the floor) are not the window's:
    * left out, and 0 where a run spans them */
   const float fl = frame->recent_floor;
-  const size_t n_list = fl > 0 ? frame->nnz_recent : frame->nnz; /* the older ones after */
+  const size_t n_list = elfm_frame_n_window(frame); /* the older ones after */
   size_t n = 0;
-  for (size_t i = 0; i < n_list; i++)
-    if (frame->data[frame->idx[i]] != 0.0f && !(fl > 0 && frame->data[frame->idx[i]] < fl)) {
+  for (size_t i = 0; i < n_list; i++) {
+    const float v = frame->data[frame->idx[i]];
+    if (v != 0.0f && elfm_frame_in_window(frame, v)) {
       start[frame->idx[i] / SW + 1]++;
       n++;
     }
+  }
   if (!grow((void **)&ws->sorted, &ws->cap_sorted, n, sizeof *ws->sorted))
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (%zu pixels)", n);
   for (int y = 0; y < p->sh; y++) start[y + 1] += start[y];
   /* place: start[y] runs ahead while filling, then is restored */
   for (size_t i = 0; i < n_list; i++) {
     uint32_t pix = frame->idx[i];
-    if (frame->data[pix] != 0.0f && !(fl > 0 && frame->data[pix] < fl))
-      ws->sorted[start[pix / SW]++] = pix % SW;
+    const float v = frame->data[pix];
+    if (v != 0.0f && elfm_frame_in_window(frame, v)) ws->sorted[start[pix / SW]++] = pix % SW;
   }
   for (int y = p->sh; y > 0; y--) start[y] = start[y - 1];
   start[0] = 0;
