@@ -40,6 +40,8 @@ static void usage(FILE *f)
           "  --relay X           relay magnification (1.25)\n"
           "  --wavelength-um X   emission wavelength (0.52)\n"
           "  --lenslets N        lenslets per side, odd (5)\n"
+          "  --mla-rotation-deg A  the lens array turned against the sensor's rows, -45..45\n"
+          "                      degrees (0): turns the views' centres and disparities\n"
           "  --sensor WxH        sensor size in pixels (1280x720, EVK4)\n"
           "  --pixel-um X        sensor pixel pitch (4.86, IMX636)\n"
           "  --view-size WxH     cropped view size = volume W x H (144x144)\n"
@@ -65,7 +67,7 @@ static int parse_wxh(const char *opt, const char *s, int *w, int *h)
 static int from_optics(int argc, char **argv)
 {
   enum { O_NA = 256, O_NM, O_MAG, O_FT, O_FF, O_FM, O_PITCH, O_RELAY, O_WL, O_LENS, O_SENSOR,
-         O_PIX, O_VIEW, O_ZMIN, O_ZMAX, O_ZSTEP, O_OUT };
+         O_PIX, O_VIEW, O_ZMIN, O_ZMAX, O_ZSTEP, O_OUT, O_ROT };
   static const struct option longopts[] = {
       {"na", required_argument, 0, O_NA},
       {"n-medium", required_argument, 0, O_NM},
@@ -77,6 +79,7 @@ static int from_optics(int argc, char **argv)
       {"relay", required_argument, 0, O_RELAY},
       {"wavelength-um", required_argument, 0, O_WL},
       {"lenslets", required_argument, 0, O_LENS},
+      {"mla-rotation-deg", required_argument, 0, O_ROT},
       {"sensor", required_argument, 0, O_SENSOR},
       {"pixel-um", required_argument, 0, O_PIX},
       {"view-size", required_argument, 0, O_VIEW},
@@ -110,6 +113,7 @@ static int from_optics(int argc, char **argv)
     case O_RELAY: ok = cli_parse_double("calib", "--relay", optarg, &o.optics.relay); break;
     case O_WL: ok = cli_parse_double("calib", "--wavelength-um", optarg, &o.optics.wavelength_um); break;
     case O_LENS: ok = cli_parse_int("calib", "--lenslets", optarg, &o.optics.lenslets_per_side); break;
+    case O_ROT: ok = cli_parse_double("calib", "--mla-rotation-deg", optarg, &o.optics.mla_rotation_deg); break;
     case O_SENSOR: ok = parse_wxh("--sensor", optarg, &o.width, &o.height); break;
     case O_PIX: ok = cli_parse_double("calib", "--pixel-um", optarg, &o.pixel_um); break;
     case O_VIEW: ok = parse_wxh("--view-size", optarg, &o.view_w_px, &o.view_h_px); break;

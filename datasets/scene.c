@@ -157,6 +157,11 @@ static elfm_status parse_optics(scene_ctx *c, const cJSON *root, elfm_scene *s)
   if ((st = get_intv(c, o, "optics", "lenslets_per_side", 1, 9, &op.lenslets_per_side))) return st;
   if (op.lenslets_per_side % 2 == 0)
     return bad_key(c, ELFM_ERR_RANGE, "optics.lenslets_per_side", "must be odd", 0);
+  /* optional: a lens array turned against the sensor's rows (elfm_optics) */
+  op.mla_rotation_deg = 0.0;
+  if (cJSON_GetObjectItemCaseSensitive(o, "mla_rotation_deg") &&
+      (st = get_num(c, o, "optics", "mla_rotation_deg", -45, 45, &op.mla_rotation_deg)))
+    return st;
 
   sim_sensor *ss = &s->sensor;
   if ((st = get_obj(c, root, "sensor", &sen))) return st;

@@ -38,6 +38,7 @@ void elfm_optics_default(elfm_optics *o)
   o->relay = 1.25;
   o->wavelength_um = 0.52; /* GFP / green bead emission */
   o->lenslets_per_side = 5;
+  o->mla_rotation_deg = 0.0;
 }
 
 static int optics_valid(const elfm_optics *o, const char **bad)
@@ -58,6 +59,11 @@ static int optics_valid(const elfm_optics *o, const char **bad)
   if (o->lenslets_per_side < 1 || o->lenslets_per_side > 2 * CALIB_MAX_LENSLET_OFFSET + 1 ||
       o->lenslets_per_side % 2 == 0) {
     *bad = "lenslets_per_side (odd, 1..9)";
+    return 0;
+  }
+  /* beyond 45 degrees the array is another array's turn the other way */
+  if (!(isfinite(o->mla_rotation_deg) && fabs(o->mla_rotation_deg) <= 45.0)) {
+    *bad = "mla_rotation_deg (-45..45)";
     return 0;
   }
   return 1;
@@ -98,6 +104,8 @@ elfm_status elfm_calib_from_optics(const elfm_optics *o, int sensor_width_px,
    * voxel centres ((W-1)/2): pixel centres at integer coordinates. */
   const double cx0 = (sensor_width_px - 1) * 0.5, cy0 = (sensor_height_px - 1) * 0.5;
   const int half = o->lenslets_per_side / 2;
+  const double rot_rad = o->mla_rotation_deg * (3.14159265358979323846 / 180.0);
+  const double ca = cos(rot_rad), sa = sin(rot_rad);
   int n = 0;
   for (int j = -half; j <= half; j++) {
     for (int i = -half; i <= half; i++) {
@@ -108,10 +116,15 @@ elfm_status elfm_calib_from_optics(const elfm_optics *o, int sensor_width_px,
       elfm_view *v = &out->views[n++];
       v->i = i;
       v->j = j;
-      v->cx_px = cx0 + i * spacing_px;
-      v->cy_px = cy0 + j * spacing_px;
-      v->dx_px_per_um = px_per_rad * na_rel * ui / root;
-      v->dy_px_per_um = px_per_rad * na_rel * uj / root;
+      /* A turned array turns the lenslet's offset, in the pupil (its
+       * disparity, along that offset) and on the sensor alike; the angle's
+       * root above depends on the distance from the axis only. */
+      const double ox = i * spacing_px, oy = j * spacing_px;
+      const double dx = px_per_rad * na_rel * ui / root, dy = px_per_rad * na_rel * uj / root;
+      v->cx_px = cx0 + ca * ox - sa * oy;
+      v->cy_px = cy0 + sa * ox + ca * oy;
+      v->dx_px_per_um = ca * dx - sa * dy;
+      v->dy_px_per_um = sa * dx + ca * dy;
     }
   }
   if (n == 0)
@@ -249,6 +262,12 @@ static elfm_status parse_optics(calib_ctx *cx, const cJSON *o, elfm_optics *op)
   if (cJSON_GetObjectItemCaseSensitive(o, "lenslets_per_side")) {
     if ((s = get_int(cx, o, "lenslets_per_side", "optics.lenslets_per_side", 1,
                      2 * CALIB_MAX_LENSLET_OFFSET + 1, &op->lenslets_per_side)))
+      return s;
+  }
+  /* ours too, and optional (0: the array aligned with the sensor's rows) */
+  if (cJSON_GetObjectItemCaseSensitive(o, "mla_rotation_deg")) {
+    if ((s = get_number(cx, o, "mla_rotation_deg", "optics.mla_rotation_deg", -45, 45,
+                        &op->mla_rotation_deg)))
       return s;
   }
   return ELFM_OK;
@@ -463,6 +482,8 @@ static cJSON *calib_to_json(const elfm_calib *c)
          add_num(op, "mla_pitch_um", o->mla_pitch_um) && add_num(op, "relay", o->relay) &&
          add_num(op, "wavelength_um", o->wavelength_um) &&
          add_num(op, "lenslets_per_side", o->lenslets_per_side);
+    /* written only when turned, so that aligned calibrations keep their bytes */
+    if (ok && o->mla_rotation_deg != 0.0) ok = add_num(op, "mla_rotation_deg", o->mla_rotation_deg);
   }
   ok = ok && add_num(root, "um_per_px", c->um_per_px);
   if (ok) {

@@ -29,6 +29,13 @@ typedef struct elfm_optics {
   double na, n_medium, magnification, f_tube_mm, f_fourier_mm, f_mla_mm,
       mla_pitch_um, relay, wavelength_um;
   int lenslets_per_side;    /* 5 for the 5 x 5 array */
+  /* The lens array turned about the optical axis against the sensor's rows,
+   * degrees (0: aligned). It turns both where each lenslet's view lands and
+   * the direction its images move with depth (a lenslet's view moves along
+   * its offset in the pupil); the images themselves do not turn. Sensor
+   * pixel axes, x along a row, y down a column: an offset (x, y) becomes
+   * (x cos a - y sin a, x sin a + y cos a). */
+  double mla_rotation_deg;
 } elfm_optics;
 
 typedef struct elfm_calib {

@@ -238,6 +238,51 @@ int main(void)
     CHECK(p.z_min_um == keep.z_min_um && p.z_max_um == keep.z_max_um && p.z_step_um == keep.z_step_um);
   }
 
+  /* A lens array turned against the sensor's rows (optics.mla_rotation_deg):
+   * centres and disparities turn about the sensor's centre, the lit views
+   * and the images' scale stay. The file keeps the angle; an aligned
+   * array's file has no such key (the bytes it had before). */
+  {
+    elfm_optics ot = o;
+    ot.mla_rotation_deg = 2.0;
+    elfm_calib t;
+    CHECK_OK(elfm_calib_from_optics(&ot, 1280, 720, 4.86, &t, &err), &err);
+    CHECK_EQ_INT(t.n_views, c.n_views);
+    CHECK(t.um_per_px == c.um_per_px);
+    const double a = 2.0 * 3.14159265358979323846 / 180.0;
+    const elfm_view *t20 = find_view(&t, 2, 0), *t02 = find_view(&t, 0, 2), *c20 = find_view(&c, 2, 0);
+    CHECK(t20 && t02 && c20);
+    if (t20 && t02 && c20) {
+      const double s2 = 2 * 600 * 1.25 / 4.86; /* two lenslets' spacing, px */
+      CHECK_NEAR(t20->cx_px, 639.5 + s2 * cos(a), 1e-9);
+      CHECK_NEAR(t20->cy_px, 359.5 + s2 * sin(a), 1e-9); /* y down: the view moves down */
+      CHECK_NEAR(t02->cx_px, 639.5 - s2 * sin(a), 1e-9);
+      CHECK_NEAR(t20->dx_px_per_um, c20->dx_px_per_um * cos(a), 1e-12);
+      CHECK_NEAR(t20->dy_px_per_um, c20->dx_px_per_um * sin(a), 1e-12);
+      CHECK_NEAR(hypot(t02->dx_px_per_um, t02->dy_px_per_um), c20->dx_px_per_um, 1e-12);
+    }
+    CHECK_OK(elfm_calib_save(&t, "calib_turned.json", &err), &err);
+    CHECK_OK(elfm_calib_load("calib_turned.json", &r, &err), &err);
+    CHECK(r.optics.mla_rotation_deg == 2.0 && r.views[3].dy_px_per_um == t.views[3].dy_px_per_um);
+    char *tt = read_file("calib_turned.json"), *aligned = read_file("calib_rt.json");
+    CHECK(tt && strstr(tt, "\"mla_rotation_deg\"") && aligned && !strstr(aligned, "mla_rotation_deg"));
+    if (tt) {
+      char *b = replace(tt, "\"mla_rotation_deg\":\t2", "\"mla_rotation_deg\":\t50");
+      expect_bad(b, ELFM_ERR_RANGE, "optics.mla_rotation_deg");
+      free(b);
+      b = replace(tt, "\"mla_rotation_deg\":\t2", "\"mla_rotation_deg\":\t\"2\"");
+      expect_bad(b, ELFM_ERR_FORMAT, "optics.mla_rotation_deg");
+      free(b);
+    }
+    free(tt);
+    free(aligned);
+    ot.mla_rotation_deg = 46;
+    CHECK(elfm_calib_from_optics(&ot, 1280, 720, 4.86, &t, &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "mla_rotation_deg") != NULL);
+    ot.mla_rotation_deg = NAN;
+    CHECK(elfm_calib_from_optics(&ot, 1280, 720, 4.86, &t, &err) == ELFM_ERR_RANGE);
+  }
+
   /* optics is optional: a file without it loads, has_optics = 0. */
   c.has_optics = 0;
   CHECK_OK(elfm_calib_save(&c, "calib_noopt.json", &err), &err);

@@ -2,6 +2,7 @@
  * built-in; bad files (missing key, wrong type, non-finite, out of range,
  * truncated, empty, impossible layouts) fail with the file and the key
  * named; --param overrides check keys and leave the scene intact on error. */
+#include <math.h>
 #include <string.h>
 
 #include "check.h"
@@ -236,6 +237,20 @@ int main(void)
     CHECK_OK(elfm_scene_set_seed(s, 6, &err), &err);
     elfm_scene_truth(s, 3, 1000, &after);
     CHECK(before.x_um != after.x_um);
+    /* A turned lens array (optics.mla_rotation_deg, 0 in every built-in
+     * scene): the scene's calibration turns; beyond 45 degrees it is refused
+     * naming the key, the turn already set kept */
+    const elfm_view v0 = elfm_scene_calib(s)->views[0];
+    CHECK(elfm_scene_calib(s)->optics.mla_rotation_deg == 0.0);
+    CHECK_OK(elfm_scene_set_param(s, "optics.mla_rotation_deg=2", &err), &err);
+    const elfm_calib *ct = elfm_scene_calib(s);
+    CHECK(ct->optics.mla_rotation_deg == 2.0 && ct->views[0].cx_px != v0.cx_px &&
+          ct->views[0].dy_px_per_um != v0.dy_px_per_um);
+    CHECK_NEAR(hypot(ct->views[0].dx_px_per_um, ct->views[0].dy_px_per_um),
+               hypot(v0.dx_px_per_um, v0.dy_px_per_um), 1e-12);
+    CHECK(elfm_scene_set_param(s, "optics.mla_rotation_deg=50", &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "mla_rotation_deg") != NULL);
+    CHECK(elfm_scene_calib(s)->optics.mla_rotation_deg == 2.0);
   }
   elfm_scene_free(s);
   elfm_scene_free(NULL);
