@@ -10,9 +10,22 @@
  * by the median of its misses (elfm_calib_refine_apply, recon/calib_refine.c,
  * which also says what no recording can fix). Why it matters: on the
  * simulated flow scene, view centres off by 1 px (random per view) took
- * the tracks' alpha from 0.862 to 0.768 (docs/recon.md). */
+ * the tracks' alpha from 0.862 to 0.768 (docs/recon.md).
+ *
+ * Before the passes, the lens array's turn against the sensor's rows: a
+ * turn of 1 degree moves the outer views' centres by 5-8 px (beyond the
+ * view fit's window; the coarse step could bring in only some views) and a
+ * turn of 3 degrees beyond the coarse step's reach, and turns the
+ * disparities, which no centre can make up (flow 100 ms at 3 degrees, the
+ * centres right: alpha 0.869 against 0.893). So the turns within
+ * --turn-deg are tried, each on the first 20 ms, and the one whose volumes
+ * are sharpest is kept (turn_search); after the passes the disparities turn
+ * to the fitted grid of centres (elfm_calib_turns). */
 #include <getopt.h>
 #include <inttypes.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,6 +49,7 @@ typedef struct refine_opts {
   int min_views;      /* views that must agree with a point's fit */
   int min_points;     /* misses a view needs to move */
   int search_px;      /* the coarse step's reach (0: none) */
+  double turn_deg;    /* the lens array's turn is searched within +-turn_deg (0: none) */
   int quiet;
   double planes_um[3]; /* --z-*-um for the passes' volumes (NaN: the calibration's) */
 } refine_opts;
@@ -46,6 +60,8 @@ typedef struct refine_slot {
   double *miss, *wt; /* [max_pts][2 nv], [max_pts][nv] */
   double (*pos)[3];  /* the coarse step: the points, um */
   const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
+  double score;            /* the turn's search: the volume's sharpness */
+  int n_scored;            /* and the peaks it sums */
 } refine_slot;
 
 typedef struct refine_ctx {
@@ -58,6 +74,9 @@ typedef struct refine_ctx {
   elfm_calib_refine *acc;
   const elfm_calib *cal; /* the centres of this pass */
   int voting;            /* this pass is the coarse step */
+  int scoring;           /* this pass scores a turn of the lens array */
+  double score;          /* its sum over the volumes, in frame order */
+  int64_t n_scored;      /* the peaks summed */
   int64_t volumes;
 } refine_ctx;
 
@@ -68,13 +87,16 @@ static void usage(FILE *f)
           "                             [options]\n\n"
           "Fits the views' centres (cx, cy) of calib.json to a recording of bright points\n"
           "(beads that move or blink, so that the event camera sees them) and writes the\n"
-          "calibration with the moved centres. Each pass refocuses --ms of the recording\n"
-          "(from its first event, or from --from-us to --to-us at most), fits every bright\n"
-          "peak from all views and moves each view by the median of its images' misses.\n"
-          "Moves no recording can see are left out: all views alike (the volume's x-y\n"
-          "origin) and in proportion to the disparities (its focal plane); the\n"
-          "disparities themselves are kept (from the optics).\n"
-          "Per-pass progress and each view's move on stderr.\n\n"
+          "calibration with the moved centres. First the lens array's turn against the\n"
+          "sensor's rows: the turn within --turn-deg whose volumes are sharpest over the\n"
+          "first 20 ms turns every view's centre and disparity. Then each pass refocuses\n"
+          "--ms of the recording (from its first event, or from --from-us to --to-us at\n"
+          "most), fits every bright peak from all views and moves each view by the median\n"
+          "of its images' misses. Moves no recording can see are left out: all views\n"
+          "alike (the volume's x-y origin) and in proportion to the disparities (its focal\n"
+          "plane). The disparities keep their length (from the optics) and turn with the\n"
+          "grid of fitted centres (optics.mla_rotation_deg records the turn found).\n"
+          "Per-pass progress, the turn and each view's move on stderr.\n\n"
           "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
           "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
@@ -83,6 +105,8 @@ static void usage(FILE *f)
           "  --search-px R        first a coarse step: each view's images are looked for\n"
           "                       up to R px from where the centres put them (12; 0: no\n"
           "                       such step), for centres from the optics alone\n"
+          "  --turn-deg A         look for the lens array turned up to A degrees, 0..45\n"
+          "                       (5; 0: no such search)\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");
@@ -105,6 +129,15 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
   s->n = 0;
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
   if (st != ELFM_OK) return st;
+  if (c->scoring) {
+    /* Squares, so that a point's light gathered in one peak counts more
+     * than the same light spread over several lower ones, as the views of
+     * a turned array leave it */
+    s->score = 0;
+    s->n_scored = n < VOTERS_PER_VOLUME ? n : VOTERS_PER_VOLUME;
+    for (int k = 0; k < s->n_scored; k++) s->score += det[k].intensity * det[k].intensity;
+    return ELFM_OK;
+  }
   if (c->voting) {
     /* the brightest points vote (the callback, in frame order) */
     s->frame = frame;
@@ -134,6 +167,12 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
   (void)err;
   refine_ctx *c = user;
   const refine_slot *s = &c->slot[slot];
+  if (c->scoring) {
+    c->score += s->score;
+    c->n_scored += s->n_scored;
+    c->volumes++;
+    return ELFM_OK;
+  }
   if (c->voting) {
     for (int k = 0; k < s->n; k++)
       elfm_calib_refine_vote(c->acc, c->cal, s->frame, s->pos[k][0], s->pos[k][1], s->pos[k][2]);
@@ -184,14 +223,14 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
 
 static int parse(int argc, char **argv, refine_opts *o)
 {
-  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_QUIET };
+  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
       {"out", required_argument, 0, O_OUT}, {"ms", required_argument, 0, O_MS},
       {"passes", required_argument, 0, O_PASSES}, {"threshold", required_argument, 0, O_THR},
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
-      {"search-px", required_argument, 0, O_SEARCH},
+      {"search-px", required_argument, 0, O_SEARCH}, {"turn-deg", required_argument, 0, O_TURN},
       {"quiet", no_argument, 0, O_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   elfm_recon_options_default(&o->recon);
@@ -205,6 +244,7 @@ static int parse(int argc, char **argv, refine_opts *o)
   o->min_views = 12;
   o->min_points = 20;
   o->search_px = 12;
+  o->turn_deg = 5;
   cli_recon_parse rp = {.ro = &o->recon};
   optind = 1;
   opterr = 0;
@@ -225,6 +265,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_MINV: ok = cli_parse_int_in(C, "--min-views", optarg, 3, ELFM_MAX_VIEWS, "3..81", &o->min_views); break;
     case O_MINP: ok = cli_parse_int_in(C, "--min-points", optarg, 1, 1000000, "1..1000000", &o->min_points); break;
     case O_SEARCH: ok = cli_parse_int_in(C, "--search-px", optarg, 0, 64, "0..64", &o->search_px); break;
+    case O_TURN: ok = cli_parse_double_in(C, "--turn-deg", optarg, 0, 0, 45, "0..45", &o->turn_deg); break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -256,6 +297,14 @@ static void add_moves(int nv, const double *shift, double *total, double *rms, d
   *rms = sqrt(ss / nv);
 }
 
+/* The turn's search reads this much of the stretch per turn tried (27
+ * turns within 5 degrees): on flow, 20 volumes of ~20 beads each. Where
+ * the sharpest turn has fewer peaks than TURN_MIN_PEAKS (blinking beads,
+ * seen in a few pulses), the search runs again on 4 times as much, up to
+ * the passes' stretch. */
+#define TURN_SEARCH_MS 20.0
+#define TURN_MIN_PEAKS 100
+
 /* One pass: refocus, fit, collect (into c->acc). */
 static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
                             elfm_error *err)
@@ -268,11 +317,101 @@ static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_opt
   return elfm_recon_run(c->o->events, cal, &ro, NULL, c, NULL, err);
 }
 
+/* How sharp the volumes of cal turned by a degrees are: the squared heights
+ * of each volume's brightest peaks, summed (the worker). */
+static elfm_status turn_score(refine_ctx *c, const elfm_calib *cal, double a, elfm_recon_options ro,
+                              double *score, int64_t *n_scored, elfm_error *err)
+{
+  elfm_calib t = *cal;
+  elfm_calib_turn(&t, a);
+  c->scoring = 1;
+  c->score = 0;
+  c->n_scored = 0;
+  const elfm_status st = run_pass(c, &t, ro, err);
+  c->scoring = 0;
+  *score = c->score;
+  if (n_scored) *n_scored = c->n_scored;
+  return st;
+}
+
+/* The lens array's turn within +-max_deg that gives the sharpest volumes
+ * (*top_score: their score, 0 when no turn gave a peak): every 0.5
+ * degrees, then every 0.1 around the best, then the vertex of the parabola
+ * through the best and its two neighbours. On flow a turn 0.5 degrees off
+ * still gives a fifth of the right one's score, 1 degree off almost none
+ * (its outer views' images miss by 5-8 px), so 0.5 is the coarsest step
+ * that cannot step over the right turn. Within 0.1 degrees, a view 300 px
+ * from the grid's middle is within 0.5 px, which the coarse step and the
+ * passes then fit. */
+static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_deg,
+                               elfm_recon_options ro, double *best_deg, int *tried, double *top_score,
+                               double *search_ms, int64_t *peaks, elfm_error *err)
+{
+  const int64_t to_us = ro.to_us;
+  double best = 0, best_score = -1;
+  *tried = 0;
+  for (double ms = TURN_SEARCH_MS;; ms *= 4) {
+    const int64_t t_end = ro.from_us + (int64_t)llround(ms * 1000);
+    ro.to_us = to_us < t_end ? to_us : t_end;
+    *search_ms = (double)(ro.to_us - ro.from_us) / 1000.0;
+    best = 0;
+    best_score = -1;
+    const int n0 = (int)floor(max_deg / 0.5 + 1e-9);
+    for (int k = -n0; k <= n0; k++) {
+      double sc;
+      int64_t np;
+      elfm_status st = turn_score(c, cal, 0.5 * k, ro, &sc, &np, err);
+      if (st != ELFM_OK) return st;
+      ++*tried;
+      /* on a tie the smaller turn, so that no peaks at all leave none */
+      if (sc > best_score || (sc == best_score && abs(k) < fabs(best) / 0.5)) {
+        best_score = sc;
+        best = 0.5 * k;
+        *peaks = np;
+      }
+    }
+    if (*peaks >= TURN_MIN_PEAKS || ro.to_us >= to_us) break;
+  }
+  *top_score = best_score;
+  *best_deg = 0;
+  if (!(best_score > 0)) return ELFM_OK;
+  /* the best of every 0.5 degrees lies within 0.25 of the sharpest */
+  double sc_at[7];
+  for (int k = -3; k <= 3; k++) {
+    const double a = best + 0.1 * k;
+    sc_at[k + 3] = k == 0 ? best_score : -1;
+    if (k == 0 || fabs(a) > max_deg + 1e-9) continue;
+    elfm_status st = turn_score(c, cal, a, ro, &sc_at[k + 3], NULL, err);
+    if (st != ELFM_OK) return st;
+    ++*tried;
+  }
+  int kb = 3;
+  for (int k = 0; k < 7; k++)
+    if (sc_at[k] > sc_at[kb]) kb = k;
+  double a = best + 0.1 * (kb - 3);
+  if (kb > 0 && kb < 6 && sc_at[kb - 1] >= 0 && sc_at[kb + 1] >= 0) {
+    const double den = sc_at[kb - 1] - 2 * sc_at[kb] + sc_at[kb + 1];
+    if (den < 0) a += 0.1 * 0.5 * (sc_at[kb - 1] - sc_at[kb + 1]) / den;
+  }
+  *top_score = sc_at[kb];
+  *best_deg = fmin(fmax(a, -max_deg), max_deg);
+  return ELFM_OK;
+}
+
 int cmd_calib_refine(int argc, char **argv)
 {
   refine_opts o;
   const int pr = parse(argc, argv, &o);
   if (pr != CLI_OK) return pr < 0 ? CLI_OK : pr;
+#if defined(__GLIBC__)
+  /* The command runs the pipeline ~30 times over (the turn's search, the
+   * coarse step, the passes). Its volumes and frames (4-8 MB each) came
+   * each time as fresh pages from the system, zeroed by the kernel: kept
+   * in the heap from run to run instead, flow 100 ms took 2.1-2.3 s
+   * against 3.5-3.9 s with the search, ~2 s of it system time. */
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
   elfm_error err;
   elfm_error_clear(&err);
   elfm_calib cal;
@@ -327,6 +466,22 @@ int cmd_calib_refine(int argc, char **argv)
   double total[2 * ELFM_MAX_VIEWS] = {0};
   int rc = CLI_OK;
   c.cal = &cal;
+  if (o.turn_deg > 0) {
+    double a = 0, top = 0, search_ms = 0;
+    int64_t peaks = 0;
+    int tried = 0;
+    if (turn_search(&c, &cal, o.turn_deg, o.recon, &a, &tried, &top, &search_ms, &peaks, &err) != ELFM_OK) {
+      ctx_free(&c, threads, slots);
+      return cli_fail(C, &err);
+    }
+    elfm_calib_turn(&cal, a);
+    if (!o.quiet && top > 0)
+      fprintf(stderr, "calib refine: the lens array's turn: %+.2f deg (the sharpest volumes of %d turns "
+              "within +-%g deg on %g ms, %" PRId64 " peaks)\n", a, tried, o.turn_deg, search_ms, peaks);
+    else if (!o.quiet)
+      fprintf(stderr, "calib refine: no peak above --threshold in the first %g ms to judge the lens "
+              "array's turn by: not turned\n", search_ms);
+  }
   if (o.search_px > 0) {
     /* the coarse step (elfm_calib_refine_apply_votes) */
     double shift[2 * ELFM_MAX_VIEWS];
@@ -385,6 +540,13 @@ int cmd_calib_refine(int argc, char **argv)
   }
   ctx_free(&c, threads, slots);
   if (rc != CLI_OK) return rc;
+  /* the disparities to the fitted centres' turn */
+  double turn_c, turn_d;
+  elfm_calib_turns(&cal, &turn_c, &turn_d);
+  elfm_calib_turn_disparities(&cal, turn_c - turn_d);
+  if (!o.quiet)
+    fprintf(stderr, "calib refine: the fitted centres lie turned %+.3f deg against the lenslets' rows, "
+            "the disparities %+.3f: these turned to match\n", turn_c, turn_d);
   if (!o.quiet)
     for (int v = 0; v < cal.n_views; v++)
       fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px\n", cal.views[v].i, cal.views[v].j,

@@ -14,7 +14,9 @@
  * on 1 and du per axis), so that refining never moves the volume's origin or
  * its focal plane. Only the centres are fitted: the disparities follow from
  * the optics, and SPEC §2 says to model more (rotation, scale) only when
- * data show it is needed. */
+ * data show it is needed. A turned lens array is such a case (the end of
+ * this file): its disparities turn with its centres, and a turn of 3
+ * degrees, the centres fitted, cost flow 0.024 of alpha until they did. */
 #include "elfm_calib.h"
 #include "elfm_frames.h"
 
@@ -292,4 +294,84 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
   if (R > 0) memset(r->votes, 0, (size_t)r->nv * cells * sizeof *r->votes);
   r->n_votes = 0;
   return ELFM_OK;
+}
+
+/* ---- the lens array's turn ----
+ * A lens array turned against the sensor's rows turns both where its views
+ * land and the direction in which their images move with depth (a view's
+ * disparity lies along its lenslet's offset in the pupil). The centres'
+ * fit sees the first; the second it cannot (a point's fit takes up no part
+ * of it, but the misses it leaves grow with the point's depth, and the
+ * median over points at all depths is no move of the centre). So the
+ * disparities are turned to the grid of fitted centres: both are the
+ * lenslets' lattice (i, j) turned, and each one's turn against it is
+ * measured on its own, so that centres that came in off by a turn of their
+ * own (moved at random, or by hand) leave no turn in the disparities. */
+
+/* (x, y) turned by the angle whose cosine and sine are ca, sa */
+static void turn_xy(double ca, double sa, double *x, double *y)
+{
+  const double x0 = *x, y0 = *y;
+  *x = ca * x0 - sa * y0;
+  *y = sa * x0 + ca * y0;
+}
+
+static void centres_mean(const elfm_calib *c, double *mx, double *my)
+{
+  *mx = *my = 0;
+  for (int v = 0; v < c->n_views; v++) {
+    *mx += c->views[v].cx_px;
+    *my += c->views[v].cy_px;
+  }
+  if (c->n_views > 0) {
+    *mx /= c->n_views;
+    *my /= c->n_views;
+  }
+}
+
+void elfm_calib_turn(elfm_calib *c, double angle_deg)
+{
+  double mx, my;
+  centres_mean(c, &mx, &my);
+  const double a = angle_deg * (3.14159265358979323846 / 180.0), ca = cos(a), sa = sin(a);
+  for (int v = 0; v < c->n_views; v++) {
+    elfm_view *w = &c->views[v];
+    double x = w->cx_px - mx, y = w->cy_px - my;
+    turn_xy(ca, sa, &x, &y);
+    w->cx_px = mx + x;
+    w->cy_px = my + y;
+  }
+  elfm_calib_turn_disparities(c, angle_deg);
+}
+
+void elfm_calib_turn_disparities(elfm_calib *c, double angle_deg)
+{
+  const double a = angle_deg * (3.14159265358979323846 / 180.0), ca = cos(a), sa = sin(a);
+  for (int v = 0; v < c->n_views; v++)
+    turn_xy(ca, sa, &c->views[v].dx_px_per_um, &c->views[v].dy_px_per_um);
+  if (c->has_optics) c->optics.mla_rotation_deg += angle_deg;
+}
+
+/* The least-squares turn carrying the lattice vectors (i, j) onto (x, y):
+ * tan a = sum((i, j) x (x, y)) / sum((i, j) . (x, y)); 0 with no match. */
+static double lattice_turn_deg(double cross, double dot)
+{
+  if (!(dot > 0)) return 0.0;
+  return atan2(cross, dot) * (180.0 / 3.14159265358979323846);
+}
+
+void elfm_calib_turns(const elfm_calib *c, double *centres_deg, double *disparities_deg)
+{
+  double mx, my, cc = 0, cd = 0, dc = 0, dd = 0;
+  centres_mean(c, &mx, &my);
+  for (int v = 0; v < c->n_views; v++) {
+    const elfm_view *w = &c->views[v];
+    const double x = w->cx_px - mx, y = w->cy_px - my;
+    cc += w->i * y - w->j * x;
+    cd += w->i * x + w->j * y;
+    dc += w->i * w->dy_px_per_um - w->j * w->dx_px_per_um;
+    dd += w->i * w->dx_px_per_um + w->j * w->dy_px_per_um;
+  }
+  *centres_deg = lattice_turn_deg(cc, cd);
+  *disparities_deg = lattice_turn_deg(dc, dd);
 }

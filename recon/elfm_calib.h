@@ -130,6 +130,19 @@ size_t elfm_calib_refine_votes(const elfm_calib_refine *r);
 elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, double *shift_px,
                                           int *n_moved, elfm_error *err);
 
+/* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
+ * turn turns every view's centre about the centres' mean and its disparity
+ * (dx, dy) by angle_deg (sensor pixel axes, as in elfm_optics);
+ * turn_disparities turns the disparities alone. Both add the angle to
+ * optics.mla_rotation_deg when c has optics. turns gives how far c's
+ * centres (about their mean) and its disparities are turned against the
+ * lenslets' lattice (i, j) (least squares, degrees; 0 where nothing tells,
+ * as for one view). `calib refine` searches the turn first and at the end
+ * turns the disparities by the difference. */
+void elfm_calib_turn(elfm_calib *c, double angle_deg);
+void elfm_calib_turn_disparities(elfm_calib *c, double angle_deg);
+void elfm_calib_turns(const elfm_calib *c, double *centres_deg, double *disparities_deg);
+
 #ifdef __cplusplus
 }
 #endif

@@ -68,6 +68,16 @@ static void perturb(elfm_calib *c, double rms_px, uint32_t seed)
 }
 
 /* Largest gauge-free difference of a's centres from b's, px. */
+/* The largest difference of a view's disparity, px/um */
+static double disparity_error(const elfm_calib *a, const elfm_calib *b)
+{
+  double worst = 0;
+  for (int v = 0; v < a->n_views; v++)
+    worst = fmax(worst, hypot(a->views[v].dx_px_per_um - b->views[v].dx_px_per_um,
+                              a->views[v].dy_px_per_um - b->views[v].dy_px_per_um));
+  return worst;
+}
+
 static double centre_error(const elfm_calib *a, const elfm_calib *b)
 {
   double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
@@ -281,6 +291,53 @@ static void test_refine(const elfm_calib *truth, elfm_frame *f)
   elfm_calib_refine_free(NULL);
 }
 
+/* The lens array's turn: elfm_calib_turn on an aligned calibration gives
+ * the one from_optics builds for the turned array (the centres' mean is the
+ * sensor's centre); elfm_calib_turns finds the angle back for centres and
+ * disparities, also from centres moved at random besides (a turn of their
+ * own of a few hundredths of a degree); turn_disparities turns those alone. */
+static void test_turn(const elfm_calib *truth)
+{
+  elfm_optics op = truth->optics;
+  op.mla_rotation_deg = 2.5;
+  elfm_calib want, t = *truth;
+  elfm_error err;
+  CHECK_OK(elfm_calib_from_optics(&op, truth->sensor_width_px, truth->sensor_height_px, truth->pixel_um,
+                                  &want, &err), &err);
+  elfm_calib_turn(&t, 2.5);
+  double worst_c = 0, worst_d = 0;
+  for (int v = 0; v < t.n_views; v++) {
+    worst_c = fmax(worst_c, hypot(t.views[v].cx_px - want.views[v].cx_px, t.views[v].cy_px - want.views[v].cy_px));
+    worst_d = fmax(worst_d, hypot(t.views[v].dx_px_per_um - want.views[v].dx_px_per_um,
+                                  t.views[v].dy_px_per_um - want.views[v].dy_px_per_um));
+  }
+  CHECK_MSG(worst_c < 1e-9 && worst_d < 1e-12, "turned: centres %.3g px, disparities %.3g px/um off", worst_c,
+            worst_d);
+  CHECK_NEAR(t.optics.mla_rotation_deg, 2.5, 1e-12);
+  double tc, td;
+  elfm_calib_turns(truth, &tc, &td);
+  CHECK(fabs(tc) < 1e-9 && fabs(td) < 1e-9);
+  elfm_calib_turns(&t, &tc, &td);
+  CHECK_NEAR(tc, 2.5, 1e-9);
+  CHECK_NEAR(td, 2.5, 1e-9);
+  elfm_calib m = t;
+  perturb(&m, 0.5, 77); /* lenslets placed 0.5 px RMS off: barely a turn */
+  elfm_calib_turns(&m, &tc, &td);
+  CHECK_NEAR(tc, 2.5, 0.05);
+  CHECK_NEAR(td, 2.5, 1e-9);
+  elfm_calib d = t;
+  elfm_calib_turn_disparities(&d, -3.0);
+  elfm_calib_turns(&d, &tc, &td);
+  CHECK(d.views[0].cx_px == t.views[0].cx_px);
+  CHECK_NEAR(tc, 2.5, 1e-9);
+  CHECK_NEAR(td, -0.5, 1e-9);
+  CHECK_NEAR(d.optics.mla_rotation_deg, -0.5, 1e-12);
+  elfm_calib few = *truth;
+  few.n_views = 1; /* view (-2, -2) alone: its centre is the mean */
+  elfm_calib_turns(&few, &tc, &td);
+  CHECK(tc == 0.0 && fabs(td) < 1e-9);
+}
+
 static char dir[] = "/tmp/elfm_calib_refine_XXXXXX";
 
 static int run(const char *args) { return cli_run(dir, args); }
@@ -338,10 +395,14 @@ static void test_cli(void)
   const double before = centre_error(&c, &truth), after = centre_error(&r, &truth);
   printf("simulated flow, 60 ms: centres off by up to %.3f px -> %.4f px\n", before, after);
   CHECK_MSG(before > 1.0 && after < 0.1, "refined centres off by %.3f px (%.3f before)", after, before);
-  CHECK(r.z_step_um == truth.z_step_um && r.views[3].dx_px_per_um == truth.views[3].dx_px_per_um);
+  /* the disparities turn to the fitted centres' grid: here by no more than
+   * the centres' few hundredths of a pixel make (2e-4 px/um: 0.03 deg),
+   * not by the turn hidden in the moved centres (~0.04 deg) */
+  CHECK(r.z_step_um == truth.z_step_um);
+  CHECK_MSG(disparity_error(&r, &truth) < 2e-4, "disparities moved by %.3g px/um", disparity_error(&r, &truth));
   /* the simulator's own calibration stays */
   snprintf(q, sizeof q, "%s/calib.json", sim);
-  refine_cli(q, sim, "t.json", "--ms 60 --passes 2 --quiet", &r);
+  refine_cli(q, sim, "t.json", "--ms 60 --passes 2 --turn-deg 0 --quiet", &r);
   CHECK_MSG(centre_error(&r, &truth) < 0.1, "the right calibration moved by %.3f px",
             centre_error(&r, &truth));
 
@@ -361,18 +422,57 @@ static void test_cli(void)
   CHECK_MSG(centre_error(&far, &truth) > 5 && far_after < 0.1, "far off: %.3f px after refining", far_after);
   CHECK_MSG(far_fine_only > 1, "without the coarse step the far-off centres came in (%.3f px): the test "
             "no longer shows what the step is for", far_fine_only);
+  /* A lens array turned 2 degrees against the sensor's rows (the outer
+   * views' centres 5-15 px from the aligned array's, their disparities
+   * turned): the search finds the turn, the passes the centres, and the
+   * disparities turn with them. Without the search (--turn-deg 0) the
+   * centres stay off, or no point is fitted at all. */
+  {
+    elfm_scene *st = NULL;
+    char sim2[760], turned[800];
+    CHECK_OK(elfm_scene_load("flow", &st, &err), &err);
+    if (st) {
+      const char *kv[] = {"duration_ms=60", "optics.mla_rotation_deg=2"};
+      CHECK_OK(elfm_scene_set_params(st, kv, 2, &err), &err);
+      snprintf(sim2, sizeof sim2, "%s/sim_turned", dir);
+      CHECK_OK(elfm_sim_run(st, sim2, &so, NULL, &err), &err);
+      elfm_scene_free(st);
+      elfm_calib truth2;
+      snprintf(turned, sizeof turned, "%s/calib.json", sim2);
+      CHECK_OK(elfm_calib_load(turned, &truth2, &err), &err);
+      CHECK(truth2.optics.mla_rotation_deg == 2.0);
+      snprintf(q, sizeof q, "%s/calib.json", sim); /* the aligned array's */
+      refine_cli(q, sim2, "turned.json", "--ms 60", &r);
+      CHECK(err_has("the lens array's turn: +"));
+      const double ce = centre_error(&r, &truth2), de = disparity_error(&r, &truth2);
+      printf("simulated flow, lens array turned 2 deg: found %.3f deg, centres %.4f px and disparities "
+             "%.2g px/um off (before: %.2f px, %.3g px/um)\n", r.optics.mla_rotation_deg, ce, de,
+             centre_error(&truth, &truth2), disparity_error(&truth, &truth2));
+      CHECK_NEAR(r.optics.mla_rotation_deg, 2.0, 0.05);
+      CHECK_MSG(ce < 0.1 && de < 2e-4, "turned array: centres %.3f px, disparities %.3g px/um off", ce, de);
+      snprintf(args, sizeof args, "calib refine --calib %s --events %s/events.raw --out %s/turned0.json --ms 60 "
+               "--turn-deg 0 --quiet", q, sim2, dir);
+      if (run(args) == 0) {
+        snprintf(p, sizeof p, "%s/turned0.json", dir);
+        CHECK_OK(elfm_calib_load(p, &r, &err), &err);
+        CHECK_MSG(centre_error(&r, &truth2) > 1, "without the search the turned array's centres came in "
+                  "(%.3f px): the test no longer shows what the search is for", centre_error(&r, &truth2));
+      }
+    }
+  }
   /* a later stretch (--from-us) or a shorter one (--to-us) works as well */
-  refine_cli(moved, sim, "w.json", "--from-us 20000 --to-us 60000 --quiet", &r);
+  refine_cli(moved, sim, "w.json", "--from-us 20000 --to-us 60000 --turn-deg 0 --quiet", &r);
   CHECK_MSG(centre_error(&r, &truth) < 0.1, "refined on 20-60 ms: %.3f px", centre_error(&r, &truth));
   /* coarser planes for the passes: the file written keeps its own */
-  refine_cli(moved, sim, "z.json", "--ms 30 --passes 1 --z-step-um 4 --quiet", &r);
+  refine_cli(moved, sim, "z.json", "--ms 30 --passes 1 --z-step-um 4 --turn-deg 0 --quiet", &r);
   CHECK(r.z_step_um == truth.z_step_um && r.z_min_um == truth.z_min_um);
   CHECK_MSG(centre_error(&r, &truth) < 0.5 * centre_error(&c, &truth), "one pass on 4 um planes: %.3f px",
             centre_error(&r, &truth));
   /* usage errors: exit 2 */
   CHECK_EQ_INT(run("calib refine"), 2);
   const char *bad[] = {"--passes 0", "--passes 2.5", "--ms 0", "--min-views 2", "--threshold -1",
-                       "--from-us 50 --to-us 40", "--dt-us 10", "--bogus", "--z-min-um 500", "--search-px 65"};
+                       "--from-us 50 --to-us 40", "--dt-us 10", "--bogus", "--z-min-um 500", "--search-px 65",
+                       "--turn-deg 46", "--turn-deg -1", "--turn-deg x"};
   for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
     snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json %s",
              sim, sim, dir, bad[k]);
@@ -426,6 +526,7 @@ int main(void)
   test_misses(&c, f);
   test_refine(&c, f);
   test_votes(&c, f);
+  test_turn(&c);
   elfm_frame_free(f);
   test_cli();
   return check_report();
