@@ -183,6 +183,12 @@ static int show(int argc, char **argv)
   printf("sensor %dx%d, %.3f um pixels, %.5f um/px, view %dx%d, z %g..%g step %g (%d planes)\n",
          c.sensor_width_px, c.sensor_height_px, c.pixel_um, c.um_per_px, c.view_w_px,
          c.view_h_px, c.z_min_um, c.z_max_um, c.z_step_um, elfm_calib_n_planes(&c));
+  /* the lens array's turn against the sensor's rows, as its centres and its
+   * disparities each show it (calib refine turns the second to the first) */
+  double turn_c, turn_d;
+  elfm_calib_turns(&c, &turn_c, &turn_d);
+  printf("lens array turned %+.3f deg against the sensor's rows (by its centres), %+.3f deg (by its "
+         "disparities)\n", turn_c, turn_d);
   /* Why the crop's share on the sensor: a grid wider than the sensor (the
    * paper's 5 x 5 overhangs the EVK4's 720 rows; on a 640 x 480 sensor its
    * corner views are gone) leaves objects far from the axis seen by fewer

@@ -78,6 +78,12 @@ for s in "1280x720:15 of 25 views wholly on the sensor, 10 partly (view 0 least:
 done
 grep -q "view 24 .*   0 % on the sensor" "$dir.out" || { echo "FAIL: 320x240 view 24 not off"; fail=$((fail+1)); }
 grep -q "view 12 .* 100 % on the sensor" "$dir.out" || { echo "FAIL: 320x240 centre view not whole"; fail=$((fail+1)); }
+# a lens array turned 1.5 degrees: calib show reads the turn off the centres and the disparities
+check from-optics-turned 0 "$bin" calib from-optics --mla-rotation-deg 1.5 --out "$dir/t.json"
+check show-turned 0 "$bin" calib show "$dir/t.json"
+grep -qxF "lens array turned +1.500 deg against the sensor's rows (by its centres), +1.500 deg (by its disparities)" "$dir.out" ||
+  { echo "FAIL: calib show, turned: $(sed -n 2p "$dir.out")"; fail=$((fail+1)); }
+check from-optics-turn-range 1 "$bin" calib from-optics --mla-rotation-deg 50 --out "$dir/t2.json"
 check from-optics-no-out 2 "$bin" calib from-optics
 check from-optics-bad-na 2 "$bin" calib from-optics --na x --out "$dir/c2.json"
 check from-optics-na-range 1 "$bin" calib from-optics --na 1.5 --out "$dir/c2.json"
