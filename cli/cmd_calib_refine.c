@@ -357,6 +357,9 @@ static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_
     best = 0;
     best_score = -1;
     const int n0 = (int)floor(max_deg / 0.5 + 1e-9);
+    if (!c->o->quiet)
+      fprintf(stderr, "calib refine: the lens array's turn: trying %d turns within +-%g deg on %g ms\n",
+              2 * n0 + 1, max_deg, *search_ms);
     for (int k = -n0; k <= n0; k++) {
       double sc;
       int64_t np;
