@@ -166,6 +166,11 @@ int cli_check_recon_options(const char *cmd, const cli_recon_parse *p);
 /* The z planes the options ask for, NaN where the calibration's stand
  * (for elfm_calib_set_planes). */
 void cli_recon_planes(const cli_recon_parse *p, double z_um[3]);
+/* A count of agreeing views chosen on the paper's 25, for a calibration
+ * with `views`: ceil(n x views / 25), at least 2 (two views locate a
+ * point), with 25 views or more n itself (track measured 7 x 7 lose with
+ * the counts doubled); 0 stays 0 (off). track and calib refine. */
+int cli_views_scale(int n, int views);
 /* Put planes z_um (cli_recon_planes) into *cal, loaded from `calib_path`:
  * 1, or 0 after a usage message naming the options and the file. */
 int cli_apply_planes(const char *cmd, const double z_um[3], const char *calib_path, elfm_calib *cal);

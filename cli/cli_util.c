@@ -570,6 +570,13 @@ elfm_status cli_json_write(cJSON *root, const char *path, elfm_error *err)
   return st;
 }
 
+int cli_views_scale(int n, int views)
+{
+  if (n <= 0 || views >= 25) return n;
+  const int m = (n * views + 24) / 25;
+  return m < 2 ? 2 : m;
+}
+
 void cli_recon_planes(const cli_recon_parse *p, double z_um[3])
 {
   for (int k = 0; k < 3; k++) z_um[k] = p->z_given & (1 << k) ? p->z_um[k] : NAN;

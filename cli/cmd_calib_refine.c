@@ -46,7 +46,7 @@ typedef struct refine_opts {
   double ms;          /* how much of the recording each pass reads */
   int passes;
   double threshold;   /* peaks above this value only (bright points fit best) */
-  int min_views;      /* views that must agree with a point's fit (0: 12 of 25, scaled) */
+  int min_views;      /* views that must agree with a point's fit (0: 12, scaled below 25 views) */
   int min_points;     /* misses a view needs to move */
   int search_px;      /* the coarse step's reach (0: none) */
   double turn_deg;    /* the lens array's turn is searched within +-turn_deg (0: none) */
@@ -100,8 +100,8 @@ static void usage(FILE *f)
           "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
           "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
-          "  --min-views N        views that must agree with a point's fit (12 of 25\n"
-          "                       views: the calibration's views x 12 / 25, at least 3)\n"
+          "  --min-views N        views that must agree with a point's fit (12; with\n"
+          "                       fewer than 25 views 12 / 25 of them, at least 3)\n"
           "  --min-points N       a view moves only with at least N misses (20)\n"
           "  --search-px R        first a coarse step: each view's images are looked for\n"
           "                       up to R px from where the centres put them (12; 0: no\n"
@@ -420,9 +420,9 @@ int cmd_calib_refine(int argc, char **argv)
   elfm_error_clear(&err);
   elfm_calib cal;
   if (elfm_calib_load(o.calib, &cal, &err)) return cli_fail(C, &err);
-  /* 12 of the paper's 25 views; a 3 x 3 array's 9 views need 5, where 12
-   * could never agree */
-  if (o.min_views == 0) o.min_views = (12 * cal.n_views + 24) / 25 > 3 ? (12 * cal.n_views + 24) / 25 : 3;
+  /* 12 of the paper's 25 views, scaled as track scales its counts: a
+   * 3 x 3 array's 9 views need 5, where 12 could never agree */
+  if (o.min_views == 0) o.min_views = cli_views_scale(12, cal.n_views) > 3 ? cli_views_scale(12, cal.n_views) : 3;
   if (o.min_views > cal.n_views)
     return cli_message(C, CLI_USAGE, "--min-views %d: %s has %d views", o.min_views, o.calib, cal.n_views);
   /* the passes may refocus on other planes (--z-*-um); the file written

@@ -689,14 +689,6 @@ int track_opts_derive(track_opts *o, const track_given *g)
   return CLI_OK;
 }
 
-/* ceil(n x views / 25), at least 2 (two views locate a point); 0 stays 0 (off) */
-static int views_scale(int n, int views)
-{
-  if (n <= 0) return n;
-  const int m = (n * views + 24) / 25;
-  return m < 2 ? 2 : m;
-}
-
 void track_views_step(track_opts *o, const elfm_calib *cal)
 {
   /* The counts were chosen on the paper's 25 views, where a few ghosts'
@@ -711,10 +703,10 @@ void track_views_step(track_opts *o, const elfm_calib *cal)
   o->views_scaled = 0;
   const int n = cal->n_views;
   if (n >= 25 || n < 2) return;
-  if (o->views_defaulted & 1) o->loc.min_views = views_scale(o->loc.min_views, n);
-  if (o->views_defaulted & 2) o->guided_views = views_scale(o->guided_views, n);
-  if (o->views_defaulted & 4) o->fill_views = views_scale(o->fill_views, n);
-  if (o->views_defaulted & 8) o->deep_peak_views = views_scale(o->deep_peak_views, n);
+  if (o->views_defaulted & 1) o->loc.min_views = cli_views_scale(o->loc.min_views, n);
+  if (o->views_defaulted & 2) o->guided_views = cli_views_scale(o->guided_views, n);
+  if (o->views_defaulted & 4) o->fill_views = cli_views_scale(o->fill_views, n);
+  if (o->views_defaulted & 8) o->deep_peak_views = cli_views_scale(o->deep_peak_views, n);
   if (o->views_defaulted) o->views_scaled = n;
 }
 
