@@ -553,13 +553,13 @@ int cmd_calib_refine(int argc, char **argv)
   double turn_c, turn_d;
   elfm_calib_turns(&cal, &turn_c, &turn_d);
   elfm_calib_turn_disparities(&cal, turn_c - turn_d);
-  if (!o.quiet)
+  if (!o.quiet) {
     fprintf(stderr, "calib refine: the fitted centres lie turned %+.3f deg against the lenslets' rows, "
             "the disparities %+.3f: these turned to match\n", turn_c, turn_d);
-  if (!o.quiet)
     for (int v = 0; v < cal.n_views; v++)
       fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px\n", cal.views[v].i, cal.views[v].j,
               total[2 * v], total[2 * v + 1]);
+  }
   cal.z_min_um = z_file[0];
   cal.z_max_um = z_file[1];
   cal.z_step_um = z_file[2];

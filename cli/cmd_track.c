@@ -614,6 +614,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                     "median: it was off in this run (summary.json deep_window_us)\n",
             o.deep_window_us);
   dim_note(&c, 0);
+  track_views_note(&c);
   rc = CLI_OK;
 done:
   track_ctx_free(&c);

@@ -380,6 +380,11 @@ typedef struct track_ctx {
     double occupancy;    /* the frame's elfm_refocus_occupancy (when a crowd rule, *_auto,
                             is on), else 0 */
     double need;         /* the share of views a peak needed (0: no test) */
+    /* the views' check (cmd_track_views.c): per view, the misses of its
+     * image off the fitted point summed (u, w, px) and the fits that kept
+     * it; the view fits done */
+    double view_miss[3 * ELFM_MAX_VIEWS];
+    int fits, tries;
   } *sp;
   /* the frame each slot's volume came from and the plan, for the guided
    * view fit in the ordered callback (the driver keeps a batch's frames
@@ -414,6 +419,10 @@ typedef struct track_ctx {
   elfm_track_xml *xml;         /* the tracks' points for the two XML files, until the end */
   int64_t n_pieces;            /* pieces taken from long live tracks (elfm_link_take_piece) */
   int64_t n_support_rejected, n_explained, n_localized, n_guided_views, n_deep_dropped;
+  /* the views' check: the slots' view_miss summed in frame order, and the
+   * view fits (track_views_merge) */
+  double view_miss[3 * ELFM_MAX_VIEWS];
+  int64_t view_fits, view_tries;
   int64_t n_pair_fits; /* detections split in two by the pair fits */
   /* view_support_auto: the frames' occupancy summed, frames that needed
    * more than view_support, and the most a frame needed */
@@ -709,5 +718,32 @@ double track_peaked_pct(const track_ctx *c, int lit);
 /* lit frames' mean events over the others' (those at least 1); NaN before
  * one of each */
 double track_pulsed_ratio(const track_ctx *c);
+
+/* ---- the views' check (cmd_track_views.c) ----
+ * Whether the calibration fits the recording: every view fit of a peak
+ * says where each view's image lay off the fitted point; with the right
+ * centres those misses average ~0 and every view takes part in most fits.
+ * A view whose images lie off on average, or which takes part in few fits
+ * where the others take part in most, is off (a turned lens array, a
+ * calibration from the optics alone). */
+/* a fit's misses (2 per view) and weights (0: the view left out) into the
+ * slot (whose `tries` the worker counts, failed fits too) */
+void track_views_add(struct slot_peaks *sp, int n_views, const double *miss_px, const double *weight);
+/* the slot's sums into the run's, in frame order (the callback) */
+void track_views_merge(track_ctx *c, int slot);
+typedef struct track_views_check {
+  int64_t fits;        /* view fits summed */
+  int64_t tries;       /* view fits tried */
+  int64_t rejected;    /* peaks the view-support test dropped before */
+  int few_placed;      /* 1: the views agreed on almost no peak */
+  int worst;           /* the view whose images lay furthest off on average (-1: none judged) */
+  double worst_miss_px, worst_u_px, worst_w_px;
+  int least;           /* the view kept in the fewest fits (-1: none) */
+  double least_share, median_share; /* its share of the fits, the median view's */
+  int off;             /* 1: a view is off (the note's rule) */
+} track_views_check;
+void track_views_judge(const track_ctx *c, track_views_check *out);
+/* the note on stderr when a view is off (not with --quiet) */
+void track_views_note(const track_ctx *c);
 
 #endif

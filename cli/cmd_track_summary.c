@@ -28,6 +28,14 @@ static void add_num(cJSON *o, const char *k, double v)
   else cJSON_AddNullToObject(o, k);
 }
 
+/* View v's lenslet (i, j) as [i, j]; null for v < 0 (none) */
+static cJSON *view_ij(const elfm_calib *cal, int v)
+{
+  if (v < 0) return cJSON_CreateNull();
+  const int ij[2] = {cal->views[v].i, cal->views[v].j};
+  return cJSON_CreateIntArray(ij, 2);
+}
+
 /* The median and spread of FWHM a (0 lateral, 1 axial) over the beads
  * whose track's speed lies in [lo, hi), or over all beads (those of unknown
  * speed too) when `all`; tmp has room for l->n values. Returns the number
@@ -351,6 +359,20 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     }
   }
   if (o->resolution) cJSON_AddItemToObject(j, "resolution", fwhm_summary(&c->fl));
+  {
+    /* does the calibration fit? (cmd_track_views.c; null fields: too few fits to judge) */
+    track_views_check k;
+    track_views_judge(c, &k);
+    cJSON *vc = cJSON_AddObjectToObject(j, "views_check");
+    cJSON_AddNumberToObject(vc, "view_fits", (double)k.fits);
+    cJSON_AddNumberToObject(vc, "view_fits_tried", (double)k.tries);
+    cJSON_AddItemToObject(vc, "worst_view", view_ij(c->calib, k.worst));
+    add_num(vc, "worst_mean_miss_px", k.worst_miss_px);
+    cJSON_AddItemToObject(vc, "least_kept_view", view_ij(c->calib, k.least));
+    add_num(vc, "least_kept_share", k.least_share);
+    add_num(vc, "median_kept_share", k.median_share);
+    cJSON_AddBoolToObject(vc, "views_off", k.off);
+  }
 
   cJSON *tr = cJSON_AddArrayToObject(j, "tracks");
   for (size_t i = 0; i < c->n_info; i++) {

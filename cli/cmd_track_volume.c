@@ -393,6 +393,8 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   c->sp[slot].explained = 0;
   c->sp[slot].loc = 0;
   c->sp[slot].deep_dropped = 0;
+  memset(c->sp[slot].view_miss, 0, 3 * (size_t)c->calib->n_views * sizeof *c->sp[slot].view_miss);
+  c->sp[slot].fits = c->sp[slot].tries = 0;
   c->sp[slot].occupancy = 0;
   c->sp[slot].need = 0;
   c->slot_frame[slot] = frame;
@@ -453,13 +455,17 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     if (deep_test) deep.min_views = c->o->deep_peak_views;
     int n = 0;
     unsigned char *fitok = c->fitok ? c->fitok + (size_t)slot * c->o->max_det : NULL;
+    double miss[2 * ELFM_MAX_VIEWS], wt[ELFM_MAX_VIEWS];
     for (int i = 0; i < c->sp[slot].n; i++) {
       elfm_localize_result r;
       const int is_deep = deep_test && det[i].deep_only;
-      if (!elfm_refocus_localize(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
-                                 elfm_volume_y_vox(v, det[i].y_um),
-                                 elfm_volume_z_vox(v, det[i].z_um), is_deep ? &deep : &c->o->loc,
-                                 &r)) {
+      /* the plain view fit, which also says where each view's image lay:
+       * the views' check (cmd_track_views.c) */
+      c->sp[slot].tries++;
+      if (!elfm_refocus_localize_misses(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
+                                        elfm_volume_y_vox(v, det[i].y_um),
+                                        elfm_volume_z_vox(v, det[i].z_um), is_deep ? &deep : &c->o->loc,
+                                        &r, miss, wt)) {
         if (is_deep) {
           c->sp[slot].deep_dropped++;
         } else {
@@ -476,6 +482,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       if (fitok) fitok[n] = 1;
       n++;
       c->sp[slot].loc++;
+      track_views_add(&c->sp[slot], c->calib->n_views, miss, wt);
     }
     c->sp[slot].n = n;
     if (c->o->localize_near_um > 0) near_refit(c, v, slot, det, n, &deep, deep_test);
@@ -563,6 +570,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   c->n_support_rejected += c->sp[slot].rej;
   c->n_explained += c->sp[slot].explained;
   c->n_localized += c->sp[slot].loc;
+  track_views_merge(c, slot);
   c->n_deep_dropped += c->sp[slot].deep_dropped;
   c->occupancy_sum += c->sp[slot].occupancy;
   if (c->sp[slot].occupancy > TRACK_CROWD_OCC) c->n_crowded++;

@@ -1,0 +1,181 @@
+/* cmd_track_views.c — does the calibration fit the recording? (cmd_track.h,
+ * "the views' check")
+ *
+ * A calibration that does not fit makes track fail quietly: on flow turned
+ * by 1 degree against an aligned calibration, 94 % of the peaks failed the
+ * view-support test, the first run judged them faint and fast and started
+ * again with a blur and shorter windows, and alpha was 0.02 (docs/recon.md
+ * "A lens array turned against the sensor"). What shows it is the view fit
+ * each peak already gets: a view whose centre is off leaves its images off
+ * the fitted point by the same amount in every fit (up to the fit's outlier
+ * limit, 1.5 px), and a view off by more is left out of most fits
+ * (docs/recon.md "Does the calibration fit?" has the measurements). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cmd_track.h"
+
+/* Judged only over this many view fits or more */
+#define VIEWS_MIN_FITS 100
+/* A view's mean miss beyond this is off. With the right centres the means
+ * stay under 0.11 px on 35 simulated recordings of most scenes (the
+ * simulated images' own bias), 0.27 px for a stage moving 2 mm/s in z
+ * (its images' lead along their disparities, beyond what the gauge takes
+ * out); centres moved 0.3 px RMS at random give 0.45-0.48 px, which flow
+ * does not yet feel (docs/recon.md), 1 px RMS 0.85-0.89 and 0.09 of alpha. */
+#define VIEWS_MISS_PX 0.4
+/* A view kept in less than this share of the median view's fits is off (a
+ * view far off is left out of nearly every fit: 4-7 % against 87-91 %) */
+#define VIEWS_SHARE_RATIO 0.5
+/* The median view kept in fewer fits than this: the views disagree (an
+ * aligned calibration on a lens array turned 1 degree: 25-27 %; the right
+ * ones 54-100 %, the least with a blur) */
+#define VIEWS_MEDIAN_SHARE 0.4
+/* Or the view fit placed almost no peak: fewer than this share of those
+ * tried, over VIEWS_MIN_TRIES (turned 3 degrees: 15 of ~2000; the right
+ * calibrations 22 % or more) */
+#define VIEWS_MIN_PLACED 0.05
+#define VIEWS_MIN_TRIES 500
+/* Or the view-support test let almost no peak through: at least this share
+ * of VIEWS_MIN_TRIES peaks or more rejected (turned 3 degrees: 98-99 %,
+ * turned 1 degree 95-97 %; the right calibrations at most 93 %, flow in a
+ * strong haze, and 90 % for a worm on 3 x 3 views) */
+#define VIEWS_MAX_REJECTED 0.97
+/* A view's mean miss is judged from this many fits that kept it */
+#define VIEWS_MIN_KEPT 50
+
+void track_views_add(struct slot_peaks *sp, int n_views, const double *miss_px, const double *weight)
+{
+  for (int v = 0; v < n_views; v++) {
+    if (!(weight[v] > 0)) continue;
+    sp->view_miss[3 * v] += miss_px[2 * v];
+    sp->view_miss[3 * v + 1] += miss_px[2 * v + 1];
+    sp->view_miss[3 * v + 2] += 1;
+  }
+  sp->fits++;
+}
+
+void track_views_merge(track_ctx *c, int slot)
+{
+  struct slot_peaks *sp = &c->sp[slot];
+  for (int k = 0; k < 3 * c->calib->n_views; k++) c->view_miss[k] += sp->view_miss[k];
+  c->view_fits += sp->fits;
+  c->view_tries += sp->tries;
+}
+
+/* s[v] -= a + b d[v] over the views with use[v] (least squares): the two
+ * moves of all views no fit can tell from the point's own (all alike: x or
+ * y; in proportion to the disparities: z), as calib refine clears them.
+ * Why here: beads moving in z lead their images along their disparities,
+ * a pattern in proportion to them, not a view off (a stage moving 2 mm/s
+ * in z: the worst view 0.53 px with it, 0.27 px without). */
+static void clear_gauge(int nv, const int *use, const double *d, double *s)
+{
+  double n = 0, sd = 0, sdd = 0, ss = 0, sds = 0;
+  for (int v = 0; v < nv; v++) {
+    if (!use[v]) continue;
+    n += 1;
+    sd += d[v];
+    sdd += d[v] * d[v];
+    ss += s[v];
+    sds += d[v] * s[v];
+  }
+  if (n < 3) return;
+  const double det = n * sdd - sd * sd;
+  double a = ss / n, b = 0;
+  if (det > 1e-12 * n * sdd) {
+    b = (n * sds - sd * ss) / det;
+    a = (ss - b * sd) / n;
+  }
+  for (int v = 0; v < nv; v++)
+    if (use[v]) s[v] -= a + b * d[v];
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+void track_views_judge(const track_ctx *c, track_views_check *out)
+{
+  const int nv = c->calib->n_views;
+  memset(out, 0, sizeof *out);
+  out->fits = c->view_fits;
+  out->tries = c->view_tries;
+  out->worst = out->least = -1;
+  out->worst_miss_px = out->worst_u_px = out->worst_w_px = NAN;
+  out->least_share = out->median_share = NAN;
+  out->rejected = c->n_support_rejected;
+  const int64_t peaks = c->n_support_rejected + c->view_tries;
+  out->few_placed = (c->view_tries >= VIEWS_MIN_TRIES &&
+                     (double)c->view_fits < VIEWS_MIN_PLACED * (double)c->view_tries) ||
+                    (peaks >= VIEWS_MIN_TRIES && (double)c->n_support_rejected >= VIEWS_MAX_REJECTED * (double)peaks);
+  out->off = out->few_placed;
+  if (c->view_fits < VIEWS_MIN_FITS || nv < 2) return;
+  double share[ELFM_MAX_VIEWS], mu[ELFM_MAX_VIEWS] = {0}, mw[ELFM_MAX_VIEWS] = {0};
+  double du[ELFM_MAX_VIEWS], dw[ELFM_MAX_VIEWS];
+  int use[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < nv; v++) {
+    const double kept = c->view_miss[3 * v + 2];
+    share[v] = kept / (double)c->view_fits;
+    if (out->least < 0 || share[v] < out->least_share) {
+      out->least = v;
+      out->least_share = share[v];
+    }
+    use[v] = kept >= VIEWS_MIN_KEPT;
+    if (use[v]) {
+      mu[v] = c->view_miss[3 * v] / kept;
+      mw[v] = c->view_miss[3 * v + 1] / kept;
+    }
+    du[v] = c->calib->views[v].dx_px_per_um;
+    dw[v] = c->calib->views[v].dy_px_per_um;
+  }
+  clear_gauge(nv, use, du, mu);
+  clear_gauge(nv, use, dw, mw);
+  for (int v = 0; v < nv; v++) {
+    if (!use[v]) continue;
+    const double u = mu[v], w = mw[v];
+    if (out->worst < 0 || hypot(u, w) > out->worst_miss_px) {
+      out->worst = v;
+      out->worst_miss_px = hypot(u, w);
+      out->worst_u_px = u;
+      out->worst_w_px = w;
+    }
+  }
+  double sorted[ELFM_MAX_VIEWS];
+  memcpy(sorted, share, (size_t)nv * sizeof *sorted);
+  qsort(sorted, (size_t)nv, sizeof *sorted, cmp_double);
+  out->median_share = nv % 2 ? sorted[nv / 2] : 0.5 * (sorted[nv / 2 - 1] + sorted[nv / 2]);
+  out->off = (out->worst >= 0 && out->worst_miss_px > VIEWS_MISS_PX) ||
+             out->least_share < VIEWS_SHARE_RATIO * out->median_share ||
+             out->median_share < VIEWS_MEDIAN_SHARE;
+}
+
+void track_views_note(const track_ctx *c)
+{
+  if (c->o->quiet) return;
+  track_views_check k;
+  track_views_judge(c, &k);
+  if (!k.off) return;
+  char what[320];
+  if (k.few_placed) {
+    snprintf(what, sizeof what, "the views agreed on %lld of %lld peaks (%lld failed the view-support "
+             "test, %lld the view fit)", (long long)k.fits, (long long)(k.rejected + k.tries),
+             (long long)k.rejected, (long long)(k.tries - k.fits));
+  } else {
+    const elfm_view *w = k.worst >= 0 ? &c->calib->views[k.worst] : NULL, *l = &c->calib->views[k.least];
+    char worst[160] = "";
+    if (w)
+      snprintf(worst, sizeof worst, "view (%+d, %+d)'s images lie (%+.2f, %+.2f) px off on average, ",
+               w->i, w->j, k.worst_u_px, k.worst_w_px);
+    snprintf(what, sizeof what, "over %lld view fits %sview (%+d, %+d) takes part in %.0f %% of them "
+             "(the median view %.0f %%)", (long long)k.fits, worst, l->i, l->j, 100 * k.least_share,
+             100 * k.median_share);
+  }
+  fprintf(stderr, "eventlfm track: note: the calibration may not fit this recording: %s; eventlfm "
+                  "calib refine fits the views to a recording of beads (docs/recon.md \"Does the "
+                  "calibration fit?\")\n", what);
+}
