@@ -349,7 +349,13 @@ void elfm_calib_turn_disparities(elfm_calib *c, double angle_deg)
   const double a = angle_deg * (3.14159265358979323846 / 180.0), ca = cos(a), sa = sin(a);
   for (int v = 0; v < c->n_views; v++)
     turn_xy(ca, sa, &c->views[v].dx_px_per_um, &c->views[v].dy_px_per_um);
-  if (c->has_optics) c->optics.mla_rotation_deg += angle_deg;
+  if (c->has_optics) {
+    /* kept within the file's -45..45: a square lattice turned by 90
+     * degrees is itself, only its views' (i, j) go round */
+    double r = c->optics.mla_rotation_deg + angle_deg;
+    r -= 90.0 * floor((r + 45.0) / 90.0);
+    c->optics.mla_rotation_deg = r;
+  }
 }
 
 /* The least-squares turn carrying the lattice vectors (i, j) onto (x, y):

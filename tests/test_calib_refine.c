@@ -337,6 +337,11 @@ static void test_turn(const elfm_calib *truth)
   CHECK_NEAR(tc, 2.5, 1e-9);
   CHECK_NEAR(td, -0.5, 1e-9);
   CHECK_NEAR(d.optics.mla_rotation_deg, -0.5, 1e-12);
+  /* the optics' angle stays within the file's -45..45 */
+  elfm_calib far = *truth;
+  far.optics.mla_rotation_deg = 44;
+  elfm_calib_turn_disparities(&far, 3.0);
+  CHECK_NEAR(far.optics.mla_rotation_deg, -43.0, 1e-12);
   elfm_calib few = *truth;
   few.n_views = 1; /* view (-2, -2) alone: its centre is the mean */
   elfm_calib_turns(&few, &tc, &td);
