@@ -65,34 +65,6 @@ void track_views_merge(track_ctx *c, int slot)
   c->view_tries += sp->tries;
 }
 
-/* s[v] -= a + b d[v] over the views with use[v] (least squares): the two
- * moves of all views no fit can tell from the point's own (all alike: x or
- * y; in proportion to the disparities: z), as calib refine clears them.
- * Why here: beads moving in z lead their images along their disparities,
- * a pattern in proportion to them, not a view off (a stage moving 2 mm/s
- * in z: the worst view 0.53 px with it, 0.27 px without). */
-static void clear_gauge(int nv, const int *use, const double *d, double *s)
-{
-  double n = 0, sd = 0, sdd = 0, ss = 0, sds = 0;
-  for (int v = 0; v < nv; v++) {
-    if (!use[v]) continue;
-    n += 1;
-    sd += d[v];
-    sdd += d[v] * d[v];
-    ss += s[v];
-    sds += d[v] * s[v];
-  }
-  if (n < 3) return;
-  const double det = n * sdd - sd * sd;
-  double a = ss / n, b = 0;
-  if (det > 1e-12 * n * sdd) {
-    b = (n * sds - sd * ss) / det;
-    a = (ss - b * sd) / n;
-  }
-  for (int v = 0; v < nv; v++)
-    if (use[v]) s[v] -= a + b * d[v];
-}
-
 static int cmp_double(const void *a, const void *b)
 {
   const double x = *(const double *)a, y = *(const double *)b;
@@ -133,8 +105,13 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
     du[v] = c->calib->views[v].dx_px_per_um;
     dw[v] = c->calib->views[v].dy_px_per_um;
   }
-  clear_gauge(nv, use, du, mu);
-  clear_gauge(nv, use, dw, mw);
+  /* The two moves of all views no fit can tell from the point's own (all
+   * alike: x or y; in proportion to the disparities: z), taken out as calib
+   * refine takes them out. Beads moving in z lead their images along their
+   * disparities, a pattern in proportion to them, not a view off (a stage
+   * moving 2 mm/s in z: the worst view 0.53 px with it, 0.27 px without). */
+  elfm_calib_gauge_clear(nv, use, du, mu);
+  elfm_calib_gauge_clear(nv, use, dw, mw);
   for (int v = 0; v < nv; v++) {
     if (!use[v]) continue;
     const double u = mu[v], w = mw[v];

@@ -105,9 +105,7 @@ static double median_of(float *tmp, const float *a, size_t n)
   return n % 2 ? tmp[n / 2] : 0.5 * ((double)tmp[n / 2 - 1] + tmp[n / 2]);
 }
 
-/* s[v] -= a + b d[v] over the views with use[v], least squares; with no
- * spread of d among them, only the mean. */
-static void clear_gauge(int nv, const int *use, const double *d, double *s)
+void elfm_calib_gauge_clear(int nv, const int *use, const double *d, double *s)
 {
   double n = 0, sd = 0, sdd = 0, ss = 0, sds = 0;
   for (int v = 0; v < nv; v++) {
@@ -138,8 +136,8 @@ static void move_views(elfm_calib *c, const int *use, double *su, double *sw, do
     du[v] = c->views[v].dx_px_per_um;
     dw[v] = c->views[v].dy_px_per_um;
   }
-  clear_gauge(c->n_views, use, du, su);
-  clear_gauge(c->n_views, use, dw, sw);
+  elfm_calib_gauge_clear(c->n_views, use, du, su);
+  elfm_calib_gauge_clear(c->n_views, use, dw, sw);
   for (int v = 0; v < c->n_views; v++) {
     c->views[v].cx_px += su[v];
     c->views[v].cy_px += sw[v];

@@ -105,6 +105,11 @@ typedef struct elfm_calib_refine elfm_calib_refine;
 elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_refine **out,
                                      elfm_error *err);
 void elfm_calib_refine_free(elfm_calib_refine *r);
+/* The gauge taken out of per-view moves s (one axis, nv views): s[v] -= a
+ * + b d[v] over the views with use[v], least squares, d the views'
+ * disparity on that axis; with fewer than 3 such views or no spread of d,
+ * the mean only. */
+void elfm_calib_gauge_clear(int nv, const int *use, const double *d, double *s);
 /* One point's misses (2 per view, px) and weights (0: the view did not
  * agree, skipped). 1, or 0 when max_points are already held (ignored). */
 int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const double *weight);
