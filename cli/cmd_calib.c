@@ -155,17 +155,6 @@ static int from_optics(int argc, char **argv)
 
 /* The fraction of view v's crop (view_w x view_h px around its centre, the
  * part the refocus reads) that lies on the sensor. */
-static double on_sensor_frac(const elfm_calib *c, const elfm_view *v)
-{
-  const double x0 = v->cx_px - 0.5 * c->view_w_px, x1 = x0 + c->view_w_px;
-  const double y0 = v->cy_px - 0.5 * c->view_h_px, y1 = y0 + c->view_h_px;
-  const double ox = fmin(x1, c->sensor_width_px) - fmax(x0, 0);
-  const double oy = fmin(y1, c->sensor_height_px) - fmax(y0, 0);
-  if (ox <= 0 || oy <= 0) return 0;
-  const double f = ox * oy / ((double)c->view_w_px * c->view_h_px);
-  return f > 1 - 1e-9 ? 1 : f; /* x1 - x0 may round a hair below the width */
-}
-
 static int show(int argc, char **argv)
 {
   if (argc != 2) {
@@ -198,7 +187,7 @@ static int show(int argc, char **argv)
   double least_f = 1;
   for (int k = 0; k < c.n_views; k++) {
     const elfm_view *v = &c.views[k];
-    const double f = on_sensor_frac(&c, v);
+    const double f = elfm_calib_view_on_sensor(&c, k);
     printf("view %2d (i=%+d, j=%+d): centre (%8.2f, %8.2f) px, shift (%+.5f, %+.5f) px/um, "
            "%3.0f %% on the sensor\n",
            k, v->i, v->j, v->cx_px, v->cy_px, v->dx_px_per_um, v->dy_px_per_um, 100 * f);

@@ -27,8 +27,12 @@
  * does not yet feel (docs/recon.md), 1 px RMS 0.85-0.89 and 0.09 of alpha. */
 #define VIEWS_MISS_PX 0.4
 /* A view kept in less than this share of the median view's fits is off (a
- * view far off is left out of nearly every fit: 4-7 % against 87-91 %) */
+ * view far off is left out of nearly every fit: 4-7 % against 87-91 %).
+ * Judged among the views wholly on the sensor (VIEWS_ON_SENSOR) only: a
+ * view partly off it sees fewer of the objects, and a 7 x 7 array's
+ * corners on the EVK4 are off it altogether (kept in no fit at all). */
 #define VIEWS_SHARE_RATIO 0.5
+#define VIEWS_ON_SENSOR 0.99
 /* The median view kept in fewer fits than this: the views disagree (an
  * aligned calibration on a lens array turned 1 degree: 25-27 %; the right
  * ones 54-100 %, the least with a blur) */
@@ -89,13 +93,15 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
   if (c->view_fits < VIEWS_MIN_FITS || nv < 2) return;
   double share[ELFM_MAX_VIEWS], mu[ELFM_MAX_VIEWS] = {0}, mw[ELFM_MAX_VIEWS] = {0};
   double du[ELFM_MAX_VIEWS], dw[ELFM_MAX_VIEWS];
-  int use[ELFM_MAX_VIEWS] = {0};
+  int use[ELFM_MAX_VIEWS] = {0}, n_whole = 0;
   for (int v = 0; v < nv; v++) {
     const double kept = c->view_miss[3 * v + 2];
-    share[v] = kept / (double)c->view_fits;
-    if (out->least < 0 || share[v] < out->least_share) {
-      out->least = v;
-      out->least_share = share[v];
+    if (elfm_calib_view_on_sensor(c->calib, v) >= VIEWS_ON_SENSOR) {
+      share[n_whole++] = kept / (double)c->view_fits;
+      if (out->least < 0 || share[n_whole - 1] < out->least_share) {
+        out->least = v;
+        out->least_share = share[n_whole - 1];
+      }
     }
     use[v] = kept >= VIEWS_MIN_KEPT;
     if (use[v]) {
@@ -122,13 +128,17 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
       out->worst_w_px = w;
     }
   }
-  double sorted[ELFM_MAX_VIEWS];
-  memcpy(sorted, share, (size_t)nv * sizeof *sorted);
-  qsort(sorted, (size_t)nv, sizeof *sorted, cmp_double);
-  out->median_share = nv % 2 ? sorted[nv / 2] : 0.5 * (sorted[nv / 2 - 1] + sorted[nv / 2]);
-  out->off = (out->worst >= 0 && out->worst_miss_px > VIEWS_MISS_PX) ||
-             out->least_share < VIEWS_SHARE_RATIO * out->median_share ||
-             out->median_share < VIEWS_MEDIAN_SHARE;
+  out->off = out->worst >= 0 && out->worst_miss_px > VIEWS_MISS_PX;
+  if (n_whole >= 3) {
+    qsort(share, (size_t)n_whole, sizeof *share, cmp_double);
+    out->median_share =
+        n_whole % 2 ? share[n_whole / 2] : 0.5 * (share[n_whole / 2 - 1] + share[n_whole / 2]);
+    out->off |= out->least_share < VIEWS_SHARE_RATIO * out->median_share ||
+                out->median_share < VIEWS_MEDIAN_SHARE;
+  } else {
+    out->least = -1;
+    out->least_share = NAN;
+  }
 }
 
 void track_views_note(const track_ctx *c)
@@ -143,14 +153,18 @@ void track_views_note(const track_ctx *c)
              "test, %lld the view fit)", (long long)k.fits, (long long)(k.rejected + k.tries),
              (long long)k.rejected, (long long)(k.tries - k.fits));
   } else {
-    const elfm_view *w = k.worst >= 0 ? &c->calib->views[k.worst] : NULL, *l = &c->calib->views[k.least];
-    char worst[160] = "";
-    if (w)
-      snprintf(worst, sizeof worst, "view (%+d, %+d)'s images lie (%+.2f, %+.2f) px off on average, ",
+    char worst[160] = "", least[160] = "";
+    if (k.worst >= 0) {
+      const elfm_view *w = &c->calib->views[k.worst];
+      snprintf(worst, sizeof worst, "; view (%+d, %+d)'s images lie (%+.2f, %+.2f) px off on average",
                w->i, w->j, k.worst_u_px, k.worst_w_px);
-    snprintf(what, sizeof what, "over %lld view fits %sview (%+d, %+d) takes part in %.0f %% of them "
-             "(the median view %.0f %%)", (long long)k.fits, worst, l->i, l->j, 100 * k.least_share,
-             100 * k.median_share);
+    }
+    if (k.least >= 0) {
+      const elfm_view *l = &c->calib->views[k.least];
+      snprintf(least, sizeof least, "; view (%+d, %+d) takes part in %.0f %% of them (the median view "
+               "%.0f %%)", l->i, l->j, 100 * k.least_share, 100 * k.median_share);
+    }
+    snprintf(what, sizeof what, "over %lld view fits%s%s", (long long)k.fits, worst, least);
   }
   fprintf(stderr, "eventlfm track: note: the calibration may not fit this recording: %s; eventlfm "
                   "calib refine fits the views to a recording of beads (docs/recon.md \"Does the "

@@ -147,6 +147,19 @@ void elfm_calib_project(const elfm_calib *c, int v, double x_um, double y_um, do
   *v_px = w->cy_px + y_um / c->um_per_px + z_um * w->dy_px_per_um;
 }
 
+double elfm_calib_view_on_sensor(const elfm_calib *c, int v)
+{
+  if (v < 0 || v >= c->n_views) return 0;
+  const elfm_view *w = &c->views[v];
+  const double x0 = w->cx_px - 0.5 * c->view_w_px, x1 = x0 + c->view_w_px;
+  const double y0 = w->cy_px - 0.5 * c->view_h_px, y1 = y0 + c->view_h_px;
+  const double ox = fmin(x1, c->sensor_width_px) - fmax(x0, 0);
+  const double oy = fmin(y1, c->sensor_height_px) - fmax(y0, 0);
+  if (ox <= 0 || oy <= 0) return 0;
+  const double f = ox * oy / ((double)c->view_w_px * c->view_h_px);
+  return f > 1 - 1e-9 ? 1 : f; /* x1 - x0 may round a hair below the width */
+}
+
 int elfm_calib_n_planes(const elfm_calib *c)
 {
   return (int)floor((c->z_max_um - c->z_min_um) / c->z_step_um + 0.5) + 1;

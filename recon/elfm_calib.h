@@ -76,6 +76,12 @@ elfm_status elfm_calib_parse(const char *text, size_t len, const char *path,
 void elfm_calib_project(const elfm_calib *c, int v, double x_um, double y_um,
                         double z_um, double *u_px, double *v_px);
 
+/* The share (0..1) of view v's crop (view_w x view_h px about its centre)
+ * that lies on the sensor; 0 for a v out of range. A grid wider than the
+ * sensor (the paper's 5 x 5 overhangs the EVK4's 720 rows by 14-15 %)
+ * leaves objects far from the axis seen by fewer views. */
+double elfm_calib_view_on_sensor(const elfm_calib *c, int v);
+
 /* Number of z planes: floor((z_max - z_min) / z_step + 0.5) + 1. */
 int elfm_calib_n_planes(const elfm_calib *c);
 
