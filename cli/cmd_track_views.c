@@ -34,8 +34,8 @@
 #define VIEWS_SHARE_RATIO 0.5
 #define VIEWS_ON_SENSOR 0.99
 /* The median view kept in fewer fits than this: the views disagree (an
- * aligned calibration on a lens array turned 1 degree: 25-27 %; the right
- * ones 54-100 %, the least with a blur) */
+ * aligned calibration on a lens array turned 1 degree: 28-31 %; the right
+ * ones 53-100 %, the least with a bright background) */
 #define VIEWS_MEDIAN_SHARE 0.4
 /* Or the view fit placed almost no peak: fewer than this share of those
  * tried, over VIEWS_MIN_TRIES (turned 3 degrees: 15 of ~2000; the right

@@ -6,7 +6,7 @@
 # mean miss 0.05 px, no note, summary.json views_off false. The lens array
 # turned 0.15 degrees in the calibration (corner views 1.1 px off): the
 # worst view 0.69 px, a note naming it; turned 1 degree (5-8 px): the median
-# view takes part in 25 % of the fits against 90 %, a note; --quiet: no
+# view takes part in 29 % of the fits against 89 %, a note; --quiet: no
 # note, summary.json still says so. (An aligned calibration on a turned
 # array is the same test the other way round: docs/recon.md "Does the
 # calibration fit?")
