@@ -2,7 +2,7 @@
  * "the views' check")
  *
  * A calibration that does not fit makes track fail quietly: on flow turned
- * by 1 degree against an aligned calibration, 94 % of the peaks failed the
+ * by 1 degree against an aligned calibration, 95 % of the peaks failed the
  * view-support test, the first run judged them faint and fast and started
  * again with a blur and shorter windows, and alpha was 0.02 (docs/recon.md
  * "A lens array turned against the sensor"). What shows it is the view fit
@@ -20,7 +20,7 @@
 /* Judged only over this many view fits or more */
 #define VIEWS_MIN_FITS 100
 /* A view's mean miss beyond this is off. With the right centres the means
- * stay under 0.11 px on 35 simulated recordings of most scenes (the
+ * stay under 0.11 px on 44 simulated recordings of most scenes (the
  * simulated images' own bias), 0.27 px for a stage moving 2 mm/s in z
  * (its images' lead along their disparities, beyond what the gauge takes
  * out); centres moved 0.3 px RMS at random give 0.45-0.48 px, which flow
