@@ -422,10 +422,10 @@ static void test_cli(void)
   perturb(&far, 4.0, 31);
   snprintf(far_path, sizeof far_path, "%s/far.json", dir);
   CHECK_OK(elfm_calib_save(&far, far_path, &err), &err);
-  refine_cli(far_path, sim, "f.json", "--ms 60", &r);
+  refine_cli(far_path, sim, "f.json", "--ms 60 --turn-deg 0", &r);
   CHECK(err_has("coarse step"));
   const double far_after = centre_error(&r, &truth);
-  refine_cli(far_path, sim, "f0.json", "--ms 60 --search-px 0 --quiet", &r);
+  refine_cli(far_path, sim, "f0.json", "--ms 60 --search-px 0 --turn-deg 0 --quiet", &r);
   const double far_fine_only = centre_error(&r, &truth);
   printf("simulated flow, centres up to %.2f px off: %.4f px with the coarse step, %.3f px without\n",
          centre_error(&far, &truth), far_after, far_fine_only);
@@ -540,11 +540,11 @@ static void test_cli(void)
   CHECK(err_has("no point"));
   /* --from-us, --to-us: the passes read that stretch. Past the last
    * event nothing can be fitted, and the message names the stretch */
-  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --from-us 90000 --quiet",
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --from-us 90000 --turn-deg 0 --quiet",
            sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
   CHECK(err_has("90000..290000 us"));
-  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --to-us 500 --quiet",
+  snprintf(args, sizeof args, "calib refine --calib %s/calib.json --events %s/events.raw --out %s/u.json --to-us 500 --turn-deg 0 --quiet",
            sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
   CHECK(err_has("..500 us"));
