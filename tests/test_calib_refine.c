@@ -367,6 +367,34 @@ static void refine_cli(const char *calib, const char *sim, const char *out, cons
   CHECK_OK(elfm_calib_load(q, r, &err), &err);
 }
 
+/* The flow scene with the n `key=value` kv simulated into DIR/name (its
+ * path into out), and its calibration into *truth; 0 when that failed
+ * (counted by the checks) */
+static int sim_flow(const char *name, const char *const *kv, int n, char *out, size_t cap,
+                    elfm_calib *truth)
+{
+  elfm_error err;
+  elfm_scene *sc = NULL;
+  CHECK_OK(elfm_scene_load("flow", &sc, &err), &err);
+  if (!sc) return 0;
+  elfm_status st = elfm_scene_set_params(sc, kv, n, &err);
+  CHECK_OK(st, &err);
+  snprintf(out, cap, "%s/%s", dir, name);
+  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
+  if (st == ELFM_OK) {
+    st = elfm_sim_run(sc, out, &so, NULL, &err);
+    CHECK_OK(st, &err);
+  }
+  elfm_scene_free(sc);
+  char p[800];
+  snprintf(p, sizeof p, "%s/calib.json", out);
+  if (st == ELFM_OK) {
+    st = elfm_calib_load(p, truth, &err);
+    CHECK_OK(st, &err);
+  }
+  return st == ELFM_OK;
+}
+
 static void test_cli(void)
 {
   char bin[600];
@@ -380,18 +408,10 @@ static void test_cli(void)
     return;
   }
   elfm_error err;
-  elfm_scene *sc = NULL;
-  CHECK_OK(elfm_scene_load("flow", &sc, &err), &err);
-  if (!sc) return;
-  CHECK_OK(elfm_scene_set_param(sc, "duration_ms=60", &err), &err);
   char sim[700], p[800], q[800], args[3000];
-  snprintf(sim, sizeof sim, "%s/sim", dir);
-  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
-  CHECK_OK(elfm_sim_run(sc, sim, &so, NULL, &err), &err);
-  elfm_scene_free(sc);
   elfm_calib truth, c;
-  snprintf(p, sizeof p, "%s/calib.json", sim);
-  CHECK_OK(elfm_calib_load(p, &truth, &err), &err);
+  const char *kv60[] = {"duration_ms=60"};
+  if (!sim_flow("sim", kv60, 1, sim, sizeof sim, &truth)) return;
   c = truth;
   perturb(&c, 1.0, 9);
   snprintf(p, sizeof p, "%s/moved.json", dir);
@@ -438,18 +458,10 @@ static void test_cli(void)
    * disparities turn with them. Without the search (--turn-deg 0) the
    * centres stay off, or no point is fitted at all. */
   {
-    elfm_scene *st = NULL;
-    char sim2[760], turned[800];
-    CHECK_OK(elfm_scene_load("flow", &st, &err), &err);
-    if (st) {
-      const char *kv[] = {"duration_ms=60", "optics.mla_rotation_deg=2"};
-      CHECK_OK(elfm_scene_set_params(st, kv, 2, &err), &err);
-      snprintf(sim2, sizeof sim2, "%s/sim_turned", dir);
-      CHECK_OK(elfm_sim_run(st, sim2, &so, NULL, &err), &err);
-      elfm_scene_free(st);
-      elfm_calib truth2;
-      snprintf(turned, sizeof turned, "%s/calib.json", sim2);
-      CHECK_OK(elfm_calib_load(turned, &truth2, &err), &err);
+    char sim2[760];
+    elfm_calib truth2;
+    const char *kv[] = {"duration_ms=60", "optics.mla_rotation_deg=2"};
+    if (sim_flow("sim_turned", kv, 2, sim2, sizeof sim2, &truth2)) {
       CHECK(truth2.optics.mla_rotation_deg == 2.0);
       snprintf(q, sizeof q, "%s/calib.json", sim); /* the aligned array's */
       refine_cli(q, sim2, "turned.json", "--ms 60", &r);
@@ -473,18 +485,10 @@ static void test_cli(void)
   /* A 3 x 3 lens array: 9 views, where the default of 12 agreeing views
    * could fit no point; it scales to 5 (12 of 25) */
   {
-    elfm_scene *s3 = NULL;
     char sim3[760];
-    CHECK_OK(elfm_scene_load("flow", &s3, &err), &err);
-    if (s3) {
-      const char *kv[] = {"duration_ms=40", "optics.lenslets_per_side=3"};
-      CHECK_OK(elfm_scene_set_params(s3, kv, 2, &err), &err);
-      snprintf(sim3, sizeof sim3, "%s/sim3", dir);
-      CHECK_OK(elfm_sim_run(s3, sim3, &so, NULL, &err), &err);
-      elfm_scene_free(s3);
-      elfm_calib truth3, moved3;
-      snprintf(p, sizeof p, "%s/calib.json", sim3);
-      CHECK_OK(elfm_calib_load(p, &truth3, &err), &err);
+    elfm_calib truth3, moved3;
+    const char *kv[] = {"duration_ms=40", "optics.lenslets_per_side=3"};
+    if (sim_flow("sim3", kv, 2, sim3, sizeof sim3, &truth3)) {
       CHECK_EQ_INT(truth3.n_views, 9);
       moved3 = truth3;
       perturb(&moved3, 1.0, 5);
