@@ -56,6 +56,8 @@ typedef struct track_opts {
                               TRACK_NEAR_MAX of them */
   int guided_views;    /* track-guided view fit: views that must agree (0 = off) */
   double guided_min_ratio; /* and its find at least this x the track's last intensity */
+  double guided_apart_um;  /* and at least this far from the frame's other detections
+                              (the linker's metric; 0 = off): nearer, it found their object */
   double pair_fit_um;  /* pair fits: two established tracks' predictions within this
                           laterally that share one detection get a view fit each
                           (cmd_track_guided.c; 0 = off) */
@@ -424,6 +426,7 @@ typedef struct track_ctx {
   double view_miss[3 * ELFM_MAX_VIEWS];
   int64_t view_fits, view_tries;
   int64_t n_pair_fits; /* detections split in two by the pair fits */
+  int64_t n_guided_beside; /* guided view fits dropped: they found another detection's object */
   /* view_support_auto: the frames' occupancy summed, frames that needed
    * more than view_support, and the most a frame needed */
   double occupancy_sum, need_max;

@@ -48,7 +48,7 @@ enum {
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
-  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ
+  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ, O_GAPART
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -99,6 +99,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"fill-gate-um", required_argument, 0, O_FILLG},
       {"view-fit-sigma", required_argument, 0, O_VFSIG},
       {"guided-min-ratio", required_argument, 0, O_GRATIO},
+      {"guided-apart-um", required_argument, 0, O_GAPART},
       {"pair-fit-um", required_argument, 0, O_PAIRFIT},
       {"deep-window-us", required_argument, 0, O_DEEPW},
       {"deep-window-um", required_argument, 0, O_DEEPZ},
@@ -263,6 +264,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_GRATIO:
       if (!cli_parse_double_in(C, "--guided-min-ratio", a, 0, 0, 1, "0..1", &o.guided_min_ratio)) return CLI_USAGE;
+      break;
+    case O_GAPART:
+      if (!cli_parse_double_in(C, "--guided-apart-um", a, 0, 0, 100, "0..100 (0: off)", &o.guided_apart_um))
+        return CLI_USAGE;
       break;
     case O_PAIRFIT:
       if (!cli_parse_double_in(C, "--pair-fit-um", a, 0, 0, 100, "0..100 (0: off)", &o.pair_fit_um)) return CLI_USAGE;

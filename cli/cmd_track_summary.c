@@ -139,6 +139,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(cnt, "deep_peaks_dropped", (double)c->n_deep_dropped);
   cJSON_AddNumberToObject(cnt, "guided_view_fits", (double)c->n_guided_views);
   cJSON_AddNumberToObject(cnt, "pair_fits", (double)c->n_pair_fits);
+  cJSON_AddNumberToObject(cnt, "guided_fits_beside", (double)c->n_guided_beside);
   cJSON_AddNumberToObject(cnt, "gap_fill_tries", (double)c->n_fill_tries);
   cJSON_AddNumberToObject(cnt, "gap_fills", (double)c->n_filled);
   cJSON_AddNumberToObject(cnt, "gap_fills_multi_frame", (double)c->n_filled_multi);
@@ -182,6 +183,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "localize_min_views", o->loc.min_views);
   cJSON_AddNumberToObject(par, "guided_views", o->guided_views);
   cJSON_AddNumberToObject(par, "guided_min_ratio", o->guided_min_ratio);
+  cJSON_AddNumberToObject(par, "guided_apart_um", o->guided_apart_um);
   cJSON_AddNumberToObject(par, "pair_fit_um", o->pair_fit_um);
   cJSON_AddNumberToObject(par, "deep_window_us", (double)o->recon.framer.deep_window_us);
   cJSON_AddNumberToObject(par, "deep_window_um", o->recon.framer.deep_window_us > 0 ? o->deep_window_um : 0);
