@@ -360,12 +360,11 @@ void track_defaults(track_opts *o)
    * 0.426 / 0.236 -> 0.404 / 0.317 / 0.496 / 0.361; flow seeds 1-20 0.7681 ->
    * 0.7687, flat from 0.15 to 0.4 (docs/tracker.md). */
   o->guided_min_ratio = 0.15;
-  /* A deep bead's guided fit beside a brighter bead slides onto it over a
-   * few frames (its track's prediction following the fit), and once both
-   * tracks hold the one bead, either may leave on the wrong one. Of the
-   * weak view fits of flow_random 1 s seeds 1-2, 3.6 % lay within 2 um of
-   * another detection of their frame, nine in ten on that detection's
-   * bead. Per-seed alpha against 0: flow_random 1 s seeds 1-32 +0.015 +-
+  /* A guided fit beside another detection most often found that
+   * detection's object: of the weak view fits of flow_random 1 s seeds
+   * 1-2, 3.8 % lay within 2 um of another detection of their frame, nine
+   * in ten on that detection's bead. Kept, two tracks hold one bead, and
+   * either may leave on the wrong one. Per-seed alpha against 0: flow_random 1 s seeds 1-32 +0.015 +-
    * 0.005, flow 1 s seeds 1-48 +0.006 +- 0.004, flow 100 ms seeds 1-40
    * +0.003 +- 0.002; 2 and 4 um gave less or the same (docs/tracker.md
    * "A guided fit on another's bead"). */

@@ -165,10 +165,10 @@ static void pair_fits(track_ctx *c, const elfm_volume *v, const elfm_frame *fram
  * 0.911 -> 0.929 over the view fit of every peak alone (docs/tracker.md).
  * A fit within guided_apart_um of another detection of the frame (a peak,
  * or a fit made for another track just before) found that object, whose
- * light reached the window: a dim deep bead's fit slides onto a brighter
- * neighbour over a few frames, its prediction following, and the two
- * tracks then share one bead until one leaves on the wrong one. Dropped,
- * the track goes dark for the frame instead.
+ * light reached the window (on random flow nine in ten of the weak view
+ * fits within 2 um of another detection lay on that detection's bead):
+ * kept, two tracks hold one bead, and one may leave on the wrong one.
+ * Dropped, the track goes dark for the frame instead.
  * pred[0 .. np) are the linker's predictions for this frame. */
 static void guided_view_fit(track_ctx *c, const elfm_volume *v, const elfm_frame *frame,
                             const elfm_refocus_plan *plan, const double *pred, int np,

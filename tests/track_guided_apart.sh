@@ -2,13 +2,14 @@
 # A guided view fit that lands on another detection's object is dropped
 # (--guided-apart-um, cli/cmd_track_guided.c). Where a track predicts its
 # bead and no peak lies near, the view fit starts from the prediction; a
-# deep bead's fit beside a brighter bead slides onto it over a few frames,
+# fit that lands beside another detection most often found that object,
 # and then two tracks hold one bead. On random flow 150 ms (seed 1, pair
 # fits off so that every weak view fit in detections.csv is a guided fit):
-# with the rule off, 10 guided fits lie within 3 um (dz / 1.5) of a
+# with the rule off, 12 guided fits lie within 3 um (dz / 1.5) of a
 # detection the frame already had when it was linked (nearest_um set; gap
-# fills, written later, have none); with the default 3 um, none, and
-# summary.json counts the fits dropped.
+# fills, written later, have none), at the positions as measured; with the
+# default 3 um, none, and summary.json counts the fits dropped. (Made a
+# no-op, the rule leaves 12 and the test fails.)
 # Usage: track_guided_apart.sh BINARY
 bin=$1
 . "$(dirname "$0")/track_lib.sh"
@@ -18,7 +19,9 @@ fail=0
 simulate_or_skip "$tmp/sim" flow_random 150 1
 
 # near DETECTIONS D KZ: the weak view fits within D um (dz / KZ) of a
-# detection of their frame that has nearest_um (present when linked)
+# detection of their frame that has nearest_um (present when linked), at
+# the positions as measured (raw_x/y/z_um; x/y/z_um are moved back by
+# their track's motion bias afterwards)
 near() {
   awk -F, -v D="$2" -v KZ="$3" '
     function flush(  i, j, dx, dy, dz) {
@@ -33,12 +36,12 @@ near() {
     }
     NR == 1 {
       for (k = 1; k <= NF; k++) col[$k] = k
-      if (!col["view_fit"] || !col["weak"] || !col["nearest_um"]) { print "no columns"; exit 1 }
+      if (!col["view_fit"] || !col["weak"] || !col["nearest_um"] || !col["raw_z_um"]) { print "no columns"; exit 1 }
       next
     }
     {
       if ($1 != f) { flush(); f = $1; n = 0 }
-      n++; x[n] = $3; y[n] = $4; z[n] = $5
+      n++; x[n] = $col["raw_x_um"]; y[n] = $col["raw_y_um"]; z[n] = $col["raw_z_um"]
       g[n] = ($col["view_fit"] == 1 && $col["weak"] == 1); lk[n] = ($col["nearest_um"] != "")
     }
     END { flush(); print c + 0 }' "$1"
