@@ -337,6 +337,8 @@ int main(void)
     elfm_table *tr = parse(&b, "tracks.csv");
     elfm_score_result r = run(truth_b, tr, NULL, NULL);
     CHECK_EQ_INT(r.n_truth_points, 30);
+    /* frame 10 (t 11 ms): B lit at 10.1-10.4 ms, dark at 11 ms */
+    CHECK_EQ_INT(r.n_truth_lit_then_dark, 1);
     CHECK_NEAR(r.alpha, 1.0, TOL);
     CHECK_NEAR(r.beta, 1.0, TOL);
     elfm_table_free(tr);
@@ -494,6 +496,11 @@ int main(void)
     CHECK_EQ_INT(r.n_spurious_tracks, 1);
     CHECK_NEAR(r.alpha, 1.0, TOL);
     CHECK_NEAR(r.beta, 80.0 / 88.0, TOL);
+    /* ... and counts the two frames B's pulses lit as lit, then dark; the
+     * window rule counts none (it counted them as B's points above) */
+    CHECK_EQ_INT(r.n_truth_lit_then_dark, 2);
+    o.window_us = 1000;
+    CHECK_EQ_INT(run(pulsed, tr, NULL, &o).n_truth_lit_then_dark, 0);
     /* Half the window must be lit: a 1900 us window holds 19 samples of
      * which 9 are lit, so B does not count at all ("any light in the
      * window" would count it). */

@@ -217,6 +217,58 @@ int main(void)
     CHECK_EQ_INT(rc, 2);
   }
 
+  /* Pulsed light: object 1 lit 800 us of every ms, dark again at each
+   * frame's t_us (1000 + 1000 f, the window's end), object 2 always lit.
+   * SPEC 7 as written leaves object 1 out at all 20 frames; score counts
+   * them (n_truth_lit_then_dark) and says on stderr what the window rule
+   * does. No note where nothing blinks, nor under the window rule. */
+  {
+    char *t = malloc(1 << 17);
+    CHECK(t != NULL);
+    if (t) {
+      size_t n = (size_t)sprintf(t, "id,t_us,x_um,y_um,z_um,brightness\n");
+      for (int us = 0; us <= 25000; us += 100) {
+        const int lit = us % 1000 >= 100 && us % 1000 < 900;
+        n += (size_t)sprintf(t + n, "1,%d,%g,-20,5,%d\n", us, -10 + 0.001 * us, lit);
+        n += (size_t)sprintf(t + n, "2,%d,%g,20,-3,1\n", us, 10 - 0.001 * us);
+      }
+      write_file("pulsed.csv", t);
+      free(t);
+    }
+    rc = run("--truth pulsed.csv --tracks tracks.csv --json", out, sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    o = cJSON_Parse(out);
+    CHECK(o != NULL);
+    if (o) {
+      CHECK_NEAR(jnum(o, "n_truth_lit_then_dark"), 20, 0);
+      CHECK_NEAR(jnum(o, "n_truth_points"), 20, 0); /* object 2's */
+      cJSON_Delete(o);
+    }
+    CHECK_MSG(strstr(err, "note: 20 of 40 object-frames were lit within their frame") != NULL &&
+                  strstr(err, "--window-us run") != NULL,
+              "stderr: %s", err);
+    rc = run("--truth pulsed.csv --tracks tracks.csv", out, sizeof out, err, sizeof err);
+    CHECK_MSG(rc == 0 && strstr(out, "20 object-frame(s) lit within their frame") != NULL,
+              "stdout: %s", out);
+    rc = run("--truth pulsed.csv --tracks tracks.csv --json --window-us 1000", out, sizeof out, err,
+             sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    o = cJSON_Parse(out);
+    CHECK(o != NULL);
+    if (o) {
+      CHECK_NEAR(jnum(o, "n_truth_lit_then_dark"), 0, 0);
+      CHECK_NEAR(jnum(o, "n_truth_points"), 40, 0);
+      cJSON_Delete(o);
+    }
+    CHECK_MSG(strstr(err, "lit within") == NULL, "stderr: %s", err);
+    rc = run("--truth truth.csv --tracks tracks.csv --json", out, sizeof out, err, sizeof err);
+    CHECK_EQ_INT(rc, 0);
+    CHECK_MSG(strstr(err, "lit within") == NULL, "stderr: %s", err);
+    o = cJSON_Parse(out);
+    if (o) CHECK_NEAR(jnum(o, "n_truth_lit_then_dark"), 0, 0);
+    cJSON_Delete(o);
+  }
+
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);

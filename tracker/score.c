@@ -432,6 +432,7 @@ elfm_status elfm_score_tables(const elfm_table *truth, const elfm_table *tracks,
   if ((s = elfm_score_frames_trim(&fr, truth, &out->n_frames_unscored, err)) != ELFM_OK) goto done;
   out->n_frames = fr.n - out->n_frames_unscored;
   if ((s = elfm_score_truth_build(&tr, truth, &fr, opt, err)) != ELFM_OK) goto done;
+  out->n_truth_lit_then_dark = tr.n_lit_then_dark;
 
   if (detections && (s = elfm_score_detections_load(&dp, detections, cd, &fr, err)) != ELFM_OK)
     goto done;

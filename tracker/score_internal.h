@@ -108,6 +108,7 @@ typedef struct {
    * sorted by x (elfm_score_index_by_frame) */
   int64_t *fr_off;
   keyed_t *fr_pt;
+  int64_t n_lit_then_dark; /* elfm_score_result.n_truth_lit_then_dark */
 } truth_t;
 
 /* Candidate tracks (elfm_score.h, TRACKS): their real points only. */

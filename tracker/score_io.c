@@ -443,6 +443,29 @@ static int inside(const elfm_score_options *o, double x, double y, double z)
          z <= o->z_max_um;
 }
 
+/* The time of the frame before f, or where the frames' spacing puts it for
+ * the first frame; NaN where neither is known. */
+static double prev_frame_t(const frames_t *fr, int f, int f_lo, int f_hi)
+{
+  if (f > f_lo) return fr->t_us[f - 1];
+  if (f < f_hi) return 2 * fr->t_us[f] - fr->t_us[f + 1];
+  return NAN;
+}
+
+/* Was a sample of ord[i .. j) in (t_prev, t] lit? cur: the last sample
+ * before t (or i). For n_truth_lit_then_dark. */
+static int lit_since(const elfm_table *tt, const int *c, const keyed_t *ord, size_t i, size_t j,
+                     size_t cur, double t, double t_prev)
+{
+  if (!(t_prev < t)) return 0;
+  size_t q = cur + 1 < j && elfm_table_get(tt, ord[cur + 1].idx, c[1]) <= t ? cur + 1 : cur;
+  for (;; q--) {
+    if (!(elfm_table_get(tt, ord[q].idx, c[1]) > t_prev)) return 0;
+    if (elfm_table_get(tt, ord[q].idx, c[5]) > 0) return 1;
+    if (q == i) return 0;
+  }
+}
+
 elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const frames_t *fr,
                                    const elfm_score_options *o, elfm_error *err)
 {
@@ -477,6 +500,7 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
    * (elfm_score_frames_build); outside it (a single known frame and a frame
    * count hint) times are unknown and nothing counts. */
   int f_lo = 0, f_hi = fr->n - 1;
+  const int literal = !o->window_frames && !(o->window_us > 0);
   while (f_lo < fr->n && isnan(fr->t_us[f_lo])) f_lo++;
   while (f_hi >= f_lo && isnan(fr->t_us[f_hi])) f_hi--;
   while (i < n && s == ELFM_OK) {
@@ -545,6 +569,9 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
         val[q] = t == ta ? a : t == tb ? b : a + w * (b - a);
       }
       int lit = window_votes >= 0 ? window_votes : val[3] > 0.0;
+      if (!lit && literal && inside(o, val[0], val[1], val[2]) &&
+          lit_since(tt, c, ord, i, j, cur, t, prev_frame_t(fr, f, f_lo, f_hi)))
+        tr->n_lit_then_dark++;
       if (!lit || !inside(o, val[0], val[1], val[2])) continue;
       if (tr->pt.n == cap) {
         /* A cap on the points (elfm_score_options.max_truth_points): a few
