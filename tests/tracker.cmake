@@ -53,6 +53,7 @@ elfm_add_track_script(track_loss)
 elfm_add_track_script(track_twins)
 elfm_add_track_script(track_near)
 elfm_add_track_script(track_guided_apart)
+elfm_add_track_script(track_optics)
 # Intensity traces per object (tracker/traces.c, `eventlfm traces`; ends with
 # the slice scene end to end) and the command on bad input.
 elfm_add_test(test_traces test_traces.c TIMEOUT 120)
