@@ -282,9 +282,10 @@ typedef struct elfm_score_result {
   int n_frames_unscored;        /* frames outside the truth's time range (FRAMES) */
   /* Under the literal rule (window_us 0, no window_frames): the
    * object-frames left out as dark at the frame's t_us, inside the volume,
-   * although a truth sample since the frame before's t_us was lit. Pulsed light ends before a time surface's window does, so a run
-   * on an LED's pulses leaves most of its objects uncounted; the window rule
-   * counts them. 0 under a window rule. */
+   * although a truth sample since the frame before's t_us was lit. Pulsed
+   * light ends before a time surface's window does, so a run on an LED's
+   * pulses leaves most of its objects uncounted; the window rule counts
+   * them. 0 under a window rule. */
   int64_t n_truth_lit_then_dark;
   /* detections */
   int detections_from_tracks;   /* 1: no detections table, raw track points used */
