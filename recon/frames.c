@@ -13,6 +13,8 @@
  */
 #include "elfm_frames.h"
 
+#include "big_alloc.h"
+
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -83,8 +85,9 @@ elfm_frame *elfm_frame_create(int w, int h, elfm_error *err)
   elfm_frame *f = calloc(1, sizeof *f);
   size_t n = (size_t)w * (size_t)h;
   if (f) {
-    f->data = calloc(n, sizeof *f->data);
-    f->idx = malloc(n * sizeof *f->idx);
+    f->cap = n; /* before the buffers: elfm_frame_free frees them by it */
+    f->data = elfm_big_calloc(n, sizeof *f->data);
+    f->idx = elfm_big_calloc(n, sizeof *f->idx);
   }
   if (!f || !f->data || !f->idx) {
     elfm_frame_free(f);
@@ -93,15 +96,14 @@ elfm_frame *elfm_frame_create(int w, int h, elfm_error *err)
   }
   f->w = w;
   f->h = h;
-  f->cap = n;
   return f;
 }
 
 void elfm_frame_free(elfm_frame *f)
 {
   if (!f) return;
-  free(f->data);
-  free(f->idx);
+  elfm_big_free(f->data, f->cap, sizeof *f->data);
+  elfm_big_free(f->idx, f->cap, sizeof *f->idx);
   free(f);
 }
 
@@ -246,7 +248,7 @@ elfm_status elfm_framer_create(const elfm_framer_options *o, int width, int heig
   f->q_cap = 1u << 16;
   f->q_t = malloc(f->q_cap * sizeof *f->q_t);
   f->q_pix = malloc(f->q_cap * sizeof *f->q_pix);
-  f->stamp = calloc(n, sizeof *f->stamp);
+  f->stamp = elfm_big_calloc(n, sizeof *f->stamp);
   /* the oldest age a frame shows: the window's, or the deep window's */
   const int64_t max_age_us = o->deep_window_us > o->dt_us ? o->deep_window_us : o->dt_us;
   int table = (o->repr == ELFM_REPR_EXP || o->repr == ELFM_REPR_LIN) &&
@@ -284,7 +286,7 @@ void elfm_framer_free(elfm_framer *f)
   if (!f) return;
   free(f->q_t);
   free(f->q_pix);
-  free(f->stamp);
+  elfm_big_free(f->stamp, (size_t)f->w * (size_t)f->h, sizeof *f->stamp);
   free(f->decay);
   free(f->px);
   free(f->act);
