@@ -1,8 +1,6 @@
 /* volume.c — allocation of elfm_volume (see elfm_volume.h). */
 #include "elfm_volume.h"
 
-#include "big_alloc.h"
-
 #include <stdlib.h>
 
 elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
@@ -20,7 +18,7 @@ elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
     return NULL;
   }
   elfm_volume *v = calloc(1, sizeof *v);
-  if (v) v->data = elfm_big_calloc((size_t)w * (size_t)h * (size_t)nz, sizeof *v->data);
+  if (v) v->data = calloc((size_t)w * (size_t)h * (size_t)nz, sizeof *v->data);
   if (!v || !v->data) {
     free(v);
     elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "cannot allocate a %d x %d x %d volume", w, h, nz);
@@ -38,6 +36,6 @@ elfm_volume *elfm_volume_create(int w, int h, int nz, double um_per_px,
 void elfm_volume_free(elfm_volume *v)
 {
   if (!v) return;
-  elfm_big_free(v->data, (size_t)v->w * (size_t)v->h * (size_t)v->nz, sizeof *v->data);
+  free(v->data);
   free(v);
 }
