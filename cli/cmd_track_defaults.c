@@ -364,10 +364,11 @@ void track_defaults(track_opts *o)
    * detection's object: of the weak view fits of flow_random 1 s seeds
    * 1-2, 3.8 % lay within 2 um of another detection of their frame, nine
    * in ten on that detection's bead. Kept, two tracks hold one bead, and
-   * either may leave on the wrong one. Per-seed alpha against 0: flow_random 1 s seeds 1-32 +0.015 +-
-   * 0.005, flow 1 s seeds 1-48 +0.006 +- 0.004, flow 100 ms seeds 1-40
-   * +0.003 +- 0.002; 2 and 4 um gave less or the same (docs/tracker.md
-   * "A guided fit on another's bead"). */
+   * either may leave on the wrong one. Per-seed alpha against 0:
+   * flow_random 1 s seeds 1-32 +0.015 +- 0.005, flow 1 s seeds 1-48
+   * +0.006 +- 0.004, flow 100 ms seeds 1-40 +0.003 +- 0.002; 2 and 4 um
+   * gave less or the same (docs/tracker.md "A guided fit on another's
+   * bead"). */
   o->guided_apart_um = 3;
   o->deep_peak_views = 10;
 }

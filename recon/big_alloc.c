@@ -21,6 +21,13 @@
 #define HUGE_BYTES ((size_t)2 << 20)
 
 #ifdef ELFM_BIG_MMAP
+/* Is a buffer of this size mapped (elfm_big_calloc and elfm_big_free must
+ * agree)? */
+static int big_mapped(size_t bytes)
+{
+  return bytes >= HUGE_BYTES && bytes <= SIZE_MAX - 2 * HUGE_BYTES;
+}
+
 /* The mapping's length: the bytes rounded up to whole huge pages. */
 static size_t big_len(size_t bytes)
 {
@@ -33,7 +40,7 @@ void *elfm_big_calloc(size_t n, size_t size)
   if (size && n > SIZE_MAX / size) return NULL;
 #ifdef ELFM_BIG_MMAP
   const size_t bytes = n * size;
-  if (bytes >= HUGE_BYTES && bytes <= SIZE_MAX - 2 * HUGE_BYTES) {
+  if (big_mapped(bytes)) {
     /* map a huge page more than needed, keep the aligned part: the kernel
      * backs only aligned 2 MiB ranges with huge pages. Anonymous mappings
      * read as zero and are faulted in as touched. */
@@ -57,7 +64,7 @@ void elfm_big_free(void *p, size_t n, size_t size)
   if (!p) return;
 #ifdef ELFM_BIG_MMAP
   const size_t bytes = n * size;
-  if (bytes >= HUGE_BYTES && bytes <= SIZE_MAX - 2 * HUGE_BYTES) {
+  if (big_mapped(bytes)) {
     munmap(p, big_len(bytes));
     return;
   }

@@ -452,17 +452,17 @@ static double prev_frame_t(const frames_t *fr, int f, int f_lo, int f_hi)
   return NAN;
 }
 
-/* Was a sample of ord[i .. j) in (t_prev, t] lit? cur: the last sample
- * before t (or i). For n_truth_lit_then_dark. */
-static int lit_since(const elfm_table *tt, const int *c, const keyed_t *ord, size_t i, size_t j,
-                     size_t cur, double t, double t_prev)
+/* The samples of ord[*q .. j) with t0 < t_us <= t1, and how many of them
+ * are lit: *q first moves past those at or before t0 (t0 never decreases
+ * between calls for one object, so the walk is once over its samples). */
+static void samples_in(const elfm_table *tt, const int *c, const keyed_t *ord, size_t *q, size_t j,
+                       double t0, double t1, int64_t *n_in, int64_t *n_lit)
 {
-  if (!(t_prev < t)) return 0;
-  size_t q = cur + 1 < j && elfm_table_get(tt, ord[cur + 1].idx, c[1]) <= t ? cur + 1 : cur;
-  for (;; q--) {
-    if (!(elfm_table_get(tt, ord[q].idx, c[1]) > t_prev)) return 0;
-    if (elfm_table_get(tt, ord[q].idx, c[5]) > 0) return 1;
-    if (q == i) return 0;
+  while (*q < j && elfm_table_get(tt, ord[*q].idx, c[1]) <= t0) (*q)++;
+  *n_in = *n_lit = 0;
+  for (size_t k = *q; k < j && elfm_table_get(tt, ord[k].idx, c[1]) <= t1; k++) {
+    (*n_in)++;
+    *n_lit += elfm_table_get(tt, ord[k].idx, c[5]) > 0;
   }
 }
 
@@ -551,12 +551,8 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
           window_votes = elfm_table_get(tt, ord[q].idx, c[5]) > 0;
         }
       } else if (o->window_us > 0) {
-        while (wcur < j && elfm_table_get(tt, ord[wcur].idx, c[1]) <= t - o->window_us) wcur++;
-        int64_t n_in = 0, n_lit = 0;
-        for (size_t q = wcur; q < j && elfm_table_get(tt, ord[q].idx, c[1]) <= t; q++) {
-          n_in++;
-          n_lit += elfm_table_get(tt, ord[q].idx, c[5]) > 0;
-        }
+        int64_t n_in, n_lit;
+        samples_in(tt, c, ord, &wcur, j, t - o->window_us, t, &n_in, &n_lit);
         if (n_in > 0) window_votes = 2 * n_lit >= n_in;
       }
       size_t ra = ord[cur].idx, rb = cur + 1 < j ? ord[cur + 1].idx : ra;
@@ -569,10 +565,17 @@ elfm_status elfm_score_truth_build(truth_t *tr, const elfm_table *tt, const fram
         val[q] = t == ta ? a : t == tb ? b : a + w * (b - a);
       }
       int lit = window_votes >= 0 ? window_votes : val[3] > 0.0;
-      if (!lit && literal && inside(o, val[0], val[1], val[2]) &&
-          lit_since(tt, c, ord, i, j, cur, t, prev_frame_t(fr, f, f_lo, f_hi)))
-        tr->n_lit_then_dark++;
-      if (!lit || !inside(o, val[0], val[1], val[2])) continue;
+      if (!lit) {
+        /* under the literal rule, was it lit since the frame before
+         * (n_truth_lit_then_dark)? wcur serves no window rule then */
+        const double t_prev = prev_frame_t(fr, f, f_lo, f_hi);
+        int64_t n_in, n_lit = 0;
+        if (literal && t_prev < t && inside(o, val[0], val[1], val[2]))
+          samples_in(tt, c, ord, &wcur, j, t_prev, t, &n_in, &n_lit);
+        tr->n_lit_then_dark += n_lit > 0;
+        continue;
+      }
+      if (!inside(o, val[0], val[1], val[2])) continue;
       if (tr->pt.n == cap) {
         /* A cap on the points (elfm_score_options.max_truth_points): a few
          * thousand ids over a long frame span would otherwise ask for
