@@ -27,7 +27,10 @@ typedef struct recon_args {
  * EXR files (ZIP) were 43 ms per 144 x 144 x 101 volume while the other
  * threads waited: the files are independent, so they are written side by
  * side. The queue holds at most `cap` copies: memory does not grow with
- * the recording. */
+ * the recording. A written copy goes to `spare` and is the next volume's
+ * copy: the copies are made once per run, not once per volume (a fresh
+ * volume's pages are zeroed and faulted in, each time, only to be
+ * overwritten by the copy). */
 enum { JOB_WAIT, JOB_BUSY, JOB_DONE };
 
 typedef struct out_job {
@@ -51,6 +54,8 @@ typedef struct recon_out {
   cnd_t done;             /* a job became JOB_DONE */
   out_job *q;
   size_t cap, head, n;
+  elfm_volume **spare;    /* written copies to reuse, at most cap */
+  size_t n_spare;
 } recon_out;
 
 static void usage(FILE *f)
@@ -161,7 +166,8 @@ static elfm_status jobs_retire(recon_out *o, size_t below, elfm_error *err)
         st = j->st;
         *err = j->err;
       }
-      elfm_volume_free(j->v);
+      if (o->n_spare < o->cap) o->spare[o->n_spare++] = j->v;
+      else elfm_volume_free(j->v);
       memset(j, 0, sizeof *j);
       o->head = (o->head + 1) % o->cap;
       o->n--;
@@ -191,14 +197,21 @@ static elfm_status on_volume(const elfm_volume *v, void *user, elfm_error *err)
   if (!o->a->save_volumes && !o->a->save_mips) return ELFM_OK;
   elfm_status st = jobs_retire(o, o->cap, err); /* room for one more */
   if (st != ELFM_OK) return st;
-  elfm_volume *c = elfm_volume_create(v->w, v->h, v->nz, v->um_per_px, v->z_min_um, v->z_step_um, err);
-  if (!c) return err->code ? err->code : ELFM_ERR_NOMEM;
+  mtx_lock(&o->mu);
+  elfm_volume *c = o->n_spare > 0 ? o->spare[--o->n_spare] : NULL;
+  mtx_unlock(&o->mu);
+  if (c && (c->w != v->w || c->h != v->h || c->nz != v->nz)) {
+    elfm_volume_free(c); /* a run's volumes are all one size; kept for safety */
+    c = NULL;
+  }
+  if (!c && !(c = elfm_volume_create(v->w, v->h, v->nz, v->um_per_px, v->z_min_um, v->z_step_um, err)))
+    return err->code ? err->code : ELFM_ERR_NOMEM;
+  float *data = c->data;
+  const int data_big = c->data_big;
+  *c = *v; /* every field: times, window, counts, geometry */
+  c->data = data;
+  c->data_big = data_big;
   memcpy(c->data, v->data, (size_t)v->w * v->h * v->nz * sizeof *c->data);
-  c->t_us = v->t_us;
-  c->frame = v->frame;
-  c->t_start_us = v->t_start_us;
-  c->t_end_us = v->t_end_us;
-  c->n_events = v->n_events;
   mtx_lock(&o->mu);
   out_job *j = &o->q[(o->head + o->n) % o->cap];
   memset(j, 0, sizeof *j);
@@ -361,14 +374,17 @@ int cmd_recon(int argc, char **argv)
      * per thread (4.19 / 4.16 s), whose peak memory was no lower */
     o.cap = (size_t)threads + 1;
     o.q = calloc(o.cap, sizeof *o.q);
-    if (!o.q || mtx_init(&o.mu, mtx_plain) != thrd_success) {
+    o.spare = calloc(o.cap, sizeof *o.spare);
+    if (!o.q || !o.spare || mtx_init(&o.mu, mtx_plain) != thrd_success) {
       free(o.q);
+      free(o.spare);
       fclose(o.ffr);
       return cli_message("recon", CLI_FAIL, "out of memory (write queue)");
     }
     if (cnd_init(&o.done) != thrd_success) {
       mtx_destroy(&o.mu);
       free(o.q);
+      free(o.spare);
       fclose(o.ffr);
       return cli_message("recon", CLI_FAIL, "out of memory (write queue)");
     }
@@ -393,6 +409,8 @@ int cmd_recon(int argc, char **argv)
     mtx_destroy(&o.mu);
     free(o.q);
     o.q = NULL;
+    for (size_t i = 0; i < o.n_spare; i++) elfm_volume_free(o.spare[i]);
+    free(o.spare);
   }
   if (!a.quiet) fputc('\n', stderr);
   /* frames.csv holds the volumes made before an error too: close it first */

@@ -230,7 +230,10 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
                                       const elfm_frame *frame, elfm_volume *vol,
                                       elfm_refocus_workspace *ws, elfm_error *err);
 
-/* A volume of the plan's size (zeroed). Free with elfm_volume_free. */
+/* A volume of the plan's size (zeroed), for refilling frame after frame:
+ * on 2 MiB pages where the system has them, which is slow to make and free
+ * one after another (elfm_volume_create is for those). Free with
+ * elfm_volume_free. */
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err);
 
 #ifdef __cplusplus

@@ -30,6 +30,11 @@ typedef struct elfm_volume {
   size_t n_events;
   int64_t n_triggers;  /* the frame's (elfm_frame): trigger edges up to its end; 0 read back */
   double um_per_px, z_min_um, z_step_um;
+  /* internal: 1 when data came from elfm_big_calloc (the volumes a run
+   * keeps, recon/big_alloc.h: on 2 MiB pages), 0 from calloc; read by
+   * elfm_volume_free. A copy of the struct must not carry it over to
+   * another volume's data. */
+  int data_big;
 } elfm_volume;
 
 /* The largest volume EventLFM allocates: 2^27 voxels, 512 MiB of floats.

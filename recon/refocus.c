@@ -3,6 +3,8 @@
  */
 #include "refocus_internal.h"
 
+#include "big_alloc.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -375,8 +377,8 @@ double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, 
 
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)
 {
-  return elfm_volume_create(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,
-                            p->calib.z_step_um, err);
+  return elfm_volume_create_kept(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,
+                                 p->calib.z_step_um, err);
 }
 
 elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,

@@ -59,6 +59,9 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
   init.error_handler_fn = exr_silent;
   int part = 0;
   const int digits = name_digits(v->nz);
+  exr_encode_pipeline_t enc; /* see the chunk loop */
+  memset(&enc, 0, sizeof enc);
+  int enc_live = 0;
   EXR_TRY(exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init), "create");
   EXR_TRY(exr_add_part(ctxt, "volume", EXR_STORAGE_SCANLINE, &part), "add part");
   EXR_TRY(exr_initialize_required_attr_simple(ctxt, part, v->w, v->h, EXR_COMPRESSION_ZIP),
@@ -78,13 +81,24 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
   EXR_TRY(exr_write_header(ctxt), "write header");
   int32_t lines = 1;
   EXR_TRY(exr_get_scanlines_per_chunk(ctxt, part, &lines), "chunk size");
+  /* One encoder for the whole file, updated chunk by chunk: it keeps its
+   * packing and compression buffers (~1 MB each at 144 x 101 floats per
+   * line, 16 lines per ZIP chunk). An encoder per chunk allocated them
+   * anew each time, above glibc's mmap threshold: fresh pages, faulted
+   * in and unmapped, 238,000 page faults for `recon --save-volumes` on
+   * 50 volumes (docs/recon.md "Huge pages for frames"). */
   for (int y = 0; y < v->h; y += lines) {
     exr_chunk_info_t ci;
-    exr_encode_pipeline_t enc;
-    memset(&enc, 0, sizeof enc);
     EXR_TRY(exr_write_scanline_chunk_info(ctxt, part, y, &ci), "chunk info");
-    EXR_TRY(exr_encoding_initialize(ctxt, part, &ci, &enc), "encoder");
-    for (int c = 0; c < enc.channel_count; c++) {
+    exr_result_t r;
+    if (!enc_live) {
+      EXR_TRY(exr_encoding_initialize(ctxt, part, &ci, &enc), "encoder");
+      enc_live = 1;
+      r = exr_encoding_choose_default_routines(ctxt, part, &enc);
+    } else {
+      r = exr_encoding_update(ctxt, part, &ci, &enc);
+    }
+    for (int c = 0; c < enc.channel_count && r == EXR_ERR_SUCCESS; c++) {
       int k = plane_of(enc.channels[c].channel_name, v->nz);
       if (k < 0) k = 0; /* cannot happen: we named them */
       enc.channels[c].encode_from_ptr =
@@ -92,12 +106,11 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
       enc.channels[c].user_pixel_stride = (int32_t)sizeof(float);
       enc.channels[c].user_line_stride = (int32_t)(sizeof(float) * (size_t)v->w);
     }
-    exr_result_t r = exr_encoding_choose_default_routines(ctxt, part, &enc);
     if (r == EXR_ERR_SUCCESS) r = exr_encoding_run(ctxt, part, &enc);
-    exr_encoding_destroy(ctxt, &enc);
     EXR_TRY(r, "encode");
   }
 done:
+  if (enc_live) exr_encoding_destroy(ctxt, &enc);
   if (ctxt) {
     exr_result_t r = exr_finish(&ctxt);
     if (!st && r != EXR_ERR_SUCCESS)
@@ -112,6 +125,9 @@ elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error
   elfm_status st = ELFM_OK;
   exr_context_t ctxt = NULL;
   elfm_volume *v = NULL;
+  exr_decode_pipeline_t dec; /* see the chunk loop */
+  memset(&dec, 0, sizeof dec);
+  int dec_live = 0;
   exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
   init.error_handler_fn = exr_silent;
   EXR_TRY(exr_start_read(&ctxt, path, &init), "open");
@@ -179,25 +195,33 @@ elfm_status elfm_volume_read_exr(const char *path, elfm_volume **out, elfm_error
   v->frame = frame;
   int32_t lines = 1;
   EXR_TRY(exr_get_scanlines_per_chunk(ctxt, 0, &lines), "chunk size");
+  /* one decoder for the file, updated chunk by chunk (as the writer's
+   * encoder: its buffers are allocated once per file, not per chunk) */
   for (int y = dw.min.y; y <= dw.max.y; y += lines) {
     exr_chunk_info_t ci;
-    exr_decode_pipeline_t dec;
-    memset(&dec, 0, sizeof dec);
     EXR_TRY(exr_read_scanline_chunk_info(ctxt, 0, y, &ci), "chunk info");
-    EXR_TRY(exr_decoding_initialize(ctxt, 0, &ci, &dec), "decoder");
-    for (int c = 0; c < dec.channel_count; c++) {
+    exr_result_t r;
+    if (!dec_live) {
+      EXR_TRY(exr_decoding_initialize(ctxt, 0, &ci, &dec), "decoder");
+      dec_live = 1;
+      r = EXR_ERR_SUCCESS;
+    } else {
+      r = exr_decoding_update(ctxt, 0, &ci, &dec);
+    }
+    for (int c = 0; c < dec.channel_count && r == EXR_ERR_SUCCESS; c++) {
       int k = plane_of(dec.channels[c].channel_name, nz);
       dec.channels[c].decode_to_ptr =
           (uint8_t *)(v->data + ((size_t)k * h + (size_t)(ci.start_y - dw.min.y)) * w);
       dec.channels[c].user_pixel_stride = (int32_t)sizeof(float);
       dec.channels[c].user_line_stride = (int32_t)(sizeof(float) * (size_t)w);
     }
-    exr_result_t r = exr_decoding_choose_default_routines(ctxt, 0, &dec);
+    /* the routines depend on the pointers and strides set just above */
+    if (r == EXR_ERR_SUCCESS) r = exr_decoding_choose_default_routines(ctxt, 0, &dec);
     if (r == EXR_ERR_SUCCESS) r = exr_decoding_run(ctxt, 0, &dec);
-    exr_decoding_destroy(ctxt, &dec);
     EXR_TRY(r, "decode");
   }
 done:
+  if (dec_live) exr_decoding_destroy(ctxt, &dec);
   if (ctxt) exr_finish(&ctxt);
   if (st) elfm_volume_free(v);
   else *out = v;

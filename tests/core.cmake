@@ -2,3 +2,4 @@
 elfm_add_test(test_core test_core.c)
 add_test(NAME cli_help COMMAND ${CMAKE_SOURCE_DIR}/tests/cli_help.sh ${CMAKE_BINARY_DIR}/eventlfm)
 elfm_add_test(test_exr_bad test_exr_bad.c)
+elfm_add_test(test_exr_roundtrip test_exr_roundtrip.c)
