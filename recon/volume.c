@@ -53,7 +53,9 @@ elfm_volume *elfm_volume_create_kept(int w, int h, int nz, double um_per_px,
 void elfm_volume_free(elfm_volume *v)
 {
   if (!v) return;
-  if (v->data_big) elfm_big_free(v->data, (size_t)v->w * (size_t)v->h * (size_t)v->nz, sizeof *v->data);
-  else free(v->data);
+  if (v->data_big)
+    elfm_big_free(v->data, (size_t)v->w * (size_t)v->h * (size_t)v->nz, sizeof *v->data);
+  else
+    free(v->data);
   free(v);
 }

@@ -86,7 +86,8 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
    * line, 16 lines per ZIP chunk). An encoder per chunk allocated them
    * anew each time, above glibc's mmap threshold: fresh pages, faulted
    * in and unmapped, 238,000 page faults for `recon --save-volumes` on
-   * 50 volumes (docs/recon.md "Huge pages for frames"). */
+   * 50 volumes (docs/recon.md "Volumes on huge pages, reused copies, one
+   * EXR encoder per file"). */
   for (int y = 0; y < v->h; y += lines) {
     exr_chunk_info_t ci;
     EXR_TRY(exr_write_scanline_chunk_info(ctxt, part, y, &ci), "chunk info");

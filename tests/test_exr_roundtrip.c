@@ -5,10 +5,9 @@
  * (its buffers reused; volume_exr.c). A chunk that kept the previous
  * chunk's rows, line count or channel pointers would pass a one-chunk
  * volume and fail here: heights 1, 15, 16, 17, 53 and 144 (the paper's
- * field), widths and plane counts that differ, values of every kind a
+ * field), 200, widths and plane counts that differ, values of every kind a
  * refocused volume can hold (zeros, negatives after ghost subtraction,
  * subnormals, large ones). Volumes made as a run's slots are, too. */
-#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
