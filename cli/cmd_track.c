@@ -390,6 +390,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
                       "integral for cells (worm on 9 views: alpha 0.12 -> 0.90; README)\n",
               o.views_scaled);
   }
+  o.recon.plan = c.plan; /* one plan for the run (track_peaks_setup) */
   if (isnan(*t0_s)) *t0_s = cli_now_s();
   const double t0 = *t0_s;
   elfm_recon_stats rs;

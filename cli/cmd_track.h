@@ -446,7 +446,10 @@ typedef struct track_ctx {
   frame_ring ring;
   elfm_frame *scratch;   /* a kept frame, made whole for the view fit */
   elfm_frame *scratch_nbr[TRACK_FILL_MAX_FRAMES - 1]; /* its neighbours (fill_frames > 1) */
-  elfm_refocus_plan *fill_plan; /* owned: outlives the driver's */
+  /* owned: the refocus plan, made once (track_peaks_setup) for the
+   * detectors' geometry, the driver (o->recon.plan) and the view fits of
+   * the gap fills, which go on after the driver's run */
+  elfm_refocus_plan *plan;
   elfm_link_gap *gaps;
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */

@@ -51,9 +51,7 @@ elfm_status track_fill_setup(track_ctx *c, elfm_error *err)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (gap filling)");
   for (int k = 0; k < r->cap; k++) r->slot[k].frame = r->slot[k].det_frame = -1;
   c->fill_retry_z_um = retry_z_um(c->calib, o->fill_retry_um);
-  /* our own plan (the same calibration and options as the driver's): the
-   * last gaps are filled after the driver has freed its own */
-  return elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->fill_plan, err);
+  return ELFM_OK; /* the plan is track_peaks_setup's, freed with the context */
 }
 
 elfm_status track_fill_keep(track_ctx *c, const elfm_frame *f, int64_t frame, elfm_error *err)
@@ -120,7 +118,7 @@ static int multi_fit_isolated(const track_ctx *c, const elfm_frame *const *use,
   for (int k = 0; k < 4; k++) {
     const double ox = k == 0 ? d_px : k == 1 ? -d_px : 0, oy = k == 2 ? d_px : k == 3 ? -d_px : 0;
     elfm_localize_result rc;
-    hits += elfm_refocus_localize_frames(c->fill_plan, use, off, n, r->x_vox + ox, r->y_vox + oy,
+    hits += elfm_refocus_localize_frames(c->plan, use, off, n, r->x_vox + ox, r->y_vox + oy,
                                          r->z_vox, lo, &rc);
   }
   return hits < 2;
@@ -204,7 +202,7 @@ static int fill_multi(track_ctx *c, fill_view *fv, const double q[3], elfm_local
    * 0.9541 / 0.9544 (without the neighbourhood test). */
   lo.min_views += 2;
   int ok = fv->n > 1 &&
-           elfm_refocus_localize_frames(c->fill_plan, fv->use, (const double (*)[3])fv->off, fv->n,
+           elfm_refocus_localize_frames(c->plan, fv->use, (const double (*)[3])fv->off, fv->n,
                                         elfm_volume_x_vox(geo, q[0]), elfm_volume_y_vox(geo, q[1]),
                                         elfm_volume_z_vox(geo, q[2]), &lo, res);
   if (ok && !multi_fit_isolated(c, fv->use, (const double (*)[3])fv->off, fv->n, &lo, res)) {
@@ -242,7 +240,7 @@ static int fill_at(track_ctx *c, fill_view *fv, const double q[3], const double 
   const double rn = o->localize_near_um;
   if (rn > 0 && sl->det_frame == sl->frame)
     k_nb = track_near_add(sl->det, sl->det_n, -1, s0[0], s0[1], rn, geo, nb, 0);
-  int ok = elfm_refocus_localize_near(c->fill_plan, s, elfm_volume_x_vox(geo, s0[0]),
+  int ok = elfm_refocus_localize_near(c->plan, s, elfm_volume_x_vox(geo, s0[0]),
                                       elfm_volume_y_vox(geo, s0[1]), elfm_volume_z_vox(geo, s0[2]),
                                       (const double(*)[3])nb, k_nb, &lo, &res);
   if (!ok && o->fill_frames > 1 && many) ok = multi = fill_multi(c, fv, s0, lo, &res);
@@ -259,7 +257,7 @@ static int fill_at(track_ctx *c, fill_view *fv, const double q[3], const double 
     const double dx = d->x_um - q[0], dy = d->y_um - q[1], dz = (d->z_um - q[2]) / o->link.kz;
     ok = X >= 0 && Y >= 0 && K >= 0 && X < geo->w && Y < geo->h && K < geo->nz &&
          dx * dx + dy * dy + dz * dz < o->fill_gate_um * o->fill_gate_um;
-    if (ok) d->intensity = elfm_refocus_value_at(c->fill_plan, s, X, Y, K);
+    if (ok) d->intensity = elfm_refocus_value_at(c->plan, s, X, Y, K);
     ok = ok && d->intensity >= min_intensity;
     if (ok && multi) c->n_filled_multi++;
   }
@@ -592,5 +590,4 @@ void track_fill_free(track_ctx *c)
   free(c->fill_keep);
   elfm_frame_free(c->scratch);
   for (int j = 0; j < TRACK_FILL_MAX_FRAMES - 1; j++) elfm_frame_free(c->scratch_nbr[j]);
-  elfm_refocus_plan_free(c->fill_plan);
 }

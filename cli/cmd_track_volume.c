@@ -150,9 +150,9 @@ static elfm_status fwhm_push(fwhm_list *l, double xy, double z, double speed, el
   return ELFM_OK;
 }
 
-/* Detectors and buffers for the driver's layout, before the run: the
- * volume geometry comes from a plan of the same calibration and options as
- * the one refocusing. With the views rule, the views sampling each voxel
+/* Detectors and buffers for the driver's layout, before the run, and the
+ * run's refocus plan (c->plan: the driver refocuses with it too, and the gap
+ * fills fit with it). With the views rule, the views sampling each voxel
  * (elfm_peaks_set_view_counts) are counted once and copied to each detector. */
 elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
 {
@@ -186,9 +186,9 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
       (o->localize_near_um > 0 && (!c->fitok || !c->near_fit)) ||
       (o->view_support > 0 && !c->keep) || !c->pred || !c->pred_intensity)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
-  elfm_refocus_plan *plan = NULL;
-  s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &plan, err);
+  s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->plan, err);
   if (s != ELFM_OK) return s;
+  const elfm_refocus_plan *plan = c->plan;
   elfm_volume *v = elfm_refocus_volume_create(plan, err);
   uint8_t *cnt = NULL;
   if (!v) s = err ? err->code : ELFM_ERR_NOMEM;
@@ -210,7 +210,6 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   }
   free(cnt);
   elfm_volume_free(v);
-  elfm_refocus_plan_free(plan);
   return s;
 }
 
@@ -679,6 +678,7 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
 void track_ctx_free(track_ctx *c)
 {
   elfm_track_store_clear(&c->stage_pending);
+  elfm_refocus_plan_free(c->plan);
   if (c->fdet) fclose(c->fdet);
   if (c->ftr) fclose(c->ftr);
   if (c->ffr) fclose(c->ffr);

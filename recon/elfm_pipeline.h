@@ -120,6 +120,14 @@ typedef struct elfm_recon_options {
    * and the callbacks still get a volume, with the frame's times and the
    * plan's geometry set and its voxels left as they are. */
   int no_refocus;
+  /* A plan the caller made with elfm_refocus_plan_create from this run's
+   * calibration and `refocus` options, to use instead of making one
+   * (NULL: the run makes its own). Borrowed: the caller frees it after the
+   * run. A caller that refocuses beside the run (a tracker's view fits)
+   * then makes the plan once: at the paper's geometry each plan takes
+   * ~16 ms to make. A plan whose sensor, views or planes differ from the
+   * calibration's is refused (ELFM_ERR_INVALID). */
+  const elfm_refocus_plan *plan;
 } elfm_recon_options;
 
 /* The worker threads and ring slots elfm_recon_run will use with `o`

@@ -8,6 +8,7 @@
  * ever touched by one thread at a time, in frame order).
  */
 #include "elfm_pipeline.h"
+#include "refocus_internal.h" /* a caller's plan checked against the calibration */
 
 #include <limits.h>
 #include <math.h>
@@ -67,7 +68,8 @@ typedef struct source {
 
 typedef struct run {
   const elfm_recon_options *opt;
-  elfm_refocus_plan *plan;
+  const elfm_refocus_plan *plan; /* plan_own, or the caller's (opt->plan) */
+  elfm_refocus_plan *plan_own;
   int threads, nslots;
   slot *slots;
   elfm_median **medians; /* one per thread */
@@ -94,7 +96,7 @@ static void run_free(run *r)
   if (r->blurs)
     for (int i = 0; i < r->threads; i++) elfm_blur_free(r->blurs[i]);
   free(r->blurs);
-  elfm_refocus_plan_free(r->plan);
+  elfm_refocus_plan_free(r->plan_own);
   elfm_reader_close(r->src.reader);
   elfm_chunk_free(r->src.chunk);
   elfm_framer_free(r->src.framer);
@@ -134,8 +136,23 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
                           (long long)opt->integral_start_us, (long long)opt->integral_start_age_us);
   elfm_status st = elfm_framer_options_check(&opt->framer, err);
   if (st) return st;
-  st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan, err);
-  if (st) return st;
+  if (opt->plan) {
+    const elfm_refocus_plan *p = opt->plan;
+    if (p->sw != calib->sensor_width_px || p->sh != calib->sensor_height_px ||
+        p->w != calib->view_w_px || p->h != calib->view_h_px || p->nv != calib->n_views ||
+        p->nz != elfm_calib_n_planes(calib) || p->calib.z_min_um != calib->z_min_um ||
+        p->calib.z_step_um != calib->z_step_um)
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                            "the refocus plan given was made for another calibration "
+                            "(%d x %d px, %d views, %d planes; the calibration's %d x %d, %d, %d)",
+                            p->sw, p->sh, p->nv, p->nz, calib->sensor_width_px,
+                            calib->sensor_height_px, calib->n_views, elfm_calib_n_planes(calib));
+    r->plan = p;
+  } else {
+    st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan_own, err);
+    if (st) return st;
+    r->plan = r->plan_own;
+  }
   st = elfm_recon_layout(opt, &r->threads, &r->nslots, err);
   if (st) return st;
   r->slots = calloc((size_t)r->nslots, sizeof *r->slots);

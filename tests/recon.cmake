@@ -12,6 +12,7 @@ elfm_add_test(test_localize test_localize.c)
 # where 120 x 3 was the limit
 elfm_add_test(test_calib_refine test_calib_refine.c TIMEOUT 200)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)
+elfm_add_test(test_recon_plan test_recon_plan.c)
 elfm_add_test(test_mip_png test_mip_png.c TIMEOUT 60)
 target_link_libraries(test_recon_pipeline PRIVATE TIFF::TIFF)  # writes a mixed-depth stack
 elfm_add_test(test_recon_sim test_recon_sim.c)
