@@ -91,11 +91,11 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
   for (int y = 0; y < v->h; y += lines) {
     exr_chunk_info_t ci;
     EXR_TRY(exr_write_scanline_chunk_info(ctxt, part, y, &ci), "chunk info");
-    exr_result_t r;
-    if (!enc_live) {
+    exr_result_t r = EXR_ERR_SUCCESS;
+    const int first = !enc_live;
+    if (first) {
       EXR_TRY(exr_encoding_initialize(ctxt, part, &ci, &enc), "encoder");
       enc_live = 1;
-      r = exr_encoding_choose_default_routines(ctxt, part, &enc);
     } else {
       r = exr_encoding_update(ctxt, part, &ci, &enc);
     }
@@ -107,6 +107,9 @@ elfm_status elfm_volume_write_exr(const elfm_volume *v, const char *path, elfm_e
       enc.channels[c].user_pixel_stride = (int32_t)sizeof(float);
       enc.channels[c].user_line_stride = (int32_t)(sizeof(float) * (size_t)v->w);
     }
+    /* the routines are chosen once, with the channels' strides set, as
+     * before the encoder was kept (they do not change from chunk to chunk) */
+    if (first && r == EXR_ERR_SUCCESS) r = exr_encoding_choose_default_routines(ctxt, part, &enc);
     if (r == EXR_ERR_SUCCESS) r = exr_encoding_run(ctxt, part, &enc);
     EXR_TRY(r, "encode");
   }
