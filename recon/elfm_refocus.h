@@ -230,6 +230,12 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
                                       const elfm_frame *frame, elfm_volume *vol,
                                       elfm_refocus_workspace *ws, elfm_error *err);
 
+/* ELFM_OK when the plan was made for a calibration of this sensor, view
+ * size, views and planes; otherwise ELFM_ERR_INVALID with both described
+ * (a plan lent to a run: elfm_recon_options.plan). */
+elfm_status elfm_refocus_plan_fits(const elfm_refocus_plan *p, const elfm_calib *c,
+                                   elfm_error *err);
+
 /* A volume of the plan's size (zeroed), for refilling frame after frame:
  * on 2 MiB pages where the system has them, which is slow to make and free
  * one after another (elfm_volume_create is for those). Free with

@@ -8,7 +8,6 @@
  * ever touched by one thread at a time, in frame order).
  */
 #include "elfm_pipeline.h"
-#include "refocus_internal.h" /* a caller's plan checked against the calibration */
 
 #include <limits.h>
 #include <math.h>
@@ -137,17 +136,9 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
   elfm_status st = elfm_framer_options_check(&opt->framer, err);
   if (st) return st;
   if (opt->plan) {
-    const elfm_refocus_plan *p = opt->plan;
-    if (p->sw != calib->sensor_width_px || p->sh != calib->sensor_height_px ||
-        p->w != calib->view_w_px || p->h != calib->view_h_px || p->nv != calib->n_views ||
-        p->nz != elfm_calib_n_planes(calib) || p->calib.z_min_um != calib->z_min_um ||
-        p->calib.z_step_um != calib->z_step_um)
-      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
-                            "the refocus plan given was made for another calibration "
-                            "(%d x %d px, %d views, %d planes; the calibration's %d x %d, %d, %d)",
-                            p->sw, p->sh, p->nv, p->nz, calib->sensor_width_px,
-                            calib->sensor_height_px, calib->n_views, elfm_calib_n_planes(calib));
-    r->plan = p;
+    st = elfm_refocus_plan_fits(opt->plan, calib, err);
+    if (st) return st;
+    r->plan = opt->plan;
   } else {
     st = elfm_refocus_plan_create(calib, &opt->refocus, &r->plan_own, err);
     if (st) return st;

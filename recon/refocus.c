@@ -375,6 +375,21 @@ double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, 
   return s;
 }
 
+elfm_status elfm_refocus_plan_fits(const elfm_refocus_plan *p, const elfm_calib *c,
+                                   elfm_error *err)
+{
+  const int nz = elfm_calib_n_planes(c);
+  if (p->sw == c->sensor_width_px && p->sh == c->sensor_height_px && p->w == c->view_w_px &&
+      p->h == c->view_h_px && p->nv == c->n_views && p->nz == nz &&
+      p->calib.z_min_um == c->z_min_um && p->calib.z_step_um == c->z_step_um)
+    return ELFM_OK;
+  return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                        "the refocus plan given was made for another calibration "
+                        "(%d x %d px, %d views, %d planes; the calibration's %d x %d, %d, %d)",
+                        p->sw, p->sh, p->nv, p->nz, c->sensor_width_px, c->sensor_height_px,
+                        c->n_views, nz);
+}
+
 elfm_volume *elfm_refocus_volume_create(const elfm_refocus_plan *p, elfm_error *err)
 {
   return elfm_volume_create_kept(p->w, p->h, p->nz, p->calib.um_per_px, p->calib.z_min_um,
