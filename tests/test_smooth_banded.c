@@ -109,7 +109,7 @@ int main(void)
       }
     }
     for (int order = 2; order <= 3; order++) {
-      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order, NULL, 0};
+      const elfm_spline_problem sp = {K, K, x3, sig, ts, sref, st, order, NULL, 0, 0};
       const double l1 = elfm_spline_gcv_lambda(&sp, w, 1), l5 = elfm_spline_gcv_lambda(&sp, w, 5);
       CHECK(l5 >= l1);
       /* the prior's rows from a table: the same numbers, so the same bits

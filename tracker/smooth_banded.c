@@ -329,6 +329,32 @@ int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double la
   return 1;
 }
 
+/* smooth_banded.h. The median spacing's decade from a count per decade
+ * (the decade of the median is the median of the decades, rounding being
+ * monotone): one pass, no sort. */
+double elfm_spline_lambda_unit(const double *ts, size_t K, int order)
+{
+  enum { E_LO = -12, E_HI = 12 };
+  size_t count[E_HI - E_LO + 1] = {0}, m = 0;
+  for (size_t k = 1; k < K; k++) {
+    const double h = ts[k] - ts[k - 1];
+    if (!(h > 0) || !isfinite(h)) continue;
+    long e = lround(log10(h));
+    if (e < E_LO) e = E_LO;
+    if (e > E_HI) e = E_HI;
+    count[e - E_LO]++;
+    m++;
+  }
+  if (m == 0) return 1;
+  size_t below = 0;
+  int e = E_LO;
+  for (; e < E_HI; e++) { /* the lower median: the (m + 1) / 2-th spacing */
+    below += count[e - E_LO];
+    if (below >= (m + 1) / 2) break;
+  }
+  return pow(10.0, (double)e * (2 * order - 1));
+}
+
 /* GCV's score at lam (n RSS / (n - gamma edf)^2, n the 3 x points
  * observed); *best and *best_g move there when it is lower. */
 static void gcv_try(const elfm_spline_problem *sp, const double *w, double gamma, double lam,
@@ -363,7 +389,8 @@ static void gcv_refine(const elfm_spline_problem *sp, const double *w, double ga
   }
 }
 
-/* The grid: 10^(e / 2) for e in GCV_E_MIN .. GCV_E_MAX (10^-4 .. 10^8). */
+/* The grid: 10^(e / 2) for e in GCV_E_MIN .. GCV_E_MAX (10^-4 .. 10^8),
+ * times the problem's lambda_unit. */
 #define GCV_E_MIN (-8)
 #define GCV_E_MAX 16
 
@@ -382,7 +409,8 @@ static void gcv_walk(const elfm_spline_problem *sp, const double *w, double gamm
   for (int dir = -1; dir <= 1; dir += 2) {
     for (int e = e0 + dir; e >= GCV_E_MIN && e <= GCV_E_MAX; e += dir) {
       const double before = *best;
-      gcv_try(sp, w, gamma, gcv_grid(e), bd, work, best, best_g);
+      gcv_try(sp, w, gamma, (sp->lambda_unit > 0 ? sp->lambda_unit : 1.0) * gcv_grid(e), bd, work,
+              best, best_g);
       if (*best == before) break;
       *best_e = e;
     }
@@ -396,11 +424,12 @@ static double gcv_search(const elfm_spline_problem *sp, const double *w, double 
   elfm_banded bd;
   elfm_banded_init(&bd);
   double *work = malloc((5 * sp->K + 1) * sizeof *work);
-  double best = 1.0, best_g = INFINITY;
+  const double unit = sp->lambda_unit > 0 ? sp->lambda_unit : 1.0;
+  double best = unit, best_g = INFINITY;
   int best_e = 0;
   for (int e = GCV_E_MIN; work && e <= GCV_E_MAX; e += how == GCV_ALL ? 1 : 2) {
     const double before = best;
-    gcv_try(sp, w, gamma, gcv_grid(e), &bd, work, &best, &best_g);
+    gcv_try(sp, w, gamma, unit * gcv_grid(e), &bd, work, &best, &best_g);
     if (best != before) best_e = e;
   }
   if (work && isfinite(best_g)) {

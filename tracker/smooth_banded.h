@@ -80,7 +80,22 @@ typedef struct elfm_spline_problem {
    * (elfm_spline_isotropic), so the axes share one matrix and one
    * factorisation; 0 (a zero-initialised problem): one per axis */
   int iso;
+  /* The unit of lambda for GCV's grid (below): the grid is lambda_unit x
+   * 10^-4 .. 10^8. 0 (a zero-initialised problem) is 1, ms^3 as is, the
+   * span for states about 1 ms apart; elfm_spline_lambda_unit moves the
+   * grid with the states' spacing. */
+  double lambda_unit;
 } elfm_spline_problem;
+
+/* The unit of lambda for states at ts (K, ms, increasing) under the prior
+ * of `order`: T^(2 order - 1), T the states' median spacing rounded to a
+ * power of ten (1 for spacings of 0.32-3.2 ms). Why: the prior's rows grow
+ * as h^-(order - 1/2) for states h apart, so the same lambda is T^(2 order
+ * - 1) times stiffer on states T times closer. On frames 1 us apart the
+ * grid's 10^-4 was already far beyond "straight line", and the banded
+ * factorisation lost its digits (docs/tracker.md "Frames microseconds
+ * apart"). Powers of ten keep the grid's points on their decades. */
+double elfm_spline_lambda_unit(const double *ts, size_t K, int order);
 
 /* Whether sig[3 i + a] / sig_ref[a] is the same on the three axes for
  * every point, to 1e-12 of itself: each axis's matrix is then the same
@@ -98,12 +113,12 @@ int elfm_spline_isotropic(const elfm_spline_problem *sp);
 int elfm_spline_linear(const elfm_spline_problem *sp, const double *w, double lambda,
                        elfm_banded *bd, double *work, double *rss, double *edf, double *p);
 
-/* The weight by GCV over the grid 10^-4 .. 10^8 ms^3 in half decades (the
- * span from "follows every frame" to "straight line" for 1 kHz frames and
- * sub-um noise), then refined around the best to 1/16 decade, each
+/* The weight by GCV over the grid 10^-4 .. 10^8 ms^3 (times lambda_unit)
+ * in half decades (the span from "follows every frame" to "straight line"
+ * for 1 kHz frames and sub-um noise), then refined around the best to 1/16 decade, each
  * effective parameter priced gamma (1: classical):
- * the lambda minimising 3n RSS / (3n - gamma edf)^2; 1 when none can be
- * computed. */
+ * the lambda minimising 3n RSS / (3n - gamma edf)^2; lambda_unit when
+ * none can be computed. */
 double elfm_spline_gcv_lambda(const elfm_spline_problem *sp, const double *w, double gamma);
 /* The same search on whole decades first (13 fits), then downhill along
  * the half-decade grid from their best (first towards smaller weights,
