@@ -21,6 +21,10 @@ static double surface_mean_age_us(elfm_repr repr, double power, double tau_us, d
 {
   if (repr == ELFM_REPR_EXP) {
     const double k = power / tau_us, w = dt_us;
+    /* A surface that barely decays over the window (k dt -> 0: --tau-us
+     * 1e300 gave 1/k - inf): the limit dt / 2, by its series, where the
+     * two terms above would cancel to their last digits. */
+    if (k * w < 1e-6) return w * (0.5 - k * w / 12.0);
     return 1.0 / k - w * exp(-k * w) / (1.0 - exp(-k * w));
   }
   const double r = 1.0 - (dt_us < tau_us ? dt_us : tau_us) / tau_us;
