@@ -611,8 +611,9 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
    * may be what turned it off */
   if (!o.quiet && o.deep_window_us > 0 && o.recon.framer.deep_window_us == 0)
     fprintf(stderr, "eventlfm track: note: --deep-window-us %" PRId64 " was given, but the deep "
-                    "window needs the ON time surface on a fixed grid, unblurred and without the "
-                    "median: it was off in this run (summary.json deep_window_us)\n",
+                    "window needs the ON time surface on a fixed grid, unblurred, without the "
+                    "median and without --agree: it was off in this run (summary.json "
+                    "deep_window_us)\n",
             o.deep_window_us);
   dim_note(&c, 0);
   track_views_note(&c);

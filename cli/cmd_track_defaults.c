@@ -684,10 +684,13 @@ int track_opts_derive(track_opts *o, const track_given *g)
    * -0.001 (alpha_identities +0.005..+0.013 on every set); 1.07 of the
    * time. Only on the ON time surface of a fixed grid, unblurred and
    * unfiltered (the blur and the median would mix the older pixels into
-   * the window's). */
+   * the window's), and without the view-agreement rule (--agree, --ghost
+   * agree:F), which reads each run of a frame as signal and refuses a
+   * deep window's frames: with it, every `track --agree F` ended at its
+   * first frame with that refusal (exit 1; tests/track_extremes.sh). */
   const int deep_ok = o->recon.framer.repr == ELFM_REPR_EXP && o->recon.framer.polarity == ELFM_POL_ON &&
                       !each_trigger && o->recon.blur_px == 0 && o->recon.median == 0 &&
-                      o->recon.framer.dt_us <= 5000000;
+                      !(o->recon.refocus.agree_frac > 0) && o->recon.framer.dt_us <= 5000000;
   o->recon.framer.deep_window_us = !deep_ok ? 0
                                    : o->deep_window_us < 0 ? 2 * o->recon.framer.dt_us
                                                            : o->deep_window_us;

@@ -247,7 +247,9 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!cli_parse_double_in(C, "--fill-gate-um", a, 0, 1, 100, "> 0 and <= 100", &o.fill_gate_um)) return CLI_USAGE;
       break;
     case O_VFSIG:
-      if (!cli_parse_double_in(C, "--view-fit-sigma", a, 0, 1, 1000, "> 0 and <= 1000",
+      /* from 0.001: at 1e-300 the fills' weights overflowed and a
+       * track's fit failed, ending the run (tests/track_extremes.sh) */
+      if (!cli_parse_double_in(C, "--view-fit-sigma", a, 0.001, 0, 1000, "0.001..1000",
                                &o.smooth.view_fit_sigma_factor))
         return CLI_USAGE;
       break;
@@ -470,7 +472,9 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       else return cli_message(C, CLI_USAGE, "--loss must be huber, cauchy or none, not '%s'", a);
       break;
     case O_LSCALE:
-      if (!cli_parse_double_in(C, "--loss-scale", a, 0, 1, 100, "(0, 100]", &o.smooth.loss_scale))
+      /* from 0.001, as --view-fit-sigma: 1e-300 left no point inside the
+       * loss, and a track's fit failed, ending the run */
+      if (!cli_parse_double_in(C, "--loss-scale", a, 0.001, 0, 100, "0.001..100", &o.smooth.loss_scale))
         return CLI_USAGE;
       g.lscale = 1;
       break;
