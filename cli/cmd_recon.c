@@ -75,7 +75,7 @@ static void usage(FILE *f)
   fprintf(f,
           "                       (median 3: the paper's; ghost agree:0.3: the measured\n"
           "                       best, docs/recon.md)\n"
-          "  --crop-margin-px N   widen each view's crop box (default 0)\n"
+          "  --crop-margin-px N   widen each view's crop box, 0..1000 px (default 0)\n"
           "  --tiff-frame-us N    TIFF: time between pages (default dt)\n"
           "output:\n"
           "  --save-volumes       write every volume as EXR\n"
@@ -311,7 +311,9 @@ int cmd_recon(int argc, char **argv)
     case O_EVENTS: a.events = optarg; break;
     case O_TIFF: a.tiff = optarg; break;
     case O_OUT: a.out = optarg; break;
-    case O_MARGIN: ok = cli_parse_int("recon", "--crop-margin-px", optarg, &r->refocus.crop_margin_px); break;
+    case O_MARGIN:
+      ok = cli_parse_int_in("recon", "--crop-margin-px", optarg, 0, 1000, "0..1000", &r->refocus.crop_margin_px);
+      break;
     case O_TIFF_US: ok = cli_parse_int64("recon", "--tiff-frame-us", optarg, &r->tiff_frame_us); break;
     case O_SAVE_V: a.save_volumes = 1; break;
     case O_SAVE_M: a.save_mips = 1; break;

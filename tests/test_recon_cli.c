@@ -240,6 +240,12 @@ int main(void)
   CHECK_EQ_INT(run(args), 2);
   snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --repr dots", sim, sim, dir);
   CHECK_EQ_INT(run(args), 2);
+  /* a crop margin out of range is the option's error, not the plan's
+   * (exit 1, "crop margin -1 px outside 0..1000", until the sixty-first
+   * session) */
+  snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/events.raw --out %s/r --crop-margin-px -1", sim, sim, dir);
+  CHECK_EQ_INT(run(args), 2);
+  CHECK(file_has("err.txt", "--crop-margin-px must be 0..1000"));
   /* failures: exit 1 naming the file */
   snprintf(args, sizeof args, "recon --calib %s/calib.json --events %s/none.raw --out %s/r", sim, sim, dir);
   CHECK_EQ_INT(run(args), 1);
