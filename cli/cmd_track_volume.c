@@ -189,27 +189,24 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->plan, err);
   if (s != ELFM_OK) return s;
   const elfm_refocus_plan *plan = c->plan;
-  elfm_volume *v = elfm_refocus_volume_create(plan, err);
+  int w, h, nz; /* the volumes' size: the plan's */
+  elfm_refocus_plan_size(plan, &w, &h, &nz);
   uint8_t *cnt = NULL;
-  if (!v) s = err ? err->code : ELFM_ERR_NOMEM;
-  if (s == ELFM_OK && o->views_rule) {
-    size_t nvox = (size_t)v->w * v->h * v->nz;
-    cnt = malloc(nvox);
-    if (!cnt) s = elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
-    else
-      for (int k = 0; k < v->nz; k++)
-        for (int Y = 0; Y < v->h; Y++)
-          for (int X = 0; X < v->w; X++)
-            cnt[((size_t)k * v->h + Y) * v->w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
+  if (o->views_rule) {
+    cnt = malloc((size_t)w * h * nz);
+    if (!cnt) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (view counts)");
+    for (int k = 0; k < nz; k++)
+      for (int Y = 0; Y < h; Y++)
+        for (int X = 0; X < w; X++)
+          cnt[((size_t)k * h + Y) * w + X] = (uint8_t)elfm_refocus_plan_views_at(plan, X, Y, k);
   }
   for (int t = 0; s == ELFM_OK && t < c->n_threads; t++) {
-    c->pk[t] = elfm_peaks_create(&o->peaks, v->w, v->h, v->nz, err);
+    c->pk[t] = elfm_peaks_create(&o->peaks, w, h, nz, err);
     if (!c->pk[t]) s = err ? err->code : ELFM_ERR_INVALID;
     else if (cnt)
       s = elfm_peaks_set_view_counts(c->pk[t], cnt, c->calib->n_views, o->views_exponent, err);
   }
   free(cnt);
-  elfm_volume_free(v);
   return s;
 }
 
