@@ -344,9 +344,14 @@ static void calib_from_summary(const char *dir, char *out, size_t size)
   if (snprintf(p, sizeof p, "%s/summary.json", dir) >= (int)sizeof p) return;
   FILE *f = fopen(p, "rb");
   if (!f) return;
-  /* summary.json is a few kB; 1 MB is far beyond any we write. */
-  char *text = malloc(1 << 20);
-  size_t n = text ? fread(text, 1, (1 << 20) - 1, f) : 0;
+  /* The whole file: summary.json lists every track (~340 bytes each), so a
+   * long run's passes 1 MB, and a summary cut there is not JSON (the
+   * viewer read 1 MB until the sixty-first session and lost the hint on
+   * runs of ~3000 tracks). 1 GiB bounds what a hint is worth reading. */
+  long bytes = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
+  char *text = bytes >= 0 && bytes < (1L << 30) && fseek(f, 0, SEEK_SET) == 0
+                   ? malloc((size_t)bytes + 1) : NULL;
+  size_t n = text ? fread(text, 1, (size_t)bytes, f) : 0;
   fclose(f);
   if (!text) return;
   text[n] = '\0';

@@ -286,6 +286,27 @@ static void test_load(void)
     CHECK(strstr(d->calib_path, "sim/calib.json") != NULL);
   }
   elfm_view_data_free(d);
+  /* ... also from a summary.json of many tracks: 6000 entries, 1.1 MB (a
+   * run's summary lists every track; the viewer read its first 1 MB only,
+   * and a cut summary was not JSON, until the sixty-first session). */
+  {
+    FILE *f = fopen(tpath("trk/summary.json"), "w");
+    CHECK(f != NULL);
+    if (f) {
+      fprintf(f, "{\"events\": \"x.raw\", \"calib\": \"%s\", \"tracks\": [", tpath("sim/calib.json"));
+      for (int k = 0; k < 6000; k++)
+        fprintf(f, "%s{\"id\": %d, \"first_frame\": 0, \"last_frame\": 999, \"points\": 1000, "
+                   "\"model\": \"spline\", \"spline_weight_ms3\": 12.5, \"edf\": 30.25, "
+                   "\"outliers\": 0, \"mean_velocity_um_per_ms\": [1.5, -2.25, 0.125]}",
+                k ? ", " : "", k);
+      fprintf(f, "]}\n");
+      CHECK(ftell(f) > (1L << 20));
+      fclose(f);
+    }
+  }
+  CHECK_OK(elfm_view_data_load(tpath("trk"), NULL, &d, &err), &err);
+  if (d) CHECK(d->box_from_calib);
+  elfm_view_data_free(d);
   /* A summary.json that is not JSON only loses the hint. */
   write_file("trk/summary.json", "{ not json");
   CHECK_OK(elfm_view_data_load(tpath("trk"), NULL, &d, &err), &err);
