@@ -32,4 +32,8 @@ void elfm_big_free(void *p, size_t n, size_t size);
 elfm_volume *elfm_volume_create_kept(int w, int h, int nz, double um_per_px,
                                      double z_min_um, double z_step_um, elfm_error *err);
 
+/* The machine's physical memory in bytes (sysconf), 0 where it does not
+ * tell: what the pipeline's ring of slots is checked against. */
+double elfm_physical_memory_bytes(void);
+
 #endif

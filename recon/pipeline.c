@@ -9,6 +9,8 @@
  */
 #include "elfm_pipeline.h"
 
+#include "big_alloc.h"
+
 #include <limits.h>
 #include <math.h>
 #include <omp.h>
@@ -118,6 +120,34 @@ elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *sl
   return ELFM_OK;
 }
 
+/* The ring's memory against the machine's, before any of it is made: each
+ * slot holds a frame (and its median's and its blur's, 8 bytes a sensor
+ * pixel each) and a volume, and a long recording fills every slot. A
+ * batch or thread count far beyond the cores (the options allow 4096
+ * and 1024) asked for more than the machine has, and the run was killed
+ * once the ring filled: `track --batch 256` on the paper's sensor held
+ * 3.3 GB at 300 ms, 4096 would be ~50 GB. Refused when the ring would take
+ * more than half of the physical memory (not checked where the system
+ * does not tell it). */
+static elfm_status ring_fits(const run *r, const elfm_calib *calib, int use_median,
+                             elfm_error *err)
+{
+  const double have_b = elfm_physical_memory_bytes();
+  if (!(have_b > 0)) return ELFM_OK;
+  int w, h, nz;
+  elfm_refocus_plan_size(r->plan, &w, &h, &nz);
+  const double frames = 1.0 + (use_median != 0) + (r->opt->blur_px > 0);
+  const double slot_b = 8.0 * calib->sensor_width_px * calib->sensor_height_px * frames +
+                        4.0 * w * h * nz;
+  const double ring_b = slot_b * r->nslots;
+  if (ring_b <= 0.5 * have_b) return ELFM_OK;
+  return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1,
+                        "%d frames in flight (batch, for %d threads) would take %.0f MB of frames "
+                        "and volumes, more than half of this machine's %.0f MB: give a smaller "
+                        "batch or fewer threads",
+                        r->nslots, r->threads, ring_b / 1048576.0, have_b / 1048576.0);
+}
+
 static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_options *opt,
                              int use_median, elfm_error *err)
 {
@@ -145,6 +175,8 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
     r->plan = r->plan_own;
   }
   st = elfm_recon_layout(opt, &r->threads, &r->nslots, err);
+  if (st) return st;
+  st = ring_fits(r, calib, use_median, err);
   if (st) return st;
   r->slots = calloc((size_t)r->nslots, sizeof *r->slots);
   r->medians = calloc((size_t)r->threads, sizeof *r->medians);
