@@ -87,6 +87,19 @@ check from-optics-turn-range 1 "$bin" calib from-optics --mla-rotation-deg 50 --
 check from-optics-no-out 2 "$bin" calib from-optics
 check from-optics-bad-na 2 "$bin" calib from-optics --na x --out "$dir/c2.json"
 check from-optics-na-range 1 "$bin" calib from-optics --na 1.5 --out "$dir/c2.json"
+# A calibration the checks refuse is not written, nor written over one
+# there: it was left in OUT (sixty-first session). The message names the
+# key and its range, and OUT.
+cp "$dir/c.json" "$dir/keep.json"
+check from-optics-tiny-na 1 "$bin" calib from-optics --na 1e-300 --out "$dir/keep.json"
+grep -q 'keep.json not written): key "optics.na": 1e-300 outside' "$dir.err" ||
+  { echo "FAIL: from-optics-tiny-na: $(cat "$dir.err")"; fail=$((fail+1)); }
+cmp -s "$dir/c.json" "$dir/keep.json" || { echo "FAIL: from-optics-tiny-na: keep.json changed"; fail=$((fail+1)); }
+check from-optics-small-sensor 1 "$bin" calib from-optics --sensor 16x16 --out "$dir/s16.json"
+[ ! -e "$dir/s16.json" ] || { echo "FAIL: from-optics-small-sensor wrote s16.json"; fail=$((fail+1)); }
+[ -z "$(ls "$dir" | grep '\.tmp$')" ] || { echo "FAIL: from-optics left $(ls "$dir" | grep '\.tmp$')"; fail=$((fail+1)); }
+check from-optics-no-dir 1 "$bin" calib from-optics --out "$dir/none/c.json"
+grep -q "none/c.json: cannot create" "$dir.err" || { echo "FAIL: from-optics-no-dir: $(cat "$dir.err")"; fail=$((fail+1)); }
 check calib-bad-action 2 "$bin" calib frobnicate
 check show-missing 1 "$bin" calib show "$dir/none.json"
 [ $fail -eq 0 ] && echo "test_sim_cli: all passed"
