@@ -220,6 +220,14 @@ int cli_out_fits(const char *cmd, const char *out, const char *longest_name);
  * when it cannot be read or is longer than max_bytes (a caller's bound on
  * what it is willing to parse). */
 char *cli_read_text(const char *path, long max_bytes);
+/* Write calibration c to out as its consumers will read it: saved beside
+ * out (out.tmp), loaded back (the checks every consumer applies; c becomes
+ * what was read) and moved over out only when it loads, so that a refused
+ * calibration neither lands in out nor replaces the one there (`calib
+ * from-optics --na 1e-300` left it there until the sixty-first session).
+ * CLI_OK, or CLI_FAIL with a message naming out and, when refused, the key
+ * and its range. */
+int cli_calib_write(const char *cmd, elfm_calib *c, const char *out);
 /* Run argv (argv[0] a path, or a name looked up on PATH when use_path) with
  * its stdout and stderr into log_path, wait for it, and kill it (by its id)
  * after timeout_s seconds (<= 0: no limit). Returns its exit code, 128 +

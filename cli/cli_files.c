@@ -60,6 +60,30 @@ char *cli_read_text(const char *path, long max_bytes)
   return s;
 }
 
+int cli_calib_write(const char *cmd, elfm_calib *c, const char *out)
+{
+  char tmp[PATH_MAX];
+  if (snprintf(tmp, sizeof tmp, "%s.tmp", out) >= (int)sizeof tmp)
+    return cli_message(cmd, CLI_FAIL, "--out %.60s...: path too long", out);
+  elfm_error err;
+  elfm_error_clear(&err);
+  if (elfm_calib_save(c, tmp, &err)) {
+    remove(tmp);
+    return cli_message(cmd, CLI_FAIL, "%s: %s", out, err.message);
+  }
+  if (elfm_calib_load(tmp, c, &err)) {
+    remove(tmp);
+    return cli_message(cmd, CLI_FAIL, "the calibration is refused (%s not written): %s", out,
+                       err.message);
+  }
+  if (rename(tmp, out) != 0) {
+    const int e = errno;
+    remove(tmp);
+    return cli_message(cmd, CLI_FAIL, "%s: cannot write: %s", out, strerror(e));
+  }
+  return CLI_OK;
+}
+
 int cli_run_child(char *const argv[], int use_path, const char *log_path, double timeout_s,
                   double *wall_s, double *peak_rss_mb, double *cpu_s)
 {

@@ -2,9 +2,7 @@
  * (SPEC §2), defaults = the EventLFM paper's system; `calib show FILE`
  * loads and checks a calib.json and prints its summary; `calib refine` is
  * in cmd_calib_refine.c. */
-#include <errno.h>
 #include <getopt.h>
-#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -147,28 +145,8 @@ static int from_optics(int argc, char **argv)
   cal.z_min_um = o.z_min_um;
   cal.z_max_um = o.z_max_um;
   cal.z_step_um = o.z_step_um;
-  /* Written beside OUT and loaded back (the same checks every consumer
-   * applies), then moved over OUT only when it loads: optics out of the
-   * calibration's ranges (--na 1e-300, --sensor 16x16) left their refused
-   * calib.json in OUT, over whatever calibration was there (sixty-first
-   * session; tests/calib_cli.sh). */
-  char tmp[PATH_MAX];
-  if (snprintf(tmp, sizeof tmp, "%s.tmp", o.out) >= (int)sizeof tmp)
-    return cli_message("calib", CLI_FAIL, "--out %.60s...: path too long", o.out);
-  if (elfm_calib_save(&cal, tmp, &err)) {
-    remove(tmp);
-    return cli_message("calib", CLI_FAIL, "%s: %s", o.out, err.message);
-  }
-  if (elfm_calib_load(tmp, &cal, &err)) {
-    remove(tmp);
-    return cli_message("calib", CLI_FAIL, "these optics give no usable calibration (%s not written): %s",
-                       o.out, err.message);
-  }
-  if (rename(tmp, o.out) != 0) {
-    const int e = errno;
-    remove(tmp);
-    return cli_message("calib", CLI_FAIL, "%s: cannot write: %s", o.out, strerror(e));
-  }
+  int rc = cli_calib_write("calib", &cal, o.out);
+  if (rc != CLI_OK) return rc;
   printf("%s: %d views, %.4f um/px, %d z planes\n", o.out, cal.n_views, cal.um_per_px,
          elfm_calib_n_planes(&cal));
   return CLI_OK;

@@ -564,6 +564,5 @@ int cmd_calib_refine(int argc, char **argv)
   cal.z_min_um = z_file[0];
   cal.z_max_um = z_file[1];
   cal.z_step_um = z_file[2];
-  if (elfm_calib_save(&cal, o.out, &err)) return cli_fail(C, &err);
-  return CLI_OK;
+  return cli_calib_write(C, &cal, o.out);
 }
