@@ -83,6 +83,14 @@ const char *cli_start_name(elfm_frame_start v);
  * edges it had and the channel asked for, and CLI_FAIL. CLI_OK otherwise. */
 int cli_check_trigger_start(const char *cmd, const elfm_framer_options *fo, const char *file,
                             int64_t volumes, int64_t edges);
+/* A run that took no event (`events`, from the run's stats) from `file`
+ * says so on stderr: none in the range asked for (--from-us / --to-us,
+ * INT64_MIN / INT64_MAX when not given), or none at all. A note, not an
+ * error: the run's outputs are valid and empty (tests/track_cli.sh), as a
+ * script over many recordings wants them; but "0 volumes" alone, exit 0,
+ * did not say why (sixty-first session). */
+void cli_note_no_events(const char *cmd, const char *file, int64_t from_us, int64_t to_us,
+                        int64_t events);
 
 /* frames.csv, written by recon and track: one row per volume, its frame,
  * t_us, window [t_start_us, t_end_us) and events, and with n_detections >= 0

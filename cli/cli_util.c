@@ -191,6 +191,23 @@ int cli_check_trigger_start(const char *cmd, const elfm_framer_options *fo, cons
                      (long long)edges);
 }
 
+void cli_note_no_events(const char *cmd, const char *file, int64_t from_us, int64_t to_us,
+                        int64_t events)
+{
+  if (events > 0) return;
+  if (from_us == INT64_MIN && to_us == INT64_MAX) {
+    fprintf(stderr, "eventlfm %s: note: %s holds no events: no window opened\n", cmd, file);
+    return;
+  }
+  char lo[32] = "its start", hi[32] = "its end";
+  if (from_us != INT64_MIN) snprintf(lo, sizeof lo, "%lld us", (long long)from_us);
+  if (to_us != INT64_MAX) snprintf(hi, sizeof hi, "%lld us", (long long)to_us);
+  fprintf(stderr,
+          "eventlfm %s: note: no event of %s lies in --from-us / --to-us (%s to %s): no window "
+          "opened (eventlfm info %s gives its first and last event times)\n",
+          cmd, file, lo, hi, file);
+}
+
 elfm_status cli_frames_csv_header(FILE *f, const char *path, int with_detections, elfm_error *err)
 {
   if (fputs(with_detections ? "frame,t_us,t_start_us,t_end_us,n_events,n_detections\n"

@@ -420,6 +420,7 @@ int cmd_recon(int argc, char **argv)
   if (fr_bad) cli_message("recon", CLI_FAIL, "%s: write failed: %s", o.p_fr, strerror(errno));
   if (!write_summary(&a, &o, &cal, &s, st ? &err : NULL) || fr_bad) return CLI_FAIL;
   if (st) return cli_fail("recon", &err);
+  if (!a.tiff && !a.quiet) cli_note_no_events("recon", a.events, r->from_us, r->to_us, s.events);
   if (!a.tiff && cli_check_trigger_start("recon", &r->framer, a.events, s.frames, s.triggers))
     return CLI_FAIL;
   if (!a.quiet)

@@ -501,6 +501,7 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     goto done;
   }
   /* the outputs are written (empty), but an empty run is not a success */
+  if (st == ELFM_OK && !o.quiet) cli_note_no_events(C, o.events, o.recon.from_us, o.recon.to_us, rs.events);
   if (st == ELFM_OK && cli_check_trigger_start(C, &o.recon.framer, o.events, c.n_frames, rs.triggers))
     goto done;
   const int pulsed = track_pulsed(&c);

@@ -125,6 +125,13 @@ check 0 "" "$bin" track --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/s
 # an empty recording: valid outputs with headers only
 printf 't_us,x,y,p\n' > "$tmp/empty.csv"
 check 0 "" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o4" -q
+# ... and why there is nothing, on stderr, here and for a range that holds
+# no event (sixty-first session); -q keeps it quiet as every note
+check 0 "note: $tmp/empty.csv holds no events" "$bin" track --calib "$tmp/calib.json" --events "$tmp/empty.csv" --out "$tmp/o5"
+check 0 "note: no event of .* lies in --from-us / --to-us (99999999 us to its end)" "$bin" track \
+  --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" --out "$tmp/o6" --from-us 99999999
+check 0 "no event of .* lies in --from-us / --to-us (its start to -5 us)" "$bin" recon \
+  --calib "$tmp/new/sim/a/calib.json" --events "$tmp/new/sim/a/events.raw" --out "$tmp/o7" --to-us -5
 head -1 "$tmp/o4/tracks.csv" 2>/dev/null | grep -q '^track_id,frame,t_us,x_um,y_um,z_um' || { echo "FAIL: empty run has no tracks.csv header"; fail=$((fail+1)); }
 grep -q '"volumes"' "$tmp/o4/summary.json" 2>/dev/null || { echo "FAIL: empty run has no summary.json"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_cli: all cases behave"
