@@ -500,8 +500,10 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
     if (st != ELFM_OK) cli_fail(C, &err);
     goto done;
   }
-  /* the outputs are written (empty), but an empty run is not a success */
+  /* no event taken: said, the outputs are valid and empty */
   if (st == ELFM_OK && !o.quiet) cli_note_no_events(C, o.events, o.recon.from_us, o.recon.to_us, rs.events);
+  /* no window opened by the triggers asked for: the outputs are written
+   * (empty), but such a run is not a success */
   if (st == ELFM_OK && cli_check_trigger_start(C, &o.recon.framer, o.events, c.n_frames, rs.triggers))
     goto done;
   const int pulsed = track_pulsed(&c);

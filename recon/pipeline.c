@@ -126,7 +126,7 @@ elfm_status elfm_recon_layout(const elfm_recon_options *o, int *threads, int *sl
  * batch or thread count far beyond the cores (the options allow 4096
  * and 1024) asked for more than the machine has, and the run was killed
  * once the ring filled: `track --batch 256` on the paper's sensor held
- * 3.3 GB at 300 ms, 4096 would be ~50 GB. Refused when the ring would take
+ * 3.3 GB at 300 ms, 4096 would be ~45 GB. Refused when the ring would take
  * more than half of the physical memory (not checked where the system
  * does not tell it). */
 static elfm_status ring_fits(const run *r, const elfm_calib *calib, int use_median,
