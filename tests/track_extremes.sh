@@ -1,6 +1,6 @@
 #!/bin/sh
 # Options at the far ends of what they take run to the end, with every
-# output written. Two that did not (docs/tracker.md "Frames microseconds
+# output written. Three that did not (docs/tracker.md "Frames microseconds
 # apart"):
 # - --stride-us 1, windows 1 us apart: a track's spline refit ended the run
 #   with "smooth: no model could be fitted (153 points)", exit 1 and no
