@@ -152,6 +152,9 @@ int cmd_bench(int argc, char **argv)
       break;
     case OPT_SEED:
       if (!cli_parse_int64("bench", "--seed", optarg, &op.seed)) return CLI_USAGE;
+      /* simulate's own rule, here before anything runs (it failed as the
+       * simulation's error, exit 1) */
+      if (op.seed < 0) return cli_message("bench", CLI_USAGE, "--seed must be >= 0");
       break;
     case OPT_TIMEOUT:
       if (!cli_parse_double("bench", "--timeout-s", optarg, &op.timeout_s)) return CLI_USAGE;

@@ -158,6 +158,9 @@ int cmd_demo(int argc, char **argv)
       break;
     case OPT_SEED:
       if (!cli_parse_int64("demo", "--seed", optarg, &op.seed)) return CLI_USAGE;
+      /* simulate's own rule, here before anything runs (it failed as the
+       * simulation's error, exit 1) */
+      if (op.seed < 0) return cli_message("demo", CLI_USAGE, "--seed must be >= 0");
       break;
     case OPT_NOPLOTS: op.plots = 0; break;
     default:

@@ -67,6 +67,11 @@ int main(void)
   CHECK_EQ_INT(run("bench --scenes , --out b0", out, sizeof out), 2);
   CHECK_EQ_INT(run("demo --duration-ms abc", out, sizeof out), 2);
   CHECK_EQ_INT(run("demo extra", out, sizeof out), 2);
+  /* a negative seed is refused before anything runs, as simulate refuses
+   * it (it failed as the simulation's error, exit 1, until the sixty-first
+   * session) */
+  CHECK_EQ_INT(run("demo --seed -1 --out d0", out, sizeof out), 2);
+  CHECK_EQ_INT(run("bench --seed -1 --out b1", out, sizeof out), 2);
 
   /* demo: 30 ms of flow, no pictures (the recon MIPs are tested by recon) */
   int rc = run("demo --duration-ms 30 --no-plots --out demo", out, sizeof out);
