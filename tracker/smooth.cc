@@ -358,7 +358,6 @@ struct SplineSetup {
   std::vector<double> coef;         // the prior's rows (elfm_spline_prior_table)
   double sig_ref[3] = {1, 1, 1};
   int order = 2;                    // penalised derivative: 2 acceleration, 3 jerk
-  double lambda_unit = 1;           // elfm_spline_lambda_unit of ts
 };
 
 // The linear fit and GCV are C (smooth_banded.c): this views the data there.
@@ -375,7 +374,7 @@ elfm_spline_problem spline_problem(const Data &d, const SplineSetup &ss)
   sp.order = ss.order;
   sp.coef = ss.coef.empty() ? nullptr : ss.coef.data();
   sp.iso = elfm_spline_isotropic(&sp);
-  sp.lambda_unit = ss.lambda_unit;
+  sp.lambda_unit = elfm_spline_lambda_unit(sp.ts, sp.K, sp.order);
   return sp;
 }
 
@@ -490,7 +489,7 @@ bool spline_fit(const Data &d, const SplineSetup &ss, const Loss &loss, double l
   // Beyond these the banded factorisation loses its digits (condition
   // ~ lambda / (sigma^2 h^(2 order - 1))); the ends are already "interpolate"
   // and "line". In the unit of the states' spacing, as GCV's grid.
-  const double lo = 1e-9 * ss.lambda_unit, hi = 1e9 * ss.lambda_unit;
+  const double lo = 1e-9 * sp.lambda_unit, hi = 1e9 * sp.lambda_unit;
   lam = std::min(std::max(lam, lo), hi);
   Banded bd;
   double rss, edf;
@@ -692,7 +691,6 @@ elfm_status fit_impl(const elfm_smooth_options *o, size_t n, const int64_t *t_us
     ss.order = o->spline_order;
     ss.ts.resize(all.size());
     for (size_t k = 0; k < all.size(); k++) ss.ts[k] = d.tau_of(all[k]);
-    ss.lambda_unit = elfm_spline_lambda_unit(ss.ts.data(), ss.ts.size(), ss.order);
     ss.coef.assign(4 * ss.ts.size(), 0.0);
     if (ss.order == 3 && o->spline_omega_rad_per_ms > 0)
       elfm_spline_prior_table_omega(ss.ts.data(), ss.ts.size(), o->spline_omega_rad_per_ms,

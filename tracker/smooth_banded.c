@@ -394,7 +394,10 @@ static void gcv_refine(const elfm_spline_problem *sp, const double *w, double ga
 #define GCV_E_MIN (-8)
 #define GCV_E_MAX 16
 
-static double gcv_grid(int e) { return pow(10.0, 0.5 * e); }
+static double gcv_grid(const elfm_spline_problem *sp, int e)
+{
+  return (sp->lambda_unit > 0 ? sp->lambda_unit : 1.0) * pow(10.0, 0.5 * e);
+}
 
 /* How a search starts: every grid point, or every other one (whole
  * decades) and then a walk. */
@@ -409,8 +412,7 @@ static void gcv_walk(const elfm_spline_problem *sp, const double *w, double gamm
   for (int dir = -1; dir <= 1; dir += 2) {
     for (int e = e0 + dir; e >= GCV_E_MIN && e <= GCV_E_MAX; e += dir) {
       const double before = *best;
-      gcv_try(sp, w, gamma, (sp->lambda_unit > 0 ? sp->lambda_unit : 1.0) * gcv_grid(e), bd, work,
-              best, best_g);
+      gcv_try(sp, w, gamma, gcv_grid(sp, e), bd, work, best, best_g);
       if (*best == before) break;
       *best_e = e;
     }
@@ -424,12 +426,11 @@ static double gcv_search(const elfm_spline_problem *sp, const double *w, double 
   elfm_banded bd;
   elfm_banded_init(&bd);
   double *work = malloc((5 * sp->K + 1) * sizeof *work);
-  const double unit = sp->lambda_unit > 0 ? sp->lambda_unit : 1.0;
-  double best = unit, best_g = INFINITY;
+  double best = gcv_grid(sp, 0), best_g = INFINITY; /* the unit, where no score is found */
   int best_e = 0;
   for (int e = GCV_E_MIN; work && e <= GCV_E_MAX; e += how == GCV_ALL ? 1 : 2) {
     const double before = best;
-    gcv_try(sp, w, gamma, unit * gcv_grid(e), &bd, work, &best, &best_g);
+    gcv_try(sp, w, gamma, gcv_grid(sp, e), &bd, work, &best, &best_g);
     if (best != before) best_e = e;
   }
   if (work && isfinite(best_g)) {
