@@ -260,16 +260,9 @@ static int window_from_summary(struct score_opts *op)
   int dir_len = slash ? (int)(slash - op->tracks) + 1 : 0;
   if (snprintf(path, sizeof path, "%.*ssummary.json", dir_len, op->tracks) >= (int)sizeof path)
     return 0;
-  FILE *f = fopen(path, "rb");
-  if (!f) return 0;
   /* Whole file: the summary lists every track, so it has no fixed size. */
-  long size = fseek(f, 0, SEEK_END) == 0 ? ftell(f) : -1;
-  char *buf = size >= 0 && size < (1L << 30) && fseek(f, 0, SEEK_SET) == 0
-                  ? malloc((size_t)size + 1) : NULL;
-  size_t n = buf ? fread(buf, 1, (size_t)size, f) : 0;
-  fclose(f);
+  char *buf = cli_read_text(path, (1L << 30) - 1);
   if (!buf) return 0;
-  buf[n] = '\0';
   cJSON *j = cJSON_Parse(buf);
   free(buf);
   const cJSON *par = cJSON_GetObjectItemCaseSensitive(j, "parameters");
