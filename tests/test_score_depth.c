@@ -139,6 +139,27 @@ int main(void)
   CHECK_EQ_INT(r.n_depth_bands, 0);
   CHECK_NEAR(r.recall, 30.0 / 35.0, TOL);
 
+  /* 5b. A band's alpha_tracks takes a paired point's own distance up to the
+   * gate, and eps beyond it: A's track 3 um off (past half the gate) in
+   * frames 0..9 and 5 um off (past the gate) in frames 10..19, the track
+   * still paired with A (its 10 close frames save 10 (eps - 3) against
+   * the dummy). */
+  {
+    buf_t b = {0};
+    bprintf(&b, "%s", TRACK_HEADER);
+    for (int f = 0; f < NF; f++) {
+      const double t = frame_t(f), x = ax(t) + (f < 10 ? 3.0 : 5.0);
+      bprintf(&b, "1,%d,%.0f,%.17g,-20,5,%.17g,-20,5,0.001,0,0,1\n", f, t, x, x);
+    }
+    elfm_table *far = parse(&b, "tracks.csv");
+    CHECK_OK(score(truth, far, NULL, 20, &r, &err), &err);
+    CHECK_EQ_INT(r.n_paired_tracks, 1);
+    CHECK_NEAR(r.depth_bands[0].alpha_tracks, 1.0 - (10 * 3.0 + 10 * EPS) / (EPS * 20), 1e-9);
+    CHECK_NEAR(r.depth_bands[2].alpha_tracks, 0.0, 1e-12); /* C: no track */
+    CHECK_NEAR(r.alpha, 1.0 - (10 * 3.0 + 10 * EPS + 15 * EPS) / (EPS * 35), 1e-9);
+    elfm_table_free(far);
+  }
+
   /* 6. A band that is not a width: an error, not a guess. */
   const double bad[3] = {-1, NAN, INFINITY};
   for (int i = 0; i < 3; i++) {
