@@ -34,6 +34,15 @@ static void add_blob(elfm_volume *v, double x, double y, double z, double amp, d
 /* elfm_analysis_shift_vote: one frame's beads moved by one shift (with
  * noise), some missing and some new in the other frame; beads moving each
  * their own way; bad input. */
+static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
+
+/* |v - s| / |s| */
+static double rel_dist(const double v[3], const double s[3])
+{
+  const double d[3] = {v[0] - s[0], v[1] - s[1], v[2] - s[2]};
+  return norm3(d) / norm3(s);
+}
+
 static void test_shift_vote(void)
 {
   elfm_error err;
@@ -252,6 +261,11 @@ int main(void)
   CHECK_MSG(r.rel_error > 0.01, "by points %g", r.rel_error);
   CHECK_MSG(r.rel_error_pooled < 0.003, "pooled %g", r.rel_error_pooled);
   CHECK(r.v_pooled_um_per_ms[0] < r.v_um_per_ms[0]);
+  /* each error is its velocity's distance from the stage's over the
+   * stage's speed (the bounds above alone pass a squared distance too) */
+  CHECK_NEAR(r.rel_error, rel_dist(r.v_um_per_ms, sv), 1e-12);
+  CHECK_NEAR(r.rel_error_pooled, rel_dist(r.v_pooled_um_per_ms, sv), 1e-12);
+  CHECK_NEAR(r.speed_rel_error, r.speed_um_per_ms / norm3(sv) - 1, 1e-12);
   /* no given velocity: no errors, the pooled velocity still */
   CHECK_OK(elfm_analysis_stage(&s, NULL, &r, &err), &err);
   CHECK(isnan(r.rel_error_pooled) && isfinite(r.v_pooled_um_per_ms[1]));
