@@ -241,6 +241,7 @@ static void test_evt2(const char *dir)
   by_u32(&b, (0u << 28) | (63u << 22) | (639u << 11) | 479u); /* OFF t=1087 */
   by_u32(&b, (0xAu << 28) | (7u << 22) | (2u << 8) | 1u); /* trigger ch 2 at 1031 */
   by_u32(&b, (0xEu << 28) | 12345);                      /* OTHERS: skipped */
+  by_u32(&b, (0xAu << 28) | (9u << 22) | (17u << 8) | 0u); /* ch 17 (5 bits) falling at 1033 */
   by_u32(&b, (8u << 28) | 0x11);
   by_u32(&b, (1u << 28) | (0u << 22) | (1u << 11) | 2u);  /* t = 0x11 << 6 = 1088 */
   by_write(&b, path);
@@ -254,8 +255,11 @@ static void test_evt2(const char *dir)
     CHECK(got.t[1] == 1087 && got.x[1] == 639 && got.y[1] == 479 && got.p[1] == 0);
     CHECK(got.t[2] == 1088 && got.x[2] == 1 && got.y[2] == 2);
   }
-  CHECK_EQ_INT(got.n_trig, 1);
-  if (got.n_trig) CHECK(got.trig[0].t_us == 1031 && got.trig[0].channel == 2 && got.trig[0].value == 1);
+  CHECK_EQ_INT(got.n_trig, 2);
+  if (got.n_trig == 2) {
+    CHECK(got.trig[0].t_us == 1031 && got.trig[0].channel == 2 && got.trig[0].value == 1);
+    CHECK(got.trig[1].t_us == 1033 && got.trig[1].channel == 17 && got.trig[1].value == 0);
+  }
   elfm_reader *r;
   CHECK_OK(elfm_reader_open(path, NULL, &r, &err), &err);
   CHECK_EQ_INT(elfm_reader_width(r), 640); /* from the gen3 plugin name */
@@ -279,6 +283,7 @@ static void test_evt21(const char *dir, int legacy)
   W21((1u << 28) | (9u << 22) | (32u << 11) | 5u, 0x0000000Bu);  /* x 32,33,35 */
   W21((0u << 28) | (9u << 22) | (1248u << 11) | 719u, 0x80000000u); /* x 1279 */
   W21((0xAu << 28) | (4u << 22) | (1u << 8) | 0u, 0);           /* trigger ch 1 falling */
+  W21((0xAu << 28) | (6u << 22) | (17u << 8) | 1u, 0);          /* ch 17 (5 bits) rising */
 #undef W21
   by_write(&b, path);
   free(b.b);
@@ -292,8 +297,11 @@ static void test_evt21(const char *dir, int legacy)
     CHECK(got.x[1] == 33 && got.x[2] == 35);
     CHECK(got.x[3] == 1279 && got.y[3] == 719 && got.p[3] == 0);
   }
-  CHECK_EQ_INT(got.n_trig, 1);
-  if (got.n_trig) CHECK(got.trig[0].t_us == ((100 << 6) | 4) && got.trig[0].channel == 1);
+  CHECK_EQ_INT(got.n_trig, 2);
+  if (got.n_trig == 2) {
+    CHECK(got.trig[0].t_us == ((100 << 6) | 4) && got.trig[0].channel == 1);
+    CHECK(got.trig[1].t_us == ((100 << 6) | 6) && got.trig[1].channel == 17 && got.trig[1].value == 1);
+  }
   ev_free(&got);
 }
 
