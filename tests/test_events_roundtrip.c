@@ -305,6 +305,52 @@ static void test_evt21(const char *dir, int legacy)
   ev_free(&got);
 }
 
+/* EVT 2.0 and 2.1 TIME_HIGH carries t[33:6] in 28 bits: it loops after 2^34
+ * us (4.8 h). A drop of half the range or more is a loop; a smaller one is
+ * time going back (an error by default). Each file: TIME_HIGH th0, an event
+ * at t_low 1, TIME_HIGH th1, an event at t_low 2. */
+static void evt2_th_pair(const char *path, int v21, uint32_t th0, uint32_t th1)
+{
+  bytes b = {0};
+  by_str(&b, v21 ? "% format EVT21;height=720;width=1280\n% end\n"
+                 : "% format EVT2;height=720;width=1280\n% end\n");
+  const uint32_t w[4] = {(8u << 28) | th0, (1u << 28) | (1u << 22) | (3u << 11) | 4u,
+                         (8u << 28) | th1, (1u << 28) | (2u << 22) | (5u << 11) | 6u};
+  for (int i = 0; i < 4; i++) {
+    if (v21) by_u32(&b, i == 1 || i == 3 ? 1u : 0u); /* EVT 2.1: the valid mask first */
+    by_u32(&b, w[i]);
+  }
+  by_write(&b, path);
+  free(b.b);
+}
+
+static void test_evt2_loops(const char *dir)
+{
+  char path[512];
+  for (int v21 = 0; v21 < 2; v21++) {
+    snprintf(path, sizeof path, "%s/loop%d.raw", dir, v21);
+    ev_list got = {0};
+    elfm_error err;
+    /* from the range's top to 4: one loop */
+    evt2_th_pair(path, v21, 0x0FFFFFF0u, 4u);
+    CHECK_OK(ev_decode_file(path, NULL, 8, &got, &err), &err);
+    CHECK_EQ_INT(got.n, 2);
+    if (got.n == 2) {
+      CHECK(got.t[0] == (((int64_t)0x0FFFFFF0 << 6) | 1));
+      CHECK_MSG(got.t[1] == ((((int64_t)1 << 28 | 4) << 6) | 2), "EVT%s after the loop: %lld us",
+                v21 ? "2.1" : "2", (long long)got.t[1]);
+    }
+    ev_free(&got);
+    /* a drop of a quarter of the range (2^26 x 64 us, 71 min): not a loop */
+    evt2_th_pair(path, v21, 3u << 26, 2u << 26);
+    elfm_status st = ev_decode_file(path, NULL, 8, &got, &err);
+    CHECK_MSG(st == ELFM_ERR_FORMAT && strstr(err.message, "goes back"), "EVT%s: status %d (%s)",
+              v21 ? "2.1" : "2", (int)st, err.message);
+    CHECK_EQ_INT(got.n, 1);
+    ev_free(&got);
+  }
+}
+
 static void test_dat(const char *dir)
 {
   char path[512];
@@ -389,6 +435,7 @@ int main(void)
   scratch_make(dir, sizeof dir);
   test_roundtrip(dir);
   test_evt3_loops(dir);
+  test_evt2_loops(dir);
   test_evt2(dir);
   test_evt21(dir, 0);
   test_evt21(dir, 1);
