@@ -235,6 +235,19 @@ int main(void)
       for (int i = 10; i < 12; i++) v->data[((size_t)k * 60 + j) * 64 + i] = 50;
   CHECK_OK(elfm_peaks_detect(pk, v, det, 16, &n, &err), &err);
   CHECK_EQ_INT(n, 1);
+  /* ... also with no least separation to merge its 12 voxels: of equal
+   * values, only the first in memory order is a maximum */
+  {
+    elfm_peaks_options o0 = o;
+    o0.min_separation_um = 0;
+    elfm_peaks *p0 = elfm_peaks_create(&o0, v->w, v->h, v->nz, &err);
+    CHECK(p0 != NULL);
+    if (p0) {
+      CHECK_OK(elfm_peaks_detect(p0, v, det, 16, &n, &err), &err);
+      CHECK_EQ_INT(n, 1);
+      elfm_peaks_free(p0);
+    }
+  }
 
   /* Depth-dependent threshold (elfm_peaks.h): a faint blob at z = 40 um
    * (amplitude 30) is below the absolute 50 but above 50 / (1 + (40/40)^2)
