@@ -57,6 +57,10 @@ static void roundtrip(int w, int h, int nz, int kept, const char *path)
               w, h, nz, back->w, back->h, back->nz);
     CHECK_EQ_INT(back->frame, 4242);
     CHECK_EQ_INT(back->t_us, 123456789);
+    /* the geometry that places each voxel in um (SPEC 5's attributes) */
+    CHECK_MSG(back->um_per_px == 0.926 && back->z_min_um == -100.0 && back->z_step_um == 2.0,
+              "um_per_px %.17g, z_min_um %.17g, z_step_um %.17g", back->um_per_px, back->z_min_um,
+              back->z_step_um);
     if (back->w == w && back->h == h && back->nz == nz) {
       size_t differ = 0, first = n;
       for (size_t i = 0; i < n; i++)
