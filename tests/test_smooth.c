@@ -61,6 +61,15 @@ int main(void)
               ci.n_outliers, info.n_outliers);
   }
 
+  /* 1b. The BIC's parameter counts (elfm_smooth.h): on a noise-free straight
+   * track both polynomials fit exactly (chi2 ~ 0), so each BIC is its
+   * penalty alone, k ln(3 n) with k = 6 and 9; the line is chosen. */
+  make(0, 50, 0, 0, 0);
+  CHECK_OK(elfm_smooth_fit(&o, 50, T, X, NULL, 50, T, P, V, NULL, NULL, &info, &err), &err);
+  CHECK_EQ_INT(info.model, ELFM_MODEL_CONST_VELOCITY);
+  CHECK_NEAR(info.bic[ELFM_MODEL_CONST_VELOCITY], 6 * log(150.0), 1e-6);
+  CHECK_NEAR(info.bic[ELFM_MODEL_CONST_ACCEL], 9 * log(150.0), 1e-6);
+
   /* 2. Constant acceleration: CA chosen, acceleration within 5 %. */
   make(1, 400, T0, 0.1, 0.4);
   CHECK_OK(elfm_smooth_fit(&o, 400, T, X, NULL, 400, T, P, V, PS, VS, &info, &err), &err);
