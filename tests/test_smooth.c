@@ -505,8 +505,11 @@ int main(void)
     make(0, 10, T0, 0.1, 0.4);
     X[5] = NAN;
     CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, NULL, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_NUMERIC);
+    CHECK(strstr(err.message, "point 1 has a non-finite coordinate") != NULL);
     X[5] = INFINITY;
     CHECK_EQ_INT(elfm_smooth_fit(&o, 10, T, X, NULL, 10, T, P, V, PS, VS, &info, &err), ELFM_ERR_NUMERIC);
+    /* refused as input, not failing later in the fit with the same code */
+    CHECK_MSG(strstr(err.message, "point 1 has a non-finite coordinate") != NULL, "%s", err.message);
     X[5] = 1;
     double sg[30];
     for (int i = 0; i < 30; i++) sg[i] = 0.1;
