@@ -181,9 +181,14 @@ typedef struct step_stats {
   double mean_delay_us, min_delay_us;
   int max_per_pixel;
   int64_t dropped;
+  int64_t min_gap_us; /* least time between two OFF events of one pixel */
 } step_stats;
 
-static step_stats step_with(const char *param)
+static step_stats step_with2(const char *param, const char *param2);
+static step_stats step_with(const char *param) { return step_with2(param, NULL); }
+
+/* the same with a second setting (NULL: none) */
+static step_stats step_with2(const char *param, const char *param2)
 {
   const char *p[] = {QUIET,
                      "objects.count=1",
@@ -193,9 +198,10 @@ static step_stats step_with(const char *param)
                      "motion.z_max_um=0",
                      "illumination={\"type\":\"periodic\",\"pulse_us\":20000,\"period_us\":40000}",
                      "duration_ms=32",
-                     param};
-  step_stats r = {0, 0, 1e9, 0, 0};
-  elfm_scene *s = load("blink", p, (int)(sizeof p / sizeof *p));
+                     param,
+                     param2};
+  step_stats r = {0, 0, 1e9, 0, 0, INT64_MAX};
+  elfm_scene *s = load("blink", p, (int)(sizeof p / sizeof *p) - (param2 ? 0 : 1));
   if (!s) return r;
   ev_store st;
   store_init(&st);
@@ -208,8 +214,11 @@ static step_stats step_with(const char *param)
   for (int y = v0 - 1; y <= v0 + 2; y++) {
     for (int x = u0 - 1; x <= u0 + 2; x++) {
       int n = 0;
+      int64_t t_prev = INT64_MIN;
       for (size_t i = 0; i < st.n; i++) {
         if (st.x[i] != x || st.y[i] != y || st.p[i]) continue;
+        if (t_prev != INT64_MIN && st.t[i] - t_prev < r.min_gap_us) r.min_gap_us = st.t[i] - t_prev;
+        t_prev = st.t[i];
         double d = (double)(st.t[i] - elfm_scene_t0_us(s) - 20000);
         r.n++;
         n++;
@@ -240,6 +249,13 @@ static void test_sensor_timing(void)
   CHECK(late.min_delay_us >= 300);
   /* Refractory 5 ms over the 12 ms after the edge: <= 3 events per pixel. */
   CHECK(refr.max_per_pixel <= 3 && fast.max_per_pixel > 3);
+  /* A pixel fires again after its refractory period and not before: on the
+   * slow photoreceptor its OFF events come as the level falls, closer than
+   * 400 us without one. */
+  step_stats slow_refr = step_with2("sensor.cutoff_hz_at_background=100", "sensor.refractory_us=400");
+  CHECK_MSG(slow.min_gap_us < 400, "least gap %lld us", (long long)slow.min_gap_us);
+  CHECK_MSG(slow_refr.min_gap_us >= 400 && slow_refr.min_gap_us < 800, "least gap %lld us",
+            (long long)slow_refr.min_gap_us);
   CHECK(refr.dropped > 0 && fast.dropped == 0);
   /* A 20x slower photoreceptor (tau 1.6 ms at background) spreads the OFF
    * run over milliseconds instead of ~0.1 ms. */
