@@ -140,10 +140,11 @@ static void test_track_xml(const char *dir)
         last_id = -1;
         continue;
       }
-      double x, y, z;
+      double x, y, z, rad;
       if (sscanf(q, "<Spot ID=\"%lld\" name=\"ID%*d\" QUALITY=\"%*g\" POSITION_X=\"%lf\" "
-                    "POSITION_Y=\"%lf\" POSITION_Z=\"%lf\" POSITION_T=\"%*f\" FRAME=\"%lld\"",
-                 &id, &x, &y, &z, &fr) != 5)
+                    "POSITION_Y=\"%lf\" POSITION_Z=\"%lf\" POSITION_T=\"%*f\" FRAME=\"%lld\" "
+                    "RADIUS=\"%lf\"",
+                 &id, &x, &y, &z, &fr, &rad) != 6)
         continue;
       n++;
       bad_order += fr != group || id <= last_id || id < 0 || (size_t)id >= total;
@@ -157,6 +158,8 @@ static void test_track_xml(const char *dir)
       const elfm_detection *d = &tr[k]->pts[r];
       bad_pos += d->frame != fr || fabs(d->x_um - x) > 1e-4 || fabs(d->y_um - y) > 1e-4 ||
                  fabs(d->z_um - z) > 1e-4;
+      /* the radius at half maximum, sqrt(2 ln 2) sigma (1 um without a width) */
+      bad_pos += fabs(rad - (d->sigma_x_um > 0 ? 1.1774 * d->sigma_x_um : 1.0)) > 1e-4;
     }
     CHECK_EQ_INT(n, (int)total);
     CHECK_EQ_INT(bad_order, 0);
