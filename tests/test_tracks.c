@@ -314,6 +314,23 @@ int main(void)
                  (elfm_table_get(tb, r, c_id) == 7 ? 0 : 30) + 0.5 * fr, 1e-3);
     }
     CHECK_EQ_INT(gaps, 3);
+    /* each row's uncertainties, per axis, are its track's for that frame
+     * (the rows come track by track, a row per frame of the span) */
+    const int c_sd = elfm_table_col(tb, "sd_x_um"), c_svd = elfm_table_col(tb, "sd_vx_um_per_ms");
+    CHECK(c_sd > 0 && c_svd == c_sd + 3);
+    size_t r = 0;
+    int sd_bad = 0;
+    for (size_t i = 0; i < s.n && c_sd > 0; i++)
+      for (size_t k = 0; k < s.tracks[i]->n_span && r < tb->n_rows; k++, r++)
+        for (int a = 0; a < 3; a++) {
+          sd_bad += fabs(elfm_table_get(tb, r, c_sd + a) - s.tracks[i]->pos_sd_um[3 * k + a]) > 1e-4;
+          sd_bad += fabs(elfm_table_get(tb, r, c_svd + a) - s.tracks[i]->vel_sd_um_per_ms[3 * k + a]) >
+                    1e-5;
+        }
+    CHECK_EQ_INT(sd_bad, 0);
+    /* the axes' own: z placed worse than x here, so a column copied from
+     * another axis would show */
+    CHECK(s.n && s.tracks[0]->pos_sd_um[2] != s.tracks[0]->pos_sd_um[0]);
   }
   elfm_table_free(tb);
 
