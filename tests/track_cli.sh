@@ -92,6 +92,18 @@ for o in o5 o6; do
   tail -1 "$d/tracks_isbi.xml" | grep -q '</root>' || { echo "FAIL: $o: ISBI XML not closed"; fail=$((fail+1)); }
   tail -1 "$d/tracks_trackmate.xml" | grep -q '</TrackMate>' || { echo "FAIL: $o: TrackMate XML not closed"; fail=$((fail+1)); }
   ls "$d" | grep -q 'tmp' && { echo "FAIL: $o: scratch file left: $(ls "$d")"; fail=$((fail+1)); }
+  # the timing's figures are what their names say (SPEC 5): the real-time
+  # factor the recording's span over the wall time, volumes per second the
+  # volumes over it
+  js=$(tr -d ' \t\n' < "$d/summary.json")
+  num() { printf '%s' "$js" | sed -n "s/.*\"$1\":\([-0-9.eE+]*\)[,}].*/\1/p"; }
+  if ! awk -v w="$(num wall_s)" -v s="$(num span_s)" -v r="$(num realtime_factor)" \
+         -v vps="$(num volumes_per_s)" -v nv="$(num volumes)" 'BEGIN {
+         exit !(w > 0 && s > 0 && nv > 0 &&
+                (r - s / w) ^ 2 <= (1e-9 * r) ^ 2 && (vps - nv / w) ^ 2 <= (1e-9 * vps) ^ 2) }'; then
+    echo "FAIL: $o: timing wall $(num wall_s) s, span $(num span_s) s, realtime_factor $(num realtime_factor), volumes $(num volumes), volumes_per_s $(num volumes_per_s)"
+    fail=$((fail+1))
+  fi
 done
 # output directories whose parents do not exist yet are made, parents and
 # all (simulate, track, recon); one under a regular file is an error naming it
