@@ -90,11 +90,47 @@ static void test_mip_exact(const char *dir)
   elfm_volume_free(v);
 }
 
+/* The depth colours between the ends: 9 planes, one voxel each at full
+ * scale, plane k at column k of the x-y projection. Expected: HSV with the
+ * hue 240 (1 - t) degrees, t = k / 8, full saturation and value, by the
+ * textbook formula (X = 255 (1 - |(H / 60) mod 2 - 1|)), not mip_png.c's. */
+static void test_mip_hues(const char *dir)
+{
+  elfm_error err;
+  const int W = 9, H = 1, NZ = 9;
+  elfm_volume *v = elfm_volume_create(W, H, NZ, 1.0, 0.0, 1.0, &err);
+  CHECK(v != NULL);
+  if (!v) return;
+  for (int k = 0; k < NZ; k++) v->data[(size_t)k * W + k] = 1.0f;
+  char png[600];
+  snprintf(png, sizeof png, "%s/mip_hues.png", dir);
+  CHECK_OK(elfm_volume_write_mip_png(v, png, 1.0, 1, &err), &err);
+  png_image im;
+  memset(&im, 0, sizeof im);
+  im.version = PNG_IMAGE_VERSION;
+  CHECK(png_image_begin_read_from_file(&im, png));
+  im.format = PNG_FORMAT_RGB;
+  uint8_t *rgb = malloc(PNG_IMAGE_SIZE(im));
+  CHECK(rgb && png_image_finish_read(&im, NULL, rgb, 0, NULL));
+  for (int k = 0; rgb && k < NZ; k++) {
+    const double hue = 240.0 * (1.0 - k / 8.0), x = 1.0 - fabs(fmod(hue / 60.0, 2.0) - 1.0);
+    const int sector = (int)(hue / 60.0) < 4 ? (int)(hue / 60.0) : 4;
+    const double e[5][3] = {{1, x, 0}, {x, 1, 0}, {0, 1, x}, {0, x, 1}, {0, 0, 1}};
+    for (int c = 0; c < 3; c++)
+      CHECK_MSG(abs(rgb[3 * k + c] - (int)lround(255.0 * e[sector][c])) <= 1,
+                "plane %d of 9 (hue %.0f): channel %d is %d, expected %ld", k, hue, c, rgb[3 * k + c],
+                lround(255.0 * e[sector][c]));
+  }
+  free(rgb);
+  elfm_volume_free(v);
+}
+
 int main(void)
 {
   char dir[] = "/tmp/elfm_mip_XXXXXX";
   if (!mkdtemp(dir)) SKIP("cannot make a temporary directory");
   test_mip_exact(dir);
+  test_mip_hues(dir);
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
   if (system(cmd) != 0) fprintf(stderr, "could not remove %s\n", dir);
