@@ -31,9 +31,6 @@ static void add_blob(elfm_volume *v, double x, double y, double z, double amp, d
       }
 }
 
-/* elfm_analysis_shift_vote: one frame's beads moved by one shift (with
- * noise), some missing and some new in the other frame; beads moving each
- * their own way; bad input. */
 static double norm3(const double v[3]) { return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 /* |v - s| / |s| */
@@ -43,6 +40,9 @@ static double rel_dist(const double v[3], const double s[3])
   return norm3(d) / norm3(s);
 }
 
+/* elfm_analysis_shift_vote: one frame's beads moved by one shift (with
+ * noise), some missing and some new in the other frame; beads moving each
+ * their own way; bad input. */
 static void test_shift_vote(void)
 {
   elfm_error err;
