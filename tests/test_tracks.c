@@ -328,7 +328,7 @@ int main(void)
                     1e-5;
         }
     CHECK_EQ_INT(sd_bad, 0);
-    /* the axes' own: z placed worse than x here, so a column copied from
+    /* the axes' own: z's differs from x's here, so a column copied from
      * another axis would show */
     CHECK(s.n && s.tracks[0]->pos_sd_um[2] != s.tracks[0]->pos_sd_um[0]);
   }
