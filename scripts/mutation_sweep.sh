@@ -84,5 +84,3 @@ for id in "${ids[@]}"; do
   fi
   (cd "$src" && git checkout -q -- "$file")
 done
-# leave the clone's build as the checkout's, for a next run with WORK=
-(cd "$src/build" && make -j"$jobs" > "$work/logs/rebuild.txt" 2>&1)

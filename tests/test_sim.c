@@ -184,10 +184,8 @@ typedef struct step_stats {
   int64_t min_gap_us; /* least time between two OFF events of one pixel */
 } step_stats;
 
-static step_stats step_with2(const char *param, const char *param2);
-static step_stats step_with(const char *param) { return step_with2(param, NULL); }
-
-/* the same with a second setting (NULL: none) */
+/* The step with sensor settings param and param2 (NULL: none); step_with
+ * below takes one. */
 static step_stats step_with2(const char *param, const char *param2)
 {
   const char *p[] = {QUIET,
@@ -233,6 +231,8 @@ static step_stats step_with2(const char *param, const char *param2)
   elfm_scene_free(s);
   return r;
 }
+
+static step_stats step_with(const char *param) { return step_with2(param, NULL); }
 
 /* Latency, refractory period and photoreceptor bandwidth do what they say. */
 static void test_sensor_timing(void)
