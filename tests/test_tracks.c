@@ -46,6 +46,35 @@ static elfm_track *piece_of(const elfm_track *t, size_t a, size_t b, int piece, 
   return p;
 }
 
+/* The points of ISBI XML text x that differ from tr[0 .. nt)'s, particle k
+ * against track k, point by point: the frame as t and x, y, z each to the
+ * 4 decimals written (a z written from y, or x and y swapped, would be
+ * read by the challenge's scorer without complaint). A particle or point
+ * missing or extra counts as one mismatch each. */
+static int isbi_mismatches(const char *x, elfm_track *const *tr, int nt)
+{
+  int bad = 0, k = 0;
+  for (const char *q = strstr(x, "<particle>"); q; q = strstr(q + 1, "<particle>"), k++) {
+    const char *end = strstr(q, "</particle>");
+    if (k >= nt || !end) return bad + 1;
+    size_t j = 0;
+    for (const char *d = strstr(q, "<detection "); d && d < end; d = strstr(d + 1, "<detection "), j++) {
+      long long fr;
+      double px, py, pz;
+      if (sscanf(d, "<detection t=\"%lld\" x=\"%lf\" y=\"%lf\" z=\"%lf\"/>", &fr, &px, &py, &pz) != 4 ||
+          j >= tr[k]->n) {
+        bad++;
+        continue;
+      }
+      const elfm_detection *p = &tr[k]->pts[j];
+      bad += p->frame != fr || fabs(p->x_um - px) > 1e-4 || fabs(p->y_um - py) > 1e-4 ||
+             fabs(p->z_um - pz) > 1e-4;
+    }
+    bad += j != tr[k]->n;
+  }
+  return bad + (k != nt);
+}
+
 /* Write both XML files of tr[0 .. nt) (and pieces, in that order) through
  * one elfm_track_xml; returns the two files' text (caller frees). */
 static void write_xml(const char *dir, elfm_track *const *tr, int nt, size_t max_sort,
@@ -121,6 +150,7 @@ static void test_track_xml(const char *dir)
   free(i2);
   free(t2);
   if (i1) CHECK(count(i1, "<particle>") == NT && count(i1, "<detection ") == (int)total);
+  if (i1) CHECK_EQ_INT(isbi_mismatches(i1, tr, NT), 0);
   if (t1) {
     char want[64];
     snprintf(want, sizeof want, "<AllSpots nspots=\"%zu\">", total);
