@@ -147,7 +147,9 @@ double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, 
  * own estimate). Read-only on plan and frame: any thread. */
 typedef struct elfm_localize_options {
   int half_window_px;  /* window half-size (2: 5 x 5 px) */
-  int iterations;      /* plain re-centring passes before the robust ones (4) */
+  int iterations;      /* plain re-centring passes before the robust ones (4; below 1
+                          counts as 1, above 100 is refused: the count plus the robust
+                          passes must not overflow an int) */
   double outlier_px;   /* drop a view whose centroid misses the fit by more (1.5) */
   int min_views;       /* fewer views agreeing: no result (6) */
   int power;           /* pixel weight value^power: on a time surface the newest

@@ -294,7 +294,7 @@ static int localize(const elfm_refocus_plan *p, const elfm_frame *const *frames,
   const elfm_calib *c = &p->calib;
   if (!frames || n_frames < 1 || n_frames > MAXF || p->nv > MAXV || !o ||
       o->half_window_px < 1 || o->half_window_px > 32 || !(o->outlier_px > 0) || o->min_views < 2 ||
-      o->power < 1 || o->power > 8 ||
+      o->power < 1 || o->power > 8 || o->iterations > 100 ||
       !isfinite(x_vox) || !isfinite(y_vox) || !isfinite(z_vox))
     return 0;
   /* neighbours: the first MAXN given (the caller lists the near ones; a

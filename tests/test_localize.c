@@ -16,6 +16,7 @@
  *    neurons 6 um apart, images 2.6 px wide): the plain fit pulls each
  *    towards the other, the fit that takes the other's light out
  *    (elfm_refocus_localize_near) does not; its bad inputs. */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -158,6 +159,16 @@ static void test_no_fit(const elfm_calib *c, const elfm_refocus_plan *p, elfm_fr
   bad = o;
   bad.outlier_px = NAN;
   CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  /* passes beyond 100 are refused: INT_MAX once overflowed the pass count
+   * (undefined; where it wrapped no pass ran and the fit read its views'
+   * sums unset; found by clang's static analyzer) */
+  bad = o;
+  bad.iterations = INT_MAX;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  bad.iterations = 101;
+  CHECK(!elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
+  bad.iterations = 100;
+  CHECK(elfm_refocus_localize(p, f, q[0], q[1], q[2], &bad, &r));
   elfm_error err;
   elfm_frame *small = elfm_frame_create(640, 360, &err);
   CHECK(small != NULL);
