@@ -56,6 +56,20 @@ i=0; while [ $i -lt 300 ]; do echo "$((913000000 + i * 97)),$((i % 640)),$((i % 
 expect 0 "" "$bin" convert "$tmp/good.csv" "$tmp/good.raw" --geometry 640x480
 expect 0 "" "$bin" convert "$tmp/good.raw" "$tmp/back.csv"
 cmp -s "$tmp/good.csv" "$tmp/back.csv" || { echo "FAIL: CSV -> EVT3 -> CSV changed the events"; fail=$((fail+1)); }
+# info's rates against the CSV's own: events over the span in ms, and the
+# most events in one 1 ms bin of the clock (t_us / 1000); a burst of 40
+# events in one millisecond makes the peak. (A mean rate 10 times too high
+# passed every test until a mutation sweep.)
+{ cat "$tmp/good.csv"; i=0; while [ $i -lt 40 ]; do echo "$((913040000 + i * 20)),5,6,1"; i=$((i+1)); done; } > "$tmp/burst.csv"
+for f in good.csv burst.csv; do
+  want=$(awk -F, 'NR > 1 { n++; if (n == 1) t0 = $1; t1 = $1; b = int($1 / 1000); c[b]++; if (c[b] > pk) pk = c[b] }
+    END { d = t1 - t0; printf "%.6f %d", n / (d > 1000 ? d / 1000 : 1), pk }' "$tmp/$f")
+  expect 0 "" "$bin" info --json "$tmp/$f"
+  got=$(sed 's/.*"mean_rate_per_ms":\([0-9.e+-]*\).*"peak_rate_per_ms":\([0-9]*\).*/\1 \2/' "$tmp/out" |
+    awk '{ printf "%.6f %d", $1, $2 }')
+  [ "$got" = "$want" ] || { echo "FAIL: info $f: mean and peak rate '$got', wanted '$want'"; fail=$((fail+1)); }
+done
+grep -q '"peak_rate_per_ms":40,' "$tmp/out" || { echo "FAIL: the burst's 40 events in one ms are not the peak"; cat "$tmp/out"; fail=$((fail+1)); }
 expect 0 "" "$bin" convert "$tmp/good.raw" "$tmp/part.csv" --from-us 913000970 --to-us 913001940
 n=$(($(wc -l < "$tmp/part.csv") - 1))
 [ "$n" -eq 10 ] || { echo "FAIL: time range kept $n events, wanted 10"; fail=$((fail+1)); }

@@ -386,6 +386,7 @@ int main(void)
     dd[0].frame = 3; dd[0].t_us = 4000; dd[0].x_um = 1; dd[0].intensity = 80;
     dd[0].width_um = 2.5; dd[0].fit_sd_px = 0.125; dd[0].weak = 1; dd[0].nearest_um = 7.25;
     dd[0].claims = 2;
+    dd[0].sigma_x_um = 0.5; dd[0].sigma_y_um = 0.75; dd[0].sigma_z_um = 2.25;
     dd[1] = dd[0];
     dd[1].width_um = 0; dd[1].fit_sd_px = 0; dd[1].weak = 0; dd[1].view_fit = 1;
     dd[1].nearest_um = 0;
@@ -399,6 +400,15 @@ int main(void)
       const int cw = elfm_table_col(tb, "width_um"), cs = elfm_table_col(tb, "fit_sd_px"),
                 cv = elfm_table_col(tb, "view_fit"), ck = elfm_table_col(tb, "weak");
       CHECK(cw == 9 && cs == 10 && cv == 11 && ck == 12);
+      /* SPEC 5's uncertainties, each axis its own (a sigma_z written from
+       * sigma_y passed every test until a mutation sweep) */
+      const char *const sc[3] = {"sigma_x_um", "sigma_y_um", "sigma_z_um"};
+      const double sw[3] = {0.5, 0.75, 2.25};
+      for (int k = 0; k < 3; k++) {
+        CHECK_EQ_INT(elfm_table_col(tb, sc[k]), 6 + k);
+        CHECK_MSG(elfm_table_get(tb, 0, 6 + k) == sw[k] && elfm_table_get(tb, 1, 6 + k) == sw[k],
+                  "%s", sc[k]);
+      }
       CHECK_NEAR(elfm_table_get(tb, 0, cw), 2.5, 1e-9);
       CHECK_NEAR(elfm_table_get(tb, 0, cs), 0.125, 1e-9);
       CHECK(elfm_table_get(tb, 0, cv) == 0 && elfm_table_get(tb, 0, ck) == 1);

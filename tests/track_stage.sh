@@ -53,6 +53,20 @@ awk -v v="$sp" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: summa
 py=$(tr -d ' \n\t' < "$tmp/d/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
 echo "dim stage 200 ms seed 3: pooled vy $py um/ms"
 awk -v v="$py" 'BEGIN { exit !(v > 2.475 && v < 2.525) }' || { echo "FAIL: pooled vy '$py' not within 1 % of 2.5"; fail=$((fail+1)); }
+# the spreads: the sample standard deviations of the listed tracks' mean
+# velocities (per axis) and speeds, recomputed here from the summary's
+# own "tracks" (a speed_sd written as the speed passed every test until a
+# mutation sweep)
+flat=$(tr -d ' \n\t' < "$tmp/d/summary.json")
+want=$(echo "$flat" | grep -o '"mean_velocity_um_per_ms":\[[^]]*\]' | sed 's/.*\[//; s/\]//' |
+  awk -F, '$1 != "null" { n++; s = sqrt($1*$1 + $2*$2 + $3*$3); sp += s; sp2 += s*s
+             for (a = 1; a <= 3; a++) { u[a] += $a; q[a] += $a*$a } }
+           END { m = sp / n; printf "%.6e", sqrt((sp2 - n*m*m) / (n - 1))
+                 for (a = 1; a <= 3; a++) { mu = u[a] / n; printf " %.6e", sqrt((q[a] - n*mu*mu) / (n - 1)) } }')
+got="$(printf '%.6e' "$(key "$tmp/d/summary.json" speed_sd_um_per_ms)") $(echo "$flat" |
+  sed -n 's/.*"velocity_sd_um_per_ms":\[\([^]]*\)\].*/\1/p' | awk -F, '{ printf "%.6e %.6e %.6e", $1, $2, $3 }')"
+echo "dim stage 200 ms seed 3: speed and velocity sd $got"
+[ -n "$want" ] && [ "$got" = "$want" ] || { echo "FAIL: summary's speed, velocity sd '$got', from its tracks '$want'"; fail=$((fail+1)); }
 
 simulate_or_skip "$tmp/acc" stage_accel 200 1
 "$bin" track --calib "$tmp/acc/calib.json" --events "$tmp/acc/events.raw" --out "$tmp/a" --motion stage \
@@ -65,6 +79,15 @@ echo "stage_accel: $line"
 case "$line" in *"accelerating at"*) ;; *) echo "FAIL: stage_accel's acceleration not said"; fail=$((fail+1)) ;; esac
 px=$(tr -d ' \n\t' < "$tmp/a/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
 case "$line" in *"$(printf '%.4f' "$px"),"*) ;; *) echo "FAIL: stderr's vy is not summary.json's $px"; fail=$((fail+1)) ;; esac
+# the acceleration's spread (over the long tracks' own slopes, which the
+# summary does not list: test_analysis checks the formula) is a spread,
+# not the acceleration again
+flat=$(tr -d ' \n\t' < "$tmp/a/summary.json")
+acc=$(echo "$flat" | sed -n 's/.*"acceleration_um_per_ms2":\[\([^]]*\)\].*/\1/p')
+asd=$(echo "$flat" | sed -n 's/.*"acceleration_sd_um_per_ms2":\[\([^]]*\)\].*/\1/p')
+echo "stage_accel: acceleration $acc, sd $asd um/ms^2"
+[ -n "$asd" ] && [ "$asd" != "$acc" ] && echo "$asd" | awk -F, '{ exit !($1 >= 0 && $2 >= 0 && $3 >= 0 && $2 < 0.002) }' ||
+  { echo "FAIL: stage_accel's acceleration sd '$asd' (acceleration '$acc')"; fail=$((fail+1)); }
 simulate_or_skip "$tmp/s11" stage 200 11
 score_args=""
 track_score "$tmp/s11" "$tmp/s11o" "$tmp/s11.json"
