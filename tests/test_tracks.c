@@ -170,12 +170,16 @@ static void test_track_xml(const char *dir)
         last_id = -1;
         continue;
       }
-      double x, y, z, rad;
+      double x, y, z, t_ms, rad;
       if (sscanf(q, "<Spot ID=\"%lld\" name=\"ID%*d\" QUALITY=\"%*g\" POSITION_X=\"%lf\" "
-                    "POSITION_Y=\"%lf\" POSITION_Z=\"%lf\" POSITION_T=\"%*f\" FRAME=\"%lld\" "
+                    "POSITION_Y=\"%lf\" POSITION_Z=\"%lf\" POSITION_T=\"%lf\" FRAME=\"%lld\" "
                     "RADIUS=\"%lf\"",
-                 &id, &x, &y, &z, &fr, &rad) != 6)
+                 &id, &x, &y, &z, &t_ms, &fr, &rad) != 7)
         continue;
+      /* the time in the file's timeunits="ms": the frame times write_xml's
+       * 2 ms interval (in seconds, or a frame count, TrackMate would show
+       * speeds off by a factor without a word) */
+      bad_pos += fabs(t_ms - 2.0 * (double)fr) > 1e-6;
       n++;
       bad_order += fr != group || id <= last_id || id < 0 || (size_t)id >= total;
       last_id = id;
@@ -342,6 +346,16 @@ int main(void)
       CHECK_NEAR(elfm_table_get(tb, r, c_vx), 0.5, 1e-3);
       CHECK_NEAR(elfm_table_get(tb, r, c_x),
                  (elfm_table_get(tb, r, c_id) == 7 ? 0 : 30) + 0.5 * fr, 1e-3);
+      /* y and z, smoothed and raw (the raw columns: the detection as
+       * measured; a raw_y written from x passed the unit tests until a
+       * mutation sweep) */
+      const double z_want = elfm_table_get(tb, r, c_id) == 7 ? 0 : 4;
+      CHECK_NEAR(elfm_table_get(tb, r, c_x + 1), -2, 1e-3);
+      CHECK_NEAR(elfm_table_get(tb, r, c_x + 2), z_want, 1e-3);
+      if (!is_gap) {
+        CHECK(elfm_table_get(tb, r, c_rx) == (elfm_table_get(tb, r, c_id) == 7 ? 0 : 30) + 0.5 * fr);
+        CHECK(elfm_table_get(tb, r, c_rx + 1) == -2 && elfm_table_get(tb, r, c_rx + 2) == z_want);
+      }
     }
     CHECK_EQ_INT(gaps, 3);
     /* each row's uncertainties, per axis, are its track's for that frame
