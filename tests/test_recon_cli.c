@@ -224,6 +224,19 @@ int main(void)
   if (v) {
     CHECK_EQ_INT(v->nz, 21);
     CHECK(v->z_min_um == -40 && v->z_step_um == 4);
+    /* summary.json's geometry is the volumes': each key its own field (a
+     * z_step_um written from um_per_px passed every test until a mutation
+     * sweep) */
+    cJSON *rs = summary_json("rz");
+    cJSON *g = rs ? cJSON_GetObjectItem(rs, "volume") : NULL;
+    const char *const key[6] = {"w", "h", "nz", "um_per_px", "z_min_um", "z_step_um"};
+    const double want[6] = {v->w, v->h, v->nz, v->um_per_px, v->z_min_um, v->z_step_um};
+    for (int k = 0; k < 6; k++) {
+      cJSON *e = g ? cJSON_GetObjectItem(g, key[k]) : NULL;
+      CHECK_MSG(cJSON_IsNumber(e) && e->valuedouble == want[k], "summary.json volume.%s", key[k]);
+    }
+    CHECK(v->um_per_px != v->z_step_um);
+    cJSON_Delete(rs);
     elfm_volume_free(v);
   }
   CHECK(file_has("rz/summary.json", "\"nz\":\t21"));

@@ -463,7 +463,9 @@ static void test_roundtrip_and_seed(void)
   elfm_scene_free(s);
 }
 
-/* truth.csv: header, every <= 100 us per object, matching the truth query. */
+/* truth.csv: header, every <= 100 us per object, matching the truth query
+ * row by row (id, time, each axis, brightness: a z written from y passed
+ * every test until a mutation sweep). */
 static void test_truth_file(void)
 {
   size_t n = 0;
@@ -475,6 +477,28 @@ static void test_truth_file(void)
   size_t lines = 0;
   for (size_t i = 0; i < n; i++) lines += b[i] == '\n';
   CHECK_EQ_INT(lines, 1 + 4 * 121);
+  const char *p[] = {"objects.count=4", "duration_ms=12", "t0_us=16771216"}; /* as written */
+  elfm_scene *s = load("blink_moving", p, 3);
+  const char *q = memchr(b, '\n', n);
+  int rows = 0, bad = 0, lit = 0;
+  for (; s && q && q + 1 < (const char *)b + n; q = strchr(q + 1, '\n'), rows++) {
+    long long id, t_us;
+    double x, y, z, br;
+    if (sscanf(q + 1, "%lld,%lld,%lf,%lf,%lf,%lf", &id, &t_us, &x, &y, &z, &br) != 6) {
+      bad++;
+      continue;
+    }
+    elfm_truth tr; /* rows go time by time, the objects in order */
+    elfm_scene_truth(s, rows % 4, t_us, &tr);
+    bad += id != tr.id || t_us != 16771216 + 100LL * (rows / 4) || fabs(x - tr.x_um) > 1e-4 ||
+           fabs(y - tr.y_um) > 1e-4 || fabs(z - tr.z_um) > 1e-4 ||
+           fabs(br - tr.brightness) > 1e-3 * fmax(1.0, fabs(tr.brightness));
+    lit += br > 0;
+  }
+  CHECK_EQ_INT(rows, 4 * 121);
+  CHECK_EQ_INT(bad, 0);
+  CHECK(lit > 0 && lit < rows); /* the LED's pulses: lit and dark rows both */
+  elfm_scene_free(s);
   free(b);
 }
 
