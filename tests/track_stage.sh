@@ -80,7 +80,7 @@ case "$line" in *"accelerating at"*) ;; *) echo "FAIL: stage_accel's acceleratio
 px=$(tr -d ' \n\t' < "$tmp/a/summary.json" | sed -n 's/.*"velocity_pooled_um_per_ms":\[\([^]]*\)\].*/\1/p' | cut -d, -f2)
 case "$line" in *"$(printf '%.4f' "$px"),"*) ;; *) echo "FAIL: stderr's vy is not summary.json's $px"; fail=$((fail+1)) ;; esac
 # the acceleration's spread (over the long tracks' own slopes, which the
-# summary does not list: test_analysis checks the formula) is a spread,
+# summary does not list; test_analysis bounds it on its own tracks) is a spread,
 # not the acceleration again
 flat=$(tr -d ' \n\t' < "$tmp/a/summary.json")
 acc=$(echo "$flat" | sed -n 's/.*"acceleration_um_per_ms2":\[\([^]]*\)\].*/\1/p')
