@@ -18,6 +18,18 @@ static inline int cli_run(const char *dir, const char *args)
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
+/* Write `text` to DIR/NAME; 0, or -1 (perror'd) when it cannot. */
+static inline int cli_write_file(const char *dir, const char *name, const char *text)
+{
+  char path[700];
+  snprintf(path, sizeof path, "%s/%s", dir, name);
+  FILE *f = fopen(path, "w");
+  if (!f) { perror(path); return -1; }
+  int bad = fputs(text, f) < 0;
+  bad |= fclose(f) != 0;
+  return bad ? -1 : 0;
+}
+
 /* 1 when DIR/NAME's first 8 kB hold `text`. */
 static inline int cli_file_has(const char *dir, const char *name, const char *text)
 {

@@ -10,18 +10,14 @@
 #include <cjson/cJSON.h>
 
 #include "check.h"
+#include "cli_test_util.h"
 
 static char dir[256];
 static const char *exe = ELFM_BINARY_DIR "/eventlfm";
 
 static void write_file(const char *name, const char *text)
 {
-  char p[512];
-  snprintf(p, sizeof p, "%s/%s", dir, name);
-  FILE *f = fopen(p, "w");
-  if (!f) { perror(p); exit(1); }
-  fputs(text, f);
-  fclose(f);
+  CHECK(cli_write_file(dir, name, text) == 0);
 }
 
 /* Run `eventlfm score ARGS` in dir; stdout into out, stderr into errtxt. */

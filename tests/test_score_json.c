@@ -18,6 +18,7 @@
 #include <cjson/cJSON.h>
 
 #include "check.h"
+#include "cli_test_util.h"
 #include "elfm_score.h"
 
 static char dir[256];
@@ -25,13 +26,7 @@ static const char *exe = ELFM_BINARY_DIR "/eventlfm";
 
 static void write_file(const char *name, const char *text)
 {
-  char p[512];
-  snprintf(p, sizeof p, "%s/%s", dir, name);
-  FILE *f = fopen(p, "w");
-  CHECK(f != NULL);
-  if (!f) return;
-  fputs(text, f);
-  fclose(f);
+  CHECK(cli_write_file(dir, name, text) == 0);
 }
 
 static double jnum(const cJSON *o, const char *key)

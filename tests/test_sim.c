@@ -69,7 +69,7 @@ static void store_free(ev_store *s)
   free(s->p);
 }
 
-static elfm_scene *load(const char *name, const char **params, int n)
+static elfm_scene *load(const char *name, const char *const *params, int n)
 {
   elfm_error err;
   elfm_error_clear(&err);
@@ -400,11 +400,14 @@ static int same_file(const char *a, const char *b)
   return same;
 }
 
+/* The scene test_roundtrip_and_seed writes to sim_rt_a and test_truth_file
+ * reads back: its 12 ms cross the EVT3 timestamp loop at 16777216 us. */
+static const char *const rt_settings[] = {"objects.count=4", "duration_ms=12", "t0_us=16771216"};
+
 /* Sink vs file, exactly; the recording crosses the EVT3 timestamp loop. */
 static void test_roundtrip_and_seed(void)
 {
-  const char *p[] = {"objects.count=4", "duration_ms=12", "t0_us=16771216"}; /* loop at 16777216 */
-  elfm_scene *s = load("blink_moving", p, 3);
+  elfm_scene *s = load("blink_moving", rt_settings, 3);
   if (!s) return;
   elfm_error err;
   ev_store mem;
@@ -477,8 +480,7 @@ static void test_truth_file(void)
   size_t lines = 0;
   for (size_t i = 0; i < n; i++) lines += b[i] == '\n';
   CHECK_EQ_INT(lines, 1 + 4 * 121);
-  const char *p[] = {"objects.count=4", "duration_ms=12", "t0_us=16771216"}; /* as written */
-  elfm_scene *s = load("blink_moving", p, 3);
+  elfm_scene *s = load("blink_moving", rt_settings, 3); /* as written */
   const char *q = memchr(b, '\n', n);
   int rows = 0, bad = 0, lit = 0;
   for (; s && q && q + 1 < (const char *)b + n; q = strchr(q + 1, '\n'), rows++) {
