@@ -11,7 +11,10 @@ static elfm_status parse(const char *text, elfm_table **t, elfm_error *err)
   return elfm_table_parse(text, strlen(text), "mem.csv", t, err);
 }
 
-static void expect_error(const char *text, elfm_status code, int64_t line, const char *what)
+/* The parse fails with `code` at `line`; its message holds `msg` (which
+ * names the field, counted from 1), unless msg is NULL. */
+static void expect_error_msg(const char *text, elfm_status code, int64_t line, const char *what,
+                             const char *msg)
 {
   elfm_table *t = NULL;
   elfm_error err;
@@ -22,6 +25,12 @@ static void expect_error(const char *text, elfm_status code, int64_t line, const
             (long long)line);
   CHECK(strcmp(err.file, "mem.csv") == 0);
   CHECK(t == NULL);
+  if (msg) CHECK_MSG(strstr(err.message, msg) != NULL, "%s: message '%s', expected '%s'", what, err.message, msg);
+}
+
+static void expect_error(const char *text, elfm_status code, int64_t line, const char *what)
+{
+  expect_error_msg(text, code, line, what, NULL);
 }
 
 int main(void)
@@ -61,9 +70,12 @@ int main(void)
   expect_error("a,,b\n", ELFM_ERR_FORMAT, 1, "unnamed column");
   expect_error("a,b\n1,2\n3\n", ELFM_ERR_FORMAT, 3, "too few fields");
   expect_error("a,b\n1,2,3\n", ELFM_ERR_FORMAT, 2, "too many fields");
-  expect_error("a,b\n1,x\n", ELFM_ERR_FORMAT, 2, "text field");
-  expect_error("a,b\n1,2.5.6\n", ELFM_ERR_FORMAT, 2, "trailing garbage");
-  expect_error("a,b\n1,nan\n", ELFM_ERR_RANGE, 2, "nan");
+  expect_error_msg("a,b\n1,x\n", ELFM_ERR_FORMAT, 2, "text field", "field 2 ('x') is not a number");
+  expect_error_msg("a,b,c\n1,2,3\n4,5.5.6,7\n", ELFM_ERR_FORMAT, 3, "trailing garbage",
+                   "field 2 ('5.5.6')");
+  expect_error_msg("a,b\nnan,1\n", ELFM_ERR_RANGE, 2, "nan", "field 1 ('nan') is not a finite");
+  expect_error_msg("a,b\n1,2222222222222222222222222222222222222222222222222222222222222222222\n",
+                   ELFM_ERR_FORMAT, 2, "too long", "field 2 is too long");
   expect_error("a,b\n1,inf\n", ELFM_ERR_RANGE, 2, "inf");
   expect_error("a,b\n1,1e999\n", ELFM_ERR_RANGE, 2, "overflow");
 
