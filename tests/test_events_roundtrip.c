@@ -268,13 +268,20 @@ static void test_evt2(const char *dir)
   ev_free(&got);
 }
 
-static void test_evt21(const char *dir, int legacy)
+/* header 0: OpenEB's standard EVT 2.1; 1: its IMX636 variant
+ * (endianness=legacy); 2: the old "% evt 2.1" header, which is always that
+ * variant (OpenEB's legacy EVT 2.1 files) */
+static void test_evt21(const char *dir, int header)
 {
+  static const char *const hdr[3] = {
+      "% format EVT21;height=720;width=1280\n% end\n",
+      "% format EVT21;height=720;width=1280;endianness=legacy\n% end\n",
+      "% evt 2.1\n% geometry 1280x720\n% end\n"};
+  const int legacy = header != 0;
   char path[512];
-  snprintf(path, sizeof path, "%s/e21_%d.raw", dir, legacy);
+  snprintf(path, sizeof path, "%s/e21_%d.raw", dir, header);
   bytes b = {0};
-  by_str(&b, legacy ? "% format EVT21;height=720;width=1280;endianness=legacy\n% end\n"
-                    : "% format EVT21;height=720;width=1280\n% end\n");
+  by_str(&b, hdr[header]);
   /* word(hi, lo): hi carries type/t/x/y, lo the valid mask. Standard
    * layout stores lo first (a little-endian 64-bit word). */
 #define W21(hi, lo) do { if (legacy) { by_u32(&b, hi); by_u32(&b, lo); } \
@@ -439,6 +446,7 @@ int main(void)
   test_evt2(dir);
   test_evt21(dir, 0);
   test_evt21(dir, 1);
+  test_evt21(dir, 2);
   test_dat(dir);
   test_many_triggers(dir);
   scratch_remove(dir);
