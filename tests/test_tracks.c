@@ -661,6 +661,17 @@ int main(void)
     elfm_track_info_get(w, &whole);
     CHECK(whole.smoothed && whole.s_tt_ms2 > 0);
     CHECK_NEAR(whole.s_tv_um[0] / whole.s_tt_ms2, 0.02, 0.002); /* x: a = 2 x 0.01 */
+    /* the mean lateral speed is |(vx, vy)| row by row (vz = 0.008 f
+     * um/ms here, as large as vy = -0.2 by frame 25), against the path's
+     * own: 0.5 + 0.02 f and -0.2 um/ms, f = 0..89 */
+    double lat = 0, lat_true = 0;
+    for (size_t k = 0; k < w->n_span; k++) {
+      lat += hypot(w->vel_um_per_ms[3 * k], w->vel_um_per_ms[3 * k + 1]);
+      lat_true += hypot(0.5 + 0.02 * (double)k, -0.2);
+    }
+    CHECK_EQ_INT(w->n_span, 90);
+    CHECK_NEAR(whole.mean_lateral_speed_um_per_ms, lat / 90, 1e-12);
+    CHECK_NEAR(whole.mean_lateral_speed_um_per_ms, lat_true / 90, 0.01);
     const int64_t cuts[4] = {0, 20, 55, INT64_MAX};
     w->partial = 1;
     for (int k = 0; k < 3; k++) {
