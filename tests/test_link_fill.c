@@ -210,6 +210,22 @@ int main(void)
     CHECK_MSG(fabs(q[0] - 50) < 1e-6 && fabs(q[1] + 25) < 1e-6 && fabs(q[2] - 12.5) < 1e-6,
               "line end %g %g %g", q[0], q[1], q[2]);
     elfm_track_free(t);
+    /* Three points, too few for the head's quadratic fit: the velocity
+     * from the first and last of them, per axis (vy and vz differ) */
+    t = elfm_track_create(11, &err);
+    CHECK(t != NULL);
+    for (int f = 0; f < 3 && t; f++) {
+      elfm_detection d = mk(f, T0 + 1000 * f, 2.0 * f, -1.0 * f, 0.5 * f);
+      CHECK_OK(elfm_track_append(t, &d, &err), &err);
+    }
+    elfm_link_track_end(t, &lo, 50, &g);
+    CHECK_MSG(fabs(g.v0_um_per_ms[0] - 2) < 1e-9 && fabs(g.v0_um_per_ms[1] + 1) < 1e-9 &&
+                  fabs(g.v0_um_per_ms[2] - 0.5) < 1e-9,
+              "3-point end velocity %g %g %g", g.v0_um_per_ms[0], g.v0_um_per_ms[1], g.v0_um_per_ms[2]);
+    elfm_link_gap_predict(&g, T0 + 6000, q);
+    CHECK_MSG(fabs(q[0] - 12) < 1e-6 && fabs(q[1] + 6) < 1e-6 && fabs(q[2] - 3) < 1e-6,
+              "3-point line end %g %g %g", q[0], q[1], q[2]);
+    elfm_track_free(t);
 
     t = elfm_track_create(10, &err);
     CHECK(t != NULL);
