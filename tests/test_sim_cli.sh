@@ -66,6 +66,19 @@ grep -q "accel_mm_per_s2" "$dir.err" || { echo "FAIL: stage-speed-half: $(cat "$
 check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
 check show 0 "$bin" calib show "$dir/c.json"
 grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
+# each view's line: its shift per um of depth points along its place in
+# the grid, x with i and y with j (0 on the middle column or row), and the
+# views (i, j) and (j, i) have their shifts swapped (a y shift printed
+# from x passed every test until a mutation sweep)
+awk '/^view / { i = $0; sub(/.*\(i=/, "", i); sub(/,.*/, "", i); j = $0; sub(/.*, j=/, "", j); sub(/\).*/, "", j)
+       i += 0; j += 0
+       s = $0; sub(/.*shift \(/, "", s); sub(/\) px.*/, "", s); split(s, d, ", ")
+       n++; dx[i "," j] = d[1] + 0; dy[i "," j] = d[2] + 0
+       if ((i > 0) != (d[1] > 0) || (i < 0) != (d[1] < 0) || (j > 0) != (d[2] > 0) || (j < 0) != (d[2] < 0)) bad++ }
+     END { for (k in dx) { split(k, ij, ","); t = ij[2] "," ij[1]
+             if (!(t in dx) || dx[k] != dy[t] || dy[k] != dx[t]) bad++ }
+           exit !(n == 25 && bad == 0) }' "$dir.out" ||
+  { echo "FAIL: calib show's shifts do not follow the views' places: $(sed -n 3,5p "$dir.out")"; fail=$((fail+1)); }
 # each view's crop on the sensor: the paper's 5 x 5 on the EVK4 overhangs
 # its 720 rows by 21-22 px top and bottom (rows j = -2, +2 at 85-86 %); on a
 # 640 x 480 sensor the corner views keep 1-2 %; on 320 x 240 most are gone
