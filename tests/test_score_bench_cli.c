@@ -4,6 +4,7 @@
  * with measured figures, a PNG from gnuplot). Option errors exit 2.
  * Run from a scratch directory far from the source tree: demo and bench
  * must not need any file of the checkout. */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -100,25 +101,62 @@ int main(void)
   CHECK(csv != NULL);
   if (csv) {
     int rows = 0, ok = 0, pareto = 0;
+    /* per row: RTF, F1, alpha, the two Pareto flags (fields 12, 14, 20,
+     * 24, 25, counted from 1) */
+    double rtf_of[2] = {0}, f1_of[2] = {0}, alpha_of[2] = {0};
+    int pf1_of[2] = {-1, -1}, pal_of[2] = {-1, -1};
     for (char *line = strchr(csv, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
       rows++;
       if (strstr(line, ",ok,")) ok++;
-      /* fields 24-25 are pareto_f1, pareto_alpha; 7 is events, 12 the RTF */
-      int field = 1, pf1 = -1;
-      double events = -1, rtf = -1;
+      /* 7 is events, 8 the span, 31 the CPU time, 32 the RTF on it */
+      int field = 1, pf1 = -1, pal = -1;
+      double events = -1, rtf = -1, f1 = -1, alpha = -1, span = -1, cpu = -1, rtf_cpu = -1;
       for (char *q = line + 1; *q && *q != '\n'; q++) {
         if (*q != ',') continue;
         field++;
         if (field == 7) events = atof(q + 1);
+        if (field == 8) span = atof(q + 1);
         if (field == 12) rtf = atof(q + 1);
+        if (field == 14) f1 = atof(q + 1);
+        if (field == 20) alpha = atof(q + 1);
         if (field == 24) pf1 = atoi(q + 1);
+        if (field == 25) pal = atoi(q + 1);
+        if (field == 31) cpu = atof(q + 1);
+        if (field == 32) rtf_cpu = atof(q + 1);
       }
       pareto += pf1 == 1;
       CHECK_MSG(events > 1000 && rtf > 0, "events %g rtf %g", events, rtf);
+      CHECK_MSG(cpu > 0 && fabs(rtf_cpu - span / cpu) <= 1e-3 * rtf_cpu, "span %g s, cpu %g s, RTF (CPU) %g",
+                span, cpu, rtf_cpu);
+      if (rows <= 2) {
+        rtf_of[rows - 1] = rtf;
+        f1_of[rows - 1] = f1;
+        alpha_of[rows - 1] = alpha;
+        pf1_of[rows - 1] = pf1;
+        pal_of[rows - 1] = pal;
+      }
     }
     CHECK_EQ_INT(rows, 2);
     CHECK_EQ_INT(ok, 2);
     CHECK_MSG(pareto >= 1, "no point on the F1 Pareto front");
+    /* Each flag recomputed: a point is on a front unless the other is as
+     * fast and as accurate, and better in one (the flags written the other
+     * way round passed every test until a mutation sweep). Points tied in
+     * the CSV's 6 digits are not judged. */
+    for (int i = 0; i < 2 && rows == 2; i++) {
+      const int j = 1 - i;
+      if (rtf_of[i] == rtf_of[j]) continue;
+      if (f1_of[i] != f1_of[j]) {
+        const int dom = rtf_of[j] >= rtf_of[i] && f1_of[j] >= f1_of[i];
+        CHECK_MSG(pf1_of[i] == !dom, "point %d: RTF %g F1 %g, the other's %g %g: pareto_f1 %d", i,
+                  rtf_of[i], f1_of[i], rtf_of[j], f1_of[j], pf1_of[i]);
+      }
+      if (alpha_of[i] != alpha_of[j]) {
+        const int dom = rtf_of[j] >= rtf_of[i] && alpha_of[j] >= alpha_of[i];
+        CHECK_MSG(pal_of[i] == !dom, "point %d: RTF %g alpha %g, the other's %g %g: pareto_alpha %d", i,
+                  rtf_of[i], alpha_of[i], rtf_of[j], alpha_of[j], pal_of[i]);
+      }
+    }
   }
   char *md = slurp("b/bench.md");
   CHECK(md != NULL && strstr(md, "| flow | baseline |") != NULL);
