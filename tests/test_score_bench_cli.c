@@ -97,6 +97,7 @@ int main(void)
   /* the summary names the most accurate point and the fastest near it */
   CHECK_MSG(strstr(out, "flow: best alpha '") != NULL && strstr(out, "fastest within 0.02") != NULL,
             "bench summary: %.300s", out);
+  double csv_rtf[2] = {NAN, NAN}, csv_rtf_cpu[2] = {NAN, NAN}, csv_f1[2] = {NAN, NAN}, csv_alpha[2] = {NAN, NAN};
   char *csv = slurp("b/bench.csv");
   CHECK(csv != NULL);
   if (csv) {
@@ -129,6 +130,7 @@ int main(void)
       CHECK_MSG(cpu > 0 && fabs(rtf_cpu - span / cpu) <= 1e-3 * rtf_cpu, "span %g s, cpu %g s, RTF (CPU) %g",
                 span, cpu, rtf_cpu);
       if (rows <= 2) {
+        csv_rtf_cpu[rows - 1] = rtf_cpu;
         rtf_of[rows - 1] = rtf;
         f1_of[rows - 1] = f1;
         alpha_of[rows - 1] = alpha;
@@ -139,6 +141,9 @@ int main(void)
     CHECK_EQ_INT(rows, 2);
     CHECK_EQ_INT(ok, 2);
     CHECK_MSG(pareto >= 1, "no point on the F1 Pareto front");
+    memcpy(csv_rtf, rtf_of, sizeof csv_rtf);
+    memcpy(csv_f1, f1_of, sizeof csv_f1);
+    memcpy(csv_alpha, alpha_of, sizeof csv_alpha);
     /* Each flag recomputed: a point is on a front unless the other is as
      * fast and as accurate, and better in one (the flags written the other
      * way round passed every test until a mutation sweep). Points tied in
@@ -160,6 +165,23 @@ int main(void)
   }
   char *md = slurp("b/bench.md");
   CHECK(md != NULL && strstr(md, "| flow | baseline |") != NULL);
+  /* bench.md's rows say what bench.csv's do, in the same order: RTF, RTF
+   * (CPU), F1, alpha (columns 7, 8, 10, 14 between the bars; its RTF
+   * (CPU) as CPU / span passed every test until a mutation sweep) */
+  {
+    const char *row = md ? strstr(md, "\n| flow |") : NULL;
+    for (int i = 0; i < 2 && row; i++, row = strstr(row + 1, "\n| flow |")) {
+      double col[16] = {0};
+      int c = 0;
+      for (const char *q = row + 1; *q && *q != '\n' && c < 16; q++)
+        if (*q == '|') col[c++] = atof(q + 1);
+      const double want[4] = {csv_rtf[i], csv_rtf_cpu[i], csv_f1[i], csv_alpha[i]};
+      const int at[4] = {7, 8, 10, 14};
+      for (int k = 0; k < 4; k++)
+        CHECK_MSG(fabs(col[at[k] - 1] - want[k]) <= 6e-4, "bench.md row %d column %d: %g, bench.csv %g", i,
+                  at[k], col[at[k] - 1], want[k]);
+    }
+  }
   char *png = slurp("b/bench_error_vs_speed.png");
   CHECK(png != NULL && memcmp(png, "\x89PNG", 4) == 0);
 
