@@ -21,6 +21,16 @@ for f in events.raw truth.csv calib.json stimulus.csv; do
   [ -s "$dir/blink/$f" ] || { echo "FAIL: blink: no $f"; fail=$((fail+1)); }
 done
 grep -q "Mev/s" "$dir.err" || { echo "FAIL: no event rate on stderr"; fail=$((fail+1)); }
+# the line's numbers agree: rate = events / span, events = light + noise
+# (a rate 1000 times too high passed every test until a mutation sweep)
+awk '/^simulate: scene/ { for (k = 1; k <= NF; k++) {
+       if ($(k + 1) == "events" && $(k + 2) == "in") e = $k
+       if ($(k + 1) == "s" && $k + 0 > 0 && d == "") d = $k
+       if ($(k + 1) == "Mev/s:") { r = $k; sub(/^\(/, "", r) }
+       if ($(k + 1) == "from") l = $k
+       if ($(k + 1) == "noise),") n = $k } }
+     END { exit !(e > 0 && d == 0.020 && (r - e / d * 1e-6) ^ 2 < 0.005 ^ 2 && l + n == e) }' "$dir.err" ||
+  { echo "FAIL: simulate's rate line does not add up: $(cat "$dir.err")"; fail=$((fail+1)); }
 check info 0 "$bin" info "$dir/blink/events.raw"
 check calib-of-scene 0 "$bin" calib show "$dir/blink/calib.json"
 check param 0 "$bin" simulate stage --out "$dir/stage" --duration-ms 3 --param objects.count=2 --quiet
