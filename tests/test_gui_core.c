@@ -338,6 +338,21 @@ static void test_load(void)
     if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 3000);
   }
   elfm_view_data_free(d);
+  /* A run whose frames start later (a recording cut with --from-us):
+   * frame 9 lies 4 frames after frame 5's 6000 us, not 9 frames after it
+   * (a clock that counted from frame 0 passed every test until a
+   * mutation sweep) */
+  mkdir(tpath("late"), 0755);
+  mkdir(tpath("late/mips"), 0755);
+  write_file("late/tracks.csv", "track_id,frame,t_us,x_um,y_um,z_um\n1,5,6000,0,0,0\n1,6,7000,1,0,0\n"
+                                "1,7,8000,2,0,0\n");
+  write_file("late/mips/mip_000009.png", "x");
+  CHECK_OK(elfm_view_data_load(tpath("late"), NULL, &d, &err), &err);
+  if (d) {
+    CHECK_EQ_INT(d->n_mips, 1);
+    if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 10000);
+  }
+  elfm_view_data_free(d);
   /* MIPs from elsewhere (--mips): recon names them by frame number. */
   mkdir(tpath("rec"), 0755);
   mkdir(tpath("rec/mips"), 0755);
