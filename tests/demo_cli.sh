@@ -35,6 +35,27 @@ shown0=$(sed -n 's/.*0-20 \([0-9.]*\) \/.*/\1/p' "$tmp/out.txt")
 awk -v a="$r0" -v s="$shown0" 'BEGIN { d = a - s; if (d < 0) d = -d; exit !(a >= 0.95 && d < 0.006) }' ||
   bad "recall within 20 um of focus: score '$r0', demo '$shown0' (want >= 0.95, the same)"
 
+# the whole depth line: each band's recall / alpha as score's, the 60+
+# band pooled over score's bands from 60 um by their truth points (a mean
+# left unweighted passed every test until a mutation sweep)
+want=$(grep -o '"depth_bands":\[[^]]*\]' "$tmp/score.json" | sed 's/},{/\n/g' |
+  awk '{ lo = $0; sub(/.*"z_lo_um":/, "", lo); lo += 0
+         n = $0; sub(/.*"n_truth_points":/, "", n); n += 0
+         tp = $0; sub(/.*"n_true_positives":/, "", tp); tp += 0
+         al = $0; sub(/.*"alpha_tracks":/, "", al); al += 0
+         k = lo < 60 ? lo / 20 : 3; N[k] += n; T[k] += tp; A[k] += n * al }
+       END { for (k = 0; k < 4; k++) printf "%.4f %.4f ", N[k] ? T[k] / N[k] : -1, N[k] ? A[k] / N[k] : -1 }')
+got=$(grep -F "recall / alpha by |z| (um)" "$tmp/out.txt" | sed 's/.*(um)//; s/[0-9]*-[0-9]*//g; s/60+//; s/\// /g')
+echo "depth line: demo '$got', from score '$want'"
+echo "$got $want" | awk '{ if (NF != 16) exit 1; for (k = 1; k <= 8; k++) { d = $k - $(k + 8); if (d < 0) d = -d; if (d > 0.006) exit 1 } }' ||
+  bad "the demo's depth line '$got' is not score's '$want'"
+# the real-time factor is the recording's span over the tracking time
+# (100 ms of recording here; the time printed to 10 ms)
+rtf=$(sed -n 's/.*real-time factor (span \/ wall) *\([0-9.]*\).*/\1/p' "$tmp/out.txt")
+trk=$(sed -n 's/.*tracking (events -> tracks files) *\([0-9.]*\) s.*/\1/p' "$tmp/out.txt")
+awk -v r="$rtf" -v t="$trk" 'BEGIN { s = r * t; exit !(t > 0 && s > 0.094 * (1 - 0.005 / t) && s < 0.1 * (1 + 0.005 / t) + 0.001) }' ||
+  bad "real-time factor $rtf x tracking $trk s is not the 0.1 s recording"
+
 # a duration out of range is a usage error (exit 2), nothing written
 "$bin" demo --out "$tmp/e" --duration-ms 5 > /dev/null 2>&1; rc=$?
 [ $rc -eq 2 ] || bad "--duration-ms 5 exited $rc, not 2"
