@@ -97,14 +97,15 @@ int main(void)
   /* the summary names the most accurate point and the fastest near it */
   CHECK_MSG(strstr(out, "flow: best alpha '") != NULL && strstr(out, "fastest within 0.02") != NULL,
             "bench summary: %.300s", out);
-  double csv_rtf[2] = {NAN, NAN}, csv_rtf_cpu[2] = {NAN, NAN}, csv_f1[2] = {NAN, NAN}, csv_alpha[2] = {NAN, NAN};
+  /* bench.csv's first two rows: RTF, RTF (CPU), F1, alpha */
+  double csv_rtf[2] = {NAN, NAN}, csv_rtf_cpu[2] = {NAN, NAN}, csv_f1[2] = {NAN, NAN},
+         csv_alpha[2] = {NAN, NAN};
   char *csv = slurp("b/bench.csv");
   CHECK(csv != NULL);
   if (csv) {
     int rows = 0, ok = 0, pareto = 0;
-    /* per row: RTF, F1, alpha, the two Pareto flags (fields 12, 14, 20,
-     * 24, 25, counted from 1) */
-    double rtf_of[2] = {0}, f1_of[2] = {0}, alpha_of[2] = {0};
+    /* per row also the two Pareto flags; fields counted from 1: 12 RTF,
+     * 14 F1, 20 alpha, 24-25 the flags */
     int pf1_of[2] = {-1, -1}, pal_of[2] = {-1, -1};
     for (char *line = strchr(csv, '\n'); line && line[1]; line = strchr(line + 1, '\n')) {
       rows++;
@@ -131,9 +132,9 @@ int main(void)
                 span, cpu, rtf_cpu);
       if (rows <= 2) {
         csv_rtf_cpu[rows - 1] = rtf_cpu;
-        rtf_of[rows - 1] = rtf;
-        f1_of[rows - 1] = f1;
-        alpha_of[rows - 1] = alpha;
+        csv_rtf[rows - 1] = rtf;
+        csv_f1[rows - 1] = f1;
+        csv_alpha[rows - 1] = alpha;
         pf1_of[rows - 1] = pf1;
         pal_of[rows - 1] = pal;
       }
@@ -141,25 +142,22 @@ int main(void)
     CHECK_EQ_INT(rows, 2);
     CHECK_EQ_INT(ok, 2);
     CHECK_MSG(pareto >= 1, "no point on the F1 Pareto front");
-    memcpy(csv_rtf, rtf_of, sizeof csv_rtf);
-    memcpy(csv_f1, f1_of, sizeof csv_f1);
-    memcpy(csv_alpha, alpha_of, sizeof csv_alpha);
     /* Each flag recomputed: a point is on a front unless the other is as
      * fast and as accurate, and better in one (the flags written the other
      * way round passed every test until a mutation sweep). Points tied in
      * the CSV's 6 digits are not judged. */
     for (int i = 0; i < 2 && rows == 2; i++) {
       const int j = 1 - i;
-      if (rtf_of[i] == rtf_of[j]) continue;
-      if (f1_of[i] != f1_of[j]) {
-        const int dom = rtf_of[j] >= rtf_of[i] && f1_of[j] >= f1_of[i];
+      if (csv_rtf[i] == csv_rtf[j]) continue;
+      if (csv_f1[i] != csv_f1[j]) {
+        const int dom = csv_rtf[j] >= csv_rtf[i] && csv_f1[j] >= csv_f1[i];
         CHECK_MSG(pf1_of[i] == !dom, "point %d: RTF %g F1 %g, the other's %g %g: pareto_f1 %d", i,
-                  rtf_of[i], f1_of[i], rtf_of[j], f1_of[j], pf1_of[i]);
+                  csv_rtf[i], csv_f1[i], csv_rtf[j], csv_f1[j], pf1_of[i]);
       }
-      if (alpha_of[i] != alpha_of[j]) {
-        const int dom = rtf_of[j] >= rtf_of[i] && alpha_of[j] >= alpha_of[i];
+      if (csv_alpha[i] != csv_alpha[j]) {
+        const int dom = csv_rtf[j] >= csv_rtf[i] && csv_alpha[j] >= csv_alpha[i];
         CHECK_MSG(pal_of[i] == !dom, "point %d: RTF %g alpha %g, the other's %g %g: pareto_alpha %d", i,
-                  rtf_of[i], alpha_of[i], rtf_of[j], alpha_of[j], pal_of[i]);
+                  csv_rtf[i], csv_alpha[i], csv_rtf[j], csv_alpha[j], pal_of[i]);
       }
     }
   }
