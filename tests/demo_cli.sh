@@ -49,11 +49,14 @@ got=$(grep -F "recall / alpha by |z| (um)" "$tmp/out.txt" | sed 's/.*(um)//; s/[
 echo "depth line: demo '$got', from score '$want'"
 echo "$got $want" | awk '{ if (NF != 16) exit 1; for (k = 1; k <= 8; k++) { d = $k - $(k + 8); if (d < 0) d = -d; if (d > 0.006) exit 1 } }' ||
   bad "the demo's depth line '$got' is not score's '$want'"
-# the real-time factor is the recording's span over the tracking time
-# (100 ms of recording here; the time printed to 10 ms)
+# the real-time factor is the recording's span (94-100 ms here) over the
+# tracking time; the time is printed to 0.01 s and the factor to 0.001,
+# so their product is the span within 0.005 r + 0.0005 t (slow machines
+# and sanitizer builds give small factors)
 rtf=$(sed -n 's/.*real-time factor (span \/ wall) *\([0-9.]*\).*/\1/p' "$tmp/out.txt")
 trk=$(sed -n 's/.*tracking (events -> tracks files) *\([0-9.]*\) s.*/\1/p' "$tmp/out.txt")
-awk -v r="$rtf" -v t="$trk" 'BEGIN { s = r * t; exit !(t > 0 && s > 0.094 * (1 - 0.005 / t) && s < 0.1 * (1 + 0.005 / t) + 0.001) }' ||
+awk -v r="$rtf" -v t="$trk" 'BEGIN { s = r * t; e = 0.005 * r + 0.0005 * t + 1e-6
+  exit !(t > 0 && s > 0.094 - e && s < 0.1 + e) }' ||
   bad "real-time factor $rtf x tracking $trk s is not the 0.1 s recording"
 
 # a duration out of range is a usage error (exit 2), nothing written
