@@ -32,5 +32,33 @@ for ok in "--stitch-points 0" "--stitch-points 4" "--stitch-late-points 0" "--st
   "$bin" track --calib "$tmp/none.json" --events b --out "$tmp/o" $ok >/dev/null 2>"$tmp/err"
   [ $? -eq 1 ] || { echo "FAIL: $ok refused: $(cat "$tmp/err")"; fail=$((fail+1)); }
 done
+# Options given land where they act: summary.json's parameters say each
+# value given, in one short run (--threshold-abs and --link-kz stored in
+# other fields passed every test until a mutation sweep)
+simulate_or_skip "$tmp/f" flow 20 1
+set -- threshold_abs:--threshold-abs:37 threshold_low:--threshold-low:11 link_kz:--link-kz:3.5 \
+  gate_um:--gate-um:5.5 fill_gate_um:--fill-gate-um:2.5 radius_xy_um:--radius-xy-um:2.25 \
+  radius_z_um:--radius-z-um:7.5 min_separation_um:--min-separation-um:3.25 \
+  threshold_k_sigma:--threshold-k:4.5 threshold_rel:--threshold-rel:0.125
+args=""
+for g in "$@"; do args="$args ${g#*:}"; done
+args=$(echo "$args" | sed 's/:/ /g')
+# shellcheck disable=SC2086
+"$bin" track --calib "$tmp/f/calib.json" --events "$tmp/f/events.raw" --out "$tmp/p" $args \
+  2>"$tmp/p.err" >/dev/null || { echo "FAIL: track$args: $(tail -n 2 "$tmp/p.err")"; fail=$((fail+1)); }
+for g in "$@"; do
+  k=${g%%:*}; v=${g##*:}
+  got=$(key "$tmp/p/summary.json" "$k")
+  awk -v a="$got" -v b="$v" 'BEGIN { exit !(a != "" && a + 0 == b + 0) }' ||
+    { echo "FAIL: $(echo "${g#*:}" | tr : " ") gave parameters.$k '$got'"; fail=$((fail+1)); }
+done
+# and the closing line's realtime factor is the span over its own time
+# (both printed to 0.01)
+line=$(tr '\r' '\n' < "$tmp/p.err" | grep "realtime factor")
+span=$(key "$tmp/p/summary.json" span_s)
+echo "$line" | sed 's/.* in \([0-9.]*\) s (.*realtime factor \([0-9.]*\)).*/\1 \2/' |
+  awk -v s="$span" '{ t = $1; r = $2; e = 0.005 + s * 0.005 / (t * t) + 1e-9
+    exit !(t > 0 && s > 0 && (r - s / t) ^ 2 <= e * e) }' ||
+  { echo "FAIL: closing line '$line' (span $span s)"; fail=$((fail+1)); }
 [ $fail -eq 0 ] && echo "track_options: all passed" || echo "track_options: $fail failed"
 [ $fail -eq 0 ]
