@@ -29,11 +29,15 @@ trap cleanup EXIT
 
 # the mutants: blocks of "id:", "file:", "tests:", "old:", "new:" lines
 ids=()
-declare -A f_of t_of o_of n_of
+declare -A f_of t_of o_of n_of seen
 id=""
 while IFS= read -r line; do
   case "$line" in
-  "id: "*) id=${line#id: }; ids+=("$id") ;;
+  "id: "*) id=${line#id: }; ids+=("$id")
+    # an id given twice: the later block would stand for both (a second
+    # csv_pol hid the first for a session)
+    if [ -n "${seen[$id]:-}" ]; then echo "mutation_sweep: id '$id' twice in $list" >&2; exit 2; fi
+    seen[$id]=1 ;;
   "file: "*) f_of[$id]=${line#file: } ;;
   "tests: "*) t_of[$id]=${line#tests: } ;;
   "old: "*) o_of[$id]=${line#old: } ;;
