@@ -504,35 +504,6 @@ static void test_truth_file(void)
   free(b);
 }
 
-/* Static beads lie uniformly over the placement disc (and in depth): of
- * 1000 placed without a minimum separation, half within R / sqrt(2) of
- * the axis (a radius drawn uniformly, not its square, put 71 % there and
- * the beads' density 1 / r at the centre; only end-to-end tracks noticed,
- * through the scenes' changed layouts), none beyond R. */
-static void test_placement_uniform(void)
-{
-  const char *p[] = {"objects.min_separation_um=0", "objects.count=1000", "duration_ms=1"};
-  elfm_scene *s = load("blink", p, 3);
-  if (!s) return;
-  const int n = elfm_scene_n_objects(s);
-  CHECK_EQ_INT(n, 1000);
-  const double R = 55, z_lo = -80, z_hi = 80; /* blink.json's motion */
-  int inner = 0, outside = 0, upper = 0;
-  for (int o = 0; o < n; o++) {
-    elfm_truth tr;
-    elfm_scene_truth(s, o, elfm_scene_t0_us(s), &tr);
-    const double r = hypot(tr.x_um, tr.y_um);
-    inner += r < R / sqrt(2.0);
-    outside += r > R + 1e-9 || tr.z_um < z_lo || tr.z_um > z_hi;
-    upper += tr.z_um > 0.5 * (z_lo + z_hi);
-  }
-  /* binomial(1000, 0.5): sd 16 */
-  CHECK_MSG(inner > 450 && inner < 550, "%d of 1000 within R / sqrt(2)", inner);
-  CHECK_MSG(upper > 450 && upper < 550, "%d of 1000 in the upper half of the depths", upper);
-  CHECK_EQ_INT(outside, 0);
-  elfm_scene_free(s);
-}
-
 static void test_truth_motion(void)
 {
   elfm_error err;
@@ -807,7 +778,6 @@ int main(void)
   test_truth_file();
   test_long_out_dir();
   test_truth_motion();
-  test_placement_uniform();
   test_random_motion();
   test_random_motion_too_big();
   test_memory_bounded();
