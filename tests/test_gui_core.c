@@ -181,6 +181,19 @@ static const char *tracks_csv =
   "3,1,2000,-11,0,0,-11,0,0,0,0,0,5\n"
   "7,1,2000,3,2,3,3,2,3,0,0,0,5\n";
 
+/* Loading run folder `run` finds one MIP, at t_us. */
+static void expect_one_mip(const char *run, int64_t t_us)
+{
+  elfm_error err;
+  elfm_view_data *d = NULL;
+  CHECK_OK(elfm_view_data_load(tpath(run), NULL, &d, &err), &err);
+  if (d) {
+    CHECK_EQ_INT(d->n_mips, 1);
+    if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, t_us);
+  }
+  elfm_view_data_free(d);
+}
+
 static void test_load(void)
 {
   elfm_error err;
@@ -332,12 +345,7 @@ static void test_load(void)
   remove(tpath("run/mips/mip_t000002500.png"));
   remove(tpath("run/mips/mip_t000001500.png"));
   write_file("run/mips/frame_000002.png", "x");
-  CHECK_OK(elfm_view_data_load(tpath("run"), NULL, &d, &err), &err);
-  if (d) {
-    CHECK_EQ_INT(d->n_mips, 1);
-    if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 3000);
-  }
-  elfm_view_data_free(d);
+  expect_one_mip("run", 3000);
   /* A run whose frames start later (a recording cut with --from-us):
    * frame 9 lies 4 frames after frame 5's 6000 us, not 9 frames after it
    * (a clock that counted from frame 0 passed every test until a
@@ -347,12 +355,7 @@ static void test_load(void)
   write_file("late/tracks.csv", "track_id,frame,t_us,x_um,y_um,z_um\n1,5,6000,0,0,0\n1,6,7000,1,0,0\n"
                                 "1,7,8000,2,0,0\n");
   write_file("late/mips/mip_000009.png", "x");
-  CHECK_OK(elfm_view_data_load(tpath("late"), NULL, &d, &err), &err);
-  if (d) {
-    CHECK_EQ_INT(d->n_mips, 1);
-    if (d->n_mips == 1) CHECK_EQ_INT(d->mips[0].t_us, 10000);
-  }
-  elfm_view_data_free(d);
+  expect_one_mip("late", 10000);
   /* MIPs from elsewhere (--mips): recon names them by frame number. */
   mkdir(tpath("rec"), 0755);
   mkdir(tpath("rec/mips"), 0755);
