@@ -397,13 +397,16 @@ int main(void)
    * a new track; with it, one track of A's 75 points and B untouched. Then
    * a bead on a straight line at 2.5 um/ms is lost, and a second bead
    * starts on its path 75 um behind 5 ms later (out of reach at 1.5 x 2.5
-   * um/ms): never stitched. */
+   * um/ms): never stitched. From the frame the young track is stitched
+   * (its 5th point, frame 69) on, A's detection is reported as joining the
+   * track that holds it at the end (the id its motion bias is taken from). */
   for (int stitch = 0; stitch < 2; stitch++) {
     elfm_link_options os = o;
     os.stitch_points = stitch ? 5 : 0;
     elfm_linker *l = elfm_link_create(&os, &err);
     CHECK(l != NULL);
     const double w = 3.5 / 20;  /* rad/ms */
+    int64_t id_a[100 - 69];
     for (int f = 0; f < 100; f++) {
       elfm_detection d[2];
       int n = 0;
@@ -411,18 +414,23 @@ int main(void)
       if (f < 40 || f >= 65) d[n++] = mk(20 * cos(pa) + 0.1 * (urand() - 0.5), 20 * sin(pa), 5);
       d[n++] = mk(60 + 20 * cos(pb), 20 * sin(pb) + 0.1 * (urand() - 0.5), 5);
       CHECK_OK(elfm_link_step(l, f, T0 + f * 1000, d, n, &err), &err);
+      if (f >= 69) id_a[f - 69] = elfm_link_last_track_id(l, 0);
     }
     CHECK_OK(elfm_link_finish(l, &err), &err);
-    int n = 0, n75 = 0;
+    int n = 0, n75 = 0, ids_ok = 0;
     elfm_track *t;
     while ((t = elfm_link_pop_finished(l))) {
       n++;
+      if (t->pts[0].x_um < 30 && t->pts[t->n - 1].frame == 99)
+        for (int f = 69; f < 100; f++) ids_ok += id_a[f - 69] == t->id;
       if (t->n == 75 && t->pts[0].x_um < 30) n75++;
       if (t->pts[0].x_um > 30) CHECK_EQ_INT((int)t->n, 100);  /* B */
       elfm_track_free(t);
     }
     CHECK_MSG(n == (stitch ? 2 : 3) && n75 == stitch, "stitch %d: %d tracks, %d of A's 75", stitch,
               n, n75);
+    CHECK_MSG(ids_ok == 100 - 69, "stitch %d: A's detection named its track in %d of frames 69-99",
+              stitch, ids_ok);
     elfm_link_free(l);
     /* out of reach */
     l = elfm_link_create(&os, &err);
