@@ -33,8 +33,10 @@ awk '/^simulate: scene/ { for (k = 1; k <= NF; k++) {
   { echo "FAIL: simulate's rate line does not add up: $(cat "$dir.err")"; fail=$((fail+1)); }
 check info 0 "$bin" info "$dir/blink/events.raw"
 check calib-of-scene 0 "$bin" calib show "$dir/blink/calib.json"
-check param 0 "$bin" simulate stage --out "$dir/stage" --duration-ms 3 --param objects.count=2 --quiet
-[ ! -e "$dir/stage/stimulus.csv" ] || { echo "FAIL: stage wrote stimulus.csv"; fail=$((fail+1)); }
+# --out in folders that do not exist yet: made, as by mkdir -p
+check param 0 "$bin" simulate stage --out "$dir/new/run/stage" --duration-ms 3 --param objects.count=2 --quiet
+[ -s "$dir/new/run/stage/events.raw" ] || { echo "FAIL: no events.raw under --out's new folders"; fail=$((fail+1)); }
+[ ! -e "$dir/new/run/stage/stimulus.csv" ] || { echo "FAIL: stage wrote stimulus.csv"; fail=$((fail+1)); }
 check no-out 2 "$bin" simulate stage
 check bad-seed 2 "$bin" simulate stage --out "$dir/x" --seed abc
 check bad-duration 2 "$bin" simulate stage --out "$dir/x" --duration-ms -5
