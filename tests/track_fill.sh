@@ -8,6 +8,7 @@
 #    found in summary.json;
 #  - detections.csv stays in frame order (fills are written with their frame);
 #  - without --fill-views the integral fills with 8 views (summary.json);
+#    each of the integral's own defaults gives way to its option when given;
 #  - the smoother weights the fills 1.5x noisier than the peaks by default
 #    (--view-fit-sigma): alpha above --view-fit-sigma 1 (seeds 1-20: every
 #    seed up, mean 0.7655 -> 0.7681; seed 21 at the final defaults 0.830
@@ -118,6 +119,16 @@ awk -F, 'NR > 2 && $1 < prev { bad = 1 } NR > 1 { prev = $1 } END { exit bad }' 
 [ "$(key "$tmp/int/summary.json" fill_ends)" = false ] || { echo "FAIL: integral fill_ends not off"; fail=$((fail+1)); }
 [ "$(key "$tmp/int/summary.json" short_path_um)" = 0 ] || { echo "FAIL: integral short_path_um not 0"; fail=$((fail+1)); }
 [ "$(key "$tmp/def/summary.json" fill_views)" = 4 ] || { echo "FAIL: default fill_views not 4"; fail=$((fail+1)); }
+# ... and every one of the integral's own defaults gives way to the option given
+"$bin" track --calib "$tmp/flow/calib.json" --events "$tmp/flow/events.raw" --out "$tmp/intg" -q \
+  --repr integral --to-us 20000 --fill-views 5 --fill-frames 3 --fill-ends on --short-path-um 7 \
+  --radius-xy-um 2.5 --spline-order 3 --gcv-gamma 2 --fit-sd-power 1 --localize-power 3 ||
+  { echo "FAIL: track --repr integral with its options given"; fail=$((fail+1)); }
+for kv in fill_views=5 fill_frames=3 short_path_um=7 radius_xy_um=2.5 spline_order=3 gcv_gamma=2 \
+          fit_sd_power=1 localize_power=3; do
+  expect_key "${kv%=*}" "$tmp/intg/summary.json" "${kv#*=}"
+done
+[ "$(key "$tmp/intg/summary.json" fill_ends)" = true ] || { echo "FAIL: --fill-ends on gave way to the integral's off"; fail=$((fail+1)); }
 
 [ $fail -eq 0 ] && echo "track_fill: all passed" || echo "track_fill: $fail failed"
 [ $fail -eq 0 ]
