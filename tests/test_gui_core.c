@@ -1,5 +1,5 @@
 /* test_gui_core.c — the viewer's parts that need no display: colour map,
- * camera projection, font, tick steps, loading run directories and CSVs
+ * camera projection, font, tick steps, levels of detail, loading run directories and CSVs
  * (and their errors), PNG round trip, and the clear failure without a
  * display (library and CLI). */
 #include <errno.h>
@@ -443,6 +443,39 @@ static void test_lod_shared(void)
   gui_series_arrays_free(&g);
 }
 
+/* A level's error (series_lod.c) is each skipped point's distance from
+ * the chord at its own time: a straight line at constant speed sampled
+ * at uneven times (a track with gaps) is exact at every level, and the
+ * same points moved off the line by 0.3 um once are not. */
+static void test_lod_error(void)
+{
+  static const int64_t t_ms[9] = {0, 1, 2, 3, 10, 11, 12, 20, 21};
+  float xyz[3 * 9];
+  int64_t t[9];
+  size_t first[2] = {0, 9};
+  int64_t id[1] = {1};
+  for (int i = 0; i < 9; i++) {
+    t[i] = 1000 * t_ms[i];
+    xyz[3 * i] = 2.5f * (float)t_ms[i]; /* 2.5 um/ms along x */
+    xyz[3 * i + 1] = -1.0f * (float)t_ms[i];
+    xyz[3 * i + 2] = 5;
+  }
+  elfm_view_series s = {1, 9, first, id, xyz, t, NULL};
+  for (int bent = 0; bent < 2; bent++) {
+    if (bent) xyz[3 * 3 + 1] += 0.3f; /* point 3, skipped at every level from 1 */
+    gui_series_gl g;
+    memset(&g, 0, sizeof g);
+    float *vtx = NULL;
+    elfm_error err;
+    CHECK_OK(gui_series_build(&s, 0, &g, &vtx, &err), &err);
+    for (int l = 1; vtx && l < GUI_LOD_LEVELS; l++)
+      CHECK_MSG(bent ? fabsf(g.lvl_err_um[l][0] - 0.3f) < 1e-4f : g.lvl_err_um[l][0] < 1e-4f,
+                "bent %d, level %d: error %g um", bent, l, (double)g.lvl_err_um[l][0]);
+    free(vtx);
+    gui_series_arrays_free(&g);
+  }
+}
+
 static void test_load_errors(void)
 {
   elfm_error err;
@@ -628,6 +661,7 @@ int main(void)
   test_load();
   test_load_errors();
   test_lod_shared();
+  test_lod_error();
   test_synthetic();
   test_png();
   test_no_display();
