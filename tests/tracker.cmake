@@ -22,6 +22,12 @@ elfm_add_test(test_smooth_timescale test_smooth_timescale.c TIMEOUT 60)
 elfm_add_test(test_analysis test_analysis.c TIMEOUT 60)
 elfm_add_test(test_tracks test_tracks.c TIMEOUT 60)
 elfm_add_test(test_frame_times test_frame_times.c TIMEOUT 60)
+# track's stage test by the frames' shift: its source compiled in, the one
+# piece of the command's internals with a unit test (the rest is tested
+# through the program)
+elfm_add_test(test_track_vote test_track_vote.c)
+target_sources(test_track_vote PRIVATE ${CMAKE_SOURCE_DIR}/cli/cmd_track_vote.c)
+target_include_directories(test_track_vote PRIVATE ${CMAKE_SOURCE_DIR}/cli)
 # End to end (simulate -> eventlfm track -> score): short scenes by default,
 # the long ones (stage_accel, blink, blink_moving, worm) labelled slow.
 elfm_add_test(test_track_e2e test_track_e2e.c TIMEOUT 300)
