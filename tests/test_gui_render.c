@@ -538,10 +538,11 @@ int main(int argc, char **argv)
   elfm_viewer_show(v, 1, 1, 1);
 
   /* 5. The MIP plane: magenta over the box floor once the cursor reaches
-   * its time (20 ms), absent before it and when switched off. */
+   * its time (20 ms: at 20 ms exactly), absent 1 us before it and when
+   * switched off. */
   elfm_viewer_set_color_mode(v, ELFM_COLOR_TIME);
   int count[3];
-  int64_t at[3] = {30000, 10000, 30000};
+  int64_t at[3] = {20000, 19999, 30000};
   int show[3] = {1, 1, 0};
   for (int k = 0; k < 3; k++) {
     elfm_viewer_show(v, 1, 1, show[k]);
