@@ -677,28 +677,45 @@ int main(int argc, char **argv)
   CHECK_MSG(differ * 100 < 3 * lit, "level of detail changed %ld of %ld lit pixels", differ, lit);
   elfm_view_data_free(syn);
 
-  /* 8. The CLI: --screenshot writes a PNG of the asked size with tracks. */
+  /* 8. The CLI: --screenshot writes a PNG of the asked size with tracks;
+   * --color's four maps give four pictures, and --at-us another moment
+   * another picture (each once mapped to another mode, or the cursor left
+   * at its start, by a fault that the library's checks above did not see). */
   const char *bin = ELFM_BINARY_DIR "/eventlfm";
   if (access(bin, X_OK) == 0) {
-    char cmd[2048];
-    snprintf(cmd, sizeof cmd,
-             "ASAN_OPTIONS=detect_leaks=0 %s view %s --truth %s --screenshot %s --size 400x300 "
-             "--at-us 60000 --color depth 2>%s",
-             bin, dir, tpath("truth.csv"), tpath("cli.png"), tpath("cli.err"));
-    int rc = system(cmd);
-    CHECK(WIFEXITED(rc) && WEXITSTATUS(rc) == 0);
-    int w = 0, h = 0;
-    uint8_t *rgba = NULL;
-    CHECK_OK(elfm_png_read_rgba(tpath("cli.png"), &w, &h, &rgba, &err), &err);
-    CHECK_EQ_INT(w, 400);
-    CHECK_EQ_INT(h, 300);
-    int sat = 0;
-    for (int i = 0; rgba && i < w * h; i++) {
-      uint8_t p3[3] = {rgba[4 * i], rgba[4 * i + 1], rgba[4 * i + 2]};
-      sat += saturation(p3) > 80;
+    static const char *const color[5] = {"depth", "time", "track", "shared", "depth"};
+    static const int at_ms[5] = {60, 60, 60, 60, 30};
+    uint8_t *shot[5] = {NULL};
+    for (int k = 0; k < 5; k++) {
+      char cmd[2048], png[64];
+      snprintf(png, sizeof png, "cli%d.png", k);
+      snprintf(cmd, sizeof cmd,
+               "ASAN_OPTIONS=detect_leaks=0 %s view %s --truth %s --screenshot %s --size 400x300 "
+               "--at-us %d000 --color %s 2>%s",
+               bin, dir, tpath("truth.csv"), tpath(png), at_ms[k], color[k], tpath("cli.err"));
+      int rc = system(cmd);
+      CHECK_MSG(WIFEXITED(rc) && WEXITSTATUS(rc) == 0, "view --color %s --at-us %d000", color[k], at_ms[k]);
+      int w = 0, h = 0;
+      CHECK_OK(elfm_png_read_rgba(tpath(png), &w, &h, &shot[k], &err), &err);
+      CHECK_EQ_INT(w, 400);
+      CHECK_EQ_INT(h, 300);
+      if (w != 400 || h != 300) {
+        free(shot[k]);
+        shot[k] = NULL;
+      }
     }
+    int sat = 0;
+    for (int i = 0; shot[0] && i < 400 * 300; i++) sat += saturation(shot[0] + 4 * i) > 80;
     CHECK_MSG(sat > 200, "CLI screenshot has %d coloured pixels", sat);
-    free(rgba);
+    for (int a = 0; a < 5; a++)
+      for (int b = a + 1; b < 5; b++) {
+        if (!shot[a] || !shot[b] || (b == 4 && a != 0)) continue; /* the moment: depth only */
+        int differ = 0;
+        for (int i = 0; i < 400 * 300 * 4; i++) differ += shot[a][i] != shot[b][i];
+        CHECK_MSG(differ > 100, "view --color %s --at-us %d000 and --color %s --at-us %d000: %d bytes differ",
+                  color[a], at_ms[a], color[b], at_ms[b], differ);
+      }
+    for (int k = 0; k < 5; k++) free(shot[k]);
   } else {
     fprintf(stderr, "note: %s not built, CLI screenshot check left out\n", bin);
   }
