@@ -556,6 +556,35 @@ int main(int argc, char **argv)
   CHECK_EQ_INT(count[1], 0);
   CHECK_EQ_INT(count[2], 0);
 
+  /* 5a. The scale bar (bottom left, white, 3 px thick) is as long as the
+   * length its label says: about a sixth of the picture's width rounded
+   * to 1/2/5 x 10^k um, at the camera's px per um. The scene is moved out
+   * of the picture (and the MIP hidden) so that only the overlay is drawn
+   * there. */
+  {
+    elfm_camera *cam = elfm_viewer_camera(v);
+    const elfm_camera keep = *cam;
+    cam->half_height_um = 50;
+    cam->target_um[0] = cam->target_um[1] = 1e6;
+    elfm_viewer_show(v, 0, 0, 0);
+    render(v);
+    const double px_per_um = H / (2.0 * 50);
+    const double want_px = elfm_nice_step(W / px_per_um / 6.0, 1) * px_per_um;
+    int longest = 0;
+    for (int r = H - 40; r < H; r++) {
+      int run = 0;
+      for (int c = 0; c < W / 2; c++) {
+        const uint8_t *p = img + 3 * ((size_t)r * W + (size_t)c);
+        run = p[0] > 240 && p[1] > 240 && p[2] > 240 ? run + 1 : 0;
+        if (run > longest) longest = run;
+      }
+    }
+    CHECK_MSG(fabs(longest - want_px) <= 2, "scale bar %d px long, its label's length is %.1f px",
+              longest, want_px);
+    *cam = keep;
+    elfm_viewer_show(v, 1, 1, 1);
+  }
+
   elfm_viewer_free(v);
   v = NULL;
   elfm_view_data_free(d);
