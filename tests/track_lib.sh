@@ -8,16 +8,18 @@ key() {
 
 # expect_gain A B M MESSAGE: B > A + M (floating point, by awk; a negative
 # M: B may fall below A by less than -M); otherwise print "FAIL: MESSAGE"
-# and count it in $fail.
+# and count it in $fail. A and B must be numbers: awk compares a word (a
+# JSON null, an empty key) with a number as text, and "null" > "0.9".
 expect_gain() {
-  awk -v a="$1" -v b="$2" -v m="$3" 'BEGIN { exit !(b > a + m) }' || { echo "FAIL: $4"; fail=$((fail+1)); }
+  awk -v a="$1" -v b="$2" -v m="$3" 'BEGIN { exit !(a != "" && b != "" && a == a + 0 && b == b + 0 && b > a + m) }' ||
+    { echo "FAIL: $4"; fail=$((fail+1)); }
 }
 
 # expect_key KEY FILE VALUE: the number KEY in FILE (key, above) is VALUE
 # to 1e-3; otherwise print a failure and count it in $fail.
 expect_key() {
   ex_v=$(key "$2" "$1")
-  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a - b < 1e-3 && b - a < 1e-3) }' ||
+  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a == a + 0 && a - b < 1e-3 && b - a < 1e-3) }' ||
     { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
 }
 
@@ -27,9 +29,17 @@ expect_string() {
   [ "$(key "$1" "$2")" = "\"$3\"" ] || { echo "FAIL: $2 in $1 is $(key "$1" "$2"), not $3"; fail=$((fail+1)); }
 }
 
-# below A F B: true when A < F x B (floating point, by awk).
+# below A F B: true when A < F x B (floating point, by awk); false when A or
+# B is not a number (a JSON null, an empty key).
 below() {
-  awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a < f * b) }'
+  awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a != "" && b != "" && a == a + 0 && b == b + 0 && a < f * b) }'
+}
+
+# at_least A B: true when A is a number >= B (not `! below`, which a JSON
+# null or an empty key passed: track_turning's judged miss written as null
+# went unseen until a mutation sweep).
+at_least() {
+  awk -v a="$1" -v b="$2" 'BEGIN { exit !(a != "" && a == a + 0 && a >= b) }'
 }
 
 # simulate_or_skip DIR SCENE MS SEED [simulate options...]: `eventlfm

@@ -48,7 +48,7 @@ grep -q "peaks are faint" "$tmp/say.err" && { echo "FAIL: faint-peaks note on fl
 expect_key blur_px "$tmp/say/summary.json" 0
 [ "$(key "$tmp/say/summary.json" blur_auto)" = true ] || { echo "FAIL: blur_auto not on by default"; fail=$((fail+1)); }
 ra=$(key "$tmp/say/summary.json" auto_height_ratio)
-[ -n "$ra" ] && ! below "$ra" 1 2.15 || { echo "FAIL: flow's auto_height_ratio '$ra' below 2.15"; fail=$((fail+1)); }
+at_least "$ra" 2.15 || { echo "FAIL: flow's auto_height_ratio '$ra' below 2.15"; fail=$((fail+1)); }
 "$bin" track --calib "$tmp/sim/calib.json" --events "$tmp/sim/events.raw" --out "$tmp/say0" \
   --plane-shift-px 0 2>"$tmp/say0.err" >/dev/null
 grep -q "apart: every" "$tmp/say0.err" && { echo "FAIL: planes named with every plane"; fail=$((fail+1)); }
