@@ -478,9 +478,9 @@ static void test_cli(void)
    * turned): the search finds the turn, the passes the centres, and the
    * disparities turn with them. The turn lies between the search's steps
    * of 0.1 degree, so its own figure comes from the parabola through the
-   * sharpest step and its neighbours: within 0.03 degree (1.23 in a run by
-   * hand; the vertex on the wrong side gave 1.17, and the centres' fit hid
-   * it). Without the search (--turn-deg 0) the centres stay off, or no
+   * sharpest step and its neighbours: within 0.03 degree (2.23 measured;
+   * 2.17 with the vertex on the wrong side, which the centres' fit after it
+   * hid). Without the search (--turn-deg 0) the centres stay off, or no
    * point is fitted at all. */
   {
     char sim2[760];

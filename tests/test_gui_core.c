@@ -1,7 +1,7 @@
 /* test_gui_core.c — the viewer's parts that need no display: colour map,
- * camera projection, font, tick steps, levels of detail, loading run directories and CSVs
- * (and their errors), PNG round trip, and the clear failure without a
- * display (library and CLI). */
+ * camera projection, font, tick steps, levels of detail, loading run
+ * directories and CSVs (and their errors), PNG round trip, and the clear
+ * failure without a display (library and CLI). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
