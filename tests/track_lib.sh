@@ -6,12 +6,16 @@ key() {
   tr ',{}' '\n\n\n' < "$1" | sed -n "s/^[[:space:]]*\"$2\":[[:space:]]*//p" | head -1
 }
 
+# The awk test the comparisons below share: num(x) is 1 when x is a number.
+# awk compares a word (a JSON null, an empty key) with a number as text,
+# and "null" > "0.9": a null once passed a check (at_least).
+AWK_NUM='function num(x) { return x != "" && x == x + 0 }'
+
 # expect_gain A B M MESSAGE: B > A + M (floating point, by awk; a negative
-# M: B may fall below A by less than -M); otherwise print "FAIL: MESSAGE"
-# and count it in $fail. A and B must be numbers: awk compares a word (a
-# JSON null, an empty key) with a number as text, and "null" > "0.9".
+# M: B may fall below A by less than -M), both numbers; otherwise print
+# "FAIL: MESSAGE" and count it in $fail.
 expect_gain() {
-  awk -v a="$1" -v b="$2" -v m="$3" 'BEGIN { exit !(a != "" && b != "" && a == a + 0 && b == b + 0 && b > a + m) }' ||
+  awk -v a="$1" -v b="$2" -v m="$3" "$AWK_NUM"' BEGIN { exit !(num(a) && num(b) && b > a + m) }' ||
     { echo "FAIL: $4"; fail=$((fail+1)); }
 }
 
@@ -19,7 +23,7 @@ expect_gain() {
 # to 1e-3; otherwise print a failure and count it in $fail.
 expect_key() {
   ex_v=$(key "$2" "$1")
-  awk -v a="$ex_v" -v b="$3" 'BEGIN { exit !(a != "" && a == a + 0 && a - b < 1e-3 && b - a < 1e-3) }' ||
+  awk -v a="$ex_v" -v b="$3" "$AWK_NUM"' BEGIN { exit !(num(a) && a - b < 1e-3 && b - a < 1e-3) }' ||
     { echo "FAIL: $1 in $2 is '$ex_v', not $3"; fail=$((fail+1)); }
 }
 
@@ -32,14 +36,14 @@ expect_string() {
 # below A F B: true when A < F x B (floating point, by awk); false when A or
 # B is not a number (a JSON null, an empty key).
 below() {
-  awk -v a="$1" -v f="$2" -v b="$3" 'BEGIN { exit !(a != "" && b != "" && a == a + 0 && b == b + 0 && a < f * b) }'
+  awk -v a="$1" -v f="$2" -v b="$3" "$AWK_NUM"' BEGIN { exit !(num(a) && num(b) && a < f * b) }'
 }
 
 # at_least A B: true when A is a number >= B (not `! below`, which a JSON
 # null or an empty key passed: track_turning's judged miss written as null
 # went unseen until a mutation sweep).
 at_least() {
-  awk -v a="$1" -v b="$2" 'BEGIN { exit !(a != "" && a == a + 0 && a >= b) }'
+  awk -v a="$1" -v b="$2" "$AWK_NUM"' BEGIN { exit !(num(a) && a >= b) }'
 }
 
 # simulate_or_skip DIR SCENE MS SEED [simulate options...]: `eventlfm
