@@ -30,17 +30,25 @@ static inline int cli_write_file(const char *dir, const char *name, const char *
   return bad ? -1 : 0;
 }
 
-/* 1 when DIR/NAME's first 8 kB hold `text`. */
-static inline int cli_file_has(const char *dir, const char *name, const char *text)
+/* DIR/NAME's first size - 1 bytes into buf, NUL-terminated; 0 when it
+ * cannot be opened. */
+static inline int cli_read_file(const char *dir, const char *name, char *buf, size_t size)
 {
-  char path[700], buf[8192];
+  char path[700];
   snprintf(path, sizeof path, "%s/%s", dir, name);
   FILE *f = fopen(path, "r");
   if (!f) return 0;
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
+  size_t n = fread(buf, 1, size - 1, f);
   fclose(f);
   buf[n] = '\0';
-  return strstr(buf, text) != NULL;
+  return 1;
+}
+
+/* 1 when DIR/NAME's first 8 kB hold `text`. */
+static inline int cli_file_has(const char *dir, const char *name, const char *text)
+{
+  char buf[8192];
+  return cli_read_file(dir, name, buf, sizeof buf) && strstr(buf, text) != NULL;
 }
 
 /* 1 when files a and b both exist and hold the same bytes (outputs of two

@@ -359,13 +359,8 @@ static int err_has(const char *text) { return cli_file_has(dir, "err.txt", text)
  * the centres' fit after it may correct. */
 static double searched_turn_deg(void)
 {
-  char path[700], buf[8192];
-  snprintf(path, sizeof path, "%s/err.txt", dir);
-  FILE *f = fopen(path, "r");
-  if (!f) return NAN;
-  size_t n = fread(buf, 1, sizeof buf - 1, f);
-  fclose(f);
-  buf[n] = '\0';
+  char buf[8192];
+  if (!cli_read_file(dir, "err.txt", buf, sizeof buf)) return NAN;
   const char *key = "the lens array's turn: ";
   for (const char *at = strstr(buf, key); at; at = strstr(at + 1, key)) {
     const char *v = at + strlen(key);
