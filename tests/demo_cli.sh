@@ -5,6 +5,7 @@
 # depth line that shows where out of focus the run can be trusted.
 # Usage: demo_cli.sh BINARY
 bin=$1
+. "$(dirname "$0")/track_lib.sh"
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -50,18 +51,17 @@ echo "depth line: demo '$got', from score '$want'"
 echo "$got $want" | awk '{ if (NF != 16) exit 1; for (k = 1; k <= 8; k++) { d = $k - $(k + 8); if (d < 0) d = -d; if (d > 0.006) exit 1 } }' ||
   bad "the demo's depth line '$got' is not score's '$want'"
 # the real-time factor is the recording's span (its first to its last
-# event, from `eventlfm info`: the sensor's latency takes it a little past
+# event, `eventlfm info`'s duration_us: the sensor's latency takes it a little past
 # the 100 ms simulated) over the tracking time; the time is printed to
 # 0.01 s and the factor to 0.001, so their product is the span within
 # 0.005 r + 0.0005 t (slow machines and sanitizer builds give small factors)
 "$bin" info "$tmp/d/sim/events.raw" --json > "$tmp/info.json" || bad "info exited non-zero"
-span=$(tr ',{}' '\n\n\n' < "$tmp/info.json" | awk -F: '/"t_first_us"/ { a = $2 } /"t_last_us"/ { b = $2 }
-  END { if (b > a) printf "%.6f", (b - a) * 1e-6 }')
+span_us=$(key "$tmp/info.json" duration_us)
 rtf=$(sed -n 's/.*real-time factor (span \/ wall) *\([0-9.]*\).*/\1/p' "$tmp/out.txt")
 trk=$(sed -n 's/.*tracking (events -> tracks files) *\([0-9.]*\) s.*/\1/p' "$tmp/out.txt")
-awk -v r="$rtf" -v t="$trk" -v sp="$span" 'BEGIN { s = r * t; e = 0.005 * r + 0.0005 * t + 1e-6
+awk -v r="$rtf" -v t="$trk" -v sp_us="$span_us" 'BEGIN { s = r * t; sp = sp_us * 1e-6; e = 0.005 * r + 0.0005 * t + 1e-6
   exit !(t > 0 && sp > 0.09 && (s - sp) ^ 2 <= e * e) }' ||
-  bad "real-time factor $rtf x tracking $trk s is not the recording's span '$span' s"
+  bad "real-time factor $rtf x tracking $trk s is not the recording's span ('$span_us' us)"
 
 # a duration out of range is a usage error (exit 2), nothing written
 "$bin" demo --out "$tmp/e" --duration-ms 5 > /dev/null 2>&1; rc=$?
