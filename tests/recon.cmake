@@ -18,3 +18,4 @@ target_link_libraries(test_recon_pipeline PRIVATE TIFF::TIFF)  # writes a mixed-
 elfm_add_test(test_recon_sim test_recon_sim.c)
 elfm_add_test(test_recon_cli test_recon_cli.c)
 elfm_add_test(test_fmt_num test_fmt_num.c TIMEOUT 120)
+elfm_add_test(test_big_alloc test_big_alloc.c)

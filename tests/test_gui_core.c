@@ -4,6 +4,7 @@
  * failure without a display (library and CLI). */
 #include <errno.h>
 #include <math.h>
+#include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -163,6 +164,16 @@ static void test_font_ticks(void)
   for (int a = 0; a < 10; a++)
     for (int b = a + 1; b < 10; b++) distinct &= memcmp(d[a], d[b], 7) != 0;
   CHECK(distinct);
+  /* and every glyph differs from every other (a 0 drawn as an O, a 5 as
+   * an S, would misread a label) */
+  const size_t n_need = strlen(need);
+  for (size_t a = 0; a < n_need; a++) {
+    elfm_font_glyph(need[a], g);
+    for (size_t b = a + 1; b < n_need; b++) {
+      elfm_font_glyph(need[b], h);
+      CHECK_MSG(memcmp(g, h, 7) != 0, "'%c' and '%c' are drawn alike", need[a], need[b]);
+    }
+  }
   CHECK_NEAR(elfm_nice_step(130, 5), 20, 1e-12);
   CHECK_NEAR(elfm_nice_step(200, 5), 50, 1e-12);
   CHECK_NEAR(elfm_nice_step(1.0, 5), 0.2, 1e-12);
@@ -539,6 +550,64 @@ static void test_synthetic(void)
   elfm_view_data_free(d);
 }
 
+/* PNGs that another program wrote: grey, grey with 16 bits, grey with
+ * alpha, RGBA, each handed back as 8-bit RGBA (the grey copied into R, G
+ * and B; the alpha kept, or 255 where there is none). Written through
+ * libpng's simplified API, which picks the file's colour type from the
+ * format. */
+static void test_png_kinds(void)
+{
+  const struct {
+    const char *name;
+    png_uint_32 format;
+    int channels, bytes;
+  } kinds[] = {
+    {"grey8.png", PNG_FORMAT_GRAY, 1, 1},
+    {"grey16.png", PNG_FORMAT_LINEAR_Y, 1, 2},
+    {"greyA.png", PNG_FORMAT_GA, 2, 1},
+    {"rgba.png", PNG_FORMAT_RGBA, 4, 1},
+  };
+  enum { W = 5, H = 3 };
+  for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++) {
+    uint16_t pix[W * H * 4];
+    uint8_t pix8[W * H * 4];
+    for (int i = 0; i < W * H * kinds[k].channels; i++) {
+      const int v = (i * 37 + 11) % 256;
+      pix8[i] = (uint8_t)v;
+      pix[i] = (uint16_t)(v * 257); /* 16 bits whose top byte is v */
+    }
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    im.width = W;
+    im.height = H;
+    im.format = kinds[k].format;
+    const int wrote = png_image_write_to_file(&im, tpath(kinds[k].name), 0,
+                                              kinds[k].bytes == 2 ? (const void *)pix : (const void *)pix8,
+                                              0, NULL);
+    png_image_free(&im);
+    CHECK_MSG(wrote, "%s: %s", kinds[k].name, im.message);
+    if (!wrote) continue;
+    int w = 0, h = 0;
+    uint8_t *rgba = NULL;
+    elfm_error err;
+    CHECK_OK(elfm_png_read_rgba(tpath(kinds[k].name), &w, &h, &rgba, &err), &err);
+    CHECK_EQ_INT(w, W);
+    CHECK_EQ_INT(h, H);
+    int bad = rgba == NULL;
+    for (int p = 0; rgba && p < W * H; p++) {
+      const int c = kinds[k].channels;
+      const uint8_t *src = pix8 + (size_t)p * c;
+      const int grey = c <= 2, alpha = c == 2 || c == 4;
+      const int want[4] = {src[0], grey ? src[0] : src[1], grey ? src[0] : src[2],
+                           alpha ? src[c - 1] : 255};
+      for (int q = 0; q < 4; q++) bad += rgba[4 * p + q] != want[q];
+    }
+    CHECK_MSG(!bad, "%s: %d channel values not as written", kinds[k].name, bad);
+    free(rgba);
+  }
+}
+
 static void test_png(void)
 {
   elfm_error err;
@@ -575,6 +644,7 @@ static void test_png(void)
   CHECK_EQ_INT(err.offset, 0);
   CHECK_EQ_INT(elfm_png_read_rgba(tpath("none.png"), &w, &h, &rgba, &err), ELFM_ERR_IO);
   CHECK_EQ_INT(elfm_png_write_rgb(tpath("nodir/x.png"), 4, 3, rgb, &err), ELFM_ERR_IO);
+  test_png_kinds();
 }
 
 /* Without a display: a clear ELFM_ERR_DISPLAY from the library, and from the

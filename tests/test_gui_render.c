@@ -137,6 +137,9 @@ static double truth_pos(int i, int axis)
   return x[axis];
 }
 static const double det_pos[3][3] = {{-40, 30, 20}, {-35, 35, 20}, {-45, 25, 25}};
+/* and one at t = 50 ms, away from the lines: drawn only while the cursor is
+ * within 10 frames after it */
+static const double det_mid[3] = {10, -10, 0};
 
 static void write_scene(void)
 {
@@ -163,6 +166,7 @@ static void write_scene(void)
   for (int k = 0; k < 3; k++)
     n += (size_t)sprintf(buf + n, "100,100000,%g,%g,%g,1\n", det_pos[k][0], det_pos[k][1],
                          det_pos[k][2]);
+  n += (size_t)sprintf(buf + n, "50,50000,%g,%g,%g,1\n", det_mid[0], det_mid[1], det_mid[2]);
   write_file("detections.csv", buf);
   free(buf);
   /* A 16 x 16 magenta MIP standing for t = 20 ms onwards. */
@@ -363,6 +367,25 @@ int main(int argc, char **argv)
     white += found;
   }
   CHECK_EQ_INT(white, 3);
+  /* The detections of the last 10 frames before the cursor, no older and
+   * none to come: the one at 50 ms is white at 50 and 59 ms, not at 49 or
+   * 61 ms (and at the end, where all are shown). */
+  const int64_t at_us[5] = {49000, 50000, 59000, 61000, INT64_MAX};
+  const int want_mid[5] = {0, 1, 1, 0, 1};
+  for (int k = 0; k < 5; k++) {
+    elfm_viewer_set_cursor(v, at_us[k]);
+    render(v);
+    double c, r;
+    elfm_camera_project(elfm_viewer_camera(v), W, H, det_mid, &c, &r);
+    int found = 0;
+    for (int dr = -2; dr <= 2; dr++)
+      for (int dc = -2; dc <= 2; dc++) {
+        const uint8_t *p = px((int)c + dc, (int)r + dr);
+        found |= p[0] > 220 && p[1] > 220 && p[2] > 220;
+      }
+    CHECK_MSG(found == want_mid[k], "cursor at %" PRId64 " us: the detection of 50 ms %s", at_us[k],
+              found ? "drawn" : "not drawn");
+  }
   /* Background where nothing projects: points inside the box's picture,
    * at least 10 px from every line and point of the scene. */
   int bg_checked = 0, bg_ok = 0;
@@ -439,6 +462,19 @@ int main(int argc, char **argv)
   elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE);
   elfm_viewer_advance(v, 100.0);
   CHECK_EQ_INT(elfm_viewer_cursor(v), 100000);
+  CHECK(!elfm_viewer_playing(v));
+  /* The speed keys stop at 1024 x and 1 / 1024 x the default (10 ms of
+   * the recording per second): 20 presses of `faster` play 10.24 ms in a
+   * millisecond, 30 of `slower` then 10 us in a second. */
+  for (int k = 0; k < 20; k++) elfm_viewer_command(v, ELFM_CMD_FASTER);
+  elfm_viewer_command(v, ELFM_CMD_HOME);
+  elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE);
+  elfm_viewer_advance(v, 0.001);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 10240);
+  for (int k = 0; k < 30; k++) elfm_viewer_command(v, ELFM_CMD_SLOWER);
+  elfm_viewer_advance(v, 1.0);
+  CHECK_EQ_INT(elfm_viewer_cursor(v), 10250);
+  elfm_viewer_command(v, ELFM_CMD_END); /* stops playing */
   CHECK(!elfm_viewer_playing(v));
   CHECK_EQ_INT(elfm_viewer_color_mode(v), ELFM_COLOR_TIME);
   elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR);
