@@ -1,6 +1,7 @@
-/* controls.c — what the viewer's keys do, apart from GLFW: the time cursor,
- * playback, colour mode, layers, camera reset. viewer_run.c maps keys to
- * these commands; tests call them directly. */
+/* controls.c — what the viewer's keys do, apart from GLFW's window: the
+ * time cursor, playback, colour mode, layers, camera reset, and which key
+ * gives which command (viewer_run.c's key handler applies it); tests call
+ * them directly. */
 #include <math.h>
 
 #include "gl_internal.h"
@@ -46,6 +47,29 @@ void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd)
   case ELFM_CMD_TOGGLE_DETECTIONS: v->opt.show_detections = !v->opt.show_detections; break;
   case ELFM_CMD_TOGGLE_MIP: v->opt.show_mip = !v->opt.show_mip; break;
   case ELFM_CMD_TOGGLE_HELP: v->show_help = !v->show_help; break;
+  }
+}
+
+int elfm_viewer_key_command(int glfw_key, int shift, elfm_viewer_cmd *cmd)
+{
+  switch (glfw_key) {
+  case GLFW_KEY_R: *cmd = ELFM_CMD_RESET_VIEW; return 1;
+  case GLFW_KEY_C: *cmd = ELFM_CMD_CYCLE_COLOR; return 1;
+  case GLFW_KEY_T: *cmd = ELFM_CMD_TOGGLE_TRUTH; return 1;
+  case GLFW_KEY_D: *cmd = ELFM_CMD_TOGGLE_DETECTIONS; return 1;
+  case GLFW_KEY_M: *cmd = ELFM_CMD_TOGGLE_MIP; return 1;
+  case GLFW_KEY_H: *cmd = ELFM_CMD_TOGGLE_HELP; return 1;
+  case GLFW_KEY_SPACE: *cmd = ELFM_CMD_PLAY_PAUSE; return 1;
+  case GLFW_KEY_RIGHT: *cmd = shift ? ELFM_CMD_STEP_FORWARD_10 : ELFM_CMD_STEP_FORWARD; return 1;
+  case GLFW_KEY_LEFT: *cmd = shift ? ELFM_CMD_STEP_BACK_10 : ELFM_CMD_STEP_BACK; return 1;
+  case GLFW_KEY_HOME: *cmd = ELFM_CMD_HOME; return 1;
+  case GLFW_KEY_END: *cmd = ELFM_CMD_END; return 1;
+  /* `+` is shift + `=` on most layouts; `=` alone does it too */
+  case GLFW_KEY_EQUAL:
+  case GLFW_KEY_KP_ADD: *cmd = ELFM_CMD_FASTER; return 1;
+  case GLFW_KEY_MINUS:
+  case GLFW_KEY_KP_SUBTRACT: *cmd = ELFM_CMD_SLOWER; return 1;
+  default: return 0;
   }
 }
 

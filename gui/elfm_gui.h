@@ -236,6 +236,11 @@ typedef enum elfm_viewer_cmd {
 } elfm_viewer_cmd;
 
 void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd);
+/* The command a key gives (GLFW's key code and whether shift is held), as
+ * the window's key handler applies it: 1 and *cmd set, or 0 for a key that
+ * gives none (q and Esc, which close the window, give none either). The
+ * table in docs/viewer.md lists the same keys. */
+int elfm_viewer_key_command(int glfw_key, int shift, elfm_viewer_cmd *cmd);
 /* Playback: when playing, move the cursor by wall_s seconds of wall time at
  * the playback speed (by default the whole recording in 10 s); stops at the
  * end. */

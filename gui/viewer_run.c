@@ -1,7 +1,8 @@
 /* viewer_run.c — the interactive loop: mouse orbit camera, keys, playback.
  *
  * GLFW callbacks find the viewer through the window's user pointer (no
- * global state); keys become elfm_viewer_command()s (controls.c). Controls:
+ * global state); keys become elfm_viewer_command()s, chosen by
+ * elfm_viewer_key_command (controls.c, where tests read the table). Controls:
  *   left-drag rotate, right-drag (or shift+left-drag) pan, scroll zoom,
  *   r reset camera, c cycle colour (time -> depth -> track -> shared), space play/pause,
  *   left/right arrows one frame (shift: 10 frames), home/end, +/- playback
@@ -16,33 +17,14 @@ static elfm_viewer *viewer_of(GLFWwindow *w) { return glfwGetWindowUserPointer(w
 static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 {
   (void)scancode;
-  elfm_viewer *v = viewer_of(w);
   if (action != GLFW_PRESS && action != GLFW_REPEAT) return;
-  int shift = (mods & GLFW_MOD_SHIFT) != 0;
-  switch (key) {
-  case GLFW_KEY_ESCAPE:
-  case GLFW_KEY_Q: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
-  case GLFW_KEY_R: elfm_viewer_command(v, ELFM_CMD_RESET_VIEW); break;
-  case GLFW_KEY_C: elfm_viewer_command(v, ELFM_CMD_CYCLE_COLOR); break;
-  case GLFW_KEY_T: elfm_viewer_command(v, ELFM_CMD_TOGGLE_TRUTH); break;
-  case GLFW_KEY_D: elfm_viewer_command(v, ELFM_CMD_TOGGLE_DETECTIONS); break;
-  case GLFW_KEY_M: elfm_viewer_command(v, ELFM_CMD_TOGGLE_MIP); break;
-  case GLFW_KEY_H: elfm_viewer_command(v, ELFM_CMD_TOGGLE_HELP); break;
-  case GLFW_KEY_SPACE: elfm_viewer_command(v, ELFM_CMD_PLAY_PAUSE); break;
-  case GLFW_KEY_RIGHT:
-    elfm_viewer_command(v, shift ? ELFM_CMD_STEP_FORWARD_10 : ELFM_CMD_STEP_FORWARD);
-    break;
-  case GLFW_KEY_LEFT:
-    elfm_viewer_command(v, shift ? ELFM_CMD_STEP_BACK_10 : ELFM_CMD_STEP_BACK);
-    break;
-  case GLFW_KEY_HOME: elfm_viewer_command(v, ELFM_CMD_HOME); break;
-  case GLFW_KEY_END: elfm_viewer_command(v, ELFM_CMD_END); break;
-  case GLFW_KEY_EQUAL:
-  case GLFW_KEY_KP_ADD: elfm_viewer_command(v, ELFM_CMD_FASTER); break;
-  case GLFW_KEY_MINUS:
-  case GLFW_KEY_KP_SUBTRACT: elfm_viewer_command(v, ELFM_CMD_SLOWER); break;
-  default: break;
+  if (key == GLFW_KEY_ESCAPE || key == GLFW_KEY_Q) {
+    glfwSetWindowShouldClose(w, GLFW_TRUE);
+    return;
   }
+  elfm_viewer_cmd cmd;
+  if (elfm_viewer_key_command(key, (mods & GLFW_MOD_SHIFT) != 0, &cmd))
+    elfm_viewer_command(viewer_of(w), cmd);
 }
 
 static void on_button(GLFWwindow *w, int button, int action, int mods)

@@ -1,7 +1,8 @@
 /* test_gui_core.c — the viewer's parts that need no display: colour map,
  * camera projection, font, tick steps, levels of detail, loading run
- * directories and CSVs (and their errors), PNG round trip, and the clear
- * failure without a display (library and CLI). */
+ * directories and CSVs (and their errors), PNGs written and read (and PNGs
+ * of other kinds), which key gives which command, and the clear failure
+ * without a display (library and CLI). */
 #include <errno.h>
 #include <math.h>
 #include <png.h>
@@ -715,6 +716,46 @@ static void test_no_display(void)
   CHECK_MSG(strstr(msg, "missing.csv") != NULL, "stderr was: %s", msg);
 }
 
+/* Which key gives which command: the table of docs/viewer.md, and keys
+ * that give none (q and Esc close the window in the key handler itself). */
+static void test_keys(void)
+{
+  const struct {
+    int key, shift;
+    elfm_viewer_cmd cmd;
+  } keys[] = {
+    {GLFW_KEY_R, 0, ELFM_CMD_RESET_VIEW},
+    {GLFW_KEY_C, 0, ELFM_CMD_CYCLE_COLOR},
+    {GLFW_KEY_SPACE, 0, ELFM_CMD_PLAY_PAUSE},
+    {GLFW_KEY_RIGHT, 0, ELFM_CMD_STEP_FORWARD},
+    {GLFW_KEY_LEFT, 0, ELFM_CMD_STEP_BACK},
+    {GLFW_KEY_RIGHT, 1, ELFM_CMD_STEP_FORWARD_10},
+    {GLFW_KEY_LEFT, 1, ELFM_CMD_STEP_BACK_10},
+    {GLFW_KEY_HOME, 0, ELFM_CMD_HOME},
+    {GLFW_KEY_END, 0, ELFM_CMD_END},
+    {GLFW_KEY_EQUAL, 0, ELFM_CMD_FASTER},
+    {GLFW_KEY_EQUAL, 1, ELFM_CMD_FASTER}, /* `+` on most layouts */
+    {GLFW_KEY_KP_ADD, 0, ELFM_CMD_FASTER},
+    {GLFW_KEY_MINUS, 0, ELFM_CMD_SLOWER},
+    {GLFW_KEY_KP_SUBTRACT, 0, ELFM_CMD_SLOWER},
+    {GLFW_KEY_T, 0, ELFM_CMD_TOGGLE_TRUTH},
+    {GLFW_KEY_D, 0, ELFM_CMD_TOGGLE_DETECTIONS},
+    {GLFW_KEY_M, 0, ELFM_CMD_TOGGLE_MIP},
+    {GLFW_KEY_H, 0, ELFM_CMD_TOGGLE_HELP},
+  };
+  for (size_t k = 0; k < sizeof keys / sizeof keys[0]; k++) {
+    elfm_viewer_cmd cmd = (elfm_viewer_cmd)-1;
+    const int got = elfm_viewer_key_command(keys[k].key, keys[k].shift, &cmd);
+    CHECK_MSG(got && cmd == keys[k].cmd, "key %d (shift %d): command %d, not %d", keys[k].key,
+              keys[k].shift, got ? (int)cmd : -1, (int)keys[k].cmd);
+  }
+  const int none[] = {GLFW_KEY_Q, GLFW_KEY_ESCAPE, GLFW_KEY_A, GLFW_KEY_X, GLFW_KEY_UP, GLFW_KEY_0};
+  for (size_t k = 0; k < sizeof none / sizeof none[0]; k++) {
+    elfm_viewer_cmd cmd;
+    CHECK_MSG(!elfm_viewer_key_command(none[k], 0, &cmd), "key %d gives a command", none[k]);
+  }
+}
+
 int main(void)
 {
   /* Work one level below a private directory: calib.json is also looked
@@ -734,6 +775,7 @@ int main(void)
   test_lod_error();
   test_synthetic();
   test_png();
+  test_keys();
   test_no_display();
   char cmd[600];
   snprintf(cmd, sizeof cmd, "rm -rf '%s'", top);
