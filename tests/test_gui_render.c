@@ -190,6 +190,28 @@ static int saturation(const uint8_t *p)
   return mx - mn;
 }
 
+/* Is some pixel within +-2 px of (c, r) the truth's grey, or a detection's
+ * white? */
+static int grey_near(double c, double r)
+{
+  for (int dr = -2; dr <= 2; dr++)
+    for (int dc = -2; dc <= 2; dc++) {
+      const uint8_t *p = px((int)c + dc, (int)r + dr);
+      if (saturation(p) < 12 && p[0] > 110 && p[0] < 200) return 1;
+    }
+  return 0;
+}
+
+static int white_near(double c, double r)
+{
+  for (int dr = -2; dr <= 2; dr++)
+    for (int dc = -2; dc <= 2; dc++) {
+      const uint8_t *p = px((int)c + dc, (int)r + dr);
+      if (p[0] > 220 && p[1] > 220 && p[2] > 220) return 1;
+    }
+  return 0;
+}
+
 /* The most saturated pixel within +-rad of (c, r); NULL if none has
  * saturation >= 80 (grey, white and background have ~0). */
 static const uint8_t *coloured_near(double c, double r, int rad)
@@ -345,26 +367,14 @@ int main(int argc, char **argv)
   for (int i = 0; i <= 100; i += 10, n++) {
     double c, r;
     project(v, truth_pos, i, &c, &r);
-    int found = 0;
-    for (int dr = -2; dr <= 2 && !found; dr++)
-      for (int dc = -2; dc <= 2 && !found; dc++) {
-        const uint8_t *p = px((int)c + dc, (int)r + dr);
-        found = saturation(p) < 12 && p[0] > 110 && p[0] < 200;
-      }
-    grey += found;
+    grey += grey_near(c, r);
   }
   CHECK_MSG(grey >= n - 1, "truth grey at %d of %d points", grey, n);
   int white = 0;
   for (int k = 0; k < 3; k++) {
     double c, r;
     elfm_camera_project(elfm_viewer_camera(v), W, H, det_pos[k], &c, &r);
-    int found = 0;
-    for (int dr = -2; dr <= 2; dr++)
-      for (int dc = -2; dc <= 2; dc++) {
-        const uint8_t *p = px((int)c + dc, (int)r + dr);
-        found |= p[0] > 220 && p[1] > 220 && p[2] > 220;
-      }
-    white += found;
+    white += white_near(c, r);
   }
   CHECK_EQ_INT(white, 3);
   /* The detections of the last 10 frames before the cursor, no older and
@@ -377,12 +387,7 @@ int main(int argc, char **argv)
     render(v);
     double c, r;
     elfm_camera_project(elfm_viewer_camera(v), W, H, det_mid, &c, &r);
-    int found = 0;
-    for (int dr = -2; dr <= 2; dr++)
-      for (int dc = -2; dc <= 2; dc++) {
-        const uint8_t *p = px((int)c + dc, (int)r + dr);
-        found |= p[0] > 220 && p[1] > 220 && p[2] > 220;
-      }
+    const int found = white_near(c, r);
     CHECK_MSG(found == want_mid[k], "cursor at %" PRId64 " us: the detection of 50 ms %s", at_us[k],
               found ? "drawn" : "not drawn");
   }
@@ -494,11 +499,7 @@ int main(int argc, char **argv)
     for (int i = 10; i <= 90; i += 20) {
       double tc, tr;
       project(v, truth_pos, i, &tc, &tr);
-      for (int dr = -2; dr <= 2; dr++)
-        for (int dc = -2; dc <= 2; dc++) {
-          const uint8_t *p = px((int)tc + dc, (int)tr + dr);
-          grey_on[k] |= saturation(p) < 12 && p[0] > 110 && p[0] < 200;
-        }
+      grey_on[k] |= grey_near(tc, tr);
     }
   }
   CHECK(!grey_on[0]);

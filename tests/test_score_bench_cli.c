@@ -45,6 +45,26 @@ static char *slurp(const char *rel)
   return buf;
 }
 
+/* Field n (counted from 1) of the CSV row that starts at row, as a number;
+ * NAN when the row has fewer fields. */
+static double csv_field(const char *row, int n)
+{
+  const char *q = row;
+  for (int field = 1; field < n; field++) {
+    q = strpbrk(q, ",\n");
+    if (!q || *q != ',') return NAN;
+    q++;
+  }
+  return atof(q);
+}
+
+/* A 0/1 flag field of bench.csv, -1 when missing */
+static int csv_flag(const char *row, int n)
+{
+  const double f = csv_field(row, n);
+  return isnan(f) ? -1 : (int)f;
+}
+
 static void show_err(void)
 {
   char *e = slurp("err.txt");
@@ -112,21 +132,11 @@ int main(void)
       rows++;
       if (strstr(line, ",ok,")) ok++;
       /* 7 is events, 8 the span, 31 the CPU time, 32 the RTF on it */
-      int field = 1, pf1 = -1, pal = -1;
-      double events = -1, rtf = -1, f1 = -1, alpha = -1, span = -1, cpu = -1, rtf_cpu = -1;
-      for (char *q = line + 1; *q && *q != '\n'; q++) {
-        if (*q != ',') continue;
-        field++;
-        if (field == 7) events = atof(q + 1);
-        if (field == 8) span = atof(q + 1);
-        if (field == 12) rtf = atof(q + 1);
-        if (field == 14) f1 = atof(q + 1);
-        if (field == 20) alpha = atof(q + 1);
-        if (field == 24) pf1 = atoi(q + 1);
-        if (field == 25) pal = atoi(q + 1);
-        if (field == 31) cpu = atof(q + 1);
-        if (field == 32) rtf_cpu = atof(q + 1);
-      }
+      const char *r = line + 1;
+      const int pf1 = csv_flag(r, 24), pal = csv_flag(r, 25);
+      const double events = csv_field(r, 7), rtf = csv_field(r, 12), f1 = csv_field(r, 14),
+                   alpha = csv_field(r, 20), span = csv_field(r, 8), cpu = csv_field(r, 31),
+                   rtf_cpu = csv_field(r, 32);
       pareto += pf1 == 1;
       CHECK_MSG(events > 1000 && rtf > 0, "events %g rtf %g", events, rtf);
       CHECK_MSG(cpu > 0 && fabs(rtf_cpu - span / cpu) <= 1e-3 * rtf_cpu, "span %g s, cpu %g s, RTF (CPU) %g",
@@ -192,16 +202,14 @@ int main(void)
            sizeof out);
   CHECK_EQ_INT(rc, 0);
   if (rc != 0) show_err();
-  double v[3] = {NAN, NAN, NAN}, v_err = NAN;
+  double v[3] = {NAN, NAN, NAN};
   const char *e = slurp("err.txt"), *at = e ? strstr(e, "stage velocity from truth (") : NULL;
   CHECK(at && sscanf(at, "stage velocity from truth (%lf, %lf, %lf)", &v[0], &v[1], &v[2]) == 3);
   CHECK_MSG(fabs(v[0]) < 1e-4 && fabs(v[1] - 2.5) < 1e-4 && fabs(v[2]) < 1e-4,
             "stage velocity from truth (%g, %g, %g) um/ms, not (0, 2.5, 0)", v[0], v[1], v[2]);
   csv = slurp("bs/bench.csv");
   const char *row = csv ? strchr(csv, '\n') : NULL; /* the header's end */
-  if (row) row++;
-  for (int field = 1; row && *row && *row != '\n' && field < 30; row++)
-    if (*row == ',' && ++field == 30) v_err = atof(row + 1);
+  const double v_err = row ? csv_field(row + 1, 30) : NAN;
   CHECK_MSG(v_err >= 0 && v_err < 0.05, "stage: the tracks' velocity %g off the truth's", v_err);
 
   char cmd[600];
