@@ -136,6 +136,35 @@ static inline uint32_t elfm_le32(const uint8_t *p)
   return (uint32_t)p[0] | ((uint32_t)p[1] << 8) | ((uint32_t)p[2] << 16) | ((uint32_t)p[3] << 24);
 }
 
+/* The words EVT 2.0 and EVT 2.1 share (the 32-bit word, or a 64-bit word's
+ * event half). TIME_HIGH (type 0x8) holds t[33:6] in 27..0; one far below
+ * the previous one (by half the 28-bit range or more) starts a new loop, as
+ * for EVT3. Before the first, the order check starts from that time. */
+static inline void elfm_evt2_time_high(elfm_evt2_state *s, uint32_t w)
+{
+  const uint32_t th = w & 0x0FFFFFFF;
+  if (s->seen_th && th + (1u << 27) <= s->prev_th) s->loops++;
+  else if (!s->seen_th) s->t_last = ((s->loops << 28) | th) << 6;
+  s->prev_th = th;
+  s->t_high = ((s->loops << 28) | (int64_t)th) << 6;
+  s->seen_th = 1;
+}
+
+/* EXT_TRIGGER (type 0xA): t[5:0] in 27..22, channel in 12..8, value bit 0.
+ * Kept when the chunk takes triggers and a TIME_HIGH came before; returns
+ * 0 when the chunk's triggers are full (the word is then read again into
+ * the next chunk), else 1. */
+static inline int elfm_evt2_trigger(const elfm_evt2_state *s, elfm_event_chunk *c, uint32_t w)
+{
+  if (!s->seen_th || !c->cap_trig) return 1;
+  if (c->n_trig >= c->cap_trig) return 0;
+  elfm_trigger *tr = &c->trig[c->n_trig++];
+  tr->t_us = s->t_high | ((w >> 22) & 63);
+  tr->channel = (uint8_t)((w >> 8) & 0x1F);
+  tr->value = (uint8_t)(w & 1);
+  return 1;
+}
+
 /* Writer: a buffered output plus a format encoder. */
 typedef struct elfm_writer_evt3_state {
   int64_t th_abs;      /* absolute TIME_HIGH (t >> 12) last written, -1 none */

@@ -63,20 +63,9 @@ elfm_status elfm_evt2_decode(elfm_reader *r, elfm_event_chunk *c, elfm_error *er
         n++;
       }
     } else if (type == 0x8) { /* TIME_HIGH */
-      const uint32_t th = w & 0x0FFFFFFF;
-      if (s.seen_th && th + (1u << 27) <= s.prev_th) s.loops++;
-      else if (!s.seen_th) s.t_last = ((s.loops << 28) | th) << 6;
-      s.prev_th = th;
-      s.t_high = ((s.loops << 28) | (int64_t)th) << 6;
-      s.seen_th = 1;
+      elfm_evt2_time_high(&s, w);
     } else if (type == 0xA) { /* EXT_TRIGGER */
-      if (s.seen_th && c->cap_trig) {
-        if (c->n_trig >= c->cap_trig) goto out;
-        elfm_trigger *tr = &c->trig[c->n_trig++];
-        tr->t_us = s.t_high | ((w >> 22) & 63);
-        tr->channel = (uint8_t)((w >> 8) & 0x1F);
-        tr->value = (uint8_t)(w & 1);
-      }
+      if (!elfm_evt2_trigger(&s, c, w)) goto out;
     }
     pos += 4;
   }
