@@ -469,6 +469,7 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
 {
   if (!ws) return;
   free(ws->plane_cnt);
+  free(ws->window_img);
   free(ws->row_start);
   free(ws->row_bits);
   free(ws->sorted);
@@ -506,11 +507,10 @@ elfm_refocus_path elfm_refocus_workspace_last_path(const elfm_refocus_workspace 
 
 /* Plane by plane: gather every view's bilinear sample into the plane, count
  * the views that see signal, then take the mean over sampling views. */
-static void refocus_dense(const elfm_refocus_plan *p, const elfm_frame *frame, elfm_volume *vol,
+static void refocus_dense(const elfm_refocus_plan *p, const float *img, elfm_volume *vol,
                           elfm_refocus_workspace *ws)
 {
   const int W = p->w, H = p->h, SW = p->sw;
-  const float *img = frame->data;
   for (int k = 0; k < p->nz; k++) {
     float *plane = vol->data + (size_t)k * W * H;
     memset(plane, 0, (size_t)W * H * sizeof *plane);
@@ -575,15 +575,34 @@ elfm_status elfm_refocus_execute_path(const elfm_refocus_plan *p, elfm_refocus_p
   if (!ws || ws->plan != p)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "workspace was made for another plan");
   if (path == ELFM_PATH_AUTO) path = p->opt.path;
-  /* only the sparse path leaves out a deep window's older pixels */
-  if (frame->recent_floor > 0) path = ELFM_PATH_SPARSE;
+  /* auto on a deep window's frame: the sparse path, which reads the
+   * window's pixels from the list (the dense path below must first copy
+   * them out) */
+  if (path == ELFM_PATH_AUTO && frame->recent_floor > 0) path = ELFM_PATH_SPARSE;
   if (path == ELFM_PATH_AUTO)
     path = (double)frame->nnz < p->opt.sparse_max_fill * p->box_area ? ELFM_PATH_SPARSE
                                                                      : ELFM_PATH_DENSE;
   elfm_refocus_stamp(p, frame, vol);
   ws->last_path = path;
   if (path == ELFM_PATH_SPARSE) return elfm_refocus_sparse(p, frame, vol, ws, err);
-  refocus_dense(p, frame, vol, ws);
+  if (frame->recent_floor > 0) {
+    /* The gather reads every pixel of the crop boxes, so on a deep
+     * window's frame it reads a copy holding the window's pixels alone
+     * (the older ones are there for the view fits: elfm_frame.recent_floor),
+     * and the volume is the one the window's frame would give. */
+    if (!ws->window_img &&
+        !(ws->window_img = calloc((size_t)p->sw * (size_t)p->sh, sizeof *ws->window_img)))
+      return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (a deep frame's copy)");
+    const size_t n = elfm_frame_n_window(frame);
+    for (size_t i = 0; i < n; i++) {
+      const float v = frame->data[frame->idx[i]];
+      if (elfm_frame_in_window(frame, v)) ws->window_img[frame->idx[i]] = v;
+    }
+    refocus_dense(p, ws->window_img, vol, ws);
+    for (size_t i = 0; i < n; i++) ws->window_img[frame->idx[i]] = 0.0f;
+  } else {
+    refocus_dense(p, frame->data, vol, ws);
+  }
   /* every voxel may now be non-zero: a later sparse call clears it all */
   elfm_refocus_workspace_forget(ws);
   ws->dirty_data = vol->data;

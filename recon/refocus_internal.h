@@ -86,6 +86,8 @@ struct elfm_refocus_workspace {
   elfm_refocus_path last_path;
   /* dense */
   uint8_t *plane_cnt;         /* [W*H] agreeing views on one plane */
+  float *window_img;          /* [sw*sh] a deep window's frame, its window's pixels only
+                               * (made on first use; all zero between calls) */
   /* sparse: the frame's listed pixels sorted by row, then cut into runs */
   uint32_t *row_start;        /* [sh + 1] counting sort by sensor row */
   uint64_t *row_bits;         /* [(sw + 63) / 64] one sensor row's columns, a bit each;
