@@ -11,7 +11,9 @@
 # Sets: flow, flow_heldout, flow_1s (20 recordings of 1 s: ~4 min on 2 cores),
 # flow_random, worm, stage, stage_accel, blink, blink_moving.
 # EVENTLFM=path/to/eventlfm, OUT=dir (default /tmp/eventlfm_targets),
-# JOBS=N recordings at once (default 2). Each recording's files stay in
+# JOBS=N recordings at once (default 2), TRACK_ARGS="..." options given to
+# every `track` (an option's effect on the targets: run twice, with and
+# without, in two OUT folders). Each recording's files stay in
 # OUT/SET/sSEED (sim.txt, track.txt, score.json) for a closer look.
 set -u
 B=${EVENTLFM:-$(cd "$(dirname "$0")/.." && pwd)/build/eventlfm}
@@ -41,8 +43,9 @@ one() {
   mkdir -p "$d"
   "$B" simulate "$scene" --out "$d/sim" --duration-ms "$ms" --seed "$seed" --quiet \
     >"$d/sim.txt" 2>&1 || { echo "$set seed $seed: simulate failed ($d/sim.txt)" >&2; return 1; }
+  # shellcheck disable=SC2086 # TRACK_ARGS: several options
   "$B" track --threads 1 --calib "$d/sim/calib.json" --events "$d/sim/events.raw" --out "$d/t" \
-    >"$d/track.txt" 2>&1 || { echo "$set seed $seed: track failed ($d/track.txt)" >&2; return 1; }
+    ${TRACK_ARGS:-} >"$d/track.txt" 2>&1 || { echo "$set seed $seed: track failed ($d/track.txt)" >&2; return 1; }
   local extra=""
   case "$scene" in
   stage) extra="--stage-velocity-um-per-ms 0,2.5,0" ;;   # the scene's stage (docs/simulator.md)
@@ -105,7 +108,7 @@ for s in "${sets[@]}"; do
     END {
       if (n == 0) { printf "| %s | 0 | | | | | | | |\n", set; exit }
       other = ""
-      if (sn > 0) other = sprintf("stage velocity error %.2f %% (largest %.2f %%; the vector, which bounds the speed's)", 100 * se / sn, 100 * smax)
+      if (sn > 0) other = sprintf("stage velocity error %.2f %% (largest %.2f %%; the vector, which bounds the speed error)", 100 * se / sn, 100 * smax)
       if (a != "") other = sprintf("fitted acceleration %.5f um/ms^2 (truth 0.0025, %.1f %%)", a, 100 * (a - 0.0025) / 0.0025)
       printf "| %s | %d | %.3f | %.3f | %.3f | %.3f | %.2f / %.2f / %.2f | %d / %d, %d | %s |\n", set, n,
              m[1] / n, m[2] / n, m[3] / n, m[4] / n, m[5] / n, m[6] / n, m[7] / n, m[8], m[9], m[10], other
