@@ -120,7 +120,9 @@ int bench_write_md(const char *dir, const struct bench_opts *op, const struct sc
   if (!f) return -1;
   fprintf(f, "# eventlfm bench%s\n\n", op->quick ? " --quick" : "");
   fprintf(f, "Machine: %s. Every point runs `eventlfm track` as a child process; wall time "
-             "includes process start, reading the events and writing all outputs. Real-time "
+             "includes process start, reading the events and writing all outputs (each scene's "
+             "first point ran once before, untimed, into runs/SCENE_warmup, so that it does not "
+             "pay alone for a cold page cache). Real-time "
              "factor = recording span / wall time (>= 1: faster than the camera); RTF (CPU) = "
              "recording span / CPU time of the run, all threads (less sensitive to other load "
              "on the machine). Errors from "

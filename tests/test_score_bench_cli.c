@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -115,6 +116,24 @@ int main(void)
            sizeof out);
   CHECK_EQ_INT(rc, 0);
   if (rc != 0) show_err();
+  /* the scene's first point ran once before, untimed (a cold page cache
+   * would have made the defaults the slowest point), and bench.md says so */
+  CHECK(slurp("b/runs/flow_warmup/summary.json") != NULL);
+  CHECK(slurp("b/runs/flow_warmup/track.log") != NULL);
+  {
+    char pw[512], p0[512];
+    struct stat sw, s0;
+    snprintf(pw, sizeof pw, "%s/b/runs/flow_warmup/summary.json", dir);
+    snprintf(p0, sizeof p0, "%s/b/runs/flow_00/summary.json", dir);
+    CHECK(stat(pw, &sw) == 0 && stat(p0, &s0) == 0);
+    /* before the first timed point, not after it */
+    CHECK(sw.st_mtim.tv_sec < s0.st_mtim.tv_sec ||
+          (sw.st_mtim.tv_sec == s0.st_mtim.tv_sec && sw.st_mtim.tv_nsec <= s0.st_mtim.tv_nsec));
+  }
+  {
+    const char *md = slurp("b/bench.md"); /* slurp's buffer: static */
+    CHECK(md && strstr(md, "ran once before, untimed, into runs/SCENE_warmup"));
+  }
   /* the summary names the most accurate point and the fastest near it */
   CHECK_MSG(strstr(out, "flow: best alpha '") != NULL && strstr(out, "fastest within 0.02") != NULL,
             "bench summary: %.300s", out);
