@@ -73,6 +73,38 @@ static int cmp_double(const void *a, const void *b)
   return (x > y) - (x < y);
 }
 
+/* A bead moving in z leads (or trails) its image in each view by about the
+ * same distance along that view's disparity, whatever the disparity's
+ * length (the ON events fire on the image's leading half; the integral's
+ * leak trails it): a move of the same length along each view's disparity,
+ * which the z of the point's fit takes up only in proportion to the
+ * disparities, leaving the rest in the inner views. Taken out together
+ * with the gauge (alternating projections, which converge on the joint
+ * least-squares fit). */
+static void lead_clear(int nv, const int *use, const double *du, const double *dw, double *mu,
+                       double *mw)
+{
+  for (int it = 0; it < 8; it++) {
+    double num = 0, den = 0;
+    for (int v = 0; v < nv; v++) {
+      const double g = hypot(du[v], dw[v]);
+      if (!use[v] || !(g > 0)) continue;
+      num += (mu[v] * du[v] + mw[v] * dw[v]) / g;
+      den += 1;
+    }
+    if (!(den > 0)) return;
+    const double a = num / den;
+    for (int v = 0; v < nv; v++) {
+      const double g = hypot(du[v], dw[v]);
+      if (!use[v] || !(g > 0)) continue;
+      mu[v] -= a * du[v] / g;
+      mw[v] -= a * dw[v] / g;
+    }
+    elfm_calib_gauge_clear(nv, use, du, mu);
+    elfm_calib_gauge_clear(nv, use, dw, mw);
+  }
+}
+
 void track_views_judge(const track_ctx *c, track_views_check *out)
 {
   const int nv = c->calib->n_views;
@@ -113,9 +145,13 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
    * alike: x or y; in proportion to the disparities: z), taken out as calib
    * refine takes them out. Beads moving in z lead their images along their
    * disparities, a pattern in proportion to them, not a view off (a stage
-   * moving 2 mm/s in z: the worst view 0.53 px with it, 0.27 px without). */
+   * moving 2 mm/s in z: the worst view 0.53 px with it, 0.27 px without),
+   * and by about one length in every view, which lead_clear takes out (one
+   * bead swept through z: 0.46 -> 0.31 px; docs/recon.md "Does the
+   * calibration fit?"). */
   elfm_calib_gauge_clear(nv, use, du, mu);
   elfm_calib_gauge_clear(nv, use, dw, mw);
+  lead_clear(nv, use, du, dw, mu, mw);
   /* (with fewer than 4 views to compare, the gauge's three moves leave
    * nothing to judge) */
   for (int v = 0; v < nv && n_use >= 4; v++) {
