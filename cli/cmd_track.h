@@ -747,6 +747,9 @@ typedef struct track_views_check {
   int least;           /* the view kept in the fewest fits (-1: none) */
   double least_share, median_share; /* its share of the fits, the median view's */
   int off;             /* 1: a view is off (the note's rule) */
+  int judged;          /* 1: enough fits to judge the views one by one (the arrays below) */
+  double miss_px[ELFM_MAX_VIEWS][2]; /* each view's mean miss as judged (gauge out); NaN: too few fits kept it */
+  double share[ELFM_MAX_VIEWS];      /* each view's share of the fits */
 } track_views_check;
 void track_views_judge(const track_ctx *c, track_views_check *out);
 /* the note on stderr when a view is off (not with --quiet) */

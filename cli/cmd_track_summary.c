@@ -374,6 +374,21 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
     add_num(vc, "least_kept_share", k.least_share);
     add_num(vc, "median_kept_share", k.median_share);
     cJSON_AddBoolToObject(vc, "views_off", k.off);
+    /* every view as judged, for a look at the pattern (a view alone off, the
+     * outer ring off together: docs/recon.md "Does the calibration fit?") */
+    if (k.judged) {
+      cJSON *va = cJSON_AddArrayToObject(vc, "views");
+      for (int v = 0; v < c->calib->n_views; v++) {
+        cJSON *e = cJSON_CreateObject();
+        cJSON_AddItemToObject(e, "view", view_ij(c->calib, v));
+        if (isfinite(k.miss_px[v][0]) && isfinite(k.miss_px[v][1]))
+          cJSON_AddItemToObject(e, "mean_miss_px", cJSON_CreateDoubleArray(k.miss_px[v], 2));
+        else
+          cJSON_AddNullToObject(e, "mean_miss_px");
+        add_num(e, "kept_share", k.share[v]);
+        cJSON_AddItemToArray(va, e);
+      }
+    }
   }
 
   cJSON *tr = cJSON_AddArrayToObject(j, "tracks");

@@ -120,6 +120,7 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
       peaks >= VIEWS_MIN_PEAKS && (double)c->n_support_rejected >= VIEWS_MAX_REJECTED * (double)peaks;
   out->off = out->few_placed;
   if (c->view_fits < VIEWS_MIN_FITS || nv < 2) return;
+  out->judged = 1;
   double share[ELFM_MAX_VIEWS], mu[ELFM_MAX_VIEWS] = {0}, mw[ELFM_MAX_VIEWS] = {0};
   double du[ELFM_MAX_VIEWS], dw[ELFM_MAX_VIEWS];
   int use[ELFM_MAX_VIEWS] = {0}, n_whole = 0, n_use = 0;
@@ -152,6 +153,11 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
   elfm_calib_gauge_clear(nv, use, du, mu);
   elfm_calib_gauge_clear(nv, use, dw, mw);
   lead_clear(nv, use, du, dw, mu, mw);
+  for (int v = 0; v < nv; v++) {
+    out->miss_px[v][0] = use[v] ? mu[v] : NAN;
+    out->miss_px[v][1] = use[v] ? mw[v] : NAN;
+    out->share[v] = c->view_miss[3 * v + 2] / (double)c->view_fits;
+  }
   /* (with fewer than 4 views to compare, the gauge's three moves leave
    * nothing to judge) */
   for (int v = 0; v < nv && n_use >= 4; v++) {

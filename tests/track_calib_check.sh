@@ -41,6 +41,21 @@ for a in 0.15 1; do
     { echo "FAIL: views_off not true with the lens array turned $a deg"; fail=$((fail+1)); }
   echo "turned $a deg: worst view $(key "$tmp/t$a/summary.json" worst_mean_miss_px) px, median view kept in $(key "$tmp/t$a/summary.json" median_kept_share) of the fits"
 done
+# every view as judged (summary.json views_check.views): 25 of them, and the
+# worst view's row is the one the note names, with the same mean miss
+view_row() { # view_row FILE I J: that view's "u w kept_share"
+  awk -v I="$2" -v J="$3" '
+    /"view":/ { l = $0; gsub(/[^-0-9,]/, "", l); split(l, a, ","); cur = (a[1] == I && a[2] == J) }
+    cur && /"mean_miss_px":/ { l = $0; sub(/.*\[/, "", l); sub(/\].*/, "", l); split(l, m, ","); u = m[1]; w = m[2] }
+    cur && /"kept_share":/ { l = $0; sub(/.*:[ \t]*/, "", l); print u + 0, w + 0, l + 0; cur = 0 }' "$1"
+}
+[ "$(grep -c '"view":' "$tmp/right/summary.json")" -eq 25 ] ||
+  { echo "FAIL: views_check.views has not 25 views"; fail=$((fail+1)); }
+row=$(view_row "$tmp/t0.15/summary.json" 2 -2)
+worst=$(key "$tmp/t0.15/summary.json" worst_mean_miss_px)
+echo "turned 0.15 deg: view (+2, -2) $row"
+echo "$row $worst" | awk '{ d = sqrt($1 * $1 + $2 * $2) - $4; exit !(NF == 4 && $4 > 0.4 && d < 1e-6 && d > -1e-6) }' ||
+  { echo "FAIL: view (+2, -2)'s row '$row' is not the worst view's $worst px"; fail=$((fail+1)); }
 grep -q "view (+2, -2)'s images lie" "$tmp/t0.15.err" ||
   { echo "FAIL: the note does not name the corner view: $(grep "$note" "$tmp/t0.15.err")"; fail=$((fail+1)); }
 run quiet "$tmp/turned1.json" --quiet
