@@ -84,21 +84,23 @@ static int cmp_double(const void *a, const void *b)
 static void lead_clear(int nv, const int *use, const double *du, const double *dw, double *mu,
                        double *mw)
 {
+  double gu[ELFM_MAX_VIEWS], gw[ELFM_MAX_VIEWS]; /* each disparity's direction (0: none) */
+  int n = 0;
+  for (int v = 0; v < nv; v++) {
+    const double g = hypot(du[v], dw[v]);
+    const int on = use[v] && g > 0;
+    gu[v] = on ? du[v] / g : 0;
+    gw[v] = on ? dw[v] / g : 0;
+    n += on;
+  }
+  if (n == 0) return;
   for (int it = 0; it < 8; it++) {
-    double num = 0, den = 0;
+    double a = 0;
+    for (int v = 0; v < nv; v++) a += mu[v] * gu[v] + mw[v] * gw[v];
+    a /= n;
     for (int v = 0; v < nv; v++) {
-      const double g = hypot(du[v], dw[v]);
-      if (!use[v] || !(g > 0)) continue;
-      num += (mu[v] * du[v] + mw[v] * dw[v]) / g;
-      den += 1;
-    }
-    if (!(den > 0)) return;
-    const double a = num / den;
-    for (int v = 0; v < nv; v++) {
-      const double g = hypot(du[v], dw[v]);
-      if (!use[v] || !(g > 0)) continue;
-      mu[v] -= a * du[v] / g;
-      mw[v] -= a * dw[v] / g;
+      mu[v] -= a * gu[v];
+      mw[v] -= a * gw[v];
     }
     elfm_calib_gauge_clear(nv, use, du, mu);
     elfm_calib_gauge_clear(nv, use, dw, mw);
@@ -126,8 +128,9 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
   int use[ELFM_MAX_VIEWS] = {0}, n_whole = 0, n_use = 0;
   for (int v = 0; v < nv; v++) {
     const double kept = c->view_miss[3 * v + 2];
+    out->share[v] = kept / (double)c->view_fits;
     if (elfm_calib_view_on_sensor(c->calib, v) >= VIEWS_ON_SENSOR) {
-      share[n_whole++] = kept / (double)c->view_fits;
+      share[n_whole++] = out->share[v];
       if (out->least < 0 || share[n_whole - 1] < out->least_share) {
         out->least = v;
         out->least_share = share[n_whole - 1];
@@ -156,7 +159,6 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
   for (int v = 0; v < nv; v++) {
     out->miss_px[v][0] = use[v] ? mu[v] : NAN;
     out->miss_px[v][1] = use[v] ? mw[v] : NAN;
-    out->share[v] = c->view_miss[3 * v + 2] / (double)c->view_fits;
   }
   /* (with fewer than 4 views to compare, the gauge's three moves leave
    * nothing to judge) */
