@@ -7,6 +7,7 @@
 # Usage: measure_targets_cli.sh BINARY
 bin=$1
 script="$(cd "$(dirname "$0")/.." && pwd)/scripts/measure_targets.sh"
+. "$(dirname "$0")/track_lib.sh" # key FILE KEY
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail=0
@@ -19,19 +20,18 @@ cat "$tmp/table.md"
 
 # a field of a row (| a | b | ... : field 1 is a)
 field() { grep "^| $1 " "$tmp/table.md" | awk -F'|' -v k="$2" '{ gsub(/^ +| +$/, "", $(k + 1)); print $(k + 1) }'; }
-num() { sed -n "s/.*\"$2\":\([-0-9.eE+]*\).*/\1/p" "$1"; }
 
 # blink: 4 recordings; the row's alpha and F1 are their means
 [ "$(field blink 2)" = 4 ] || bad "blink: $(field blink 2) recordings, not 4"
 for k in alpha:3 f1:4; do
-  key=${k%:*} col=${k#*:}
-  want=$(for s in 1 2 3 4; do num "$tmp/o/blink/s$s/score.json" "$key"; done |
+  name=${k%:*} col=${k#*:}
+  want=$(for s in 1 2 3 4; do key "$tmp/o/blink/s$s/score.json" "$name"; done |
     awk '{ s += $1; n++ } END { if (n == 4) printf "%.3f", s / n }')
   got=$(field blink "$col")
-  [ -n "$want" ] && [ "$got" = "$want" ] || bad "blink $key: row '$got', scores' mean '$want'"
+  [ -n "$want" ] && [ "$got" = "$want" ] || bad "blink $name: row '$got', scores' mean '$want'"
 done
-paired=$(for s in 1 2 3 4; do num "$tmp/o/blink/s$s/score.json" n_paired_tracks; done | awk '{ s += $1 } END { print s }')
-truth=$(for s in 1 2 3 4; do num "$tmp/o/blink/s$s/score.json" n_truth_tracks; done | awk '{ s += $1 } END { print s }')
+paired=$(for s in 1 2 3 4; do key "$tmp/o/blink/s$s/score.json" n_paired_tracks; done | awk '{ s += $1 } END { print s }')
+truth=$(for s in 1 2 3 4; do key "$tmp/o/blink/s$s/score.json" n_truth_tracks; done | awk '{ s += $1 } END { print s }')
 case "$(field blink 8)" in
 "$paired / $truth, "*) ;;
 *) bad "blink objects '$(field blink 8)', scores $paired / $truth" ;;

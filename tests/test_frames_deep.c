@@ -20,6 +20,7 @@
 #include "elfm_recon.h"
 #include "frames_test_util.h"
 #include "lfm_render.h"
+#include "volume_test_util.h"
 
 enum { SW = 64, SH = 48 };
 
@@ -166,18 +167,6 @@ static int same_volume_planes(const elfm_volume *x, const elfm_volume *y, int k0
                 (size_t)(k1 - k0) * pl * sizeof *x->data) == 0;
 }
 
-/* The largest |x - y| over two volumes, over the largest |y|: the dense
- * and sparse paths agree to float rounding, not bit for bit. */
-static double volume_rel_diff(const elfm_volume *x, const elfm_volume *y)
-{
-  double d = 0, m = 0;
-  for (size_t i = 0; i < (size_t)x->w * x->h * x->nz; i++) {
-    d = fmax(d, fabs((double)x->data[i] - y->data[i]));
-    m = fmax(m, fabs((double)y->data[i]));
-  }
-  return m > 0 ? d / m : d;
-}
-
 static int same_fit(int ra, const elfm_localize_result *a, int rb, const elfm_localize_result *b)
 {
   return ra == rb && (!ra || (a->x_vox == b->x_vox && a->y_vox == b->y_vox && a->z_vox == b->z_vox &&
@@ -229,19 +218,19 @@ static void test_refocus(void)
   CHECK(elfm_refocus_workspace_last_path(ws) == ELFM_PATH_SPARSE);
   CHECK(same_volume_planes(vd, vw, 0, nz));
   CHECK(!same_volume_planes(vh, vw, 0, nz)); /* the older pixels would show */
-  CHECK(volume_rel_diff(vh, vw) > 0.05);
+  CHECK(maxdiff(vh, vw) > 0.05f * vmax(vw));
   /* the dense path asked for (track --path dense) is the dense path, and it
    * too leaves out the older pixels: the window's volume to rounding, twice
    * in a row (its copy of the window's pixels is cleared after each use) */
   for (int rep = 0; rep < 2; rep++) {
     CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, deep, vd, ws, &err), &err);
     CHECK(elfm_refocus_workspace_last_path(ws) == ELFM_PATH_DENSE);
-    CHECK(volume_rel_diff(vd, vw) < 1e-5);
+    CHECK(maxdiff(vd, vw) < 1e-5f * vmax(vw));
   }
   /* and the same workspace then refocuses the plain frame as ever, and a
    * deep frame with nothing in its window to an empty volume */
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, whole, vd, ws, &err), &err);
-  CHECK(volume_rel_diff(vd, vh) < 1e-5);
+  CHECK(maxdiff(vd, vh) < 1e-5f * vmax(vh));
   elfm_frame *none = elfm_frame_create(1280, 720, &err);
   CHECK_OK(elfm_frame_copy(none, old, &err), &err);
   for (size_t i = 0; i < none->nnz; i++)
@@ -249,9 +238,7 @@ static void test_refocus(void)
   none->recent_floor = floor_v;
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, deep, vd, ws, &err), &err);
   CHECK_OK(elfm_refocus_execute_path(p, ELFM_PATH_DENSE, none, vd, ws, &err), &err);
-  float vmax = 0;
-  for (size_t i = 0; i < (size_t)W * H * nz; i++) vmax = fmaxf(vmax, fabsf(vd->data[i]));
-  CHECK(vmax == 0.0f);
+  CHECK(vmax(vd) == 0.0f);
   elfm_frame_free(none);
   /* auto takes the sparse path on a deep frame even where the fill rule
    * would take the dense one (a plan whose rule always does): track's

@@ -19,6 +19,7 @@
 #include "lfm_render.h"
 #include "elfm_recon.h"
 #include "refocus_internal.h" /* the workspace's agree_portable and merge_gap_px */
+#include "volume_test_util.h"
 
 /* sigma 1.3 px: the 3.9 um lateral FWHM / 0.93 um/px / 2.355 */
 static void render_bead(elfm_frame *f, const elfm_calib *c, double x, double y, double z,
@@ -47,21 +48,6 @@ static size_t argmax(const elfm_volume *v)
   for (size_t i = 1; i < n; i++)
     if (v->data[i] > v->data[best]) best = i;
   return best;
-}
-
-static float vmax(const elfm_volume *v)
-{
-  float m = 0.0f;
-  for (size_t i = 0; i < (size_t)v->w * v->h * v->nz; i++) m = fmaxf(m, fabsf(v->data[i]));
-  return m;
-}
-
-static float maxdiff(const elfm_volume *a, const elfm_volume *b)
-{
-  float m = 0.0f;
-  for (size_t i = 0; i < (size_t)a->w * a->h * a->nz; i++)
-    m = fmaxf(m, fabsf(a->data[i] - b->data[i]));
-  return m;
 }
 
 static void paper_calib(elfm_calib *c)
