@@ -58,6 +58,7 @@ typedef struct refine_opts {
 typedef struct refine_slot {
   int n;
   double *miss, *wt; /* [max_pts][2 nv], [max_pts][nv] */
+  double *at;        /* [max_pts][2 nv]: where the point projects in each view, px */
   double (*pos)[3];  /* the coarse step: the points, um */
   const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
   double score;            /* the turn's search: the volume's sharpness */
@@ -157,6 +158,9 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
                                       elfm_volume_y_vox(v, det[k].y_um), elfm_volume_z_vox(v, det[k].z_um),
                                       &c->lo, &r, miss, wt))
       continue;
+    double *at = s->at + (size_t)s->n * 2 * (size_t)c->nv;
+    for (int u = 0; u < c->nv; u++)
+      elfm_calib_project(c->cal, u, det[k].x_um, det[k].y_um, det[k].z_um, &at[2 * u], &at[2 * u + 1]);
     s->n++;
   }
   return ELFM_OK;
@@ -181,7 +185,8 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
     return ELFM_OK;
   }
   for (int k = 0; k < s->n; k++)
-    elfm_calib_refine_add(c->acc, s->miss + (size_t)k * 2 * (size_t)c->nv, s->wt + (size_t)k * (size_t)c->nv);
+    elfm_calib_refine_add(c->acc, s->at + (size_t)k * 2 * (size_t)c->nv, s->miss + (size_t)k * 2 * (size_t)c->nv,
+                          s->wt + (size_t)k * (size_t)c->nv);
   c->volumes++;
   return ELFM_OK;
 }
@@ -216,6 +221,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
   for (int s = 0; c->slot && s < slots; s++) {
     free(c->slot[s].miss);
     free(c->slot[s].wt);
+    free(c->slot[s].at);
     free(c->slot[s].pos);
   }
   free(c->slot);
@@ -305,6 +311,12 @@ static void add_moves(int nv, const double *shift, double *total, double *rms, d
  * the passes' stretch. */
 #define TURN_SEARCH_MS 20.0
 #define TURN_MIN_PEAKS 100
+/* Fewer peaks than this over the whole stretch tell no turn: one bead
+ * swept through z (zsweep seed 1, its first 200 ms on the time surface)
+ * gave 1 peak, whose sharpest turn was -3 degrees (the array is not
+ * turned); the passes then failed, but a recording with a few more points
+ * would have gone on with that turn. So the array stays as it is. */
+#define TURN_JUDGE_MIN_PEAKS 20
 
 /* One pass: refocus, fit, collect (into c->acc). */
 static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
@@ -343,10 +355,11 @@ static elfm_status turn_score(refine_ctx *c, const elfm_calib *cal, double a, el
  * (its outer views' images miss by 5-8 px), so 0.5 is the coarsest step
  * that cannot step over the right turn. Within 0.1 degrees, a view 300 px
  * from the grid's middle is within 0.5 px, which the coarse step and the
- * passes then fit. */
+ * passes then fit. *too_few: peaks were seen, but fewer than
+ * TURN_JUDGE_MIN_PEAKS, and no turn was judged (*best_deg 0). */
 static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_deg,
                                elfm_recon_options ro, double *best_deg, int *tried, double *top_score,
-                               double *search_ms, int64_t *peaks, elfm_error *err)
+                               double *search_ms, int64_t *peaks, int *too_few, elfm_error *err)
 {
   const int64_t to_us = ro.to_us;
   double best = 0, best_score = -1;
@@ -378,7 +391,8 @@ static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_
   }
   *top_score = best_score;
   *best_deg = 0;
-  if (!(best_score > 0)) return ELFM_OK;
+  *too_few = best_score > 0 && *peaks < TURN_JUDGE_MIN_PEAKS;
+  if (!(best_score > 0) || *too_few) return ELFM_OK;
   /* the best of every 0.5 degrees lies within 0.25 of the sharpest */
   double sc_at[7];
   for (int k = -3; k <= 3; k++) {
@@ -456,8 +470,9 @@ int cmd_calib_refine(int argc, char **argv)
   for (int s = 0; ok && s < slots; s++) {
     c.slot[s].miss = malloc((size_t)c.max_pts * 2 * (size_t)c.nv * sizeof(double));
     c.slot[s].wt = malloc((size_t)c.max_pts * (size_t)c.nv * sizeof(double));
+    c.slot[s].at = malloc((size_t)c.max_pts * 2 * (size_t)c.nv * sizeof(double));
     c.slot[s].pos = malloc(VOTERS_PER_VOLUME * sizeof *c.slot[s].pos);
-    ok = c.slot[s].miss && c.slot[s].wt && c.slot[s].pos;
+    ok = c.slot[s].miss && c.slot[s].wt && c.slot[s].at && c.slot[s].pos;
   }
   if (!ok) {
     ctx_free(&c, threads, slots);
@@ -479,13 +494,17 @@ int cmd_calib_refine(int argc, char **argv)
   if (o.turn_deg > 0) {
     double a = 0, top = 0, search_ms = 0;
     int64_t peaks = 0;
-    int tried = 0;
-    if (turn_search(&c, &cal, o.turn_deg, o.recon, &a, &tried, &top, &search_ms, &peaks, &err) != ELFM_OK) {
+    int tried = 0, too_few = 0;
+    if (turn_search(&c, &cal, o.turn_deg, o.recon, &a, &tried, &top, &search_ms, &peaks, &too_few, &err) !=
+        ELFM_OK) {
       ctx_free(&c, threads, slots);
       return cli_fail(C, &err);
     }
     elfm_calib_turn(&cal, a);
-    if (!o.quiet && top > 0)
+    if (!o.quiet && too_few)
+      fprintf(stderr, "calib refine: %" PRId64 " peaks above --threshold in the first %g ms, too few to judge "
+              "the lens array's turn by (%d or more): not turned\n", peaks, search_ms, TURN_JUDGE_MIN_PEAKS);
+    else if (!o.quiet && top > 0)
       fprintf(stderr, "calib refine: the lens array's turn: %+.2f deg (the sharpest volumes of %d turns "
               "within +-%g deg on %g ms, %" PRId64 " peaks)\n", a, tried, o.turn_deg, search_ms, peaks);
     else if (!o.quiet)
@@ -510,7 +529,10 @@ int cmd_calib_refine(int argc, char **argv)
     c.voting = 0;
     double rms, worst;
     add_moves(c.nv, shift, total, &rms, &worst);
-    if (!o.quiet)
+    if (!o.quiet && nv < ELFM_CALIB_VOTES_MIN)
+      fprintf(stderr, "calib refine: coarse step (+-%d px): %zu points, too few to move the views by (%d or "
+              "more): skipped\n", o.search_px, nv, ELFM_CALIB_VOTES_MIN);
+    else if (!o.quiet)
       fprintf(stderr, "calib refine: coarse step (+-%d px): %zu points, %d of %d views moved, RMS %.3f px, "
               "largest %.3f px\n", o.search_px, nv, moved, c.nv, rms, worst);
   }
@@ -543,11 +565,18 @@ int cmd_calib_refine(int argc, char **argv)
               rms, worst);
     if (npts == 0) {
       rc = cli_message(C, CLI_FAIL, "%s: no point in %" PRId64 "..%" PRId64 " us could be fitted from "
-                       "%d views (try a lower --threshold or --min-views, or a longer --ms)", o.events,
-                       o.recon.from_us, o.recon.to_us, o.min_views);
+                       "%d views (try a lower --threshold or --min-views, or a longer --ms%s)", o.events,
+                       o.recon.from_us, o.recon.to_us, o.min_views,
+                       o.recon.framer.repr == ELFM_REPR_INTEGRAL ? ""
+                       : "; objects that move slowly, such as one bead swept through z, show on "
+                         "--repr integral, with a --ms that covers the sweep");
       break;
     }
   }
+  /* the views the last pass placed on the others' grid */
+  int still[ELFM_MAX_VIEWS];
+  double spread[ELFM_MAX_VIEWS];
+  for (int v = 0; v < cal.n_views; v++) still[v] = elfm_calib_refine_still(c.acc, v, &spread[v]);
   ctx_free(&c, threads, slots);
   if (rc != CLI_OK) return rc;
   /* the disparities to the fitted centres' turn */
@@ -557,9 +586,13 @@ int cmd_calib_refine(int argc, char **argv)
   if (!o.quiet) {
     fprintf(stderr, "calib refine: the fitted centres lie turned %+.3f deg against the lenslets' rows, "
             "the disparities %+.3f: these turned to match\n", turn_c, turn_d);
-    for (int v = 0; v < cal.n_views; v++)
-      fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px\n", cal.views[v].i, cal.views[v].j,
-              total[2 * v], total[2 * v + 1]);
+    for (int v = 0; v < cal.n_views; v++) {
+      fprintf(stderr, "  view (%+d, %+d): moved (%+.3f, %+.3f) px%s", cal.views[v].i, cal.views[v].j,
+              total[2 * v], total[2 * v + 1], still[v] ? "" : "\n");
+      if (still[v])
+        fprintf(stderr, ", placed on the other views' grid: its images stayed within %.2f px RMS of "
+                "one place\n", spread[v]);
+    }
   }
   cal.z_min_um = z_file[0];
   cal.z_max_um = z_file[1];

@@ -16,7 +16,9 @@
  * the optics, and SPEC §2 says to model more (rotation, scale) only when
  * data show it is needed. A turned lens array is such a case (the end of
  * this file): its disparities turn with its centres, and a turn of 3
- * degrees, the centres fitted, cost flow 0.024 of alpha until they did. */
+ * degrees, the centres fitted, cost flow 0.024 of alpha until they did.
+ * A view whose images never moved on the sensor tells nothing of its own
+ * centre, and is set on the grid of the others (settle_views). */
 #include "elfm_calib.h"
 #include "elfm_frames.h"
 
@@ -34,7 +36,21 @@ struct elfm_calib_refine {
   int search_px;  /* the votes' half-width R (0: no votes) */
   double *votes;  /* [nv][(2R + 1)^2] frame values by offset from the projection */
   size_t n_votes; /* points voted */
+  /* where each view's images lay on the sensor (Welford: count, mean u and
+   * w, summed squared distance from the mean), for elfm_calib_refine_still */
+  double at_n[ELFM_MAX_VIEWS], at_u[ELFM_MAX_VIEWS], at_w[ELFM_MAX_VIEWS], at_m2[ELFM_MAX_VIEWS];
+  double spread_px[ELFM_MAX_VIEWS]; /* the last apply's: RMS distance from the mean, NaN: none */
+  int placed[ELFM_MAX_VIEWS];       /* ... and the views it placed on the others' grid */
 };
+
+static void at_add(elfm_calib_refine *r, int v, double u, double w)
+{
+  if (!(fabs(u) < 1e7 && fabs(w) < 1e7)) return;
+  const double n = ++r->at_n[v], du = u - r->at_u[v], dw = w - r->at_w[v];
+  r->at_u[v] += du / n;
+  r->at_w[v] += dw / n;
+  r->at_m2[v] += du * (u - r->at_u[v]) + dw * (w - r->at_w[v]);
+}
 
 elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_refine **out,
                                      elfm_error *err)
@@ -48,6 +64,7 @@ elfm_status elfm_calib_refine_create(int n_views, size_t max_points, elfm_calib_
   if (!r) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
   r->nv = n_views;
   r->cap = max_points;
+  for (int v = 0; v < ELFM_MAX_VIEWS; v++) r->spread_px[v] = NAN;
   r->n = calloc((size_t)n_views, sizeof *r->n);
   r->mu = malloc((size_t)n_views * max_points * sizeof *r->mu);
   r->mw = malloc((size_t)n_views * max_points * sizeof *r->mw);
@@ -72,7 +89,8 @@ void elfm_calib_refine_free(elfm_calib_refine *r)
   free(r);
 }
 
-int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const double *weight)
+int elfm_calib_refine_add(elfm_calib_refine *r, const double *at_px, const double *miss_px,
+                          const double *weight)
 {
   if (r->n_points >= r->cap) return 0;
   for (int v = 0; v < r->nv; v++) {
@@ -82,6 +100,7 @@ int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const dou
     const size_t k = r->n[v]++;
     r->mu[(size_t)v * r->cap + k] = (float)a;
     r->mw[(size_t)v * r->cap + k] = (float)b;
+    if (at_px) at_add(r, v, at_px[2 * v], at_px[2 * v + 1]);
   }
   r->n_points++;
   return 1;
@@ -148,6 +167,105 @@ static void move_views(elfm_calib *c, const int *use, double *su, double *sw, do
   }
 }
 
+/* cx (or cy) = a + b i + c j over the views with use[v], least squares:
+ * the lenslets' grid, turned and scaled as it may be. 0 when the views do
+ * not span it (fewer than 3, or all in one row). */
+static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3])
+{
+  double m[3][4] = {{0}};
+  for (int v = 0; v < c->n_views; v++) {
+    if (!use[v]) continue;
+    const double x[3] = {1, c->views[v].i, c->views[v].j};
+    const double y = axis ? c->views[v].cy_px : c->views[v].cx_px;
+    for (int a = 0; a < 3; a++) {
+      for (int b = 0; b < 3; b++) m[a][b] += x[a] * x[b];
+      m[a][3] += x[a] * y;
+    }
+  }
+  /* Gauss-Jordan with partial pivoting on the 3 x 3 normal equations */
+  const double scale = m[0][0] + m[1][1] + m[2][2];
+  for (int k = 0; k < 3; k++) {
+    int p = k;
+    for (int a = k + 1; a < 3; a++)
+      if (fabs(m[a][k]) > fabs(m[p][k])) p = a;
+    if (!(fabs(m[p][k]) > 1e-9 * scale)) return 0;
+    for (int b = 0; b < 4; b++) {
+      const double t = m[k][b];
+      m[k][b] = m[p][b];
+      m[p][b] = t;
+    }
+    for (int a = 0; a < 3; a++) {
+      if (a == k) continue;
+      const double f = m[a][k] / m[k][k];
+      for (int b = k; b < 4; b++) m[a][b] -= f * m[k][b];
+    }
+  }
+  for (int k = 0; k < 3; k++) abc[k] = m[k][3] / m[k][k];
+  return 1;
+}
+
+/* Move the views as move_views does, except those whose images all lay
+ * within ELFM_CALIB_STILL_PX of one place on the sensor: their misses rest
+ * on one pixel phase and on whatever that place holds, and a view that
+ * sees its object without its image moving sees little of it (the
+ * central view of one bead swept through z fires on the image's slow
+ * defocus only; its fit there followed its start: 0.65-0.73 px off after
+ * refining from the right centres, 7.5 px after a coarse step on noise;
+ * docs/recon.md "One bead swept through z"). Those views go where the grid
+ * of the others puts them (cx, cy affine in the lenslets' (i, j)), when
+ * ELFM_CALIB_GRID_MIN_VIEWS others span it; otherwise all move as before. */
+#define ELFM_CALIB_STILL_PX 2.0
+#define ELFM_CALIB_GRID_MIN_VIEWS 6
+static void settle_views(elfm_calib_refine *r, elfm_calib *c, const int *use, double *su, double *sw,
+                         double *shift_px)
+{
+  int still[ELFM_MAX_VIEWS] = {0}, rest[ELFM_MAX_VIEWS] = {0}, n_still = 0, n_rest = 0;
+  for (int v = 0; v < c->n_views; v++) {
+    r->spread_px[v] = r->at_n[v] > 0 ? sqrt(r->at_m2[v] / r->at_n[v]) : NAN;
+    r->placed[v] = 0;
+    still[v] = use[v] && r->at_n[v] >= 2 && r->spread_px[v] < ELFM_CALIB_STILL_PX;
+    rest[v] = use[v] && !still[v];
+    n_still += still[v];
+    n_rest += rest[v];
+  }
+  memset(r->at_n, 0, sizeof r->at_n);
+  memset(r->at_u, 0, sizeof r->at_u);
+  memset(r->at_w, 0, sizeof r->at_w);
+  memset(r->at_m2, 0, sizeof r->at_m2);
+  elfm_calib moved = *c;
+  double gx[3], gy[3];
+  if (n_still > 0 && n_rest >= ELFM_CALIB_GRID_MIN_VIEWS) {
+    move_views(&moved, rest, su, sw, shift_px);
+    if (grid_fit(&moved, rest, 0, gx) && grid_fit(&moved, rest, 1, gy)) {
+      for (int v = 0; v < c->n_views; v++) {
+        if (!still[v]) continue;
+        elfm_view *w = &moved.views[v];
+        const double x = gx[0] + gx[1] * w->i + gx[2] * w->j, y = gy[0] + gy[1] * w->i + gy[2] * w->j;
+        if (shift_px) {
+          shift_px[2 * v] = x - c->views[v].cx_px;
+          shift_px[2 * v + 1] = y - c->views[v].cy_px;
+        }
+        w->cx_px = x;
+        w->cy_px = y;
+        r->placed[v] = 1;
+      }
+      *c = moved;
+      return;
+    }
+  }
+  move_views(c, use, su, sw, shift_px);
+}
+
+int elfm_calib_refine_still(const elfm_calib_refine *r, int v, double *spread_px)
+{
+  if (v < 0 || v >= r->nv) {
+    if (spread_px) *spread_px = NAN;
+    return 0;
+  }
+  if (spread_px) *spread_px = r->spread_px[v];
+  return r->placed[v];
+}
+
 elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
                                     double *shift_px, int *n_moved, elfm_error *err)
 {
@@ -164,7 +282,7 @@ elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_c
     sw[v] = use[v] ? median_of(r->scratch, r->mw + (size_t)v * r->cap, r->n[v]) : 0;
     moved += use[v];
   }
-  move_views(c, use, su, sw, shift_px);
+  settle_views(r, c, use, su, sw, shift_px);
   if (n_moved) *n_moved = moved;
   memset(r->n, 0, (size_t)r->nv * sizeof *r->n);
   r->n_points = 0;
@@ -206,6 +324,7 @@ void elfm_calib_refine_vote(elfm_calib_refine *r, const elfm_calib *c, const elf
   for (int v = 0; v < r->nv; v++) {
     double u, w;
     elfm_calib_project(c, v, x_um, y_um, z_um, &u, &w);
+    at_add(r, v, u, w);
     const long iu = lround(u), iw = lround(w);
     double *h = r->votes + (size_t)v * (size_t)side * (size_t)side;
     for (int b = -R; b <= R; b++) {
@@ -244,7 +363,7 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
     free(tmp);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib refine: out of memory");
   }
-  for (int v = 0; R > 0 && r->n_votes > 0 && v < r->nv; v++) {
+  for (int v = 0; R > 0 && r->n_votes >= ELFM_CALIB_VOTES_MIN && v < r->nv; v++) {
     const double *h = r->votes + (size_t)v * cells;
     /* the peak of the map smoothed over 3 x 3 (an image is a few px wide),
      * then the centroid of the smoothed map above its median around it */
@@ -287,7 +406,7 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
   }
   free(sm);
   free(tmp);
-  move_views(c, use, su, sw, shift_px);
+  settle_views(r, c, use, su, sw, shift_px);
   if (n_moved) *n_moved = moved;
   if (R > 0) memset(r->votes, 0, (size_t)r->nv * cells * sizeof *r->votes);
   r->n_votes = 0;

@@ -103,7 +103,7 @@ elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_u
  * the views' centres" has the measurements.
  *
  *   elfm_calib_refine *r;  elfm_calib_refine_create(cal.n_views, 20000, &r, &err);
- *   for each point: elfm_calib_refine_add(r, miss_px, weight);
+ *   for each point: elfm_calib_refine_add(r, at_px, miss_px, weight);
  *   elfm_calib_refine_apply(r, 20, &cal, shift_px, &n_moved, &err);  (and again) */
 typedef struct elfm_calib_refine elfm_calib_refine;
 /* A collector for up to max_points points (1..10^7) of n_views views
@@ -117,8 +117,11 @@ void elfm_calib_refine_free(elfm_calib_refine *r);
  * the mean only. */
 void elfm_calib_gauge_clear(int nv, const int *use, const double *d, double *s);
 /* One point's misses (2 per view, px) and weights (0: the view did not
- * agree, skipped). 1, or 0 when max_points are already held (ignored). */
-int elfm_calib_refine_add(elfm_calib_refine *r, const double *miss_px, const double *weight);
+ * agree, skipped), and where its image lay in each view (at_px: sensor u,
+ * w, 2 per view; may be NULL). 1, or 0 when max_points are already held
+ * (ignored). */
+int elfm_calib_refine_add(elfm_calib_refine *r, const double *at_px, const double *miss_px,
+                          const double *weight);
 size_t elfm_calib_refine_points(const elfm_calib_refine *r);
 /* Move each view of c with at least min_points misses by their median
  * (gauge cleared as above; the others stay); shift_px (2 per view, may be
@@ -127,12 +130,26 @@ size_t elfm_calib_refine_points(const elfm_calib_refine *r);
  * of views. */
 elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_calib *c,
                                     double *shift_px, int *n_moved, elfm_error *err);
+/* A view whose images (at_px of the points it agreed with; the points'
+ * projections in the coarse step) all lay within 2 px RMS of one place
+ * does not move by its own misses: their median rests on one pixel phase
+ * and on whatever that place holds (the central view of one bead swept
+ * through z). When 6 or more other views moved, it goes where the grid of
+ * their centres puts it (cx, cy affine in the lenslets' (i, j)). still
+ * says whether the last apply (or apply_votes) placed view v so, and puts
+ * its images' RMS distance from their mean in *spread_px (may be NULL;
+ * NaN when none were given). */
+int elfm_calib_refine_still(const elfm_calib_refine *r, int v, double *spread_px);
 /* The coarse step, for centres too far off for the view fit's window (a
  * calibration from the optics alone): every point votes, in each view,
  * with the frame's values at offsets up to radius_px from its projection;
  * each view moves to the peak of its votes (gauge cleared as above; a view
- * whose peak is not twice the votes' median stays). set_search allocates
- * the votes (0..64 px; 0 frees them), apply_votes empties them. */
+ * whose peak is not twice the votes' median stays). Fewer than
+ * ELFM_CALIB_VOTES_MIN points make no map, and no view moves: one point's
+ * frame (a bead swept through z, its first 200 ms on the time surface)
+ * moved views by up to 15 px. set_search allocates the votes (0..64 px; 0
+ * frees them), apply_votes empties them. */
+#define ELFM_CALIB_VOTES_MIN 20
 struct elfm_frame;
 elfm_status elfm_calib_refine_set_search(elfm_calib_refine *r, int radius_px, elfm_error *err);
 void elfm_calib_refine_vote(elfm_calib_refine *r, const elfm_calib *c, const struct elfm_frame *f,

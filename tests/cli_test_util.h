@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 /* Run `eventlfm ARGS` from the build tree, stdout to DIR/out.txt, stderr
  * to DIR/err.txt; its exit code (-1: it did not exit). */
@@ -16,6 +17,23 @@ static inline int cli_run(const char *dir, const char *args)
   snprintf(cmd, sizeof cmd, "%s/eventlfm %s >%s/out.txt 2>%s/err.txt", ELFM_BINARY_DIR, args, dir, dir);
   int rc = system(cmd);
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/* Before a test of the command: 1 when the eventlfm program is built and
+ * dir (a mkdtemp template) was made; else 0, with a SKIP line saying why. */
+static inline int cli_test_ready(char *dir)
+{
+  char bin[600];
+  snprintf(bin, sizeof bin, "%s/eventlfm", ELFM_BINARY_DIR);
+  if (access(bin, X_OK) != 0) {
+    printf("SKIP the command: %s not built\n", bin);
+    return 0;
+  }
+  if (!mkdtemp(dir)) {
+    printf("SKIP the command: no temporary directory\n");
+    return 0;
+  }
+  return 1;
 }
 
 /* Write `text` to DIR/NAME; 0, or -1 (perror'd) when it cannot. */

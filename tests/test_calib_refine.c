@@ -27,6 +27,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "calib_test_util.h"
 #include "check.h"
 #include "cli_test_util.h"
 #include "elfm_datasets.h"
@@ -37,21 +38,6 @@ static double lcg(uint32_t *s)
 {
   *s = *s * 1664525u + 1013904223u;
   return (*s >> 8) % 100001 / 100000.0;
-}
-
-/* Remove from e[v] (one axis) its least-squares fit a + b d[v]: the moves
- * no recording can show (elfm_calib.h). */
-static void gauge_free(int nv, const double *d, double *e)
-{
-  double n = nv, sd = 0, sdd = 0, se = 0, sde = 0;
-  for (int v = 0; v < nv; v++) {
-    sd += d[v];
-    sdd += d[v] * d[v];
-    se += e[v];
-    sde += d[v] * e[v];
-  }
-  const double b = (n * sde - sd * se) / (n * sdd - sd * sd), a = (se - b * sd) / n;
-  for (int v = 0; v < nv; v++) e[v] -= a + b * d[v];
 }
 
 /* *c moved by a gauge-free pattern of about `rms_px` per axis (seeded). */
@@ -73,7 +59,6 @@ static void perturb(elfm_calib *c, double rms_px, uint32_t seed)
   }
 }
 
-/* Largest gauge-free difference of a's centres from b's, px. */
 /* The largest difference of a view's disparity, px/um */
 static double disparity_error(const elfm_calib *a, const elfm_calib *b)
 {
@@ -81,23 +66,6 @@ static double disparity_error(const elfm_calib *a, const elfm_calib *b)
   for (int v = 0; v < a->n_views; v++)
     worst = fmax(worst, hypot(a->views[v].dx_px_per_um - b->views[v].dx_px_per_um,
                               a->views[v].dy_px_per_um - b->views[v].dy_px_per_um));
-  return worst;
-}
-
-static double centre_error(const elfm_calib *a, const elfm_calib *b)
-{
-  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
-         dw[ELFM_MAX_VIEWS] = {0};
-  for (int v = 0; v < a->n_views; v++) {
-    eu[v] = a->views[v].cx_px - b->views[v].cx_px;
-    ew[v] = a->views[v].cy_px - b->views[v].cy_px;
-    du[v] = b->views[v].dx_px_per_um;
-    dw[v] = b->views[v].dy_px_per_um;
-  }
-  gauge_free(a->n_views, du, eu);
-  gauge_free(a->n_views, dw, ew);
-  double worst = 0;
-  for (int v = 0; v < a->n_views; v++) worst = fmax(worst, hypot(eu[v], ew[v]));
   return worst;
 }
 
@@ -178,8 +146,11 @@ static size_t refine_pass(elfm_calib *c, const elfm_calib *truth, elfm_frame *f,
     double q[3];
     to_vox(c, x, y, z, q);
     elfm_localize_result r;
-    if (elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, wt))
-      elfm_calib_refine_add(acc, miss, wt);
+    if (elfm_refocus_localize_misses(p, f, q[0], q[1], q[2], &o, &r, miss, wt)) {
+      double at[2 * ELFM_MAX_VIEWS];
+      for (int v = 0; v < c->n_views; v++) elfm_calib_project(c, v, x, y, z, &at[2 * v], &at[2 * v + 1]);
+      elfm_calib_refine_add(acc, at, miss, wt);
+    }
   }
   const size_t n = elfm_calib_refine_points(acc);
   double shift[2 * ELFM_MAX_VIEWS];
@@ -278,8 +249,8 @@ static void test_refine(const elfm_calib *truth, elfm_frame *f)
   for (int v = 0; v < ELFM_MAX_VIEWS; v++) wt[v] = 1;
   miss[0] = NAN;      /* view 0's miss unusable: skipped, the others kept */
   miss[3] = INFINITY; /* view 1 too */
-  for (int k = 0; k < 1000; k++) CHECK(elfm_calib_refine_add(acc, miss, wt));
-  CHECK(!elfm_calib_refine_add(acc, miss, wt)); /* full */
+  for (int k = 0; k < 1000; k++) CHECK(elfm_calib_refine_add(acc, NULL, miss, wt));
+  CHECK(!elfm_calib_refine_add(acc, NULL, miss, wt)); /* full */
   CHECK_EQ_INT(elfm_calib_refine_points(acc), 1000);
   c = *truth;
   int moved = 0;
@@ -413,16 +384,7 @@ static int sim_flow(const char *name, const char *const *kv, int n, char *out, s
 
 static void test_cli(void)
 {
-  char bin[600];
-  snprintf(bin, sizeof bin, "%s/eventlfm", ELFM_BINARY_DIR);
-  if (access(bin, X_OK) != 0) {
-    printf("SKIP the command: %s not built\n", bin);
-    return;
-  }
-  if (!mkdtemp(dir)) {
-    printf("SKIP the command: no temporary directory\n");
-    return;
-  }
+  if (!cli_test_ready(dir)) return;
   elfm_error err;
   char sim[700], p[800], q[800], args[3000];
   elfm_calib truth, c;
@@ -583,10 +545,8 @@ static void test_cli(void)
 int main(void)
 {
   elfm_calib c;
-  elfm_optics op;
   elfm_error err;
-  elfm_optics_default(&op);
-  CHECK_OK(elfm_calib_from_optics(&op, 1280, 720, 4.86, &c, &err), &err);
+  if (!calib_test_default(&c)) return check_report();
   elfm_frame *f = elfm_frame_create(c.sensor_width_px, c.sensor_height_px, &err);
   CHECK(f != NULL);
   if (!f) return check_report();
