@@ -363,6 +363,8 @@ typedef struct fwhm_list {
  * scratch file cut short: a bus error). */
 #define TRACK_PATH_CHARS PATH_MAX
 
+/* per view in the views' check's sums (cmd_track_views.c) */
+#define TRACK_VIEW_SUMS 6
 typedef struct track_ctx {
   const track_opts *o;
   const elfm_calib *calib;
@@ -383,9 +385,10 @@ typedef struct track_ctx {
                             is on), else 0 */
     double need;         /* the share of views a peak needed (0: no test) */
     /* the views' check (cmd_track_views.c): per view, the misses of its
-     * image off the fitted point summed (u, w, px) and the fits that kept
-     * it; the view fits done */
-    double view_miss[3 * ELFM_MAX_VIEWS];
+     * image off the fitted point summed (u, w, px), the fits that kept it,
+     * and where its images lay (u, w from the view's centre, px, summed,
+     * and u^2 + w^2 summed); the view fits done */
+    double view_miss[TRACK_VIEW_SUMS * ELFM_MAX_VIEWS];
     int fits, tries;
   } *sp;
   /* the frame each slot's volume came from and the plan, for the guided
@@ -423,7 +426,7 @@ typedef struct track_ctx {
   int64_t n_support_rejected, n_explained, n_localized, n_guided_views, n_deep_dropped;
   /* the views' check: the slots' view_miss summed in frame order, and the
    * view fits (track_views_merge) */
-  double view_miss[3 * ELFM_MAX_VIEWS];
+  double view_miss[TRACK_VIEW_SUMS * ELFM_MAX_VIEWS];
   int64_t view_fits, view_tries;
   int64_t n_pair_fits; /* detections split in two by the pair fits */
   int64_t n_guided_beside; /* guided view fits dropped: they found another detection's object */
@@ -734,7 +737,8 @@ double track_pulsed_ratio(const track_ctx *c);
  * calibration from the optics alone). */
 /* a fit's misses (2 per view) and weights (0: the view left out) into the
  * slot (whose `tries` the worker counts, failed fits too) */
-void track_views_add(struct slot_peaks *sp, int n_views, const double *miss_px, const double *weight);
+void track_views_add(struct slot_peaks *sp, const elfm_calib *calib, const double xyz_um[3],
+                     const double *miss_px, const double *weight);
 /* the slot's sums into the run's, in frame order (the callback) */
 void track_views_merge(track_ctx *c, int slot);
 typedef struct track_views_check {
@@ -750,6 +754,8 @@ typedef struct track_views_check {
   int judged;          /* 1: enough fits to judge the views one by one (the arrays below) */
   double miss_px[ELFM_MAX_VIEWS][2]; /* each view's mean miss as judged (gauge out); NaN: too few fits kept it */
   double share[ELFM_MAX_VIEWS];      /* each view's share of the fits */
+  double spread_px[ELFM_MAX_VIEWS];  /* RMS distance of its images from their mean, px (NaN: none) */
+  int still[ELFM_MAX_VIEWS];         /* 1: its images stayed in one place, its miss not judged */
 } track_views_check;
 void track_views_judge(const track_ctx *c, track_views_check *out);
 /* the note on stderr when a view is off (not with --quiet) */

@@ -386,6 +386,10 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
         else
           cJSON_AddNullToObject(e, "mean_miss_px");
         add_num(e, "kept_share", k.share[v]);
+        /* where its images lay: within ELFM_CALIB_STILL_PX of one place,
+         * the view's miss is not judged (still: true, mean_miss_px null) */
+        add_num(e, "images_spread_px", k.spread_px[v]);
+        cJSON_AddBoolToObject(e, "still", k.still[v]);
         cJSON_AddItemToArray(va, e);
       }
     }

@@ -48,13 +48,21 @@
 /* A view's mean miss is judged from this many fits that kept it */
 #define VIEWS_MIN_KEPT 50
 
-void track_views_add(struct slot_peaks *sp, int n_views, const double *miss_px, const double *weight)
+void track_views_add(struct slot_peaks *sp, const elfm_calib *calib, const double xyz_um[3],
+                     const double *miss_px, const double *weight)
 {
-  for (int v = 0; v < n_views; v++) {
+  for (int v = 0; v < calib->n_views; v++) {
     if (!(weight[v] > 0)) continue;
-    sp->view_miss[3 * v] += miss_px[2 * v];
-    sp->view_miss[3 * v + 1] += miss_px[2 * v + 1];
-    sp->view_miss[3 * v + 2] += 1;
+    double *s = sp->view_miss + TRACK_VIEW_SUMS * v, u, w;
+    elfm_calib_project(calib, v, xyz_um[0], xyz_um[1], xyz_um[2], &u, &w);
+    u -= calib->views[v].cx_px;
+    w -= calib->views[v].cy_px;
+    s[0] += miss_px[2 * v];
+    s[1] += miss_px[2 * v + 1];
+    s[2] += 1;
+    s[3] += u;
+    s[4] += w;
+    s[5] += u * u + w * w;
   }
   sp->fits++;
 }
@@ -62,7 +70,7 @@ void track_views_add(struct slot_peaks *sp, int n_views, const double *miss_px, 
 void track_views_merge(track_ctx *c, int slot)
 {
   struct slot_peaks *sp = &c->sp[slot];
-  for (int k = 0; k < 3 * c->calib->n_views; k++) c->view_miss[k] += sp->view_miss[k];
+  for (int k = 0; k < TRACK_VIEW_SUMS * c->calib->n_views; k++) c->view_miss[k] += sp->view_miss[k];
   c->view_fits += sp->fits;
   c->view_tries += sp->tries;
 }
@@ -127,7 +135,7 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
   double du[ELFM_MAX_VIEWS], dw[ELFM_MAX_VIEWS];
   int use[ELFM_MAX_VIEWS] = {0}, n_whole = 0, n_use = 0;
   for (int v = 0; v < nv; v++) {
-    const double kept = c->view_miss[3 * v + 2];
+    const double *s = c->view_miss + TRACK_VIEW_SUMS * v, kept = s[2];
     out->share[v] = kept / (double)c->view_fits;
     if (elfm_calib_view_on_sensor(c->calib, v) >= VIEWS_ON_SENSOR) {
       share[n_whole++] = out->share[v];
@@ -136,11 +144,19 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
         out->least_share = share[n_whole - 1];
       }
     }
-    use[v] = kept >= VIEWS_MIN_KEPT;
+    /* A view whose images stayed in one place (the central view of a bead
+     * swept through z) has a miss that follows wherever its centre is put,
+     * and tells nothing of it: not judged (calib refine sets such a view on
+     * the others' grid; elfm_calib.h). One bead swept at 1 mm/s drew the
+     * note on that view alone (0.43 px), its images within 0.2 px. */
+    const double mean_u = kept > 0 ? s[3] / kept : 0, mean_w = kept > 0 ? s[4] / kept : 0;
+    out->spread_px[v] = kept > 0 ? sqrt(fmax(0, s[5] / kept - mean_u * mean_u - mean_w * mean_w)) : NAN;
+    out->still[v] = kept >= VIEWS_MIN_KEPT && out->spread_px[v] < ELFM_CALIB_STILL_PX;
+    use[v] = kept >= VIEWS_MIN_KEPT && !out->still[v];
     n_use += use[v];
     if (use[v]) {
-      mu[v] = c->view_miss[3 * v] / kept;
-      mw[v] = c->view_miss[3 * v + 1] / kept;
+      mu[v] = s[0] / kept;
+      mw[v] = s[1] / kept;
     }
     du[v] = c->calib->views[v].dx_px_per_um;
     dw[v] = c->calib->views[v].dy_px_per_um;

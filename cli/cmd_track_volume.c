@@ -389,7 +389,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
   c->sp[slot].explained = 0;
   c->sp[slot].loc = 0;
   c->sp[slot].deep_dropped = 0;
-  memset(c->sp[slot].view_miss, 0, 3 * (size_t)c->calib->n_views * sizeof *c->sp[slot].view_miss);
+  memset(c->sp[slot].view_miss, 0, TRACK_VIEW_SUMS * (size_t)c->calib->n_views * sizeof *c->sp[slot].view_miss);
   c->sp[slot].fits = c->sp[slot].tries = 0;
   c->sp[slot].occupancy = 0;
   c->sp[slot].need = 0;
@@ -478,7 +478,8 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       if (fitok) fitok[n] = 1;
       n++;
       c->sp[slot].loc++;
-      track_views_add(&c->sp[slot], c->calib->n_views, miss, wt);
+      const double at_um[3] = {det[n - 1].x_um, det[n - 1].y_um, det[n - 1].z_um};
+      track_views_add(&c->sp[slot], c->calib, at_um, miss, wt);
     }
     c->sp[slot].n = n;
     if (c->o->localize_near_um > 0) near_refit(c, v, slot, det, n, &deep, deep_test);

@@ -214,7 +214,6 @@ static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3]
  * docs/recon.md "One bead swept through z"). Those views go where the grid
  * of the others puts them (cx, cy affine in the lenslets' (i, j)), when
  * ELFM_CALIB_GRID_MIN_VIEWS others span it; otherwise all move as before. */
-#define ELFM_CALIB_STILL_PX 2.0
 #define ELFM_CALIB_GRID_MIN_VIEWS 6
 static void settle_views(elfm_calib_refine *r, elfm_calib *c, const int *use, double *su, double *sw,
                          double *shift_px)

@@ -140,6 +140,9 @@ elfm_status elfm_calib_refine_apply(elfm_calib_refine *r, int min_points, elfm_c
  * its images' RMS distance from their mean in *spread_px (may be NULL;
  * NaN when none were given). */
 int elfm_calib_refine_still(const elfm_calib_refine *r, int v, double *spread_px);
+/* ... the 2 px of that rule (track's check of the views leaves such views
+ * unjudged too) */
+#define ELFM_CALIB_STILL_PX 2.0
 /* The coarse step, for centres too far off for the view fit's window (a
  * calibration from the optics alone): every point votes, in each view,
  * with the frame's values at offsets up to radius_px from its projection;
