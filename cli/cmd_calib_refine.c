@@ -52,6 +52,11 @@ typedef struct refine_opts {
   double turn_deg;    /* the lens array's turn is searched within +-turn_deg (0: none) */
   int quiet;
   double planes_um[3]; /* --z-*-um for the passes' volumes (NaN: the calibration's) */
+  /* none of --repr, --tau-us, --polarity, --blur-px given: too few peaks on
+   * the time surface, and the integral (recon_integral, its defaults) is
+   * tried (choose_repr) */
+  int repr_auto;
+  elfm_recon_options recon_integral;
 } refine_opts;
 
 /* Per batch slot: the points of the slot's volume, misses and weights. */
@@ -76,6 +81,8 @@ typedef struct refine_ctx {
   const elfm_calib *cal; /* the centres of this pass */
   int voting;            /* this pass is the coarse step */
   int scoring;           /* this pass scores a turn of the lens array */
+  int64_t count_stop;    /* ... and stops once this many peaks are scored (0: never) */
+  int count_stopped;     /* the pass was stopped so */
   double score;          /* its sum over the volumes, in frame order */
   int64_t n_scored;      /* the peaks summed */
   int64_t volumes;
@@ -97,6 +104,11 @@ static void usage(FILE *f)
           "alike (the volume's x-y origin) and in proportion to the disparities (its focal\n"
           "plane). The disparities keep their length (from the optics) and turn with the\n"
           "grid of fitted centres (optics.mla_rotation_deg records the turn found).\n"
+          "A view whose images stay in one place (the central view of a bead swept\n"
+          "through z) is set on the grid of the others instead. Objects that move\n"
+          "slowly show in few peaks on the time surface: with fewer than 20 over the\n"
+          "stretch and --repr not given, the integral is tried and taken if it shows\n"
+          "more (for a z sweep, give a --ms that covers it).\n"
           "Per-pass progress, the turn and each view's move on stderr.\n\n"
           "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
@@ -176,6 +188,10 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
     c->score += s->score;
     c->n_scored += s->n_scored;
     c->volumes++;
+    if (c->count_stop > 0 && c->n_scored >= c->count_stop) {
+      c->count_stopped = 1;
+      return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "enough peaks counted");
+    }
     return ELFM_OK;
   }
   if (c->voting) {
@@ -252,11 +268,13 @@ static int parse(int argc, char **argv, refine_opts *o)
   o->min_points = 20;
   o->search_px = 12;
   o->turn_deg = 5;
+  o->repr_auto = 1;
   cli_recon_parse rp = {.ro = &o->recon};
   optind = 1;
   opterr = 0;
   int c;
   while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
+    if (c == CLI_RO_REPR || c == CLI_RO_TAU || c == CLI_RO_POLARITY || c == CLI_RO_BLUR) o->repr_auto = 0;
     const int k = cli_parse_recon_option(C, c, optarg, &rp);
     if (k == 0) return CLI_USAGE;
     if (k > 0) continue;
@@ -285,6 +303,15 @@ static int parse(int argc, char **argv, refine_opts *o)
     return cli_message(C, CLI_USAGE, "--to-us must be after --from-us");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o->planes_um);
+  if (o->repr_auto) {
+    /* the same options on the integral, with its own defaults (both
+     * polarities, its leak, its start: cli_check_recon_options) */
+    o->recon_integral = o->recon;
+    o->recon_integral.framer.repr = ELFM_REPR_INTEGRAL;
+    cli_recon_parse ri = rp;
+    ri.ro = &o->recon_integral;
+    if (!cli_check_recon_options(C, &ri)) return CLI_USAGE;
+  }
   return CLI_OK;
 }
 
@@ -416,6 +443,49 @@ static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_
   return ELFM_OK;
 }
 
+/* Peaks (up to VOTERS_PER_VOLUME per volume) on ro's frames over the
+ * stretch, at the calibration as it is; stops counting at `enough`. */
+static elfm_status count_peaks(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro, int64_t enough,
+                               int64_t *n, elfm_error *err)
+{
+  double score;
+  c->count_stop = enough;
+  c->count_stopped = 0;
+  elfm_status st = turn_score(c, cal, 0.0, ro, &score, n, err);
+  c->count_stop = 0;
+  if (c->count_stopped) {
+    elfm_error_clear(err);
+    st = ELFM_OK;
+  }
+  return st;
+}
+
+/* Objects that move slowly (one bead swept through z at 0.2 mm/s) fire few
+ * of their pixels in a window: the time surface shows them in no peak,
+ * the integral (each pixel's leaky sum of events) does. zsweep seed 1 over
+ * 900 ms: 2 peaks on the time surface, 189 on the integral, on which the
+ * refinement works (docs/recon.md "Refining on one bead swept through z").
+ * So with the representation not given and fewer than
+ * TURN_JUDGE_MIN_PEAKS peaks on the time surface over the whole stretch,
+ * the integral is counted too, and taken if it shows more; as track does
+ * with too few peaks to judge (cmd_track_auto.h). Flow reaches the count
+ * within its first volume or two. */
+static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts *o, elfm_error *err)
+{
+  int64_t n_surface = 0, n_integral = 0;
+  elfm_status st = count_peaks(c, cal, o->recon, TURN_JUDGE_MIN_PEAKS, &n_surface, err);
+  if (st != ELFM_OK || n_surface >= TURN_JUDGE_MIN_PEAKS) return st;
+  st = count_peaks(c, cal, o->recon_integral, TURN_JUDGE_MIN_PEAKS, &n_integral, err);
+  if (st != ELFM_OK || n_integral <= n_surface) return st;
+  if (!o->quiet)
+    fprintf(stderr, "calib refine: %" PRId64 " peaks above --threshold on the time surface over the %g ms, "
+            "%s%" PRId64 " on the integral: refining on --repr integral (objects that move slowly; "
+            "--repr exp keeps the time surface)\n", n_surface, o->ms,
+            n_integral >= TURN_JUDGE_MIN_PEAKS ? "at least " : "", n_integral);
+  o->recon = o->recon_integral;
+  return ELFM_OK;
+}
+
 int cmd_calib_refine(int argc, char **argv)
 {
   refine_opts o;
@@ -452,6 +522,8 @@ int cmd_calib_refine(int argc, char **argv)
   const int64_t t1 = t0 + (int64_t)llround(o.ms * 1000);
   o.recon.from_us = t0;
   if (o.recon.to_us > t1) o.recon.to_us = t1;
+  o.recon_integral.from_us = o.recon.from_us;
+  o.recon_integral.to_us = o.recon.to_us;
 
   int threads = 0, slots = 0;
   if (elfm_recon_layout(&o.recon, &threads, &slots, &err) != ELFM_OK) return cli_fail(C, &err);
@@ -491,6 +563,10 @@ int cmd_calib_refine(int argc, char **argv)
   double total[2 * ELFM_MAX_VIEWS] = {0};
   int rc = CLI_OK;
   c.cal = &cal;
+  if (o.repr_auto && choose_repr(&c, &cal, &o, &err) != ELFM_OK) {
+    ctx_free(&c, threads, slots);
+    return cli_fail(C, &err);
+  }
   if (o.turn_deg > 0) {
     double a = 0, top = 0, search_ms = 0;
     int64_t peaks = 0;

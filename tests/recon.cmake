@@ -11,7 +11,7 @@ elfm_add_test(test_localize test_localize.c)
 # and 310 s beside the other tests in CI (with four more searches then),
 # where 120 x 3 was the limit
 elfm_add_test(test_calib_refine test_calib_refine.c TIMEOUT 200)
-# one simulated z sweep refined on its 900 ms of integral frames: ~7 s
+# one simulated z sweep refined on its 900 ms (the integral given, then chosen): ~20 s
 elfm_add_test(test_calib_still test_calib_still.c TIMEOUT 120)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)
 elfm_add_test(test_recon_plan test_recon_plan.c)

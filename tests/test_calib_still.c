@@ -17,7 +17,10 @@
  *    integral over the whole sweep) from the simulator's calibration: the
  *    central view stays within 0.15 px of the truth (0.73 px off before
  *    it was placed), every view within 0.45 px (0.33 measured), stderr
- *    names the views placed; on the time surface's first 200 ms (1 peak)
+ *    names the views placed; without --repr the integral is chosen there
+ *    (2 peaks on the time surface, more on the integral: the same bytes
+ *    as --repr integral given), with --repr exp it is not; on the time
+ *    surface's first 200 ms (1 peak; the integral none)
  *    no turn is judged and no coarse step taken (the build before turned
  *    the array -3 degrees and moved views up to 15 px on that one point),
  *    and the failure names --repr integral. */
@@ -267,6 +270,20 @@ static void test_cli(void)
          worst, per[c0]);
   CHECK_MSG(per[c0] < 0.15, "the central view %.3f px off", per[c0]);
   CHECK_MSG(worst < 0.45, "views up to %.3f px off", worst);
+  /* --repr not given: 2 peaks on the time surface over the 900 ms, more on
+   * the integral, which is taken (and said), to the same bytes */
+  snprintf(args, sizeof args, "calib refine --calib %s/zs/calib.json --events %s/zs/events.raw --out %s/a.json "
+           "--ms 900 --turn-deg 0 --passes 2", dir, dir, dir);
+  CHECK_EQ_INT(cli_run(dir, args), 0);
+  CHECK(err_has("on the time surface over the 900 ms") && err_has("refining on --repr integral"));
+  char pa[800];
+  snprintf(pa, sizeof pa, "%s/a.json", dir);
+  CHECK_MSG(cli_same_file(p, pa), "refined with the integral chosen: not the bytes of --repr integral given");
+  /* --repr exp given: kept, and no point fitted */
+  snprintf(args, sizeof args, "calib refine --calib %s/zs/calib.json --events %s/zs/events.raw --out %s/e.json "
+           "--ms 900 --turn-deg 0 --passes 1 --repr exp", dir, dir, dir);
+  CHECK_EQ_INT(cli_run(dir, args), 1);
+  CHECK(err_has("no point in") && !err_has("refining on --repr integral"));
 
   /* the time surface's first 200 ms: one peak. No turn, no coarse step;
    * the failure says what to try */
