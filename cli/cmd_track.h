@@ -736,7 +736,9 @@ double track_pulsed_ratio(const track_ctx *c);
  * where the others take part in most, is off (a turned lens array, a
  * calibration from the optics alone). */
 /* a fit's misses (2 per view) and weights (0: the view left out) into the
- * slot (whose `tries` the worker counts, failed fits too) */
+ * slot, with where the fitted point (xyz_um) put each view's image (whose
+ * spread says a view's images stayed in one place); the worker counts the
+ * slot's `tries`, failed fits too */
 void track_views_add(struct slot_peaks *sp, const elfm_calib *calib, const double xyz_um[3],
                      const double *miss_px, const double *weight);
 /* the slot's sums into the run's, in frame order (the callback) */

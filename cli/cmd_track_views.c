@@ -148,7 +148,7 @@ void track_views_judge(const track_ctx *c, track_views_check *out)
      * swept through z) has a miss that follows wherever its centre is put,
      * and tells nothing of it: not judged (calib refine sets such a view on
      * the others' grid; elfm_calib.h). One bead swept at 1 mm/s drew the
-     * note on that view alone (0.43 px), its images within 0.2 px. */
+     * note on that view alone (0.43 px), its images within 0.1 px. */
     const double mean_u = kept > 0 ? s[3] / kept : 0, mean_w = kept > 0 ? s[4] / kept : 0;
     out->spread_px[v] = kept > 0 ? sqrt(fmax(0, s[5] / kept - mean_u * mean_u - mean_w * mean_w)) : NAN;
     out->still[v] = kept >= VIEWS_MIN_KEPT && out->spread_px[v] < ELFM_CALIB_STILL_PX;

@@ -211,7 +211,7 @@ static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3]
  * central view of one bead swept through z fires on the image's slow
  * defocus only; its fit there followed its start: 0.65-0.73 px off after
  * refining from the right centres, 7.5 px after a coarse step on noise;
- * docs/recon.md "One bead swept through z"). Those views go where the grid
+ * docs/recon.md "Refining on one bead swept through z"). Those views go where the grid
  * of the others puts them (cx, cy affine in the lenslets' (i, j)), when
  * ELFM_CALIB_GRID_MIN_VIEWS others span it; otherwise all move as before. */
 #define ELFM_CALIB_GRID_MIN_VIEWS 6
