@@ -57,6 +57,7 @@ typedef struct refine_opts {
    * tried (choose_repr) */
   int repr_auto;
   elfm_recon_options recon_integral;
+  int threshold_given; /* --threshold given: the integral keeps it too */
 } refine_opts;
 
 /* Per batch slot: the points of the slot's volume, misses and weights. */
@@ -75,6 +76,7 @@ typedef struct refine_ctx {
   int nv, max_pts;
   elfm_localize_options lo;
   elfm_peaks **pk;     /* [threads] */
+  int threads;
   elfm_detection *det; /* [threads][max_pts] */
   refine_slot *slot;   /* [slots] */
   elfm_calib_refine *acc;
@@ -107,8 +109,9 @@ static void usage(FILE *f)
           "A view whose images stay in one place (the central view of a bead swept\n"
           "through z) is set on the grid of the others instead. Objects that move\n"
           "slowly show in few peaks on the time surface: with fewer than 20 over the\n"
-          "stretch and --repr not given, the integral is tried and taken if it shows\n"
-          "more (for a z sweep, give a --ms that covers it).\n"
+          "stretch and --repr not given, the integral is tried (above 30 unless\n"
+          "--threshold is given) and taken if it shows 20 or more (for a z sweep, give\n"
+          "a --ms that covers it).\n"
           "Per-pass progress, the turn and each view's move on stderr.\n\n"
           "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
@@ -286,7 +289,10 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_OUT: o->out = optarg; break;
     case O_MS: ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
     case O_PASSES: ok = cli_parse_int_in(C, "--passes", optarg, 1, 20, "1..20", &o->passes); break;
-    case O_THR: ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold); break;
+    case O_THR:
+      o->threshold_given = 1;
+      ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold);
+      break;
     case O_MINV: ok = cli_parse_int_in(C, "--min-views", optarg, 3, ELFM_MAX_VIEWS, "3..81", &o->min_views); break;
     case O_MINP: ok = cli_parse_int_in(C, "--min-points", optarg, 1, 1000000, "1..1000000", &o->min_points); break;
     case O_SEARCH: ok = cli_parse_int_in(C, "--search-px", optarg, 0, 64, "0..64", &o->search_px); break;
@@ -344,6 +350,10 @@ static void add_moves(int nv, const double *shift, double *total, double *rms, d
  * turned); the passes then failed, but a recording with a few more points
  * would have gone on with that turn. So the array stays as it is. */
 #define TURN_JUDGE_MIN_PEAKS 20
+/* The integral's peaks, chosen for slow objects (choose_repr), above this
+ * when --threshold is not given: its images are dimmer than the time
+ * surface's (track's thresholds: 25 on the integral, 45 on the surface) */
+#define REFINE_INTEGRAL_THRESHOLD 30
 
 /* One pass: refocus, fit, collect (into c->acc). */
 static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
@@ -443,6 +453,20 @@ static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_
   return ELFM_OK;
 }
 
+/* The peak detectors (one per thread) for peaks above thr */
+static elfm_status set_threshold(refine_ctx *c, const elfm_calib *cal, double thr, elfm_error *err)
+{
+  elfm_peaks_options po;
+  elfm_peaks_options_default(&po);
+  po.absolute = thr;
+  for (int t = 0; t < c->threads; t++) {
+    elfm_peaks_free(c->pk[t]);
+    if (!(c->pk[t] = elfm_peaks_create(&po, cal->view_w_px, cal->view_h_px, elfm_calib_n_planes(cal), err)))
+      return ELFM_ERR_NOMEM;
+  }
+  return ELFM_OK;
+}
+
 /* Peaks (up to VOTERS_PER_VOLUME per volume) on ro's frames over the
  * stretch, at the calibration as it is; stops counting at `enough`. */
 static elfm_status count_peaks(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro, int64_t enough,
@@ -467,22 +491,27 @@ static elfm_status count_peaks(refine_ctx *c, const elfm_calib *cal, elfm_recon_
  * refinement works (docs/recon.md "Refining on one bead swept through z").
  * So with the representation not given and fewer than
  * TURN_JUDGE_MIN_PEAKS peaks on the time surface over the whole stretch,
- * the integral is counted too, and taken if it shows more; as track does
- * with too few peaks to judge (cmd_track_auto.h). Flow reaches the count
- * within its first volume or two. */
+ * the integral is counted too, and taken if it shows that many; as track
+ * does with too few peaks to judge (cmd_track_auto.h). (Taken when it
+ * showed merely more, 2 against 1 on the sweep's first 200 ms, its turn's
+ * search then found 37 peaks of noise at -2.7 degrees.) Flow reaches the
+ * count within its first volume or two. */
 static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts *o, elfm_error *err)
 {
   int64_t n_surface = 0, n_integral = 0;
   elfm_status st = count_peaks(c, cal, o->recon, TURN_JUDGE_MIN_PEAKS, &n_surface, err);
   if (st != ELFM_OK || n_surface >= TURN_JUDGE_MIN_PEAKS) return st;
+  const double thr = o->threshold_given ? o->threshold : REFINE_INTEGRAL_THRESHOLD;
+  if ((st = set_threshold(c, cal, thr, err)) != ELFM_OK) return st;
   st = count_peaks(c, cal, o->recon_integral, TURN_JUDGE_MIN_PEAKS, &n_integral, err);
-  if (st != ELFM_OK || n_integral <= n_surface) return st;
+  if (st != ELFM_OK) return st;
+  if (n_integral < TURN_JUDGE_MIN_PEAKS) return set_threshold(c, cal, o->threshold, err);
   if (!o->quiet)
     fprintf(stderr, "calib refine: %" PRId64 " peaks above --threshold on the time surface over the %g ms, "
-            "%s%" PRId64 " on the integral: refining on --repr integral (objects that move slowly; "
-            "--repr exp keeps the time surface)\n", n_surface, o->ms,
-            n_integral >= TURN_JUDGE_MIN_PEAKS ? "at least " : "", n_integral);
+            "at least %" PRId64 " above %g on the integral: refining on --repr integral (objects that move "
+            "slowly; --repr exp keeps the time surface)\n", n_surface, o->ms, n_integral, thr);
   o->recon = o->recon_integral;
+  o->threshold = thr;
   return ELFM_OK;
 }
 
@@ -532,9 +561,7 @@ int cmd_calib_refine(int argc, char **argv)
   c.o = &o;
   c.nv = cal.n_views;
   c.max_pts = 1000;
-  elfm_peaks_options po;
-  elfm_peaks_options_default(&po);
-  po.absolute = o.threshold;
+  c.threads = threads;
   c.pk = calloc((size_t)threads, sizeof *c.pk);
   c.det = malloc((size_t)threads * (size_t)c.max_pts * sizeof *c.det);
   c.slot = calloc((size_t)slots, sizeof *c.slot);
@@ -550,12 +577,10 @@ int cmd_calib_refine(int argc, char **argv)
     ctx_free(&c, threads, slots);
     return cli_message(C, CLI_FAIL, "out of memory");
   }
-  const int nz = elfm_calib_n_planes(&cal);
-  for (int t = 0; t < threads; t++)
-    if (!(c.pk[t] = elfm_peaks_create(&po, cal.view_w_px, cal.view_h_px, nz, &err))) {
-      ctx_free(&c, threads, slots);
-      return cli_fail(C, &err);
-    }
+  if (set_threshold(&c, &cal, o.threshold, &err) != ELFM_OK) {
+    ctx_free(&c, threads, slots);
+    return cli_fail(C, &err);
+  }
   if (elfm_calib_refine_create(c.nv, 200000, &c.acc, &err) != ELFM_OK) {
     ctx_free(&c, threads, slots);
     return cli_fail(C, &err);
