@@ -1,11 +1,13 @@
-/* calib_test_util.h — what the tests of fitted centres share: the
- * largest difference of two calibrations' centres once the two moves no
- * recording can show (elfm_calib.h: all views alike, and in proportion to
- * the disparities) are taken out. */
+/* calib_test_util.h — what the tests of fitted centres share: centres
+ * moved by a seeded pattern free of the two moves no recording can show
+ * (elfm_calib.h: all views alike, and in proportion to the disparities),
+ * the largest difference of two calibrations' centres once those moves are
+ * taken out, and the paper's calibration. */
 #ifndef ELFM_TESTS_CALIB_TEST_UTIL_H
 #define ELFM_TESTS_CALIB_TEST_UTIL_H
 
 #include <math.h>
+#include <stdint.h>
 
 #include "check.h"
 #include "elfm_recon.h"
@@ -23,6 +25,32 @@ static inline void gauge_free(int nv, const double *d, double *e)
   }
   const double b = (n * sde - sd * se) / (n * sdd - sd * sd), a = (se - b * sd) / n;
   for (int v = 0; v < nv; v++) e[v] -= a + b * d[v];
+}
+
+/* A seeded uniform draw in [0, 1] (5 decimals) */
+static inline double lcg(uint32_t *s)
+{
+  *s = *s * 1664525u + 1013904223u;
+  return (*s >> 8) % 100001 / 100000.0;
+}
+
+/* *c moved by a gauge-free pattern of about `rms_px` per axis (seeded). */
+static inline void perturb(elfm_calib *c, double rms_px, uint32_t seed)
+{
+  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
+         dw[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < c->n_views; v++) {
+    eu[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1); /* uniform: sd = 1.7 / sqrt 3 ~ 1 x rms */
+    ew[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1);
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+  }
+  gauge_free(c->n_views, du, eu);
+  gauge_free(c->n_views, dw, ew);
+  for (int v = 0; v < c->n_views; v++) {
+    c->views[v].cx_px += eu[v];
+    c->views[v].cy_px += ew[v];
+  }
 }
 
 /* Largest gauge-free difference of a's centres from b's, px; each view's

@@ -34,31 +34,6 @@
 #include "elfm_recon.h"
 #include "lfm_render.h"
 
-static double lcg(uint32_t *s)
-{
-  *s = *s * 1664525u + 1013904223u;
-  return (*s >> 8) % 100001 / 100000.0;
-}
-
-/* *c moved by a gauge-free pattern of about `rms_px` per axis (seeded). */
-static void perturb(elfm_calib *c, double rms_px, uint32_t seed)
-{
-  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0},
-         dw[ELFM_MAX_VIEWS] = {0};
-  for (int v = 0; v < c->n_views; v++) {
-    eu[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1); /* uniform: sd = 1.7 / sqrt 3 ~ 1 x rms */
-    ew[v] = rms_px * 1.7 * (2 * lcg(&seed) - 1);
-    du[v] = c->views[v].dx_px_per_um;
-    dw[v] = c->views[v].dy_px_per_um;
-  }
-  gauge_free(c->n_views, du, eu);
-  gauge_free(c->n_views, dw, ew);
-  for (int v = 0; v < c->n_views; v++) {
-    c->views[v].cx_px += eu[v];
-    c->views[v].cy_px += ew[v];
-  }
-}
-
 /* The largest difference of a view's disparity, px/um */
 static double disparity_error(const elfm_calib *a, const elfm_calib *b)
 {

@@ -36,12 +36,6 @@
 #include "cli_test_util.h"
 #include "elfm_recon.h"
 
-static double lcg(uint32_t *s)
-{
-  *s = *s * 1664525u + 1013904223u;
-  return (*s >> 8) % 100001 / 100000.0;
-}
-
 static int centre_view(const elfm_calib *c)
 {
   for (int v = 0; v < c->n_views; v++)
@@ -100,25 +94,13 @@ static void draw_spot(uint32_t *s, double *x, double *y, double *z)
   *z = 5 + lcg(s);
 }
 
-/* the truth's centres moved by a gauge-free pattern of ~0.4 px, and the
- * central view by (0.5, -0.35) px more */
+/* the truth's centres moved by a gauge-free pattern (uniform within
+ * +-0.4 px per axis before the gauge is taken out), and the central view
+ * by (0.5, -0.35) px more */
 static void start_off(const elfm_calib *truth, elfm_calib *work)
 {
   *work = *truth;
-  uint32_t seed = 3;
-  double eu[ELFM_MAX_VIEWS] = {0}, ew[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0}, dw[ELFM_MAX_VIEWS] = {0};
-  for (int v = 0; v < truth->n_views; v++) {
-    eu[v] = 0.8 * (lcg(&seed) - 0.5);
-    ew[v] = 0.8 * (lcg(&seed) - 0.5);
-    du[v] = truth->views[v].dx_px_per_um;
-    dw[v] = truth->views[v].dy_px_per_um;
-  }
-  gauge_free(truth->n_views, du, eu);
-  gauge_free(truth->n_views, dw, ew);
-  for (int v = 0; v < truth->n_views; v++) {
-    work->views[v].cx_px += eu[v];
-    work->views[v].cy_px += ew[v];
-  }
+  perturb(work, 0.4 / 1.7, 3);
   const int c0 = centre_view(truth);
   work->views[c0].cx_px += 0.5;
   work->views[c0].cy_px -= 0.35;
