@@ -36,6 +36,10 @@
 
 static const char *const C = "calib refine";
 
+/* --sweep reads this much of the recording unless --ms is given: a sweep
+ * of 180 um at 0.2 mm/s takes 0.9 s; every pass reads it whole */
+#define SWEEP_MS 5000.0
+
 /* The coarse step's points per volume: the brightest, whose images stand
  * out in every view. */
 #define VOTERS_PER_VOLUME 50
@@ -58,6 +62,8 @@ typedef struct refine_opts {
   int repr_auto;
   elfm_recon_options recon_integral;
   int threshold_given; /* --threshold given: the integral keeps it too */
+  int sweep;           /* --sweep: one object swept through z, its views found frame by frame */
+  int ms_given;
 } refine_opts;
 
 /* Per batch slot: the points of the slot's volume, misses and weights. */
@@ -82,6 +88,7 @@ typedef struct refine_ctx {
   elfm_calib_refine *acc;
   const elfm_calib *cal; /* the centres of this pass */
   int voting;            /* this pass is the coarse step */
+  elfm_calib_sweep *sweep; /* this pass is the sweep's step (--sweep) */
   int scoring;           /* this pass scores a turn of the lens array */
   int64_t count_stop;    /* ... and stops once this many peaks are scored (0: never) */
   int count_stopped;     /* the pass was stopped so */
@@ -112,6 +119,12 @@ static void usage(FILE *f)
           "stretch and --repr not given, the integral is tried (above 30 unless\n"
           "--threshold is given) and taken if it shows 20 or more (for a z sweep, give\n"
           "a --ms that covers it).\n"
+          "--sweep, for one object (a bead) swept through z, such as on a piezo: each\n"
+          "view's image is found in every frame and the centres fitted to where they\n"
+          "lie, from centres any distance off that keeps each image in its view's crop\n"
+          "(a calibration from the optics alone); then the passes. No turn's search\n"
+          "or coarse step (a turned array is fitted all the same), the integral unless\n"
+          "--repr is given, --ms 5000 unless given.\n"
           "Per-pass progress, the turn and each view's move on stderr.\n\n"
           "  --ms T               read T ms of the recording per pass (200)\n"
           "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
@@ -124,6 +137,7 @@ static void usage(FILE *f)
           "                       such step), for centres from the optics alone\n"
           "  --turn-deg A         look for the lens array turned up to A degrees, 0..45\n"
           "                       (5; 0: no such search)\n"
+          "  --sweep              the recording is one object swept through z (above)\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");
@@ -144,6 +158,11 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
   elfm_detection *det = c->det + (size_t)thread * (size_t)c->max_pts;
   int n = 0;
   s->n = 0;
+  if (c->sweep) {
+    /* each view's brightest spot (the callback keeps them in frame order) */
+    elfm_calib_sweep_spots(c->sweep, frame, s->at, s->wt);
+    return ELFM_OK;
+  }
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
   if (st != ELFM_OK) return st;
   if (c->scoring) {
@@ -195,6 +214,11 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
       c->count_stopped = 1;
       return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "enough peaks counted");
     }
+    return ELFM_OK;
+  }
+  if (c->sweep) {
+    elfm_calib_sweep_add(c->sweep, s->at, s->wt);
+    c->volumes++;
     return ELFM_OK;
   }
   if (c->voting) {
@@ -249,7 +273,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
 
 static int parse(int argc, char **argv, refine_opts *o)
 {
-  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_QUIET };
+  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_SWEEP, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -257,7 +281,8 @@ static int parse(int argc, char **argv, refine_opts *o)
       {"passes", required_argument, 0, O_PASSES}, {"threshold", required_argument, 0, O_THR},
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
       {"search-px", required_argument, 0, O_SEARCH}, {"turn-deg", required_argument, 0, O_TURN},
-      {"quiet", no_argument, 0, O_QUIET}, {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+      {"sweep", no_argument, 0, O_SWEEP}, {"quiet", no_argument, 0, O_QUIET},
+      {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   elfm_recon_options_default(&o->recon);
   /* track's frames: ON events, no median, no view-agreement rule (cmd_track_opts.c) */
@@ -287,7 +312,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_CALIB: o->calib = optarg; break;
     case O_EVENTS: o->events = optarg; break;
     case O_OUT: o->out = optarg; break;
-    case O_MS: ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
+    case O_MS: o->ms_given = 1; ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
     case O_PASSES: ok = cli_parse_int_in(C, "--passes", optarg, 1, 20, "1..20", &o->passes); break;
     case O_THR:
       o->threshold_given = 1;
@@ -297,6 +322,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_MINP: ok = cli_parse_int_in(C, "--min-points", optarg, 1, 1000000, "1..1000000", &o->min_points); break;
     case O_SEARCH: ok = cli_parse_int_in(C, "--search-px", optarg, 0, 64, "0..64", &o->search_px); break;
     case O_TURN: ok = cli_parse_double_in(C, "--turn-deg", optarg, 0, 0, 45, "0..45", &o->turn_deg); break;
+    case O_SWEEP: o->sweep = 1; break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -309,6 +335,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     return cli_message(C, CLI_USAGE, "--to-us must be after --from-us");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
   cli_recon_planes(&rp, o->planes_um);
+  if (o->sweep && !o->ms_given) o->ms = SWEEP_MS;
   if (o->repr_auto) {
     /* the same options on the integral, with its own defaults (both
      * polarities, its leak, its start: cli_check_recon_options) */
@@ -515,6 +542,52 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   return ELFM_OK;
 }
 
+/* --sweep: the recording is one object swept through z, whose images the
+ * coarse step's refocused peaks would not find from centres a few pixels
+ * off (from 2.3 px RMS off it took noise for a turn of -3.3 degrees and
+ * fitted nothing). Each view's images are found frame by frame and the
+ * centres fitted to them (elfm_calib_sweep_*, recon/calib_sweep.c),
+ * in place of the turn's search and the coarse step; on the integral,
+ * which shows a slow object (choose_repr), unless the frames are given. */
+static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *total, elfm_error *err)
+{
+  if (o->repr_auto) {
+    o->recon = o->recon_integral;
+    if (!o->threshold_given) o->threshold = REFINE_INTEGRAL_THRESHOLD;
+    if (set_threshold(c, cal, o->threshold, err) != ELFM_OK) return cli_fail(C, err);
+  }
+  const double frame_ms = (double)o->recon.framer.dt_us / 1000.0;
+  const size_t max_frames = (size_t)ceil(o->ms / frame_ms) + 2;
+  if (elfm_calib_sweep_create(cal, max_frames, &c->sweep, err) != ELFM_OK) return cli_fail(C, err);
+  elfm_status st = run_pass(c, cal, o->recon, err);
+  const size_t frames = elfm_calib_sweep_frames(c->sweep);
+  double shift[2 * ELFM_MAX_VIEWS];
+  int moved = 0, used = 0, placed[ELFM_MAX_VIEWS], images[ELFM_MAX_VIEWS];
+  double fit_rms = NAN;
+  if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
+  elfm_calib_sweep_result(c->sweep, &used, images, placed, &fit_rms);
+  elfm_calib_sweep_free(c->sweep);
+  c->sweep = NULL;
+  if (st != ELFM_OK) return cli_fail(C, err);
+  if (moved == 0)
+    return cli_message(C, CLI_FAIL, "%s: the sweep's images were found in too few views or frames to fit "
+                       "the centres to (%d frames of %zu told the depth; %d or more images in 3 views or "
+                       "more are needed): is one object, and only one, swept through z in %" PRId64 "..%" PRId64
+                       " us?",
+                       o->events, used, frames, o->min_points, o->recon.from_us, o->recon.to_us);
+  double rms, worst;
+  add_moves(c->nv, shift, total, &rms, &worst);
+  if (!o->quiet) {
+    int n_placed = 0;
+    for (int v = 0; v < c->nv; v++) n_placed += placed[v];
+    fprintf(stderr, "calib refine: the sweep's views, frame by frame: %d of %zu frames told the depth; "
+            "%d of %d views fitted to their images (%.2f px RMS from the fit), %d set on the others' grid; "
+            "moves RMS %.3f px, largest %.3f px\n", used, frames, moved, c->nv, fit_rms, n_placed,
+            rms, worst);
+  }
+  return CLI_OK;
+}
+
 int cmd_calib_refine(int argc, char **argv)
 {
   refine_opts o;
@@ -588,11 +661,17 @@ int cmd_calib_refine(int argc, char **argv)
   double total[2 * ELFM_MAX_VIEWS] = {0};
   int rc = CLI_OK;
   c.cal = &cal;
-  if (o.repr_auto && choose_repr(&c, &cal, &o, &err) != ELFM_OK) {
+  if (o.sweep) {
+    rc = sweep_step(&c, &cal, &o, total, &err);
+    if (rc != CLI_OK) {
+      ctx_free(&c, threads, slots);
+      return rc;
+    }
+  } else if (o.repr_auto && choose_repr(&c, &cal, &o, &err) != ELFM_OK) {
     ctx_free(&c, threads, slots);
     return cli_fail(C, &err);
   }
-  if (o.turn_deg > 0) {
+  if (o.turn_deg > 0 && !o.sweep) {
     double a = 0, top = 0, search_ms = 0;
     int64_t peaks = 0;
     int tried = 0, too_few = 0;
@@ -612,7 +691,7 @@ int cmd_calib_refine(int argc, char **argv)
       fprintf(stderr, "calib refine: no peak above --threshold in the first %g ms to judge the lens "
               "array's turn by: not turned\n", search_ms);
   }
-  if (o.search_px > 0) {
+  if (o.search_px > 0 && !o.sweep) {
     /* the coarse step (elfm_calib_refine_apply_votes) */
     double shift[2 * ELFM_MAX_VIEWS];
     int moved = 0;
@@ -670,7 +749,8 @@ int cmd_calib_refine(int argc, char **argv)
                        o.recon.from_us, o.recon.to_us, o.min_views,
                        o.recon.framer.repr == ELFM_REPR_INTEGRAL ? ""
                        : "; objects that move slowly, such as one bead swept through z, show on "
-                         "--repr integral, with a --ms that covers the sweep");
+                         "--repr integral, with a --ms that covers the sweep; for one bead swept "
+                         "through z, --sweep");
       break;
     }
   }

@@ -19,6 +19,7 @@
  * degrees, the centres fitted, cost flow 0.024 of alpha until they did.
  * A view whose images never moved on the sensor tells nothing of its own
  * centre, and is set on the grid of the others (settle_views). */
+#include "calib_internal.h"
 #include "elfm_calib.h"
 #include "elfm_frames.h"
 
@@ -146,9 +147,7 @@ void elfm_calib_gauge_clear(int nv, const int *use, const double *d, double *s)
     if (use[v]) s[v] -= a + b * d[v];
 }
 
-/* Move c's views with use[v] by (su[v], sw[v]) cleared of the gauge; the
- * moves into shift_px (2 per view, may be NULL). */
-static void move_views(elfm_calib *c, const int *use, double *su, double *sw, double *shift_px)
+void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, double *sw, double *shift_px)
 {
   double du[ELFM_MAX_VIEWS] = {0}, dw[ELFM_MAX_VIEWS] = {0};
   for (int v = 0; v < c->n_views; v++) {
@@ -204,17 +203,56 @@ static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3]
   return 1;
 }
 
-/* Move the views as move_views does, except those whose images all lay
- * within ELFM_CALIB_STILL_PX of one place on the sensor: their misses rest
- * on one pixel phase and on whatever that place holds, and a view that
- * sees its object without its image moving sees little of it (the
- * central view of one bead swept through z fires on the image's slow
- * defocus only; its fit there followed its start: 0.65-0.73 px off after
- * refining from the right centres, 7.5 px after a coarse step on noise;
- * docs/recon.md "Refining on one bead swept through z"). Those views go where the grid
- * of the others puts them (cx, cy affine in the lenslets' (i, j)), when
+int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px)
+{
+  double gx[3], gy[3];
+  if (!grid_fit(c, from, 0, gx) || !grid_fit(c, from, 1, gy)) return 0;
+  for (int v = 0; v < c->n_views; v++) {
+    if (!to[v]) continue;
+    elfm_view *w = &c->views[v];
+    const double x = gx[0] + gx[1] * w->i + gx[2] * w->j, y = gy[0] + gy[1] * w->i + gy[2] * w->j;
+    shift_px[2 * v] += x - w->cx_px;
+    shift_px[2 * v + 1] += y - w->cy_px;
+    w->cx_px = x;
+    w->cy_px = y;
+  }
+  /* The moves of from were cleared of the gauge among themselves; a view
+   * placed then brings its own start's error into the gauge of the whole:
+   * the central view of a sweep 10 px off moved every view by 1/24 of
+   * that (0.1-0.25 px: flow tracked with such a calibration lost 0.01-0.03
+   * of alpha against the truth). So the moves of all the views are cleared
+   * together, as refine's are when every view moves by its own misses. */
+  int all[ELFM_MAX_VIEWS] = {0};
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0}, du[ELFM_MAX_VIEWS] = {0}, dw[ELFM_MAX_VIEWS] = {0};
+  for (int v = 0; v < c->n_views; v++) {
+    all[v] = from[v] || to[v];
+    su[v] = shift_px[2 * v];
+    sw[v] = shift_px[2 * v + 1];
+    du[v] = c->views[v].dx_px_per_um;
+    dw[v] = c->views[v].dy_px_per_um;
+  }
+  elfm_calib_gauge_clear(c->n_views, all, du, su);
+  elfm_calib_gauge_clear(c->n_views, all, dw, sw);
+  for (int v = 0; v < c->n_views; v++) {
+    if (!all[v]) continue;
+    c->views[v].cx_px += su[v] - shift_px[2 * v];
+    c->views[v].cy_px += sw[v] - shift_px[2 * v + 1];
+    shift_px[2 * v] = su[v];
+    shift_px[2 * v + 1] = sw[v];
+  }
+  return 1;
+}
+
+/* Move the views as elfm_calib_move_gauge_free does, except those whose
+ * images all lay within ELFM_CALIB_STILL_PX of one place on the sensor:
+ * their misses rest on one pixel phase and on whatever that place holds,
+ * and a view that sees its object without its image moving sees little of
+ * it (the central view of one bead swept through z fires on the image's
+ * slow defocus only; its fit there followed its start: 0.65-0.73 px off
+ * after refining from the right centres, 7.5 px after a coarse step on
+ * noise; docs/recon.md "Refining on one bead swept through z"). Those
+ * views go where the grid of the others puts them, when
  * ELFM_CALIB_GRID_MIN_VIEWS others span it; otherwise all move as before. */
-#define ELFM_CALIB_GRID_MIN_VIEWS 6
 static void settle_views(elfm_calib_refine *r, elfm_calib *c, const int *use, double *su, double *sw,
                          double *shift_px)
 {
@@ -231,28 +269,18 @@ static void settle_views(elfm_calib_refine *r, elfm_calib *c, const int *use, do
   memset(r->at_u, 0, sizeof r->at_u);
   memset(r->at_w, 0, sizeof r->at_w);
   memset(r->at_m2, 0, sizeof r->at_m2);
-  elfm_calib moved = *c;
-  double gx[3], gy[3];
   if (n_still > 0 && n_rest >= ELFM_CALIB_GRID_MIN_VIEWS) {
-    move_views(&moved, rest, su, sw, shift_px);
-    if (grid_fit(&moved, rest, 0, gx) && grid_fit(&moved, rest, 1, gy)) {
-      for (int v = 0; v < c->n_views; v++) {
-        if (!still[v]) continue;
-        elfm_view *w = &moved.views[v];
-        const double x = gx[0] + gx[1] * w->i + gx[2] * w->j, y = gy[0] + gy[1] * w->i + gy[2] * w->j;
-        if (shift_px) {
-          shift_px[2 * v] = x - c->views[v].cx_px;
-          shift_px[2 * v + 1] = y - c->views[v].cy_px;
-        }
-        w->cx_px = x;
-        w->cy_px = y;
-        r->placed[v] = 1;
-      }
+    elfm_calib moved = *c;
+    double sh[2 * ELFM_MAX_VIEWS] = {0};
+    elfm_calib_move_gauge_free(&moved, rest, su, sw, sh);
+    if (elfm_calib_place_on_grid(&moved, rest, still, sh)) {
+      for (int v = 0; v < c->n_views; v++) r->placed[v] = still[v];
+      if (shift_px) memcpy(shift_px, sh, 2 * (size_t)c->n_views * sizeof *shift_px);
       *c = moved;
       return;
     }
   }
-  move_views(c, use, su, sw, shift_px);
+  elfm_calib_move_gauge_free(c, use, su, sw, shift_px);
 }
 
 int elfm_calib_refine_still(const elfm_calib_refine *r, int v, double *spread_px)

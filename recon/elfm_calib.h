@@ -161,6 +161,42 @@ size_t elfm_calib_refine_votes(const elfm_calib_refine *r);
 elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, double *shift_px,
                                           int *n_moved, elfm_error *err);
 
+/* ---- the views' centres from one object swept through z (calib_sweep.c) ----
+ * For centres too far off for the coarse step's refocused peaks (a
+ * calibration from the optics alone) on a recording of one bright object
+ * moved along the axis (a bead on a piezo): each view is looked at on its
+ * own. spots finds, in each view's crop about the centres given to create,
+ * the frame's brightest 3 x 3 spot of positive values (its sum less its
+ * brightest pixel: a hot pixel alone is no spot) and its 5 x 5 centroid
+ * (at_px, 2 per view, NaN where the crop is empty), and how far it stands
+ * out: its strength over the next spot's 5 px or more away (contrast,
+ * infinite with no other). add keeps a frame's spots with a
+ * contrast of ELFM_CALIB_SWEEP_CONTRAST or more (0 when max_frames are
+ * held). apply fits image = centre + the object's place + disparity x its
+ * depth in each frame (the disparities kept), moves every view with
+ * min_images images near that model to its fitted centre (cleared of the
+ * gauge, as refine_apply; *n_moved says how many), sets the others, and
+ * those that do not tell the depth (the central view), on the grid of
+ * those when 6 or more moved, and empties the collector. result
+ * gives the last apply's frames that told the depth, images per view
+ * (near the model), the views set on the grid and the images' RMS distance
+ * from the model, px. spots is safe on many threads at once (it reads the
+ * collector's map of views only). docs/recon.md "A sweep's views, frame by
+ * frame". */
+#define ELFM_CALIB_SWEEP_CONTRAST 2.0
+typedef struct elfm_calib_sweep elfm_calib_sweep;
+elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
+                                    elfm_error *err);
+void elfm_calib_sweep_free(elfm_calib_sweep *s);
+void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const struct elfm_frame *f, double *at_px,
+                            double *contrast);
+int elfm_calib_sweep_add(elfm_calib_sweep *s, const double *at_px, const double *contrast);
+size_t elfm_calib_sweep_frames(const elfm_calib_sweep *s);
+elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
+                                   int *n_moved, elfm_error *err);
+void elfm_calib_sweep_result(const elfm_calib_sweep *s, int *frames_used, int *images, int *placed,
+                             double *rms_px);
+
 /* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
  * turn turns every view's centre about the centres' mean and its disparity
  * (dx, dy) by angle_deg (sensor pixel axes, as in elfm_optics);

@@ -1,0 +1,24 @@
+/* calib_internal.h — what calib_refine.c and calib_sweep.c share: moving
+ * the views cleared of the gauge, and the grid of the lenslets' centres.
+ * Not part of the public API (elfm_calib.h is). */
+#ifndef ELFM_CALIB_INTERNAL_H
+#define ELFM_CALIB_INTERNAL_H
+
+#include "elfm_calib.h"
+
+/* Views needed to set others on their grid (cx, cy affine in (i, j)) */
+#define ELFM_CALIB_GRID_MIN_VIEWS 6
+
+/* Move c's views with use[v] by (su[v], sw[v]) cleared of the two moves no
+ * recording can see (elfm_calib_gauge_clear; su, sw are cleared in place);
+ * the moves into shift_px (2 per view, may be NULL). */
+void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, double *sw, double *shift_px);
+
+/* Set the views with to[v] where the grid of the views with from[v] puts
+ * them (least squares), adding each move to shift_px (2 per view: the
+ * moves so far, from the calibration before them), then clear those moves
+ * of the gauge over all the views of from and to, together. 0, and nothing
+ * moved, when those views do not span the grid. */
+int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px);
+
+#endif

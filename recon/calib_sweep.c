@@ -1,0 +1,357 @@
+/* calib_sweep.c — the views' centres from one bright object swept through z.
+ *
+ * The recording a microscopist makes to check depth: one bead moved along
+ * the axis by a piezo or the focus drive. `calib refine`'s coarse step
+ * finds the views from refocused peaks, and a calibration from the optics
+ * alone (centres 2-10 px off) refocuses such a bead into no peak: from
+ * centres 2.3 px RMS off it turned the array by -3.3 degrees on noise and
+ * fitted nothing (docs/recon.md "A sweep's views, frame by frame").
+ *
+ * So each view is looked at on its own. In every frame each view holds one
+ * image of the object (and noise): the brightest 3 x 3 spot of the view's
+ * crop, when it stands out (at least ELFM_CALIB_SWEEP_CONTRAST times the
+ * view's next spot 5 px or more away), gives the image's place p(v, f), the
+ * centroid of the 5 x 5 about it. With one object
+ *
+ *   p(v, f) = c(v) + b + d(v) z(f)
+ *
+ * c the view's centre, d its disparity (from the optics, as in refine), b
+ * the object's lateral place and z(f) its depth at frame f, both unknown.
+ * Alternating, each step exact for the other fixed: z(f) from the views
+ * (a median first, then least squares over the images near the model), c(v)
+ * the median over the frames of p - d z. The two moves no recording can
+ * see (all views alike, which b is, and in proportion to d, an offset of
+ * z) are cleared as refine clears them. Nothing here needs the centres
+ * near right: only that each view's image lies in the crop about them.
+ *
+ * A view with few images (the central one sees an axial sweep only as its
+ * image's slow defocus) goes where the grid of the others puts it, as in
+ * refine (calib_internal.h).
+ */
+#include "calib_internal.h"
+#include "elfm_calib.h"
+#include "elfm_frames.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A spot's centroid window, half-width px, and how far its rival lies */
+#define SWEEP_HALF_PX 2
+#define SWEEP_RIVAL_PX 5
+/* The alternation's steps and their outlier radii, px (the first: none) */
+#define SWEEP_ITERATIONS 8
+static const double sweep_radius_px[SWEEP_ITERATIONS] = {INFINITY, 8, 4, 2, 1.5, 1.5, 1.5, 1.5};
+/* Views whose disparity is below this share of the largest tell nothing
+ * of z (the central view's d is 0) */
+#define SWEEP_D_MIN_FRAC 0.1
+
+struct elfm_calib_sweep {
+  int nv, w, h;
+  uint8_t *view_of; /* [w * h] the view whose crop holds the pixel (nearest centre), 255: none */
+  size_t cap, n;    /* frames held */
+  float *pu, *pw;   /* [cap][nv] the spots, NaN: none */
+  int frames_used, images[ELFM_MAX_VIEWS], placed[ELFM_MAX_VIEWS];
+  double rms_px;
+};
+
+elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
+                                    elfm_error *err)
+{
+  *out = NULL;
+  if (c->n_views < 1 || c->n_views > ELFM_MAX_VIEWS || c->n_views > 255 || max_frames < 1 ||
+      max_frames > 10000000 || c->sensor_width_px < 1 || c->sensor_height_px < 1)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calib sweep: %d views, %zu frames (1..%d views, 1..10^7 frames)", c->n_views,
+                          max_frames, ELFM_MAX_VIEWS);
+  elfm_calib_sweep *s = calloc(1, sizeof *s);
+  const size_t npx = (size_t)c->sensor_width_px * (size_t)c->sensor_height_px;
+  if (s) {
+    s->nv = c->n_views;
+    s->w = c->sensor_width_px;
+    s->h = c->sensor_height_px;
+    s->cap = max_frames;
+    s->view_of = malloc(npx);
+    s->pu = malloc(max_frames * (size_t)c->n_views * sizeof *s->pu);
+    s->pw = malloc(max_frames * (size_t)c->n_views * sizeof *s->pw);
+  }
+  if (!s || !s->view_of || !s->pu || !s->pw) {
+    elfm_calib_sweep_free(s);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib sweep: out of memory");
+  }
+  /* each pixel to the view of the nearest centre whose crop holds it */
+  for (int y = 0; y < s->h; y++)
+    for (int x = 0; x < s->w; x++) {
+      int best = 255;
+      double bd = INFINITY;
+      for (int v = 0; v < s->nv; v++) {
+        const double du = x - c->views[v].cx_px, dw = y - c->views[v].cy_px;
+        if (fabs(du) > 0.5 * c->view_w_px || fabs(dw) > 0.5 * c->view_h_px) continue;
+        if (du * du + dw * dw < bd) {
+          bd = du * du + dw * dw;
+          best = v;
+        }
+      }
+      s->view_of[(size_t)y * (size_t)s->w + (size_t)x] = (uint8_t)best;
+    }
+  *out = s;
+  return ELFM_OK;
+}
+
+void elfm_calib_sweep_free(elfm_calib_sweep *s)
+{
+  if (!s) return;
+  free(s->view_of);
+  free(s->pu);
+  free(s->pw);
+  free(s);
+}
+
+/* The frame's value at (x, y) if it is the window's and above 0, else 0 */
+static float value_at(const elfm_frame *f, int x, int y)
+{
+  if (x < 0 || y < 0 || x >= f->w || y >= f->h) return 0;
+  const float a = f->data[(size_t)y * (size_t)f->w + (size_t)x];
+  return a > 0 && elfm_frame_in_window(f, a) ? a : 0;
+}
+
+/* A spot's strength: the 3 x 3 sum about (x, y) less its brightest pixel,
+ * so that a hot pixel (one pixel firing on its own, brighter in the
+ * integral than any bead's image: zsweep seed 3's took two inner views
+ * 37-87 px off) is as weak as the noise about it */
+static float box3(const elfm_frame *f, int x, int y)
+{
+  float s = 0, top = 0;
+  for (int b = -1; b <= 1; b++)
+    for (int a = -1; a <= 1; a++) {
+      const float q = value_at(f, x + a, y + b);
+      s += q;
+      top = q > top ? q : top;
+    }
+  return s - top;
+}
+
+void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const elfm_frame *f, double *at_px, double *contrast)
+{
+  float best[ELFM_MAX_VIEWS], rival[ELFM_MAX_VIEWS];
+  int bx[ELFM_MAX_VIEWS], by[ELFM_MAX_VIEWS];
+  for (int v = 0; v < s->nv; v++) {
+    best[v] = rival[v] = 0;
+    bx[v] = by[v] = -1;
+    at_px[2 * v] = at_px[2 * v + 1] = NAN;
+    contrast[v] = 0;
+  }
+  if (f->w != s->w || f->h != s->h) return;
+  const size_t n = elfm_frame_n_window(f);
+  /* the brightest spot of each view, then its rival: the brightest 5 px or
+   * more from it (a second object, or the noise) */
+  for (int pass = 0; pass < 2; pass++)
+    for (size_t k = 0; k < n; k++) {
+      const uint32_t p = f->idx[k];
+      const int x = (int)(p % (uint32_t)f->w), y = (int)(p / (uint32_t)f->w);
+      const int v = s->view_of[p];
+      if (v == 255 || value_at(f, x, y) <= 0) continue;
+      const float b = box3(f, x, y);
+      if (pass == 0 && b > best[v]) {
+        best[v] = b;
+        bx[v] = x;
+        by[v] = y;
+      } else if (pass == 1 && b > rival[v] &&
+                 (abs(x - bx[v]) >= SWEEP_RIVAL_PX || abs(y - by[v]) >= SWEEP_RIVAL_PX)) {
+        rival[v] = b;
+      }
+    }
+  for (int v = 0; v < s->nv; v++) {
+    if (bx[v] < 0) continue;
+    double sv = 0, su = 0, sw = 0;
+    for (int b = -SWEEP_HALF_PX; b <= SWEEP_HALF_PX; b++)
+      for (int a = -SWEEP_HALF_PX; a <= SWEEP_HALF_PX; a++) {
+        const double q = value_at(f, bx[v] + a, by[v] + b);
+        sv += q;
+        su += q * (bx[v] + a);
+        sw += q * (by[v] + b);
+      }
+    at_px[2 * v] = su / sv;
+    at_px[2 * v + 1] = sw / sv;
+    contrast[v] = rival[v] > 0 ? (double)best[v] / rival[v] : INFINITY;
+  }
+}
+
+int elfm_calib_sweep_add(elfm_calib_sweep *s, const double *at_px, const double *contrast)
+{
+  if (s->n >= s->cap) return 0;
+  float *pu = s->pu + s->n * (size_t)s->nv, *pw = s->pw + s->n * (size_t)s->nv;
+  for (int v = 0; v < s->nv; v++) {
+    const int ok =
+        contrast[v] >= ELFM_CALIB_SWEEP_CONTRAST && isfinite(at_px[2 * v]) && isfinite(at_px[2 * v + 1]);
+    pu[v] = ok ? (float)at_px[2 * v] : NAN;
+    pw[v] = ok ? (float)at_px[2 * v + 1] : NAN;
+  }
+  s->n++;
+  return 1;
+}
+
+size_t elfm_calib_sweep_frames(const elfm_calib_sweep *s)
+{
+  return s->n;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+  const double x = *(const double *)a, y = *(const double *)b;
+  return (x > y) - (x < y);
+}
+
+/* the median of a[0 .. n) (n > 0), reordering a */
+static double median_d(double *a, size_t n)
+{
+  qsort(a, n, sizeof *a, cmp_double);
+  return n % 2 ? a[n / 2] : 0.5 * (a[n / 2 - 1] + a[n / 2]);
+}
+
+/* z of frame f (NaN when fewer than 3 views tell it): at radius r the least
+ * squares over the images within r px of the model at z_prev, else (r
+ * infinite, or no z_prev) the median of the views' own z */
+static double frame_z(const elfm_calib_sweep *s, const elfm_calib *c, const int *tells, size_t f, double z_prev,
+                      double r, double *tmp)
+{
+  const float *pu = s->pu + f * (size_t)s->nv, *pw = s->pw + f * (size_t)s->nv;
+  double num = 0, den = 0;
+  size_t n = 0;
+  if (isnan(z_prev)) r = INFINITY;
+  for (int v = 0; v < s->nv; v++) {
+    if (!tells[v] || isnan(pu[v])) continue;
+    const elfm_view *w = &c->views[v];
+    const double eu = pu[v] - w->cx_px, ew = pw[v] - w->cy_px;
+    const double dd = w->dx_px_per_um * w->dx_px_per_um + w->dy_px_per_um * w->dy_px_per_um;
+    if (isinf(r)) {
+      tmp[n++] = (w->dx_px_per_um * eu + w->dy_px_per_um * ew) / dd;
+    } else if (hypot(eu - w->dx_px_per_um * z_prev, ew - w->dy_px_per_um * z_prev) <= r) {
+      num += w->dx_px_per_um * eu + w->dy_px_per_um * ew;
+      den += dd;
+      n++;
+    }
+  }
+  if (n < 3) return NAN;
+  return isinf(r) ? median_d(tmp, n) : num / den;
+}
+
+elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
+                                   int *n_moved, elfm_error *err)
+{
+  if (c->n_views != s->nv)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "calib sweep: the calibration has %d views, the images %d", c->n_views, s->nv);
+  if (min_images < 1) min_images = 1;
+  const int nv = s->nv;
+  double *z = malloc((s->n + 1) * sizeof *z), *tu = malloc((s->n + 1) * sizeof *tu),
+         *tw = malloc((s->n + 1) * sizeof *tw);
+  if (!z || !tu || !tw) {
+    free(z);
+    free(tu);
+    free(tw);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib sweep: out of memory");
+  }
+  double dmax = 0;
+  for (int v = 0; v < nv; v++) dmax = fmax(dmax, hypot(c->views[v].dx_px_per_um, c->views[v].dy_px_per_um));
+  int tells[ELFM_MAX_VIEWS];
+  for (int v = 0; v < nv; v++)
+    tells[v] = hypot(c->views[v].dx_px_per_um, c->views[v].dy_px_per_um) > SWEEP_D_MIN_FRAC * dmax;
+  /* the centres as they go, on a copy: c keeps the start until the end */
+  elfm_calib m = *c;
+  for (size_t f = 0; f < s->n; f++) z[f] = NAN;
+  double tmp[ELFM_MAX_VIEWS];
+  int use[ELFM_MAX_VIEWS] = {0};
+  double ss = 0;
+  size_t nss = 0;
+  for (int it = 0; it < SWEEP_ITERATIONS; it++) {
+    const double r = sweep_radius_px[it];
+    int frames = 0;
+    for (size_t f = 0; f < s->n; f++) {
+      z[f] = frame_z(s, &m, tells, f, z[f], r, tmp);
+      frames += !isnan(z[f]);
+    }
+    s->frames_used = frames;
+    ss = 0;
+    nss = 0;
+    for (int v = 0; v < nv; v++) {
+      const elfm_view *w = &m.views[v];
+      size_t n = 0;
+      for (size_t f = 0; f < s->n; f++) {
+        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
+        if (isnan(pu) || isnan(z[f])) continue;
+        const double eu = pu - w->dx_px_per_um * z[f], ew = pw - w->dy_px_per_um * z[f];
+        if (!isinf(r) && hypot(eu - w->cx_px, ew - w->cy_px) > r) continue;
+        tu[n] = eu;
+        tw[n] = ew;
+        n++;
+      }
+      s->images[v] = (int)n;
+      use[v] = n >= (size_t)min_images;
+      if (!use[v]) continue;
+      m.views[v].cx_px = median_d(tu, n);
+      m.views[v].cy_px = median_d(tw, n);
+    }
+    /* the last step's fit: RMS distance of the images kept from the model */
+    for (int v = 0; v < nv && it == SWEEP_ITERATIONS - 1; v++)
+      for (size_t f = 0; use[v] && f < s->n; f++) {
+        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
+        if (isnan(pu) || isnan(z[f])) continue;
+        const elfm_view *w = &m.views[v];
+        const double d = hypot(pu - w->cx_px - w->dx_px_per_um * z[f], pw - w->cy_px - w->dy_px_per_um * z[f]);
+        if (d > r) continue;
+        ss += d * d;
+        nss++;
+      }
+  }
+  free(z);
+  free(tu);
+  free(tw);
+  s->rms_px = nss > 0 ? sqrt(ss / (double)nss) : NAN;
+  /* the moves, cleared of the gauge; views without enough images on the
+   * grid of the others */
+  double su[ELFM_MAX_VIEWS] = {0}, sw[ELFM_MAX_VIEWS] = {0};
+  int moved = 0;
+  for (int v = 0; v < nv; v++) {
+    s->placed[v] = 0;
+    if (!use[v]) continue;
+    su[v] = m.views[v].cx_px - c->views[v].cx_px;
+    sw[v] = m.views[v].cy_px - c->views[v].cy_px;
+    moved++;
+  }
+  /* views that do not tell z (the central one) see an axial sweep's
+   * image stand still, its defocus alone: their centre rests on one pixel
+   * phase (as refine's still views, settle_views), and goes on the grid of
+   * the others when enough of them moved; so do views with too few images */
+  int from[ELFM_MAX_VIEWS] = {0}, to[ELFM_MAX_VIEWS] = {0}, n_from = 0;
+  for (int v = 0; v < nv; v++) {
+    from[v] = use[v] && tells[v];
+    to[v] = !from[v];
+    n_from += from[v];
+  }
+  double sh[2 * ELFM_MAX_VIEWS] = {0};
+  if (n_from >= ELFM_CALIB_GRID_MIN_VIEWS && n_from < nv) {
+    elfm_calib_move_gauge_free(c, from, su, sw, sh);
+    if (elfm_calib_place_on_grid(c, from, to, sh))
+      for (int v = 0; v < nv; v++) s->placed[v] = to[v];
+    moved = n_from;
+  } else {
+    elfm_calib_move_gauge_free(c, use, su, sw, sh);
+  }
+  if (shift_px) memcpy(shift_px, sh, 2 * (size_t)nv * sizeof *shift_px);
+  if (n_moved) *n_moved = moved;
+  s->n = 0;
+  return ELFM_OK;
+}
+
+void elfm_calib_sweep_result(const elfm_calib_sweep *s, int *frames_used, int *images, int *placed,
+                             double *rms_px)
+{
+  if (frames_used) *frames_used = s->frames_used;
+  for (int v = 0; v < s->nv; v++) {
+    if (images) images[v] = s->images[v];
+    if (placed) placed[v] = s->placed[v];
+  }
+  if (rms_px) *rms_px = s->rms_px;
+}
