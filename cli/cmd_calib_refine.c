@@ -536,7 +536,8 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   if (!o->quiet)
     fprintf(stderr, "calib refine: %" PRId64 " peaks above --threshold on the time surface over the %g ms, "
             "at least %" PRId64 " above %g on the integral: refining on --repr integral (objects that move "
-            "slowly; --repr exp keeps the time surface)\n", n_surface, o->ms, n_integral, thr);
+            "slowly; --repr exp keeps the time surface; for one object swept through z, --sweep finds "
+            "the views from centres further off, and sooner)\n", n_surface, o->ms, n_integral, thr);
   o->recon = o->recon_integral;
   o->threshold = thr;
   return ELFM_OK;
