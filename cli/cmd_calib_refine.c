@@ -127,7 +127,8 @@ static void usage(FILE *f)
           "--repr is given, --ms 5000 unless given.\n"
           "Per-pass progress, the turn and each view's move on stderr.\n\n"
           "  --ms T               read T ms of the recording per pass (200)\n"
-          "  --passes N           passes, 1..20 (4); each uses the previous one's centres\n"
+          "  --passes N           passes, 0..20 (4); each uses the previous one's centres\n"
+          "                       (0: the turn and the coarse step alone, or --sweep's fit)\n"
           "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
           "  --min-views N        views that must agree with a point's fit (12; with\n"
           "                       fewer than 25 views 12 / 25 of them, at least 3)\n"
@@ -313,7 +314,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_EVENTS: o->events = optarg; break;
     case O_OUT: o->out = optarg; break;
     case O_MS: o->ms_given = 1; ok = cli_parse_double_in(C, "--ms", optarg, 0, 1, 1e7, "> 0", &o->ms); break;
-    case O_PASSES: ok = cli_parse_int_in(C, "--passes", optarg, 1, 20, "1..20", &o->passes); break;
+    case O_PASSES: ok = cli_parse_int_in(C, "--passes", optarg, 0, 20, "0..20", &o->passes); break;
     case O_THR:
       o->threshold_given = 1;
       ok = cli_parse_double_in(C, "--threshold", optarg, 0, 1, 1e9, "> 0", &o->threshold);
