@@ -565,27 +565,27 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   const size_t frames = elfm_calib_sweep_frames(c->sweep);
   double shift[2 * ELFM_MAX_VIEWS];
   int moved = 0, used = 0, placed[ELFM_MAX_VIEWS], images[ELFM_MAX_VIEWS];
-  double fit_rms = NAN;
+  double fit_rms = NAN, agree = 0;
   if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
-  elfm_calib_sweep_result(c->sweep, &used, images, placed, &fit_rms);
+  elfm_calib_sweep_result(c->sweep, &used, images, placed, &fit_rms, &agree);
   elfm_calib_sweep_free(c->sweep);
   c->sweep = NULL;
   if (st != ELFM_OK) return cli_fail(C, err);
   if (moved == 0)
-    return cli_message(C, CLI_FAIL, "%s: the sweep's images were found in too few views or frames to fit "
-                       "the centres to (%d frames of %zu told the depth; %d or more images in 3 views or "
-                       "more are needed): is one object, and only one, swept through z in %" PRId64 "..%" PRId64
-                       " us?",
-                       o->events, used, frames, o->min_points, o->recon.from_us, o->recon.to_us);
+    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit one object in too few views or frames to "
+                       "fit the centres to (%d frames of %zu told the depth; the views' median share of "
+                       "their spots near the fit %.2f, 0.5 or more needed, and %d images in a view): is one "
+                       "object, and only one, swept through z in %" PRId64 "..%" PRId64 " us?",
+                       o->events, used, frames, agree, o->min_points, o->recon.from_us, o->recon.to_us);
   double rms, worst;
   add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {
     int n_placed = 0;
     for (int v = 0; v < c->nv; v++) n_placed += placed[v];
     fprintf(stderr, "calib refine: the sweep's views, frame by frame: %d of %zu frames told the depth; "
-            "%d of %d views fitted to their images (%.2f px RMS from the fit), %d set on the others' grid; "
-            "moves RMS %.3f px, largest %.3f px\n", used, frames, moved, c->nv, fit_rms, n_placed,
-            rms, worst);
+            "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
+            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", used, frames, moved,
+            c->nv, fit_rms, agree, n_placed, rms, worst);
   }
   return CLI_OK;
 }

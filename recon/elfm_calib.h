@@ -177,12 +177,13 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * min_images images near that model to its fitted centre (cleared of the
  * gauge, as refine_apply; *n_moved says how many), sets the others, and
  * those that do not tell the depth (the central view), on the grid of
- * those when 6 or more moved, and empties the collector. result
- * gives the last apply's frames that told the depth, images per view
- * (near the model), the views set on the grid and the images' RMS distance
- * from the model, px. spots is safe on many threads at once (it reads the
- * collector's map of views only). docs/recon.md "A sweep's views, frame by
- * frame". */
+ * those when 6 or more moved, and empties the collector. When the views'
+ * median share of spots near the model is under 0.5 (several objects
+ * taken for one), nothing moves. result gives the last apply's frames
+ * that told the depth, images per view (near the model), the views set on
+ * the grid, the images' RMS distance from the model, px, and that median
+ * share. spots is safe on many threads at once (it reads the collector's
+ * map of views only). docs/recon.md "A sweep's views, frame by frame". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
 typedef struct elfm_calib_sweep elfm_calib_sweep;
 elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
@@ -195,7 +196,7 @@ size_t elfm_calib_sweep_frames(const elfm_calib_sweep *s);
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
                                    int *n_moved, elfm_error *err);
 void elfm_calib_sweep_result(const elfm_calib_sweep *s, int *frames_used, int *images, int *placed,
-                             double *rms_px);
+                             double *rms_px, double *agree);
 
 /* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
  * turn turns every view's centre about the centres' mean and its disparity
