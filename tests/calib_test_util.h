@@ -82,6 +82,14 @@ static inline double centre_error(const elfm_calib *a, const elfm_calib *b)
 
 /* The paper's system on the EVK4 (elfm_optics_default, 1280 x 720, 4.86
  * um pixels) into *c; 0 when that failed (counted by CHECK_OK). */
+/* The central view (i = j = 0), -1 when there is none */
+static inline int centre_view(const elfm_calib *c)
+{
+  for (int v = 0; v < c->n_views; v++)
+    if (c->views[v].i == 0 && c->views[v].j == 0) return v;
+  return -1;
+}
+
 static inline int calib_test_default(elfm_calib *c)
 {
   elfm_optics op;

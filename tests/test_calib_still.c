@@ -36,13 +36,6 @@
 #include "cli_test_util.h"
 #include "elfm_recon.h"
 
-static int centre_view(const elfm_calib *c)
-{
-  for (int v = 0; v < c->n_views; v++)
-    if (c->views[v].i == 0 && c->views[v].j == 0) return v;
-  return -1;
-}
-
 /* The misses of n points at (x, y, z) drawn by `draw` for the centres
  * `work`, whose true centres are `truth`: each view's image lies where the
  * truth puts it, give or take 0.05 px, except that the view `anchored`

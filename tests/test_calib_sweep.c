@@ -34,13 +34,6 @@
 #include "cli_test_util.h"
 #include "elfm_recon.h"
 
-static int centre_view(const elfm_calib *c)
-{
-  for (int v = 0; v < c->n_views; v++)
-    if (c->views[v].i == 0 && c->views[v].j == 0) return v;
-  return -1;
-}
-
 /* value into pixel (x, y), listed (the frame's list is what spots reads) */
 static void put(elfm_frame *f, long x, long y, float value)
 {
