@@ -73,6 +73,16 @@ int elfm_viewer_key_command(int glfw_key, int shift, elfm_viewer_cmd *cmd)
   }
 }
 
+elfm_viewer_drag elfm_viewer_drag_mode(int glfw_button, int shift)
+{
+  switch (glfw_button) {
+  case GLFW_MOUSE_BUTTON_LEFT: return shift ? ELFM_DRAG_PAN : ELFM_DRAG_ROTATE;
+  case GLFW_MOUSE_BUTTON_RIGHT:
+  case GLFW_MOUSE_BUTTON_MIDDLE: return ELFM_DRAG_PAN;
+  default: return ELFM_DRAG_NONE;
+  }
+}
+
 void elfm_viewer_advance(elfm_viewer *v, double wall_s)
 {
   if (!v->playing || !(wall_s > 0)) return;

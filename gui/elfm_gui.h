@@ -241,6 +241,11 @@ void elfm_viewer_command(elfm_viewer *v, elfm_viewer_cmd cmd);
  * gives none (q and Esc, which close the window, give none either). The
  * table in docs/viewer.md lists the same keys. */
 int elfm_viewer_key_command(int glfw_key, int shift, elfm_viewer_cmd *cmd);
+/* What a mouse button pressed starts (GLFW's button and whether shift is
+ * held), as the window's button handler applies it until a button is let
+ * go: left rotates, shift+left, right and middle pan (docs/viewer.md). */
+typedef enum { ELFM_DRAG_NONE, ELFM_DRAG_ROTATE, ELFM_DRAG_PAN } elfm_viewer_drag;
+elfm_viewer_drag elfm_viewer_drag_mode(int glfw_button, int shift);
 /* Playback: when playing, move the cursor by wall_s seconds of wall time at
  * the playback speed (by default the whole recording in 10 s); stops at the
  * end. */

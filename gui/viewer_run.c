@@ -30,13 +30,12 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
 static void on_button(GLFWwindow *w, int button, int action, int mods)
 {
   elfm_viewer *v = viewer_of(w);
-  int down = action == GLFW_PRESS;
-  if (button == GLFW_MOUSE_BUTTON_LEFT) {
-    v->drag_rotate = down && !(mods & GLFW_MOD_SHIFT);
-    v->drag_pan = down && (mods & GLFW_MOD_SHIFT);
-  } else if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE) {
-    v->drag_pan = down;
-  }
+  /* a press starts what elfm_viewer_drag_mode says (controls.c, where
+   * tests read it); letting any button go ends the drag */
+  const elfm_viewer_drag mode =
+      action == GLFW_PRESS ? elfm_viewer_drag_mode(button, (mods & GLFW_MOD_SHIFT) != 0) : ELFM_DRAG_NONE;
+  v->drag_rotate = mode == ELFM_DRAG_ROTATE;
+  v->drag_pan = mode == ELFM_DRAG_PAN;
   glfwGetCursorPos(w, &v->mouse_x, &v->mouse_y);
 }
 

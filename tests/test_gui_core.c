@@ -754,6 +754,13 @@ static void test_keys(void)
     elfm_viewer_cmd cmd;
     CHECK_MSG(!elfm_viewer_key_command(none[k], 0, &cmd), "key %d gives a command", none[k]);
   }
+  /* the mouse: docs/viewer.md's table */
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_LEFT, 0) == ELFM_DRAG_ROTATE);
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_LEFT, 1) == ELFM_DRAG_PAN);
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_RIGHT, 0) == ELFM_DRAG_PAN);
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_RIGHT, 1) == ELFM_DRAG_PAN);
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_MIDDLE, 0) == ELFM_DRAG_PAN);
+  CHECK(elfm_viewer_drag_mode(GLFW_MOUSE_BUTTON_4, 0) == ELFM_DRAG_NONE);
 }
 
 int main(void)
