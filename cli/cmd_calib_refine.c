@@ -63,6 +63,7 @@ typedef struct refine_opts {
   elfm_recon_options recon_integral;
   int threshold_given; /* --threshold given: the integral keeps it too */
   int sweep;           /* --sweep: one object swept through z, its views found frame by frame */
+  double sweep_speed;  /* --sweep-um-per-ms: its known axial speed (0: not known) */
   int ms_given;
 } refine_opts;
 
@@ -74,6 +75,7 @@ typedef struct refine_slot {
   double (*pos)[3];  /* the coarse step: the points, um */
   const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
   double score;            /* the turn's search: the volume's sharpness */
+  int64_t t_us;            /* the sweep's step: the frame's time */
   int n_scored;            /* and the peaks it sums */
 } refine_slot;
 
@@ -139,6 +141,10 @@ static void usage(FILE *f)
           "  --turn-deg A         look for the lens array turned up to A degrees, 0..45\n"
           "                       (5; 0: no such search)\n"
           "  --sweep              the recording is one object swept through z (above)\n"
+          "  --sweep-um-per-ms V  (implies --sweep) the object moved in z at V um/ms\n"
+          "                       (a piezo's ramps, up or down): the disparities are\n"
+          "                       scaled so that the fitted depths move at V (the depth\n"
+          "                       scale, which no recording of unknown motion shows)\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");
@@ -162,6 +168,7 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
   if (c->sweep) {
     /* each view's brightest spot (the callback keeps them in frame order) */
     elfm_calib_sweep_spots(c->sweep, frame, s->at, s->wt);
+    s->t_us = frame->t_us;
     return ELFM_OK;
   }
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
@@ -218,7 +225,7 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
     return ELFM_OK;
   }
   if (c->sweep) {
-    elfm_calib_sweep_add(c->sweep, s->at, s->wt);
+    elfm_calib_sweep_add(c->sweep, s->t_us, s->at, s->wt);
     c->volumes++;
     return ELFM_OK;
   }
@@ -274,7 +281,8 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
 
 static int parse(int argc, char **argv, refine_opts *o)
 {
-  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_SWEEP, O_QUIET };
+  enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_SWEEP,
+         O_SPEED, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -282,7 +290,8 @@ static int parse(int argc, char **argv, refine_opts *o)
       {"passes", required_argument, 0, O_PASSES}, {"threshold", required_argument, 0, O_THR},
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
       {"search-px", required_argument, 0, O_SEARCH}, {"turn-deg", required_argument, 0, O_TURN},
-      {"sweep", no_argument, 0, O_SWEEP}, {"quiet", no_argument, 0, O_QUIET},
+      {"sweep", no_argument, 0, O_SWEEP}, {"sweep-um-per-ms", required_argument, 0, O_SPEED},
+      {"quiet", no_argument, 0, O_QUIET},
       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   elfm_recon_options_default(&o->recon);
@@ -324,6 +333,10 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_SEARCH: ok = cli_parse_int_in(C, "--search-px", optarg, 0, 64, "0..64", &o->search_px); break;
     case O_TURN: ok = cli_parse_double_in(C, "--turn-deg", optarg, 0, 0, 45, "0..45", &o->turn_deg); break;
     case O_SWEEP: o->sweep = 1; break;
+    case O_SPEED:
+      o->sweep = 1;
+      ok = cli_parse_double_in(C, "--sweep-um-per-ms", optarg, 0, 1e-6, 1e6, "> 0", &o->sweep_speed);
+      break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -544,6 +557,36 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   return ELFM_OK;
 }
 
+/* The depth scale: the fitted depths move at the speed the disparities
+ * give them; a piezo's known speed scales the disparities (every view's by
+ * one factor: the centres fitted stay right, image = centre + d z being
+ * unchanged with d x k and z / k). A relay magnification 2.4 % off, which
+ * no recording of unknown motion shows (docs/recon.md), is such a factor. */
+static int sweep_scale(elfm_calib *cal, const refine_opts *o, const elfm_calib_sweep_fit *fit)
+{
+  const double v = fit->speed_um_per_ms;
+  if (!o->quiet && isfinite(v))
+    fprintf(stderr, "calib refine: the object moved in z at %.4f um/ms by the disparities as they are (the "
+            "middle half of 40 ms spans in the middle half of its depths %.4f-%.4f)%s\n", v, fit->speed_lo_um_per_ms, fit->speed_hi_um_per_ms,
+            o->sweep_speed > 0 ? "" : "; --sweep-um-per-ms with the piezo's speed scales the depths to it");
+  if (!(o->sweep_speed > 0)) return CLI_OK;
+  if (!isfinite(v))
+    return cli_message(C, CLI_FAIL, "%s: too few frames told the depth to measure the object's speed by "
+                       "(--sweep-um-per-ms)", o->events);
+  const double k = v / o->sweep_speed;
+  if (!(k > 0.5 && k < 2))
+    return cli_message(C, CLI_FAIL, "%s: the object moved at %.4f um/ms, --sweep-um-per-ms %g: the "
+                       "disparities would be scaled by %.3f (0.5..2 expected: the speed's units are um per ms)",
+                       o->events, v, o->sweep_speed, k);
+  for (int w = 0; w < cal->n_views; w++) {
+    cal->views[w].dx_px_per_um *= k;
+    cal->views[w].dy_px_per_um *= k;
+  }
+  if (!o->quiet)
+    fprintf(stderr, "calib refine: the disparities scaled by %.4f to the piezo's %g um/ms\n", k, o->sweep_speed);
+  return CLI_OK;
+}
+
 /* --sweep: the recording is one object swept through z, whose images the
  * coarse step's refocused peaks would not find from centres a few pixels
  * off (from 2.3 px RMS off it took noise for a turn of -3.3 degrees and
@@ -564,10 +607,12 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   elfm_status st = run_pass(c, cal, o->recon, err);
   const size_t frames = elfm_calib_sweep_frames(c->sweep);
   double shift[2 * ELFM_MAX_VIEWS];
-  int moved = 0, used = 0, placed[ELFM_MAX_VIEWS], images[ELFM_MAX_VIEWS];
-  double fit_rms = NAN, agree = 0;
+  int moved = 0;
+  elfm_calib_sweep_fit fit;
   if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
-  elfm_calib_sweep_result(c->sweep, &used, images, placed, &fit_rms, &agree);
+  elfm_calib_sweep_result(c->sweep, &fit);
+  const int used = fit.frames_used;
+  const double agree = fit.agree, fit_rms = fit.rms_px;
   elfm_calib_sweep_free(c->sweep);
   c->sweep = NULL;
   if (st != ELFM_OK) return cli_fail(C, err);
@@ -581,13 +626,13 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {
     int n_placed = 0;
-    for (int v = 0; v < c->nv; v++) n_placed += placed[v];
+    for (int v = 0; v < c->nv; v++) n_placed += fit.placed[v];
     fprintf(stderr, "calib refine: the sweep's views, frame by frame: %d of %zu frames told the depth; "
             "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
             "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", used, frames, moved,
             c->nv, fit_rms, agree, n_placed, rms, worst);
   }
-  return CLI_OK;
+  return sweep_scale(cal, o, &fit);
 }
 
 int cmd_calib_refine(int argc, char **argv)

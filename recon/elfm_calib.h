@@ -10,6 +10,8 @@
 #ifndef ELFM_CALIB_H
 #define ELFM_CALIB_H
 
+#include <stdint.h>
+
 #include "elfm_error.h"
 
 #ifdef __cplusplus
@@ -172,7 +174,7 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * out: its strength over the next spot's 5 px or more away (contrast,
  * infinite with no other). add keeps a frame's spots with a
  * contrast of ELFM_CALIB_SWEEP_CONTRAST or more (0 when max_frames are
- * held). apply fits image = centre + the object's place + disparity x its
+ * held; t_us: the frame's time). apply fits image = centre + the object's place + disparity x its
  * depth in each frame (the disparities kept), moves every view with
  * min_images images near that model to its fitted centre (cleared of the
  * gauge, as refine_apply; *n_moved says how many), sets the others, and
@@ -181,8 +183,10 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * median share of spots near the model is under 0.5 (several objects
  * taken for one), nothing moves. result gives the last apply's frames
  * that told the depth, images per view (near the model), the views set on
- * the grid, the images' RMS distance from the model, px, and that median
- * share. spots is safe on many threads at once (it reads the collector's
+ * the grid, the images' RMS distance from the model, px, that median
+ * share, and how fast the object moved in z by the disparities as they
+ * are (a piezo's known speed gives their scale, which no recording of
+ * unknown motion can: docs/recon.md "What it still cannot see"). spots is safe on many threads at once (it reads the collector's
  * map of views only). docs/recon.md "A sweep's views, frame by frame". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
 typedef struct elfm_calib_sweep elfm_calib_sweep;
@@ -191,12 +195,21 @@ elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm
 void elfm_calib_sweep_free(elfm_calib_sweep *s);
 void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const struct elfm_frame *f, double *at_px,
                             double *contrast);
-int elfm_calib_sweep_add(elfm_calib_sweep *s, const double *at_px, const double *contrast);
+int elfm_calib_sweep_add(elfm_calib_sweep *s, int64_t t_us, const double *at_px, const double *contrast);
 size_t elfm_calib_sweep_frames(const elfm_calib_sweep *s);
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
                                    int *n_moved, elfm_error *err);
-void elfm_calib_sweep_result(const elfm_calib_sweep *s, int *frames_used, int *images, int *placed,
-                             double *rms_px, double *agree);
+typedef struct elfm_calib_sweep_fit {
+  int frames_used;              /* frames that told the depth */
+  int images[ELFM_MAX_VIEWS];   /* per view, its images near the model */
+  int placed[ELFM_MAX_VIEWS];   /* per view, set on the grid of the others */
+  double rms_px;                /* the images' RMS distance from the model */
+  double agree;                 /* the views' median share of spots near the model */
+  /* |dz/dt| over 20 ms spans of the fitted depths: median and middle half;
+   * NaN with fewer than 20 spans */
+  double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;
+} elfm_calib_sweep_fit;
+void elfm_calib_sweep_result(const elfm_calib_sweep *s, elfm_calib_sweep_fit *fit);
 
 /* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
  * turn turns every view's centre about the centres' mean and its disparity
