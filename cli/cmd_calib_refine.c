@@ -335,7 +335,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     case O_SWEEP: o->sweep = 1; break;
     case O_SPEED:
       o->sweep = 1;
-      ok = cli_parse_double_in(C, "--sweep-um-per-ms", optarg, 0, 1e-6, 1e6, "> 0", &o->sweep_speed);
+      ok = cli_parse_double_in(C, "--sweep-um-per-ms", optarg, 0, 1, 1e6, "> 0", &o->sweep_speed);
       break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
@@ -567,7 +567,8 @@ static int sweep_scale(elfm_calib *cal, const refine_opts *o, const elfm_calib_s
   const double v = fit->speed_um_per_ms;
   if (!o->quiet && isfinite(v))
     fprintf(stderr, "calib refine: the object moved in z at %.4f um/ms by the disparities as they are (the "
-            "middle half of 40 ms spans in the middle half of its depths %.4f-%.4f)%s\n", v, fit->speed_lo_um_per_ms, fit->speed_hi_um_per_ms,
+            "middle half of 40 ms spans in the middle half of its depths %.4f-%.4f)%s\n", v,
+            fit->speed_lo_um_per_ms, fit->speed_hi_um_per_ms,
             o->sweep_speed > 0 ? "" : "; --sweep-um-per-ms with the piezo's speed scales the depths to it");
   if (!(o->sweep_speed > 0)) return CLI_OK;
   if (!isfinite(v))

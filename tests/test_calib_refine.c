@@ -474,7 +474,8 @@ static void test_cli(void)
             centre_error(&r, &truth));
   /* usage errors: exit 2 */
   CHECK_EQ_INT(run("calib refine"), 2);
-  const char *bad[] = {"--passes -1", "--passes 21", "--passes 2.5", "--ms 0", "--min-views 2", "--threshold -1",
+  const char *bad[] = {"--passes -1", "--passes 21", "--passes 2.5", "--sweep-um-per-ms 0",
+                       "--sweep-um-per-ms -1", "--ms 0", "--min-views 2", "--threshold -1",
                        "--from-us 50 --to-us 40", "--dt-us 10", "--bogus", "--z-min-um 500", "--search-px 65",
                        "--turn-deg 46", "--turn-deg -1", "--turn-deg x"};
   for (size_t k = 0; k < sizeof bad / sizeof *bad; k++) {
