@@ -24,6 +24,9 @@ int cmd_info(int argc, char **argv);
 int cmd_convert(int argc, char **argv);
 int cmd_calib(int argc, char **argv);
 int cmd_calib_refine(int argc, char **argv); /* calib refine (cmd_calib_refine.c) */
+/* its --help, and the frames' defaults it starts from (cmd_calib_refine_help.c) */
+void calib_refine_usage(FILE *f);
+void calib_refine_recon_defaults(elfm_recon_options *ro);
 int cmd_simulate(int argc, char **argv);
 int cmd_recon(int argc, char **argv);
 int cmd_track(int argc, char **argv);

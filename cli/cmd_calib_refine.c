@@ -99,64 +99,6 @@ typedef struct refine_ctx {
   int64_t volumes;
 } refine_ctx;
 
-static void usage(FILE *f)
-{
-  fprintf(f,
-          "usage: eventlfm calib refine --calib calib.json --events FILE --out refined.json\n"
-          "                             [options]\n\n"
-          "Fits the views' centres (cx, cy) of calib.json to a recording of bright points\n"
-          "(beads that move or blink, so that the event camera sees them) and writes the\n"
-          "calibration with the moved centres. First the lens array's turn against the\n"
-          "sensor's rows: the turn within --turn-deg whose volumes are sharpest over the\n"
-          "first 20 ms turns every view's centre and disparity. Then each pass refocuses\n"
-          "--ms of the recording (from its first event, or from --from-us to --to-us at\n"
-          "most), fits every bright peak from all views and moves each view by the median\n"
-          "of its images' misses. Moves no recording can see are left out: all views\n"
-          "alike (the volume's x-y origin) and in proportion to the disparities (its focal\n"
-          "plane). The disparities keep their length (from the optics) and turn with the\n"
-          "grid of fitted centres (optics.mla_rotation_deg records the turn found).\n"
-          "A view whose images stay in one place (the central view of a bead swept\n"
-          "through z) is set on the grid of the others instead. Objects that move\n"
-          "slowly show in few peaks on the time surface: with fewer than 20 over the\n"
-          "stretch and --repr not given, the integral is tried (above 30 unless\n"
-          "--threshold is given) and taken if it shows 20 or more (for a z sweep, give\n"
-          "a --ms that covers it).\n"
-          "--sweep, for one object (a bead) swept through z, such as on a piezo: each\n"
-          "view's image is found in every frame and the centres fitted to where they\n"
-          "lie, from centres any distance off that keeps each image in its view's crop\n"
-          "(a calibration from the optics alone); then the passes. No turn's search\n"
-          "or coarse step (a turned array is fitted all the same), the integral unless\n"
-          "--repr is given, --ms 5000 unless given.\n"
-          "Per-pass progress, the turn and each view's move on stderr.\n\n"
-          "  --ms T               read T ms of the recording per pass (200)\n"
-          "  --passes N           passes, 0..20 (4); each uses the previous one's centres\n"
-          "                       (0: the turn and the coarse step alone, or --sweep's fit)\n"
-          "  --threshold V        peaks above V on the 0..255 time surface only (60)\n"
-          "  --min-views N        views that must agree with a point's fit (12; with\n"
-          "                       fewer than 25 views 12 / 25 of them, at least 3)\n"
-          "  --min-points N       a view moves only with at least N misses (20)\n"
-          "  --search-px R        first a coarse step: each view's images are looked for\n"
-          "                       up to R px from where the centres put them (12; 0: no\n"
-          "                       such step), for centres from the optics alone\n"
-          "  --turn-deg A         look for the lens array turned up to A degrees, 0..45\n"
-          "                       (5; 0: no such search)\n"
-          "  --sweep              the recording is one object swept through z (above)\n"
-          "  --sweep-um-per-ms V  (implies --sweep) the object moved in z at V um/ms\n"
-          "                       (a piezo's ramps, up or down): the disparities are\n"
-          "                       scaled so that the fitted depths move at V (the depth\n"
-          "                       scale, which no recording of unknown motion shows)\n"
-          "  --quiet              no progress\n"
-          "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
-          "--z-*-um set the passes' planes, the file written keeps its own):\n");
-  elfm_recon_options d;
-  elfm_recon_options_default(&d);
-  d.framer.polarity = ELFM_POL_ON;
-  d.median = 0;
-  d.refocus.agree_frac = 0;
-  cli_recon_options_usage(f, &d);
-  fprintf(f, "  -h, --help           this text\n");
-}
-
 static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const elfm_refocus_plan *plan,
                           int slot, int thread, void *user, elfm_error *err)
 {
@@ -294,11 +236,7 @@ static int parse(int argc, char **argv, refine_opts *o)
       {"quiet", no_argument, 0, O_QUIET},
       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
-  elfm_recon_options_default(&o->recon);
-  /* track's frames: ON events, no median, no view-agreement rule (cmd_track_opts.c) */
-  o->recon.framer.polarity = ELFM_POL_ON;
-  o->recon.median = 0;
-  o->recon.refocus.agree_frac = 0;
+  calib_refine_recon_defaults(&o->recon);
   o->ms = 200;
   o->passes = 4;
   o->threshold = 60;
@@ -318,7 +256,7 @@ static int parse(int argc, char **argv, refine_opts *o)
     if (k > 0) continue;
     int ok = 1;
     switch (c) {
-    case 'h': usage(stdout); return -1;
+    case 'h': calib_refine_usage(stdout); return -1;
     case O_CALIB: o->calib = optarg; break;
     case O_EVENTS: o->events = optarg; break;
     case O_OUT: o->out = optarg; break;
@@ -395,6 +333,10 @@ static void add_moves(int nv, const double *shift, double *total, double *rms, d
  * when --threshold is not given: its images are dimmer than the time
  * surface's (track's thresholds: 25 on the integral, 45 on the surface) */
 #define REFINE_INTEGRAL_THRESHOLD 30
+static double integral_threshold(const refine_opts *o)
+{
+  return o->threshold_given ? o->threshold : REFINE_INTEGRAL_THRESHOLD;
+}
 
 /* One pass: refocus, fit, collect (into c->acc). */
 static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
@@ -542,7 +484,7 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   int64_t n_surface = 0, n_integral = 0;
   elfm_status st = count_peaks(c, cal, o->recon, TURN_JUDGE_MIN_PEAKS, &n_surface, err);
   if (st != ELFM_OK || n_surface >= TURN_JUDGE_MIN_PEAKS) return st;
-  const double thr = o->threshold_given ? o->threshold : REFINE_INTEGRAL_THRESHOLD;
+  const double thr = integral_threshold(o);
   if ((st = set_threshold(c, cal, thr, err)) != ELFM_OK) return st;
   st = count_peaks(c, cal, o->recon_integral, TURN_JUDGE_MIN_PEAKS, &n_integral, err);
   if (st != ELFM_OK) return st;
@@ -599,7 +541,7 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
 {
   if (o->repr_auto) {
     o->recon = o->recon_integral;
-    if (!o->threshold_given) o->threshold = REFINE_INTEGRAL_THRESHOLD;
+    o->threshold = integral_threshold(o);
     if (set_threshold(c, cal, o->threshold, err) != ELFM_OK) return cli_fail(C, err);
   }
   const double frame_ms = (double)o->recon.framer.dt_us / 1000.0;
@@ -612,8 +554,6 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   elfm_calib_sweep_fit fit;
   if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
   elfm_calib_sweep_result(c->sweep, &fit);
-  const int used = fit.frames_used;
-  const double agree = fit.agree, fit_rms = fit.rms_px;
   elfm_calib_sweep_free(c->sweep);
   c->sweep = NULL;
   if (st != ELFM_OK) return cli_fail(C, err);
@@ -622,7 +562,8 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
                        "fit the centres to (%d frames of %zu told the depth; the views' median share of "
                        "their spots near the fit %.2f, 0.5 or more needed, and %d images in a view): is one "
                        "object, and only one, swept through z in %" PRId64 "..%" PRId64 " us?",
-                       o->events, used, frames, agree, o->min_points, o->recon.from_us, o->recon.to_us);
+                       o->events, fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us,
+                       o->recon.to_us);
   double rms, worst;
   add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {
@@ -630,8 +571,8 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
     for (int v = 0; v < c->nv; v++) n_placed += fit.placed[v];
     fprintf(stderr, "calib refine: the sweep's views, frame by frame: %d of %zu frames told the depth; "
             "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
-            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", used, frames, moved,
-            c->nv, fit_rms, agree, n_placed, rms, worst);
+            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", fit.frames_used,
+            frames, moved, c->nv, fit.rms_px, fit.agree, n_placed, rms, worst);
   }
   return sweep_scale(cal, o, &fit);
 }
