@@ -278,8 +278,7 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
     tmp[n++] = 1000.0 * fabs(z[g] - z[f]) / (s->t_us[g] - s->t_us[f]);
   }
   if (n < 20) return;
-  qsort(tmp, n, sizeof *tmp, cmp_double);
-  s->fit.speed_um_per_ms = n % 2 ? tmp[n / 2] : 0.5 * (tmp[n / 2 - 1] + tmp[n / 2]);
+  s->fit.speed_um_per_ms = median_d(tmp, n); /* (sorting tmp) */
   s->fit.speed_lo_um_per_ms = tmp[n / 4];
   s->fit.speed_hi_um_per_ms = tmp[(3 * n) / 4];
 }
@@ -324,10 +323,11 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
     nss = 0;
     for (int v = 0; v < nv; v++) {
       const elfm_view *w = &m.views[v];
-      size_t n = 0;
+      size_t n = 0, told = 0;
       for (size_t f = 0; f < s->n; f++) {
         const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
         if (isnan(pu) || isnan(z[f])) continue;
+        told++;
         const double eu = pu - w->dx_px_per_um * z[f], ew = pw - w->dy_px_per_um * z[f];
         if (!isinf(r) && hypot(eu - w->cx_px, ew - w->cy_px) > r) continue;
         tu[n] = eu;
@@ -336,11 +336,7 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
       }
       s->fit.images[v] = (int)n;
       use[v] = n >= (size_t)min_images;
-      if (it == SWEEP_ITERATIONS - 1) {
-        size_t told = 0;
-        for (size_t f = 0; f < s->n; f++) told += !isnan(s->pu[f * (size_t)nv + (size_t)v]) && !isnan(z[f]);
-        share[v] = told > 0 ? (double)n / (double)told : NAN;
-      }
+      share[v] = told > 0 ? (double)n / (double)told : NAN; /* the last step's is kept */
       if (!use[v]) continue;
       m.views[v].cx_px = median_d(tu, n);
       m.views[v].cy_px = median_d(tw, n);

@@ -172,21 +172,20 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * brightest pixel: a hot pixel alone is no spot) and its 5 x 5 centroid
  * (at_px, 2 per view, NaN where the crop is empty), and how far it stands
  * out: its strength over the next spot's 5 px or more away (contrast,
- * infinite with no other). add keeps a frame's spots with a
- * contrast of ELFM_CALIB_SWEEP_CONTRAST or more (0 when max_frames are
- * held; t_us: the frame's time). apply fits image = centre + the object's place + disparity x its
- * depth in each frame (the disparities kept), moves every view with
- * min_images images near that model to its fitted centre (cleared of the
- * gauge, as refine_apply; *n_moved says how many), sets the others, and
- * those that do not tell the depth (the central view), on the grid of
- * those when 6 or more moved, and empties the collector. When the views'
- * median share of spots near the model is under 0.5 (several objects
- * taken for one), nothing moves. result gives the last apply's frames
- * that told the depth, images per view (near the model), the views set on
- * the grid, the images' RMS distance from the model, px, that median
- * share, and how fast the object moved in z by the disparities as they
- * are (a piezo's known speed gives their scale, which no recording of
- * unknown motion can: docs/recon.md "What it still cannot see"). spots is safe on many threads at once (it reads the collector's
+ * infinite with no other). add keeps a frame's spots with a contrast of
+ * ELFM_CALIB_SWEEP_CONTRAST or more (0 when max_frames are held; t_us: the
+ * frame's time). apply fits image = centre + the object's place +
+ * disparity x its depth in each frame (the disparities kept), moves every
+ * view with min_images images near that model to its fitted centre
+ * (cleared of the gauge, as refine_apply; *n_moved says how many), sets
+ * the others, and those that do not tell the depth (the central view), on
+ * the grid of those when 6 or more moved, and empties the collector. When
+ * the views' median share of spots near the model is under 0.5 (several
+ * objects taken for one), nothing moves. result gives the last apply's fit
+ * (elfm_calib_sweep_fit), with how fast the object moved in z by the
+ * disparities as they are (a piezo's known speed gives their scale, which
+ * no recording of unknown motion can: docs/recon.md "What it still cannot
+ * see"). spots is safe on many threads at once (it reads the collector's
  * map of views only). docs/recon.md "A sweep's views, frame by frame". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
 typedef struct elfm_calib_sweep elfm_calib_sweep;
@@ -205,8 +204,8 @@ typedef struct elfm_calib_sweep_fit {
   int placed[ELFM_MAX_VIEWS];   /* per view, set on the grid of the others */
   double rms_px;                /* the images' RMS distance from the model */
   double agree;                 /* the views' median share of spots near the model */
-  /* |dz/dt| over 20 ms spans of the fitted depths: median and middle half;
-   * NaN with fewer than 20 spans */
+  /* |dz/dt| over 40 ms spans within the middle half of the fitted depths:
+   * median and middle half; NaN with fewer than 20 spans */
   double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;
 } elfm_calib_sweep_fit;
 void elfm_calib_sweep_result(const elfm_calib_sweep *s, elfm_calib_sweep_fit *fit);
