@@ -76,6 +76,7 @@ typedef struct refine_slot {
   const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
   double score;            /* the turn's search: the volume's sharpness */
   int64_t t_us;            /* the sweep's step: the frame's time */
+  elfm_calib_sweep_image *img; /* ... and its spots */
   int n_scored;            /* and the peaks it sums */
 } refine_slot;
 
@@ -108,10 +109,9 @@ static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const e
   int n = 0;
   s->n = 0;
   if (c->sweep) {
-    /* each view's brightest spot (the callback keeps them in frame order) */
-    elfm_calib_sweep_spots(c->sweep, frame, s->at, s->wt);
+    /* each view's spots (the callback keeps them in frame order) */
     s->t_us = frame->t_us;
-    return ELFM_OK;
+    return elfm_calib_sweep_spots(c->sweep, frame, s->img, err);
   }
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->max_pts, &n, err);
   if (st != ELFM_OK) return st;
@@ -167,7 +167,7 @@ static elfm_status on_volume(const elfm_volume *v, int slot, void *user, elfm_er
     return ELFM_OK;
   }
   if (c->sweep) {
-    elfm_calib_sweep_add(c->sweep, s->t_us, s->at, s->wt);
+    elfm_calib_sweep_add(c->sweep, s->t_us, s->img);
     c->volumes++;
     return ELFM_OK;
   }
@@ -216,6 +216,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
     free(c->slot[s].wt);
     free(c->slot[s].at);
     free(c->slot[s].pos);
+    free(c->slot[s].img);
   }
   free(c->slot);
   elfm_calib_refine_free(c->acc);
@@ -557,22 +558,32 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   elfm_calib_sweep_free(c->sweep);
   c->sweep = NULL;
   if (st != ELFM_OK) return cli_fail(C, err);
-  if (moved == 0)
-    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit one object in too few views or frames to "
+  if (moved == 0) {
+    char several[160] = "";
+    if (!isnan(fit.pattern_share))
+      snprintf(several, sizeof several, "; as several objects side by side, %.2f of the frames matched "
+               "their pattern, 0.5 or more needed", fit.pattern_share);
+    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to "
                        "fit the centres to (%d frames of %zu told the depth; the views' median share of "
-                       "their spots near the fit %.2f, 0.5 or more needed, and %d images in a view): is one "
-                       "object, and only one, swept through z in %" PRId64 "..%" PRId64 " us?",
-                       o->events, fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us,
-                       o->recon.to_us);
+                       "their spots near the fit %.2f, 0.5 or more needed, and %d images in a view%s): is "
+                       "one object, or several side by side, swept together through z in "
+                       "%" PRId64 "..%" PRId64 " us?",
+                       o->events, fit.frames_used, frames, fit.agree, o->min_points, several,
+                       o->recon.from_us, o->recon.to_us);
+  }
   double rms, worst;
   add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {
     int n_placed = 0;
     for (int v = 0; v < c->nv; v++) n_placed += fit.placed[v];
-    fprintf(stderr, "calib refine: the sweep's views, frame by frame: %d of %zu frames told the depth; "
+    char several[160] = "";
+    if (fit.objects > 1)
+      snprintf(several, sizeof several, " (%d objects side by side, %.1f um apart in depth at most, their "
+               "pattern matched in a median %.2f of the frames)", fit.objects, fit.depth_um, fit.pattern_share);
+    fprintf(stderr, "calib refine: the sweep's views, frame by frame%s: %d of %zu frames told the depth; "
             "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
-            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", fit.frames_used,
-            frames, moved, c->nv, fit.rms_px, fit.agree, n_placed, rms, worst);
+            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", several,
+            fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, n_placed, rms, worst);
   }
   return sweep_scale(cal, o, &fit);
 }
@@ -633,7 +644,8 @@ int cmd_calib_refine(int argc, char **argv)
     c.slot[s].wt = malloc((size_t)c.max_pts * (size_t)c.nv * sizeof(double));
     c.slot[s].at = malloc((size_t)c.max_pts * 2 * (size_t)c.nv * sizeof(double));
     c.slot[s].pos = malloc(VOTERS_PER_VOLUME * sizeof *c.slot[s].pos);
-    ok = c.slot[s].miss && c.slot[s].wt && c.slot[s].at && c.slot[s].pos;
+    c.slot[s].img = malloc(sizeof *c.slot[s].img);
+    ok = c.slot[s].miss && c.slot[s].wt && c.slot[s].at && c.slot[s].pos && c.slot[s].img;
   }
   if (!ok) {
     ctx_free(&c, threads, slots);

@@ -119,11 +119,14 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
     o->flux_hz = sim_uniform_ab(r, s->flux_min_hz, s->flux_max_hz);
   }
   if (s->motion == SIM_MOTION_ZSWEEP) {
-    /* Several sweeping beads sit side by side along x, min_separation apart. */
+    /* Several sweeping beads sit side by side along x, min_separation apart,
+     * on a slide that may be tilted (each bead then at its own depth). */
+    const double slope = tan(s->sweep_tilt_deg * M_PI / 180.0);
     for (int k = 0; k < n; k++) {
-      s->obj[k].p0[0] = s->sweep_x_um + (k - (n - 1) * 0.5) * s->min_separation_um;
+      const double x = (k - (n - 1) * 0.5) * s->min_separation_um;
+      s->obj[k].p0[0] = s->sweep_x_um + x;
       s->obj[k].p0[1] = s->sweep_y_um;
-      s->obj[k].p0[2] = s->sweep_z_from_um;
+      s->obj[k].p0[2] = s->sweep_z_from_um + x * slope;
     }
     return ELFM_OK;
   }
@@ -353,7 +356,7 @@ void sim_object_position(const elfm_scene *s, int k, double t, double pos[3], in
     double sign = s->sweep_z_to_um > s->sweep_z_from_um ? 1.0 : -1.0;
     pos[0] = o->p0[0];
     pos[1] = o->p0[1];
-    pos[2] = s->sweep_z_from_um + sign * tri;
+    pos[2] = o->p0[2] + sign * tri;
     return;
   }
   case SIM_MOTION_HELIX: {

@@ -268,6 +268,12 @@ static elfm_status parse_motion(scene_ctx *c, const cJSON *root, elfm_scene *s)
   case SIM_MOTION_ZSWEEP:
     if ((st = get_num(c, m, P, "x_um", -1000, 1000, &s->sweep_x_um))) return st;
     if ((st = get_num(c, m, P, "y_um", -1000, 1000, &s->sweep_y_um))) return st;
+    /* optional: the slide tilted about y, its beads (side by side along x)
+     * each at its own depth */
+    s->sweep_tilt_deg = 0;
+    if (cJSON_GetObjectItemCaseSensitive(m, "tilt_deg") &&
+        (st = get_num(c, m, P, "tilt_deg", -45, 45, &s->sweep_tilt_deg)))
+      return st;
     if ((st = get_num(c, m, P, "z_from_um", -1000, 1000, &s->sweep_z_from_um))) return st;
     if ((st = get_num(c, m, P, "z_to_um", -1000, 1000, &s->sweep_z_to_um))) return st;
     if ((st = get_num(c, m, P, "speed_mm_per_s", 1e-6, 50, &a))) return st;

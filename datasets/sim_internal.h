@@ -140,6 +140,7 @@ struct elfm_scene {
   double place_radius_um, z_min_um, z_max_um;
   /* zsweep */
   double sweep_x_um, sweep_y_um, sweep_z_from_um, sweep_z_to_um, sweep_speed_um_per_us;
+  double sweep_tilt_deg; /* the slide's tilt about y: a bead x um off sweep_x is x tan(tilt) deeper */
   /* helix */
   double helix_speed_min, helix_speed_max;   /* um/us */
   double helix_radius_min_um, helix_radius_max_um, helix_axial_amp_max_um;

@@ -1,10 +1,14 @@
 /* calib_internal.h — what calib_refine.c and calib_sweep.c share: moving
- * the views cleared of the gauge, and the grid of the lenslets' centres.
+ * the views cleared of the gauge, and the grid of the lenslets' centres;
+ * and calib_sweep_pattern.c's several objects swept together.
  * Not part of the public API (elfm_calib.h is). */
 #ifndef ELFM_CALIB_INTERNAL_H
 #define ELFM_CALIB_INTERNAL_H
 
 #include "elfm_calib.h"
+
+#include <stddef.h>
+#include <stdint.h>
 
 /* Views needed to set others on their grid (cx, cy affine in (i, j)) */
 #define ELFM_CALIB_GRID_MIN_VIEWS 6
@@ -20,5 +24,18 @@ void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, doubl
  * of the gauge over all the views of from and to, together. 0, and nothing
  * moved, when those views do not span the grid. */
 int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px);
+
+/* Several objects swept through z together (calib_sweep_pattern.c): each
+ * view's spots in each frame (n_spots [nf][nv], spots [nf][nv][MAX][2],
+ * the brightest's strength [nf][nv])
+ * matched to one pattern of objects, its first object's place into pu, pw
+ * ([nf][nv], NaN where not placed). Returns the pattern's objects (0: no
+ * pattern of two or more, pu and pw all NaN), and in *share the median
+ * over the views with tells[v] of the share of their frames with two spots
+ * or more that were placed, and in *depth_um how far apart in depth its
+ * objects lie (the deepest's depth less the shallowest's). */
+int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, const uint8_t *n_spots,
+                             const float *strength, const float *spots, float *pu, float *pw, double *share,
+                             double *depth_um);
 
 #endif

@@ -27,6 +27,11 @@
  * A view with few images (the central one sees an axial sweep only as its
  * image's slow defocus) goes where the grid of the others puts it, as in
  * refine (calib_internal.h).
+ *
+ * Several objects swept together (beads on a slide) fit no one object:
+ * the brightest spot is now one's image, now another's. Their spots are
+ * then matched to one pattern, and its translation in each view and frame
+ * fitted as the one object's image (calib_sweep_pattern.c).
  */
 #include "calib_internal.h"
 #include "elfm_calib.h"
@@ -40,6 +45,8 @@
 /* A spot's centroid window, half-width px, and how far its rival lies */
 #define SWEEP_HALF_PX 2
 #define SWEEP_RIVAL_PX 5
+/* Several objects: a view's spots down to this share of its brightest */
+#define SWEEP_SPOT_FRAC 0.3
 /* The alternation's steps and their outlier radii, px (the first: none) */
 #define SWEEP_ITERATIONS 8
 static const double sweep_radius_px[SWEEP_ITERATIONS] = {INFINITY, 8, 4, 2, 1.5, 1.5, 1.5, 1.5};
@@ -60,6 +67,9 @@ struct elfm_calib_sweep {
   uint8_t *view_of; /* [w * h] the view whose crop holds the pixel (nearest centre), 255: none */
   size_t cap, n;    /* frames held */
   float *pu, *pw;   /* [cap][nv] the spots, NaN: none */
+  uint8_t *n_spots; /* [cap][nv] and each view's spots for several objects, */
+  float *strength;  /* [cap][nv] the brightest's strength, */
+  float *spots;     /* [cap][nv][ELFM_CALIB_SWEEP_MAX_SPOTS][2] */
   double *t_us;     /* [cap] the frames' times */
   elfm_calib_sweep_fit fit; /* the last apply's */
 };
@@ -84,8 +94,11 @@ elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm
     s->pu = malloc(max_frames * (size_t)c->n_views * sizeof *s->pu);
     s->pw = malloc(max_frames * (size_t)c->n_views * sizeof *s->pw);
     s->t_us = malloc(max_frames * sizeof *s->t_us);
+    s->n_spots = malloc(max_frames * (size_t)c->n_views);
+    s->strength = malloc(max_frames * (size_t)c->n_views * sizeof *s->strength);
+    s->spots = malloc(max_frames * (size_t)c->n_views * ELFM_CALIB_SWEEP_MAX_SPOTS * 2 * sizeof *s->spots);
   }
-  if (!s || !s->view_of || !s->pu || !s->pw || !s->t_us) {
+  if (!s || !s->view_of || !s->pu || !s->pw || !s->t_us || !s->n_spots || !s->strength || !s->spots) {
     elfm_calib_sweep_free(s);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib sweep: out of memory");
   }
@@ -115,6 +128,9 @@ void elfm_calib_sweep_free(elfm_calib_sweep *s)
   free(s->pu);
   free(s->pw);
   free(s->t_us);
+  free(s->n_spots);
+  free(s->strength);
+  free(s->spots);
   free(s);
 }
 
@@ -142,20 +158,53 @@ static float box3(const elfm_frame *f, int x, int y)
   return s - top;
 }
 
-void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const elfm_frame *f, double *at_px, double *contrast)
+/* the 5 x 5 centroid about (x, y) */
+static void centroid5(const elfm_frame *f, int x, int y, double *u, double *w)
+{
+  double sv = 0, su = 0, sw = 0;
+  for (int b = -SWEEP_HALF_PX; b <= SWEEP_HALF_PX; b++)
+    for (int a = -SWEEP_HALF_PX; a <= SWEEP_HALF_PX; a++) {
+      const double q = value_at(f, x + a, y + b);
+      sv += q;
+      su += q * (x + a);
+      sw += q * (y + b);
+    }
+  *u = su / sv;
+  *w = sw / sv;
+}
+
+typedef struct sweep_candidate {
+  float b;
+  int x, y, v;
+} sweep_candidate;
+
+static int cmp_candidate(const void *a, const void *b)
+{
+  const sweep_candidate *p = a, *q = b;
+  if (p->b != q->b) return p->b < q->b ? 1 : -1;
+  return p->y != q->y ? (p->y > q->y) - (p->y < q->y) : (p->x > q->x) - (p->x < q->x);
+}
+
+elfm_status elfm_calib_sweep_spots(const elfm_calib_sweep *s, const elfm_frame *f, elfm_calib_sweep_image *img,
+                                   elfm_error *err)
 {
   float best[ELFM_MAX_VIEWS], rival[ELFM_MAX_VIEWS];
   int bx[ELFM_MAX_VIEWS], by[ELFM_MAX_VIEWS];
   for (int v = 0; v < s->nv; v++) {
     best[v] = rival[v] = 0;
     bx[v] = by[v] = -1;
-    at_px[2 * v] = at_px[2 * v + 1] = NAN;
-    contrast[v] = 0;
+    img->at_px[2 * v] = img->at_px[2 * v + 1] = NAN;
+    img->contrast[v] = img->strength[v] = 0;
+    img->n_spots[v] = 0;
   }
-  if (f->w != s->w || f->h != s->h) return;
+  if (f->w != s->w || f->h != s->h) return ELFM_OK;
   const size_t n = elfm_frame_n_window(f);
+  sweep_candidate *cand = malloc((n + 1) * sizeof *cand);
+  if (!cand) return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib sweep: out of memory");
+  size_t nc = 0;
   /* the brightest spot of each view, then its rival: the brightest 5 px or
-   * more from it (a second object, or the noise) */
+   * more from it (a second object, or the noise); and the candidates for
+   * several objects' spots, down to SWEEP_SPOT_FRAC of the brightest */
   for (int pass = 0; pass < 2; pass++)
     for (size_t k = 0; k < n; k++) {
       const uint32_t p = f->idx[k];
@@ -167,37 +216,55 @@ void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const elfm_frame *f, doub
         best[v] = b;
         bx[v] = x;
         by[v] = y;
-      } else if (pass == 1 && b > rival[v] &&
-                 (abs(x - bx[v]) >= SWEEP_RIVAL_PX || abs(y - by[v]) >= SWEEP_RIVAL_PX)) {
-        rival[v] = b;
+      } else if (pass == 1) {
+        if (b > rival[v] && (abs(x - bx[v]) >= SWEEP_RIVAL_PX || abs(y - by[v]) >= SWEEP_RIVAL_PX)) rival[v] = b;
+        if (b > 0 && b >= (float)SWEEP_SPOT_FRAC * best[v]) cand[nc++] = (sweep_candidate){b, x, y, v};
       }
     }
   for (int v = 0; v < s->nv; v++) {
     if (bx[v] < 0) continue;
-    double sv = 0, su = 0, sw = 0;
-    for (int b = -SWEEP_HALF_PX; b <= SWEEP_HALF_PX; b++)
-      for (int a = -SWEEP_HALF_PX; a <= SWEEP_HALF_PX; a++) {
-        const double q = value_at(f, bx[v] + a, by[v] + b);
-        sv += q;
-        su += q * (bx[v] + a);
-        sw += q * (by[v] + b);
-      }
-    at_px[2 * v] = su / sv;
-    at_px[2 * v + 1] = sw / sv;
-    contrast[v] = rival[v] > 0 ? (double)best[v] / rival[v] : INFINITY;
+    centroid5(f, bx[v], by[v], &img->at_px[2 * v], &img->at_px[2 * v + 1]);
+    img->contrast[v] = rival[v] > 0 ? (double)best[v] / rival[v] : INFINITY;
+    img->strength[v] = best[v];
   }
+  /* Every view's spots for several objects side by side: the strongest
+   * with no stronger one within SWEEP_RIVAL_PX - 1 px (either axis) */
+  qsort(cand, nc, sizeof *cand, cmp_candidate);
+  int sx[ELFM_MAX_VIEWS][ELFM_CALIB_SWEEP_MAX_SPOTS], sy[ELFM_MAX_VIEWS][ELFM_CALIB_SWEEP_MAX_SPOTS];
+  for (size_t k = 0; k < nc; k++) {
+    const int v = cand[k].v, m = img->n_spots[v];
+    if (m >= ELFM_CALIB_SWEEP_MAX_SPOTS) continue;
+    int near = 0;
+    for (int j = 0; j < m && !near; j++)
+      near = abs(cand[k].x - sx[v][j]) < SWEEP_RIVAL_PX && abs(cand[k].y - sy[v][j]) < SWEEP_RIVAL_PX;
+    if (near) continue;
+    sx[v][m] = cand[k].x;
+    sy[v][m] = cand[k].y;
+    double u, w;
+    centroid5(f, cand[k].x, cand[k].y, &u, &w);
+    img->spot_px[v][m][0] = (float)u;
+    img->spot_px[v][m][1] = (float)w;
+    img->n_spots[v] = m + 1;
+  }
+  free(cand);
+  return ELFM_OK;
 }
 
-int elfm_calib_sweep_add(elfm_calib_sweep *s, int64_t t_us, const double *at_px, const double *contrast)
+int elfm_calib_sweep_add(elfm_calib_sweep *s, int64_t t_us, const elfm_calib_sweep_image *img)
 {
   if (s->n >= s->cap) return 0;
   s->t_us[s->n] = (double)t_us;
   float *pu = s->pu + s->n * (size_t)s->nv, *pw = s->pw + s->n * (size_t)s->nv;
+  uint8_t *ns = s->n_spots + s->n * (size_t)s->nv;
+  float *sp = s->spots + s->n * (size_t)s->nv * ELFM_CALIB_SWEEP_MAX_SPOTS * 2;
   for (int v = 0; v < s->nv; v++) {
-    const int ok =
-        contrast[v] >= ELFM_CALIB_SWEEP_CONTRAST && isfinite(at_px[2 * v]) && isfinite(at_px[2 * v + 1]);
-    pu[v] = ok ? (float)at_px[2 * v] : NAN;
-    pw[v] = ok ? (float)at_px[2 * v + 1] : NAN;
+    const int ok = img->contrast[v] >= ELFM_CALIB_SWEEP_CONTRAST && isfinite(img->at_px[2 * v]) &&
+                   isfinite(img->at_px[2 * v + 1]);
+    pu[v] = ok ? (float)img->at_px[2 * v] : NAN;
+    pw[v] = ok ? (float)img->at_px[2 * v + 1] : NAN;
+    ns[v] = (uint8_t)img->n_spots[v];
+    s->strength[s->n * (size_t)s->nv + (size_t)v] = (float)img->strength[v];
+    memcpy(sp + (size_t)v * ELFM_CALIB_SWEEP_MAX_SPOTS * 2, img->spot_px[v], sizeof img->spot_px[v]);
   }
   s->n++;
   return 1;
@@ -283,6 +350,70 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
   s->fit.speed_hi_um_per_ms = tmp[(3 * n) / 4];
 }
 
+/* The alternation (the file's head) from c's centres into m, its views
+ * with enough images near the model in use[], the views' shares of spots
+ * near it into share[]; z, tu, tw: room for s->n values. Into s->fit:
+ * frames_used, images, rms_px, agree. */
+static void sweep_fit(elfm_calib_sweep *s, const elfm_calib *c, const int *tells, int min_images, double *z,
+                      double *tu, double *tw, elfm_calib *m, int *use)
+{
+  const int nv = s->nv;
+  double tmp[ELFM_MAX_VIEWS], share[ELFM_MAX_VIEWS];
+  *m = *c;
+  for (size_t f = 0; f < s->n; f++) z[f] = NAN;
+  double ss = 0;
+  size_t nss = 0;
+  for (int it = 0; it < SWEEP_ITERATIONS; it++) {
+    const double r = sweep_radius_px[it];
+    int frames = 0;
+    for (size_t f = 0; f < s->n; f++) {
+      z[f] = frame_z(s, m, tells, f, z[f], r, tmp);
+      frames += !isnan(z[f]);
+    }
+    s->fit.frames_used = frames;
+    ss = 0;
+    nss = 0;
+    for (int v = 0; v < nv; v++) {
+      const elfm_view *w = &m->views[v];
+      size_t n = 0, told = 0;
+      for (size_t f = 0; f < s->n; f++) {
+        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
+        if (isnan(pu) || isnan(z[f])) continue;
+        told++;
+        const double eu = pu - w->dx_px_per_um * z[f], ew = pw - w->dy_px_per_um * z[f];
+        if (!isinf(r) && hypot(eu - w->cx_px, ew - w->cy_px) > r) continue;
+        tu[n] = eu;
+        tw[n] = ew;
+        n++;
+      }
+      s->fit.images[v] = (int)n;
+      use[v] = n >= (size_t)min_images;
+      share[v] = told > 0 ? (double)n / (double)told : NAN; /* the last step's is kept */
+      if (!use[v]) continue;
+      m->views[v].cx_px = median_d(tu, n);
+      m->views[v].cy_px = median_d(tw, n);
+    }
+    /* the last step's fit: RMS distance of the images kept from the model */
+    for (int v = 0; v < nv && it == SWEEP_ITERATIONS - 1; v++)
+      for (size_t f = 0; use[v] && f < s->n; f++) {
+        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
+        if (isnan(pu) || isnan(z[f])) continue;
+        const elfm_view *w = &m->views[v];
+        const double d = hypot(pu - w->cx_px - w->dx_px_per_um * z[f], pw - w->cy_px - w->dy_px_per_um * z[f]);
+        if (d > r) continue;
+        ss += d * d;
+        nss++;
+      }
+  }
+  s->fit.rms_px = nss > 0 ? sqrt(ss / (double)nss) : NAN;
+  /* the views' median share of spots near the model: several objects
+   * taken for one fit none of them */
+  size_t ns = 0;
+  for (int v = 0; v < nv; v++)
+    if (tells[v] && !isnan(share[v])) tmp[ns++] = share[v];
+  s->fit.agree = ns > 0 ? median_d(tmp, ns) : 0;
+}
+
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
                                    int *n_moved, elfm_error *err)
 {
@@ -305,66 +436,27 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   for (int v = 0; v < nv; v++)
     tells[v] = hypot(c->views[v].dx_px_per_um, c->views[v].dy_px_per_um) > SWEEP_D_MIN_FRAC * dmax;
   /* the centres as they go, on a copy: c keeps the start until the end */
-  elfm_calib m = *c;
-  for (size_t f = 0; f < s->n; f++) z[f] = NAN;
-  double tmp[ELFM_MAX_VIEWS], share[ELFM_MAX_VIEWS];
+  elfm_calib m;
   int use[ELFM_MAX_VIEWS] = {0};
-  double ss = 0;
-  size_t nss = 0;
-  for (int it = 0; it < SWEEP_ITERATIONS; it++) {
-    const double r = sweep_radius_px[it];
-    int frames = 0;
-    for (size_t f = 0; f < s->n; f++) {
-      z[f] = frame_z(s, &m, tells, f, z[f], r, tmp);
-      frames += !isnan(z[f]);
+  sweep_fit(s, c, tells, min_images, z, tu, tw, &m, use);
+  s->fit.objects = 1;
+  s->fit.pattern_share = s->fit.depth_um = NAN;
+  if (!(s->fit.agree >= SWEEP_AGREE)) {
+    /* not one object: several side by side, moving together? Their
+     * pattern's first object's images in place of the brightest spots */
+    const int k = elfm_calib_sweep_pattern(c, s->n, tells, s->n_spots, s->strength, s->spots, s->pu, s->pw,
+                                           &s->fit.pattern_share, &s->fit.depth_um);
+    s->fit.objects = 0;
+    if (k >= 2 && s->fit.pattern_share >= SWEEP_AGREE) {
+      sweep_fit(s, c, tells, min_images, z, tu, tw, &m, use);
+      s->fit.objects = k;
     }
-    s->fit.frames_used = frames;
-    ss = 0;
-    nss = 0;
-    for (int v = 0; v < nv; v++) {
-      const elfm_view *w = &m.views[v];
-      size_t n = 0, told = 0;
-      for (size_t f = 0; f < s->n; f++) {
-        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
-        if (isnan(pu) || isnan(z[f])) continue;
-        told++;
-        const double eu = pu - w->dx_px_per_um * z[f], ew = pw - w->dy_px_per_um * z[f];
-        if (!isinf(r) && hypot(eu - w->cx_px, ew - w->cy_px) > r) continue;
-        tu[n] = eu;
-        tw[n] = ew;
-        n++;
-      }
-      s->fit.images[v] = (int)n;
-      use[v] = n >= (size_t)min_images;
-      share[v] = told > 0 ? (double)n / (double)told : NAN; /* the last step's is kept */
-      if (!use[v]) continue;
-      m.views[v].cx_px = median_d(tu, n);
-      m.views[v].cy_px = median_d(tw, n);
-    }
-    /* the last step's fit: RMS distance of the images kept from the model */
-    for (int v = 0; v < nv && it == SWEEP_ITERATIONS - 1; v++)
-      for (size_t f = 0; use[v] && f < s->n; f++) {
-        const double pu = s->pu[f * (size_t)nv + (size_t)v], pw = s->pw[f * (size_t)nv + (size_t)v];
-        if (isnan(pu) || isnan(z[f])) continue;
-        const elfm_view *w = &m.views[v];
-        const double d = hypot(pu - w->cx_px - w->dx_px_per_um * z[f], pw - w->cy_px - w->dy_px_per_um * z[f]);
-        if (d > r) continue;
-        ss += d * d;
-        nss++;
-      }
   }
   sweep_speed(s, z, tu);
   free(z);
   free(tu);
   free(tw);
-  s->fit.rms_px = nss > 0 ? sqrt(ss / (double)nss) : NAN;
-  /* the views' median share of spots near the model: several objects
-   * taken for one fit none of them */
-  size_t ns = 0;
-  for (int v = 0; v < nv; v++)
-    if (tells[v] && !isnan(share[v])) tmp[ns++] = share[v];
-  s->fit.agree = ns > 0 ? median_d(tmp, ns) : 0;
-  if (!(s->fit.agree >= SWEEP_AGREE))
+  if (!(s->fit.agree >= SWEEP_AGREE) || s->fit.objects == 0)
     for (int v = 0; v < nv; v++) use[v] = 0;
   /* the moves, cleared of the gauge; views without enough images on the
    * grid of the others */

@@ -163,38 +163,56 @@ size_t elfm_calib_refine_votes(const elfm_calib_refine *r);
 elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, double *shift_px,
                                           int *n_moved, elfm_error *err);
 
-/* ---- the views' centres from one object swept through z (calib_sweep.c) ----
+/* ---- the views' centres from objects swept through z (calib_sweep.c) ----
  * For centres too far off for the coarse step's refocused peaks (a
  * calibration from the optics alone) on a recording of one bright object
- * moved along the axis (a bead on a piezo): each view is looked at on its
- * own. spots finds, in each view's crop about the centres given to create,
- * the frame's brightest 3 x 3 spot of positive values (its sum less its
- * brightest pixel: a hot pixel alone is no spot) and its 5 x 5 centroid
- * (at_px, 2 per view, NaN where the crop is empty), and how far it stands
- * out: its strength over the next spot's 5 px or more away (contrast,
- * infinite with no other). add keeps a frame's spots with a contrast of
- * ELFM_CALIB_SWEEP_CONTRAST or more (0 when max_frames are held; t_us: the
- * frame's time). apply fits image = centre + the object's place +
- * disparity x its depth in each frame (the disparities kept), moves every
- * view with min_images images near that model to its fitted centre
- * (cleared of the gauge, as refine_apply; *n_moved says how many), sets
- * the others, and those that do not tell the depth (the central view), on
- * the grid of those when 6 or more moved, and empties the collector. When
- * the views' median share of spots near the model is under 0.5 (several
- * objects taken for one), nothing moves. result gives the last apply's fit
+ * moved along the axis (a bead on a piezo), or of several side by side
+ * moved together (beads on a slide): each view is looked at on its own.
+ * spots finds, in each view's crop about the centres given to create, the
+ * frame's brightest 3 x 3 spot of positive values (its sum less its
+ * brightest pixel, strength: a hot pixel alone is no spot) and its 5 x 5
+ * centroid (at_px, 2 per view, NaN where the crop is empty), how far it
+ * stands out: its strength over the next spot's 5 px or more away
+ * (contrast, infinite with no other); and the view's spots down to 0.3 of
+ * the brightest, none within 4 px of a brighter one, the brightest
+ * ELFM_CALIB_SWEEP_MAX_SPOTS (n_spots, spot_px); ELFM_ERR_NOMEM when it
+ * found no memory for its list. add keeps a frame's spots, the brightest
+ * where its contrast is ELFM_CALIB_SWEEP_CONTRAST or more (0 when
+ * max_frames are held, ~1.9 KB each on 25 views; t_us: the frame's time).
+ * apply fits image = centre + the object's place + disparity x its depth
+ * in each frame (the disparities kept), moves every view with min_images
+ * images near that model to its fitted centre (cleared of the gauge, as
+ * refine_apply; *n_moved says how many), sets the others, and those that
+ * do not tell the depth (the central view), on the grid of those when 6 or
+ * more moved, and empties the collector. When the views' median share of
+ * brightest spots near the model is under 0.5 (not one object), the spots
+ * are matched to one pattern of objects each at its own place and depth,
+ * moved in each frame by the view's translation, and the translations
+ * fitted instead (recon/calib_sweep_pattern.c); when under half of the
+ * frames match it (objects that move each their own way), or its fit too
+ * is under 0.5, nothing moves. result gives the last apply's fit
  * (elfm_calib_sweep_fit), with how fast the object moved in z by the
  * disparities as they are (a piezo's known speed gives their scale, which
  * no recording of unknown motion can: docs/recon.md "What it still cannot
  * see"). spots is safe on many threads at once (it reads the collector's
- * map of views only). docs/recon.md "A sweep's views, frame by frame". */
+ * map of views only). docs/recon.md "A sweep's views, frame by frame",
+ * "Several beads swept together". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
 typedef struct elfm_calib_sweep elfm_calib_sweep;
 elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
                                     elfm_error *err);
 void elfm_calib_sweep_free(elfm_calib_sweep *s);
-void elfm_calib_sweep_spots(const elfm_calib_sweep *s, const struct elfm_frame *f, double *at_px,
-                            double *contrast);
-int elfm_calib_sweep_add(elfm_calib_sweep *s, int64_t t_us, const double *at_px, const double *contrast);
+#define ELFM_CALIB_SWEEP_MAX_SPOTS 8
+typedef struct elfm_calib_sweep_image {
+  double at_px[2 * ELFM_MAX_VIEWS];  /* each view's brightest spot, NaN: none */
+  double strength[ELFM_MAX_VIEWS];   /* its 3 x 3 sum less its brightest pixel */
+  double contrast[ELFM_MAX_VIEWS];   /* its strength over its rival's */
+  int n_spots[ELFM_MAX_VIEWS];       /* each view's spots, brightest first: */
+  float spot_px[ELFM_MAX_VIEWS][ELFM_CALIB_SWEEP_MAX_SPOTS][2];
+} elfm_calib_sweep_image;
+elfm_status elfm_calib_sweep_spots(const elfm_calib_sweep *s, const struct elfm_frame *f,
+                                   elfm_calib_sweep_image *img, elfm_error *err);
+int elfm_calib_sweep_add(elfm_calib_sweep *s, int64_t t_us, const elfm_calib_sweep_image *img);
 size_t elfm_calib_sweep_frames(const elfm_calib_sweep *s);
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
                                    int *n_moved, elfm_error *err);
@@ -204,6 +222,9 @@ typedef struct elfm_calib_sweep_fit {
   int placed[ELFM_MAX_VIEWS];   /* per view, set on the grid of the others */
   double rms_px;                /* the images' RMS distance from the model */
   double agree;                 /* the views' median share of spots near the model */
+  int objects;                  /* 1, or the objects of the pattern fitted (0: none) */
+  double pattern_share;         /* several: the views' median share of frames placed, */
+  double depth_um;              /* and how far apart in depth they lie */
   /* |dz/dt| over 40 ms spans within the middle half of the fitted depths:
    * median and middle half; NaN with fewer than 20 spans */
   double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;

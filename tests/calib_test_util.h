@@ -80,8 +80,6 @@ static inline double centre_error(const elfm_calib *a, const elfm_calib *b)
   return centre_errors(a, b, NULL);
 }
 
-/* The paper's system on the EVK4 (elfm_optics_default, 1280 x 720, 4.86
- * um pixels) into *c; 0 when that failed (counted by CHECK_OK). */
 /* The central view (i = j = 0), -1 when there is none */
 static inline int centre_view(const elfm_calib *c)
 {
@@ -89,6 +87,27 @@ static inline int centre_view(const elfm_calib *c)
     if (c->views[v].i == 0 && c->views[v].j == 0) return v;
   return -1;
 }
+
+/* value into pixel (x, y) of a frame drawn by hand, listed (the frame's
+ * list is what the sweep's spots read) */
+static inline void frame_put(elfm_frame *f, long x, long y, float value)
+{
+  if (x < 0 || y < 0 || x >= f->w || y >= f->h) return;
+  const size_t i = (size_t)y * (size_t)f->w + (size_t)x;
+  if (f->data[i] == 0) f->idx[f->nnz++] = (uint32_t)i;
+  f->data[i] += value;
+}
+
+/* a Gaussian spot (sigma 1 px, peak `peak`) centred at (u, w) */
+static inline void frame_spot(elfm_frame *f, double u, double w, double peak)
+{
+  for (long y = lround(w) - 3; y <= lround(w) + 3; y++)
+    for (long x = lround(u) - 3; x <= lround(u) + 3; x++)
+      frame_put(f, x, y, (float)(peak * exp(-0.5 * ((x - u) * (x - u) + (y - w) * (y - w)))));
+}
+
+/* The paper's system on the EVK4 (elfm_optics_default, 1280 x 720, 4.86
+ * um pixels) into *c; 0 when that failed (counted by CHECK_OK). */
 
 static inline int calib_test_default(elfm_calib *c)
 {

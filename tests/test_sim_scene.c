@@ -287,6 +287,26 @@ int main(void)
   }
   elfm_scene_free(s);
   elfm_scene_free(NULL);
+  /* A z sweep's beads on a tilted slide (motion.tilt_deg, 0 in the
+   * built-in): side by side along x, each x tan(tilt) deeper, all moving
+   * together; beyond 45 degrees refused naming the key */
+  elfm_scene *zs = NULL;
+  CHECK_OK(elfm_scene_load("zsweep", &zs, &err), &err);
+  if (zs) {
+    CHECK_OK(elfm_scene_set_param(zs, "objects.count=5", &err), &err);
+    CHECK_OK(elfm_scene_set_param(zs, "motion.tilt_deg=20", &err), &err);
+    for (int k = 0; k < 5; k++) {
+      elfm_truth t0, t1;
+      elfm_scene_truth(zs, k, 0, &t0);
+      elfm_scene_truth(zs, k, 100000, &t1);
+      CHECK_NEAR(t0.x_um, 10.0 * (k - 2), 1e-9);
+      CHECK_NEAR(t0.z_um, -90 + t0.x_um * tan(20 * M_PI / 180), 1e-9);
+      CHECK_NEAR(t1.z_um - t0.z_um, 20, 1e-9); /* 0.2 mm/s for 100 ms */
+    }
+    CHECK(elfm_scene_set_param(zs, "motion.tilt_deg=50", &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "tilt_deg") != NULL);
+    elfm_scene_free(zs);
+  }
   test_placement_uniform();
   return check_report();
 }
