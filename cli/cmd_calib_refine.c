@@ -558,19 +558,24 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   elfm_calib_sweep_free(c->sweep);
   c->sweep = NULL;
   if (st != ELFM_OK) return cli_fail(C, err);
-  if (moved == 0) {
-    char several[160] = "";
-    if (!isnan(fit.pattern_share))
-      snprintf(several, sizeof several, "; as several objects side by side, %.2f of the frames matched "
-               "their pattern, 0.5 or more needed", fit.pattern_share);
-    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to "
-                       "fit the centres to (%d frames of %zu told the depth; the views' median share of "
-                       "their spots near the fit %.2f, 0.5 or more needed, and %d images in a view%s): is "
-                       "one object, or several side by side, swept together through z in "
-                       "%" PRId64 "..%" PRId64 " us?",
-                       o->events, fit.frames_used, frames, fit.agree, o->min_points, several,
+  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL)
+    return cli_message(C, CLI_FAIL, "%s: several objects in the views (a median %.2f of the frames hold two "
+                       "spots or more), and they do not move as one pattern: %.2f of the frames matched it, "
+                       "0.5 or more needed. Is one object, or several side by side, swept together through z "
+                       "in %" PRId64 "..%" PRId64 " us?", o->events, fit.several_share, fit.pattern_share,
                        o->recon.from_us, o->recon.to_us);
-  }
+  if (moved == 0 && fit.off_grid_px > ELFM_CALIB_SWEEP_OFF_GRID_PX && fit.off_grid_view >= 0)
+    return cli_message(C, CLI_FAIL, "%s: the centres fitted to the sweep's images lie off the lenslets' grid: "
+                       "view (%+d, %+d) %.1f px from the grid of the fitted views (%g at most). Objects taken "
+                       "for each other (%d side by side)? A sweep of fewer objects, or of one, fits",
+                       o->events, cal->views[fit.off_grid_view].i, cal->views[fit.off_grid_view].j,
+                       fit.off_grid_px, ELFM_CALIB_SWEEP_OFF_GRID_PX, fit.objects);
+  if (moved == 0)
+    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to fit the centres to "
+                       "(%d frames of %zu told the depth; the views' median share of their spots near the fit "
+                       "%.2f, 0.5 or more needed, and %d images in a view): is one object, or several side by "
+                       "side, swept together through z in %" PRId64 "..%" PRId64 " us?", o->events,
+                       fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us, o->recon.to_us);
   double rms, worst;
   add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {
@@ -582,8 +587,9 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
                "pattern matched in a median %.2f of the frames)", fit.objects, fit.depth_um, fit.pattern_share);
     fprintf(stderr, "calib refine: the sweep's views, frame by frame%s: %d of %zu frames told the depth; "
             "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
-            "near it), %d set on the others' grid; moves RMS %.3f px, largest %.3f px\n", several,
-            fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, n_placed, rms, worst);
+            "near it, within %.2f px of their grid), %d set on the others' grid; moves RMS %.3f px, largest "
+            "%.3f px\n", several, fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, fit.off_grid_px,
+            n_placed, rms, worst);
   }
   return sweep_scale(cal, o, &fit);
 }

@@ -25,6 +25,11 @@ void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, doubl
  * moved, when those views do not span the grid. */
 int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px);
 
+/* The largest distance, px, of a view with use[v] from the lenslets' grid
+ * (cx, cy affine in (i, j)) fitted to those views, and that view into
+ * *worst; -1 when they do not span the grid. */
+double elfm_calib_off_grid(const elfm_calib *c, const int *use, int *worst);
+
 /* Several objects swept through z together (calib_sweep_pattern.c): each
  * view's spots in each frame (n_spots [nf][nv], spots [nf][nv][MAX][2],
  * the brightest's strength [nf][nv])
@@ -32,7 +37,7 @@ int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, doub
  * ([nf][nv], NaN where not placed). Returns the pattern's objects (0: no
  * pattern of two or more, pu and pw all NaN), and in *share the median
  * over the views with tells[v] of the share of their frames with two spots
- * or more that were placed, and in *depth_um how far apart in depth its
+ * or more that were placed (0 for a view with none), and in *depth_um how far apart in depth its
  * objects lie (the deepest's depth less the shallowest's). */
 int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, const uint8_t *n_spots,
                              const float *strength, const float *spots, float *pu, float *pw, double *share,

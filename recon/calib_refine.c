@@ -203,6 +203,24 @@ static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3]
   return 1;
 }
 
+double elfm_calib_off_grid(const elfm_calib *c, const int *use, int *worst)
+{
+  double gx[3], gy[3], off = -1;
+  *worst = -1;
+  if (!grid_fit(c, use, 0, gx) || !grid_fit(c, use, 1, gy)) return -1;
+  for (int v = 0; v < c->n_views; v++) {
+    if (!use[v]) continue;
+    const elfm_view *w = &c->views[v];
+    const double d = hypot(w->cx_px - (gx[0] + gx[1] * w->i + gx[2] * w->j),
+                           w->cy_px - (gy[0] + gy[1] * w->i + gy[2] * w->j));
+    if (d > off) {
+      off = d;
+      *worst = v;
+    }
+  }
+  return off;
+}
+
 int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px)
 {
   double gx[3], gy[3];

@@ -47,6 +47,13 @@
 #define SWEEP_RIVAL_PX 5
 /* Several objects: a view's spots down to this share of its brightest */
 #define SWEEP_SPOT_FRAC 0.3
+/* Several objects in the views, not moving as one pattern, when the views'
+ * median share of frames with two spots or more is this or more: one bead
+ * swept, 0.18-0.24 (zsweep seeds 1-4, the noise's spots where the bead is
+ * faint); two to five beads, 0.84-0.93, and a flow 1.0. The brightest
+ * spots of two beads fitted one in most views and the other in a few, 9 px
+ * off, at a median 0.76 of the spots near the fit. */
+#define SWEEP_SEVERAL ELFM_CALIB_SWEEP_SEVERAL
 /* The alternation's steps and their outlier radii, px (the first: none) */
 #define SWEEP_ITERATIONS 8
 static const double sweep_radius_px[SWEEP_ITERATIONS] = {INFINITY, 8, 4, 2, 1.5, 1.5, 1.5, 1.5};
@@ -414,6 +421,24 @@ static void sweep_fit(elfm_calib_sweep *s, const elfm_calib *c, const int *tells
   s->fit.agree = ns > 0 ? median_d(tmp, ns) : 0;
 }
 
+/* The views' (those with tells[v]) median share of their frames with a
+ * spot that hold two or more */
+static double several_share(const elfm_calib_sweep *s, const int *tells)
+{
+  double tmp[ELFM_MAX_VIEWS];
+  size_t n = 0;
+  for (int v = 0; v < s->nv; v++) {
+    size_t one = 0, two = 0;
+    for (size_t f = 0; tells[v] && f < s->n; f++) {
+      const int k = s->n_spots[f * (size_t)s->nv + (size_t)v];
+      one += k >= 1;
+      two += k >= 2;
+    }
+    if (one > 0) tmp[n++] = (double)two / (double)one;
+  }
+  return n > 0 ? median_d(tmp, n) : 0;
+}
+
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,
                                    int *n_moved, elfm_error *err)
 {
@@ -435,28 +460,54 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   int tells[ELFM_MAX_VIEWS];
   for (int v = 0; v < nv; v++)
     tells[v] = hypot(c->views[v].dx_px_per_um, c->views[v].dy_px_per_um) > SWEEP_D_MIN_FRAC * dmax;
+  /* Several objects side by side, moving together? Then their pattern's
+   * translations (calib_sweep_pattern.c) in place of the brightest spots,
+   * which are now one object's image, now another's: two beads 10 um apart
+   * fitted one object in most views and the other in a few, 9 px off, at a
+   * median 0.5 or more of the spots near the fit. One object makes no
+   * pattern of two, and its brightest spots are fitted. */
+  float *qu = malloc(s->cap * (size_t)nv * sizeof *qu), *qw = malloc(s->cap * (size_t)nv * sizeof *qw);
+  if (!qu || !qw) {
+    free(qu);
+    free(qw);
+    free(z);
+    free(tu);
+    free(tw);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "calib sweep: out of memory");
+  }
+  s->fit.objects = elfm_calib_sweep_pattern(c, s->n, tells, s->n_spots, s->strength, s->spots, qu, qw,
+                                            &s->fit.pattern_share, &s->fit.depth_um);
+  if (s->fit.objects >= 2 && s->fit.pattern_share >= SWEEP_AGREE) {
+    float *t = s->pu;
+    s->pu = qu;
+    qu = t;
+    t = s->pw;
+    s->pw = qw;
+    qw = t;
+  } else {
+    s->fit.objects = 1;
+  }
+  free(qu);
+  free(qw);
+  s->fit.several_share = several_share(s, tells);
   /* the centres as they go, on a copy: c keeps the start until the end */
   elfm_calib m;
   int use[ELFM_MAX_VIEWS] = {0};
   sweep_fit(s, c, tells, min_images, z, tu, tw, &m, use);
-  s->fit.objects = 1;
-  s->fit.pattern_share = s->fit.depth_um = NAN;
-  if (!(s->fit.agree >= SWEEP_AGREE)) {
-    /* not one object: several side by side, moving together? Their
-     * pattern's first object's images in place of the brightest spots */
-    const int k = elfm_calib_sweep_pattern(c, s->n, tells, s->n_spots, s->strength, s->spots, s->pu, s->pw,
-                                           &s->fit.pattern_share, &s->fit.depth_um);
-    s->fit.objects = 0;
-    if (k >= 2 && s->fit.pattern_share >= SWEEP_AGREE) {
-      sweep_fit(s, c, tells, min_images, z, tu, tw, &m, use);
-      s->fit.objects = k;
-    }
-  }
   sweep_speed(s, z, tu);
   free(z);
   free(tu);
   free(tw);
-  if (!(s->fit.agree >= SWEEP_AGREE) || s->fit.objects == 0)
+  /* Centres fitted to another object's images in some views (beads in a
+   * row taken for their neighbours, 11 px apart) still fit their images;
+   * they lie off the lenslets' grid, which a calibration does not (the
+   * optics' is affine in (i, j); a lens array's pitch errs by far less
+   * than a pixel) */
+  int on_grid[ELFM_MAX_VIEWS];
+  for (int v = 0; v < nv; v++) on_grid[v] = use[v] && tells[v];
+  s->fit.off_grid_px = elfm_calib_off_grid(&m, on_grid, &s->fit.off_grid_view);
+  if (!(s->fit.agree >= SWEEP_AGREE) || (s->fit.objects == 1 && s->fit.several_share >= SWEEP_SEVERAL) ||
+      s->fit.off_grid_px > ELFM_CALIB_SWEEP_OFF_GRID_PX)
     for (int v = 0; v < nv; v++) use[v] = 0;
   /* the moves, cleared of the gauge; views without enough images on the
    * grid of the others */

@@ -58,8 +58,9 @@
  * most of P's objects agree on (each matched to a spot within
  * PATTERN_TOL_PX of it moved), averaged over them, into t; the objects
  * matched, or 0 when fewer than two agree, or fewer than half of the
- * spots or of P's objects (whichever are fewer), or another translation
- * has as many */
+ * spots or of P's objects (whichever are fewer: six beads each moving its
+ * own way matched 0.36 of their frames with two enough, none so), or
+ * another translation has as many */
 static int translate(const float (*S)[2], int ns, const double (*P)[2], int np, double t[2])
 {
   int best = 0, ambiguous = 0;
@@ -313,8 +314,9 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
   }
   double tmp[ELFM_MAX_VIEWS];
   int n = 0;
+  /* a view with no frame of two spots holds one object (or none): 0 */
   for (int v = 0; v < nv; v++)
-    if (tells[v] && !isnan(shares[v])) tmp[n++] = shares[v];
+    if (tells[v]) tmp[n++] = isnan(shares[v]) ? 0 : shares[v];
   /* the median (a handful of values) */
   for (int i = 1; i < n; i++)
     for (int j = i; j > 0 && tmp[j - 1] > tmp[j]; j--) {

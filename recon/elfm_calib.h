@@ -190,7 +190,13 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * moved in each frame by the view's translation, and the translations
  * fitted instead (recon/calib_sweep_pattern.c); when under half of the
  * frames match it (objects that move each their own way), or its fit too
- * is under 0.5, nothing moves. result gives the last apply's fit
+ * is under 0.5, nothing moves; nor when no pattern is matched and the
+ * views' median share of frames with two spots or more is
+ * ELFM_CALIB_SWEEP_SEVERAL or more (several objects: one object's
+ * brightest spots are fitted only where there is one), nor when a fitted
+ * view lies more than ELFM_CALIB_SWEEP_OFF_GRID_PX from the lenslets'
+ * grid (cx, cy affine in (i, j)) of the fitted views (objects taken for
+ * each other). result gives the last apply's fit
  * (elfm_calib_sweep_fit), with how fast the object moved in z by the
  * disparities as they are (a piezo's known speed gives their scale, which
  * no recording of unknown motion can: docs/recon.md "What it still cannot
@@ -198,6 +204,8 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * map of views only). docs/recon.md "A sweep's views, frame by frame",
  * "Several beads swept together". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
+#define ELFM_CALIB_SWEEP_SEVERAL 0.5
+#define ELFM_CALIB_SWEEP_OFF_GRID_PX 3.0
 typedef struct elfm_calib_sweep elfm_calib_sweep;
 elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
                                     elfm_error *err);
@@ -222,9 +230,12 @@ typedef struct elfm_calib_sweep_fit {
   int placed[ELFM_MAX_VIEWS];   /* per view, set on the grid of the others */
   double rms_px;                /* the images' RMS distance from the model */
   double agree;                 /* the views' median share of spots near the model */
-  int objects;                  /* 1, or the objects of the pattern fitted (0: none) */
+  int objects;                  /* 1 (the brightest spots), or the pattern's objects */
   double pattern_share;         /* several: the views' median share of frames placed, */
   double depth_um;              /* and how far apart in depth they lie */
+  double several_share;         /* the views' median share of frames with 2+ spots */
+  double off_grid_px;           /* the fitted views' largest distance from their grid */
+  int off_grid_view;            /* ... that view (-1: they span no grid) */
   /* |dz/dt| over 40 ms spans within the middle half of the fitted depths:
    * median and middle half; NaN with fewer than 20 spans */
   double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;

@@ -163,7 +163,7 @@ static void test_by_hand(const elfm_calib *truth)
   elfm_calib_sweep_result(s, &fit);
   printf("two beads swept opposite ways: a median %.2f of the spots near one fit, %.2f of the frames matched "
          "as several\n", fit.agree, fit.pattern_share);
-  CHECK_EQ_INT(fit.objects, 0);
+  CHECK_EQ_INT(fit.objects, 1);
   CHECK_MSG(fit.pattern_share < 0.5, "two beads swept opposite ways: %.2f of the frames matched",
             fit.pattern_share);
   elfm_calib_sweep_free(s);
@@ -288,8 +288,18 @@ static void test_cli(void)
   snprintf(args, sizeof args, "calib refine --sweep --calib %s/fl/calib.json --events %s/fl/events.raw "
            "--out %s/f.json", dir, dir, dir);
   CHECK_EQ_INT(cli_run(dir, args), 1);
-  CHECK(cli_file_has(dir, "err.txt", "is one object, or several side by side, swept together through z") &&
-        cli_file_has(dir, "err.txt", "of the frames matched their pattern, 0.5 or more needed"));
+  CHECK(cli_file_has(dir, "err.txt", "one object, or several side by side, swept together through z") &&
+        cli_file_has(dir, "err.txt", "several objects in the views (a median 1.00 of the frames hold two") &&
+        cli_file_has(dir, "err.txt", "of the frames matched it, 0.5 or more needed"));
+  /* as several objects: the beads of one frame match another frame's by
+   * chance in a few views (0.08 measured) */
+  char text[4096];
+  const char *at = NULL;
+  double share = 1;
+  if (cli_read_file(dir, "err.txt", text, sizeof text) &&
+      (at = strstr(text, "do not move as one pattern: ")) != NULL)
+    share = atof(at + strlen("do not move as one pattern: "));
+  CHECK_MSG(at && share < 0.2, "a flow's frames matched a pattern in %.2f", share);
   snprintf(p, sizeof p, "%s/f.json", dir);
   CHECK_MSG(access(p, F_OK) != 0, "a refused sweep wrote %s", p);
 

@@ -10,7 +10,11 @@
  *    found, their depths' spread measured to 0.3 um, every view within
  *    0.08 px of the truth;
  *  - six beads each moving through z its own way (a flow, not a sweep):
- *    refused, nothing moves;
+ *    refused, nothing moves; two beads swept opposite ways, each the
+ *    brighter in some views (one object's fit would take each view's
+ *    brighter bead, right in some, ~30 px off in others): refused; one
+ *    bead, and in one view a brighter spot beside its image moving with
+ *    it: that view fits the spot, off the lenslets' grid: refused;
  *  - `eventlfm calib refine --sweep` on five simulated beads 10 um apart on
  *    a slide tilted by 20 degrees (zsweep, objects.count=5): fitted as one
  *    pattern within 0.45 px, the beads' 14.6 um of depth said. */
@@ -32,19 +36,30 @@ static const double bead_um[N_BEADS][2] = {{0, 0}, {14, 3}, {-12, 9}, {6, -15}, 
 /* their depths against the first's, um, on an uneven slide */
 static const double bead_dz_um[N_BEADS] = {0, 4, -3, 6, -5, 2};
 
+enum { TOGETHER, APART, TWO_OPPOSITE, DECOY };
+#define DECOY_VIEW 6
+
 /* Frame k: the beads at z from -60 to +60 um, each at depth z + dz[b]
- * (scaled by `uneven`), or with `apart` each at its own speed and start */
-static void draw(elfm_frame *f, const elfm_calib *truth, int k, double uneven, int apart, uint32_t *seed)
+ * (scaled by `uneven`); APART: each at its own speed and start;
+ * TWO_OPPOSITE: the first two beads alone, swept opposite ways, the first
+ * 2.5 x the second in views 0-17, the second 2.5 x the first in the rest;
+ * DECOY: the first bead alone, and in view DECOY_VIEW a spot 3 x as bright
+ * 7 px beside its image, moving with it */
+static void draw(elfm_frame *f, const elfm_calib *truth, int k, double uneven, int mode, uint32_t *seed)
 {
   elfm_frame_clear(f);
   const int c0 = centre_view(truth);
-  for (int b = 0; b < N_BEADS; b++) {
+  for (int b = 0; b < (mode == TWO_OPPOSITE ? 2 : mode == DECOY ? 1 : N_BEADS); b++) {
     const double z0 = -60 + 120.0 * k / (N_FRAMES - 1) + uneven * bead_dz_um[b];
-    const double z = apart ? -50 + 100.0 * fmod(0.37 * b + (0.5 + 0.3 * b) * k / N_FRAMES, 1.0) : z0;
+    const double z = mode == APART          ? -50 + 100.0 * fmod(0.37 * b + (0.5 + 0.3 * b) * k / N_FRAMES, 1.0)
+                     : mode == TWO_OPPOSITE && b == 1 ? -z0
+                                                      : z0;
     for (int v = 0; v < truth->n_views; v++) {
       double u, w;
       elfm_calib_project(truth, v, bead_um[b][0], bead_um[b][1], z, &u, &w);
-      const double peak = 50 * (0.7 + 0.6 * lcg(seed));
+      double peak = 50 * (0.7 + 0.6 * lcg(seed));
+      if (mode == TWO_OPPOSITE) peak = (b == (v >= 18)) ? 50 : 20;
+      if (mode == DECOY && v == DECOY_VIEW) frame_spot(f, u + 7, w, 3 * peak);
       if (v != c0) frame_spot(f, u, w, peak);
       else if (k % 5 == 0) frame_spot(f, u + 0.7, w, 8);
     }
@@ -57,7 +72,7 @@ static void draw(elfm_frame *f, const elfm_calib *truth, int k, double uneven, i
 
 /* The frames' spots collected and applied to c; the fit into *fit; the
  * views moved */
-static int sweep(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, double uneven, int apart,
+static int sweep(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, double uneven, int mode,
                  elfm_calib_sweep_fit *fit)
 {
   elfm_error err;
@@ -67,7 +82,7 @@ static int sweep(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, double u
   uint32_t seed = 9;
   static elfm_calib_sweep_image img;
   for (int k = 0; k < N_FRAMES; k++) {
-    draw(f, truth, k, uneven, apart, &seed);
+    draw(f, truth, k, uneven, mode, &seed);
     CHECK_OK(elfm_calib_sweep_spots(s, f, &img, &err), &err);
     CHECK(elfm_calib_sweep_add(s, 1000 * (int64_t)k, &img));
   }
@@ -90,7 +105,7 @@ static void test_by_hand(const elfm_calib *truth)
   elfm_calib_sweep_fit fit;
   for (int uneven = 0; uneven < 2; uneven++) {
     elfm_calib c = start;
-    const int moved = sweep(truth, &c, f, uneven, 0, &fit);
+    const int moved = sweep(truth, &c, f, uneven, TOGETHER, &fit);
     const double after = centre_error(&c, truth);
     printf("six beads swept together%s: centres up to %.2f px off -> %.4f px; %d objects, %.2f um apart in "
            "depth, the pattern matched in %.2f of the frames\n", uneven ? " at depths 11 um apart" : "", before,
@@ -100,14 +115,42 @@ static void test_by_hand(const elfm_calib *truth)
     CHECK_MSG(fit.pattern_share > 0.8, "the pattern matched in %.2f of the frames", fit.pattern_share);
     CHECK_MSG(before > 5 && after < 0.08, "centres up to %.3f px off after the sweep", after);
     CHECK_EQ_INT(moved, truth->n_views - 1);
+    CHECK_MSG(fit.off_grid_px >= 0 && fit.off_grid_px < 0.2, "the views %.3f px off their grid", fit.off_grid_px);
   }
-  /* each its own way: no pattern */
+  /* each its own way: no pattern (0.00 of the frames matched it; 0.36
+   * where two spots of six that agree were a match) */
   elfm_calib c = start;
-  const int moved = sweep(truth, &c, f, 0, 1, &fit);
+  int moved = sweep(truth, &c, f, 0, APART, &fit);
   printf("six beads each moving its own way: %.2f of the frames matched a pattern\n", fit.pattern_share);
   CHECK_EQ_INT(moved, 0);
-  CHECK_EQ_INT(fit.objects, 0);
-  CHECK(fit.pattern_share < 0.5);
+  CHECK_EQ_INT(fit.objects, 1);
+  CHECK_MSG(fit.pattern_share < 0.2, "%.2f of the frames matched", fit.pattern_share);
+  CHECK(memcmp(&c, &start, sizeof c) == 0);
+  /* two beads swept opposite ways, each the brighter in some views: no
+   * pattern, and each view's brightest spot stands out (2.5 x the other
+   * bead's), so one object fits every view, 7 of them on the other bead,
+   * ~30 px off. Two spots in every frame: refused */
+  c = start;
+  moved = sweep(truth, &c, f, 0, TWO_OPPOSITE, &fit);
+  printf("two beads swept opposite ways, each the brighter in some views: two spots or more in %.2f of the "
+         "frames, a median %.2f of the brightest near one object's fit\n", fit.several_share, fit.agree);
+  CHECK_MSG(fit.agree >= 0.5, "the brightest spots %.2f near one fit", fit.agree);
+  CHECK(fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL && fit.objects == 1);
+  CHECK_EQ_INT(moved, 0);
+  CHECK(memcmp(&c, &start, sizeof c) == 0);
+  /* one view fitted to another object's images (as a row of beads taken
+   * for their neighbours: the images fit, the view does not lie on the
+   * lenslets' grid): refused, naming the view */
+  c = start;
+  moved = sweep(truth, &c, f, 0, DECOY, &fit);
+  printf("one bead, and in view %d a brighter spot beside it: that view %.2f px off the grid (%d frames told "
+         "the depth, a median %.2f of the spots near the fit)\n", DECOY_VIEW, fit.off_grid_px, fit.frames_used,
+         fit.agree);
+  CHECK_MSG(fit.agree >= 0.5 && fit.objects == 1 && fit.frames_used == N_FRAMES, "the brightest spots %.2f near "
+            "one fit, %d frames", fit.agree, fit.frames_used);
+  CHECK_EQ_INT(fit.off_grid_view, DECOY_VIEW);
+  CHECK_MSG(fit.off_grid_px > 5, "the view %.2f px off the grid", fit.off_grid_px);
+  CHECK_EQ_INT(moved, 0);
   CHECK(memcmp(&c, &start, sizeof c) == 0);
   elfm_frame_free(f);
 }
@@ -139,6 +182,19 @@ static void test_cli(void)
   printf("zsweep, five beads on a slide tilted 20 degrees: centres up to %.2f px off -> %.3f px\n",
          centre_error(&start, &truth), centre_error(&r, &truth));
   CHECK_MSG(centre_error(&r, &truth) < 0.45, "centres %.3f px off", centre_error(&r, &truth));
+  /* twelve beads in a row 110 um long, more than a view's 8 spots and
+   * wider than the field: some views take the row's beads for their
+   * neighbours, 11 px off, which their images fit. Refused, naming a view
+   * off the lenslets' grid */
+  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param objects.count=12 --out %s/z12 --no-truth --quiet",
+           dir);
+  CHECK_EQ_INT(cli_run(dir, args), 0);
+  snprintf(args, sizeof args, "calib refine --sweep --calib %s/start.json --events %s/z12/events.raw --out "
+           "%s/r12.json --passes 0", dir, dir, dir);
+  CHECK_EQ_INT(cli_run(dir, args), 1);
+  CHECK(cli_file_has(dir, "err.txt", "the centres fitted to the sweep's images lie off the lenslets' grid: view ("));
+  snprintf(p, sizeof p, "%s/r12.json", dir);
+  CHECK_MSG(access(p, F_OK) != 0, "a refused sweep wrote %s", p);
   snprintf(args, sizeof args, "rm -rf '%s'", dir);
   if (system(args) != 0) fprintf(stderr, "could not remove %s\n", dir);
 }
