@@ -38,7 +38,6 @@
 
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 /* Spots within this many px of where the pattern puts them match it
  * (their centroids scatter ~0.2-0.5 px; beads 1 um apart in depth move

@@ -14,6 +14,7 @@
  *    bead's place off the axis is 5 px);
  *  - the same frames with a second bead as bright, elsewhere: no view's
  *    spot stands out, nothing moves, and the calibration is untouched;
+ *    one bead moved sideways instead of through z: nothing moves;
  *  - too few frames: nothing moves; bad arguments refused; a frame of
  *    another size gives no spots; a full collector takes no more;
  *  - `eventlfm calib refine --sweep` on a simulated z sweep (zsweep seed 1)
@@ -38,21 +39,27 @@
 #define N_FRAMES 200
 #define LOST 8
 
+enum { ONE, TWIN, SIDEWAYS };
+
 /* Frame k of the sweep: the bead at (5, -3) um, z from -80 to +80 um;
- * with `twin`, a second bead as bright at (-30, 25) um, z the other way */
-static void draw(elfm_frame *f, const elfm_calib *truth, int k, int twin, uint32_t *seed)
+ * TWIN: a second bead as bright at (-30, 25) um, z the other way;
+ * SIDEWAYS: the bead not swept but moved along x, -10 to +10 um, at z 10 */
+static void draw(elfm_frame *f, const elfm_calib *truth, int k, int mode, uint32_t *seed)
 {
   elfm_frame_clear(f);
   const double z = -80 + 160.0 * k / (N_FRAMES - 1);
   const int c0 = centre_view(truth);
   for (int v = 0; v < truth->n_views; v++) {
     double u, w;
-    elfm_calib_project(truth, v, 5, -3, z, &u, &w);
+    if (mode == SIDEWAYS)
+      elfm_calib_project(truth, v, -10 + 20.0 * k / (N_FRAMES - 1), -3, 10, &u, &w);
+    else
+      elfm_calib_project(truth, v, 5, -3, z, &u, &w);
     if (v == LOST) /* a spot brighter than the image, anywhere in the view */
       frame_spot(f, truth->views[v].cx_px + 100 * (lcg(seed) - 0.5), truth->views[v].cy_px + 100 * (lcg(seed) - 0.5), 150);
     if (v != c0) frame_spot(f, u, w, 50);
     else if (k % 5 == 0) frame_spot(f, u + 0.7, w, 8); /* the central view: faint, and not where the image is */
-    if (twin) {
+    if (mode == TWIN) {
       elfm_calib_project(truth, v, -30, 25, -z, &u, &w);
       frame_spot(f, u, w, 50);
     }
@@ -67,7 +74,7 @@ static void draw(elfm_frame *f, const elfm_calib *truth, int k, int twin, uint32
 }
 
 /* Collect the N_FRAMES frames' spots and apply; views moved */
-static int sweep_frames(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, int twin, int n_frames,
+static int sweep_frames(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, int mode, int n_frames,
                         elfm_calib_sweep **out)
 {
   elfm_error err;
@@ -77,7 +84,7 @@ static int sweep_frames(const elfm_calib *truth, elfm_calib *c, elfm_frame *f, i
   uint32_t seed = 5;
   static elfm_calib_sweep_image img;
   for (int k = 0; k < n_frames; k++) {
-    draw(f, truth, k * (N_FRAMES / n_frames), twin, &seed);
+    draw(f, truth, k * (N_FRAMES / n_frames), mode, &seed);
     CHECK_OK(elfm_calib_sweep_spots(s, f, &img, &err), &err);
     CHECK(elfm_calib_sweep_add(s, 1000 * (int64_t)k, &img));
   }
@@ -104,7 +111,7 @@ static void test_by_hand(const elfm_calib *truth)
   perturb(&c, 5, 21);
   const double before = centre_error(&c, truth);
   const elfm_calib start = c;
-  int moved = sweep_frames(truth, &c, f, 0, N_FRAMES, &s);
+  int moved = sweep_frames(truth, &c, f, ONE, N_FRAMES, &s);
   double per[ELFM_MAX_VIEWS];
   const double after = centre_errors(&c, truth, per);
   elfm_calib_sweep_fit fit;
@@ -157,7 +164,7 @@ static void test_by_hand(const elfm_calib *truth)
   /* two beads as bright, swept opposite ways: no spot stands out, and
    * the two are no pattern that moves as one; nothing moves */
   c = start;
-  moved = sweep_frames(truth, &c, f, 1, N_FRAMES, &s);
+  moved = sweep_frames(truth, &c, f, TWIN, N_FRAMES, &s);
   CHECK_EQ_INT(moved, 0);
   CHECK(memcmp(&c, &start, sizeof c) == 0);
   elfm_calib_sweep_result(s, &fit);
@@ -166,10 +173,27 @@ static void test_by_hand(const elfm_calib *truth)
   CHECK_EQ_INT(fit.objects, 1);
   CHECK_MSG(fit.pattern_share < 0.5, "two beads swept opposite ways: %.2f of the frames matched",
             fit.pattern_share);
+  /* no brightest spot stands out twice over the other bead's: no frame
+   * tells the depth (each would, by whichever bead is brighter there, were
+   * every brightest spot kept) */
+  CHECK_MSG(fit.frames_used < 20, "two beads as bright: %d frames told the depth", fit.frames_used);
+  elfm_calib_sweep_free(s);
+
+  /* one bead moved sideways, not through z (the wrong recording): its
+   * images fit no depths (a median 0.23 of them near the fit, where 23
+   * views had 20 images near it and would have moved); nothing moves */
+  c = start;
+  moved = sweep_frames(truth, &c, f, SIDEWAYS, N_FRAMES, &s);
+  elfm_calib_sweep_result(s, &fit);
+  printf("one bead moved sideways: a median %.2f of the spots near the fit, two spots in %.2f of the frames\n",
+         fit.agree, fit.several_share);
+  CHECK_EQ_INT(moved, 0);
+  CHECK(memcmp(&c, &start, sizeof c) == 0);
+  CHECK(fit.agree < 0.5 && fit.several_share < 0.5);
   elfm_calib_sweep_free(s);
 
   /* 10 frames: fewer than the 20 images a view needs */
-  moved = sweep_frames(truth, &c, f, 0, 10, &s);
+  moved = sweep_frames(truth, &c, f, ONE, 10, &s);
   CHECK_EQ_INT(moved, 0);
   CHECK(memcmp(&c, &start, sizeof c) == 0);
 
