@@ -32,13 +32,13 @@ double elfm_calib_off_grid(const elfm_calib *c, const int *use, int *worst);
 
 /* Several objects swept through z together (calib_sweep_pattern.c): each
  * view's spots in each frame (n_spots [nf][nv], spots [nf][nv][MAX][2],
- * the brightest's strength [nf][nv])
- * matched to one pattern of objects, its first object's place into pu, pw
- * ([nf][nv], NaN where not placed). Returns the pattern's objects (0: no
- * pattern of two or more, pu and pw all NaN), and in *share the median
- * over the views with tells[v] of the share of their frames with two spots
- * or more that were placed (0 for a view with none), and in *depth_um how far apart in depth its
- * objects lie (the deepest's depth less the shallowest's). */
+ * the brightest's strength [nf][nv]) matched to one pattern of objects,
+ * its first object's place into pu, pw ([nf][nv], NaN where not placed).
+ * Returns the pattern's objects (0: no pattern of two or more, pu and pw
+ * all NaN); in *share the median over the views with tells[v] of the
+ * share of their frames with two spots or more that were placed (0 for a
+ * view with none), and in *depth_um how far apart in depth its objects
+ * lie (the deepest's depth less the shallowest's; NaN with no pattern). */
 int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, const uint8_t *n_spots,
                              const float *strength, const float *spots, float *pu, float *pw, double *share,
                              double *depth_um);

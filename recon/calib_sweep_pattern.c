@@ -289,9 +289,8 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
         f0 = f;
       }
     }
-  if (v0 < 0) return 0;
-  pattern p = {.n = n_spots[f0 * (size_t)nv + (size_t)v0]};
-  const float(*S0)[2] = spots_at(spots, nv, f0, v0);
+  pattern p = {.n = v0 < 0 ? 0 : n_spots[f0 * (size_t)nv + (size_t)v0]};
+  const float(*S0)[2] = spots_at(spots, nv, f0, v0 < 0 ? 0 : v0);
   for (int k = 0; k < p.n; k++) {
     p.b[k][0] = S0[k][0] - S0[0][0];
     p.b[k][1] = S0[k][1] - S0[0][1];
@@ -299,17 +298,17 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
   }
   /* placed by that frame's spots; by the objects gathered from the
    * reference view's placed frames; then by their depths, in turn */
-  for (int round = 0; round < PATTERN_ROUNDS; round++) {
+  for (int round = 0; p.n >= 2 && round < PATTERN_ROUNDS; round++) {
     pattern_place(nv, nf, c, n_spots, spots, &p, pu, pw, shares);
     if (round == PATTERN_ROUNDS - 1) break;
     if (round == 0)
       pattern_gather(nv, nf, v0, n_spots, spots, pu, pw, &p);
     else
       pattern_depths(nv, nf, c, n_spots, spots, pu, pw, &p);
-    if (p.n < 2) {
-      for (size_t i = 0; i < nf * (size_t)nv; i++) pu[i] = pw[i] = NAN;
-      return 0;
-    }
+  }
+  if (p.n < 2) {
+    for (size_t i = 0; i < nf * (size_t)nv; i++) pu[i] = pw[i] = NAN;
+    return 0;
   }
   double tmp[ELFM_MAX_VIEWS];
   int n = 0;
