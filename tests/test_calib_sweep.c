@@ -157,9 +157,8 @@ static void test_by_hand(const elfm_calib *truth)
     CHECK_MSG(fabs(a) < 0.01 && fabs(b) < 0.001, "axis %d: the moves' gauge part %.4f px + %.5f d", axis, a, b);
   }
   CHECK_MSG(per[3] < 0.08 && per[17] < 0.08, "views with a hot pixel %.3f / %.3f px off", per[3], per[17]);
+  CHECK_EQ_INT(fit.objects, 1); /* its brightest spots fitted: no pattern of two */
   elfm_calib_sweep_free(s);
-
-  CHECK_EQ_INT(fit.objects, 1);
 
   /* two beads as bright, swept opposite ways: no spot stands out, and
    * the two are no pattern that moves as one; nothing moves */
