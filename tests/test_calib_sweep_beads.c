@@ -5,19 +5,21 @@
  *    frame to frame (so the brightest spot is now one bead's, now
  *    another's, and no one object fits), swept from z -60 to +60 um, hot
  *    pixels and noise, the central view faint; the start's centres up to
- *    ~9 px off. On one depth, and at depths 11 um apart (a bead's images then
- *    lie other in every view, 4 px between opposite outer views): the six
- *    found, their depths' spread measured to 0.3 um, every view within
- *    0.08 px of the truth;
+ *    ~9 px off. On one depth, and at depths 11 um apart (the beads' images
+ *    then lie apart otherwise in every view, by up to 8 px per axis between
+ *    opposite corner views): the six found, their depths' spread measured
+ *    to 0.3 um, every view within 0.08 px of the truth;
  *  - six beads each moving through z its own way (a flow, not a sweep):
  *    refused, nothing moves; two beads swept opposite ways, each the
  *    brighter in some views (one object's fit would take each view's
- *    brighter bead, right in some, ~30 px off in others): refused; one
+ *    brighter bead, right in some, off by the beads' distance in the
+ *    others): refused; one
  *    bead, and in one view a brighter spot beside its image moving with
  *    it: that view fits the spot, off the lenslets' grid: refused;
  *  - `eventlfm calib refine --sweep` on five simulated beads 10 um apart on
  *    a slide tilted by 20 degrees (zsweep, objects.count=5): fitted as one
- *    pattern within 0.45 px, the beads' 14.6 um of depth said. */
+ *    pattern within 0.45 px, the beads' 14.6 um of depth said; twelve in a
+ *    row, wider than the field: refused, a view named off the grid. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -128,8 +130,8 @@ static void test_by_hand(const elfm_calib *truth)
   CHECK(memcmp(&c, &start, sizeof c) == 0);
   /* two beads swept opposite ways, each the brighter in some views: no
    * pattern, and each view's brightest spot stands out (2.5 x the other
-   * bead's), so one object fits every view, 7 of them on the other bead,
-   * ~30 px off. Two spots in every frame: refused */
+   * bead's), so one object fits every view, 7 of them on the other bead.
+   * Two spots in every frame: refused */
   c = start;
   moved = sweep(truth, &c, f, 0, TWO_OPPOSITE, &fit);
   printf("two beads swept opposite ways, each the brighter in some views: two spots or more in %.2f of the "
