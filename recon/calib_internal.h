@@ -25,6 +25,9 @@ void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, doubl
  * moved, when those views do not span the grid. */
 int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px);
 
+/* The median of a[0 .. n) (n > 0), reordering a (calib_sweep.c) */
+double elfm_calib_median(double *a, size_t n);
+
 /* The largest distance, px, of a view with use[v] from the lenslets' grid
  * (cx, cy affine in (i, j)) fitted to those views, and that view into
  * *worst; -1 when they do not span the grid. */

@@ -288,8 +288,7 @@ static int cmp_double(const void *a, const void *b)
   return (x > y) - (x < y);
 }
 
-/* the median of a[0 .. n) (n > 0), reordering a */
-static double median_d(double *a, size_t n)
+double elfm_calib_median(double *a, size_t n)
 {
   qsort(a, n, sizeof *a, cmp_double);
   return n % 2 ? a[n / 2] : 0.5 * (a[n / 2 - 1] + a[n / 2]);
@@ -319,7 +318,7 @@ static double frame_z(const elfm_calib_sweep *s, const elfm_calib *c, const int 
     }
   }
   if (n < 3) return NAN;
-  return isinf(r) ? median_d(tmp, n) : num / den;
+  return isinf(r) ? elfm_calib_median(tmp, n) : num / den;
 }
 
 /* The object's axial speed by the disparities as they are: the median and
@@ -352,7 +351,7 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
     tmp[n++] = 1000.0 * fabs(z[g] - z[f]) / (s->t_us[g] - s->t_us[f]);
   }
   if (n < 20) return;
-  s->fit.speed_um_per_ms = median_d(tmp, n); /* (sorting tmp) */
+  s->fit.speed_um_per_ms = elfm_calib_median(tmp, n); /* (sorting tmp) */
   s->fit.speed_lo_um_per_ms = tmp[n / 4];
   s->fit.speed_hi_um_per_ms = tmp[(3 * n) / 4];
 }
@@ -397,8 +396,8 @@ static void sweep_fit(elfm_calib_sweep *s, const elfm_calib *c, const int *tells
       use[v] = n >= (size_t)min_images;
       share[v] = told > 0 ? (double)n / (double)told : NAN; /* the last step's is kept */
       if (!use[v]) continue;
-      m->views[v].cx_px = median_d(tu, n);
-      m->views[v].cy_px = median_d(tw, n);
+      m->views[v].cx_px = elfm_calib_median(tu, n);
+      m->views[v].cy_px = elfm_calib_median(tw, n);
     }
     /* the last step's fit: RMS distance of the images kept from the model */
     for (int v = 0; v < nv && it == SWEEP_ITERATIONS - 1; v++)
@@ -418,7 +417,7 @@ static void sweep_fit(elfm_calib_sweep *s, const elfm_calib *c, const int *tells
   size_t ns = 0;
   for (int v = 0; v < nv; v++)
     if (tells[v] && !isnan(share[v])) tmp[ns++] = share[v];
-  s->fit.agree = ns > 0 ? median_d(tmp, ns) : 0;
+  s->fit.agree = ns > 0 ? elfm_calib_median(tmp, ns) : 0;
 }
 
 /* The views' (those with tells[v]) median share of their frames with a
@@ -436,7 +435,7 @@ static double several_share(const elfm_calib_sweep *s, const int *tells)
     }
     if (one > 0) tmp[n++] = (double)two / (double)one;
   }
-  return n > 0 ? median_d(tmp, n) : 0;
+  return n > 0 ? elfm_calib_median(tmp, n) : 0;
 }
 
 elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_calib *c, double *shift_px,

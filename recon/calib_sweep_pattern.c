@@ -315,14 +315,7 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
   /* a view with no frame of two spots holds one object (or none): 0 */
   for (int v = 0; v < nv; v++)
     if (tells[v]) tmp[n++] = isnan(shares[v]) ? 0 : shares[v];
-  /* the median (a handful of values) */
-  for (int i = 1; i < n; i++)
-    for (int j = i; j > 0 && tmp[j - 1] > tmp[j]; j--) {
-      const double x = tmp[j];
-      tmp[j] = tmp[j - 1];
-      tmp[j - 1] = x;
-    }
-  *share = n == 0 ? 0 : n % 2 ? tmp[n / 2] : 0.5 * (tmp[n / 2 - 1] + tmp[n / 2]);
+  *share = n == 0 ? 0 : elfm_calib_median(tmp, (size_t)n);
   double lo = p.dz[0], hi = p.dz[0];
   for (int k = 1; k < p.n; k++) {
     lo = fmin(lo, p.dz[k]);
