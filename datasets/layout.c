@@ -122,11 +122,37 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
     /* Several sweeping beads sit side by side along x, min_separation apart,
      * on a slide that may be tilted (each bead then at its own depth). */
     const double slope = tan(s->sweep_tilt_deg * M_PI / 180.0);
+    if (s->place_radius_um <= 0) {
+      for (int k = 0; k < n; k++) {
+        const double x = (k - (n - 1) * 0.5) * s->min_separation_um;
+        s->obj[k].p0[0] = s->sweep_x_um + x;
+        s->obj[k].p0[1] = s->sweep_y_um;
+        s->obj[k].p0[2] = s->sweep_z_from_um + x * slope;
+      }
+      return ELFM_OK;
+    }
+    /* Scattered over a disc, as beads dried on a slide lie: the slide's
+     * beads at least min_separation apart (all sweep together, so their
+     * distances stay). */
+    int64_t budget = PLACE_BUDGET;
     for (int k = 0; k < n; k++) {
-      const double x = (k - (n - 1) * 0.5) * s->min_separation_um;
-      s->obj[k].p0[0] = s->sweep_x_um + x;
-      s->obj[k].p0[1] = s->sweep_y_um;
-      s->obj[k].p0[2] = s->sweep_z_from_um + x * slope;
+      int placed = 0;
+      for (int tries = 0; tries < PLACE_TRIES && !placed && budget > 0; tries++) {
+        double p[3];
+        disk_point(r, s->place_radius_um, &p[0], &p[1]);
+        p[2] = s->sweep_z_from_um + p[0] * slope;
+        p[0] += s->sweep_x_um;
+        p[1] += s->sweep_y_um;
+        if (far_enough(s, k, p, &budget)) {
+          memcpy(s->obj[k].p0, p, sizeof p);
+          placed = 1;
+        }
+      }
+      if (!placed)
+        return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
+                              "key \"objects.count\": cannot place %d beads %.1f um apart on a "
+                              "disc of radius %.1f um (placed %d)",
+                              n, s->min_separation_um, s->place_radius_um, k);
     }
     return ELFM_OK;
   }

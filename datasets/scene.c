@@ -280,7 +280,12 @@ static elfm_status parse_motion(scene_ctx *c, const cJSON *root, elfm_scene *s)
     s->sweep_speed_um_per_us = a * MM_PER_S_TO_UM_PER_US;
     if (s->sweep_z_to_um == s->sweep_z_from_um)
       return bad_key(c, ELFM_ERR_RANGE, "motion.z_to_um", "equals z_from_um", 0);
+    /* optional: the beads scattered at random over a disc of this radius
+     * about (x_um, y_um), as on a calibration slide, instead of in a row */
     s->place_radius_um = 0;
+    if (cJSON_GetObjectItemCaseSensitive(m, "place_radius_um") &&
+        (st = get_num(c, m, P, "place_radius_um", 0, 1000, &s->place_radius_um)))
+      return st;
     s->z_min_um = fmin(s->sweep_z_from_um, s->sweep_z_to_um);
     s->z_max_um = fmax(s->sweep_z_from_um, s->sweep_z_to_um);
     break;

@@ -305,6 +305,36 @@ int main(void)
     }
     CHECK(elfm_scene_set_param(zs, "motion.tilt_deg=50", &err) == ELFM_ERR_RANGE);
     CHECK(strstr(err.message, "tilt_deg") != NULL);
+    /* scattered over a disc (motion.place_radius_um, 0 in the built-in:
+     * the row above), as dried on a slide: 30 beads within 50 um of
+     * (x_um, y_um), 10 um apart or more, each still x tan(tilt) deeper,
+     * spread over the disc (not all in a row), moving together; too many
+     * for the disc refused naming the count */
+    CHECK_OK(elfm_scene_set_param(zs, "objects.count=30", &err), &err);
+    CHECK_OK(elfm_scene_set_param(zs, "motion.tilt_deg=10", &err), &err);
+    CHECK_OK(elfm_scene_set_param(zs, "motion.x_um=5", &err), &err);
+    CHECK_OK(elfm_scene_set_param(zs, "motion.place_radius_um=50", &err), &err);
+    double ylo = 1e9, yhi = -1e9, closest = 1e9;
+    elfm_truth b[30];
+    for (int k = 0; k < 30; k++) {
+      elfm_truth t1;
+      elfm_scene_truth(zs, k, 0, &b[k]);
+      elfm_scene_truth(zs, k, 100000, &t1);
+      CHECK(hypot(b[k].x_um - 5, b[k].y_um) <= 50 + 1e-9);
+      CHECK_NEAR(b[k].z_um, -90 + (b[k].x_um - 5) * tan(10 * M_PI / 180), 1e-9);
+      CHECK_NEAR(t1.z_um - b[k].z_um, 20, 1e-9);
+      CHECK_NEAR(t1.x_um, b[k].x_um, 1e-9);
+      ylo = fmin(ylo, b[k].y_um);
+      yhi = fmax(yhi, b[k].y_um);
+      for (int q = 0; q < k; q++) {
+        const double dz = (b[k].z_um - b[q].z_um) / 4; /* SPEC 7's metric, as the placement's */
+        closest = fmin(closest, sqrt(pow(b[k].x_um - b[q].x_um, 2) + pow(b[k].y_um - b[q].y_um, 2) + dz * dz));
+      }
+    }
+    CHECK_MSG(yhi - ylo > 50, "the beads span %.1f um in y", yhi - ylo);
+    CHECK_MSG(closest >= 10, "two beads %.2f um apart", closest);
+    CHECK(elfm_scene_set_param(zs, "objects.count=200", &err) == ELFM_ERR_RANGE);
+    CHECK(strstr(err.message, "objects.count") != NULL && strstr(err.message, "radius 50.0 um") != NULL);
     elfm_scene_free(zs);
   }
   test_placement_uniform();
