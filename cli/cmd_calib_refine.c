@@ -548,7 +548,11 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   const double frame_ms = (double)o->recon.framer.dt_us / 1000.0;
   const size_t max_frames = (size_t)ceil(o->ms / frame_ms) + 2;
   if (elfm_calib_sweep_create(cal, max_frames, &c->sweep, err) != ELFM_OK) return cli_fail(C, err);
-  elfm_status st = run_pass(c, cal, o->recon, err);
+  /* the spots are read off the frames (the worker above): refocusing every
+   * frame's volume, which nothing read, was half of a sweep's time */
+  elfm_recon_options ro = o->recon;
+  ro.no_refocus = 1;
+  elfm_status st = run_pass(c, cal, ro, err);
   const size_t frames = elfm_calib_sweep_frames(c->sweep);
   double shift[2 * ELFM_MAX_VIEWS];
   int moved = 0;
