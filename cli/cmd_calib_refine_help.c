@@ -39,7 +39,7 @@ void calib_refine_usage(FILE *f)
           "view's image is found in every frame and the centres fitted to where they\n"
           "lie, from centres any distance off that keeps each image in its view's crop\n"
           "(a calibration from the optics alone); then the passes. Several beads side\n"
-          "by side (a slide, tilted or not; up to 8 in a view) are matched as one\n"
+          "by side (a slide, tilted or not; a view's brightest 32) are matched as one\n"
           "pattern moved in every view; beads that do not move together, or views\n"
           "fitted off the lenslets' grid, are refused. No turn's search or coarse\n"
           "step (a turned array is fitted all the same), the integral unless --repr\n"

@@ -46,4 +46,13 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
                              const float *strength, const float *spots, float *pu, float *pw, double *share,
                              double *depth_um);
 
+/* The translation of spots S[0 .. ns) onto objects P[0 .. np) (at most
+ * ELFM_CALIB_SWEEP_MAX_SPOTS each) that elfm_calib_sweep_pattern takes for
+ * a view's frame, into t: the objects that agree on it, 0 for none (fewer
+ * than 2, or than half of the spots or objects, or two translations as
+ * good). with_votes 0: without the differences' votes that spare it most
+ * of the pairs (the same result, slower). For tests. */
+int elfm_calib_pattern_translate(const float (*S)[2], int ns, const double (*P)[2], int np, int with_votes,
+                                 double t[2]);
+
 #endif

@@ -51,7 +51,75 @@
 #define PATTERN_ROUNDS 5
 /* A view's clusters tell the objects' depths from this many frames placed */
 #define PATTERN_MIN_FRAMES 10
-#define PATTERN_MAX_CLUSTERS 64
+#define PATTERN_MAX_CLUSTERS 256
+
+/* The spot of S nearest (u, w) within PATTERN_TOL_PX, or -1; order[]
+ * lists S's spots by their u, so only those within the tolerance in u are
+ * looked at */
+static int nearest_spot(const float (*S)[2], const int *order, int ns, double u, double w)
+{
+  int lo = 0, hi = ns;
+  while (lo < hi) {
+    const int mid = (lo + hi) / 2;
+    if (S[order[mid]][0] < u - PATTERN_TOL_PX)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  int q = -1;
+  double dq = PATTERN_TOL_PX * PATTERN_TOL_PX; /* squared: hypot's cost showed */
+  for (int a = lo; a < ns && S[order[a]][0] <= u + PATTERN_TOL_PX; a++) {
+    const int l = order[a];
+    const double du = S[l][0] - u, dw = S[l][1] - w, d = du * du + dw * dw;
+    if (d <= dq) {
+      dq = d;
+      q = l;
+    }
+  }
+  return q;
+}
+
+/* The spot-object differences counted in cells 2 x PATTERN_TOL_PX wide
+ * (translate): the cells under a translation's tolerance bound how many
+ * objects can agree on it. VOTE_SIDE cells a side cover differences
+ * spanning 512 px, a view and a pattern as wide (the paper's views are 144
+ * px); wider ones go without the bound. Left all zero between calls. */
+#define VOTE_CELL_PX (2 * PATTERN_TOL_PX)
+#define VOTE_SIDE 128
+typedef struct votes {
+  double u0, w0;
+  int cols, rows;
+  uint16_t n[VOTE_SIDE * VOTE_SIDE];
+} votes;
+
+static int vote_cell(double x, double x0, int n)
+{
+  const int k = (int)floor((x - x0) / VOTE_CELL_PX);
+  return k < 0 ? 0 : k >= n ? n - 1 : k;
+}
+
+/* Adds (+1) or takes back (-1) every spot-object difference's vote */
+static void vote(votes *g, const float (*S)[2], int ns, const double (*P)[2], int np, int add)
+{
+  for (int i = 0; i < ns; i++)
+    for (int j = 0; j < np; j++) {
+      const int a = vote_cell(S[i][0] - P[j][0], g->u0, g->cols), b = vote_cell(S[i][1] - P[j][1], g->w0, g->rows);
+      g->n[b * VOTE_SIDE + a] = (uint16_t)(g->n[b * VOTE_SIDE + a] + add);
+    }
+}
+
+/* The votes of the cells under the disc of PATTERN_TOL_PX about (u, w):
+ * no more objects can agree on that translation (each agrees through its
+ * own spot, one difference within the disc) */
+static int vote_bound(const votes *g, double u, double w)
+{
+  const int a0 = vote_cell(u - PATTERN_TOL_PX, g->u0, g->cols), a1 = vote_cell(u + PATTERN_TOL_PX, g->u0, g->cols);
+  const int b0 = vote_cell(w - PATTERN_TOL_PX, g->w0, g->rows), b1 = vote_cell(w + PATTERN_TOL_PX, g->w0, g->rows);
+  int n = 0;
+  for (int b = b0; b <= b1; b++)
+    for (int a = a0; a <= a1; a++) n += g->n[b * VOTE_SIDE + a];
+  return n;
+}
 
 /* The translation of spots S[0 .. ns) onto the pattern P[0 .. np) that
  * most of P's objects agree on (each matched to a spot within
@@ -59,32 +127,69 @@
  * matched, or 0 when fewer than two agree, or fewer than half of the
  * spots or of P's objects (whichever are fewer: six beads each moving its
  * own way matched 0.36 of their frames with two enough, none so), or
- * another translation has as many */
-static int translate(const float (*S)[2], int ns, const double (*P)[2], int np, double t[2])
+ * another translation has as many.
+ *
+ * Each translation tried puts one spot on one object. A slide of 30 beads
+ * fills a view with 30 spots, and trying all spot-object pairs, each
+ * matching every object against every spot, took minutes (ns^2 np^2), so:
+ * the spots are looked up by their u (nearest_spot); a translation is
+ * not matched where the differences' votes (g, when not NULL) bound it
+ * under the best (or the half needed), and stops being matched once the
+ * objects left cannot bring it there. Both bounds are exact, and the
+ * pairs are tried in the same order: what it finds is what trying every
+ * pair in full found (tests/test_calib_pattern.c). */
+static int translate(const float (*S)[2], int ns, const double (*P)[2], int np, double t[2], votes *g)
 {
+  if (g && ns > 0 && np > 0) {
+    /* the differences' extent: S's extremes less P's */
+    double ulo = INFINITY, uhi = -INFINITY, wlo = INFINITY, whi = -INFINITY;
+    double pulo = INFINITY, puhi = -INFINITY, pwlo = INFINITY, pwhi = -INFINITY;
+    for (int j = 0; j < np; j++) {
+      pulo = fmin(pulo, P[j][0]);
+      puhi = fmax(puhi, P[j][0]);
+      pwlo = fmin(pwlo, P[j][1]);
+      pwhi = fmax(pwhi, P[j][1]);
+    }
+    for (int i = 0; i < ns; i++) {
+      ulo = fmin(ulo, S[i][0] - puhi);
+      uhi = fmax(uhi, S[i][0] - pulo);
+      wlo = fmin(wlo, S[i][1] - pwhi);
+      whi = fmax(whi, S[i][1] - pwlo);
+    }
+    g->u0 = ulo;
+    g->w0 = wlo;
+    g->cols = (int)floor((uhi - ulo) / VOTE_CELL_PX) + 1;
+    g->rows = (int)floor((whi - wlo) / VOTE_CELL_PX) + 1;
+    if (g->cols <= VOTE_SIDE && g->rows <= VOTE_SIDE)
+      vote(g, S, ns, P, np, +1);
+    else
+      g = NULL;
+  }
+  int order[ELFM_CALIB_SWEEP_MAX_SPOTS];
+  for (int i = 0; i < ns; i++) {
+    int a = i;
+    for (; a > 0 && S[order[a - 1]][0] > S[i][0]; a--) order[a] = order[a - 1];
+    order[a] = i;
+  }
+  const int few = ns < np ? ns : np;
+  const int need = (few + 1) / 2 > 2 ? (few + 1) / 2 : 2;
   int best = 0, ambiguous = 0;
   double bt[2] = {0, 0};
   for (int i = 0; i < ns; i++)
     for (int j = 0; j < np; j++) {
+      const int floor_m = best > need ? best : need;
       const double cu = S[i][0] - P[j][0], cw = S[i][1] - P[j][1];
+      if (g && vote_bound(g, cu, cw) < floor_m) continue;
       int m = 0;
       double su = 0, sw = 0;
-      for (int k = 0; k < np; k++) {
-        int q = -1;
-        double dq = PATTERN_TOL_PX;
-        for (int l = 0; l < ns; l++) {
-          const double d = hypot(S[l][0] - P[k][0] - cu, S[l][1] - P[k][1] - cw);
-          if (d <= dq) {
-            dq = d;
-            q = l;
-          }
-        }
+      for (int k = 0; k < np && m + (np - k) >= floor_m; k++) {
+        const int q = nearest_spot(S, order, ns, P[k][0] + cu, P[k][1] + cw);
         if (q < 0) continue;
         m++;
         su += S[q][0] - P[k][0];
         sw += S[q][1] - P[k][1];
       }
-      if (m == 0) continue;
+      if (m < floor_m) continue;
       su /= m;
       sw /= m;
       if (m > best) {
@@ -92,15 +197,24 @@ static int translate(const float (*S)[2], int ns, const double (*P)[2], int np, 
         bt[0] = su;
         bt[1] = sw;
         ambiguous = 0;
-      } else if (m == best && hypot(su - bt[0], sw - bt[1]) > PATTERN_TOL_PX) {
+      } else if (hypot(su - bt[0], sw - bt[1]) > PATTERN_TOL_PX) {
         ambiguous = 1;
       }
     }
-  const int few = ns < np ? ns : np;
-  if (best < 2 || 2 * best < few || ambiguous) return 0;
+  if (g) vote(g, S, ns, P, np, -1);
+  if (best < need || ambiguous) return 0;
   t[0] = bt[0];
   t[1] = bt[1];
   return best;
+}
+
+int elfm_calib_pattern_translate(const float (*S)[2], int ns, const double (*P)[2], int np, int with_votes,
+                                 double t[2])
+{
+  votes *g = with_votes ? calloc(1, sizeof *g) : NULL;
+  const int m = translate(S, ns, P, np, t, g);
+  free(g);
+  return m;
 }
 
 static const float (*spots_at(const float *spots, int nv, size_t f, int v))[2]
@@ -150,7 +264,9 @@ static int view_clusters(int nv, size_t nf, int v, const uint8_t *n_spots, const
     for (int l = 0; l < n_spots[i]; l++) {
       const double u = S[l][0] - pu[i], w = S[l][1] - pw[i];
       int k = 0;
-      while (k < ncl && hypot(u - cl[k].u, w - cl[k].w) > PATTERN_TOL_PX) k++;
+      while (k < ncl && (u - cl[k].u) * (u - cl[k].u) + (w - cl[k].w) * (w - cl[k].w) >
+                            PATTERN_TOL_PX * PATTERN_TOL_PX)
+        k++;
       if (k == ncl) {
         if (ncl == PATTERN_MAX_CLUSTERS) continue;
         cl[ncl++] = (cluster){u, w, 0};
@@ -245,7 +361,7 @@ static void pattern_depths(int nv, size_t nf, const elfm_calib *c, const uint8_t
  * share of its frames with two spots or more that were placed, into
  * share[] (NaN: none) */
 static void pattern_place(int nv, size_t nf, const elfm_calib *c, const uint8_t *n_spots, const float *spots,
-                          const pattern *p, float *pu, float *pw, double *share)
+                          const pattern *p, float *pu, float *pw, double *share, votes *g)
 {
   for (int v = 0; v < nv; v++) {
     double P[ELFM_CALIB_SWEEP_MAX_SPOTS][2];
@@ -257,7 +373,7 @@ static void pattern_place(int nv, size_t nf, const elfm_calib *c, const uint8_t 
       pu[i] = pw[i] = NAN;
       if (n_spots[i] < 2) continue;
       two++;
-      if (!translate(spots_at(spots, nv, f, v), n_spots[i], (const double(*)[2])P, p->n, t)) continue;
+      if (!translate(spots_at(spots, nv, f, v), n_spots[i], (const double(*)[2])P, p->n, t, g)) continue;
       pu[i] = (float)t[0];
       pw[i] = (float)t[1];
       placed++;
@@ -298,14 +414,17 @@ int elfm_calib_sweep_pattern(const elfm_calib *c, size_t nf, const int *tells, c
   }
   /* placed by that frame's spots; by the objects gathered from the
    * reference view's placed frames; then by their depths, in turn */
+  /* the votes' cells (32 KB; without them the same, only slower) */
+  votes *g = calloc(1, sizeof *g);
   for (int round = 0; p.n >= 2 && round < PATTERN_ROUNDS; round++) {
-    pattern_place(nv, nf, c, n_spots, spots, &p, pu, pw, shares);
+    pattern_place(nv, nf, c, n_spots, spots, &p, pu, pw, shares, g);
     if (round == PATTERN_ROUNDS - 1) break;
     if (round == 0)
       pattern_gather(nv, nf, v0, n_spots, spots, pu, pw, &p);
     else
       pattern_depths(nv, nf, c, n_spots, spots, pu, pw, &p);
   }
+  free(g);
   if (p.n < 2) {
     for (size_t i = 0; i < nf * (size_t)nv; i++) pu[i] = pw[i] = NAN;
     return 0;

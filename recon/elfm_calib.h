@@ -178,7 +178,7 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * ELFM_CALIB_SWEEP_MAX_SPOTS (n_spots, spot_px); ELFM_ERR_NOMEM when it
  * found no memory for its list. add keeps a frame's spots, the brightest
  * where its contrast is ELFM_CALIB_SWEEP_CONTRAST or more (0 when
- * max_frames are held, ~1.9 KB each on 25 views; t_us: the frame's time).
+ * max_frames are held, ~6.6 KB each on 25 views; t_us: the frame's time).
  * apply fits image = centre + the object's place + disparity x its depth
  * in each frame (the disparities kept), moves every view with min_images
  * images near that model to its fitted centre (cleared of the gauge, as
@@ -210,7 +210,7 @@ typedef struct elfm_calib_sweep elfm_calib_sweep;
 elfm_status elfm_calib_sweep_create(const elfm_calib *c, size_t max_frames, elfm_calib_sweep **out,
                                     elfm_error *err);
 void elfm_calib_sweep_free(elfm_calib_sweep *s);
-#define ELFM_CALIB_SWEEP_MAX_SPOTS 8
+#define ELFM_CALIB_SWEEP_MAX_SPOTS 32
 typedef struct elfm_calib_sweep_image {
   double at_px[2 * ELFM_MAX_VIEWS];  /* each view's brightest spot, NaN: none */
   double strength[ELFM_MAX_VIEWS];   /* its 3 x 3 sum less its brightest pixel */

@@ -19,9 +19,12 @@ elfm_add_test(test_calib_still test_calib_still.c TIMEOUT 200)
 # ~20 s; under the sanitizers 72 s alone (test_calib_refine's took 1.8 x
 # that beside the other tests in CI)
 elfm_add_test(test_calib_sweep test_calib_sweep.c TIMEOUT 300)
-# frames drawn by hand (three sweeps of six beads), one simulated sweep of
-# five beads and its refinement: ~10 s
+# frames drawn by hand (five sweeps of six beads, one of 25), simulated
+# sweeps of five beads and of thirty and their refinements: ~10 s
+# (of which ~6 s the simulator's thirty beads)
 elfm_add_test(test_calib_sweep_beads test_calib_sweep_beads.c TIMEOUT 120)
+# 8,000 random spot lists matched to their patterns twice, one way in full: ~3 s
+elfm_add_test(test_calib_pattern test_calib_pattern.c)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)
 elfm_add_test(test_recon_plan test_recon_plan.c)
 elfm_add_test(test_mip_png test_mip_png.c TIMEOUT 60)
