@@ -178,7 +178,7 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * ELFM_CALIB_SWEEP_MAX_SPOTS (n_spots, spot_px); ELFM_ERR_NOMEM when it
  * found no memory for its list. add keeps a frame's spots, the brightest
  * where its contrast is ELFM_CALIB_SWEEP_CONTRAST or more (0 when
- * max_frames are held, ~6.6 KB each on 25 views; t_us: the frame's time).
+ * max_frames are held, ~6.7 KB each on 25 views; t_us: the frame's time).
  * apply fits image = centre + the object's place + disparity x its depth
  * in each frame (the disparities kept), moves every view with min_images
  * images near that model to its fitted centre (cleared of the gauge, as
