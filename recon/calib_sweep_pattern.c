@@ -156,14 +156,18 @@ static int translate(const float (*S)[2], int ns, const double (*P)[2], int np, 
       wlo = fmin(wlo, S[i][1] - pwhi);
       whi = fmax(whi, S[i][1] - pwlo);
     }
-    g->u0 = ulo;
-    g->w0 = wlo;
-    g->cols = (int)floor((uhi - ulo) / VOTE_CELL_PX) + 1;
-    g->rows = (int)floor((whi - wlo) / VOTE_CELL_PX) + 1;
-    if (g->cols <= VOTE_SIDE && g->rows <= VOTE_SIDE)
+    /* compared before the casts: a span too wide (or not a number) goes
+     * without the votes */
+    const double cols = floor((uhi - ulo) / VOTE_CELL_PX) + 1, rows = floor((whi - wlo) / VOTE_CELL_PX) + 1;
+    if (cols <= VOTE_SIDE && rows <= VOTE_SIDE) {
+      g->u0 = ulo;
+      g->w0 = wlo;
+      g->cols = (int)cols;
+      g->rows = (int)rows;
       vote(g, S, ns, P, np, +1);
-    else
+    } else {
       g = NULL;
+    }
   }
   int order[ELFM_CALIB_SWEEP_MAX_SPOTS];
   for (int i = 0; i < ns; i++) {

@@ -13,7 +13,8 @@
  * tie: no translation); two
  * patterns in one view; spots at random) it must return the same objects
  * and the same translation to the last bit, with the votes and without.
- * Plus the cases at the ends: no spots, one object, 32 of each. */
+ * Plus the cases at the ends: no spots, one object, 32 of each, spots
+ * spread wider than the votes reach. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -201,5 +202,13 @@ int main(void)
   CHECK_EQ_INT(elfm_calib_pattern_translate((const float(*)[2])S, MAX, (const double(*)[2])P, MAX, 1, t), MAX);
   CHECK_NEAR(t[0], 412.25, 1e-4);
   CHECK_NEAR(t[1], -97.5, 1e-4);
+  /* spots spread wider than the votes' cells reach (one 900 px off):
+   * the same answer, found without them */
+  S[0][0] += 900;
+  double tr[2];
+  const int mr = reference((const float(*)[2])S, MAX, (const double(*)[2])P, MAX, tr);
+  CHECK_EQ_INT(mr, MAX - 1);
+  CHECK_EQ_INT(elfm_calib_pattern_translate((const float(*)[2])S, MAX, (const double(*)[2])P, MAX, 1, t), mr);
+  CHECK(memcmp(t, tr, sizeof t) == 0);
   return check_report();
 }
