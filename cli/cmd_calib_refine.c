@@ -549,7 +549,8 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   const size_t max_frames = (size_t)ceil(o->ms / frame_ms) + 2;
   if (elfm_calib_sweep_create(cal, max_frames, &c->sweep, err) != ELFM_OK) return cli_fail(C, err);
   /* the spots are read off the frames (the worker above): refocusing every
-   * frame's volume, which nothing read, was half of a sweep's time */
+   * frame's volume, which nothing read, was most of a sweep's time (one
+   * bead over 0.9 s: 2.6-3.2 s -> 0.44 s) */
   elfm_recon_options ro = o->recon;
   ro.no_refocus = 1;
   elfm_status st = run_pass(c, cal, ro, err);
