@@ -118,41 +118,15 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
     o->diameter_um = sim_uniform_ab(r, s->diameter_min_um, s->diameter_max_um);
     o->flux_hz = sim_uniform_ab(r, s->flux_min_hz, s->flux_max_hz);
   }
-  if (s->motion == SIM_MOTION_ZSWEEP) {
-    /* Several sweeping beads sit side by side along x, min_separation apart,
-     * on a slide that may be tilted (each bead then at its own depth). */
-    const double slope = tan(s->sweep_tilt_deg * M_PI / 180.0);
-    if (s->place_radius_um <= 0) {
-      for (int k = 0; k < n; k++) {
-        const double x = (k - (n - 1) * 0.5) * s->min_separation_um;
-        s->obj[k].p0[0] = s->sweep_x_um + x;
-        s->obj[k].p0[1] = s->sweep_y_um;
-        s->obj[k].p0[2] = s->sweep_z_from_um + x * slope;
-      }
-      return ELFM_OK;
-    }
-    /* Scattered over a disc, as beads dried on a slide lie: the slide's
-     * beads at least min_separation apart (all sweep together, so their
-     * distances stay). */
-    int64_t budget = PLACE_BUDGET;
+  /* A z sweep's slide, tilted or not: each bead x tan(tilt) deeper */
+  const double slope = tan(s->sweep_tilt_deg * M_PI / 180.0);
+  if (s->motion == SIM_MOTION_ZSWEEP && s->place_radius_um <= 0) {
+    /* Several sweeping beads sit side by side along x, min_separation apart. */
     for (int k = 0; k < n; k++) {
-      int placed = 0;
-      for (int tries = 0; tries < PLACE_TRIES && !placed && budget > 0; tries++) {
-        double p[3];
-        disk_point(r, s->place_radius_um, &p[0], &p[1]);
-        p[2] = s->sweep_z_from_um + p[0] * slope;
-        p[0] += s->sweep_x_um;
-        p[1] += s->sweep_y_um;
-        if (far_enough(s, k, p, &budget)) {
-          memcpy(s->obj[k].p0, p, sizeof p);
-          placed = 1;
-        }
-      }
-      if (!placed)
-        return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
-                              "key \"objects.count\": cannot place %d beads %.1f um apart on a "
-                              "disc of radius %.1f um (placed %d)",
-                              n, s->min_separation_um, s->place_radius_um, k);
+      const double x = (k - (n - 1) * 0.5) * s->min_separation_um;
+      s->obj[k].p0[0] = s->sweep_x_um + x;
+      s->obj[k].p0[1] = s->sweep_y_um;
+      s->obj[k].p0[2] = s->sweep_z_from_um + x * slope;
     }
     return ELFM_OK;
   }
@@ -278,6 +252,13 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
         }
         disk_point(r, lat, &p[0], &p[1]);
         p[2] = sim_uniform_ab(r, zlo, zhi);
+      } else if (s->motion == SIM_MOTION_ZSWEEP) {
+        /* scattered over a disc, as beads dried on a slide lie (all sweep
+         * together, so their distances stay) */
+        disk_point(r, s->place_radius_um, &p[0], &p[1]);
+        p[2] = s->sweep_z_from_um + p[0] * slope;
+        p[0] += s->sweep_x_um;
+        p[1] += s->sweep_y_um;
       } else { /* static */
         disk_point(r, s->place_radius_um, &p[0], &p[1]);
         p[2] = sim_uniform_ab(r, s->z_min_um, s->z_max_um);
@@ -286,6 +267,12 @@ static elfm_status place_objects(elfm_scene *s, sim_rng *r, elfm_error *err)
         memcpy(o->p0, p, sizeof p);
         placed = 1;
       }
+    }
+    if (!placed && s->motion == SIM_MOTION_ZSWEEP) {
+      return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
+                            "key \"objects.count\": cannot place %d beads %.1f um apart on a "
+                            "disc of radius %.1f um (placed %d)",
+                            n, s->min_separation_um, s->place_radius_um, k);
     }
     if (!placed && too_big == tries) {
       return elfm_error_set(err, ELFM_ERR_RANGE, s->source, -1,
