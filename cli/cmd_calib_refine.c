@@ -64,6 +64,7 @@ typedef struct refine_opts {
   int threshold_given; /* --threshold given: the integral keeps it too */
   int sweep;           /* --sweep: one object swept through z, its views found frame by frame */
   double sweep_speed;  /* --sweep-um-per-ms: its known axial speed (0: not known) */
+  int keep_focus;      /* --keep-focal-plane: the sweep's focus not made z = 0 */
   int ms_given;
 } refine_opts;
 
@@ -225,7 +226,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
 static int parse(int argc, char **argv, refine_opts *o)
 {
   enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_SWEEP,
-         O_SPEED, O_QUIET };
+         O_SPEED, O_KEEP_FOCUS, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -234,7 +235,7 @@ static int parse(int argc, char **argv, refine_opts *o)
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
       {"search-px", required_argument, 0, O_SEARCH}, {"turn-deg", required_argument, 0, O_TURN},
       {"sweep", no_argument, 0, O_SWEEP}, {"sweep-um-per-ms", required_argument, 0, O_SPEED},
-      {"quiet", no_argument, 0, O_QUIET},
+      {"keep-focal-plane", no_argument, 0, O_KEEP_FOCUS}, {"quiet", no_argument, 0, O_QUIET},
       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   calib_refine_recon_defaults(&o->recon);
@@ -276,6 +277,7 @@ static int parse(int argc, char **argv, refine_opts *o)
       o->sweep = 1;
       ok = cli_parse_double_in(C, "--sweep-um-per-ms", optarg, 0, 1, 1e6, "> 0", &o->sweep_speed);
       break;
+    case O_KEEP_FOCUS: o->keep_focus = 1; break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -500,37 +502,6 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   return ELFM_OK;
 }
 
-/* The depth scale: the fitted depths move at the speed the disparities
- * give them; a piezo's known speed scales the disparities (every view's by
- * one factor: the centres fitted stay right, image = centre + d z being
- * unchanged with d x k and z / k). A relay magnification 2.4 % off, which
- * no recording of unknown motion shows (docs/recon.md), is such a factor. */
-static int sweep_scale(elfm_calib *cal, const refine_opts *o, const elfm_calib_sweep_fit *fit)
-{
-  const double v = fit->speed_um_per_ms;
-  if (!o->quiet && isfinite(v))
-    fprintf(stderr, "calib refine: the object moved in z at %.4f um/ms by the disparities as they are (the "
-            "middle half of 40 ms spans in the middle half of its depths %.4f-%.4f)%s\n", v,
-            fit->speed_lo_um_per_ms, fit->speed_hi_um_per_ms,
-            o->sweep_speed > 0 ? "" : "; --sweep-um-per-ms with the piezo's speed scales the depths to it");
-  if (!(o->sweep_speed > 0)) return CLI_OK;
-  if (!isfinite(v))
-    return cli_message(C, CLI_FAIL, "%s: too few frames told the depth to measure the object's speed by "
-                       "(--sweep-um-per-ms)", o->events);
-  const double k = v / o->sweep_speed;
-  if (!(k > 0.5 && k < 2))
-    return cli_message(C, CLI_FAIL, "%s: the object moved at %.4f um/ms, --sweep-um-per-ms %g: the "
-                       "disparities would be scaled by %.3f (0.5..2 expected: the speed's units are um per ms)",
-                       o->events, v, o->sweep_speed, k);
-  for (int w = 0; w < cal->n_views; w++) {
-    cal->views[w].dx_px_per_um *= k;
-    cal->views[w].dy_px_per_um *= k;
-  }
-  if (!o->quiet)
-    fprintf(stderr, "calib refine: the disparities scaled by %.4f to the piezo's %g um/ms\n", k, o->sweep_speed);
-  return CLI_OK;
-}
-
 /* --sweep: the recording is one object swept through z, whose images the
  * coarse step's refocused peaks would not find from centres a few pixels
  * off (from 2.3 px RMS off it took noise for a turn of -3.3 degrees and
@@ -596,7 +567,7 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
             "%.3f px\n", several, fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, fit.off_grid_px,
             n_placed, rms, worst);
   }
-  return sweep_scale(cal, o, &fit);
+  return calib_sweep_finish(cal, &fit, o->events, o->sweep_speed, o->keep_focus, o->quiet);
 }
 
 int cmd_calib_refine(int argc, char **argv)

@@ -63,6 +63,9 @@ void calib_refine_usage(FILE *f)
           "                       (a piezo's ramps, up or down): the disparities are\n"
           "                       scaled so that the fitted depths move at V (the depth\n"
           "                       scale, which no recording of unknown motion shows)\n"
+          "  --keep-focal-plane   the sweep's focal plane stays the calibration's (by\n"
+          "                       default it moves to where the sweep's images were\n"
+          "                       strongest: the object in focus)\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");

@@ -25,6 +25,10 @@ void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, doubl
  * moved, when those views do not span the grid. */
 int elfm_calib_place_on_grid(elfm_calib *c, const int *from, const int *to, double *shift_px);
 
+/* The 3 x 3 system m[.][0..2] x = m[.][3], solved in place (Gauss-Jordan
+ * with partial pivoting): 0 when it is singular (calib_refine.c) */
+int elfm_calib_solve3(double m[3][4], double x[3]);
+
 /* The median of a[0 .. n) (n > 0), reordering a (calib_sweep.c) */
 double elfm_calib_median(double *a, size_t n);
 

@@ -166,23 +166,10 @@ void elfm_calib_move_gauge_free(elfm_calib *c, const int *use, double *su, doubl
   }
 }
 
-/* cx (or cy) = a + b i + c j over the views with use[v], least squares:
- * the lenslets' grid, turned and scaled as it may be. 0 when the views do
- * not span it (fewer than 3, or all in one row). */
-static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3])
+int elfm_calib_solve3(double m[3][4], double x[3])
 {
-  double m[3][4] = {{0}};
-  for (int v = 0; v < c->n_views; v++) {
-    if (!use[v]) continue;
-    const double x[3] = {1, c->views[v].i, c->views[v].j};
-    const double y = axis ? c->views[v].cy_px : c->views[v].cx_px;
-    for (int a = 0; a < 3; a++) {
-      for (int b = 0; b < 3; b++) m[a][b] += x[a] * x[b];
-      m[a][3] += x[a] * y;
-    }
-  }
-  /* Gauss-Jordan with partial pivoting on the 3 x 3 normal equations */
-  const double scale = m[0][0] + m[1][1] + m[2][2];
+  /* Gauss-Jordan with partial pivoting */
+  const double scale = fabs(m[0][0]) + fabs(m[1][1]) + fabs(m[2][2]);
   for (int k = 0; k < 3; k++) {
     int p = k;
     for (int a = k + 1; a < 3; a++)
@@ -199,8 +186,26 @@ static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3]
       for (int b = k; b < 4; b++) m[a][b] -= f * m[k][b];
     }
   }
-  for (int k = 0; k < 3; k++) abc[k] = m[k][3] / m[k][k];
+  for (int k = 0; k < 3; k++) x[k] = m[k][3] / m[k][k];
   return 1;
+}
+
+/* cx (or cy) = a + b i + c j over the views with use[v], least squares:
+ * the lenslets' grid, turned and scaled as it may be. 0 when the views do
+ * not span it (fewer than 3, or all in one row). */
+static int grid_fit(const elfm_calib *c, const int *use, int axis, double abc[3])
+{
+  double m[3][4] = {{0}};
+  for (int v = 0; v < c->n_views; v++) {
+    if (!use[v]) continue;
+    const double x[3] = {1, c->views[v].i, c->views[v].j};
+    const double y = axis ? c->views[v].cy_px : c->views[v].cx_px;
+    for (int a = 0; a < 3; a++) {
+      for (int b = 0; b < 3; b++) m[a][b] += x[a] * x[b];
+      m[a][3] += x[a] * y;
+    }
+  }
+  return elfm_calib_solve3(m, abc);
 }
 
 double elfm_calib_off_grid(const elfm_calib *c, const int *use, int *worst)
@@ -517,6 +522,15 @@ void elfm_calib_turn_disparities(elfm_calib *c, double angle_deg)
     double r = c->optics.mla_rotation_deg + angle_deg;
     r -= 90.0 * floor((r + 45.0) / 90.0);
     c->optics.mla_rotation_deg = r;
+  }
+}
+
+void elfm_calib_move_focus(elfm_calib *c, double z_um)
+{
+  if (!isfinite(z_um)) return;
+  for (int v = 0; v < c->n_views; v++) {
+    c->views[v].cx_px += c->views[v].dx_px_per_um * z_um;
+    c->views[v].cy_px += c->views[v].dy_px_per_um * z_um;
   }
 }
 

@@ -356,6 +356,101 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
   s->fit.speed_hi_um_per_ms = tmp[(3 * n) / 4];
 }
 
+/* Where the sweep went through focus: the depth at which the views'
+ * images are strongest. A bead's image is sharpest in focus and widens
+ * with its distance from it (defocus), and a sharper image fires more of
+ * its pixels, more often: the median over the views that tell the depth
+ * of their brightest spot's strength, on the integral of zsweep seed 1,
+ * 421 at z -10..0 um and 423 at 0..10, 269 / 303 at -30..-20 / 20..30, 3-6
+ * at the ends (+-80..90). The focal plane is what no fit of the images'
+ * places can see (a move of every view in proportion to its disparity is
+ * an offset of z: the gauge above), and a calibration from the optics puts
+ * it where the optics say (a relay 2.4 % longer than the optics': 22 um
+ * off). log(strength) is fitted with a parabola in z over the frames at
+ * SWEEP_FOCUS_FRAC of the peak or more; its vertex is the focus (seeds 1-4,
+ * a relay 1.25 or 1.28: -0.11..+1.46 um from the truth's focus, mean +0.4;
+ * the half-maximum's middle, -1.6..+2.7). NaN unless the profile falls
+ * below half its peak on both sides of the vertex (the sweep went through
+ * focus and out of it both ways) and the parabola opens down. z: each
+ * frame's depth (NaN: none) in the calibration's depths; zq, run: room for
+ * s->n values. */
+#define SWEEP_FOCUS_FRAC 0.25
+#define SWEEP_FOCUS_SMOOTH 10 /* frames either side of the running median */
+typedef struct sweep_depth {
+  double z, q; /* a frame's depth, and its views' median strength */
+} sweep_depth;
+
+static int cmp_depth(const void *a, const void *b)
+{
+  const double x = ((const sweep_depth *)a)->z, y = ((const sweep_depth *)b)->z;
+  return (x > y) - (x < y);
+}
+
+static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const double *z, sweep_depth *zq,
+                          double *run)
+{
+  double v_tmp[ELFM_MAX_VIEWS];
+  size_t n = 0;
+  for (size_t f = 0; f < s->n; f++) {
+    if (isnan(z[f])) continue;
+    size_t k = 0;
+    for (int v = 0; v < s->nv; v++) {
+      const double a = s->strength[f * (size_t)s->nv + (size_t)v];
+      if (tells[v] && a > 0) v_tmp[k++] = a;
+    }
+    if (k < 3) continue;
+    zq[n++] = (sweep_depth){z[f], elfm_calib_median(v_tmp, k)};
+  }
+  if (n < 20) return NAN;
+  qsort(zq, n, sizeof *zq, cmp_depth);
+  /* the profile's peak, on a running median of the strengths (one frame's
+   * strength scatters by a third) */
+  double peak = 0, win[2 * SWEEP_FOCUS_SMOOTH + 1];
+  for (size_t i = 0; i < n; i++) {
+    const size_t a = i > SWEEP_FOCUS_SMOOTH ? i - SWEEP_FOCUS_SMOOTH : 0;
+    const size_t b = i + SWEEP_FOCUS_SMOOTH < n ? i + SWEEP_FOCUS_SMOOTH : n - 1;
+    for (size_t k = a; k <= b; k++) win[k - a] = zq[k].q;
+    run[i] = elfm_calib_median(win, b - a + 1);
+    peak = fmax(peak, run[i]);
+  }
+  if (!(peak > 0)) return NAN;
+  /* log q = c0 + c1 t + c2 t^2 over the frames at the fraction of the peak
+   * or more, t = (z - mean) / spread for the normal equations' sake */
+  double zm = 0, zs = 0;
+  size_t m = 0;
+  for (size_t i = 0; i < n; i++)
+    if (zq[i].q >= SWEEP_FOCUS_FRAC * peak) {
+      zm += zq[i].z;
+      m++;
+    }
+  if (m < 10) return NAN;
+  zm /= (double)m;
+  for (size_t i = 0; i < n; i++)
+    if (zq[i].q >= SWEEP_FOCUS_FRAC * peak) zs += (zq[i].z - zm) * (zq[i].z - zm);
+  zs = sqrt(zs / (double)m);
+  if (!(zs > 0)) return NAN;
+  double a[3][4] = {{0}};
+  for (size_t i = 0; i < n; i++) {
+    if (zq[i].q < SWEEP_FOCUS_FRAC * peak) continue;
+    const double t = (zq[i].z - zm) / zs, x[3] = {1, t, t * t}, y = log(zq[i].q);
+    for (int r = 0; r < 3; r++) {
+      for (int c = 0; c < 3; c++) a[r][c] += x[r] * x[c];
+      a[r][3] += x[r] * y;
+    }
+  }
+  double c[3];
+  if (!elfm_calib_solve3(a, c) || !(c[2] < 0)) return NAN;
+  const double focus = zm - zs * c[1] / (2 * c[2]);
+  /* through focus and out of it both ways */
+  int below_lo = 0, below_hi = 0;
+  for (size_t i = 0; i < n; i++) {
+    if (run[i] >= 0.5 * peak) continue;
+    below_lo |= zq[i].z < focus;
+    below_hi |= zq[i].z > focus;
+  }
+  return below_lo && below_hi ? focus : NAN;
+}
+
 /* The alternation (the file's head) from c's centres into m, its views
  * with enough images near the model in use[], the views' shares of spots
  * near it into share[]; z, tu, tw: room for s->n values. Into s->fit:
@@ -448,7 +543,9 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   const int nv = s->nv;
   double *z = malloc((s->n + 1) * sizeof *z), *tu = malloc((s->n + 1) * sizeof *tu),
          *tw = malloc((s->n + 1) * sizeof *tw);
-  if (!z || !tu || !tw) {
+  sweep_depth *zq = malloc((s->n + 1) * sizeof *zq);
+  if (!z || !tu || !tw || !zq) {
+    free(zq);
     free(z);
     free(tu);
     free(tw);
@@ -469,6 +566,7 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   if (!qu || !qw) {
     free(qu);
     free(qw);
+    free(zq);
     free(z);
     free(tu);
     free(tw);
@@ -494,9 +592,6 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   int use[ELFM_MAX_VIEWS] = {0};
   sweep_fit(s, c, tells, min_images, z, tu, tw, &m, use);
   sweep_speed(s, z, tu);
-  free(z);
-  free(tu);
-  free(tw);
   /* Centres fitted to another object's images in some views (beads in a
    * row taken for their neighbours, 11 px apart) still fit their images;
    * they lie off the lenslets' grid, which a calibration does not (the
@@ -540,6 +635,21 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   }
   if (shift_px) memcpy(shift_px, sh, 2 * (size_t)nv * sizeof *shift_px);
   if (n_moved) *n_moved = moved;
+  /* the focus, in the depths of the calibration as it is now (the gauge
+   * cleared above is an offset of the fit's depths) */
+  s->fit.focus_um = NAN;
+  if (moved > 0) {
+    double tmp[ELFM_MAX_VIEWS];
+    for (size_t f = 0; f < s->n; f++) {
+      z[f] = frame_z(s, c, tells, f, NAN, INFINITY, tmp);
+      for (int it = 0; it < 2; it++) z[f] = frame_z(s, c, tells, f, z[f], sweep_radius_px[SWEEP_ITERATIONS - 1], tmp);
+    }
+    s->fit.focus_um = sweep_focus(s, tells, z, zq, tu);
+  }
+  free(zq);
+  free(z);
+  free(tu);
+  free(tw);
   s->n = 0;
   return ELFM_OK;
 }

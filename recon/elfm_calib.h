@@ -239,8 +239,18 @@ typedef struct elfm_calib_sweep_fit {
   /* |dz/dt| over 40 ms spans within the middle half of the fitted depths:
    * median and middle half; NaN with fewer than 20 spans */
   double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;
+  /* the depth, in the calibration apply leaves, where the views' images
+   * are strongest (the object in focus: docs/recon.md "The focal plane
+   * from a sweep"); NaN when the sweep did not go through it and out */
+  double focus_um;
 } elfm_calib_sweep_fit;
 void elfm_calib_sweep_result(const elfm_calib_sweep *s, elfm_calib_sweep_fit *fit);
+
+/* The plane at depth z_um made the focal plane (z = 0): every view's
+ * centre moved by its disparity x z_um, so that image = centre + x + d z
+ * keeps every object's images (each at z - z_um now). A sweep's focus
+ * (elfm_calib_sweep_fit.focus_um) is such a plane. Not finite: nothing. */
+void elfm_calib_move_focus(elfm_calib *c, double z_um);
 
 /* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
  * turn turns every view's centre about the centres' mean and its disparity

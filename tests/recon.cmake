@@ -23,6 +23,9 @@ elfm_add_test(test_calib_sweep test_calib_sweep.c TIMEOUT 300)
 # sweeps of five beads and of thirty and their refinements: ~10 s
 # (of which ~6 s the simulator's thirty beads)
 elfm_add_test(test_calib_sweep_beads test_calib_sweep_beads.c TIMEOUT 120)
+# frames drawn by hand (five sweeps), two simulated sweeps refined three
+# times, a flow simulated and tracked twice: ~8 s
+elfm_add_test(test_calib_sweep_focus test_calib_sweep_focus.c TIMEOUT 120)
 # 8,000 random spot lists matched to their patterns twice, one way in full: ~3 s
 elfm_add_test(test_calib_pattern test_calib_pattern.c)
 elfm_add_test(test_recon_pipeline test_recon_pipeline.c)

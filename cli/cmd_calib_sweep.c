@@ -1,0 +1,76 @@
+/* cmd_calib_sweep.c — what `calib refine --sweep` makes of its fit besides
+ * the centres (cmd_calib_refine.c): the focal plane where the object was
+ * in focus, and the depth scale from the piezo's speed. */
+#include <math.h>
+#include <stdio.h>
+
+#include "cli.h"
+
+static const char *const C = "calib refine";
+
+/* The depth scale: the fitted depths move at the speed the disparities
+ * give them; a piezo's known speed scales the disparities (every view's by
+ * one factor: the centres fitted stay right, image = centre + d z being
+ * unchanged with d x k and z / k). A relay magnification 2.4 % off, which
+ * no recording of unknown motion shows (docs/recon.md), is such a factor. */
+static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, const char *events, double speed, int quiet)
+{
+  const double v = fit->speed_um_per_ms;
+  if (!quiet && isfinite(v))
+    fprintf(stderr, "calib refine: the object moved in z at %.4f um/ms by the disparities as they are (the "
+            "middle half of 40 ms spans in the middle half of its depths %.4f-%.4f)%s\n", v,
+            fit->speed_lo_um_per_ms, fit->speed_hi_um_per_ms,
+            speed > 0 ? "" : "; --sweep-um-per-ms with the piezo's speed scales the depths to it");
+  if (!(speed > 0)) return CLI_OK;
+  if (!isfinite(v))
+    return cli_message(C, CLI_FAIL, "%s: too few frames told the depth to measure the object's speed by "
+                       "(--sweep-um-per-ms)", events);
+  const double k = v / speed;
+  if (!(k > 0.5 && k < 2))
+    return cli_message(C, CLI_FAIL, "%s: the object moved at %.4f um/ms, --sweep-um-per-ms %g: the "
+                       "disparities would be scaled by %.3f (0.5..2 expected: the speed's units are um per ms)",
+                       events, v, speed, k);
+  for (int w = 0; w < cal->n_views; w++) {
+    cal->views[w].dx_px_per_um *= k;
+    cal->views[w].dy_px_per_um *= k;
+  }
+  if (!quiet)
+    fprintf(stderr, "calib refine: the disparities scaled by %.4f to the piezo's %g um/ms\n", k, speed);
+  return CLI_OK;
+}
+
+/* The focal plane: where the sweep's images were strongest (the object in
+ * focus), which no fit of their places sees (a move of every view along
+ * its disparity is an offset of z), made z = 0 unless --keep-focal-plane.
+ * A calibration from the optics puts it where they say: a relay 2.4 %
+ * longer than the optics' put it 21 um off. Nearer than FOCUS_TOL_UM the
+ * sweep does not tell it better than the calibration has it: one-way
+ * sweeps of one bead, seeds 1-4 either way, put it -1.9..+1.9 um from the
+ * truth's, +0.8 um on the side the bead went to (docs/recon.md "The focal
+ * plane from a sweep"). */
+#define FOCUS_TOL_UM 2.0
+#define FOCUS_TOL_TEXT "2"
+static void sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int keep, int quiet)
+{
+  const double z = fit->focus_um;
+  if (!isfinite(z)) {
+    if (!quiet)
+      fprintf(stderr, "calib refine: the sweep's images were strongest at no depth it went through and out of "
+              "both ways: the focal plane kept\n");
+    return;
+  }
+  const int move = !keep && fabs(z) > FOCUS_TOL_UM;
+  if (move) elfm_calib_move_focus(cal, z);
+  if (!quiet)
+    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths: %s\n", z,
+            move ? "the focal plane moved there"
+            : keep ? "the focal plane kept (--keep-focal-plane)"
+                   : "within " FOCUS_TOL_TEXT " um, as near as a sweep tells it, the focal plane kept");
+}
+
+int calib_sweep_finish(elfm_calib *cal, const elfm_calib_sweep_fit *fit, const char *events, double speed_um_per_ms,
+                       int keep_focus, int quiet)
+{
+  sweep_focus(cal, fit, keep_focus, quiet);
+  return sweep_scale(cal, fit, events, speed_um_per_ms, quiet);
+}
