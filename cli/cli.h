@@ -28,10 +28,12 @@ int cmd_calib_refine(int argc, char **argv); /* calib refine (cmd_calib_refine.c
 void calib_refine_usage(FILE *f);
 void calib_refine_recon_defaults(elfm_recon_options *ro);
 /* calib refine --sweep, after its fit (cmd_calib_sweep.c): the sweep's
- * focus made z = 0 unless keep_focus; the disparities scaled to the
- * piezo's speed (um/ms, 0: not known). CLI_OK or CLI_FAIL (said). */
-int calib_sweep_finish(elfm_calib *cal, const elfm_calib_sweep_fit *fit, const char *events, double speed_um_per_ms,
-                       int keep_focus, int quiet);
+ * focus made z = 0 unless keep_focus; then, the focal plane moved, the
+ * relay's magnification from the views' grid against start's unless
+ * keep_scale; the disparities scaled to the piezo's speed (um/ms, 0: not
+ * known). CLI_OK or CLI_FAIL (said). */
+int calib_sweep_finish(elfm_calib *cal, const elfm_calib *start, const elfm_calib_sweep_fit *fit, const char *events,
+                       double speed_um_per_ms, int keep_focus, int keep_scale, int quiet);
 int cmd_simulate(int argc, char **argv);
 int cmd_recon(int argc, char **argv);
 int cmd_track(int argc, char **argv);

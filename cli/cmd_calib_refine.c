@@ -65,6 +65,7 @@ typedef struct refine_opts {
   int sweep;           /* --sweep: one object swept through z, its views found frame by frame */
   double sweep_speed;  /* --sweep-um-per-ms: its known axial speed (0: not known) */
   int keep_focus;      /* --keep-focal-plane: the sweep's focus not made z = 0 */
+  int keep_scale;      /* --keep-scale: nor the relay's magnification taken from its grid */
   int ms_given;
 } refine_opts;
 
@@ -226,7 +227,7 @@ static void ctx_free(refine_ctx *c, int threads, int slots)
 static int parse(int argc, char **argv, refine_opts *o)
 {
   enum { O_CALIB = 256, O_EVENTS, O_OUT, O_MS, O_PASSES, O_THR, O_MINV, O_MINP, O_SEARCH, O_TURN, O_SWEEP,
-         O_SPEED, O_KEEP_FOCUS, O_QUIET };
+         O_SPEED, O_KEEP_FOCUS, O_KEEP_SCALE, O_QUIET };
   static const struct option opts[] = {
       CLI_RECON_LONG_OPTIONS,
       {"calib", required_argument, 0, O_CALIB}, {"events", required_argument, 0, O_EVENTS},
@@ -235,7 +236,8 @@ static int parse(int argc, char **argv, refine_opts *o)
       {"min-views", required_argument, 0, O_MINV}, {"min-points", required_argument, 0, O_MINP},
       {"search-px", required_argument, 0, O_SEARCH}, {"turn-deg", required_argument, 0, O_TURN},
       {"sweep", no_argument, 0, O_SWEEP}, {"sweep-um-per-ms", required_argument, 0, O_SPEED},
-      {"keep-focal-plane", no_argument, 0, O_KEEP_FOCUS}, {"quiet", no_argument, 0, O_QUIET},
+      {"keep-focal-plane", no_argument, 0, O_KEEP_FOCUS}, {"keep-scale", no_argument, 0, O_KEEP_SCALE},
+      {"quiet", no_argument, 0, O_QUIET},
       {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
   memset(o, 0, sizeof *o);
   calib_refine_recon_defaults(&o->recon);
@@ -278,6 +280,7 @@ static int parse(int argc, char **argv, refine_opts *o)
       ok = cli_parse_double_in(C, "--sweep-um-per-ms", optarg, 0, 1, 1e6, "> 0", &o->sweep_speed);
       break;
     case O_KEEP_FOCUS: o->keep_focus = 1; break;
+    case O_KEEP_SCALE: o->keep_scale = 1; break;
     case O_QUIET: o->quiet = 1; break;
     default: return cli_bad_option(C, c, argv);
     }
@@ -529,6 +532,7 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   double shift[2 * ELFM_MAX_VIEWS];
   int moved = 0;
   elfm_calib_sweep_fit fit;
+  const elfm_calib start = *cal;
   if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
   elfm_calib_sweep_result(c->sweep, &fit);
   elfm_calib_sweep_free(c->sweep);
@@ -567,7 +571,7 @@ static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
             "%.3f px\n", several, fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, fit.off_grid_px,
             n_placed, rms, worst);
   }
-  return calib_sweep_finish(cal, &fit, o->events, o->sweep_speed, o->keep_focus, o->quiet);
+  return calib_sweep_finish(cal, &start, &fit, o->events, o->sweep_speed, o->keep_focus, o->keep_scale, o->quiet);
 }
 
 int cmd_calib_refine(int argc, char **argv)

@@ -66,6 +66,10 @@ void calib_refine_usage(FILE *f)
           "  --keep-focal-plane   the sweep's focal plane stays the calibration's (by\n"
           "                       default it moves to where the sweep's images were\n"
           "                       strongest: the object in focus)\n"
+          "  --keep-scale         the sweep's um_per_px and disparities stay the\n"
+          "                       calibration's (by default, with the focal plane\n"
+          "                       moved, the views' grid against the start's gives\n"
+          "                       the relay's magnification, which scales both)\n"
           "  --quiet              no progress\n"
           "frames and refocusing (the same options as eventlfm track's; its defaults;\n"
           "--z-*-um set the passes' planes, the file written keeps its own):\n");

@@ -534,6 +534,26 @@ void elfm_calib_move_focus(elfm_calib *c, double z_um)
   }
 }
 
+double elfm_calib_grid_pitch(const elfm_calib *c)
+{
+  int all[ELFM_MAX_VIEWS];
+  for (int v = 0; v < c->n_views; v++) all[v] = 1;
+  double gx[3], gy[3];
+  if (!grid_fit(c, all, 0, gx) || !grid_fit(c, all, 1, gy)) return NAN;
+  return 0.5 * (hypot(gx[1], gy[1]) + hypot(gx[2], gy[2]));
+}
+
+void elfm_calib_scale_relay(elfm_calib *c, double k)
+{
+  if (!(isfinite(k) && k > 0)) return;
+  c->um_per_px /= k;
+  for (int v = 0; v < c->n_views; v++) {
+    c->views[v].dx_px_per_um *= k;
+    c->views[v].dy_px_per_um *= k;
+  }
+  if (c->has_optics) c->optics.relay *= k;
+}
+
 /* The least-squares turn carrying the lattice vectors (i, j) onto (x, y):
  * tan a = sum((i, j) x (x, y)) / sum((i, j) . (x, y)); 0 with no match. */
 static double lattice_turn_deg(double cross, double dot)

@@ -252,6 +252,18 @@ void elfm_calib_sweep_result(const elfm_calib_sweep *s, elfm_calib_sweep_fit *fi
  * (elfm_calib_sweep_fit.focus_um) is such a plane. Not finite: nothing. */
 void elfm_calib_move_focus(elfm_calib *c, double z_um);
 
+/* The lenslets' grid on the sensor: the mean length of its two lattice
+ * vectors (cx, cy affine in (i, j) over every view, least squares), px;
+ * NaN when the views do not span it. The lenslets' pitch is made to well
+ * under 0.1 % and the pixels' too, so between two calibrations of one
+ * microscope it changes with the relay's magnification alone (the optics
+ * between the lens array and the sensor), which scales everything on the
+ * sensor: scale_relay(c, k) takes the relay's magnification k times c's
+ * (um_per_px / k, every disparity x k, optics.relay x k; the centres
+ * stay). Not finite or not above 0: nothing. */
+double elfm_calib_grid_pitch(const elfm_calib *c);
+void elfm_calib_scale_relay(elfm_calib *c, double k);
+
 /* The lens array turned about the optical axis (elfm_optics.mla_rotation_deg):
  * turn turns every view's centre about the centres' mean and its disparity
  * (dx, dy) by angle_deg (sensor pixel axes, as in elfm_optics);

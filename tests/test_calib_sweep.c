@@ -272,7 +272,9 @@ static void test_cli(void)
    * the disparities come within 1 % of the truth's (0.7 % short measured:
    * the fitted depths fall short away from focus), where the optics' are
    * 2.4 % short; without the speed they stay the optics' and the speed
-   * measured says 0.20 um/ms */
+   * measured says 0.20 um/ms (--keep-scale: the relay's scale that the
+   * views' grid shows once the focal plane has moved, which would come
+   * first, is test_calib_sweep_focus.c's) */
   snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --out %s/zr --no-truth --quiet",
            dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
@@ -282,7 +284,7 @@ static void test_cli(void)
   snprintf(p, sizeof p, "%s/zr/calib.json", dir);
   CHECK_OK(elfm_calib_load(p, &relay, &err), &err);
   snprintf(args, sizeof args, "calib refine --sweep-um-per-ms 0.2 --calib %s/optics.json --events %s/zr/events.raw "
-           "--out %s/zr.json --passes 1", dir, dir, dir);
+           "--out %s/zr.json --passes 1 --keep-scale", dir, dir, dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
   CHECK(cli_file_has(dir, "err.txt", "the disparities scaled by 1.01"));
   snprintf(p, sizeof p, "%s/zr.json", dir);
@@ -294,7 +296,7 @@ static void test_cli(void)
   CHECK_MSG(fabs(ratio - 1) < 0.01, "disparities %.4f of the truth's", ratio);
   CHECK_MSG(centre_error(&r, &relay) < 0.6, "centres %.3f px off", centre_error(&r, &relay));
   snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/zr/events.raw "
-           "--out %s/zr0.json --passes 0", dir, dir, dir);
+           "--out %s/zr0.json --passes 0 --keep-scale", dir, dir, dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
   CHECK(cli_file_has(dir, "err.txt", "the object moved in z at 0.20") &&
         cli_file_has(dir, "err.txt", "--sweep-um-per-ms with the piezo's speed"));

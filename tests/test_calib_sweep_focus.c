@@ -1,6 +1,7 @@
 /* test_calib_sweep_focus.c — the focal plane from a z sweep
- * (elfm_calib_sweep_fit.focus_um, recon/calib_sweep.c; elfm_calib_move_focus;
- * `calib refine --sweep` and --keep-focal-plane, cli/cmd_calib_sweep.c):
+ * (elfm_calib_sweep_fit.focus_um, recon/calib_sweep.c; elfm_calib_move_focus,
+ * elfm_calib_grid_pitch, elfm_calib_scale_relay; `calib refine --sweep`,
+ * --keep-focal-plane and --keep-scale, cli/cmd_calib_sweep.c):
  *  - frames drawn by hand: one bead swept from z -80 to +80 um whose images
  *    are brightest at a focus of +12 um (or -30), fainter away from it, from
  *    centres ~5 px off (none of it in proportion to the disparities): the
@@ -8,17 +9,27 @@
  *    the sweep's end (+100 um) or not below half that on one side (+70 um):
  *    no focus (NaN);
  *  - elfm_calib_move_focus: every point's images kept at z less the move,
- *    to 1e-9 px; NaN or infinite moves nothing;
+ *    to 1e-9 px; NaN or infinite moves nothing; elfm_calib_grid_pitch: the
+ *    optics' 600 um x 1.25 / 4.86 um, NaN on three views in a row;
+ *    elfm_calib_scale_relay: the scale and disparities x k, the pitch kept,
+ *    0, negative or NaN nothing;
  *  - the command on zsweep seed 1 with a relay 2.4 % longer than the
  *    optics' calibration's (whose focal plane then lies 20.9 um off): the
- *    focal plane moved to within 2.5 um of the truth's (+1.9 measured), the
- *    message says so; --keep-focal-plane keeps it 15 um or more off; with
- *    the optics' own relay (focus found +1.1 um, within the 2 um a sweep
- *    tells) the start's focal plane is kept, within 0.5 um of the truth's;
- *  - a flow (100 ms, seed 2) under the same relay, tracked with each of
- *    those calibrations: alpha 0.70 or more with the focal plane moved
- *    (0.754 measured, 0.898 with the simulator's own calibration: the
- *    lateral scale stays 2.5 % off), under 0.1 with it kept (0.004). */
+ *    focal plane moved to within 2.5 um of the truth's (+1.9 measured), and
+ *    then the views' grid, 1.02 x the start's, taken for the relay's
+ *    magnification: um_per_px and the disparities within 0.5 % of the
+ *    truth's (-0.21 / +0.21 % measured, the optics' +2.40 / -2.34 %), the
+ *    messages say so; --keep-scale keeps the optics' scale (the same focal
+ *    plane); the piezo's speed given, the disparities follow it (within 1 %,
+ *    -0.68 %) and um_per_px the grid; --keep-focal-plane keeps it 15 um or
+ *    more off and says nothing of the grid; with the optics' own relay
+ *    (focus found +1.1 um, within the 2 um a sweep tells) the start's focal
+ *    plane and scale are kept, within 0.5 um of the truth's;
+ *  - a flow (100 ms, seed 2) under the same relay, tracked with those
+ *    calibrations: alpha 0.80 or more with the focal plane and the scale
+ *    moved (0.819 measured; 0.898 with the simulator's own calibration),
+ *    0.70 or more and less than that with the scale kept (0.752), under 0.1
+ *    with the focal plane kept (0.004). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -143,26 +154,61 @@ static void test_move(const elfm_calib *truth)
   elfm_calib_move_focus(&c, NAN);
   elfm_calib_move_focus(&c, INFINITY);
   CHECK(memcmp(&c, truth, sizeof c) == 0);
+
+  /* the grid's pitch: the lenslets' 600 um x the relay's 1.25 over 4.86
+   * um pixels; a relay 3 % longer: the lateral scale and the disparities
+   * 3 % more px per um, the centres (and the pitch) as they were */
+  const double pitch = elfm_calib_grid_pitch(truth);
+  printf("the grid's pitch %.4f px\n", pitch);
+  CHECK_MSG(fabs(pitch - 600 * 1.25 / 4.86) < 0.01, "the grid's pitch %.4f px", pitch);
+  elfm_calib_scale_relay(&c, 1.03);
+  CHECK(fabs(elfm_calib_grid_pitch(&c) - pitch) < 1e-9);
+  CHECK(fabs(c.um_per_px * 1.03 - truth->um_per_px) < 1e-12 &&
+        fabs(c.views[0].dx_px_per_um - 1.03 * truth->views[0].dx_px_per_um) < 1e-12 &&
+        fabs(c.views[0].dy_px_per_um - 1.03 * truth->views[0].dy_px_per_um) < 1e-12);
+  CHECK(!truth->has_optics || fabs(c.optics.relay - 1.03 * truth->optics.relay) < 1e-12);
+  c = *truth;
+  elfm_calib_scale_relay(&c, 0);
+  elfm_calib_scale_relay(&c, -1);
+  elfm_calib_scale_relay(&c, NAN);
+  CHECK(memcmp(&c, truth, sizeof c) == 0);
+  /* three views in a row span no grid */
+  elfm_calib row = *truth;
+  row.n_views = 0;
+  for (int v = 0; v < truth->n_views; v++)
+    if (truth->views[v].j == 0 && abs(truth->views[v].i) <= 1) row.views[row.n_views++] = truth->views[v];
+  CHECK_EQ_INT(row.n_views, 3);
+  CHECK(isnan(elfm_calib_grid_pitch(&row)));
 }
 
 static char dir[] = "/tmp/elfm_calib_focus_XXXXXX";
 
 /* calib refine --sweep --passes 0 on zsweep DIR/NAME with the optics'
- * calibration, into DIR/OUT; extra options EXTRA; its focal plane's offset
- * from the simulator's calibration, um (NaN when it failed) */
-static double refine(const char *name, const char *out, const char *extra)
+ * calibration, into DIR/OUT (and *r); extra options EXTRA; its focal
+ * plane's offset from the simulator's calibration (into *truth), um (NaN
+ * when it failed) */
+static double refine(const char *name, const char *out, const char *extra, elfm_calib *r, elfm_calib *truth)
 {
   char args[3000], p[800];
   elfm_error err;
-  elfm_calib truth, r;
   snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/%s/events.raw --out %s/%s "
            "--passes 0 %s", dir, dir, name, dir, out, extra);
   CHECK_EQ_INT(cli_run(dir, args), 0);
   snprintf(p, sizeof p, "%s/%s/calib.json", dir, name);
-  CHECK_OK(elfm_calib_load(p, &truth, &err), &err);
+  CHECK_OK(elfm_calib_load(p, truth, &err), &err);
   snprintf(p, sizeof p, "%s/%s", dir, out);
-  if (elfm_calib_load(p, &r, &err) != ELFM_OK) return NAN;
-  return focal_offset(&r, &truth);
+  if (elfm_calib_load(p, r, &err) != ELFM_OK) return NAN;
+  return focal_offset(r, truth);
+}
+
+/* a's lateral scale and corner view's disparity against b's, less 1 */
+static double scale_off(const elfm_calib *a, const elfm_calib *b)
+{
+  return a->um_per_px / b->um_per_px - 1;
+}
+static double disparity_off(const elfm_calib *a, const elfm_calib *b)
+{
+  return a->views[0].dx_px_per_um / b->views[0].dx_px_per_um - 1;
 }
 
 static double flow_alpha(const char *calib)
@@ -180,36 +226,72 @@ static double flow_alpha(const char *calib)
 
 static void test_cli(void)
 {
-  char args[3000];
+  char args[3000], p[800];
+  elfm_error err;
+  elfm_calib optics, truth, r;
   if (!cli_test_ready(dir)) return;
   snprintf(args, sizeof args, "calib from-optics --out %s/optics.json", dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
+  snprintf(p, sizeof p, "%s/optics.json", dir);
+  CHECK_OK(elfm_calib_load(p, &optics, &err), &err);
   snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --out %s/zr --no-truth --quiet",
            dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
-  const double moved = refine("zr", "moved.json", "");
-  CHECK(cli_file_has(dir, "err.txt", "the sweep's images were strongest at z +") &&
-        cli_file_has(dir, "err.txt", "the focal plane moved there"));
-  const double kept = refine("zr", "kept.json", "--keep-focal-plane");
-  CHECK(cli_file_has(dir, "err.txt", "the focal plane kept (--keep-focal-plane)"));
-  printf("a relay 2.4 %% longer than the optics': the focal plane %+.2f um off, %+.2f with --keep-focal-plane\n",
-         moved, kept);
-  CHECK_MSG(fabs(moved) < 2.5, "the focal plane moved to %.2f um off", moved);
-  CHECK_MSG(fabs(kept) > 15, "--keep-focal-plane: the focal plane %.2f um off", kept);
 
+  /* the focal plane moved, then the relay's scale from the grid */
+  const double moved = refine("zr", "moved.json", "", &r, &truth);
+  CHECK(cli_file_has(dir, "err.txt", "the sweep's images were strongest at z +") &&
+        cli_file_has(dir, "err.txt", "the focal plane moved there") &&
+        cli_file_has(dir, "err.txt", "the views' grid is 1.02") &&
+        cli_file_has(dir, "err.txt", "x the start's: the relay's magnification, um_per_px 0.9257 -> 0.90"));
+  printf("a relay 2.4 %% longer than the optics': the focal plane %+.2f um off, um_per_px %+.2f %%, disparities "
+         "%+.2f %% (the optics' %+.2f / %+.2f %%)\n", moved, 100 * scale_off(&r, &truth), 100 * disparity_off(&r, &truth),
+         100 * scale_off(&optics, &truth), 100 * disparity_off(&optics, &truth));
+  CHECK_MSG(fabs(moved) < 2.5, "the focal plane moved to %.2f um off", moved);
+  CHECK_MSG(fabs(scale_off(&r, &truth)) < 0.005 && fabs(disparity_off(&r, &truth)) < 0.005,
+            "um_per_px %.4f, disparities %.4f off", scale_off(&r, &truth), disparity_off(&r, &truth));
+  /* --keep-scale: the optics' scale */
+  const double still = refine("zr", "still.json", "--keep-scale", &r, &truth);
+  CHECK(cli_file_has(dir, "err.txt", "the scale kept (--keep-scale)"));
+  CHECK_MSG(fabs(still - moved) < 1e-9, "--keep-scale moved the focal plane to %.3f, not %.3f", still, moved);
+  CHECK_MSG(fabs(scale_off(&r, &optics)) < 1e-6 && fabs(disparity_off(&r, &optics)) < 1e-3,
+            "--keep-scale: um_per_px %.3g, disparities %.3g off the optics'", scale_off(&r, &optics),
+            disparity_off(&r, &optics));
+  /* the piezo's speed given too: the disparities follow it, from the
+   * grid's scale */
+  const double piezo = refine("zr", "piezo.json", "--sweep-um-per-ms 0.2", &r, &truth);
+  printf("... with the piezo's speed: the focal plane %+.2f um, um_per_px %+.2f %%, disparities %+.2f %%\n", piezo,
+         100 * scale_off(&r, &truth), 100 * disparity_off(&r, &truth));
+  CHECK(cli_file_has(dir, "err.txt", "the disparities scaled by 0.9"));
+  CHECK_MSG(fabs(scale_off(&r, &truth)) < 0.005 && fabs(disparity_off(&r, &truth)) < 0.01,
+            "um_per_px %.4f, disparities %.4f off", scale_off(&r, &truth), disparity_off(&r, &truth));
+  /* --keep-focal-plane: neither seen */
+  const double kept = refine("zr", "kept.json", "--keep-focal-plane", &r, &truth);
+  CHECK(cli_file_has(dir, "err.txt", "the focal plane kept (--keep-focal-plane)") &&
+        !cli_file_has(dir, "err.txt", "the views' grid"));
+  printf("... --keep-focal-plane: %+.2f um off\n", kept);
+  CHECK_MSG(fabs(kept) > 15, "--keep-focal-plane: the focal plane %.2f um off", kept);
+  CHECK(fabs(scale_off(&r, &optics)) < 1e-6);
+
+  /* the optics' own relay: the focus found within 2 um, nothing moved */
   snprintf(args, sizeof args, "simulate zsweep --seed 1 --out %s/zs --no-truth --quiet", dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
-  const double right = refine("zs", "right.json", "");
-  CHECK(cli_file_has(dir, "err.txt", "as near as a sweep tells it, the focal plane kept"));
+  const double right = refine("zs", "right.json", "", &r, &truth);
+  CHECK(cli_file_has(dir, "err.txt", "as near as a sweep tells it, the focal plane kept") &&
+        !cli_file_has(dir, "err.txt", "the views' grid"));
   printf("the optics' own relay: the focal plane %+.2f um off\n", right);
   CHECK_MSG(fabs(right) < 0.5, "the right relay: the focal plane %.2f um off", right);
+  CHECK(fabs(scale_off(&r, &optics)) < 1e-6);
 
   snprintf(args, sizeof args, "simulate flow --seed 2 --duration-ms 100 --param optics.relay=1.28 --out %s/flow "
            "--quiet", dir);
   CHECK_EQ_INT(cli_run(dir, args), 0);
-  const double a_moved = flow_alpha("moved.json"), a_kept = flow_alpha("kept.json");
-  printf("flow 100 ms seed 2 under that relay: alpha %.4f with the focal plane moved, %.4f kept\n", a_moved, a_kept);
-  CHECK_MSG(a_moved >= 0.70, "alpha %.4f with the focal plane moved", a_moved);
+  const double a_moved = flow_alpha("moved.json"), a_still = flow_alpha("still.json"),
+               a_kept = flow_alpha("kept.json");
+  printf("flow 100 ms seed 2 under that relay: alpha %.4f with the focal plane and the scale moved, %.4f with the "
+         "scale kept, %.4f with both kept\n", a_moved, a_still, a_kept);
+  CHECK_MSG(a_moved >= 0.80, "alpha %.4f with the focal plane and the scale moved", a_moved);
+  CHECK_MSG(a_still >= 0.70 && a_still < a_moved, "alpha %.4f with the scale kept", a_still);
   CHECK_MSG(a_kept < 0.1, "alpha %.4f with the focal plane kept", a_kept);
 
   snprintf(args, sizeof args, "rm -rf '%s'", dir);
