@@ -51,7 +51,7 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * sweep does not tell it better than the calibration has it: 20 simulated
  * one-way sweeps on the 5 x 5 array put it -1.9..+2.1 um from the truth's
  * (3 x 3 and 7 x 7: +0.6..+3.6), mostly on the side the bead went to; up
- * and down +0.3 / +0.9 (docs/recon.md "The focal plane from a sweep"). 1
+ * and down +0.1..+1.5 (docs/recon.md "The focal plane from a sweep"). 1
  * when it moved the focal plane. */
 #define FOCUS_TOL_UM 2.0
 #define FOCUS_TOL_TEXT "2"
