@@ -177,6 +177,17 @@ static int show(int argc, char **argv)
   elfm_calib_turns(&c, &turn_c, &turn_d);
   printf("lens array turned %+.3f deg against the sensor's rows (by its centres), %+.3f deg (by its "
          "disparities)\n", turn_c, turn_d);
+  /* the grid's pitch against the one its optics give: they part when the
+   * relay's magnification is not the optics' (calib refine --sweep takes
+   * it from the grid, docs/recon.md "The focal plane from a sweep") */
+  const double pitch = elfm_calib_grid_pitch(&c);
+  if (isfinite(pitch)) {
+    printf("views' grid %.2f px apart", pitch);
+    if (c.has_optics && c.pixel_um > 0)
+      printf(" (the lenslets' %g um x the relay's %.4f over the pixels: %.2f px)", c.optics.mla_pitch_um,
+             c.optics.relay, c.optics.mla_pitch_um * c.optics.relay / c.pixel_um);
+    printf("\n");
+  }
   /* Why the crop's share on the sensor: a grid wider than the sensor (the
    * paper's 5 x 5 overhangs the EVK4's 720 rows; on a 640 x 480 sensor its
    * corner views are gone) leaves objects far from the axis seen by fewer

@@ -78,6 +78,10 @@ grep -q "accel_mm_per_s2" "$dir.err" || { echo "FAIL: stage-speed-half: $(cat "$
 check from-optics 0 "$bin" calib from-optics --na 0.5 --out "$dir/c.json"
 check show 0 "$bin" calib show "$dir/c.json"
 grep -q "view" "$dir.out" || { echo "FAIL: calib show printed no views"; fail=$((fail+1)); }
+# the views' grid and the optics' (600 um lenslets x relay 1.25 / 4.86 um
+# pixels = 154.32 px), which part when a sweep has taken another relay
+grep -q "^views' grid 154.32 px apart (the lenslets' 600 um x the relay's 1.2500 over the pixels: 154.32 px)$" "$dir.out" ||
+  { echo "FAIL: calib show's grid: $(grep grid "$dir.out")"; fail=$((fail+1)); }
 # each view's line: its shift per um of depth points along its place in
 # the grid, x with i and y with j (0 on the middle column or row), and the
 # views (i, j) and (j, i) have their shifts swapped (a y shift printed
