@@ -51,8 +51,8 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * sweep does not tell it better than the calibration has it: 20 simulated
  * one-way sweeps on the 5 x 5 array put it -1.9..+2.1 um from the truth's
  * (3 x 3 and 7 x 7: +0.6..+3.6), mostly on the side the bead went to; up
- * and down +0.1..+1.5 (docs/recon.md "The focal plane from a sweep"). 1
- * when it moved the focal plane. */
+ * and down, each way fitted alone, -0.22..+0.35 (docs/recon.md "The focal
+ * plane from a sweep"). 1 when it moved the focal plane. */
 #define FOCUS_TOL_UM 2.0
 #define FOCUS_TOL_TEXT "2"
 static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int keep, int quiet)
@@ -66,9 +66,13 @@ static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int kee
   }
   const int move = !keep && fabs(z) > FOCUS_TOL_UM;
   if (move) elfm_calib_move_focus(cal, z);
+  char ways[96] = "";
+  if (isfinite(fit->focus_up_um) && isfinite(fit->focus_down_um))
+    snprintf(ways, sizeof ways, " (the mean of the way up's %+.2f and the way down's %+.2f)", fit->focus_up_um,
+             fit->focus_down_um);
   if (!quiet)
-    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths: %s\n", z,
-            move ? "the focal plane moved there"
+    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths%s: %s\n", z,
+            ways, move ? "the focal plane moved there"
             : keep ? "the focal plane kept (--keep-focal-plane)"
                    : "within " FOCUS_TOL_TEXT " um, as near as a sweep tells it, the focal plane kept");
   return move;

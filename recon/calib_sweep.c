@@ -372,8 +372,9 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
  * the half-maximum's middle, -1.6..+2.7). NaN unless the profile falls
  * below half its peak on both sides of the vertex (the sweep went through
  * focus and out of it both ways) and the parabola opens down. z: each
- * frame's depth (NaN: none) in the calibration's depths; zq, run: room for
- * s->n values. */
+ * frame's depth (NaN: none) in the calibration's depths; way 0: every
+ * frame's, +1 / -1: only those of frames going up / down (way_of[f]); zq,
+ * run: room for s->n values. */
 #define SWEEP_FOCUS_FRAC 0.25
 #define SWEEP_FOCUS_SMOOTH 10 /* frames either side of the running median */
 typedef struct sweep_depth {
@@ -386,13 +387,13 @@ static int cmp_depth(const void *a, const void *b)
   return (x > y) - (x < y);
 }
 
-static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const double *z, sweep_depth *zq,
-                          double *run)
+static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const double *z, const signed char *way_of,
+                          int way, sweep_depth *zq, double *run)
 {
   double v_tmp[ELFM_MAX_VIEWS];
   size_t n = 0;
   for (size_t f = 0; f < s->n; f++) {
-    if (isnan(z[f])) continue;
+    if (isnan(z[f]) || (way != 0 && way_of[f] != way)) continue;
     size_t k = 0;
     for (int v = 0; v < s->nv; v++) {
       const double a = s->strength[f * (size_t)s->nv + (size_t)v];
@@ -449,6 +450,34 @@ static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const dou
     below_hi |= zq[i].z > focus;
   }
   return below_lo && below_hi ? focus : NAN;
+}
+
+/* Which way each frame's object went: +1 up, -1 down, 0 not known (the
+ * depths SWEEP_WAY_US before and after it, or either missing, the same);
+ * returns 1 when the sweep went both ways, each in SWEEP_WAY_SHARE of the
+ * frames whose way is known or more (a one-way sweep of 30 beads on a
+ * slide had frames "going down" where its fit slipped, whose own focus
+ * lay 11-33 um off).
+ * A one-way sweep's focus lies on the side the object went to, by 0-2.4
+ * um (the images of a bead coming into focus and leaving it differ), and
+ * a sweep up and down fitted at once by 0.1-1.5 um; the mean of the two
+ * ways' foci, each fitted alone, came within 0.35 um (seeds 1-4,
+ * docs/recon.md "The focal plane from a sweep"). */
+#define SWEEP_WAY_US 10000.0
+#define SWEEP_WAY_SHARE 0.25
+static int sweep_ways(const elfm_calib_sweep *s, const double *z, signed char *way_of)
+{
+  size_t up = 0, down = 0;
+  for (size_t f = 0, a = 0, b = 0; f < s->n; f++) {
+    while (s->t_us[f] - s->t_us[a] > SWEEP_WAY_US) a++;
+    if (b < f) b = f;
+    while (b + 1 < s->n && s->t_us[b + 1] - s->t_us[f] <= SWEEP_WAY_US) b++;
+    const double dz = z[b] - z[a];
+    way_of[f] = (signed char)(isnan(dz) || dz == 0 ? 0 : dz > 0 ? 1 : -1);
+    up += way_of[f] > 0;
+    down += way_of[f] < 0;
+  }
+  return up + down > 0 && (double)(up < down ? up : down) >= SWEEP_WAY_SHARE * (double)(up + down);
 }
 
 /* The alternation (the file's head) from c's centres into m, its views
@@ -637,14 +666,21 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   if (n_moved) *n_moved = moved;
   /* the focus, in the depths of the calibration as it is now (the gauge
    * cleared above is an offset of the fit's depths) */
-  s->fit.focus_um = NAN;
+  s->fit.focus_um = s->fit.focus_up_um = s->fit.focus_down_um = NAN;
   if (moved > 0) {
     double tmp[ELFM_MAX_VIEWS];
     for (size_t f = 0; f < s->n; f++) {
       z[f] = frame_z(s, c, tells, f, NAN, INFINITY, tmp);
       for (int it = 0; it < 2; it++) z[f] = frame_z(s, c, tells, f, z[f], sweep_radius_px[SWEEP_ITERATIONS - 1], tmp);
     }
-    s->fit.focus_um = sweep_focus(s, tells, z, zq, tu);
+    signed char *way_of = (signed char *)tw; /* tw's room, no longer needed */
+    if (sweep_ways(s, z, way_of)) {
+      s->fit.focus_up_um = sweep_focus(s, tells, z, way_of, 1, zq, tu);
+      s->fit.focus_down_um = sweep_focus(s, tells, z, way_of, -1, zq, tu);
+    }
+    s->fit.focus_um = isfinite(s->fit.focus_up_um) && isfinite(s->fit.focus_down_um)
+                          ? 0.5 * (s->fit.focus_up_um + s->fit.focus_down_um)
+                          : sweep_focus(s, tells, z, way_of, 0, zq, tu);
   }
   free(zq);
   free(z);

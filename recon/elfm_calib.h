@@ -241,8 +241,11 @@ typedef struct elfm_calib_sweep_fit {
   double speed_um_per_ms, speed_lo_um_per_ms, speed_hi_um_per_ms;
   /* the depth, in the calibration apply leaves, where the views' images
    * are strongest (the object in focus: docs/recon.md "The focal plane
-   * from a sweep"); NaN when the sweep did not go through it and out */
-  double focus_um;
+   * from a sweep"); NaN when the sweep did not go through it and out.
+   * With frames going up and frames going down that each show it (a
+   * sweep both ways), the mean of the two (focus_up_um, focus_down_um,
+   * else NaN) */
+  double focus_um, focus_up_um, focus_down_um;
 } elfm_calib_sweep_fit;
 void elfm_calib_sweep_result(const elfm_calib_sweep *s, elfm_calib_sweep_fit *fit);
 

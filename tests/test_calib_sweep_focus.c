@@ -7,7 +7,9 @@
  *    centres ~5 px off (none of it in proportion to the disparities): the
  *    focus found within 1 um; images as bright at every depth, brightest at
  *    the sweep's end (+100 um) or not below half that on one side (+70 um):
- *    no focus (NaN);
+ *    no focus (NaN); one way, no way's own; up in 200 frames brightest at
+ *    +20 and down in 100 brightest at +4: each way's within 1-1.5 um, the
+ *    focus their mean, 12, within 1;
  *  - elfm_calib_move_focus: every point's images kept at z less the move,
  *    to 1e-9 px; NaN or infinite moves nothing; elfm_calib_grid_pitch: the
  *    optics' 600 um x 1.25 / 4.86 um, NaN on three views in a row;
@@ -22,7 +24,9 @@
  *    messages say so; --keep-scale keeps the optics' scale (the same focal
  *    plane); the piezo's speed given, the disparities follow it (within 1 %,
  *    -0.68 %) and um_per_px the grid; --keep-focal-plane keeps it 15 um or
- *    more off and says nothing of the grid; with the optics' own relay
+ *    more off and says nothing of the grid; the bead swept up and down
+ *    (1.8 s): each way's focus, their mean within 0.7 um (+0.35); with the
+ *    optics' own relay
  *    (focus found +1.1 um, within the 2 um a sweep tells) the start's focal
  *    plane and scale are kept, within 0.5 um of the truth's;
  *  - a flow (100 ms, seed 2) under the same relay, tracked with those
@@ -66,13 +70,12 @@ static double focal_offset(const elfm_calib *a, const elfm_calib *b)
   return num / den;
 }
 
-/* Frame k: the bead at (5, -3) um, z from -80 to +80 um, its image's peak
+/* A frame of the bead at (5, -3) um and depth z, its image's peak
  * 60 x (0.2 + 0.8 exp(-((z - focus) / WIDTH_UM)^2)), or 60 with focus NaN,
  * in every view, and noise */
-static void draw(elfm_frame *f, const elfm_calib *truth, int k, double focus_um, uint32_t *seed)
+static void draw(elfm_frame *f, const elfm_calib *truth, double z, double focus_um, uint32_t *seed)
 {
   elfm_frame_clear(f);
-  const double z = -80 + 160.0 * k / (N_FRAMES - 1);
   const double e = (z - focus_um) / WIDTH_UM;
   const double peak = isnan(focus_um) ? 60 : 60 * (0.2 + 0.8 * exp(-e * e));
   for (int v = 0; v < truth->n_views; v++) {
@@ -84,29 +87,34 @@ static void draw(elfm_frame *f, const elfm_calib *truth, int k, double focus_um,
     frame_put(f, (long)(lcg(seed) * (f->w - 1)), (long)(lcg(seed) * (f->h - 1)), (float)(1 + 3 * lcg(seed)));
 }
 
-/* The sweep's focus from centres ~5 px off (gauge-free: the fitted depths
- * are the truth's); the views moved into *moved */
-static double sweep_focus(const elfm_calib *truth, elfm_frame *f, double focus_um, int *moved)
+/* The sweep's fit from centres ~5 px off (gauge-free: the fitted depths
+ * are the truth's): N_FRAMES frames 1 ms apart from z -80 to +80 um, the
+ * images brightest at focus_um; then, with n_down > 0, n_down frames back
+ * to -80, brightest at down_um. The views moved into *moved. */
+static elfm_calib_sweep_fit sweep_fit(const elfm_calib *truth, elfm_frame *f, double focus_um, int n_down,
+                                      double down_um, int *moved)
 {
   elfm_error err;
+  elfm_calib_sweep_fit fit = {.focus_um = NAN};
   elfm_calib c = *truth;
   perturb(&c, 5, 21);
   elfm_calib_sweep *s = NULL;
-  CHECK_OK(elfm_calib_sweep_create(&c, N_FRAMES, &s, &err), &err);
-  if (!s) return NAN;
+  CHECK_OK(elfm_calib_sweep_create(&c, N_FRAMES + (size_t)n_down, &s, &err), &err);
+  if (!s) return fit;
   uint32_t seed = 7;
   static elfm_calib_sweep_image img;
-  for (int k = 0; k < N_FRAMES; k++) {
-    draw(f, truth, k, focus_um, &seed);
+  for (int k = 0; k < N_FRAMES + n_down; k++) {
+    const int up = k < N_FRAMES;
+    const double z = up ? -80 + 160.0 * k / (N_FRAMES - 1) : 80 - 160.0 * (k - N_FRAMES + 1) / n_down;
+    draw(f, truth, z, up ? focus_um : down_um, &seed);
     CHECK_OK(elfm_calib_sweep_spots(s, f, &img, &err), &err);
     CHECK(elfm_calib_sweep_add(s, 1000 * (int64_t)k, &img));
   }
   *moved = -1;
   CHECK_OK(elfm_calib_sweep_apply(s, 20, &c, NULL, moved, &err), &err);
-  elfm_calib_sweep_fit fit;
   elfm_calib_sweep_result(s, &fit);
   elfm_calib_sweep_free(s);
-  return fit.focus_um;
+  return fit;
 }
 
 static void test_by_hand(const elfm_calib *truth)
@@ -118,21 +126,33 @@ static void test_by_hand(const elfm_calib *truth)
   const double at[2] = {12, -30};
   for (int k = 0; k < 2; k++) {
     int moved;
-    const double z = sweep_focus(truth, f, at[k], &moved);
-    printf("a bead brightest at z %+.0f um: the sweep's focus %+.3f um (%d views moved)\n", at[k], z, moved);
+    const elfm_calib_sweep_fit fit = sweep_fit(truth, f, at[k], 0, NAN, &moved);
+    printf("a bead brightest at z %+.0f um: the sweep's focus %+.3f um (%d views moved)\n", at[k], fit.focus_um,
+           moved);
     CHECK_EQ_INT(moved, truth->n_views - 1);
-    CHECK_MSG(fabs(z - at[k]) < 1, "brightest at %g um, the focus found at %.3f", at[k], z);
+    CHECK_MSG(fabs(fit.focus_um - at[k]) < 1, "brightest at %g um, the focus found at %.3f", at[k], fit.focus_um);
+    CHECK(isnan(fit.focus_up_um) && isnan(fit.focus_down_um)); /* one way */
   }
   /* no depth where the images are brightest, or no fall below half the
    * peak beyond it: no focus */
   const double none[3] = {NAN, 100, 70};
   for (int k = 0; k < 3; k++) {
     int moved;
-    const double z = sweep_focus(truth, f, none[k], &moved);
+    const double z = sweep_fit(truth, f, none[k], 0, NAN, &moved).focus_um;
     printf("a bead brightest at %g: the sweep's focus %g (%d views moved)\n", none[k], z, moved);
     CHECK_EQ_INT(moved, truth->n_views - 1);
     CHECK_MSG(isnan(z), "brightest at %g um, a focus found at %.3f", none[k], z);
   }
+  /* up in 200 frames, brightest at +20, and down in 100, brightest at +4
+   * (a bead's images lead it into focus): each way's own, and their mean,
+   * 12, where the frames fitted together (two going up for one coming
+   * down) would lean to the way up */
+  int moved;
+  const elfm_calib_sweep_fit two = sweep_fit(truth, f, 20, 100, 4, &moved);
+  printf("up brightest at +20, down at +4: the focus %+.3f um (up %+.3f, down %+.3f)\n", two.focus_um,
+         two.focus_up_um, two.focus_down_um);
+  CHECK_MSG(fabs(two.focus_up_um - 20) < 1 && fabs(two.focus_down_um - 4) < 1.5 && fabs(two.focus_um - 12) < 1,
+            "up and down: the focus %.3f (up %.3f, down %.3f)", two.focus_um, two.focus_up_um, two.focus_down_um);
   elfm_frame_free(f);
 }
 
@@ -272,6 +292,20 @@ static void test_cli(void)
   printf("... --keep-focal-plane: %+.2f um off\n", kept);
   CHECK_MSG(fabs(kept) > 15, "--keep-focal-plane: the focal plane %.2f um off", kept);
   CHECK(fabs(scale_off(&r, &optics)) < 1e-6);
+
+  /* the bead swept up and then down again (the scene's triangle over 1.8
+   * s): each way's focus, their mean within 0.7 um (+0.35 measured, where
+   * one way up left +1.89) */
+  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --duration-ms 1800 --out %s/zud "
+           "--no-truth --quiet", dir);
+  CHECK_EQ_INT(cli_run(dir, args), 0);
+  const double both = refine("zud", "both.json", "", &r, &truth);
+  CHECK(cli_file_has(dir, "err.txt", "(the mean of the way up's +") &&
+        cli_file_has(dir, "err.txt", "the focal plane moved there"));
+  printf("... swept up and down: the focal plane %+.2f um off, um_per_px %+.2f %%\n", both,
+         100 * scale_off(&r, &truth));
+  CHECK_MSG(fabs(both) < 0.7, "up and down: the focal plane %.2f um off", both);
+  CHECK_MSG(fabs(scale_off(&r, &truth)) < 0.002, "up and down: um_per_px %.4f off", scale_off(&r, &truth));
 
   /* the optics' own relay: the focus found within 2 um, nothing moved */
   snprintf(args, sizeof args, "simulate zsweep --seed 1 --out %s/zs --no-truth --quiet", dir);
