@@ -200,7 +200,9 @@ elfm_status elfm_calib_refine_apply_votes(elfm_calib_refine *r, elfm_calib *c, d
  * (elfm_calib_sweep_fit), with how fast the object moved in z by the
  * disparities as they are (a piezo's known speed gives their scale, which
  * no recording of unknown motion can: docs/recon.md "What it still cannot
- * see"). spots is safe on many threads at once (it reads the collector's
+ * see") and the depth where its images were strongest, the focus (which
+ * elfm_calib_move_focus makes z = 0; the grid then gives the relay's
+ * magnification: elfm_calib_grid_pitch). spots is safe on many threads at once (it reads the collector's
  * map of views only). docs/recon.md "A sweep's views, frame by frame",
  * "Several beads swept together". */
 #define ELFM_CALIB_SWEEP_CONTRAST 2.0
