@@ -49,10 +49,10 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * A calibration from the optics puts it where they say: a relay 2.4 %
  * longer than the optics' put it 21 um off. Nearer than FOCUS_TOL_UM the
  * sweep does not tell it better than the calibration has it: 20 simulated
- * one-way sweeps on the 5 x 5 array put it -1.9..+2.1 um from the truth's
- * (3 x 3 and 7 x 7: +0.6..+3.6), mostly on the side the bead went to; up
- * and down, each way fitted alone, -0.22..+0.35 (docs/recon.md "The focal
- * plane from a sweep"). 1 when it moved the focal plane. */
+ * one-way sweeps on the 5 x 5 array put it -1.95..+1.91 um from the
+ * truth's (3 x 3 and 7 x 7: +0.6..+3.6), mostly on the side the bead went
+ * to; up and down, each way fitted alone, -0.99..+0.90 (docs/recon.md "The
+ * focal plane from a sweep"). 1 when it moved the focal plane. */
 #define FOCUS_TOL_UM 2.0
 #define FOCUS_TOL_TEXT "2"
 static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int keep, int quiet)

@@ -374,8 +374,9 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
  * focus and out of it both ways) and the parabola opens down. z: each
  * frame's depth (NaN: none) in the calibration's depths; way 0: every
  * frame's, +1 / -1: only those of frames going up / down (way_of[f]); zq,
- * run: room for s->n values. */
+ * run, tmp: room for s->n values. */
 #define SWEEP_FOCUS_FRAC 0.25
+#define SWEEP_FOCUS_RISE 8.0
 #define SWEEP_FOCUS_SMOOTH 10 /* frames either side of the running median */
 typedef struct sweep_depth {
   double z, q; /* a frame's depth, and its views' median strength */
@@ -388,7 +389,7 @@ static int cmp_depth(const void *a, const void *b)
 }
 
 static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const double *z, const signed char *way_of,
-                          int way, sweep_depth *zq, double *run)
+                          int way, sweep_depth *zq, double *run, double *tmp)
 {
   double v_tmp[ELFM_MAX_VIEWS];
   size_t n = 0;
@@ -415,6 +416,15 @@ static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const dou
     peak = fmax(peak, run[i]);
   }
   if (!(peak > 0)) return NAN;
+  /* The profile must rise from its floor (the running median's tenth
+   * percentile) to SWEEP_FOCUS_RISE times it or more, else the frames at
+   * SWEEP_FOCUS_FRAC of the peak take in the floor's noise: a faint bead
+   * (flux 8-10 x 10^3 Hz, where the built-in's is 25-35), its strengths
+   * ~5 far from focus and 21-24 at it, put the focus 28 um off; a bright
+   * one rises 50-150 times */
+  memcpy(tmp, run, n * sizeof *tmp);
+  qsort(tmp, n, sizeof *tmp, cmp_double);
+  if (!(tmp[n / 10] * SWEEP_FOCUS_RISE <= peak)) return NAN;
   /* log q = c0 + c1 t + c2 t^2 over the frames at the fraction of the peak
    * or more, t = (z - mean) / spread for the normal equations' sake */
   double zm = 0, zs = 0;
@@ -461,7 +471,7 @@ static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const dou
  * A one-way sweep's focus lies on the side the object went to, by 0-2.4
  * um (the images of a bead coming into focus and leaving it differ), and
  * a sweep up and down fitted at once by 0.1-1.5 um; the mean of the two
- * ways' foci, each fitted alone, came within 0.35 um (seeds 1-4,
+ * ways' foci, each fitted alone, came within 0.4 um (seeds 1-4,
  * docs/recon.md "The focal plane from a sweep"). */
 #define SWEEP_WAY_US 10000.0
 #define SWEEP_WAY_SHARE 0.25
@@ -573,7 +583,9 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   double *z = malloc((s->n + 1) * sizeof *z), *tu = malloc((s->n + 1) * sizeof *tu),
          *tw = malloc((s->n + 1) * sizeof *tw);
   sweep_depth *zq = malloc((s->n + 1) * sizeof *zq);
-  if (!z || !tu || !tw || !zq) {
+  double *tq = malloc((s->n + 1) * sizeof *tq);
+  if (!z || !tu || !tw || !zq || !tq) {
+    free(tq);
     free(zq);
     free(z);
     free(tu);
@@ -595,6 +607,7 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   if (!qu || !qw) {
     free(qu);
     free(qw);
+    free(tq);
     free(zq);
     free(z);
     free(tu);
@@ -664,24 +677,46 @@ elfm_status elfm_calib_sweep_apply(elfm_calib_sweep *s, int min_images, elfm_cal
   }
   if (shift_px) memcpy(shift_px, sh, 2 * (size_t)nv * sizeof *shift_px);
   if (n_moved) *n_moved = moved;
-  /* the focus, in the depths of the calibration as it is now (the gauge
-   * cleared above is an offset of the fit's depths) */
+  /* The focus, over the frames that told the depth, in the fit's depths z
+   * (m's), then in those of c as it is now: images = m + d z = c + b + d
+   * (z + g), b the objects' place, which m's centres hold and c's do not,
+   * and g the gauge cleared from the moves (their part in proportion to
+   * the disparities, least squares over the views fitted). Depths taken
+   * anew from c's centres without b fit no view off the axis (a bead 47
+   * um out, a slide's pattern: no frame within 1.5 px). */
   s->fit.focus_um = s->fit.focus_up_um = s->fit.focus_down_um = NAN;
   if (moved > 0) {
-    double tmp[ELFM_MAX_VIEWS];
-    for (size_t f = 0; f < s->n; f++) {
-      z[f] = frame_z(s, c, tells, f, NAN, INFINITY, tmp);
-      for (int it = 0; it < 2; it++) z[f] = frame_z(s, c, tells, f, z[f], sweep_radius_px[SWEEP_ITERATIONS - 1], tmp);
+    double num = 0, den = 0;
+    for (int axis = 0; axis < 2; axis++) {
+      double n = 0, sd = 0, se = 0, sdd = 0, sde = 0;
+      for (int v = 0; v < nv; v++) {
+        if (!from[v]) continue;
+        const double d = axis ? c->views[v].dy_px_per_um : c->views[v].dx_px_per_um;
+        const double e = axis ? m.views[v].cy_px - c->views[v].cy_px : m.views[v].cx_px - c->views[v].cx_px;
+        n += 1;
+        sd += d;
+        se += e;
+        sdd += d * d;
+        sde += d * e;
+      }
+      if (n < 1) continue;
+      num += sde - sd * se / n;
+      den += sdd - sd * sd / n;
     }
+    const double g = den > 0 ? num / den : 0;
     signed char *way_of = (signed char *)tw; /* tw's room, no longer needed */
     if (sweep_ways(s, z, way_of)) {
-      s->fit.focus_up_um = sweep_focus(s, tells, z, way_of, 1, zq, tu);
-      s->fit.focus_down_um = sweep_focus(s, tells, z, way_of, -1, zq, tu);
+      s->fit.focus_up_um = sweep_focus(s, tells, z, way_of, 1, zq, tu, tq);
+      s->fit.focus_down_um = sweep_focus(s, tells, z, way_of, -1, zq, tu, tq);
     }
     s->fit.focus_um = isfinite(s->fit.focus_up_um) && isfinite(s->fit.focus_down_um)
                           ? 0.5 * (s->fit.focus_up_um + s->fit.focus_down_um)
-                          : sweep_focus(s, tells, z, way_of, 0, zq, tu);
+                          : sweep_focus(s, tells, z, way_of, 0, zq, tu, tq);
+    s->fit.focus_um += g;
+    s->fit.focus_up_um += g;
+    s->fit.focus_down_um += g;
   }
+  free(tq);
   free(zq);
   free(z);
   free(tu);
