@@ -372,7 +372,7 @@ static void sweep_speed(elfm_calib_sweep *s, const double *z, double *tmp)
  * the half-maximum's middle, -1.6..+2.7). NaN unless the profile falls
  * below half its peak on both sides of the vertex (the sweep went through
  * focus and out of it both ways) and the parabola opens down. z: each
- * frame's depth (NaN: none) in the calibration's depths; way 0: every
+ * frame's depth (NaN: none) in the fit's depths; way 0: every
  * frame's, +1 / -1: only those of frames going up / down (way_of[f]); zq,
  * run, tmp: room for s->n values. */
 #define SWEEP_FOCUS_FRAC 0.25
