@@ -54,7 +54,6 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * to; up and down, each way fitted alone, -0.99..+0.90 (docs/recon.md "The
  * focal plane from a sweep"). 1 when it moved the focal plane. */
 #define FOCUS_TOL_UM 2.0
-#define FOCUS_TOL_TEXT "2"
 static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int keep, int quiet)
 {
   const double z = fit->focus_um;
@@ -70,11 +69,15 @@ static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int kee
   if (isfinite(fit->focus_up_um) && isfinite(fit->focus_down_um))
     snprintf(ways, sizeof ways, " (the mean of the way up's %+.2f and the way down's %+.2f)", fit->focus_up_um,
              fit->focus_down_um);
-  if (!quiet)
-    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths%s: %s\n", z,
-            ways, move ? "the focal plane moved there"
-            : keep ? "the focal plane kept (--keep-focal-plane)"
-                   : "within " FOCUS_TOL_TEXT " um, as near as a sweep tells it, the focal plane kept");
+  if (!quiet) {
+    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths%s: ", z, ways);
+    if (move)
+      fprintf(stderr, "the focal plane moved there\n");
+    else if (keep)
+      fprintf(stderr, "the focal plane kept (--keep-focal-plane)\n");
+    else
+      fprintf(stderr, "within %g um, as near as a sweep tells it, the focal plane kept\n", FOCUS_TOL_UM);
+  }
   return move;
 }
 
@@ -91,8 +94,9 @@ static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int kee
  * plane moved (else the grid is the start's). The factor taken (1: none). */
 static double sweep_relay(elfm_calib *cal, const elfm_calib *start, int moved, int keep, int quiet)
 {
+  if (!moved) return 1;
   const double k = elfm_calib_grid_pitch(cal) / elfm_calib_grid_pitch(start);
-  if (!moved || !isfinite(k)) return 1;
+  if (!isfinite(k)) return 1;
   const double um_per_px = cal->um_per_px;
   if (!keep) elfm_calib_scale_relay(cal, k);
   if (!quiet) {

@@ -420,8 +420,8 @@ static double sweep_focus(const elfm_calib_sweep *s, const int *tells, const dou
    * percentile) to SWEEP_FOCUS_RISE times it or more, else the frames at
    * SWEEP_FOCUS_FRAC of the peak take in the floor's noise: a faint bead
    * (flux 8-10 x 10^3 Hz, where the built-in's is 25-35), its strengths
-   * ~5 far from focus and 21-24 at it, put the focus 28 um off; a bright
-   * one rises 50-150 times */
+   * ~5 far from focus and 21-24 at it, put the focus 28 um off; bright
+   * ones rose 11-36 times (the least: a way down under haze 0.3) */
   memcpy(tmp, run, n * sizeof *tmp);
   qsort(tmp, n, sizeof *tmp, cmp_double);
   if (!(tmp[n / 10] * SWEEP_FOCUS_RISE <= peak)) return NAN;
