@@ -114,6 +114,20 @@ elfm_status elfm_writer_write(elfm_writer *w, const elfm_event_chunk *chunk, elf
 /* Flush and close; frees `w` even when the final flush fails. */
 elfm_status elfm_writer_close(elfm_writer *w, elfm_error *err);
 
+/* ---- playing backwards ---- */
+
+/* Write the events of `in` with from_us <= t_us < to_us to `out` (EVT 3.0)
+ * as the sensor would have seen the scene played backwards: last event
+ * first, each at t_first + t_last - t_us (the same span of time) and of the
+ * other polarity (a pixel that brightened dims). Triggers are left out.
+ * The geometry is the file's, else the smallest holding every event.
+ * Memory does not grow with the span: the events pass through an unnamed
+ * temporary file. *n_events (may be NULL) = the events written. A reading
+ * error names `in` and its offset; `out` then holds nothing useful and is
+ * the caller's to remove. Why: recon/events_reverse.c. */
+elfm_status elfm_events_reverse(const char *in, const elfm_reader_options *ropt, int64_t from_us, int64_t to_us,
+                                const char *out, int64_t *n_events, elfm_error *err);
+
 #ifdef __cplusplus
 }
 #endif
