@@ -27,13 +27,6 @@ int cmd_calib_refine(int argc, char **argv); /* calib refine (cmd_calib_refine.c
 /* its --help, and the frames' defaults it starts from (cmd_calib_refine_help.c) */
 void calib_refine_usage(FILE *f);
 void calib_refine_recon_defaults(elfm_recon_options *ro);
-/* calib refine --sweep, after its fit (cmd_calib_sweep.c): the sweep's
- * focus made z = 0 unless keep_focus; then, the focal plane moved, the
- * relay's magnification from the views' grid against start's unless
- * keep_scale; the disparities scaled to the piezo's speed (um/ms, 0: not
- * known). CLI_OK or CLI_FAIL (said). */
-int calib_sweep_finish(elfm_calib *cal, const elfm_calib *start, const elfm_calib_sweep_fit *fit, const char *events,
-                       double speed_um_per_ms, int keep_focus, int keep_scale, int quiet);
 int cmd_simulate(int argc, char **argv);
 int cmd_recon(int argc, char **argv);
 int cmd_track(int argc, char **argv);
@@ -69,6 +62,11 @@ int cli_parse_double_in(const char *cmd, const char *opt, const char *s, double 
 
 /* "1280x720" -> 1280, 720 (both 1..65536); 1 on success, 0 otherwise. */
 int cli_parse_geometry(const char *s, int *w, int *h);
+
+/* A new empty file of this process's own, $TMPDIR/PREFIX-XXXXXX (else
+ * /tmp), its path into out[n]: 1, or 0 when none could be made. The
+ * caller removes it. */
+int cli_temp_path(char *out, size_t n, const char *prefix);
 
 /* snprintf for paths and labels: returns 0, or -1 when the text did not fit
  * (the caller then meets a missing file, never an overflow). */

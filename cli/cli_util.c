@@ -15,6 +15,7 @@
 #include <sys/time.h>
 #include <sys/types.h>
 #include <time.h>
+#include <unistd.h>
 
 int cli_fail(const char *cmd, const elfm_error *err)
 {
@@ -736,4 +737,15 @@ const char *cli_progress_left(char *buf, size_t n, double frac, double wall_s)
   else if (left_s < 5400) snprintf(buf, n, ", %.0f %% (~%.0f min left)", 100 * frac, left_s / 60);
   else snprintf(buf, n, ", %.0f %% (~%.1f h left)", 100 * frac, left_s / 3600);
   return buf;
+}
+
+int cli_temp_path(char *out, size_t n, const char *prefix)
+{
+  const char *dir = getenv("TMPDIR");
+  if (!dir || !*dir) dir = "/tmp";
+  if (cli_path_fmt(out, n, "%s/%s-XXXXXX", dir, prefix) != 0) return 0;
+  const int fd = mkstemp(out);
+  if (fd < 0) return 0;
+  close(fd);
+  return 1;
 }

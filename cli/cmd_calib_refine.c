@@ -32,6 +32,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "cmd_calib_refine.h"
 #include "elfm_tracker.h"
 
 static const char *const C = "calib refine";
@@ -43,64 +44,6 @@ static const char *const C = "calib refine";
 /* The coarse step's points per volume: the brightest, whose images stand
  * out in every view. */
 #define VOTERS_PER_VOLUME 50
-
-typedef struct refine_opts {
-  const char *calib, *events, *out;
-  elfm_recon_options recon;
-  double ms;          /* how much of the recording each pass reads */
-  int passes;
-  double threshold;   /* peaks above this value only (bright points fit best) */
-  int min_views;      /* views that must agree with a point's fit (0: 12, scaled below 25 views) */
-  int min_points;     /* misses a view needs to move */
-  int search_px;      /* the coarse step's reach (0: none) */
-  double turn_deg;    /* the lens array's turn is searched within +-turn_deg (0: none) */
-  int quiet;
-  double planes_um[3]; /* --z-*-um for the passes' volumes (NaN: the calibration's) */
-  /* none of --repr, --tau-us, --polarity, --blur-px given: too few peaks on
-   * the time surface, and the integral (recon_integral, its defaults) is
-   * tried (choose_repr) */
-  int repr_auto;
-  elfm_recon_options recon_integral;
-  int threshold_given; /* --threshold given: the integral keeps it too */
-  int sweep;           /* --sweep: one object swept through z, its views found frame by frame */
-  double sweep_speed;  /* --sweep-um-per-ms: its known axial speed (0: not known) */
-  int keep_focus;      /* --keep-focal-plane: the sweep's focus not made z = 0 */
-  int keep_scale;      /* --keep-scale: nor the relay's magnification taken from its grid */
-  int ms_given;
-} refine_opts;
-
-/* Per batch slot: the points of the slot's volume, misses and weights. */
-typedef struct refine_slot {
-  int n;
-  double *miss, *wt; /* [max_pts][2 nv], [max_pts][nv] */
-  double *at;        /* [max_pts][2 nv]: where the point projects in each view, px */
-  double (*pos)[3];  /* the coarse step: the points, um */
-  const elfm_frame *frame; /* and their frame (the driver's, valid until the callback) */
-  double score;            /* the turn's search: the volume's sharpness */
-  int64_t t_us;            /* the sweep's step: the frame's time */
-  elfm_calib_sweep_image *img; /* ... and its spots */
-  int n_scored;            /* and the peaks it sums */
-} refine_slot;
-
-typedef struct refine_ctx {
-  const refine_opts *o;
-  int nv, max_pts;
-  elfm_localize_options lo;
-  elfm_peaks **pk;     /* [threads] */
-  int threads;
-  elfm_detection *det; /* [threads][max_pts] */
-  refine_slot *slot;   /* [slots] */
-  elfm_calib_refine *acc;
-  const elfm_calib *cal; /* the centres of this pass */
-  int voting;            /* this pass is the coarse step */
-  elfm_calib_sweep *sweep; /* this pass is the sweep's step (--sweep) */
-  int scoring;           /* this pass scores a turn of the lens array */
-  int64_t count_stop;    /* ... and stops once this many peaks are scored (0: never) */
-  int count_stopped;     /* the pass was stopped so */
-  double score;          /* its sum over the volumes, in frame order */
-  int64_t n_scored;      /* the peaks summed */
-  int64_t volumes;
-} refine_ctx;
 
 static elfm_status worker(const elfm_volume *v, const elfm_frame *frame, const elfm_refocus_plan *plan,
                           int slot, int thread, void *user, elfm_error *err)
@@ -292,6 +235,7 @@ static int parse(int argc, char **argv, refine_opts *o)
   if (o->recon.from_us != INT64_MIN && o->recon.to_us != INT64_MAX && o->recon.to_us <= o->recon.from_us)
     return cli_message(C, CLI_USAGE, "--to-us must be after --from-us");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  o->istart_given = rp.istart_given;
   cli_recon_planes(&rp, o->planes_um);
   if (o->sweep && !o->ms_given) o->ms = SWEEP_MS;
   if (o->repr_auto) {
@@ -308,7 +252,7 @@ static int parse(int argc, char **argv, refine_opts *o)
 
 /* A pass's moves (2 per view) into the running totals; their RMS and
  * largest, px, for the progress line. */
-static void add_moves(int nv, const double *shift, double *total, double *rms, double *worst)
+void refine_add_moves(int nv, const double *shift, double *total, double *rms, double *worst)
 {
   double ss = 0;
   *worst = 0;
@@ -339,13 +283,13 @@ static void add_moves(int nv, const double *shift, double *total, double *rms, d
  * when --threshold is not given: its images are dimmer than the time
  * surface's (track's thresholds: 25 on the integral, 45 on the surface) */
 #define REFINE_INTEGRAL_THRESHOLD 30
-static double integral_threshold(const refine_opts *o)
+double refine_integral_threshold(const refine_opts *o)
 {
   return o->threshold_given ? o->threshold : REFINE_INTEGRAL_THRESHOLD;
 }
 
 /* One pass: refocus, fit, collect (into c->acc). */
-static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
+elfm_status refine_run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_options ro,
                             elfm_error *err)
 {
   ro.worker = worker;
@@ -353,7 +297,7 @@ static elfm_status run_pass(refine_ctx *c, const elfm_calib *cal, elfm_recon_opt
   ro.on_volume_slot = on_volume;
   ro.progress = NULL;
   c->volumes = 0;
-  return elfm_recon_run(c->o->events, cal, &ro, NULL, c, NULL, err);
+  return elfm_recon_run(c->events, cal, &ro, NULL, c, NULL, err);
 }
 
 /* How sharp the volumes of cal turned by a degrees are: the squared heights
@@ -366,7 +310,7 @@ static elfm_status turn_score(refine_ctx *c, const elfm_calib *cal, double a, el
   c->scoring = 1;
   c->score = 0;
   c->n_scored = 0;
-  const elfm_status st = run_pass(c, &t, ro, err);
+  const elfm_status st = refine_run_pass(c, &t, ro, err);
   c->scoring = 0;
   *score = c->score;
   if (n_scored) *n_scored = c->n_scored;
@@ -443,7 +387,7 @@ static elfm_status turn_search(refine_ctx *c, const elfm_calib *cal, double max_
 }
 
 /* The peak detectors (one per thread) for peaks above thr */
-static elfm_status set_threshold(refine_ctx *c, const elfm_calib *cal, double thr, elfm_error *err)
+elfm_status refine_set_threshold(refine_ctx *c, const elfm_calib *cal, double thr, elfm_error *err)
 {
   elfm_peaks_options po;
   elfm_peaks_options_default(&po);
@@ -490,11 +434,11 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   int64_t n_surface = 0, n_integral = 0;
   elfm_status st = count_peaks(c, cal, o->recon, TURN_JUDGE_MIN_PEAKS, &n_surface, err);
   if (st != ELFM_OK || n_surface >= TURN_JUDGE_MIN_PEAKS) return st;
-  const double thr = integral_threshold(o);
-  if ((st = set_threshold(c, cal, thr, err)) != ELFM_OK) return st;
+  const double thr = refine_integral_threshold(o);
+  if ((st = refine_set_threshold(c, cal, thr, err)) != ELFM_OK) return st;
   st = count_peaks(c, cal, o->recon_integral, TURN_JUDGE_MIN_PEAKS, &n_integral, err);
   if (st != ELFM_OK) return st;
-  if (n_integral < TURN_JUDGE_MIN_PEAKS) return set_threshold(c, cal, o->threshold, err);
+  if (n_integral < TURN_JUDGE_MIN_PEAKS) return refine_set_threshold(c, cal, o->threshold, err);
   if (!o->quiet)
     fprintf(stderr, "calib refine: %" PRId64 " peaks above --threshold on the time surface over the %g ms, "
             "at least %" PRId64 " above %g on the integral: refining on --repr integral (objects that move "
@@ -503,75 +447,6 @@ static elfm_status choose_repr(refine_ctx *c, const elfm_calib *cal, refine_opts
   o->recon = o->recon_integral;
   o->threshold = thr;
   return ELFM_OK;
-}
-
-/* --sweep: the recording is one object swept through z, whose images the
- * coarse step's refocused peaks would not find from centres a few pixels
- * off (from 2.3 px RMS off it took noise for a turn of -3.3 degrees and
- * fitted nothing). Each view's images are found frame by frame and the
- * centres fitted to them (elfm_calib_sweep_*, recon/calib_sweep.c),
- * in place of the turn's search and the coarse step; on the integral,
- * which shows a slow object (choose_repr), unless the frames are given. */
-static int sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *total, elfm_error *err)
-{
-  if (o->repr_auto) {
-    o->recon = o->recon_integral;
-    o->threshold = integral_threshold(o);
-    if (set_threshold(c, cal, o->threshold, err) != ELFM_OK) return cli_fail(C, err);
-  }
-  const double frame_ms = (double)o->recon.framer.dt_us / 1000.0;
-  const size_t max_frames = (size_t)ceil(o->ms / frame_ms) + 2;
-  if (elfm_calib_sweep_create(cal, max_frames, &c->sweep, err) != ELFM_OK) return cli_fail(C, err);
-  /* the spots are read off the frames (the worker above): refocusing every
-   * frame's volume, which nothing read, was most of a sweep's time (one
-   * bead over 0.9 s: 2.6-3.2 s -> 0.44 s) */
-  elfm_recon_options ro = o->recon;
-  ro.no_refocus = 1;
-  elfm_status st = run_pass(c, cal, ro, err);
-  const size_t frames = elfm_calib_sweep_frames(c->sweep);
-  double shift[2 * ELFM_MAX_VIEWS];
-  int moved = 0;
-  elfm_calib_sweep_fit fit;
-  const elfm_calib start = *cal;
-  if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, &moved, err);
-  elfm_calib_sweep_result(c->sweep, &fit);
-  elfm_calib_sweep_free(c->sweep);
-  c->sweep = NULL;
-  if (st != ELFM_OK) return cli_fail(C, err);
-  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL)
-    return cli_message(C, CLI_FAIL, "%s: several objects in the views (a median %.2f of the frames hold two "
-                       "spots or more), and they do not move as one pattern: %.2f of the frames matched it, "
-                       "0.5 or more needed. Is one object, or several side by side, swept together through z "
-                       "in %" PRId64 "..%" PRId64 " us?", o->events, fit.several_share, fit.pattern_share,
-                       o->recon.from_us, o->recon.to_us);
-  if (moved == 0 && fit.off_grid_px > ELFM_CALIB_SWEEP_OFF_GRID_PX && fit.off_grid_view >= 0)
-    return cli_message(C, CLI_FAIL, "%s: the centres fitted to the sweep's images lie off the lenslets' grid: "
-                       "view (%+d, %+d) %.1f px from the grid of the fitted views (%g at most). Objects taken "
-                       "for each other (%d side by side)? A sweep of fewer objects, or of one, fits",
-                       o->events, cal->views[fit.off_grid_view].i, cal->views[fit.off_grid_view].j,
-                       fit.off_grid_px, ELFM_CALIB_SWEEP_OFF_GRID_PX, fit.objects);
-  if (moved == 0)
-    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to fit the centres to "
-                       "(%d frames of %zu told the depth; the views' median share of their spots near the fit "
-                       "%.2f, 0.5 or more needed, and %d images in a view): is one object, or several side by "
-                       "side, swept together through z in %" PRId64 "..%" PRId64 " us?", o->events,
-                       fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us, o->recon.to_us);
-  double rms, worst;
-  add_moves(c->nv, shift, total, &rms, &worst);
-  if (!o->quiet) {
-    int n_placed = 0;
-    for (int v = 0; v < c->nv; v++) n_placed += fit.placed[v];
-    char several[160] = "";
-    if (fit.objects > 1)
-      snprintf(several, sizeof several, " (%d objects side by side, %.1f um apart in depth at most, their "
-               "pattern matched in a median %.2f of the frames)", fit.objects, fit.depth_um, fit.pattern_share);
-    fprintf(stderr, "calib refine: the sweep's views, frame by frame%s: %d of %zu frames told the depth; "
-            "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
-            "near it, within %.2f px of their grid), %d set on the others' grid; moves RMS %.3f px, largest "
-            "%.3f px\n", several, fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, fit.off_grid_px,
-            n_placed, rms, worst);
-  }
-  return calib_sweep_finish(cal, &start, &fit, o->events, o->sweep_speed, o->keep_focus, o->keep_scale, o->quiet);
 }
 
 int cmd_calib_refine(int argc, char **argv)
@@ -618,6 +493,7 @@ int cmd_calib_refine(int argc, char **argv)
   refine_ctx c;
   memset(&c, 0, sizeof c);
   c.o = &o;
+  c.events = o.events;
   c.nv = cal.n_views;
   c.max_pts = 1000;
   c.threads = threads;
@@ -637,7 +513,7 @@ int cmd_calib_refine(int argc, char **argv)
     ctx_free(&c, threads, slots);
     return cli_message(C, CLI_FAIL, "out of memory");
   }
-  if (set_threshold(&c, &cal, o.threshold, &err) != ELFM_OK) {
+  if (refine_set_threshold(&c, &cal, o.threshold, &err) != ELFM_OK) {
     ctx_free(&c, threads, slots);
     return cli_fail(C, &err);
   }
@@ -649,7 +525,7 @@ int cmd_calib_refine(int argc, char **argv)
   int rc = CLI_OK;
   c.cal = &cal;
   if (o.sweep) {
-    rc = sweep_step(&c, &cal, &o, total, &err);
+    rc = refine_sweep_step(&c, &cal, &o, total, &err);
     if (rc != CLI_OK) {
       ctx_free(&c, threads, slots);
       return rc;
@@ -684,7 +560,7 @@ int cmd_calib_refine(int argc, char **argv)
     int moved = 0;
     c.voting = 1;
     if (elfm_calib_refine_set_search(c.acc, o.search_px, &err) != ELFM_OK ||
-        run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
+        refine_run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
       ctx_free(&c, threads, slots);
       return cli_fail(C, &err);
     }
@@ -695,7 +571,7 @@ int cmd_calib_refine(int argc, char **argv)
     }
     c.voting = 0;
     double rms, worst;
-    add_moves(c.nv, shift, total, &rms, &worst);
+    refine_add_moves(c.nv, shift, total, &rms, &worst);
     if (!o.quiet && nv < ELFM_CALIB_VOTES_MIN)
       fprintf(stderr, "calib refine: coarse step (+-%d px): %zu points, too few to move the views by (%d or "
               "more): skipped\n", o.search_px, nv, ELFM_CALIB_VOTES_MIN);
@@ -713,7 +589,7 @@ int cmd_calib_refine(int argc, char **argv)
       c.lo.half_window_px = 3;
       c.lo.outlier_px = 3;
     }
-    if (run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
+    if (refine_run_pass(&c, &cal, o.recon, &err) != ELFM_OK) {
       rc = cli_fail(C, &err);
       break;
     }
@@ -725,7 +601,7 @@ int cmd_calib_refine(int argc, char **argv)
       break;
     }
     double rms, worst;
-    add_moves(c.nv, shift, total, &rms, &worst);
+    refine_add_moves(c.nv, shift, total, &rms, &worst);
     if (!o.quiet)
       fprintf(stderr, "calib refine: pass %d: %" PRId64 " volumes, %zu points, %d of %d views moved, "
               "RMS %.3f px, largest %.3f px\n", pass + 1, c.volumes, npts, moved, c.nv,

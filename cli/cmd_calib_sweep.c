@@ -1,11 +1,15 @@
-/* cmd_calib_sweep.c — what `calib refine --sweep` makes of its fit besides
- * the centres (cmd_calib_refine.c): the focal plane where the object was
- * in focus, then the relay's magnification from the views' grid, and the
- * depth scale from the piezo's speed. */
+/* cmd_calib_sweep.c — `calib refine --sweep`'s step (the rest of the
+ * command: cmd_calib_refine.c): each view's images found frame by frame
+ * and the centres fitted to them; the sweep read backwards as well; then
+ * the focal plane where the object was in focus, the relay's magnification
+ * from the views' grid, and the depth scale from the piezo's speed. */
+#include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "cli.h"
+#include "cmd_calib_refine.h"
 
 static const char *const C = "calib refine";
 
@@ -47,16 +51,20 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * focus), which no fit of their places sees (a move of every view along
  * its disparity is an offset of z), made z = 0 unless --keep-focal-plane.
  * A calibration from the optics puts it where they say: a relay 2.4 %
- * longer than the optics' put it 21 um off. Nearer than FOCUS_TOL_UM the
- * sweep does not tell it better than the calibration has it: 20 simulated
- * one-way sweeps on the 5 x 5 array put it -1.95..+1.91 um from the
- * truth's (3 x 3 and 7 x 7: +0.6..+3.6), mostly on the side the bead went
- * to; up and down, each way fitted alone, -0.99..+0.90 (docs/recon.md "The
- * focal plane from a sweep"). 1 when it moved the focal plane. */
+ * longer than the optics' put it 21 um off. One way, the focus leans
+ * towards the way the object went (14 simulated one-way sweeps on the 5 x
+ * 5 array: -0.93..+1.91 um, 3.56 on a 3 x 3 array): fw and back (not NULL
+ * for a one-way sweep read both ways) lean apart, by 0.3-6.4 um, and
+ * their mean is taken (-1.56..+0.90); a sweep up and down gives each
+ * way's focus in fit, and their mean (docs/recon.md "A one-way sweep read
+ * both ways"). Nearer than FOCUS_TOL_UM a sweep does not tell it better
+ * than the calibration has it. 1 when it moved the focal plane. */
 #define FOCUS_TOL_UM 2.0
-static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int keep, int quiet)
+static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, const elfm_calib_sweep_fit *fw,
+                       const elfm_calib_sweep_fit *back, int keep, int quiet)
 {
-  const double z = fit->focus_um;
+  const int both = fw && back && isfinite(fw->focus_um) && isfinite(back->focus_um);
+  const double z = both ? 0.5 * (fw->focus_um + back->focus_um) : fit->focus_um;
   if (!isfinite(z)) {
     if (!quiet)
       fprintf(stderr, "calib refine: the sweep's images were strongest at no depth it went through and out of "
@@ -65,12 +73,17 @@ static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, int kee
   }
   const int move = !keep && fabs(z) > FOCUS_TOL_UM;
   if (move) elfm_calib_move_focus(cal, z);
-  char ways[96] = "";
-  if (isfinite(fit->focus_up_um) && isfinite(fit->focus_down_um))
-    snprintf(ways, sizeof ways, " (the mean of the way up's %+.2f and the way down's %+.2f)", fit->focus_up_um,
+  char said[200] = "";
+  if (both)
+    snprintf(said, sizeof said, " (one way: the mean of the sweep read forwards, %+.2f, and backwards, %+.2f)",
+             fw->focus_um, back->focus_um);
+  else if (fw && back)
+    snprintf(said, sizeof said, " (one way, read forwards alone: backwards it showed none)");
+  else if (isfinite(fit->focus_up_um) && isfinite(fit->focus_down_um))
+    snprintf(said, sizeof said, " (the mean of the way up's %+.2f and the way down's %+.2f)", fit->focus_up_um,
              fit->focus_down_um);
   if (!quiet) {
-    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths%s: ", z, ways);
+    fprintf(stderr, "calib refine: the sweep's images were strongest at z %+.2f um of the fitted depths%s: ", z, said);
     if (move)
       fprintf(stderr, "the focal plane moved there\n");
     else if (keep)
@@ -110,10 +123,145 @@ static double sweep_relay(elfm_calib *cal, const elfm_calib *start, int moved, i
   return keep ? 1 : k;
 }
 
-int calib_sweep_finish(elfm_calib *cal, const elfm_calib *start, const elfm_calib_sweep_fit *fit, const char *events,
-                       double speed_um_per_ms, int keep_focus, int keep_scale, int quiet)
+/* After the fit: the sweep's focus (fit's, or the mean of fw's and back's:
+ * a one-way sweep read both ways) made z = 0 unless keep_focus; then,
+ * the focal plane moved, the relay's magnification from the views' grid
+ * against start's unless keep_scale; the disparities scaled to the
+ * piezo's speed (um/ms, 0: not known). CLI_OK or CLI_FAIL (said). */
+static int sweep_finish(elfm_calib *cal, const elfm_calib *start, const elfm_calib_sweep_fit *fit,
+                        const elfm_calib_sweep_fit *fw, const elfm_calib_sweep_fit *back, const char *events,
+                        double speed_um_per_ms, int keep_focus, int keep_scale, int quiet)
 {
-  const int moved = sweep_focus(cal, fit, keep_focus, quiet);
+  const int moved = sweep_focus(cal, fit, fw, back, keep_focus, quiet);
   const double k = sweep_relay(cal, start, moved, keep_scale, quiet);
   return sweep_scale(cal, fit, k, events, speed_um_per_ms, quiet);
+}
+
+/* One pass of the sweep's step over c->events on recon's frames, from the
+ * centres in *cal:
+ * the fitted centres into *cal, their moves into shift[], the fit into
+ * *fit, the frames read into *frames. */
+static elfm_status sweep_pass(refine_ctx *c, const elfm_recon_options *recon, elfm_calib *cal, double *shift,
+                              int *moved, elfm_calib_sweep_fit *fit, size_t *frames, elfm_error *err)
+{
+  const refine_opts *o = c->o;
+  const double frame_ms = (double)recon->framer.dt_us / 1000.0;
+  const size_t max_frames = (size_t)ceil(o->ms / frame_ms) + 2;
+  elfm_status st = elfm_calib_sweep_create(cal, max_frames, &c->sweep, err);
+  if (st != ELFM_OK) return st;
+  /* the spots are read off the frames (the worker above): refocusing every
+   * frame's volume, which nothing read, was most of a sweep's time (one
+   * bead over 0.9 s: 2.6-3.2 s -> 0.44 s) */
+  elfm_recon_options ro = *recon;
+  ro.no_refocus = 1;
+  st = refine_run_pass(c, cal, ro, err);
+  *frames = elfm_calib_sweep_frames(c->sweep);
+  if (st == ELFM_OK) st = elfm_calib_sweep_apply(c->sweep, o->min_points, cal, shift, moved, err);
+  elfm_calib_sweep_result(c->sweep, fit);
+  elfm_calib_sweep_free(c->sweep);
+  c->sweep = NULL;
+  return st;
+}
+
+/* A one-way sweep read both ways for its focus: forwards, and played
+ * backwards (elfm_events_reverse into a temporary file, removed after),
+ * each fitted from the same start on the integral started empty unless
+ * --integral-start-ms was given (why: docs/recon.md "A one-way sweep read
+ * both ways"). 1 with *fw and *back filled; on any failure a note on
+ * stderr and 0: the focus of the fit stands alone. */
+static int sweep_both_ways(refine_ctx *c, const elfm_calib *start, elfm_calib_sweep_fit *fw,
+                           elfm_calib_sweep_fit *back)
+{
+  const refine_opts *o = c->o;
+  elfm_recon_options ro = o->recon;
+  if (ro.framer.repr == ELFM_REPR_INTEGRAL && !o->istart_given) ro.integral_start_us = 0;
+  char path[4096];
+  elfm_error err;
+  elfm_error_clear(&err);
+  if (!cli_temp_path(path, sizeof path, "eventlfm-sweep-backwards")) {
+    if (!o->quiet) fprintf(stderr, "calib refine: no temporary file for the sweep read backwards (TMPDIR?): "
+                           "its focus read forwards alone\n");
+    return 0;
+  }
+  elfm_status st = elfm_events_reverse(o->events, &o->recon.reader, o->recon.from_us, o->recon.to_us, path, NULL, &err);
+  double shift[2 * ELFM_MAX_VIEWS];
+  int moved_fw = 0, moved_back = 0;
+  size_t frames = 0;
+  elfm_calib cal = *start;
+  if (st == ELFM_OK) st = sweep_pass(c, &ro, &cal, shift, &moved_fw, fw, &frames, &err);
+  cal = *start;
+  if (st == ELFM_OK) {
+    c->events = path;
+    st = sweep_pass(c, &ro, &cal, shift, &moved_back, back, &frames, &err);
+    c->events = o->events;
+  }
+  remove(path);
+  if (st != ELFM_OK && !o->quiet) {
+    char buf[1200];
+    fprintf(stderr, "calib refine: the sweep read both ways: %s: its focus read forwards alone\n",
+            elfm_error_format(&err, buf, sizeof buf));
+  }
+  return st == ELFM_OK && moved_fw > 0 && moved_back > 0;
+}
+
+/* --sweep: the recording is one object swept through z, whose images the
+ * coarse step's refocused peaks would not find from centres a few pixels
+ * off (from 2.3 px RMS off it took noise for a turn of -3.3 degrees and
+ * fitted nothing). Each view's images are found frame by frame and the
+ * centres fitted to them (elfm_calib_sweep_*, recon/calib_sweep.c),
+ * in place of the turn's search and the coarse step; on the integral,
+ * which shows a slow object (choose_repr), unless the frames are given. */
+int refine_sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *total, elfm_error *err)
+{
+  if (o->repr_auto) {
+    o->recon = o->recon_integral;
+    o->threshold = refine_integral_threshold(o);
+    if (refine_set_threshold(c, cal, o->threshold, err) != ELFM_OK) return cli_fail(C, err);
+  }
+  double shift[2 * ELFM_MAX_VIEWS];
+  int moved = 0;
+  elfm_calib_sweep_fit fit;
+  size_t frames = 0;
+  const elfm_calib start = *cal;
+  if (sweep_pass(c, &o->recon, cal, shift, &moved, &fit, &frames, err) != ELFM_OK) return cli_fail(C, err);
+  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL)
+    return cli_message(C, CLI_FAIL, "%s: several objects in the views (a median %.2f of the frames hold two "
+                       "spots or more), and they do not move as one pattern: %.2f of the frames matched it, "
+                       "0.5 or more needed. Is one object, or several side by side, swept together through z "
+                       "in %" PRId64 "..%" PRId64 " us?", o->events, fit.several_share, fit.pattern_share,
+                       o->recon.from_us, o->recon.to_us);
+  if (moved == 0 && fit.off_grid_px > ELFM_CALIB_SWEEP_OFF_GRID_PX && fit.off_grid_view >= 0)
+    return cli_message(C, CLI_FAIL, "%s: the centres fitted to the sweep's images lie off the lenslets' grid: "
+                       "view (%+d, %+d) %.1f px from the grid of the fitted views (%g at most). Objects taken "
+                       "for each other (%d side by side)? A sweep of fewer objects, or of one, fits",
+                       o->events, cal->views[fit.off_grid_view].i, cal->views[fit.off_grid_view].j,
+                       fit.off_grid_px, ELFM_CALIB_SWEEP_OFF_GRID_PX, fit.objects);
+  if (moved == 0)
+    return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to fit the centres to "
+                       "(%d frames of %zu told the depth; the views' median share of their spots near the fit "
+                       "%.2f, 0.5 or more needed, and %d images in a view): is one object, or several side by "
+                       "side, swept together through z in %" PRId64 "..%" PRId64 " us?", o->events,
+                       fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us, o->recon.to_us);
+  double rms, worst;
+  refine_add_moves(c->nv, shift, total, &rms, &worst);
+  if (!o->quiet) {
+    int n_placed = 0;
+    for (int v = 0; v < c->nv; v++) n_placed += fit.placed[v];
+    char several[160] = "";
+    if (fit.objects > 1)
+      snprintf(several, sizeof several, " (%d objects side by side, %.1f um apart in depth at most, their "
+               "pattern matched in a median %.2f of the frames)", fit.objects, fit.depth_um, fit.pattern_share);
+    fprintf(stderr, "calib refine: the sweep's views, frame by frame%s: %d of %zu frames told the depth; "
+            "%d of %d views fitted to their images (%.2f px RMS from the fit, a median %.2f of their spots "
+            "near it, within %.2f px of their grid), %d set on the others' grid; moves RMS %.3f px, largest "
+            "%.3f px\n", several, fit.frames_used, frames, moved, c->nv, fit.rms_px, fit.agree, fit.off_grid_px,
+            n_placed, rms, worst);
+  }
+  /* a sweep up and down gave each way's focus; one way, it is read both
+   * ways, unless the focus is kept */
+  elfm_calib_sweep_fit fw, back;
+  const int one_way = !(isfinite(fit.focus_up_um) && isfinite(fit.focus_down_um));
+  const int both = one_way && !o->keep_focus && sweep_both_ways(c, &start, &fw, &back);
+  return sweep_finish(cal, &start, &fit, both ? &fw : NULL, both ? &back : NULL, o->events, o->sweep_speed,
+                      o->keep_focus, o->keep_scale, o->quiet);
 }

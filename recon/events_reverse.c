@@ -1,11 +1,11 @@
 /* events_reverse.c — a recording played backwards (elfm_events_reverse).
  *
- * Why: a z sweep read forwards finds the bead sharpest a little on the side
- * it went to (0-2.4 um on the 5 x 5 array, 3.6 on 3 x 3): every filter of
- * the pipeline looks back in time (the integral's leak, the pixels' own
- * lag), so a profile met in one order leans one way. Played backwards, the
- * same bead goes the other way through the same focus, and leans the other
- * way (docs/recon.md "A sweep read both ways").
+ * Why: a one-way z sweep's focus, found where the bead's images are
+ * strongest, leans towards the way the bead went (up to 1.9 um on the 5 x
+ * 5 array, 3.6 on 3 x 3); played backwards, the bead goes the other way
+ * through the same focus and its focus leans the other way, so `calib
+ * refine --sweep` takes the mean of the two (docs/recon.md "A one-way
+ * sweep read both ways").
  *
  * Backwards, a pixel that brightened dims: each event keeps its pixel and
  * changes polarity, and its time is mirrored within the span of the events
