@@ -183,7 +183,14 @@ static int sweep_both_ways(refine_ctx *c, const elfm_calib *start, elfm_calib_sw
                            "its focus read forwards alone\n");
     return 0;
   }
-  elfm_status st = elfm_events_reverse(o->events, &o->recon.reader, o->recon.from_us, o->recon.to_us, path, NULL, &err);
+  /* a file without a geometry (CSV) gets the sensor's, which the passes
+   * ask of the copy (not the smallest holding its events) */
+  elfm_reader_options rd = o->recon.reader;
+  if (rd.width == 0 && rd.height == 0) {
+    rd.width = start->sensor_width_px;
+    rd.height = start->sensor_height_px;
+  }
+  elfm_status st = elfm_events_reverse(o->events, &rd, o->recon.from_us, o->recon.to_us, path, NULL, &err);
   double shift[2 * ELFM_MAX_VIEWS];
   int moved_fw = 0, moved_back = 0;
   size_t frames = 0;
