@@ -54,8 +54,8 @@ static int sweep_scale(elfm_calib *cal, const elfm_calib_sweep_fit *fit, double 
  * longer than the optics' put it 21 um off. One way, the focus leans
  * towards the way the object went (14 simulated one-way sweeps on the 5 x
  * 5 array: -0.93..+1.91 um, 3.56 on a 3 x 3 array): fw and back (not NULL
- * for a one-way sweep read both ways) lean apart, by 0.3-6.4 um, and
- * their mean is taken (-1.56..+0.90); a sweep up and down gives each
+ * for a one-way sweep read both ways) lean apart, by 1.1-6.7 um, and
+ * their mean is taken (-1.49..+0.90); a sweep up and down gives each
  * way's focus in fit, and their mean (docs/recon.md "A one-way sweep read
  * both ways"). Nearer than FOCUS_TOL_UM a sweep does not tell it better
  * than the calibration has it. 1 when it moved the focal plane. */
