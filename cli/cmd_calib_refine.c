@@ -198,6 +198,7 @@ static int parse(int argc, char **argv, refine_opts *o)
   int c;
   while ((c = getopt_long(argc, argv, ":h", opts, NULL)) != -1) {
     if (c == CLI_RO_REPR || c == CLI_RO_TAU || c == CLI_RO_POLARITY || c == CLI_RO_BLUR) o->repr_auto = 0;
+    if (c == CLI_RO_MEDIAN) o->median_given = 1;
     const int k = cli_parse_recon_option(C, c, optarg, &rp);
     if (k == 0) return CLI_USAGE;
     if (k > 0) continue;

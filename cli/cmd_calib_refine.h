@@ -30,6 +30,8 @@ typedef struct refine_opts {
   int keep_focus;      /* --keep-focal-plane: the sweep's focus not made z = 0 */
   int keep_scale;      /* --keep-scale: nor the relay's magnification taken from its grid */
   int istart_given;    /* --integral-start-ms given (a one-way sweep read both ways keeps it) */
+  int median_given;    /* --median given (else a sweep taken for several objects is read again
+                          through the 3 x 3 median: sensor noise) */
   int ms_given;
 } refine_opts;
 

@@ -194,19 +194,33 @@ static int sweep_both_ways(refine_ctx *c, const elfm_calib *start, elfm_calib_sw
   double shift[2 * ELFM_MAX_VIEWS];
   int moved_fw = 0, moved_back = 0;
   size_t frames = 0;
-  elfm_calib cal = *start;
-  if (st == ELFM_OK) st = sweep_pass(c, &ro, &cal, shift, &moved_fw, fw, &frames, &err);
-  cal = *start;
-  if (st == ELFM_OK) {
-    c->events = path;
-    st = sweep_pass(c, &ro, &cal, shift, &moved_back, back, &frames, &err);
-    c->events = o->events;
+  /* a reading taken for several objects is made again through the 3 x 3
+   * median, as the forward reading is (refine_sweep_step): sensor noise,
+   * whose polarities swap backwards */
+  for (int again = 0; again < 2 && st == ELFM_OK; again++) {
+    elfm_calib cal = *start;
+    st = sweep_pass(c, &ro, &cal, shift, &moved_fw, fw, &frames, &err);
+    cal = *start;
+    if (st == ELFM_OK) {
+      c->events = path;
+      st = sweep_pass(c, &ro, &cal, shift, &moved_back, back, &frames, &err);
+      c->events = o->events;
+    }
+    const int noise = (moved_fw == 0 && fw->several_share >= ELFM_CALIB_SWEEP_SEVERAL) ||
+                      (moved_back == 0 && back->several_share >= ELFM_CALIB_SWEEP_SEVERAL);
+    if (!noise || o->median_given || ro.median != 0) break;
+    ro.median = 3;
   }
   remove(path);
   if (st != ELFM_OK && !o->quiet) {
     char buf[1200];
     fprintf(stderr, "calib refine: the sweep read both ways: %s: its focus read forwards alone\n",
             elfm_error_format(&err, buf, sizeof buf));
+  } else if ((moved_fw == 0 || moved_back == 0) && !o->quiet) {
+    const elfm_calib_sweep_fit *f = moved_fw == 0 ? fw : back;
+    fprintf(stderr, "calib refine: the sweep read %s on the integral started empty fitted no views (%d frames told "
+            "the depth; a median %.2f of the frames held two spots or more): its focus read forwards alone\n",
+            moved_fw == 0 ? "forwards" : "backwards", f->frames_used, f->several_share);
   }
   return st == ELFM_OK && moved_fw > 0 && moved_back > 0;
 }
@@ -231,6 +245,35 @@ int refine_sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
   size_t frames = 0;
   const elfm_calib start = *cal;
   if (sweep_pass(c, &o->recon, cal, shift, &moved, &fit, &frames, err) != ELFM_OK) return cli_fail(C, err);
+  /* Sensor noise (background activity, 10 Hz a pixel where the
+   * simulator's is 2) puts spots beside a faint, far-defocused image in
+   * most frames: taken for several objects that do not move together.
+   * The 3 x 3 median takes out lone noise pixels and keeps an image of
+   * several: read again through it, for the passes too, unless --median
+   * was given (docs/recon.md "A one-way sweep read both ways") */
+  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL && !o->median_given &&
+      o->recon.median == 0) {
+    if (!o->quiet)
+      fprintf(stderr, "calib refine: a median %.2f of the frames hold two spots or more in a view, not moving as "
+              "one pattern: noise? read again through the 3 x 3 median filter (--median 3)\n", fit.several_share);
+    /* kept only if it fits: else the first reading is what is refused */
+    elfm_recon_options ro = o->recon;
+    ro.median = 3;
+    elfm_calib m = start;
+    double shift_m[2 * ELFM_MAX_VIEWS];
+    int moved_m = 0;
+    elfm_calib_sweep_fit fit_m;
+    size_t frames_m = 0;
+    if (sweep_pass(c, &ro, &m, shift_m, &moved_m, &fit_m, &frames_m, err) != ELFM_OK) return cli_fail(C, err);
+    if (moved_m > 0) {
+      o->recon.median = 3;
+      *cal = m;
+      memcpy(shift, shift_m, sizeof shift);
+      moved = moved_m;
+      fit = fit_m;
+      frames = frames_m;
+    }
+  }
   if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL)
     return cli_message(C, CLI_FAIL, "%s: several objects in the views (a median %.2f of the frames hold two "
                        "spots or more), and they do not move as one pattern: %.2f of the frames matched it, "
