@@ -290,8 +290,14 @@ int refine_sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
     return cli_message(C, CLI_FAIL, "%s: the sweep's images fit too few views or frames to fit the centres to "
                        "(%d frames of %zu told the depth; the views' median share of their spots near the fit "
                        "%.2f, 0.5 or more needed, and %d images in a view): is one object, or several side by "
-                       "side, swept together through z in %" PRId64 "..%" PRId64 " us?", o->events,
-                       fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us, o->recon.to_us);
+                       "side, swept together through z in %" PRId64 "..%" PRId64 " us?%s%s%s", o->events,
+                       fit.frames_used, frames, fit.agree, o->min_points, o->recon.from_us, o->recon.to_us,
+                       o->recon.framer.repr == ELFM_REPR_INTEGRAL ? "" : " On --repr ",
+                       o->recon.framer.repr == ELFM_REPR_INTEGRAL ? "" : cli_repr_name(o->recon.framer.repr),
+                       o->recon.framer.repr == ELFM_REPR_INTEGRAL
+                           ? ""
+                           : ", a slow object shows only where it moved: the integral, --sweep's default "
+                             "without --repr, shows it whole");
   double rms, worst;
   refine_add_moves(c->nv, shift, total, &rms, &worst);
   if (!o->quiet) {

@@ -39,7 +39,8 @@
  *    sensor noise a pixel (at 0.4 mm/s), taken for several objects, read
  *    again through the 3 x 3 median (said) and fitted within 1.2 um
  *    (-0.71), refused with --median 0; under 8 Hz read both ways (the
- *    backward reading through the median) within 1.2 um (+0.14); with the
+ *    backward reading through the median) within 1.2 um (+0.14); --repr
+ *    exp refused, the integral named; with the
  *    optics' own relay (focus found
  *    within the 2 um a sweep tells) the start's focal plane and scale are
  *    kept, within 0.5 um of the truth's;
@@ -429,6 +430,13 @@ static void test_cli(void)
   CHECK_EQ_INT(cli_run(dir, args), 0);
   CHECK(cli_file_has(dir, "err.txt", "(one way: the mean of the sweep read forwards, +") &&
         !cli_file_has(dir, "err.txt", "its focus read forwards alone"));
+
+  /* the time surface given: refused, and the integral named */
+  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/zr/events.raw --out "
+           "%s/exp.json --passes 0 --repr exp", dir, dir, dir);
+  CHECK_EQ_INT(cli_run(dir, args), 1);
+  CHECK(cli_file_has(dir, "err.txt", "too few views or frames") &&
+        cli_file_has(dir, "err.txt", "On --repr exp, a slow object shows only where it moved: the integral"));
 
   /* sensor noise, 10 Hz a pixel (the simulator's 2), the sweep at 0.4
    * mm/s (half the events to read): taken for several objects, read again
