@@ -78,7 +78,10 @@ static int sweep_focus(elfm_calib *cal, const elfm_calib_sweep_fit *fit, const e
     snprintf(said, sizeof said, " (one way: the mean of the sweep read forwards, %+.2f, and backwards, %+.2f)",
              fw->focus_um, back->focus_um);
   else if (fw && back)
-    snprintf(said, sizeof said, " (one way, read forwards alone: backwards it showed none)");
+    snprintf(said, sizeof said, " (one way, the fit's own: read %s on the integral started empty, it showed none)",
+             !isfinite(fw->focus_um) && !isfinite(back->focus_um) ? "either way"
+             : !isfinite(fw->focus_um)                            ? "forwards"
+                                                                  : "backwards");
   else if (isfinite(fit->focus_up_um) && isfinite(fit->focus_down_um))
     snprintf(said, sizeof said, " (the mean of the way up's %+.2f and the way down's %+.2f)", fit->focus_up_um,
              fit->focus_down_um);
@@ -206,6 +209,7 @@ static int sweep_both_ways(refine_ctx *c, const elfm_calib *start, elfm_calib_sw
       st = sweep_pass(c, &ro, &cal, shift, &moved_back, back, &frames, &err);
       c->events = o->events;
     }
+    if (st != ELFM_OK) break;
     const int noise = (moved_fw == 0 && fw->several_share >= ELFM_CALIB_SWEEP_SEVERAL) ||
                       (moved_back == 0 && back->several_share >= ELFM_CALIB_SWEEP_SEVERAL);
     if (!noise || o->median_given || ro.median != 0) break;
