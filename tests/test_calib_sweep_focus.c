@@ -228,17 +228,36 @@ static void test_move(const elfm_calib *truth)
 
 static char dir[] = "/tmp/elfm_calib_focus_XXXXXX";
 
-/* calib refine --sweep --passes 0 on zsweep DIR/NAME with the optics'
- * calibration, into DIR/OUT (and *r); extra options EXTRA; its focal
- * plane's offset from the simulator's calibration (into *truth), um (NaN
- * when it failed) */
+/* simulate zsweep --seed 1 PARAMS into DIR/NAME (no truth) */
+static void sweep_sim(const char *name, const char *params)
+{
+  char args[3000];
+  snprintf(args, sizeof args, "simulate zsweep --seed 1 %s --out %s/%s --no-truth --quiet", params, dir, name);
+  CHECK_EQ_INT(cli_run(dir, args), 0);
+}
+
+/* calib refine --sweep --passes 0 on DIR/EVENTS with the optics'
+ * calibration, into DIR/OUT, extra options EXTRA; its exit code (CHECKed
+ * to be rc) */
+static int refine_run(const char *events, const char *out, const char *extra, int rc)
+{
+  char args[3000];
+  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/%s --out %s/%s --passes 0 %s",
+           dir, dir, events, dir, out, extra);
+  const int got = cli_run(dir, args);
+  CHECK_EQ_INT(got, rc);
+  return got;
+}
+
+/* refine_run on zsweep DIR/NAME, expected to succeed, into DIR/OUT (and
+ * *r); its focal plane's offset from the simulator's calibration (into
+ * *truth), um (NaN when it failed) */
 static double refine(const char *name, const char *out, const char *extra, elfm_calib *r, elfm_calib *truth)
 {
-  char args[3000], p[800];
+  char ev[800], p[800];
   elfm_error err;
-  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/%s/events.raw --out %s/%s "
-           "--passes 0 %s", dir, dir, name, dir, out, extra);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  snprintf(ev, sizeof ev, "%s/events.raw", name);
+  refine_run(ev, out, extra, 0);
   snprintf(p, sizeof p, "%s/%s/calib.json", dir, name);
   CHECK_OK(elfm_calib_load(p, truth, &err), &err);
   snprintf(p, sizeof p, "%s/%s", dir, out);
@@ -334,9 +353,7 @@ static void test_cli(void)
   CHECK_EQ_INT(cli_run(dir, args), 0);
   snprintf(p, sizeof p, "%s/optics.json", dir);
   CHECK_OK(elfm_calib_load(p, &optics, &err), &err);
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --out %s/zr --no-truth --quiet",
-           dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zr", "--param optics.relay=1.28");
 
   /* the focal plane moved, then the relay's scale from the grid; the
    * sweep read backwards from a copy in TMPDIR, removed after */
@@ -398,9 +415,7 @@ static void test_cli(void)
    * s): each way's focus, their mean within 0.7 um (+0.39 measured, where
    * one way up left +1.91 before it was read both ways); not read
    * backwards (which gave +0.34-0.56 on seeds 1-4, not better) */
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --duration-ms 1800 --out %s/zud "
-           "--no-truth --quiet", dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zud", "--param optics.relay=1.28 --duration-ms 1800");
   const double both = refine("zud", "both.json", "", &r, &truth);
   CHECK(cli_file_has(dir, "err.txt", "(the mean of the way up's +") && !cli_file_has(dir, "err.txt", "backwards") &&
         cli_file_has(dir, "err.txt", "the focal plane moved there"));
@@ -413,9 +428,7 @@ static void test_cli(void)
    * integral with its start levels read back, it leant 7.2 um the other
    * way (a mean 3.85 um off); started empty, both readings lean less, and
    * their mean is within 1.2 um (+0.59 measured; the fit's own +0.62) */
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --param motion.speed_mm_per_s=0.4 "
-           "--duration-ms 450 --out %s/zfast --no-truth --quiet", dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zfast", "--param optics.relay=1.28 --param motion.speed_mm_per_s=0.4 --duration-ms 450");
   const double fast = refine("zfast", "fast.json", "", &r, &truth);
   CHECK(cli_file_has(dir, "err.txt", "(one way: the mean of the sweep read forwards, +"));
   printf("... one way at 0.4 mm/s: the focal plane %+.2f um off\n", fast);
@@ -425,16 +438,12 @@ static void test_cli(void)
    * of its own, narrower than the sensor): the reversed copy takes the
    * sensor's geometry, and both readings are made */
   write_roi_csv("zfast/events.raw", "roi.csv", 1200);
-  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/roi.csv --out %s/roi.json "
-           "--passes 0", dir, dir, dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  refine_run("roi.csv", "roi.json", "", 0);
   CHECK(cli_file_has(dir, "err.txt", "(one way: the mean of the sweep read forwards, +") &&
         !cli_file_has(dir, "err.txt", "its focus read forwards alone"));
 
   /* the time surface given: refused, and the integral named */
-  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/zr/events.raw --out "
-           "%s/exp.json --passes 0 --repr exp", dir, dir, dir);
-  CHECK_EQ_INT(cli_run(dir, args), 1);
+  refine_run("zr/events.raw", "exp.json", "--repr exp", 1);
   CHECK(cli_file_has(dir, "err.txt", "too few views or frames") &&
         cli_file_has(dir, "err.txt", "On --repr exp, a slow object shows only where it moved: the integral"));
 
@@ -444,9 +453,8 @@ static void test_cli(void)
    * 1.2); refused with --median 0 given. At 8 Hz the forward reading fits
    * as it is, the backward one (the noise's polarities swapped) only
    * through the median: both readings are made (+0.14) */
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --param sensor.shot_noise_hz=10 "
-           "--param motion.speed_mm_per_s=0.4 --duration-ms 450 --out %s/zn10 --no-truth --quiet", dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zn10", "--param optics.relay=1.28 --param sensor.shot_noise_hz=10 --param motion.speed_mm_per_s=0.4 "
+            "--duration-ms 450");
   const double noisy = refine("zn10", "noisy.json", "", &r, &truth);
   CHECK(cli_file_has(dir, "err.txt", "noise? read again through the 3 x 3 median filter (--median 3)") &&
         cli_file_has(dir, "err.txt", "(one way: the mean of the sweep read forwards, +"));
@@ -454,13 +462,10 @@ static void test_cli(void)
          100 * scale_off(&r, &truth));
   CHECK_MSG(fabs(noisy) < 1.2 && fabs(scale_off(&r, &truth)) < 0.002, "noise: the focal plane %.2f um off, "
             "um_per_px %.4f", noisy, scale_off(&r, &truth));
-  snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/zn10/events.raw --out "
-           "%s/noisy0.json --passes 0 --median 0", dir, dir, dir);
-  CHECK_EQ_INT(cli_run(dir, args), 1);
+  refine_run("zn10/events.raw", "noisy0.json", "--median 0", 1);
   CHECK(cli_file_has(dir, "err.txt", "several objects in the views") && !cli_file_has(dir, "err.txt", "noise?"));
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --param optics.relay=1.28 --param sensor.shot_noise_hz=8 "
-           "--param motion.speed_mm_per_s=0.4 --duration-ms 450 --out %s/zn8 --no-truth --quiet", dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zn8", "--param optics.relay=1.28 --param sensor.shot_noise_hz=8 --param motion.speed_mm_per_s=0.4 "
+            "--duration-ms 450");
   const double noisy8 = refine("zn8", "noisy8.json", "", &r, &truth);
   CHECK(!cli_file_has(dir, "err.txt", "noise?") &&
         cli_file_has(dir, "err.txt", "(one way: the mean of the sweep read forwards, +"));
@@ -468,8 +473,7 @@ static void test_cli(void)
   CHECK_MSG(fabs(noisy8) < 1.2, "8 Hz: the focal plane %.2f um off", noisy8);
 
   /* the optics' own relay: the focus found within 2 um, nothing moved */
-  snprintf(args, sizeof args, "simulate zsweep --seed 1 --out %s/zs --no-truth --quiet", dir);
-  CHECK_EQ_INT(cli_run(dir, args), 0);
+  sweep_sim("zs", "");
   const double right = refine("zs", "right.json", "", &r, &truth);
   CHECK(cli_file_has(dir, "err.txt", "as near as a sweep tells it, the focal plane kept") &&
         !cli_file_has(dir, "err.txt", "the views' grid"));
