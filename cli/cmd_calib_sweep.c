@@ -166,6 +166,17 @@ static elfm_status sweep_pass(refine_ctx *c, const elfm_recon_options *recon, el
   return st;
 }
 
+/* A reading that fitted no views because most frames held two spots or
+ * more in a view that did not move as one pattern: the mark of sensor
+ * noise beside a faint image, which the 3 x 3 median takes out. The
+ * forward reading also asks that it was not taken for several objects
+ * side by side (objects == 1), as its refusal does; the readings both
+ * ways only ask whether to read again. */
+static int taken_for_several(int moved, const elfm_calib_sweep_fit *f)
+{
+  return moved == 0 && f->several_share >= ELFM_CALIB_SWEEP_SEVERAL;
+}
+
 /* A one-way sweep read both ways for its focus: forwards, and played
  * backwards (elfm_events_reverse into a temporary file, removed after),
  * each fitted from the same start on the integral started empty unless
@@ -210,8 +221,7 @@ static int sweep_both_ways(refine_ctx *c, const elfm_calib *start, elfm_calib_sw
       c->events = o->events;
     }
     if (st != ELFM_OK) break;
-    const int noise = (moved_fw == 0 && fw->several_share >= ELFM_CALIB_SWEEP_SEVERAL) ||
-                      (moved_back == 0 && back->several_share >= ELFM_CALIB_SWEEP_SEVERAL);
+    const int noise = taken_for_several(moved_fw, fw) || taken_for_several(moved_back, back);
     if (!noise || o->median_given || ro.median != 0) break;
     ro.median = 3;
   }
@@ -255,8 +265,7 @@ int refine_sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
    * The 3 x 3 median takes out lone noise pixels and keeps an image of
    * several: read again through it, for the passes too, unless --median
    * was given (docs/recon.md "A one-way sweep read both ways") */
-  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL && !o->median_given &&
-      o->recon.median == 0) {
+  if (taken_for_several(moved, &fit) && fit.objects == 1 && !o->median_given && o->recon.median == 0) {
     if (!o->quiet)
       fprintf(stderr, "calib refine: a median %.2f of the frames hold two spots or more in a view, not moving as "
               "one pattern: noise? read again through the 3 x 3 median filter (--median 3)\n", fit.several_share);
@@ -278,7 +287,7 @@ int refine_sweep_step(refine_ctx *c, elfm_calib *cal, refine_opts *o, double *to
       frames = frames_m;
     }
   }
-  if (moved == 0 && fit.objects == 1 && fit.several_share >= ELFM_CALIB_SWEEP_SEVERAL)
+  if (taken_for_several(moved, &fit) && fit.objects == 1)
     return cli_message(C, CLI_FAIL, "%s: several objects in the views (a median %.2f of the frames hold two "
                        "spots or more), and they do not move as one pattern: %.2f of the frames matched it, "
                        "0.5 or more needed. Is one object, or several side by side, swept together through z "
