@@ -46,7 +46,7 @@ enum {
   O_GUIDED, O_GUIDEDR, O_GUIDEDM, O_VSUP, O_EXPLAIN, O_EXPLAINUM,
   O_STITCHN, O_STITCHG, O_STITCHL, O_SWAPN, O_LOC, O_LOCWIN,
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
-  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
+  O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_MPATH, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
   O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ, O_GAPART
 };
@@ -108,6 +108,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"gcv-gamma", required_argument, 0, O_GCVG},
       {"spline-order", required_argument, 0, O_SPORD},
       {"spline-turn", required_argument, 0, O_SPTURN},
+      {"motion-along-path", required_argument, 0, O_MPATH},
       {"fit-sd-power", required_argument, 0, O_FSDP},
       {"motion-fade-um-per-ms", required_argument, 0, O_MFADE},
       {"motion-slow-lead-ms", required_argument, 0, O_MSLOW},
@@ -495,6 +496,11 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       if (!strcmp(a, "on")) o.smooth.spline_turn = 1;
       else if (!strcmp(a, "off")) o.smooth.spline_turn = 0;
       else return cli_message(C, CLI_USAGE, "--spline-turn must be on or off, not '%s'", a);
+      break;
+    case O_MPATH:
+      if (!strcmp(a, "on")) o.smooth.motion_along_path = 1;
+      else if (!strcmp(a, "off")) o.smooth.motion_along_path = 0;
+      else return cli_message(C, CLI_USAGE, "--motion-along-path must be on or off, not '%s'", a);
       break;
     case O_MFADE:
       if (!cli_parse_double_in(C, "--motion-fade-um-per-ms", a, 0, 1, 100, "> 0 and <= 100",

@@ -306,6 +306,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddNumberToObject(par, "gcv_gamma", o->smooth.gcv_gamma);
   cJSON_AddNumberToObject(par, "spline_order", o->smooth.spline_order);
   cJSON_AddBoolToObject(par, "spline_turn", o->smooth.spline_turn && o->smooth.spline_order == 3);
+  cJSON_AddBoolToObject(par, "motion_along_path", o->smooth.motion_along_path != 0);
   cJSON_AddNumberToObject(par, "spline_weight_ms3", o->smooth.spline_weight_ms3);
   cJSON_AddStringToObject(par, "motion", o->motion == MOTION_STAGE ? "stage"
                                          : o->motion == MOTION_FREE ? "free" : "auto");

@@ -178,6 +178,17 @@ typedef struct elfm_smooth_options {
    * um/ms with its own lead and delay). */
   double motion_slow_lead_ms;
   double motion_slow_um_per_ms;
+  /* 1: the bias along the fitted path (0 = off, the default; track: on).
+   * The image shows the object where it was motion_delay_us ago, ahead
+   * along its motion then: each view's lead lies along its velocity at
+   * that time (the fitted velocity there), and the way back is the mean
+   * of the velocities then and now times the delay. On a straight path
+   * that is the model above; on a turn the earlier motion points outward
+   * of the present one, and the lead with it: raw detections of
+   * flow_random lie 0.2-0.6 um outward of beads turning at 1-2 um/ms^2
+   * below 2 um/ms, about lead x delay x turn rate (docs/tracker.md "The
+   * lead along the path"). Without a delay it is the model above. */
+  int motion_along_path;
   int motion_n_views;                       /* 0: lateral model only */
   double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
   /* elfm_track_smooth only: the run's frame times (elfm_tracks.h; borrowed,

@@ -44,11 +44,17 @@ void elfm_smooth_options_set_views(elfm_smooth_options *o, const elfm_calib *c)
   }
 }
 
-void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[3])
+/* elfm_motion_bias, or with vl (the velocity delay before, non-NULL) the
+ * model along the path (elfm_smooth.h motion_along_path): each image's lead
+ * along its velocity then, and the delay's way back the mean of its
+ * velocities then and now (the trapezoid rule: on a circle it keeps the
+ * chord's inward sag, which a straight step back along v leaves out). */
+static void motion_bias_lagged(const elfm_smooth_options *o, const double v[3], const double *vl,
+                               double b[3])
 {
   b[0] = b[1] = b[2] = 0;
   if (o->motion_lead_um == 0 && o->motion_delay_us == 0 && o->motion_slow_lead_ms == 0) return;
-  if (o->motion_n_views <= 0) {
+  if (o->motion_n_views <= 0 && !vl) {
     double f = image_bias_factor(o, v[0], v[1]);
     b[0] = f * v[0];
     b[1] = f * v[1];
@@ -56,24 +62,42 @@ void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[
   }
   /* The equal-weight least-squares fit of u_v = p + z g_v to images each
    * off by b_v = b(w_v): dz = sum (b_v - mean b).(g_v - mean g) /
-   * sum |g_v - mean g|^2 and dp = mean b - dz mean g. */
-  const int n = o->motion_n_views;
+   * sum |g_v - mean g|^2 and dp = mean b - dz mean g. Without views, one
+   * image at g = 0: dz = 0 and dp = its b. */
+  const int n = o->motion_n_views > 0 ? o->motion_n_views : 1;
+  const double d_ms = o->motion_delay_us * 1e-3;
   double sb[2] = {0, 0}, sg[2] = {0, 0}, sbg = 0, sgg = 0;
   for (int k = 0; k < n; k++) {
-    const double gx = o->motion_view_g[k][0], gy = o->motion_view_g[k][1];
+    const double gx = o->motion_n_views > 0 ? o->motion_view_g[k][0] : 0;
+    const double gy = o->motion_n_views > 0 ? o->motion_view_g[k][1] : 0;
     const double wx = v[0] + v[2] * gx, wy = v[1] + v[2] * gy;
-    const double f = image_bias_factor(o, wx, wy);
-    sb[0] += f * wx;
-    sb[1] += f * wy;
+    if (vl) {
+      /* image_bias_factor with the delay taken out is the lead's factor */
+      const double ux = vl[0] + vl[2] * gx, uy = vl[1] + vl[2] * gy;
+      const double fl = image_bias_factor(o, ux, uy) + d_ms;
+      const double bx = fl * ux - d_ms * 0.5 * (wx + ux), by = fl * uy - d_ms * 0.5 * (wy + uy);
+      sb[0] += bx;
+      sb[1] += by;
+      sbg += bx * gx + by * gy;
+    } else {
+      const double f = image_bias_factor(o, wx, wy);
+      sb[0] += f * wx;
+      sb[1] += f * wy;
+      sbg += f * (wx * gx + wy * gy);
+    }
     sg[0] += gx;
     sg[1] += gy;
-    sbg += f * (wx * gx + wy * gy);
     sgg += gx * gx + gy * gy;
   }
   const double den = sgg - (sg[0] * sg[0] + sg[1] * sg[1]) / n;
   b[2] = den > 1e-12 ? (sbg - (sb[0] * sg[0] + sb[1] * sg[1]) / n) / den : 0;
   b[0] = (sb[0] - b[2] * sg[0]) / n;
   b[1] = (sb[1] - b[2] * sg[1]) / n;
+}
+
+void elfm_motion_bias(const elfm_smooth_options *o, const double v[3], double b[3])
+{
+  motion_bias_lagged(o, v, NULL, b);
 }
 
 /* The median fit_sd_px over t's points that have one (> 0); 0 when fewer
@@ -115,13 +139,28 @@ static double turn_rate(const double *vel, const int64_t *t_us, size_t ns, doubl
 /* xyz (n x 3) = t's points moved by the motion bias of the smoothed
  * velocity vel (one per frame from t's first) at their frames. */
 static void points_unbiased(const elfm_smooth_options *o, const elfm_track *t, const double *vel,
-                            double *xyz)
+                            const int64_t *tq, size_t ns, double *xyz)
 {
   const int64_t f0 = t->pts[0].frame;
+  const double lag_us = o->motion_along_path ? o->motion_delay_us : 0;
   for (size_t i = 0; i < t->n; i++) {
     const elfm_detection *d = &t->pts[i];
+    const size_t s = (size_t)(d->frame - f0);
     double b[3];
-    elfm_motion_bias(o, vel + 3 * (size_t)(d->frame - f0), b);
+    if (lag_us > 0 && ns >= 2) {
+      /* the fitted velocity delay before, linear between the samples
+       * around that time (from the first two before the span's start) */
+      const double tt = (double)tq[s] - lag_us;
+      size_t k = s > 0 ? s - 1 : 0;
+      while (k > 0 && (double)tq[k] > tt) k--;
+      const double span = (double)(tq[k + 1] - tq[k]);
+      const double f = span > 0 ? (tt - (double)tq[k]) / span : 0;
+      double vl[3];
+      for (int a = 0; a < 3; a++) vl[a] = vel[3 * k + a] + f * (vel[3 * (k + 1) + a] - vel[3 * k + a]);
+      motion_bias_lagged(o, vel + 3 * s, vl, b);
+    } else {
+      elfm_motion_bias(o, vel + 3 * s, b);
+    }
     xyz[3 * i] = d->x_um - b[0];
     xyz[3 * i + 1] = d->y_um - b[1];
     xyz[3 * i + 2] = d->z_um - b[2];
@@ -148,6 +187,9 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
   if (!(o->fit_sd_power >= 0 && o->fit_sd_power <= 4))
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
                           "smooth: fit_sd_power %g is not in [0, 4]", o->fit_sd_power);
+  if (o->motion_along_path != 0 && o->motion_along_path != 1)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "smooth: motion_along_path %d is not 0 or 1",
+                          o->motion_along_path);
   if (o->motion_n_views < 0 || o->motion_n_views > ELFM_MAX_VIEWS)
     return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "smooth: %d views for the motion bias",
                           o->motion_n_views);
@@ -266,7 +308,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
      * a second GCV search would double the cost. Except along a turn
      * (spline_turn): the prior then leaves the track's circle alone, and
      * the weight that suits the new prior is larger (chosen again). */
-    if (bias) points_unbiased(o, t, vel, xyz);
+    if (bias) points_unbiased(o, t, vel, tq, ns, xyz);
     elfm_smooth_options o2 = *o;
     o2.model = info.model;
     /* and a third after this one: the bias again along the turn */
@@ -281,7 +323,7 @@ elfm_status elfm_track_smooth(elfm_track *t, const elfm_smooth_options *o, elfm_
        * moved again, the same prior and weight (no third search). Flow
        * 100 ms seeds 1-20 alpha 0.8749 -> 0.8768; the turn rate measured
        * again as well: 0.8769; the weight chosen again: 0.8763. */
-      points_unbiased(o, t, vel, xyz);
+      points_unbiased(o, t, vel, tq, ns, xyz);
       o2.spline_weight_ms3 = info.spline_weight_ms3;
       o2.irls_only = o->irls_only;
       st = elfm_smooth_fit(&o2, n, td, xyz, sig, ns, tq, pos, vel, psd, vsd, &info, err);
