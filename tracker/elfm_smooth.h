@@ -187,7 +187,8 @@ typedef struct elfm_smooth_options {
    * of the present one, and the lead with it: raw detections of
    * flow_random lie 0.2-0.6 um outward of beads turning at 1-2 um/ms^2
    * below 2 um/ms, about lead x delay x turn rate (docs/tracker.md "The
-   * lead along the path"). Without a delay it is the model above. */
+   * lead along the path"). Without a delay (or with one below 0) it is
+   * the model above. */
   int motion_along_path;
   int motion_n_views;                       /* 0: lateral model only */
   double motion_view_g[ELFM_MAX_VIEWS][2];  /* (gx, gy) per view, um per um of z */
