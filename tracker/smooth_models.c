@@ -137,7 +137,9 @@ static double turn_rate(const double *vel, const int64_t *t_us, size_t ns, doubl
 }
 
 /* xyz (n x 3) = t's points moved by the motion bias of the smoothed
- * velocity vel (one per frame from t's first) at their frames. */
+ * velocity vel (one per frame from t's first, at times tq) at their
+ * frames; along the path (motion_along_path), of that velocity and the
+ * one a delay before. */
 static void points_unbiased(const elfm_smooth_options *o, const elfm_track *t, const double *vel,
                             const int64_t *tq, size_t ns, double *xyz)
 {
