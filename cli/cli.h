@@ -60,6 +60,10 @@ int cli_parse_int_in(const char *cmd, const char *opt, const char *s, int lo, in
 int cli_parse_double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,
                         double hi, const char *range, double *out);
 
+/* "on" -> 1, "off" -> 0; anything else: a usage message "OPT must be on
+ * or off, not 'S'". */
+int cli_parse_on_off(const char *cmd, const char *opt, const char *s, int *out);
+
 /* "1280x720" -> 1280, 720 (both 1..65536); 1 on success, 0 otherwise. */
 int cli_parse_geometry(const char *s, int *w, int *h);
 

@@ -268,6 +268,17 @@ int cli_parse_int_in(const char *cmd, const char *opt, const char *s, int lo, in
   return 1;
 }
 
+int cli_parse_on_off(const char *cmd, const char *opt, const char *s, int *out)
+{
+  if (!strcmp(s, "on")) *out = 1;
+  else if (!strcmp(s, "off")) *out = 0;
+  else {
+    cli_message(cmd, CLI_USAGE, "%s must be on or off, not '%s'", opt, s);
+    return 0;
+  }
+  return 1;
+}
+
 int cli_parse_double_in(const char *cmd, const char *opt, const char *s, double lo, int lo_open,
                         double hi, const char *range, double *out)
 {

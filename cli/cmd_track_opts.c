@@ -298,9 +298,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_FILLE:
       g.fille = 1;
-      if (!strcmp(a, "on")) o.fill_ends = 1;
-      else if (!strcmp(a, "off")) o.fill_ends = 0;
-      else return cli_message(C, CLI_USAGE, "--fill-ends must be on or off, not '%s'", a);
+      if (!cli_parse_on_off(C, "--fill-ends", a, &o.fill_ends)) return CLI_USAGE;
       break;
     case O_FILLRT:
       g.fretry = 1;
@@ -413,9 +411,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       break;
     case O_STITCHG: if (!cli_parse_double_in(C, "--stitch-gate-um", a, 0, 0, 1e4, "0..10000", &o.link.stitch_gate_um)) return CLI_USAGE; break;
     case O_VIEWSRULE:
-      if (!strcmp(a, "on")) o.views_rule = 1;
-      else if (!strcmp(a, "off")) o.views_rule = 0;
-      else return cli_message(C, CLI_USAGE, "--views-rule must be on or off, not '%s'", a);
+      if (!cli_parse_on_off(C, "--views-rule", a, &o.views_rule)) return CLI_USAGE;
       break;
     case O_THMIN: g.min = 1; if (!cli_parse_double_in(C, "--threshold-min", a, 0, 0, 1e12, ">= 0", &o.peaks.absolute_min)) return CLI_USAGE; break;
     case O_THR: g.thr = 1; if (!cli_parse_double_in(C, "--threshold-rel", a, 0, 0, 1, "0..1 (0: off)", &o.peaks.relative)) return CLI_USAGE; break;
@@ -443,9 +439,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_MAXGAP: if (!cli_parse_int_in(C, "--max-gap", a, 0, 1000000, "0..1000000 frames", &o.link.max_gap_frames)) return CLI_USAGE; break;
     case O_MINPTS: g.minpts = 1; if (!cli_parse_int_in(C, "--min-points", a, 1, 1000000, ">= 1", &o.link.min_points)) return CLI_USAGE; break;
     case O_LAG:
-      if (!strcmp(a, "on")) o.lag_correct = 1;
-      else if (!strcmp(a, "off")) o.lag_correct = 0;
-      else return cli_message(C, CLI_USAGE, "--lag-correct must be on or off, not '%s'", a);
+      if (!cli_parse_on_off(C, "--lag-correct", a, &o.lag_correct)) return CLI_USAGE;
       break;
     case O_MOTION:
       o.motion_auto = !strcmp(a, "auto");
@@ -493,14 +487,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       g.spord = 1;
       break;
     case O_SPTURN:
-      if (!strcmp(a, "on")) o.smooth.spline_turn = 1;
-      else if (!strcmp(a, "off")) o.smooth.spline_turn = 0;
-      else return cli_message(C, CLI_USAGE, "--spline-turn must be on or off, not '%s'", a);
+      if (!cli_parse_on_off(C, "--spline-turn", a, &o.smooth.spline_turn)) return CLI_USAGE;
       break;
     case O_MPATH:
-      if (!strcmp(a, "on")) o.smooth.motion_along_path = 1;
-      else if (!strcmp(a, "off")) o.smooth.motion_along_path = 0;
-      else return cli_message(C, CLI_USAGE, "--motion-along-path must be on or off, not '%s'", a);
+      if (!cli_parse_on_off(C, "--motion-along-path", a, &o.smooth.motion_along_path)) return CLI_USAGE;
       break;
     case O_MFADE:
       if (!cli_parse_double_in(C, "--motion-fade-um-per-ms", a, 0, 1, 100, "> 0 and <= 100",

@@ -237,16 +237,14 @@ static void sweep_sim(const char *name, const char *params)
 }
 
 /* calib refine --sweep --passes 0 on DIR/EVENTS with the optics'
- * calibration, into DIR/OUT, extra options EXTRA; its exit code (CHECKed
- * to be rc) */
-static int refine_run(const char *events, const char *out, const char *extra, int rc)
+ * calibration, into DIR/OUT, extra options EXTRA; its exit code CHECKed
+ * to be rc */
+static void refine_run(const char *events, const char *out, const char *extra, int rc)
 {
   char args[3000];
   snprintf(args, sizeof args, "calib refine --sweep --calib %s/optics.json --events %s/%s --out %s/%s --passes 0 %s",
            dir, dir, events, dir, out, extra);
-  const int got = cli_run(dir, args);
-  CHECK_EQ_INT(got, rc);
-  return got;
+  CHECK_EQ_INT(cli_run(dir, args), rc);
 }
 
 /* refine_run on zsweep DIR/NAME, expected to succeed, into DIR/OUT (and
