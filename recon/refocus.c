@@ -33,8 +33,8 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->in_boxes);
   free(p->shift);
   free(p->count);
-  free(p->full_lo);
-  free(p->full_hi);
+  free(p->inv_row_off);
+  free(p->inv_rows);
   free(p->vrow_off);
   free(p->need);
   free(p->need_row_min);
@@ -44,6 +44,28 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
 
 static int imax(int a, int b) { return a > b ? a : b; }
 static int imin(int a, int b) { return a < b ? a : b; }
+
+/* Each plane row's 1 / count (inv_row_off, inv_rows: refocus_internal.h):
+ * a row whose counts equal those of the row above shares its inverses.
+ * Returns nonzero when out of memory. */
+static int plan_inverse_rows(elfm_refocus_plan *p)
+{
+  const size_t W = (size_t)p->w, H = (size_t)p->h;
+  size_t n = 0;
+  for (size_t r = 0; r < H * (size_t)p->nz; r++)
+    if (r % H == 0 || memcmp(p->count + r * W, p->count + (r - 1) * W, W) != 0) n++;
+  p->inv_rows = malloc(n * W * sizeof *p->inv_rows);
+  if (!p->inv_rows) return 1;
+  size_t at = 0;
+  for (size_t r = 0; r < H * (size_t)p->nz; r++) {
+    if (r % H == 0 || memcmp(p->count + r * W, p->count + (r - 1) * W, W) != 0) {
+      for (size_t X = 0; X < W; X++) p->inv_rows[at + X] = p->inv_table[p->count[r * W + X]];
+      at += W;
+    }
+    p->inv_row_off[r] = at - W;
+  }
+  return 0;
+}
 
 elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_options *opt,
                                      elfm_refocus_plan **out, elfm_error *err)
@@ -101,8 +123,7 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   /* + 32: the sparse path's AVX2 code reads a row's need and count 8
    * bytes at a time from any voxel on, up to 7 past the end of the row */
   p->count = calloc(nvox + 32, 1);
-  p->full_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_lo);
-  p->full_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->full_hi);
+  p->inv_row_off = calloc((size_t)p->h * (size_t)nz, sizeof *p->inv_row_off);
   p->vrow_off = calloc((size_t)p->nv, sizeof *p->vrow_off);
   p->in_boxes = calloc((size_t)p->sw * (size_t)p->sh, 1);
   if (o.agree_frac > 0.0) {
@@ -111,7 +132,7 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->full_lo || !p->full_hi || !p->vrow_off || !p->in_boxes ||
+  if (!p->box || !p->shift || !p->count || !p->inv_row_off || !p->vrow_off || !p->in_boxes ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);
@@ -176,18 +197,9 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
   }
   p->inv_table[0] = 0.0f;
   for (int n = 1; n < 256; n++) p->inv_table[n] = 1.0f / (float)n;
-  for (size_t r = 0; r < (size_t)p->h * (size_t)nz; r++) {
-    /* Each view samples an interval of the row, so the columns all of
-     * them sample are one interval too; checked, not assumed: a row
-     * where they were not keeps an empty one, and the table for all. */
-    const uint8_t *row = p->count + r * (size_t)p->w;
-    int lo = 0, hi = 0;
-    while (lo < p->w && row[lo] != p->nv) lo++;
-    for (hi = lo; hi < p->w && row[hi] == p->nv; hi++) {}
-    for (int X = hi; X < p->w; X++)
-      if (row[X] == p->nv) lo = hi = 0;
-    p->full_lo[r] = lo;
-    p->full_hi[r] = hi;
+  if (plan_inverse_rows(p)) {
+    elfm_refocus_plan_free(p);
+    return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan's 1 / count rows)");
   }
   if (p->need)
     for (size_t i = 0; i < nvox; i++) {
@@ -539,8 +551,11 @@ static void refocus_dense(const elfm_refocus_plan *p, const float *img, elfm_vol
         }
       }
     }
-    const uint8_t *cnt = p->count + (size_t)k * W * H;
-    for (size_t i = 0; i < (size_t)W * H; i++) plane[i] *= p->inv_table[cnt[i]];
+    for (int Y = 0; Y < H; Y++) {
+      const float *inv = p->inv_rows + p->inv_row_off[(size_t)k * H + Y];
+      float *row = plane + (size_t)Y * W;
+      for (int X = 0; X < W; X++) row[X] *= inv[X];
+    }
     if (p->need)
       for (int Y = 0; Y < H; Y++)
         elfm_ghost_agree_row(p, k, Y, plane + (size_t)Y * W, ws->plane_cnt + (size_t)Y * W);

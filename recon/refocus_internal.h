@@ -40,11 +40,13 @@ struct elfm_refocus_plan {
   elfm_refocus_shift *shift;  /* [k * nv + v] */
   uint8_t *count;             /* [k][Y][X]: views sampling */
   float inv_table[256];       /* 1 / n, 0 for n = 0 */
-  /* [k * h + Y]: the columns [full_lo, full_hi) of that plane row that
-   * every view samples (count == nv; one interval, the views' overlap),
-   * empty when none: the sparse path scales them by one constant 1 / nv in
-   * a loop the compiler vectorises, the table only beyond them */
-  int32_t *full_lo, *full_hi;
+  /* [k * h + Y]: where that plane row's 1 / count (inv_table of each
+   * voxel's count) starts in inv_rows. A row's counts change only where a
+   * view's rows begin or end, so the rows of a plane share a few such rows
+   * (at most 2 nv + 1), and inv_rows stays small enough to stay in cache.
+   * The paths scale a row by it in a loop the compiler vectorises. */
+  size_t *inv_row_off;
+  float *inv_rows;
   /* [nv]: where view v's box rows (and one end mark) start in the sparse
    * workspace's run index by row (vrow), n_vrow in all */
   size_t *vrow_off, n_vrow;

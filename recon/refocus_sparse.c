@@ -221,7 +221,6 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
   size_t old_at = 0;
   const int W = p->w, H = p->h;
   const elfm_refocus_run *runs = ws->runs;
-  const float inv_all = p->inv_table[p->nv];
   for (int k = 0; k < p->nz; k++) {
     sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
@@ -327,25 +326,23 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
           }
         }
       }
-      /* The mean over sampling views, row by row in memory order.
-       * 1/count through a 256-entry table: the counts are 2 MB of bytes,
-       * a float inverse per voxel would be 8.4 MB of memory traffic. Where
-       * every view samples (most of a row: full_lo .. full_hi) it is one
-       * constant, in a loop the compiler vectorises: the table's load per
-       * voxel was a sixth of this function under perf (flow, 1 ms time
-       * surface; the refocus 3.5 % faster without it) */
+      /* The mean over sampling views, row by row in memory order, each
+       * voxel times its row's 1 / count (the plan's inv_rows), in a loop
+       * the compiler vectorises. The rows' written extents are most of a
+       * row (flow 1 s: 107 of 144 columns on 7,319 of 7,344 plane rows per
+       * frame), mostly where not every view samples. Scaled there through
+       * the 256-entry table one voxel at a time (a count and a table entry
+       * loaded per voxel), `track` on flow 1 s took 1.08 times the CPU it
+       * takes now (docs/recon.md "One over the count, a row at a time").
+       * The same products, so the same floats. */
       for (int Y = Yb; Y < Ye; Y++) {
         const int lo = blo[Y - Yb], hi = bhi[Y - Yb];
         if (lo >= hi) continue;
         const uint32_t r = (uint32_t)k * (uint32_t)H + (uint32_t)Y;
         elfm_refocus_mark_row(ws, r, lo, hi);
         float *row = vol->data + (size_t)r * W;
-        const uint8_t *cnt = p->count + (size_t)r * W;
-        const int a = p->full_lo[r] > lo ? (p->full_lo[r] < hi ? p->full_lo[r] : hi) : lo;
-        const int b = p->full_hi[r] < hi ? (p->full_hi[r] > a ? p->full_hi[r] : a) : hi;
-        for (int X = lo; X < a; X++) row[X] *= p->inv_table[cnt[X]];
-        for (int X = a; X < b; X++) row[X] *= inv_all;
-        for (int X = b; X < hi; X++) row[X] *= p->inv_table[cnt[X]];
+        const float *inv = p->inv_rows + p->inv_row_off[r];
+        for (int X = lo; X < hi; X++) row[X] *= inv[X];
       }
     }
   }
