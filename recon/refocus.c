@@ -35,6 +35,8 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
   free(p->count);
   free(p->inv_row_off);
   free(p->inv_rows);
+  free(p->samp_lo);
+  free(p->samp_hi);
   free(p->vrow_off);
   free(p->need);
   free(p->need_row_min);
@@ -63,6 +65,12 @@ static int plan_inverse_rows(elfm_refocus_plan *p)
       at += W;
     }
     p->inv_row_off[r] = at - W;
+    const uint8_t *cnt = p->count + r * W;
+    int lo = 0, hi = (int)W;
+    while (lo < hi && !cnt[lo]) lo++;
+    while (hi > lo && !cnt[hi - 1]) hi--;
+    p->samp_lo[r] = lo < hi ? lo : 0;
+    p->samp_hi[r] = lo < hi ? hi : 0;
   }
   return 0;
 }
@@ -124,6 +132,8 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
    * bytes at a time from any voxel on, up to 7 past the end of the row */
   p->count = calloc(nvox + 32, 1);
   p->inv_row_off = calloc((size_t)p->h * (size_t)nz, sizeof *p->inv_row_off);
+  p->samp_lo = calloc((size_t)p->h * (size_t)nz, sizeof *p->samp_lo);
+  p->samp_hi = calloc((size_t)p->h * (size_t)nz, sizeof *p->samp_hi);
   p->vrow_off = calloc((size_t)p->nv, sizeof *p->vrow_off);
   p->in_boxes = calloc((size_t)p->sw * (size_t)p->sh, 1);
   if (o.agree_frac > 0.0) {
@@ -132,7 +142,7 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->inv_row_off || !p->vrow_off || !p->in_boxes ||
+  if (!p->box || !p->shift || !p->count || !p->inv_row_off || !p->samp_lo || !p->samp_hi || !p->vrow_off || !p->in_boxes ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);

@@ -47,6 +47,9 @@ struct elfm_refocus_plan {
    * The paths scale a row by it in a loop the compiler vectorises. */
   size_t *inv_row_off;
   float *inv_rows;
+  /* [k * h + Y]: the columns [samp_lo, samp_hi) of that plane row some
+   * view samples (empty: 0, 0) */
+  int32_t *samp_lo, *samp_hi;
   /* [nv]: where view v's box rows (and one end mark) start in the sparse
    * workspace's run index by row (vrow), n_vrow in all */
   size_t *vrow_off, n_vrow;
