@@ -142,7 +142,8 @@ elfm_status elfm_refocus_plan_create(const elfm_calib *c, const elfm_refocus_opt
     p->need_words = ((size_t)p->w + 63) / 64;
     p->need_bits = calloc((size_t)p->h * (size_t)nz * 6 * p->need_words + 4, sizeof *p->need_bits);
   }
-  if (!p->box || !p->shift || !p->count || !p->inv_row_off || !p->samp_lo || !p->samp_hi || !p->vrow_off || !p->in_boxes ||
+  if (!p->box || !p->shift || !p->count || !p->inv_row_off || !p->samp_lo || !p->samp_hi ||
+      !p->vrow_off || !p->in_boxes ||
       (o.agree_frac > 0.0 && (!p->need || !p->need_row_min || !p->need_bits))) {
     elfm_refocus_plan_free(p);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (plan, %zu voxels)", nvox);

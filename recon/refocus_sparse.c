@@ -329,11 +329,11 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
        * voxel times its row's 1 / count (the plan's inv_rows), in a loop
        * the compiler vectorises. The runs write most of each row (flow
        * 1 s: 107 of 144 columns on 7,319 of 7,344 plane rows per frame),
-       * mostly where not every view samples. Scaled there through
-       * the 256-entry table one voxel at a time (a count and a table entry
+       * mostly where not every view samples. Scaled there through the
+       * 256-entry table one voxel at a time (a count and a table entry
        * loaded per voxel), `track` on flow 1 s took 1.08 times the CPU it
-       * takes now (docs/recon.md "One over the count, a row at a time").
-       * The same products, so the same floats. */
+       * took with these rows (docs/recon.md "One over the count, a row at
+       * a time"). The same products, so the same floats. */
       for (int Y = Yb; Y < Ye; Y++) {
         if (!wrote[Y - Yb]) continue;
         const uint32_t r = (uint32_t)k * (uint32_t)H + (uint32_t)Y;
