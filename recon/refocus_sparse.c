@@ -329,7 +329,7 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
        * voxel times its row's 1 / count (the plan's inv_rows), in a loop
        * the compiler vectorises. The runs write most of each row (flow
        * 1 s: 107 of 144 columns on 7,319 of 7,344 plane rows per frame),
-       * mostly where not every view samples. Scaled there through the
+       * about half of it where not every view samples. Scaled there through the
        * 256-entry table one voxel at a time (a count and a table entry
        * loaded per voxel), `track` on flow 1 s took 1.08 times the CPU it
        * took with these rows (docs/recon.md "One over the count, a row at
