@@ -47,6 +47,14 @@ void elfm_refocus_plan_free(elfm_refocus_plan *p)
 static int imax(int a, int b) { return a > b ? a : b; }
 static int imin(int a, int b) { return a < b ? a : b; }
 
+/* Whether plane row r (k * h + Y) needs inverses of its own: the first
+ * row of a plane, or counts other than those of the row above. */
+static int row_counts_new(const elfm_refocus_plan *p, size_t r)
+{
+  const size_t W = (size_t)p->w;
+  return r % (size_t)p->h == 0 || memcmp(p->count + r * W, p->count + (r - 1) * W, W) != 0;
+}
+
 /* Each plane row's 1 / count (inv_row_off, inv_rows: refocus_internal.h):
  * a row whose counts equal those of the row above shares its inverses.
  * Returns nonzero when out of memory. */
@@ -54,13 +62,12 @@ static int plan_inverse_rows(elfm_refocus_plan *p)
 {
   const size_t W = (size_t)p->w, H = (size_t)p->h;
   size_t n = 0;
-  for (size_t r = 0; r < H * (size_t)p->nz; r++)
-    if (r % H == 0 || memcmp(p->count + r * W, p->count + (r - 1) * W, W) != 0) n++;
+  for (size_t r = 0; r < H * (size_t)p->nz; r++) n += (size_t)row_counts_new(p, r);
   p->inv_rows = malloc(n * W * sizeof *p->inv_rows);
   if (!p->inv_rows) return 1;
   size_t at = 0;
   for (size_t r = 0; r < H * (size_t)p->nz; r++) {
-    if (r % H == 0 || memcmp(p->count + r * W, p->count + (r - 1) * W, W) != 0) {
+    if (row_counts_new(p, r)) {
       for (size_t X = 0; X < W; X++) p->inv_rows[at + X] = p->inv_table[p->count[r * W + X]];
       at += W;
     }
