@@ -34,6 +34,7 @@ struct elfm_peaks {
   int n_views;
   double view_scale[256]; /* threshold factor (N / n)^exponent by view count n */
   int32_t *row_max;  /* per (y, z) row: its maximum voxel's bits as int32 (float order for >= 0) */
+  uint8_t *above;    /* one row's voxels above the threshold (mark_above), w rounded up to 8 */
   double last_threshold;
 };
 
@@ -101,7 +102,10 @@ elfm_peaks *elfm_peaks_create(const elfm_peaks_options *o, int w, int h, int nz,
   p->row_max = malloc((size_t)h * nz * sizeof *p->row_max);
   p->thr_plane = malloc((size_t)nz * sizeof *p->thr_plane);
   p->thr_low = malloc((size_t)nz * sizeof *p->thr_low);
-  if (!p->cand || !p->sample || !p->keys || !p->row_max || !p->thr_plane || !p->thr_low) goto nomem;
+  p->above = calloc((size_t)w + 8, 1); /* the tail past w stays 0: read 8 at a time */
+  if (!p->cand || !p->sample || !p->keys || !p->row_max || !p->thr_plane || !p->thr_low ||
+      !p->above)
+    goto nomem;
   return p;
 nomem:
   elfm_peaks_free(p);
@@ -118,6 +122,7 @@ void elfm_peaks_free(elfm_peaks *p)
   free(p->row_max);
   free(p->thr_plane);
   free(p->thr_low);
+  free(p->above);
   free(p->views);
   free(p);
 }
@@ -340,6 +345,24 @@ static void scan_rows(const float *restrict d, int w, size_t nrows, int32_t *res
   *mag_max_out = mag_max;
   *imax_out = imax;
   *nonzero_out = nonzero;
+}
+
+/* above[x] = 1 where row[x] > thr, else 0: a loop the compiler vectorises,
+ * so that the candidate search of elfm_peaks_detect reads a row's voxels
+ * above the threshold one by one and skips the rest eight at a time
+ * (any8). In a flow volume most voxels of a row whose maximum passes lie
+ * below the threshold. */
+static void mark_above(const float *restrict row, int w, float thr, uint8_t *restrict above)
+{
+  for (int x = 0; x < w; x++) above[x] = row[x] > thr;
+}
+
+/* Is any of the eight flags at a set? */
+static int any8(const uint8_t *a)
+{
+  uint64_t m;
+  memcpy(&m, a, sizeof m);
+  return m != 0;
 }
 
 /* The blob's lateral width along its widest axis at voxel (x, y, z) of v
@@ -576,9 +599,19 @@ elfm_status elfm_peaks_detect(elfm_peaks *p, const elfm_volume *v, elfm_detectio
        * (thr_f >= 0, where the bits' integer order is the float order) */
       if (p->row_max[(size_t)z * h + y] <= thr_bits) continue;
       const float *row = d + ((size_t)z * h + y) * w;
+      mark_above(row, w, thr_f, p->above);
       for (int x = 0; x < w; x++) {
+        if ((x & 7) == 0 && !any8(p->above + x)) {
+          x += 7; /* eight voxels at or below the threshold */
+          continue;
+        }
+        if (!p->above[x]) continue;
         float c = row[x];
-        if (!(c > thr_f) || (double)c <= thr) continue;
+        if ((double)c <= thr) continue;
+        /* the row's two neighbours first (most voxels above the
+         * threshold lie on a blob's slope), with is_box_max's tie rule:
+         * an equal voxel at a lower index wins */
+        if ((x > 0 && row[x - 1] >= c) || (x + 1 < w && row[x + 1] > c)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, 1, 1)) continue;
         if (!is_box_max(d, w, h, nz, x, y, z, rx, rz)) continue;
         int weak = !((double)c > thr_hi);
