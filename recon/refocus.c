@@ -450,6 +450,7 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
   ws->rows = malloc((size_t)p->nz * p->h * sizeof *ws->rows);
   ws->rows_old = malloc((size_t)p->nz * p->h * sizeof *ws->rows_old);
   ws->vrow = calloc(p->n_vrow, sizeof *ws->vrow);
+  ws->scatter_plane = calloc((size_t)p->w * (size_t)p->h, sizeof *ws->scatter_plane);
   int sup_ok = 1;
   if (p->need) {
     /* support bit maps (refocus_agree.c), packed: 25 views x 145 rows x
@@ -486,7 +487,8 @@ elfm_status elfm_refocus_workspace_create(const elfm_refocus_plan *p,
     }
   }
   if (!ws->plane_cnt || !ws->row_start || !ws->row_bits || !ws->sorted || !ws->runs || !ws->vals ||
-      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !ws->vrow || !sup_ok) {
+      !ws->row_dirty || !ws->row_lo || !ws->row_hi || !ws->rows || !ws->rows_old || !ws->vrow ||
+      !ws->scatter_plane || !sup_ok) {
     elfm_refocus_workspace_free(ws);
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (workspace)");
   }
@@ -519,6 +521,7 @@ void elfm_refocus_workspace_free(elfm_refocus_workspace *ws)
   free(ws->rows);
   free(ws->rows_old);
   free(ws->vrow);
+  free(ws->scatter_plane);
   free(ws);
 }
 

@@ -135,6 +135,7 @@ struct elfm_refocus_workspace {
   uint32_t *rows_old;         /* the previous call's rows while they are cleared */
   const float *dirty_data;    /* volume data the dirty rows refer to */
   int dirty_all;              /* that volume may be non-zero anywhere */
+  float *scatter_plane;       /* [W*H] the sparse scatter's plane, all zero between its blocks */
 };
 
 /* ghost.c: the view-agreement rule on one row of W voxels (plane k, row Y):

@@ -10,15 +10,22 @@
  * a short contiguous loop the compiler vectorises instead of 4 scattered
  * adds per pixel.
  *
- * The workspace remembers the rows and column extents it wrote, so the
- * next call clears only those (a 144 x 144 x 101 volume is 8.4 MB: clearing
- * it whole would cost more than refocusing a typical 1 ms frame).
+ * The plain path (sparse_scatter) sums each block of plane rows in the
+ * workspace and streams it into the volume whole. The agreement path
+ * writes into the volume itself: the workspace remembers the rows and
+ * column extents written, so that the next call clears only those (a
+ * 144 x 144 x 101 volume is 8.4 MB: clearing it whole would cost more than
+ * refocusing a typical 1 ms frame).
  */
 #include "refocus_internal.h"
 
 #include <stddef.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 /* Eight floats, operated on lane by lane (GCC's vector extension), loaded
  * and stored unaligned through memcpy. Passed by pointer: by value they
@@ -207,6 +214,29 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   return ELFM_OK;
 }
 
+/* The previous call's rows, forgotten without clearing them: the scatter
+ * writes every voxel of every plane (sparse_scatter). */
+static void sparse_forget_old(elfm_refocus_workspace *ws, size_t n_old)
+{
+  for (size_t i = 0; i < n_old; i++) ws->row_dirty[ws->rows_old[i]] = 0;
+}
+
+/* dst[0 .. n) = src[0 .. n), with non-temporal stores where the CPU has
+ * them (SSE2: every x86-64). Such stores write whole cache lines to memory
+ * without reading them first; the caller ends its run of them with
+ * _mm_sfence. */
+static void stream_floats(float *restrict dst, const float *restrict src, size_t n)
+{
+#if defined(__SSE2__)
+  size_t i = 0;
+  for (; i < n && ((uintptr_t)(dst + i) & 15); i++) dst[i] = src[i];
+  for (; i + 4 <= n; i += 4) _mm_stream_ps(dst + i, _mm_loadu_ps(src + i));
+  for (; i < n; i++) dst[i] = src[i];
+#else
+  memcpy(dst, src, n * sizeof *dst);
+#endif
+}
+
 /* The plain path's planes (no agreement rule). On x86-64 Linux it is built
  * twice, for AVX2 and for any x86-64 (SSE2), and the loader picks one; the
  * source is the same, and its vectors of 8 are one instruction with AVX2,
@@ -217,13 +247,26 @@ __attribute__((target_clones("avx2", "default")))
 static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws,
                            size_t n_old)
 {
-  size_t old_at = 0;
   const int W = p->w, H = p->h;
   const elfm_refocus_run *runs = ws->runs;
+  sparse_forget_old(ws, n_old);
   for (int k = 0; k < p->nz; k++) {
-    sparse_clear_plane(p, vol, ws, k, &old_at, n_old);
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
-    float *plane = vol->data + (size_t)k * W * H;
+    /* The scatter sums into the workspace's plane, which stays in cache
+     * (83 kB at the paper's geometry), and each block of rows is then
+     * streamed into the volume whole, zeros included, by non-temporal
+     * stores. Summed in the volume itself, each plane's rows were first
+     * cleared there: a write to lines last touched a frame-ring ago,
+     * which the CPU reads from memory before writing. Those reads were
+     * 3-18 % of `track`'s samples under perf, from run to run of the same
+     * command (the machine's other work sharing its memory); the stores
+     * stream without them. `track` on flow 1 s seed 1, 2 threads, 11
+     * pairs: 0.856 of the wall time of the summing in the volume, and
+     * 0.929 of streaming by plain stores (memcpy), which read the lines
+     * as the clearing did (docs/recon.md "Planes streamed into the
+     * volume"). */
+    float *plane = ws->scatter_plane;
+    float *vplane = vol->data + (size_t)k * W * H;
     const float *vals = ws->vals;
     /* A block of plane rows at a time, view by view: each view takes only
      * its runs on the box rows that reach the block (vrow). Which rows were
@@ -339,12 +382,20 @@ static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_re
         const uint32_t r = (uint32_t)k * (uint32_t)H + (uint32_t)Y;
         const int lo = p->samp_lo[r], hi = p->samp_hi[r];
         elfm_refocus_mark_row(ws, r, lo, hi);
-        float *row = vol->data + (size_t)r * W;
+        float *row = plane + (size_t)Y * W;
         const float *inv = p->inv_rows + p->inv_row_off[r];
         for (int X = lo; X < hi; X++) row[X] *= inv[X];
       }
+      /* the block into the volume, and its written rows back to zero (the
+       * unwritten ones are zero still) */
+      stream_floats(vplane + (size_t)Yb * W, plane + (size_t)Yb * W, (size_t)(Ye - Yb) * W);
+      for (int Y = Yb; Y < Ye; Y++)
+        if (wrote[Y - Yb]) memset(plane + (size_t)Y * W, 0, (size_t)W * sizeof *plane);
     }
   }
+#if defined(__SSE2__)
+  _mm_sfence(); /* the streamed stores before the volume is handed on */
+#endif
 }
 
 elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *frame,

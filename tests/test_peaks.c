@@ -111,8 +111,51 @@ static void test_noise_exact(void)
   }
 }
 
+/* A lone bright voxel at every column of an odd-width volume, with a
+ * dimmer one after it (a slope voxel above the threshold; before it in the
+ * last column): the candidate search marks a row's voxels above the
+ * threshold and skips eight at a time where none is, so each column, the
+ * first after eight empty ones and the row's last ones included, must
+ * still be found, and only the peak. */
+static void test_every_column(void)
+{
+  elfm_error err;
+  const int W = 37, H = 5, NZ = 3;
+  elfm_volume *v = elfm_volume_create(W, H, NZ, 1.0, 0, 4, &err);
+  elfm_peaks_options o;
+  elfm_peaks_options_default(&o);
+  o.k_sigma = 0;
+  o.absolute = 10;
+  o.min_separation_um = 0;
+  o.radius_xy_um = 1;
+  o.radius_z_um = 1;
+  elfm_peaks *pk = v ? elfm_peaks_create(&o, W, H, NZ, &err) : NULL;
+  CHECK(pk != NULL);
+  if (!pk) {
+    elfm_volume_free(v);
+    return;
+  }
+  elfm_detection det[8];
+  int bad = 0;
+  for (int x = 0; x < W; x++) {
+    memset(v->data, 0, (size_t)W * H * NZ * sizeof *v->data);
+    float *row = v->data + ((size_t)1 * H + 2) * W;
+    row[x] = 100;
+    row[x + 1 < W ? x + 1 : x - 1] = 50;
+    int n = 0;
+    CHECK_OK(elfm_peaks_detect(pk, v, det, 8, &n, &err), &err);
+    if (n != 1 || fabs(det[0].x_um - elfm_volume_x_um(v, x)) > 0.5) {
+      if (bad++ < 3) fprintf(stderr, "column %d: %d peaks\n", x, n);
+    }
+  }
+  CHECK_EQ_INT(bad, 0);
+  elfm_peaks_free(pk);
+  elfm_volume_free(v);
+}
+
 int main(void)
 {
+  test_every_column();
   elfm_error err;
   elfm_error_clear(&err);
   elfm_volume *v = elfm_volume_create(64, 60, 51, 0.926, -50, 2, &err);
