@@ -44,22 +44,28 @@ __attribute__((always_inline)) static inline void add8(float *o, const v8f *w0, 
 }
 
 /* Plane rows per block of the scatter (elfm_refocus_sparse): the rows'
- * written extents live on the stack. bench_refocus on flow 1 s, 1 thread,
+ * written flags live on the stack, and the block is summed in the
+ * workspace's plane. bench_refocus on flow 1 s, 1 thread, 101 planes: 96
+ * rows 1.99-2.05, 48 2.09-2.19, 32 2.32-2.62 ms per volume (docs/recon.md
+ * "Planes streamed into the volume"). Summed in the volume itself, earlier,
  * ms per volume over 4 alternating runs (before the groups of four): 16
  * rows 5.5-5.6, 32 5.3-5.4, 48 4.87-4.94, 64 4.92-5.01, 96 4.65-4.89, a
  * whole 144-row plane 4.74-4.85. */
 #define SPARSE_BLOCK_ROWS 96
 
-/* Start a call: when the volume is not the one this workspace last wrote
- * sparsely (or was written densely), clear it whole; otherwise keep the
+/* Start a call. writes_all: the call writes every voxel (sparse_scatter),
+ * so the previous call's rows are only forgotten. Otherwise (the
+ * agreement path), when the volume is not the one this workspace last
+ * wrote sparsely (or was written densely), clear it whole; else keep the
  * previous call's rows in rows_old, to be cleared plane by plane just
- * before each plane is scattered (the plane is then in cache once). */
-static size_t sparse_begin(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws)
+ * before each plane is written (the plane is then in cache once). */
+static size_t sparse_begin(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws,
+                           int writes_all)
 {
   size_t n_old = 0;
-  if (ws->dirty_data != vol->data || ws->dirty_all) {
+  if (writes_all || ws->dirty_data != vol->data || ws->dirty_all) {
     const size_t nvox = (size_t)p->w * p->h * p->nz;
-    memset(vol->data, 0, nvox * sizeof *vol->data);
+    if (!writes_all) memset(vol->data, 0, nvox * sizeof *vol->data);
     for (size_t i = 0; i < ws->n_rows; i++) ws->row_dirty[ws->rows[i]] = 0;
   } else {
     uint32_t *t = ws->rows_old;
@@ -214,13 +220,6 @@ static elfm_status sparse_runs(const elfm_refocus_plan *p, const elfm_frame *fra
   return ELFM_OK;
 }
 
-/* The previous call's rows, forgotten without clearing them: the scatter
- * writes every voxel of every plane (sparse_scatter). */
-static void sparse_forget_old(elfm_refocus_workspace *ws, size_t n_old)
-{
-  for (size_t i = 0; i < n_old; i++) ws->row_dirty[ws->rows_old[i]] = 0;
-}
-
 /* dst[0 .. n) = src[0 .. n), with non-temporal stores where the CPU has
  * them (SSE2: every x86-64). Such stores write whole cache lines to memory
  * without reading them first; the caller ends its run of them with
@@ -244,12 +243,10 @@ static void stream_floats(float *restrict dst, const float *restrict src, size_t
 #if defined(__x86_64__) && defined(__GNUC__) && defined(__linux__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws,
-                           size_t n_old)
+static void sparse_scatter(const elfm_refocus_plan *p, elfm_volume *vol, elfm_refocus_workspace *ws)
 {
   const int W = p->w, H = p->h;
   const elfm_refocus_run *runs = ws->runs;
-  sparse_forget_old(ws, n_old);
   for (int k = 0; k < p->nz; k++) {
     const elfm_refocus_shift *sk = p->shift + (size_t)k * p->nv;
     /* The scatter sums into the workspace's plane, which stays in cache
@@ -407,9 +404,9 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
   /* the agreement rule reads each run as signal: its runs stay exact */
   elfm_status st = sparse_runs(p, frame, p->need ? 0 : ws->merge_gap_px, ws, err);
   if (st) return st;
-  const size_t n_old = sparse_begin(p, vol, ws);
-  size_t old_at = 0;
   if (p->need) {
+    const size_t n_old = sparse_begin(p, vol, ws, 0);
+    size_t old_at = 0;
     /* the view-agreement rule: refocus_agree.c, which reads the frame
      * itself (not a deep window's: track's, where the rule is off) */
     if (frame->recent_floor > 0)
@@ -425,7 +422,8 @@ elfm_status elfm_refocus_sparse(const elfm_refocus_plan *p, const elfm_frame *fr
     elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
     return ELFM_OK;
   }
-  sparse_scatter(p, vol, ws, n_old);
+  sparse_begin(p, vol, ws, 1);
+  sparse_scatter(p, vol, ws);
   elfm_ghost_threshold_apply(p, vol, ws->rows, ws->n_rows);
   return ELFM_OK;
 }
