@@ -391,6 +391,8 @@ static int track_run(const track_opts *po, track_again *again, double *t0_s)
               o.views_scaled);
   }
   o.recon.plan = c.plan; /* one plan for the run (track_peaks_setup) */
+  o.recon.bin_px = o.bin_px;
+  o.recon.volume_plan = c.vplan; /* --bin-px: the binned volumes' */
   if (isnan(*t0_s)) *t0_s = cli_now_s();
   const double t0 = *t0_s;
   elfm_recon_stats rs;

@@ -86,6 +86,9 @@ typedef struct track_opts {
   double plane_shift_px; /* without --z-step-um: every m-th of the calibration's planes, the
                             outermost view moving <= this between them (0 = all of them;
                             track_plane_step) */
+  int bin_px;           /* --bin-px: peaks found in volumes refocused from the frames binned
+                           bin_px x bin_px (elfm_recon_options.bin_px; 1: off); the view
+                           fits stay on the full frames */
   int plane_every;      /* the m taken (1: the calibration's planes), for summary.json */
   int plane_centred;    /* m does not divide the calibration's range: centred, off its grid */
   int thr_defaulted;    /* 1 absolute, 2 hysteresis_low, 4 absolute_min: track's own
@@ -443,7 +446,10 @@ typedef struct track_ctx {
   double t_peaks, t_link, t_smooth;
   elfm_fwhm *fw;
   fwhm_list fl;
-  elfm_volume geo;       /* the volumes' geometry (header only, data NULL) */
+  elfm_volume geo;       /* the full-sampled volume's geometry (header only, data NULL), set
+                            in track_peaks_setup: the view fits' voxels (c->plan's). With
+                            --bin-px the volumes the peaks come from are coarser, so a
+                            detection goes between the two by its um (elfm_volume_x_vox) */
   double median_speed_um_per_ms; /* of the finished tracks (summary.json, the note) */
   /* gap filling (cmd_track_fill.c) */
   frame_ring ring;
@@ -453,6 +459,9 @@ typedef struct track_ctx {
    * detectors' geometry, the driver (o->recon.plan) and the view fits of
    * the gap fills, which go on after the driver's run */
   elfm_refocus_plan *plan;
+  elfm_refocus_plan *vplan; /* owned, with --bin-px: the binned calibration's, the volumes' */
+  float *bin_piece;         /* with --bin-px: a piece of full-sampled volume per thread */
+  size_t bin_piece_len;     /* floats per thread (cmd_track_bin.c) */
   elfm_link_gap *gaps;
   int gaps_cap;
   elfm_detection *fill_pts; /* [ring.cap] */
@@ -543,6 +552,13 @@ typedef struct track_ctx {
 /* Detectors and buffers for the driver's layout (elfm_recon_layout of
  * c->o->recon), before the run. */
 elfm_status track_peaks_setup(track_ctx *c, elfm_error *err);
+/* --bin-px (cmd_track_bin.c): the pieces' memory (called by
+ * track_peaks_setup), and det[0 .. n), peaks of a binned volume, refined
+ * again as the detector would in the full-sampled volume, on voxels made
+ * from the frame with the full plan around each */
+elfm_status track_bin_setup(track_ctx *c, elfm_error *err);
+void track_bin_refine(track_ctx *c, const elfm_refocus_plan *plan, const elfm_frame *frame,
+                      int thread, elfm_detection *det, int n);
 /* The recon driver's worker hook (elfm_volume_worker_fn; user: the
  * track_ctx): peaks of the slot's volume, on the worker thread. */
 elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,

@@ -37,6 +37,7 @@ void track_defaults(track_opts *o)
    * error the same), and `track` on flow 1 s in 0.68 of the time (RTF 0.22
    * -> 0.31; docs/tracker.md "Planes 4 um apart"). */
   o->plane_shift_px = 1.5;
+  o->bin_px = 1;
   o->plane_every = 1;
   o->max_outlier_frac = 1.0 / 3;
   /* A recording whose beads all move fast leads less than its in-focus

@@ -26,20 +26,29 @@ static int any_near(const elfm_detection *det, int n, const double q[3], double 
   return 0;
 }
 
-/* A point the view fit placed from a track's prediction (r): weak (it can
- * only go on with a track) and view_fit, its intensity the volume's at the
- * nearest voxel. 0 where that voxel lies outside the volume. */
-static int guided_point(const elfm_volume *v, const elfm_localize_result *r, elfm_detection *d)
+/* A point the view fit placed from a track's prediction (r, in the voxels
+ * of geo, the full-sampled volume's geometry): weak (it can only go on with
+ * a track) and view_fit, its intensity the volume v's at the nearest voxel
+ * (v's own, coarser with --bin-px). 0 where that voxel lies outside the
+ * volume. */
+static int guided_point(const elfm_volume *geo, const elfm_volume *v,
+                        const elfm_localize_result *r, elfm_detection *d)
 {
-  const int X = (int)lround(r->x_vox), Y = (int)lround(r->y_vox), K = (int)lround(r->z_vox);
-  if (X < 0 || Y < 0 || K < 0 || X >= v->w || Y >= v->h || K >= v->nz) return 0;
+  int X = (int)lround(r->x_vox), Y = (int)lround(r->y_vox), K = (int)lround(r->z_vox);
+  if (X < 0 || Y < 0 || K < 0 || X >= geo->w || Y >= geo->h || K >= geo->nz) return 0;
   memset(d, 0, sizeof *d);
   d->frame = v->frame;
   d->t_us = v->t_us;
-  d->x_um = elfm_volume_x_um(v, r->x_vox);
-  d->y_um = elfm_volume_y_um(v, r->y_vox);
-  d->z_um = elfm_volume_z_um(v, r->z_vox);
+  d->x_um = elfm_volume_x_um(geo, r->x_vox);
+  d->y_um = elfm_volume_y_um(geo, r->y_vox);
+  d->z_um = elfm_volume_z_um(geo, r->z_vox);
   d->fit_sd_px = r->sd_px;
+  if (v->w != geo->w || v->h != geo->h) { /* a binned volume: its voxel at the point */
+    X = (int)lround(elfm_volume_x_vox(v, d->x_um));
+    Y = (int)lround(elfm_volume_y_vox(v, d->y_um));
+    X = X < 0 ? 0 : X >= v->w ? v->w - 1 : X;
+    Y = Y < 0 ? 0 : Y >= v->h ? v->h - 1 : Y;
+  }
   d->intensity = v->data[((size_t)K * v->h + Y) * v->w + X];
   d->weak = 1;
   d->view_fit = 1;
@@ -80,14 +89,15 @@ static int fit_beside(const track_ctx *c, const elfm_volume *v, const elfm_refoc
                       const elfm_frame *frame, const double q[3], const double other[3],
                       elfm_detection *d)
 {
-  const double nb[1][3] = {{elfm_volume_x_vox(v, other[0]), elfm_volume_y_vox(v, other[1]),
-                            elfm_volume_z_vox(v, other[2])}};
+  const elfm_volume *geo = &c->geo;
+  const double nb[1][3] = {{elfm_volume_x_vox(geo, other[0]), elfm_volume_y_vox(geo, other[1]),
+                            elfm_volume_z_vox(geo, other[2])}};
   elfm_localize_result r;
   const elfm_localize_options lo = track_guided_loc(c->o);
-  return elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, q[0]),
-                                    elfm_volume_y_vox(v, q[1]), elfm_volume_z_vox(v, q[2]), nb, 1,
-                                    &lo, &r) &&
-         guided_point(v, &r, d);
+  return elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(geo, q[0]),
+                                    elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]), nb,
+                                    1, &lo, &r) &&
+         guided_point(geo, v, &r, d);
 }
 
 elfm_localize_options track_guided_loc(const track_opts *o)
@@ -175,6 +185,7 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, const elfm_frame
                             elfm_detection *det, int *n_io)
 {
   const track_opts *o = c->o;
+  const elfm_volume *geo = &c->geo; /* the view fits' voxels */
   int n = *n_io;
   const double g = o->link.weak_gate_um, kz = o->link.kz;
   elfm_localize_options lo = track_guided_loc(o);
@@ -189,23 +200,23 @@ static void guided_view_fit(track_ctx *c, const elfm_volume *v, const elfm_frame
     int k_nb = 0;
     if (o->localize_near_um > 0) {
       const double r2 = o->localize_near_um * o->localize_near_um;
-      k_nb = track_near_add(det, n, -1, q[0], q[1], o->localize_near_um, v, nb, 0);
+      k_nb = track_near_add(det, n, -1, q[0], q[1], o->localize_near_um, geo, nb, 0);
       for (int j = 0; j < np && k_nb < TRACK_NEAR_MAX; j++) {
         const double *qj = pred + 3 * (size_t)j;
         const double dx = qj[0] - q[0], dy = qj[1] - q[1];
         if (j == k || dx * dx + dy * dy >= r2 || any_near(det, n, qj, g, kz)) continue;
-        nb[k_nb][0] = elfm_volume_x_vox(v, qj[0]);
-        nb[k_nb][1] = elfm_volume_y_vox(v, qj[1]);
-        nb[k_nb][2] = elfm_volume_z_vox(v, qj[2]);
+        nb[k_nb][0] = elfm_volume_x_vox(geo, qj[0]);
+        nb[k_nb][1] = elfm_volume_y_vox(geo, qj[1]);
+        nb[k_nb][2] = elfm_volume_z_vox(geo, qj[2]);
         k_nb++;
       }
     }
-    if (!elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, q[0]),
-                                    elfm_volume_y_vox(v, q[1]), elfm_volume_z_vox(v, q[2]),
+    if (!elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(geo, q[0]),
+                                    elfm_volume_y_vox(geo, q[1]), elfm_volume_z_vox(geo, q[2]),
                                     (const double(*)[3])nb, k_nb, &lo, &r))
       continue;
     elfm_detection d;
-    if (!guided_point(v, &r, &d) || !any_near(&d, 1, q, g, kz)) continue;
+    if (!guided_point(geo, v, &r, &d) || !any_near(&d, 1, q, g, kz)) continue;
     if (d.intensity < o->guided_min_ratio * c->pred_intensity[k]) continue;
     const double pd[3] = {d.x_um, d.y_um, d.z_um};
     if (o->guided_apart_um > 0 && any_near(det, n, pd, o->guided_apart_um, kz)) {

@@ -48,7 +48,7 @@ enum {
   O_LOCPOW, O_LOCOUT, O_LOCMIN, O_LOCNEAR, O_GVIEWS, O_MLEAD, O_MDELAY,
   O_FILLV, O_FILLG, O_FILLN, O_FILLR, O_FILLK, O_FILLE, O_FILLRT, O_SPATH, O_CIRCN, O_CIRCNP, O_CIRCE, O_CIRCA, O_VFSIG, O_GRATIO, O_DEEPV, O_PRIO, O_GCVG, O_SPORD, O_SPTURN, O_MPATH, O_FSDP, O_MFADE, O_MSLOW, O_MSLOWS, O_MFAST, O_MFASTS, O_MBLUR,
   O_ENCUM, O_ENCPAD, O_ENCAPART, O_ENCR, O_ENCCR, O_ENCLR, O_RJOIN, O_RESTV, O_PIECE,
-  O_LSCALE, O_PLSHIFT, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ, O_GAPART
+  O_LSCALE, O_PLSHIFT, O_BIN, O_TWIN, O_TWINN, O_PAIRFIT, O_DEEPW, O_DEEPZ, O_GAPART
 };
 
 /* Parse argv into *out (track defaults first). CLI_OK: run; TRACK_PARSE_HELP:
@@ -131,7 +131,7 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
       {"lead-sigmas", required_argument, 0, O_LEAD},
       {"link-kz", required_argument, 0, O_LINKKZ},
       {"views-exponent", required_argument, 0, O_VEXP},
-      {"plane-shift-px", required_argument, 0, O_PLSHIFT},
+      {"plane-shift-px", required_argument, 0, O_PLSHIFT}, {"bin-px", required_argument, 0, O_BIN},
       {"threshold-low", required_argument, 0, O_HYST},
       {"radius-xy-um", required_argument, 0, O_RXY},
       {"radius-z-um", required_argument, 0, O_RZ}, {"min-separation-um", required_argument, 0, O_SEP},
@@ -183,6 +183,9 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
     case O_PLSHIFT:
       if (!cli_parse_double_in(C, "--plane-shift-px", a, 0, 0, 100, "0..100 (0 = every plane)", &o.plane_shift_px))
         return CLI_USAGE;
+      break;
+    case O_BIN:
+      if (!cli_parse_int_in(C, "--bin-px", a, 1, 4, "1..4 (1 = off)", &o.bin_px)) return CLI_USAGE;
       break;
     case O_LINKKZ: if (!cli_parse_double_in(C, "--link-kz", a, 0, 1, 100, "> 0 and <= 100", &o.link.kz)) return CLI_USAGE; break;
     case O_LEAD: if (!cli_parse_double(C, "--lead-sigmas", a, &o.link.lead_sigmas)) return CLI_USAGE; break;
@@ -562,6 +565,10 @@ int track_opts_parse(int argc, char **argv, track_opts *out)
   if (!o.calib || !o.events || !o.out)
     return cli_message(C, CLI_USAGE, "--calib, --events and --out are required (see --help)");
   if (!cli_check_recon_options(C, &rp)) return CLI_USAGE;
+  /* the widths --resolution reports would be the binned volume's */
+  if (o.bin_px > 1 && o.resolution)
+    return cli_message(C, CLI_USAGE, "--resolution measures the volumes' widths: not with --bin-px %d",
+                       o.bin_px);
   cli_recon_planes(&rp, o.planes_um);
   const int rc = track_opts_derive(&o, &g);
   if (rc != CLI_OK) return rc;

@@ -204,6 +204,7 @@ elfm_status track_write_summary(const track_ctx *c, const elfm_recon_stats *rs, 
   cJSON_AddBoolToObject(par, "views_rule", o->views_rule);
   cJSON_AddNumberToObject(par, "views_exponent", o->views_exponent);
   cJSON_AddNumberToObject(par, "plane_shift_px", o->plane_shift_px);
+  cJSON_AddNumberToObject(par, "bin_px", o->bin_px);
   cJSON_AddNumberToObject(par, "fit_half_z", o->peaks.fit_half_z);
   cJSON_AddNumberToObject(par, "rescue_gate_factor", o->link.rescue_gate_factor);
   cJSON_AddNumberToObject(par, "stitch_points", o->link.stitch_points);

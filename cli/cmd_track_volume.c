@@ -188,8 +188,20 @@ elfm_status track_peaks_setup(track_ctx *c, elfm_error *err)
     return elfm_error_set(err, ELFM_ERR_NOMEM, NULL, -1, "out of memory (detections)");
   s = elfm_refocus_plan_create(c->calib, &o->recon.refocus, &c->plan, err);
   if (s != ELFM_OK) return s;
-  const elfm_refocus_plan *plan = c->plan;
-  int w, h, nz; /* the volumes' size: the plan's */
+  memset(&c->geo, 0, sizeof c->geo);
+  elfm_refocus_plan_size(c->plan, &c->geo.w, &c->geo.h, &c->geo.nz);
+  c->geo.um_per_px = c->calib->um_per_px;
+  c->geo.z_min_um = c->calib->z_min_um;
+  c->geo.z_step_um = c->calib->z_step_um;
+  if (o->bin_px > 1) {
+    elfm_calib binned;
+    s = elfm_calib_bin(c->calib, o->bin_px, &binned, err);
+    if (s == ELFM_OK) s = elfm_refocus_plan_create(&binned, &o->recon.refocus, &c->vplan, err);
+    if (s == ELFM_OK) s = track_bin_setup(c, err);
+    if (s != ELFM_OK) return s;
+  }
+  const elfm_refocus_plan *plan = c->vplan ? c->vplan : c->plan;
+  int w, h, nz; /* the volumes' size: their plan's */
   elfm_refocus_plan_size(plan, &w, &h, &nz);
   uint8_t *cnt = NULL;
   if (o->views_rule) {
@@ -231,7 +243,7 @@ int track_near_add(const elfm_detection *det, int n, int skip, double x_um, doub
  * Every second fit starts from, and reads its neighbours at, the first fits'
  * positions (the results are kept aside until all are done), so that the
  * order does not matter. Where the second fit fails, the first stays. */
-static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detection *det, int n,
+static void near_refit(track_ctx *c, const elfm_volume *geo, int slot, elfm_detection *det, int n,
                        const elfm_localize_options *deep, int deep_test)
 {
   const elfm_frame *frame = c->slot_frame[slot];
@@ -242,18 +254,18 @@ static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detect
     fit[i][0] = NAN;
     if (!ok[i]) continue;
     double nb[TRACK_NEAR_MAX][3];
-    const int k = track_near_add(det, n, i, det[i].x_um, det[i].y_um, c->o->localize_near_um, v,
+    const int k = track_near_add(det, n, i, det[i].x_um, det[i].y_um, c->o->localize_near_um, geo,
                                  nb, 0);
     elfm_localize_result r;
-    if (!k || !elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
-                                          elfm_volume_y_vox(v, det[i].y_um),
-                                          elfm_volume_z_vox(v, det[i].z_um),
+    if (!k || !elfm_refocus_localize_near(plan, frame, elfm_volume_x_vox(geo, det[i].x_um),
+                                          elfm_volume_y_vox(geo, det[i].y_um),
+                                          elfm_volume_z_vox(geo, det[i].z_um),
                                           (const double(*)[3])nb, k,
                                           deep_test && det[i].deep_only ? deep : &c->o->loc, &r))
       continue;
-    fit[i][0] = elfm_volume_x_um(v, r.x_vox);
-    fit[i][1] = elfm_volume_y_um(v, r.y_vox);
-    fit[i][2] = elfm_volume_z_um(v, r.z_vox);
+    fit[i][0] = elfm_volume_x_um(geo, r.x_vox);
+    fit[i][1] = elfm_volume_y_um(geo, r.y_vox);
+    fit[i][2] = elfm_volume_z_um(geo, r.z_vox);
     fit[i][3] = r.sd_px;
   }
   for (int i = 0; i < n; i++) {
@@ -284,20 +296,20 @@ static void near_refit(track_ctx *c, const elfm_volume *v, int slot, elfm_detect
  * brighter neighbour then explains can take it under the test
  * (flow_random seeds 1-8, recall 0.850 -> 0.837 with every explained view
  * left out). docs/tracker.md "Ghosts of bright objects" has the rest. */
-static int explained_support(const track_ctx *c, const elfm_volume *v,
+static int explained_support(const track_ctx *c, const elfm_volume *geo,
                              const elfm_refocus_plan *plan, const elfm_frame *frame,
                              const elfm_detection *det, int n_peaks, int i, int X, int Y, int K,
                              int n)
 {
   const track_opts *o = c->o;
-  const double r_px = o->explain_um / v->um_per_px;
-  const double reach_px_per_plane = c->shift_max_px_per_um * v->z_step_um;
+  const double r_px = o->explain_um / geo->um_per_px;
+  const double reach_px_per_plane = c->shift_max_px_per_um * geo->z_step_um;
   double others[TRACK_EXPLAIN_MAX][3], bright[TRACK_EXPLAIN_MAX];
   int no = 0;
   for (int j = 0; j < n_peaks; j++) {
     if (j == i || !(det[i].intensity < o->explain_brighter * det[j].intensity)) continue;
-    const double xj = elfm_volume_x_vox(v, det[j].x_um), yj = elfm_volume_y_vox(v, det[j].y_um),
-                 kj = elfm_volume_z_vox(v, det[j].z_um);
+    const double xj = elfm_volume_x_vox(geo, det[j].x_um), yj = elfm_volume_y_vox(geo, det[j].y_um),
+                 kj = elfm_volume_z_vox(geo, det[j].z_um);
     const double reach = reach_px_per_plane * fabs(kj - K) + r_px + 1;
     if (fabs(xj - X) > reach || fabs(yj - Y) > reach) continue;
     /* keep the TRACK_EXPLAIN_MAX brightest: insertion by intensity */
@@ -382,6 +394,8 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
                                 elfm_error *err)
 {
   track_ctx *c = user;
+  /* v's voxels may be coarser (--bin-px); the view fits' are c->geo's */
+  const elfm_volume *g = &c->geo;
   double t0 = cli_now_s();
   elfm_detection *det = c->det + (size_t)slot * c->o->max_det;
   elfm_status st = elfm_peaks_detect(c->pk[thread], v, det, c->o->max_det, &c->sp[slot].n, err);
@@ -414,14 +428,14 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     const int n_peaks = c->sp[slot].n;
     unsigned char *keep = c->keep + (size_t)slot * c->o->max_det;
     for (int i = 0; i < n_peaks; i++) {
-      const int X = (int)lround(elfm_volume_x_vox(v, det[i].x_um));
-      const int Y = (int)lround(elfm_volume_y_vox(v, det[i].y_um));
-      const int K = (int)lround(elfm_volume_z_vox(v, det[i].z_um));
+      const int X = (int)lround(elfm_volume_x_vox(g, det[i].x_um));
+      const int Y = (int)lround(elfm_volume_y_vox(g, det[i].y_um));
+      const int K = (int)lround(elfm_volume_z_vox(g, det[i].z_um));
       int ns = 0;
       int n = elfm_refocus_view_support(plan, frame, X, Y, K, &ns);
       const double need = share * ns;
       if ((double)n >= need && n > 0 && c->o->explain_brighter > 0) {
-        const int nu = explained_support(c, v, plan, frame, det, n_peaks, i, X, Y, K, n);
+        const int nu = explained_support(c, g, plan, frame, det, n_peaks, i, X, Y, K, n);
         if (!((double)nu >= need && nu > 0)) c->sp[slot].explained++;
         n = nu;
       }
@@ -434,6 +448,9 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
     c->sp[slot].rej = n_peaks - kept;
     c->sp[slot].n = kept;
   }
+  /* --bin-px: after the view support, which leaves some 70 % of a binned
+   * flow's peaks out (their own voxels are enough to judge them) */
+  if (st == ELFM_OK && c->vplan) track_bin_refine(c, plan, frame, thread, det, c->sp[slot].n);
   if (st == ELFM_OK && c->o->localize_views) {
     /* The peak fit reads three voxels per axis of a volume that averages
      * the views; the view fit measures the object's image in each view
@@ -458,9 +475,9 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       /* the plain view fit, which also says where each view's image lay:
        * the views' check (cmd_track_views.c) */
       c->sp[slot].tries++;
-      if (!elfm_refocus_localize_misses(plan, frame, elfm_volume_x_vox(v, det[i].x_um),
-                                        elfm_volume_y_vox(v, det[i].y_um),
-                                        elfm_volume_z_vox(v, det[i].z_um), is_deep ? &deep : &c->o->loc,
+      if (!elfm_refocus_localize_misses(plan, frame, elfm_volume_x_vox(g, det[i].x_um),
+                                        elfm_volume_y_vox(g, det[i].y_um),
+                                        elfm_volume_z_vox(g, det[i].z_um), is_deep ? &deep : &c->o->loc,
                                         &r, miss, wt)) {
         if (is_deep) {
           c->sp[slot].deep_dropped++;
@@ -471,9 +488,9 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
         continue;
       }
       det[n] = det[i];
-      det[n].x_um = elfm_volume_x_um(v, r.x_vox);
-      det[n].y_um = elfm_volume_y_um(v, r.y_vox);
-      det[n].z_um = elfm_volume_z_um(v, r.z_vox);
+      det[n].x_um = elfm_volume_x_um(g, r.x_vox);
+      det[n].y_um = elfm_volume_y_um(g, r.y_vox);
+      det[n].z_um = elfm_volume_z_um(g, r.z_vox);
       det[n].fit_sd_px = r.sd_px;
       if (fitok) fitok[n] = 1;
       n++;
@@ -482,7 +499,7 @@ elfm_status track_detect_worker(const elfm_volume *v, const elfm_frame *frame,
       track_views_add(&c->sp[slot], c->calib, at_um, miss, wt);
     }
     c->sp[slot].n = n;
-    if (c->o->localize_near_um > 0) near_refit(c, v, slot, det, n, &deep, deep_test);
+    if (c->o->localize_near_um > 0) near_refit(c, g, slot, det, n, &deep, deep_test);
   }
   c->sp[slot].s = cli_now_s() - t0;
   return st;
@@ -541,8 +558,6 @@ elfm_status track_on_volume(const elfm_volume *v, int slot, void *user, elfm_err
   const track_opts *o = c->o;
   if (!c->have_first) {
     c->have_first = 1;
-    c->geo = *v;
-    c->geo.data = NULL;
     c->first_frame = v->frame;
     c->first_t_us = v->t_us;
   }
@@ -677,6 +692,8 @@ void track_ctx_free(track_ctx *c)
 {
   elfm_track_store_clear(&c->stage_pending);
   elfm_refocus_plan_free(c->plan);
+  elfm_refocus_plan_free(c->vplan);
+  free(c->bin_piece);
   if (c->fdet) fclose(c->fdet);
   if (c->ftr) fclose(c->ftr);
   if (c->ffr) fclose(c->ffr);

@@ -199,6 +199,29 @@ elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_u
   return ELFM_OK;
 }
 
+elfm_status elfm_calib_bin(const elfm_calib *c, int factor, elfm_calib *out, elfm_error *err)
+{
+  if (factor < 1 || c->view_w_px / factor < 3 || c->view_h_px / factor < 3)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1,
+                          "binning %d: views of %d x %d px would be under 3 x 3 px", factor,
+                          c->view_w_px, c->view_h_px);
+  *out = *c;
+  const double f = factor, half = 0.5 * (factor - 1);
+  out->sensor_width_px = (c->sensor_width_px + factor - 1) / factor;
+  out->sensor_height_px = (c->sensor_height_px + factor - 1) / factor;
+  out->pixel_um = c->pixel_um * f;
+  out->um_per_px = c->um_per_px * f;
+  out->view_w_px = c->view_w_px / factor;
+  out->view_h_px = c->view_h_px / factor;
+  for (int v = 0; v < c->n_views; v++) {
+    out->views[v].cx_px = (c->views[v].cx_px - half) / f;
+    out->views[v].cy_px = (c->views[v].cy_px - half) / f;
+    out->views[v].dx_px_per_um = c->views[v].dx_px_per_um / f;
+    out->views[v].dy_px_per_um = c->views[v].dy_px_per_um / f;
+  }
+  return ELFM_OK;
+}
+
 /* ---- loading ---- */
 
 /* Context of one load: the file name and the error to fill. */

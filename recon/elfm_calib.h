@@ -95,6 +95,18 @@ int elfm_calib_n_planes(const elfm_calib *c);
 elfm_status elfm_calib_set_planes(elfm_calib *c, double z_min_um, double z_max_um, double z_step_um,
                                   elfm_error *err);
 
+/* The calibration of the sensor binned factor x factor (elfm_frame_bin):
+ * sensor ceil(w / factor) x ceil(h / factor), pixel_um and um_per_px
+ * factor times, each view's shift per um over factor, its centre where the
+ * block of its pixel lies (a block's centre is at full-pixel (factor - 1) /
+ * 2 from its first pixel's), the view size over factor (rounded down). The
+ * planes and the optics stay. A voxel of the binned volume and one of the
+ * full-sampled volume at the same (x, y, z) um see the same sensor point,
+ * both volumes centred on the views' centres (elfm_volume_x_um). Factor 1
+ * copies; ELFM_ERR_INVALID for a factor below 1 or a binned view smaller
+ * than 3 x 3 px. */
+elfm_status elfm_calib_bin(const elfm_calib *c, int factor, elfm_calib *out, elfm_error *err);
+
 /* ---- the views' centres fitted to a recording (calib_refine.c) ----
  * Collect, for many points fitted from all views, each view's miss
  * (elfm_refocus_localize_misses), then move every view's centre by the

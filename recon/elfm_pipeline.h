@@ -128,6 +128,18 @@ typedef struct elfm_recon_options {
    * ~16 ms to make. A plan whose sensor, views or planes differ from the
    * calibration's is refused (ELFM_ERR_INVALID). */
   const elfm_refocus_plan *plan;
+  /* 0 or 1: volumes at the calibration's sampling. 2 (to 4): volumes
+   * refocused from each frame binned bin_px x bin_px (elfm_frame_bin, after
+   * the median and the blur) with the binned calibration's plan
+   * (elfm_calib_bin): bin_px times coarser across, for about 1 / bin_px^2
+   * of the refocus's work. The worker still gets the full frame and `plan`,
+   * so its view fits place objects at the full sampling
+   * (`eventlfm track --bin 2`, docs/tracker.md "Peaks found in a binned
+   * volume"). */
+  int bin_px;
+  /* With bin_px > 1: a plan the caller made from the binned calibration
+   * (borrowed and checked as `plan` is); NULL: the run makes its own. */
+  const elfm_refocus_plan *volume_plan;
 } elfm_recon_options;
 
 /* The worker threads and ring slots elfm_recon_run will use with `o`

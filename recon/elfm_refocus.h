@@ -123,6 +123,14 @@ int elfm_refocus_view_support_unexplained(const elfm_refocus_plan *p, const elfm
 double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame, int X, int Y,
                              int k);
 
+/* Voxels X0 .. X0+w-1, Y0 .. Y0+h-1 of plane k, each as
+ * elfm_refocus_value_at gives it (the same values; 0 outside the volume),
+ * into out (w x h doubles, row by row). O(views x w x h) with a view's
+ * setup once per piece, not per voxel: the full-sampled voxels around a
+ * peak found in a binned volume (`eventlfm track --bin-px`). */
+void elfm_refocus_plane_piece(const elfm_refocus_plan *p, const elfm_frame *frame, int X0, int Y0,
+                              int w, int h, int k, double *out);
+
 /* Give vol the frame's times (t_us, frame, window, events) and the plan's
  * geometry, as elfm_refocus_execute does, leaving its voxels as they are
  * (for a run that reads frames without refocusing them). */

@@ -159,6 +159,47 @@ elfm_status elfm_frame_copy(elfm_frame *dst, const elfm_frame *src, elfm_error *
   return ELFM_OK;
 }
 
+/* The output pixel of input pixel p (elfm_frame_bin): the row by a
+ * multiply, as a division per pixel was ~5 % of `track --bin-px 2` on flow;
+ * the double's rounding is off by at most one, then fixed. */
+static inline uint32_t bin_pixel(uint32_t p, uint32_t sw, double inv_sw, uint32_t dw, uint32_t f)
+{
+  uint32_t y = (uint32_t)(p * inv_sw);
+  if (y * sw > p) y--;
+  else if ((y + 1) * sw <= p) y++;
+  const uint32_t x = p - y * sw;
+  return f == 2 ? (y >> 1) * dw + (x >> 1) : (y / f) * dw + x / f;
+}
+
+elfm_status elfm_frame_bin(elfm_frame *dst, const elfm_frame *src, int factor, elfm_error *err)
+{
+  if (factor < 1 || dst->w != (src->w + factor - 1) / factor ||
+      dst->h != (src->h + factor - 1) / factor)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "frame bin %d: %dx%d into %dx%d",
+                          factor, src->w, src->h, dst->w, dst->h);
+  elfm_frame_clear_like(dst, src);
+  const size_t n = elfm_frame_n_window(src);
+  const uint32_t sw = (uint32_t)src->w, dw = (uint32_t)dst->w, f = (uint32_t)factor;
+  const double inv_sw = 1.0 / sw;
+  for (size_t i = 0; i < n; i++) {
+    /* the list is in event order, so its pixels lie all over both frames:
+     * fetched ahead, as the framer does (the input's pixel further on than
+     * the output's, whose place needs the input's index only) */
+    if (i + 16 < n) __builtin_prefetch(src->data + src->idx[i + 16]);
+    if (i + 8 < n) __builtin_prefetch(dst->data + bin_pixel(src->idx[i + 8], sw, inv_sw, dw, f), 1);
+    const uint32_t p = src->idx[i];
+    const float v = src->data[p];
+    /* a zero is never stored, so a zero output pixel is an unlisted one */
+    if (v == 0.0f || !elfm_frame_in_window(src, v)) continue;
+    const uint32_t q = bin_pixel(p, sw, inv_sw, dw, f);
+    const float old = dst->data[q];
+    if (old == 0.0f) dst->idx[dst->nnz++] = q;
+    if (fabsf(v) > fabsf(old)) dst->data[q] = v;
+  }
+  dst->nnz_recent = dst->nnz;
+  return ELFM_OK;
+}
+
 void elfm_framer_options_default(elfm_framer_options *o)
 {
   memset(o, 0, sizeof *o);

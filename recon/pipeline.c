@@ -42,6 +42,7 @@ void elfm_recon_options_default(elfm_recon_options *o)
 
 typedef struct slot {
   elfm_frame *frame, *filtered, *blurred;
+  elfm_frame *binned; /* bin_px > 1: the frame the volume is refocused from */
   elfm_volume *vol;
   elfm_refocus_workspace *ws;
   elfm_status status;
@@ -71,6 +72,10 @@ typedef struct run {
   const elfm_recon_options *opt;
   const elfm_refocus_plan *plan; /* plan_own, or the caller's (opt->plan) */
   elfm_refocus_plan *plan_own;
+  /* the volumes' plan: `plan`, or with bin_px > 1 the binned calibration's
+   * (vplan_own, or the caller's opt->volume_plan) */
+  const elfm_refocus_plan *vplan;
+  elfm_refocus_plan *vplan_own;
   int threads, nslots;
   slot *slots;
   elfm_median **medians; /* one per thread */
@@ -87,6 +92,7 @@ static void run_free(run *r)
       elfm_frame_free(r->slots[i].frame);
       elfm_frame_free(r->slots[i].filtered);
       elfm_frame_free(r->slots[i].blurred);
+      elfm_frame_free(r->slots[i].binned);
       elfm_volume_free(r->slots[i].vol);
       elfm_refocus_workspace_free(r->slots[i].ws);
     }
@@ -98,6 +104,7 @@ static void run_free(run *r)
     for (int i = 0; i < r->threads; i++) elfm_blur_free(r->blurs[i]);
   free(r->blurs);
   elfm_refocus_plan_free(r->plan_own);
+  elfm_refocus_plan_free(r->vplan_own);
   elfm_reader_close(r->src.reader);
   elfm_chunk_free(r->src.chunk);
   elfm_framer_free(r->src.framer);
@@ -135,7 +142,7 @@ static elfm_status ring_fits(const run *r, const elfm_calib *calib, int use_medi
   const double have_b = elfm_physical_memory_bytes();
   if (!(have_b > 0)) return ELFM_OK;
   int w, h, nz;
-  elfm_refocus_plan_size(r->plan, &w, &h, &nz);
+  elfm_refocus_plan_size(r->vplan, &w, &h, &nz);
   const double frames = 1.0 + (use_median != 0) + (r->opt->blur_px > 0);
   const double slot_b = 8.0 * calib->sensor_width_px * calib->sensor_height_px * frames +
                         4.0 * w * h * nz;
@@ -174,6 +181,23 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
     if (st) return st;
     r->plan = r->plan_own;
   }
+  r->vplan = r->plan;
+  if (opt->bin_px < 0 || opt->bin_px > 4)
+    return elfm_error_set(err, ELFM_ERR_INVALID, NULL, -1, "binning %d px: use 1 to 4", opt->bin_px);
+  if (opt->bin_px > 1) {
+    elfm_calib binned;
+    st = elfm_calib_bin(calib, opt->bin_px, &binned, err);
+    if (st) return st;
+    if (opt->volume_plan) {
+      st = elfm_refocus_plan_fits(opt->volume_plan, &binned, err);
+      if (st) return st;
+      r->vplan = opt->volume_plan;
+    } else {
+      st = elfm_refocus_plan_create(&binned, &opt->refocus, &r->vplan_own, err);
+      if (st) return st;
+      r->vplan = r->vplan_own;
+    }
+  }
   st = elfm_recon_layout(opt, &r->threads, &r->nslots, err);
   if (st) return st;
   st = ring_fits(r, calib, use_median, err);
@@ -191,8 +215,12 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
       return err ? err->code : ELFM_ERR_NOMEM;
     if (opt->blur_px > 0 && !(s->blurred = elfm_frame_create(sw, sh, err)))
       return err ? err->code : ELFM_ERR_NOMEM;
-    if (!(s->vol = elfm_refocus_volume_create(r->plan, err))) return err ? err->code : ELFM_ERR_NOMEM;
-    st = elfm_refocus_workspace_create(r->plan, &s->ws, err);
+    if (opt->bin_px > 1 &&
+        !(s->binned = elfm_frame_create((sw + opt->bin_px - 1) / opt->bin_px,
+                                        (sh + opt->bin_px - 1) / opt->bin_px, err)))
+      return err ? err->code : ELFM_ERR_NOMEM;
+    if (!(s->vol = elfm_refocus_volume_create(r->vplan, err))) return err ? err->code : ELFM_ERR_NOMEM;
+    st = elfm_refocus_workspace_create(r->vplan, &s->ws, err);
     if (st) return st;
   }
   if (use_median)
@@ -455,8 +483,12 @@ static void job_refocus(run *r, slot *s, int i, int thread, elfm_refocus_path pa
     in = s->blurred;
   }
   if (r->opt->no_refocus) {
-    elfm_refocus_stamp(plan, in, s->vol);
+    elfm_refocus_stamp(r->vplan, in, s->vol);
     s->status = ELFM_OK;
+  } else if (s->binned) {
+    s->status = elfm_frame_bin(s->binned, in, r->opt->bin_px, &s->err);
+    if (s->status == ELFM_OK)
+      s->status = elfm_refocus_execute_path(r->vplan, path, s->binned, s->vol, s->ws, &s->err);
   } else {
     s->status = elfm_refocus_execute_path(plan, path, in, s->vol, s->ws, &s->err);
   }

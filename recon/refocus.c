@@ -387,6 +387,41 @@ double elfm_refocus_value_at(const elfm_refocus_plan *p, const elfm_frame *frame
   return ns > 0 ? s / ns : 0;
 }
 
+void elfm_refocus_plane_piece(const elfm_refocus_plan *p, const elfm_frame *frame, int X0, int Y0,
+                              int w, int h, int k, double *out)
+{
+  for (int i = 0; i < w * h; i++) out[i] = 0;
+  if (k < 0 || k >= p->nz) return;
+  /* a view at a time, each voxel's views summed in the order
+   * elfm_refocus_value_at sums them: the same values */
+  const float fl = frame->recent_floor;
+  for (int v = 0; v < p->nv; v++) {
+    const elfm_refocus_shift *sh = p->shift + (size_t)k * p->nv + v;
+    const int xa = imax(X0, sh->xlo), xb = imin(X0 + w, sh->xhi);
+    const int ya = imax(Y0, sh->ylo), yb = imin(Y0 + h, sh->yhi);
+    float wt[4];
+    elfm_refocus_shift_weights(sh, wt);
+    for (int Y = ya; Y < yb; Y++) {
+      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + sh->ix;
+      const float *r1 = r0 + p->sw;
+      double *o = out + (size_t)(Y - Y0) * w - X0;
+      if (fl > 0)
+        for (int X = xa; X < xb; X++)
+          o[X] += wt[0] * (r0[X] >= fl ? r0[X] : 0.0f) + wt[1] * (r0[X + 1] >= fl ? r0[X + 1] : 0.0f) +
+                  wt[2] * (r1[X] >= fl ? r1[X] : 0.0f) + wt[3] * (r1[X + 1] >= fl ? r1[X + 1] : 0.0f);
+      else
+        for (int X = xa; X < xb; X++)
+          o[X] += wt[0] * r0[X] + wt[1] * r0[X + 1] + wt[2] * r1[X] + wt[3] * r1[X + 1];
+    }
+  }
+  for (int Y = imax(Y0, 0); Y < imin(Y0 + h, p->h); Y++)
+    for (int X = imax(X0, 0); X < imin(X0 + w, p->w); X++) {
+      const int n = p->count[((size_t)k * p->h + Y) * p->w + X];
+      double *o = out + (size_t)(Y - Y0) * w + (X - X0);
+      *o = n > 0 ? *o / n : 0;
+    }
+}
+
 double elfm_refocus_sample(const elfm_refocus_plan *p, const elfm_frame *frame, double X, double Y,
                            double k)
 {

@@ -133,6 +133,18 @@ elfm_status elfm_peaks_find_near(const elfm_peaks *p, const elfm_volume *v, cons
                                  double radius_xy_um, double radius_z_um, double min_value,
                                  elfm_detection *out, int *found, elfm_error *err);
 
+/* Refine det again at voxel (x, y, z) of v as elfm_peaks_detect does
+ * (position, intensity, sigmas, width; p's fit options), keeping its weak
+ * and deep_only flags. v may be a piece of a volume: the fits read row y
+ * and column x of plane z (fit_half_xy voxels each way), the voxels along z
+ * at (x, y) (fit_half_z) and plane z within +-6 voxels (the width), and
+ * take v's edges for the volume's, so a piece must reach the volume's
+ * edges where those windows do. The position is in v's um
+ * (elfm_volume_x_um). For a peak found in a binned volume, placed again on
+ * the full-sampled voxels around it (`eventlfm track --bin-px`). */
+void elfm_peaks_refine_at(const elfm_peaks *p, const elfm_volume *v, int x, int y, int z,
+                          elfm_detection *det);
+
 /* The threshold the last detect call used (for reports). */
 double elfm_peaks_last_threshold(const elfm_peaks *p);
 

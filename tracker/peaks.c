@@ -435,6 +435,14 @@ static void fill_detection(const elfm_peaks_options *o, const elfm_volume *v, in
   det->width_um = f0 > 0 ? blob_width_vox(v, x, y, z, f0) * v->um_per_px : 0;
 }
 
+void elfm_peaks_refine_at(const elfm_peaks *p, const elfm_volume *v, int x, int y, int z,
+                          elfm_detection *det)
+{
+  const int deep = det->deep_only;
+  fill_detection(&p->opt, v, x, y, z, det->weak, det);
+  det->deep_only = deep;
+}
+
 elfm_status elfm_peaks_find_near(const elfm_peaks *p, const elfm_volume *v, const double xyz_um[3],
                                  double radius_xy_um, double radius_z_um, double min_value,
                                  elfm_detection *out, int *found, elfm_error *err)
