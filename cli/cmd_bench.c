@@ -57,6 +57,7 @@ static const struct sweep_point SWEEP[] = {
     {"ghost", "agreement 0.8", {"--agree", "0.8", NULL}, 0, 1},
     {"refocus", "dense", {"--path", "dense", NULL}, 0, 1},
     {"refocus", "sparse", {"--path", "sparse", NULL}, 0, 1},
+    {"refocus", "peaks binned 2x2", {"--bin-px", "2", NULL}, 0, 1},
     {"threads", "1 thread", {"--threads", "1", NULL}, 0, 1},
     {"threads", "2 threads", {"--threads", "2", NULL}, 0, 1},
     {"localize", "peak fit only", {"--localize", "peak", "--guided-views", "0", NULL}, 0, 1},
@@ -99,7 +100,7 @@ static void bench_usage(FILE *f)
           "runs `eventlfm track` as a child process and is scored (SPEC 7).\n"
           "Writes DIR/bench.csv, bench.md, bench_error_vs_speed.png (gnuplot), fig_s4.png and\n"
           "the output of the component benchmarks (build/bench/bench_*) in DIR/components/.\n"
-          "  --quick         flow only, 50 ms, 23 points (a few minutes on 2 cores)\n"
+          "  --quick         flow only, 50 ms, 27 points (a few minutes on 2 cores)\n"
           "  --out DIR       output directory (default bench_out)\n"
           "  --scenes LIST   built-in scenes (default: flow with --quick, else flow,stage)\n"
           "  --duration-ms D simulated duration per scene (default 50 quick, 300 full)\n"
