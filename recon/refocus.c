@@ -401,17 +401,21 @@ void elfm_refocus_plane_piece(const elfm_refocus_plan *p, const elfm_frame *fram
     const int ya = imax(Y0, sh->ylo), yb = imin(Y0 + h, sh->yhi);
     float wt[4];
     elfm_refocus_shift_weights(sh, wt);
+    /* columns: the piece's from 0, the sensor row's from the view's first
+     * sampled pixel (xa + ix >= 0 by the shift's bounds) */
+    const int n = xb - xa;
+    if (n <= 0) continue;
     for (int Y = ya; Y < yb; Y++) {
-      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + sh->ix;
+      const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (size_t)(xa + sh->ix);
       const float *r1 = r0 + p->sw;
-      double *o = out + (size_t)(Y - Y0) * w - X0;
+      double *o = out + (size_t)(Y - Y0) * w + (xa - X0);
       if (fl > 0)
-        for (int X = xa; X < xb; X++)
-          o[X] += wt[0] * (r0[X] >= fl ? r0[X] : 0.0f) + wt[1] * (r0[X + 1] >= fl ? r0[X + 1] : 0.0f) +
-                  wt[2] * (r1[X] >= fl ? r1[X] : 0.0f) + wt[3] * (r1[X + 1] >= fl ? r1[X + 1] : 0.0f);
+        for (int i = 0; i < n; i++)
+          o[i] += wt[0] * (r0[i] >= fl ? r0[i] : 0.0f) + wt[1] * (r0[i + 1] >= fl ? r0[i + 1] : 0.0f) +
+                  wt[2] * (r1[i] >= fl ? r1[i] : 0.0f) + wt[3] * (r1[i + 1] >= fl ? r1[i + 1] : 0.0f);
       else
-        for (int X = xa; X < xb; X++)
-          o[X] += wt[0] * r0[X] + wt[1] * r0[X + 1] + wt[2] * r1[X] + wt[3] * r1[X + 1];
+        for (int i = 0; i < n; i++)
+          o[i] += wt[0] * r0[i] + wt[1] * r0[i + 1] + wt[2] * r1[i] + wt[3] * r1[i + 1];
     }
   }
   for (int Y = imax(Y0, 0); Y < imin(Y0 + h, p->h); Y++)
