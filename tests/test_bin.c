@@ -7,8 +7,8 @@
  *  - elfm_calib_bin: every view projects a point where the block of its
  *    full-sensor projection lies ((u - (f - 1) / 2) / f); a bead rendered
  *    on the full sensor, binned and refocused with the binned plan, peaks
- *    at its (x, y, z) um (elfm_volume_x_um of the binned volume); views
- *    binned under 3 px refused;
+ *    at its (x, y, z) um (elfm_volume_x_um of the binned volume), with
+ *    144- and 61-pixel views; views binned under 3 px refused;
  *  - elfm_refocus_plane_piece: every voxel as elfm_refocus_value_at gives
  *    it, bit for bit, on pieces inside, across the volume's edges and
  *    outside it, on a plain and a deep window's frame;
@@ -160,6 +160,8 @@ static void test_bead_binned(const elfm_calib *c)
   if (!plan || !ws || !vol || !f || !fb) return;
   const double bead[3][3] = {{5.3, -7.9, 10.0}, {-21.6, 14.2, -30.0}, {40.1, 2.7, 0.0}};
   for (int q = 0; q < 3; q++) {
+    /* beads well inside the views (a 61-pixel view spans +-28 um) */
+    if (fabs(bead[q][0]) > 0.4 * c->view_w_px * c->um_per_px) continue;
     elfm_frame_clear(f);
     render_views(f, c, bead[q][0], bead[q][1], bead[q][2], 200, 1.4, 0, 0, 0);
     CHECK_OK(elfm_frame_bin(fb, f, 2, &err), &err);
@@ -430,6 +432,10 @@ int main(void)
   if (calib_test_default(&c)) {
     test_calib_bin(&c);
     test_bead_binned(&c);
+    /* odd views: 61 px binned to 30, whose centre is no voxel's of the 61 */
+    elfm_calib odd = c;
+    odd.view_w_px = odd.view_h_px = 61;
+    test_bead_binned(&odd);
     test_plane_piece(&c);
     test_refine_at(&c);
   }
