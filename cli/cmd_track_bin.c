@@ -35,7 +35,9 @@ elfm_status track_bin_setup(track_ctx *c, elfm_error *err)
   return ELFM_OK;
 }
 
-static int clampi(int v, int lo, int hi) { return v < lo ? lo : v > hi ? hi : v; }
+static int imin(int a, int b) { return a < b ? a : b; }
+static int imax(int a, int b) { return a > b ? a : b; }
+static int clampi(int v, int lo, int hi) { return imin(imax(v, lo), hi); }
 
 /* cmd_track.h */
 void track_bin_refine(track_ctx *c, const elfm_refocus_plan *plan, const elfm_frame *frame,
@@ -48,11 +50,10 @@ void track_bin_refine(track_ctx *c, const elfm_refocus_plan *plan, const elfm_fr
     const int X0 = clampi((int)lround(elfm_volume_x_vox(g, det[i].x_um)), 0, g->w - 1);
     const int Y0 = clampi((int)lround(elfm_volume_y_vox(g, det[i].y_um)), 0, g->h - 1);
     const int K = clampi((int)lround(elfm_volume_z_vox(g, det[i].z_um)), 0, g->nz - 1);
-    const int x0 = X0 - BIN_HALF < 0 ? 0 : X0 - BIN_HALF;
-    const int x1 = X0 + BIN_HALF + 1 > g->w ? g->w : X0 + BIN_HALF + 1;
-    const int y0 = Y0 - BIN_HALF < 0 ? 0 : Y0 - BIN_HALF;
-    const int y1 = Y0 + BIN_HALF + 1 > g->h ? g->h : Y0 + BIN_HALF + 1;
-    const int k0 = K - fz < 0 ? 0 : K - fz, k1 = K + fz + 1 > g->nz ? g->nz : K + fz + 1;
+    /* the piece: its box cut at the volume's edges */
+    const int x0 = imax(X0 - BIN_HALF, 0), x1 = imin(X0 + BIN_HALF + 1, g->w);
+    const int y0 = imax(Y0 - BIN_HALF, 0), y1 = imin(Y0 + BIN_HALF + 1, g->h);
+    const int k0 = imax(K - fz, 0), k1 = imin(K + fz + 1, g->nz);
     const int pw = x1 - x0, ph = y1 - y0, pn = k1 - k0;
     memset(buf, 0, (size_t)pw * ph * pn * sizeof *buf);
     float *pl = buf + (size_t)(K - k0) * pw * ph;

@@ -76,6 +76,7 @@ typedef struct run {
    * (vplan_own, or the caller's opt->volume_plan) */
   const elfm_refocus_plan *vplan;
   elfm_refocus_plan *vplan_own;
+  int bin_sw, bin_sh; /* bin_px > 1: the binned sensor (elfm_calib_bin), the binned frames' size */
   int threads, nslots;
   slot *slots;
   elfm_median **medians; /* one per thread */
@@ -188,6 +189,8 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
     elfm_calib binned;
     st = elfm_calib_bin(calib, opt->bin_px, &binned, err);
     if (st) return st;
+    r->bin_sw = binned.sensor_width_px;
+    r->bin_sh = binned.sensor_height_px;
     if (opt->volume_plan) {
       st = elfm_refocus_plan_fits(opt->volume_plan, &binned, err);
       if (st) return st;
@@ -215,9 +218,7 @@ static elfm_status run_setup(run *r, const elfm_calib *calib, const elfm_recon_o
       return err ? err->code : ELFM_ERR_NOMEM;
     if (opt->blur_px > 0 && !(s->blurred = elfm_frame_create(sw, sh, err)))
       return err ? err->code : ELFM_ERR_NOMEM;
-    if (opt->bin_px > 1 &&
-        !(s->binned = elfm_frame_create((sw + opt->bin_px - 1) / opt->bin_px,
-                                        (sh + opt->bin_px - 1) / opt->bin_px, err)))
+    if (opt->bin_px > 1 && !(s->binned = elfm_frame_create(r->bin_sw, r->bin_sh, err)))
       return err ? err->code : ELFM_ERR_NOMEM;
     if (!(s->vol = elfm_refocus_volume_create(r->vplan, err))) return err ? err->code : ELFM_ERR_NOMEM;
     st = elfm_refocus_workspace_create(r->vplan, &s->ws, err);

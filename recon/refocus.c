@@ -261,6 +261,18 @@ int elfm_refocus_plan_views_at(const elfm_refocus_plan *p, int X, int Y, int k)
 
 const elfm_calib *elfm_refocus_plan_calib(const elfm_refocus_plan *p) { return &p->calib; }
 
+/* The bilinear sample of the four pixels r0[0], r0[1], r1[0], r1[1] with
+ * weights w; on a deep window's frame (floor fl > 0) its older pixels, below
+ * the floor, are not the window's and count as 0. view_sample and
+ * elfm_refocus_plane_piece both take it, so their values are the same. */
+static inline float tap_sample(const float *r0, const float *r1, const float w[4], float fl)
+{
+  if (fl > 0)
+    return w[0] * (r0[0] >= fl ? r0[0] : 0.0f) + w[1] * (r0[1] >= fl ? r0[1] : 0.0f) +
+           w[2] * (r1[0] >= fl ? r1[0] : 0.0f) + w[3] * (r1[1] >= fl ? r1[1] : 0.0f);
+  return w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
+}
+
 /* View v's bilinear sample at voxel (X, Y, k), as the dense path takes it,
  * into *a; 0 when the view does not sample the voxel. (X, Y, k) must lie
  * in the volume. */
@@ -272,14 +284,7 @@ static int view_sample(const elfm_refocus_plan *p, const elfm_frame *frame, int 
   float w[4];
   elfm_refocus_shift_weights(sh, w);
   const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (X + sh->ix);
-  const float *r1 = r0 + p->sw;
-  const float fl = frame->recent_floor;
-  if (fl > 0) { /* a deep window's frame: its older pixels are not the window's */
-    *a = w[0] * (r0[0] >= fl ? r0[0] : 0.0f) + w[1] * (r0[1] >= fl ? r0[1] : 0.0f) +
-         w[2] * (r1[0] >= fl ? r1[0] : 0.0f) + w[3] * (r1[1] >= fl ? r1[1] : 0.0f);
-    return 1;
-  }
-  *a = w[0] * r0[0] + w[1] * r0[1] + w[2] * r1[0] + w[3] * r1[1];
+  *a = tap_sample(r0, r0 + p->sw, w, frame->recent_floor);
   return 1;
 }
 
@@ -409,13 +414,7 @@ void elfm_refocus_plane_piece(const elfm_refocus_plan *p, const elfm_frame *fram
       const float *r0 = frame->data + (size_t)(Y + sh->iy) * (size_t)p->sw + (size_t)(xa + sh->ix);
       const float *r1 = r0 + p->sw;
       double *o = out + (size_t)(Y - Y0) * w + (xa - X0);
-      if (fl > 0)
-        for (int i = 0; i < n; i++)
-          o[i] += wt[0] * (r0[i] >= fl ? r0[i] : 0.0f) + wt[1] * (r0[i + 1] >= fl ? r0[i + 1] : 0.0f) +
-                  wt[2] * (r1[i] >= fl ? r1[i] : 0.0f) + wt[3] * (r1[i + 1] >= fl ? r1[i + 1] : 0.0f);
-      else
-        for (int i = 0; i < n; i++)
-          o[i] += wt[0] * r0[i] + wt[1] * r0[i + 1] + wt[2] * r1[i] + wt[3] * r1[i + 1];
+      for (int i = 0; i < n; i++) o[i] += tap_sample(r0 + i, r1 + i, wt, fl);
     }
   }
   for (int Y = imax(Y0, 0); Y < imin(Y0 + h, p->h); Y++)

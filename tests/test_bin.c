@@ -33,6 +33,7 @@
 #include "elfm_recon.h"
 #include "elfm_tracker.h"
 #include "lfm_render.h"
+#include "sim_test_util.h"
 
 static elfm_frame *frame_new(int w, int h)
 {
@@ -365,17 +366,9 @@ static void test_pipeline(void)
   }
   elfm_error err;
   elfm_error_clear(&err);
-  elfm_scene *sc = NULL;
-  CHECK_OK(elfm_scene_load("flow", &sc, &err), &err);
-  CHECK_OK(elfm_scene_set_param(sc, "duration_ms=5", &err), &err);
-  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
-  CHECK_OK(elfm_sim_run(sc, dir, &so, NULL, &err), &err);
-  elfm_scene_free(sc);
-  char events[700], calib_path[700];
-  snprintf(events, sizeof events, "%s/events.raw", dir);
-  snprintf(calib_path, sizeof calib_path, "%s/calib.json", dir);
+  char events[700];
   elfm_calib cal, bc;
-  CHECK_OK(elfm_calib_load(calib_path, &cal, &err), &err);
+  sim_test_scene("flow", 5, dir, events, sizeof events, &cal);
   CHECK_OK(elfm_calib_bin(&cal, 2, &bc, &err), &err);
   elfm_recon_options o;
   elfm_recon_options_default(&o);

@@ -14,6 +14,7 @@
 #include "check.h"
 #include "elfm_datasets.h"
 #include "elfm_recon.h"
+#include "sim_test_util.h"
 
 #define MAX_VOL 64
 
@@ -43,17 +44,9 @@ int main(void)
   if (!mkdtemp(dir)) SKIP("cannot make a temporary directory");
   elfm_error err;
   elfm_error_clear(&err);
-  elfm_scene *sc = NULL;
-  CHECK_OK(elfm_scene_load("flow", &sc, &err), &err);
-  CHECK_OK(elfm_scene_set_param(sc, "duration_ms=6", &err), &err);
-  elfm_sim_options so = {.progress = NULL, .progress_user = NULL, .write_truth = 0};
-  CHECK_OK(elfm_sim_run(sc, dir, &so, NULL, &err), &err);
-  elfm_scene_free(sc);
-  char events[700], calib_path[700];
-  snprintf(events, sizeof events, "%s/events.raw", dir);
-  snprintf(calib_path, sizeof calib_path, "%s/calib.json", dir);
+  char events[700];
   elfm_calib cal;
-  CHECK_OK(elfm_calib_load(calib_path, &cal, &err), &err);
+  sim_test_scene("flow", 6, dir, events, sizeof events, &cal);
 
   elfm_recon_options o;
   elfm_recon_options_default(&o);
